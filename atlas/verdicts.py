@@ -1,0 +1,77 @@
+"""The one definition of verdict codes.
+
+Every place that needs the codes (kernels, the exact reference, CF flag attributes, plot colours
+and legends) reads them from here (SPEC §1-2).
+"""
+
+from __future__ import annotations
+
+import enum
+
+__all__ = ["Verdict", "Consistency", "flag_attrs", "UNDECIDED_CODE"]
+
+
+class Verdict(enum.IntEnum):
+    """Stability verdict of a contact mode or of an impact without collision.
+
+    ``NEUTRAL`` means no eigenvalue with positive real part but some on the imaginary axis (the
+    ``q = 0`` case of the paper's Fig. 1, drawn there as stable).  ``UNDECIDED`` is emitted only by
+    the fast kernels where floating point cannot certify a sign; the exact reference never emits it.
+    """
+
+    UNSTABLE = 0
+    STABLE = 1
+    NEUTRAL = 2
+    UNDECIDED = 3
+
+    @property
+    def label(self) -> str:
+        return _VERDICT_STYLE[self][0]
+
+    @property
+    def color(self) -> str:
+        return _VERDICT_STYLE[self][1]
+
+
+class Consistency(enum.IntEnum):
+    """Consistency verdict (for ``consistent_II`` and the certified consistency flags)."""
+
+    INCONSISTENT = 0
+    CONSISTENT = 1
+    UNDECIDED = 3
+
+    @property
+    def label(self) -> str:
+        return _CONSISTENCY_STYLE[self][0]
+
+    @property
+    def color(self) -> str:
+        return _CONSISTENCY_STYLE[self][1]
+
+
+#: code used by integer code arrays (class/subclass codes) while a sign is still uncertain
+UNDECIDED_CODE = -1
+
+_VERDICT_STYLE = {
+    Verdict.UNSTABLE: ("unstable", "#f7f7f7"),
+    Verdict.STABLE: ("stable", "#525252"),
+    Verdict.NEUTRAL: ("neutral (q = 0)", "#969696"),
+    Verdict.UNDECIDED: ("undecided", "#e41a1c"),
+}
+_CONSISTENCY_STYLE = {
+    Consistency.INCONSISTENT: ("inconsistent", "#f7f7f7"),
+    Consistency.CONSISTENT: ("consistent", "#4292c6"),
+    Consistency.UNDECIDED: ("undecided", "#e41a1c"),
+}
+
+
+def flag_attrs(codes: type[enum.IntEnum], long_name: str) -> dict:
+    """CF flag attributes (``flag_values``, ``flag_meanings``, ``long_name``) for an enumeration."""
+    import numpy as np
+
+    members = list(codes)
+    return {
+        "long_name": long_name,
+        "flag_values": np.array([int(m) for m in members], dtype=np.int8),
+        "flag_meanings": " ".join(m.name.lower() for m in members),
+    }
