@@ -335,10 +335,15 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
     pos_possible = meets_axis & (x + R * hi_f > 0)
     e = lambda a: a[..., None]  # noqa: E731
     # row 1: c2 * (l^2 + c1 q1 l + c1 k1) < 0 ; row 2: s1 * (l^2 + s2 q2 l + s2 k2) < 0
-    r1 = _interval_quadratic_sign(jnp.sign(e(c2)), e(c1 * q1s), e(c1 * k1), lo, hi, dtype)
-    r2 = _interval_quadratic_sign(jnp.sign(e(s1)), e(s2 * q2s), e(s2 * k2), lo, hi, dtype)
-    cons_row = (r1 == -1) | (r2 == -1)
-    incons_row = (r1 == 1) | (r2 == 1)
+    one = jnp.ones_like(lo)
+    h1 = _interval_quadratic_sign(one, e(c1 * q1s), e(c1 * k1), lo, hi, dtype)
+    h2 = _interval_quadratic_sign(one, e(s2 * q2s), e(s2 * k2), lo, hi, dtype)
+    known1, known2 = h1 != UNKNOWN, h2 != UNKNOWN
+    r1 = jnp.where(known1, jnp.sign(e(c2)) * h1, 0)  # row 1 usable where c2 != 0
+    r2 = jnp.where(known2, jnp.sign(e(s1)) * h2, 0)  # row 2 usable where s1 != 0
+    cons_row = (r1 < 0) | (r2 < 0)
+    # x2 = 0 when s1 = 0 and h2 != 0; x1 = 0 when c2 = 0 and h1 != 0: x1 x2 = 0, not II
+    incons_row = (r1 > 0) | (r2 > 0) | ((e(s1) == 0) & known2) | ((e(c2) == 0) & known1)
     cons_cert = real & (x - R * hi_f > 0) & cons_row
     incons_cert = ~pos_possible | incons_row
     C, I, X = int(Consistency.CONSISTENT), int(Consistency.INCONSISTENT), int(Consistency.UNDECIDED)
