@@ -1,0 +1,201 @@
+"""Table 2 of the paper, regenerated from the kernels (never typed in).
+
+For each of the 24 classes: the dual class, the subclasses in which FF, SS, SF, FS are consistent, each
+mode's stability over the class (``stable`` / ``unstable`` / ``model-dependent``: the verdict changes
+over the class's sample of (beta1, beta2) and of the kappa-q sample :data:`KAPPA_Q_SAMPLE`, with
+``neutral`` counted as stable as in Fig. 1), the IF, FI, II markers (``x`` consistent throughout,
+``(x)`` model-dependent, ``-`` never; II also gets a stability word) and the CC marker (``?`` where the
+necessary condition ``b11 > 0, b22 > 0`` holds).
+
+Sampling: class interiors come from an offset grid of ``n x n`` angles (no grid point lies on an axis
+or on ``beta2 = beta1``); each subclass is sampled with ``n_alpha`` offset values of alpha.  Points the
+fast kernels leave undecided are settled by :mod:`atlas.exact`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, field
+
+import jax.numpy as jnp
+import numpy as np
+
+from . import exact, mechanics, spectral
+from .verdicts import Consistency, Verdict
+
+__all__ = ["table2", "class_samples", "to_markdown", "to_csv", "run_cli", "KAPPA_Q_SAMPLE", "Row"]
+
+#: (kappa, q1, q2) sample over which "model-dependent" is judged
+KAPPA_Q_SAMPLE = tuple(
+    (k, q1, q2)
+    for k in (0.1, 0.5, 1.0, 2.0, 10.0)
+    for (q1, q2) in ((0.0, 0.0), (0.01, 0.01), (0.3, 0.3), (2.0, 2.0), (0.01, 1.0), (1.0, 0.01))
+)
+
+MODES = ("FF", "SS", "SF", "FS")
+
+
+@dataclass
+class Row:
+    cls: int
+    dual: int
+    subclasses: dict = field(default_factory=dict)  # mode -> list of k
+    stability: dict = field(default_factory=dict)  # mode -> word
+    IF: str = "-"
+    FI: str = "-"
+    II: str = "-"
+    II_stability: str = "-"
+    CC: str = ""
+
+
+def _grid(n):
+    return (np.arange(n) + 0.5) * (2 * np.pi / n)
+
+
+def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
+    """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid."""
+    b = _grid(n)
+    c, s = mechanics.direction(b)
+    code = np.asarray(mechanics.class_code(jnp.asarray(c)[:, None], jnp.asarray(s)[:, None],
+                                           jnp.asarray(c)[None, :], jnp.asarray(s)[None, :]))
+    rng = np.random.default_rng(seed)
+    out = {}
+    for cls in mechanics.ALL_CLASSES:
+        idx = np.argwhere(code == cls)
+        if len(idx) > per_class:
+            idx = idx[rng.choice(len(idx), per_class, replace=False)]
+        out[cls] = np.stack([b[idx[:, 0]], b[idx[:, 1]]], -1) if len(idx) else np.zeros((0, 2))
+    return out
+
+
+def _resolved(name, fast, pts):
+    """Replace undecided fast-path verdicts by exact ones."""
+    fast = np.array(fast)
+    und = fast == 3
+    if und.any():
+        sub = {k: np.broadcast_to(v, fast.shape)[und] for k, v in pts.items()}
+        fast[und] = exact.resolve(sub, names=(name,))[name]
+    return fast
+
+
+def _word(verdicts) -> str:
+    v = set(int(x) for x in np.ravel(verdicts))
+    v = {Verdict.STABLE if x == Verdict.NEUTRAL else x for x in v}
+    if v == {Verdict.STABLE}:
+        return "stable"
+    if v == {Verdict.UNSTABLE}:
+        return "unstable"
+    return "model-dependent"
+
+
+def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float64) -> list[Row]:
+    """Regenerate Table 2 (all 24 classes) from the kernels."""
+    samples = class_samples(n, per_class)
+    alpha = _grid(n_alpha)
+    ca, sa = (jnp.asarray(v) for v in mechanics.direction(alpha, dtype))
+    rows = []
+    for cls in mechanics.ALL_CLASSES:
+        pts = samples[cls]
+        c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
+        c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
+        # dual class (contact indices swapped; exact in vector form)
+        duals = set(np.asarray(mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))).ravel())
+        if len(duals) != 1:
+            raise RuntimeError(f"class {cls}: dual not unique: {duals}")
+        row = Row(cls=cls, dual=int(duals.pop()))
+        sub = np.asarray(mechanics.subclass_code(c1, s1, c2, s2, ca[None, :], sa[None, :]))
+        cons = {m: np.broadcast_to(np.asarray(v), sub.shape) for m, v in
+                mechanics.consistent_modes(c1, s1, c2, s2, ca[None, :], sa[None, :]).items()}
+        for m in MODES:
+            if (cons[m] == Consistency.UNDECIDED).any():
+                raise RuntimeError(f"class {cls}: undecided {m} consistency on the sample")
+            ks = []
+            for k in range(1, 7):
+                sel = sub == 10 * cls + k
+                if not sel.any():
+                    raise RuntimeError(f"subclass {10 * cls + k} not sampled")
+                vals = set(cons[m][sel].tolist())
+                if len(vals) != 1:
+                    raise RuntimeError(f"{m} consistency not constant in subclass {10 * cls + k}")
+                if vals == {1}:
+                    ks.append(k)
+            row.subclasses[m] = ks
+        row.stability["FF"] = "stable"
+        row.stability["SF"] = _word(mechanics.stable_SF(c1))
+        row.stability["FS"] = _word(mechanics.stable_FS(s2))
+        # SS and II over the kappa-q sample
+        kq = np.array(KAPPA_Q_SAMPLE)
+        P = {"c1": np.asarray(c1), "s1": np.asarray(s1), "c2": np.asarray(c2), "s2": np.asarray(s2),
+             "kappa": kq[None, :, 0], "q1": kq[None, :, 1], "q2": kq[None, :, 2]}
+        out = spectral.verdicts_jit(*(jnp.asarray(P[k]) for k in
+                                      ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")))
+        ss = _resolved("stable_SS", out["stable_SS"], P)
+        ci = _resolved("consistent_II", out["consistent_II"], P)
+        si = _resolved("stable_II", out["stable_II"], P)
+        row.stability["SS"] = _word(ss)
+        if_ = np.asarray(mechanics.consistent_IF(c1, s1))
+        fi = np.asarray(mechanics.consistent_FI(c2, s2))
+        row.IF = _marker(if_)
+        row.FI = _marker(fi)
+        row.II = _marker(ci)
+        row.II_stability = _word(si[ci == 1]) if (ci == 1).any() else "-"
+        row.CC = "?" if bool(np.all(mechanics.cc_possible(c1, s2))) else (
+            "" if not np.any(mechanics.cc_possible(c1, s2)) else "(?)")
+        rows.append(row)
+    return rows
+
+
+def _marker(flags) -> str:
+    f = np.asarray(flags).ravel()
+    if np.all(f == 1):
+        return "x"
+    if np.all(f == 0):
+        return "-"
+    return "(x)"
+
+
+_SHADE = {"stable": "", "unstable": "**", "model-dependent": "_"}
+
+
+def to_markdown(rows: list[Row]) -> str:
+    """Markdown table; unstable entries in **bold** (paper: dark), model-dependent in _italics_
+    (paper: light), stable plain (paper: white)."""
+    head = "| class (dual) | FF | SS | SF | FS | IF | FI | II | CC |\n|---|---|---|---|---|---|---|---|---|"
+    lines = [head]
+    for r in rows:
+        dual = "same" if r.dual == r.cls else str(r.dual)
+        cells = []
+        for m in MODES:
+            ks = " ".join(str(k) for k in r.subclasses[m])
+            sh = _SHADE[r.stability[m]] if ks else ""
+            cells.append(f"{sh}{ks}{sh}")
+        ii = r.II
+        if ii != "-":
+            ii = f"{_SHADE[r.II_stability]}{ii}{_SHADE[r.II_stability]}"
+        lines.append(f"| {r.cls} ({dual}) | " + " | ".join(cells) + f" | {r.IF} | {r.FI} | {ii} | {r.CC} |")
+    return "\n".join(lines) + "\n"
+
+
+def to_csv(rows: list[Row]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["class", "dual"] + [f"{m}_subclasses" for m in MODES] + [f"{m}_stability" for m in MODES]
+               + ["IF", "FI", "II", "II_stability", "CC"])
+    for r in rows:
+        w.writerow([r.cls, r.dual] + [" ".join(map(str, r.subclasses[m])) for m in MODES]
+                   + [r.stability[m] for m in MODES] + [r.IF, r.FI, r.II, r.II_stability, r.CC])
+    return buf.getvalue()
+
+
+def run_cli(format: str = "markdown", out: str | None = None, **_):
+    """``atlas table``: print Table 2 (Markdown) or write CSV."""
+    rows = table2()
+    text = to_markdown(rows) if format == "markdown" else to_csv(rows)
+    if out:
+        from .io import atomic_write_text
+
+        atomic_write_text(out, text)
+    else:
+        print(text, end="")
+    return 0
