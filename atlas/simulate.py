@@ -384,8 +384,10 @@ def simulate(
     max_steps : int
         Stop with status ``"step_cap"`` after this many sub-steps.
     amplitude_limit, penetration_limit : float, optional
-        Stop with status ``"diverged"`` when ``max|d_i| > amplitude_limit`` or when an active
-        contact has ``d_i < -penetration_limit`` (impact without collision, paper Sec. 4.3).
+        Stop with status ``"diverged"`` when a gap ``d_i > amplitude_limit``, when an active
+        contact has ``d_i < -penetration_limit`` while the state is aligned with an IWC
+        eigenvector (impact without collision, paper Sec. 4.3; see :func:`classify`), or when any
+        ``d_i < -1e3 penetration_limit``.
         Defaults: ``1e4`` and ``1e3`` times the scale
         ``s = max(|d(0)|, |a| / min_i(k_i |b_i|))``.
     stop_when_settled : bool
@@ -467,7 +469,7 @@ def simulate(
         if not brackets:
             t += h
             z = z1
-            if _diverged(z, mask, amp_lim, pen_lim):
+            if _diverged(sysm, z, mask, amp_lim, pen_lim):
                 status, message = Status.DIVERGED, _div_message(z, mask, amp_lim, pen_lim)
                 break
             if stop_when_settled and _settled(sysm, mode, z, settle_rtol):
@@ -516,7 +518,7 @@ def simulate(
         if len(ev_t) >= max_events:
             status, message = Status.EVENT_CAP, f"{len(ev_t)} events by t = {t:.6g}"
             break
-        if _diverged(z, mask, amp_lim, pen_lim):
+        if _diverged(sysm, z, mask, amp_lim, pen_lim):
             status, message = Status.DIVERGED, _div_message(z, mask, amp_lim, pen_lim)
             break
     return SimulationResult(
@@ -552,13 +554,15 @@ def _mask_from_signs(s) -> int:
     return int(a1) | (int(a2) << 1)
 
 
-def _diverged(z, mask, amp_lim, pen_lim) -> bool:
+def _diverged(sysm, z, mask, amp_lim, pen_lim) -> bool:
+    """Gap above ``amp_lim``, or an active gap below ``-pen_lim`` along an IWC eigenvector
+    (or any gap below ``-1e3 pen_lim``)."""
     if not np.all(np.isfinite(z)):
         return True
-    if np.max(np.abs(z[:2])) > amp_lim:
+    if np.max(z[:2]) > amp_lim or np.min(z[:2]) < -1e3 * pen_lim:
         return True
     for i in range(2):
-        if mask >> i & 1 and z[i] < -pen_lim:
+        if mask >> i & 1 and z[i] < -pen_lim and _iwc_aligned(sysm, mask, z[:4], 1e-3):
             return True
     return False
 
@@ -605,7 +609,7 @@ def classify(
     *,
     min_impacts: int = 6,
     growth_ratio: float = 1.25,
-    align_tol: float = 1e-3,
+    align_tol: float = 1e-2,
 ) -> Outcome:
     """Outcome class of a simulated trajectory (the label depends on the simulated horizon).
 
@@ -640,17 +644,30 @@ def classify(
     if res.status == Status.DIVERGED and mask and _iwc_aligned(sysm, mask, res.g_final, align_tol):
         return Outcome.IWC
     last_event = res.t_events[-1] if res.n_events else 0.0
-    if res.status == Status.T_END and mask and last_event <= 0.5 * T:
+    g = res.g_final
+    acc = mode.E[2:4] @ np.append(g, 1.0)
+    if res.status in (Status.T_END, Status.DIVERGED) and last_event <= 0.5 * T:
         lam = mode.eig
-        if np.all(lam.real <= 1e-9 * np.abs(lam).max()) and _free_gaps_leaving(mode, res.g_final):
+        neutral_or_stable = lam.size == 0 or np.all(lam.real <= 1e-9 * np.abs(lam).max())
+        if neutral_or_stable and _free_gaps_leaving(mode, g):
             return Outcome[f"SETTLES_{res.mode_final}"]
     imp = np.array([k == IMPACT for k in res.kinds], dtype=bool)
-    if imp.sum() < min_impacts:
-        return Outcome.UNDETERMINED
     t_imp = res.t_events[imp]
     speeds = np.abs(res.states[imp][np.arange(imp.sum()), res.contacts[imp] + 1])
+    # a free gap in flight that will come back: its impact speed, dated at the end of the run
+    for i in range(2):
+        if mask == 0 and g[i] > 0 and acc[i] < 0:  # FF: constant acceleration -a_i
+            t_imp = np.append(t_imp, T)
+            speeds = np.append(speeds, math.sqrt(g[i + 2] ** 2 + 2 * abs(acc[i]) * g[i]))
+    if t_imp.size < min_impacts:
+        return Outcome.UNDETERMINED
     if res.status == Status.DIVERGED:
-        return Outcome.GROWING_BOUNCING if last_event >= 0.8 * T else Outcome.UNDETERMINED
+        # a gap beyond the amplitude limit while bouncing (an event late, or in flight and
+        # falling back): growing bouncing
+        in_flight = any(not mask >> i & 1 and acc[i] < 0 for i in range(2))
+        if last_event >= 0.8 * T or in_flight:
+            return Outcome.GROWING_BOUNCING
+        return Outcome.UNDETERMINED
     mid = speeds[(t_imp >= T / 3) & (t_imp < 2 * T / 3)]
     late = speeds[t_imp >= 2 * T / 3]
     if mid.size == 0 or late.size == 0:
@@ -667,7 +684,15 @@ def classify(
 
 
 def _free_gaps_leaving(mode: _Mode, g) -> bool:
+    """Every free gap open, opening, and accelerating away once the active gaps sit at their
+    equilibrium (the mean acceleration of an oscillating neutral mode)."""
     z = np.append(g, 1.0)
+    if mode.mask and mode.z_eq is not None:
+        idx = [i for i in range(2) if mode.mask >> i & 1]
+        z[idx] = mode.z_eq[idx]
+        z[[i + 2 for i in idx]] = 0.0
+    elif mode.mask:
+        return False
     acc = mode.E[2:4] @ z
     return all(
         g[i] > 0 and g[i + 2] >= 0 and acc[i] > 0 for i in range(2) if not mode.mask >> i & 1
@@ -675,35 +700,42 @@ def _free_gaps_leaving(mode: _Mode, g) -> bool:
 
 
 def _iwc_aligned(sysm: _System, mask: int, g, tol) -> bool:
+    """State in an impact without collision (paper Sec. 4.3) in mode ``mask``.
+
+    The deviation of the active gaps and velocities from the mode's equilibrium is expanded in the
+    eigenvectors of the active subsystem; it must lie in the span of the real positive eigenvalues
+    (other components below ``tol`` relative), the component along the dominant one must be
+    non-zero and send every active gap to ``-inf`` (its force to ``+inf``), the active gaps must be
+    negative and decreasing, and every free gap open and opening.
+    """
     mode = sysm.modes[mask]
-    A = mode.E[:4, :4]
+    idx = [i for i in range(2) if mask >> i & 1]
+    if not idx or mode.z_eq is None:
+        return False
+    sub = idx + [i + 2 for i in idx]
+    if any(g[i] >= 0 or g[i + 2] >= 0 for i in idx):
+        return False
+    if any(g[i] < 0 or g[i + 2] < 0 for i in range(2) if i not in idx):
+        return False
+    A = mode.E[np.ix_(sub, sub)]
     w, V = np.linalg.eig(A)
-    z = np.append(g, 1.0)
-    # deviation from a particular solution: use the mode's equilibrium for active gaps if any
-    dev = g.copy()
-    if mode.z_eq is not None:
-        idx = [i for i in range(2) if mask >> i & 1]
-        dev[idx] -= mode.z_eq[idx]
-    del z
-    for lam, v in zip(w, V.T, strict=True):
-        if abs(lam.imag) > 1e-9 * max(abs(lam), 1.0) or lam.real <= 0:
-            continue
-        v = v.real
-        # only the active gaps and velocities are compared (free gaps are driven, polynomially)
-        idx = [i for i in range(2) if mask >> i & 1]
-        sub = idx + [i + 2 for i in idx]
-        vv, dd = v[sub], dev[sub]
-        nv, nd = np.linalg.norm(vv), np.linalg.norm(dd)
-        if nv == 0 or nd == 0:
-            continue
-        cos = float(vv @ dd) / (nv * nd)
-        if 1 - abs(cos) < tol:
-            sgn = np.sign(cos)
-            if all(sgn * v[i] < 0 for i in idx) and all(
-                g[i] > 0 and g[i + 2] >= 0 for i in range(2) if not mask >> i & 1
-            ):
-                return True
-    return False
+    dev = g[sub] - mode.z_eq[sub]
+    try:
+        c = np.linalg.solve(V, dev)
+    except np.linalg.LinAlgError:
+        return False
+    real_pos = (np.abs(w.imag) <= 1e-9 * np.abs(w).max()) & (w.real > 0)
+    if not real_pos.any():
+        return False
+    norm = np.linalg.norm(dev)
+    parts = np.abs(c) * np.linalg.norm(V, axis=0)
+    if np.any(parts[~real_pos] > tol * norm):
+        return False
+    dom = int(np.argmax(np.where(real_pos, w.real, -np.inf)))
+    if parts[dom] <= tol * norm:
+        return False
+    direction = (c[dom] * V[:, dom]).real
+    return bool(np.all(direction[: len(idx)] < 0))
 
 
 # ----------------------------------------------------------------------------- reference
@@ -768,7 +800,7 @@ def simulate_solve_ivp(
             rtol=rtol,
             atol=atol,
             events=events,
-            jac=lambda _t, y, A=A: A,
+            **({"jac": (lambda _t, y, A=A: A)} if method in ("Radau", "BDF", "LSODA") else {}),
         )
         nfev += sol.nfev
         if sol.status != 1:
@@ -854,3 +886,220 @@ def fig2_cases() -> dict:
     )
     e = dict(d, beta2=1.1 * pi)
     return {"a": a, "b": b, "c": c, "d": d, "e": e}
+
+
+# ----------------------------------------------------------------------------- outcome map
+
+#: subclasses (and their duals) where the paper predicts no stable mode or impact (Sec. 6.4-6.5)
+NO_STABLE_SUBCLASSES = (132, 133, 142, 143)
+
+
+def _rank(x, others) -> int:
+    """1 + number of ``others`` below ``x`` (angles mod 2*pi); 0 on an exact tie."""
+    x = x % (2 * math.pi)
+    rank = 1
+    for o in others:
+        o = o % (2 * math.pi)
+        if o == x:
+            return 0
+        rank += o < x
+    return rank
+
+
+def subclass_code_local(beta1: float, beta2: float, alpha: float) -> int:
+    """Subclass code ``ijk`` of SPEC §1 (paper Sec. 3); 0 if degenerate (an exact tie).
+
+    A small local helper for outlining regions in the outcome map; ``atlas.mechanics`` is the
+    reference implementation.
+
+    Parameters
+    ----------
+    beta1, beta2, alpha : float
+        Angles [rad].
+    """
+    hp, p, tp = math.pi / 2, math.pi, 3 * math.pi / 2
+    i = _rank(beta1, (hp, p, tp))
+    j = _rank(beta2, (beta1, beta1 + math.pi, hp, p, tp))
+    k = _rank(alpha, (beta1, beta2, hp, p, tp))
+    if 0 in (i, j, k):
+        return 0
+    return 100 * i + 10 * j + k
+
+
+def dual_angles_local(beta1: float, beta2: float, alpha: float):
+    """Dual point (swap the contacts): ``(pi/2 - beta2, pi/2 - beta1, pi/2 - alpha)`` [rad]."""
+    hp = math.pi / 2
+    return hp - beta2, hp - beta1, hp - alpha
+
+
+def in_no_stable_subclass(beta1: float, beta2: float, alpha: float) -> bool:
+    """True in subclasses 132, 133, 142, 143 or their duals (paper Sec. 6.4-6.5)."""
+    return (
+        subclass_code_local(beta1, beta2, alpha) in NO_STABLE_SUBCLASSES
+        or subclass_code_local(*dual_angles_local(beta1, beta2, alpha)) in NO_STABLE_SUBCLASSES
+    )
+
+
+def ss_spectral_abscissa(beta1, beta2, kappa=0.5, q=(0.0, 0.0)) -> float:
+    """max Re(eig M), ``M = [[0, I], [-B K, -B Q]]`` (paper eq. 8), scaled units (k2 = |b| = 1).
+
+    Plain floating-point ``eig``: a plotting aid for the outcome map, not a stability verdict.
+    """
+    q = np.broadcast_to(np.asarray(q, dtype=float), (2,))
+    B = np.array([[math.cos(beta1), math.cos(beta2)], [math.sin(beta1), math.sin(beta2)]])
+    M = np.zeros((4, 4))
+    M[:2, 2:] = _I2
+    M[2:, :2] = -B @ np.diag([kappa, 1.0])
+    M[2:, 2:] = -B @ np.diag(q)
+    return float(np.max(np.linalg.eigvals(M).real))
+
+
+def outcome_map(
+    beta1_values,
+    beta2_values,
+    kappa: float = 0.5,
+    q=0.0,
+    alpha: float = 0.35 * math.pi,
+    n_perturb: int = 1,
+    seed: int = 0,
+    perturbation: float = 1e-2,
+    t_end: float = 150.0,
+    max_events: int = 2000,
+    progress=None,
+):
+    """Simulated outcome over a ``(beta1, beta2)`` grid (what the dynamics actually do).
+
+    Scaled parameters (SPEC §1): ``|b_1| = |b_2| = |a| = 1``, ``k = (kappa, 1)``,
+    ``q = (q1_hat, q2_hat)``; time in units of ``1 / sqrt(k2 |b2|)``.  Initial conditions are
+    seeded random perturbations of the SS equilibrium ``d* = -K^{-1} B^{-1} a`` (paper eq. 8):
+    ``d = d* + perturbation * |d*| * xi``, ``d' = perturbation * |d*| * xi'`` with standard normal
+    ``xi``; where the SS mode is inconsistent, the perturbation is applied to the state at rest
+    with zero gaps, gaps pushed into contact: ``d = -perturbation * |xi| / kappa_min``.
+
+    Parameters
+    ----------
+    beta1_values, beta2_values : array_like
+        Grid of contact directions [rad].
+    kappa : float
+        ``k1 |b1| / (k2 |b2|)`` [1].
+    q : float or (float, float)
+        Scaled damping ``q_j_hat`` [1].
+    alpha : float
+        Direction of ``a`` [rad].
+    n_perturb : int
+        Initial conditions per grid point; ``outcome`` is the most frequent class and
+        ``agreement`` the fraction of runs that gave it.
+    seed : int
+        Seed of ``numpy.random.default_rng``.
+    perturbation : float
+        Relative size of the perturbation [1].
+    t_end, max_events
+        Horizon [scaled time] and event cap per trajectory (see :func:`simulate`).
+    progress : callable, optional
+        Called with ``(done, total)`` after each grid point.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``outcome`` (int8, CF flags from :class:`Outcome`) and ``agreement`` (float32) over
+        ``(beta1, beta2)``; ``no_stable_subclass`` (bool): subclasses 132, 133, 142, 143 or duals;
+        ``ss_spectral_abscissa`` (float64, eig-based plotting aid).
+    """
+    import xarray as xr
+
+    b1 = np.atleast_1d(_check_finite("beta1_values", beta1_values)).astype(float)
+    b2 = np.atleast_1d(_check_finite("beta2_values", beta2_values)).astype(float)
+    if b1.ndim != 1 or b2.ndim != 1 or b1.size == 0 or b2.size == 0:
+        raise ValueError("beta1_values and beta2_values must be non-empty 1-D arrays")
+    kappa = float(_check_finite("kappa", kappa, positive=True))
+    qq = _check_finite("q", np.broadcast_to(np.asarray(q, dtype=float), (2,)), nonneg=True)
+    alpha = float(_check_finite("alpha", alpha))
+    if int(n_perturb) < 1:
+        raise ValueError(f"n_perturb must be >= 1, got {n_perturb!r}")
+    perturbation = float(_check_finite("perturbation", perturbation, positive=True))
+    rng = np.random.default_rng(seed)
+    k = (kappa, 1.0)
+    out = np.zeros((b1.size, b2.size), dtype=np.int8)
+    agree = np.zeros((b1.size, b2.size), dtype=np.float32)
+    region = np.zeros((b1.size, b2.size), dtype=bool)
+    absc = np.zeros((b1.size, b2.size))
+    n_traj = 0
+    t0 = _time.perf_counter()
+    total = b1.size * b2.size
+    for i, x1 in enumerate(b1):
+        for j, x2 in enumerate(b2):
+            d_eq = ss_equilibrium(x1, x2, alpha, k=k)
+            codes = []
+            for _ in range(int(n_perturb)):
+                xi = rng.standard_normal(4)
+                if d_eq is not None:
+                    s = np.abs(d_eq).max()
+                    g0 = np.concatenate(
+                        [d_eq + perturbation * s * xi[:2], perturbation * s * xi[2:]]
+                    )
+                else:
+                    s = 1.0 / min(kappa, 1.0)
+                    g0 = np.concatenate(
+                        [-perturbation * s * np.abs(xi[:2]), perturbation * s * xi[2:]]
+                    )
+                res = simulate(x1, x2, alpha, k=k, q=qq, g0=g0, t_end=t_end, max_events=max_events)
+                codes.append(int(classify(res)))
+                n_traj += 1
+            vals, counts = np.unique(codes, return_counts=True)
+            best = int(vals[np.argmax(counts)])
+            out[i, j] = best
+            agree[i, j] = counts.max() / len(codes)
+            region[i, j] = in_no_stable_subclass(x1, x2, alpha)
+            absc[i, j] = ss_spectral_abscissa(x1, x2, kappa, qq)
+            if progress is not None:
+                progress(i * b2.size + j + 1, total)
+    wall = _time.perf_counter() - t0
+    flags = {
+        "long_name": "simulated outcome of perturbed SS equilibrium",
+        "flag_values": np.array([int(m) for m in Outcome], dtype=np.int8),
+        "flag_meanings": " ".join(m.label for m in Outcome),
+    }
+    coords = {
+        "beta1": ("beta1", b1, {"units": "rad", "long_name": "direction of b_1"}),
+        "beta2": ("beta2", b2, {"units": "rad", "long_name": "direction of b_2"}),
+    }
+    ds = xr.Dataset(
+        {
+            "outcome": (("beta1", "beta2"), out, flags),
+            "agreement": (
+                ("beta1", "beta2"),
+                agree,
+                {"units": "1", "long_name": "fraction of perturbed runs giving outcome"},
+            ),
+            "no_stable_subclass": (
+                ("beta1", "beta2"),
+                region,
+                {"long_name": "subclass 132, 133, 142, 143 or dual (paper Sec. 6.4-6.5)"},
+            ),
+            "ss_spectral_abscissa": (
+                ("beta1", "beta2"),
+                absc,
+                {"units": "1", "long_name": "max Re eig of SS matrix (eig, plotting aid)"},
+            ),
+        },
+        coords=coords,
+        attrs={
+            "title": "Outcome map of the compliant two-contact dynamics",
+            "references": "Varkonyi, Dynamics of mechanical systems with multiple sliding "
+            "contacts: new faces of Painleve's paradox (Sec. 4.1, 6.4-6.5, Fig. 2)",
+            "method": "exact event-driven simulation (atlas.simulate)",
+            "kappa": kappa,
+            "q1": float(qq[0]),
+            "q2": float(qq[1]),
+            "alpha": alpha,
+            "alpha_units": "rad",
+            "n_perturb": int(n_perturb),
+            "seed": int(seed),
+            "perturbation": perturbation,
+            "t_end": float(t_end),
+            "max_events": int(max_events),
+            "trajectories": n_traj,
+            "trajectories_per_second": n_traj / wall if wall > 0 else float("nan"),
+        },
+    )
+    return ds
