@@ -301,7 +301,9 @@ class SimulationResult:
         Returns
         -------
         ndarray (..., 4)
-            ``g(t) = expm(E_S (t - t_s)) g(t_s)`` from the segment start ``t_s`` preceding ``t``.
+            ``g(t) = expm(E_S (t - t_s)) g(t_s)`` from the segment start ``t_s`` preceding ``t``
+            (evaluated as whole sub-steps ``expm(E_S h_S)`` plus the degree-30 Taylor polynomial
+            of the remainder, like the simulator itself).
         """
         times = np.asarray(times, dtype=float)
         if np.any(~np.isfinite(times)) or np.any(times < 0) or np.any(times > self.t_final):
@@ -312,10 +314,20 @@ class SimulationResult:
         out = np.empty((flat.size, 4))
         for s in np.unique(seg):
             sel = seg == s
-            E = self._system.modes[self._seg_mask[s]].E
+            mode = self._system.modes[self._seg_mask[s]]
             tau = flat[sel] - self._seg_t[s]
-            Ms = scipy.linalg.expm(E[None, :, :] * tau[:, None, None])
-            out[sel] = (Ms @ self._seg_z[s])[:, :4]
+            # the simulator's own arithmetic: sub-steps expm(E h), then the Taylor polynomial
+            n = np.floor(tau / mode.h).astype(int)
+            grid = np.empty((n.max() + 1, 5))
+            grid[0] = self._seg_z[s]
+            for m in range(1, n.max() + 1):
+                grid[m] = mode.Phi @ grid[m - 1]
+            off = tau - n * mode.h
+            W = np.einsum("kij,sj->ksi", mode.P, grid[n])
+            acc = np.zeros((tau.size, 5))
+            for kk in range(W.shape[0] - 1, -1, -1):
+                acc = acc * off[:, None] + W[kk]
+            out[sel] = acc[:, :4]
         return out.reshape(times.shape + (4,))
 
 
