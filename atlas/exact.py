@@ -194,6 +194,7 @@ def resolve(points: dict, names=_SPECTRAL) -> dict:
 
 # --- class codes and Table 1, exactly ------------------------------------------------------------
 
+
 def _angle(c, s):
     with mpmath.workdps(50):
         a = mpmath.atan2(mpmath.mpf(float(s)), mpmath.mpf(float(c)))

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._signs import UNKNOWN, det2_sign, sign_of
-from .verdicts import UNDECIDED_CODE, Consistency, Verdict
+from .verdicts import UNDECIDED_CODE, Verdict
 
 __all__ = [
     "direction",
@@ -54,8 +54,13 @@ def direction(angle, dtype=np.float64):
     x = np.where((x >= 0) & (x < dtype.type(TWO_PI)), x, np.mod(x, dtype.type(TWO_PI)))
     c = np.cos(x.astype(np.float64)).astype(dtype)
     s = np.sin(x.astype(np.float64)).astype(dtype)
-    axes = [(0.0, 1.0, 0.0), (np.pi / 2, 0.0, 1.0), (np.pi, -1.0, 0.0), (1.5 * np.pi, 0.0, -1.0),
-            (TWO_PI, 1.0, 0.0)]
+    axes = [
+        (0.0, 1.0, 0.0),
+        (np.pi / 2, 0.0, 1.0),
+        (np.pi, -1.0, 0.0),
+        (1.5 * np.pi, 0.0, -1.0),
+        (TWO_PI, 1.0, 0.0),
+    ]
     for a, ca, sa in axes:
         hit = x == dtype.type(a)
         c = np.where(hit, dtype.type(ca), c)
@@ -140,7 +145,10 @@ def subclass_code(c1, s1, c2, s2, ca, sa):
 
 def dual_angles(beta1, beta2, alpha=None):
     """Dual (contact indices swapped): ``(pi/2 - beta2, pi/2 - beta1, pi/2 - alpha)`` mod 2 pi."""
-    out = [np.mod(np.pi / 2 - np.asarray(beta2), TWO_PI), np.mod(np.pi / 2 - np.asarray(beta1), TWO_PI)]
+    out = [
+        np.mod(np.pi / 2 - np.asarray(beta2), TWO_PI),
+        np.mod(np.pi / 2 - np.asarray(beta1), TWO_PI),
+    ]
     if alpha is not None:
         out.append(np.mod(np.pi / 2 - np.asarray(alpha), TWO_PI))
     return tuple(out)
@@ -200,8 +208,9 @@ def _neg_sign(a):
 
 def _stable_from_diagonal(b_jj):
     # matrix (7): det = b_jj k_j, trace = -b_jj q_j (Appendix B); b_jj = 0 gives a double zero root
-    return jnp.where(b_jj > 0, Verdict.STABLE, jnp.where(b_jj < 0, Verdict.UNSTABLE, Verdict.NEUTRAL)
-                     ).astype(jnp.int8)
+    return jnp.where(
+        b_jj > 0, Verdict.STABLE, jnp.where(b_jj < 0, Verdict.UNSTABLE, Verdict.NEUTRAL)
+    ).astype(jnp.int8)
 
 
 def stable_SF(c1):

@@ -41,11 +41,20 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ._signs import UNKNOWN, certified_sign, det2_sign, evaluate_certified, gamma
+from ._signs import UNKNOWN, det2_sign, evaluate_certified, gamma
 from .verdicts import Consistency, Verdict
 
-__all__ = ["normalize", "coefficients", "ss_verdict", "ss_margin", "ii_verdicts", "verdicts",
-           "quartic_roots", "eig_verdicts", "build_M"]
+__all__ = [
+    "normalize",
+    "coefficients",
+    "ss_verdict",
+    "ss_margin",
+    "ii_verdicts",
+    "verdicts",
+    "quartic_roots",
+    "eig_verdicts",
+    "build_M",
+]
 
 _DK_STEPS = 3
 
@@ -64,6 +73,7 @@ def normalize(kappa, q1, q2):
 
 # --- polynomial expressions, written once; evaluated as values and as absolute bounds ------------
 
+
 def _a2_undamped(k1, c1, k2, s2, *, sub):
     return k1 * c1 + k2 * s2
 
@@ -80,7 +90,9 @@ def _G(s1, c2, k1, c1, k2, s2, r1, r2, w2, w4, *, sub):
     m = k1 * r2 + k2 * r1
     a3 = c1 * r1 + s2 * r2
     det = sub(c1 * s2, s1 * c2)
-    return w2 * (s1 * c2 * m * m + r1 * r2 * sub(k1 * c1, k2 * s2) ** 2) + w4 * r1 * r2 * det * a3 * m
+    return (
+        w2 * (s1 * c2 * m * m + r1 * r2 * sub(k1 * c1, k2 * s2) ** 2) + w4 * r1 * r2 * det * a3 * m
+    )
 
 
 def _coefficients(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
@@ -120,8 +132,18 @@ def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
     # equal damping: sign(a3) = sign(c1 + s2), one rounding of a sum -> exact sign
     s_a3 = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(jnp.int8), s_a3)
     G, G_abs, s_G = evaluate_certified(_G, s1, c2, k1, c1, k2, s2, r1, r2, w2, w4)
-    return dict(sd=sd, s_a2u=s_a2u, s_disc=s_disc, s_a3=s_a3, s_G=s_G, disc=disc, disc_abs=disc_abs,
-                G=G, G_abs=G_abs, damped=(q1s > 0) | (q2s > 0))
+    return dict(
+        sd=sd,
+        s_a2u=s_a2u,
+        s_disc=s_disc,
+        s_a3=s_a3,
+        s_G=s_G,
+        disc=disc,
+        disc_abs=disc_abs,
+        G=G,
+        G_abs=G_abs,
+        damped=(q1s > 0) | (q2s > 0),
+    )
 
 
 def _all_nonneg(*signs):
@@ -139,17 +161,23 @@ def _any_neg(*signs):
 
 
 def _ss_from_signs(p):
-    U, S, N, X = (int(Verdict.UNSTABLE), int(Verdict.STABLE), int(Verdict.NEUTRAL),
-                  int(Verdict.UNDECIDED))
+    U, S, N, X = (
+        int(Verdict.UNSTABLE),
+        int(Verdict.STABLE),
+        int(Verdict.NEUTRAL),
+        int(Verdict.UNDECIDED),
+    )
     sd, s_a2u, s_disc, s_a3, s_G = p["sd"], p["s_a2u"], p["s_disc"], p["s_a3"], p["s_G"]
     # undamped
     und = jnp.where(_any_neg(sd, s_a2u, s_disc), U, jnp.where(_all_nonneg(sd, s_a2u, s_disc), N, X))
     # damped, det B = 0
     d0 = jnp.where(_any_neg(s_a3, s_a2u), U, jnp.where(_all_nonneg(s_a3, s_a2u), N, X))
     # damped, det B > 0
-    dpos = jnp.where((s_a3 == -1) | (s_a3 == 0), U,
-                     jnp.where(s_a3 == 1,
-                               jnp.where(s_G == 1, S, jnp.where(s_G == -1, U, X)), X))
+    dpos = jnp.where(
+        (s_a3 == -1) | (s_a3 == 0),
+        U,
+        jnp.where(s_a3 == 1, jnp.where(s_G == 1, S, jnp.where(s_G == -1, U, X)), X),
+    )
     dmp = jnp.where(sd == -1, U, jnp.where(sd == 0, d0, jnp.where(sd == 1, dpos, X)))
     return jnp.where(p["damped"], dmp, und).astype(jnp.int8)
 
@@ -171,6 +199,7 @@ def ss_margin(c1, s1, c2, s2, kappa, q1, q2):
 
 
 # --- roots and their enclosure ------------------------------------------------------------------
+
 
 def _csqrt(z):
     return jnp.sqrt(z)
@@ -215,19 +244,19 @@ def quartic_roots(a3, a2, a1, a0, undamped):
     # Ferrari: l = y - a3/4, y^4 + p y^2 + qq y + r
     sh = a3c / 4
     p = a2c - 6 * sh * sh
-    qq = a1c - 2 * a2c * sh + 8 * sh ** 3
-    r = a0c - a1c * sh + a2c * sh * sh - 3 * sh ** 4
+    qq = a1c - 2 * a2c * sh + 8 * sh**3
+    r = a0c - a1c * sh + a2c * sh * sh - 3 * sh**4
     # resolvent 8 m^3 + 8 p m^2 + (2 p^2 - 8 r) m - qq^2 = 0  ->  m^3 + B m^2 + C m + Dd
     B, C, Dd = p, p * p / 4 - r, -qq * qq / 8
     # depressed cubic m = t - B/3
     P = C - B * B / 3
-    Qc = 2 * B ** 3 / 27 - B * C / 3 + Dd
-    disc = _csqrt(Qc * Qc / 4 + P ** 3 / 27)
+    Qc = 2 * B**3 / 27 - B * C / 3 + Dd
+    disc = _csqrt(Qc * Qc / 4 + P**3 / 27)
     u = _cbrt(-Qc / 2 + jnp.where(jnp.abs(-Qc / 2 + disc) >= jnp.abs(-Qc / 2 - disc), disc, -disc))
     omega = jnp.exp(2j * jnp.pi / 3).astype(cdt)
     best = jnp.zeros_like(u)
     for kk in range(3):
-        uk = u * omega ** kk
+        uk = u * omega**kk
         tk = uk - jnp.where(uk != 0, P / (3 * jnp.where(uk != 0, uk, 1)), 0)
         mk = tk - B / 3
         best = jnp.where(jnp.abs(mk) > jnp.abs(best), mk, best)
@@ -322,8 +351,11 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
             be = exact[..., i] & exact[..., j]
             o = o | overlap(z[..., i], z[..., j], R[..., i], R[..., j], be)
             cc = cc & ~overlap(jnp.conj(z[..., i]), z[..., j], R[..., i], R[..., j], be)
-            d = d & ((x[..., i] - R[..., i]) * 1 > (x[..., j] + R[..., j]) + 8 * u * (
-                jnp.abs(x[..., i]) + jnp.abs(x[..., j]) + R[..., i] + R[..., j]))
+            d = d & (
+                (x[..., i] - R[..., i]) * 1
+                > (x[..., j] + R[..., j])
+                + 8 * u * (jnp.abs(x[..., i]) + jnp.abs(x[..., j]) + R[..., i] + R[..., j])
+            )
         iso.append(~o)
         conj_clear.append(cc)
         dom.append(d)
@@ -358,21 +390,29 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
         ok = nonreal[..., i]
         for j in range(n):
             if j != i:
-                ok = ok & (~meets_axis[..., j] | ((x[..., i] - R[..., i]) > (x[..., j] + R[..., j])
-                                                  + 8 * u * (jnp.abs(x[..., i]) + jnp.abs(x[..., j]))))
+                ok = ok & (
+                    ~meets_axis[..., j]
+                    | (
+                        (x[..., i] - R[..., i])
+                        > (x[..., j] + R[..., j])
+                        + 8 * u * (jnp.abs(x[..., i]) + jnp.abs(x[..., j]))
+                    )
+                )
         cplx_right.append(ok)
     cplx_right = jnp.any(jnp.stack(cplx_right, -1), -1)
     S, U, XX = int(Verdict.STABLE), int(Verdict.UNSTABLE), int(Verdict.UNDECIDED)
-    stable = jnp.where(consistent == I, U,
-                       jnp.where(stable_dom, S, jnp.where(unstable_dom | cplx_right, U, XX)))
+    stable = jnp.where(
+        consistent == I, U, jnp.where(stable_dom, S, jnp.where(unstable_dom | cplx_right, U, XX))
+    )
     return consistent.astype(jnp.int8), stable.astype(jnp.int8)
 
 
 def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     dtype = c1.dtype
     k1, k2, q1s, q2s, n = normalize(kappa, q1, q2)
-    shape = jnp.broadcast_shapes(c1.shape, s1.shape, c2.shape, s2.shape, kappa.shape, q1.shape,
-                                 q2.shape)
+    shape = jnp.broadcast_shapes(
+        c1.shape, s1.shape, c2.shape, s2.shape, kappa.shape, q1.shape, q2.shape
+    )
     bc = lambda a: jnp.broadcast_to(a, shape)  # noqa: E731
     c1, s1, c2, s2, k1, k2, q1s, q2s, n = (bc(a) for a in (c1, s1, c2, s2, k1, k2, q1s, q2s, n))
     sd = det2_sign(c1, s1, c2, s2)
@@ -411,7 +451,8 @@ def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
     The abscissa (max Re of the approximate roots) is in the time unit of contact 2.
     """
     z, R, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero) = _roots_and_radii(
-        c1, s1, c2, s2, kappa, q1, q2)
+        c1, s1, c2, s2, kappa, q1, q2
+    )
     cons, stab = _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, dzero, c1.dtype)
     absc = jnp.ldexp(jnp.max(jnp.real(z), -1), n)
     return cons, stab, absc
@@ -429,10 +470,12 @@ def verdicts(c1, s1, c2, s2, kappa, q1, q2, *, ii=True):
 
 # --- baseline: batched general eigen-solver -----------------------------------------------------
 
+
 def build_M(c1, s1, c2, s2, kappa, q1, q2):
     """The 4x4 matrix ``M`` of eq. (9) in invariant parameters (``K = diag(kappa, 1)``)."""
-    shape = jnp.broadcast_shapes(c1.shape, s1.shape, c2.shape, s2.shape, kappa.shape, q1.shape,
-                                 q2.shape)
+    shape = jnp.broadcast_shapes(
+        c1.shape, s1.shape, c2.shape, s2.shape, kappa.shape, q1.shape, q2.shape
+    )
     bc = lambda a: jnp.broadcast_to(a, shape)  # noqa: E731
     c1, s1, c2, s2, kappa, q1, q2 = (bc(a) for a in (c1, s1, c2, s2, kappa, q1, q2))
     zero, one = jnp.zeros_like(c1), jnp.ones_like(c1)
@@ -457,8 +500,9 @@ def eig_verdicts(c1, s1, c2, s2, kappa, q1, q2, *, tol=None):
     w, v = jnp.linalg.eig(M)
     re, im = jnp.real(w), jnp.imag(w)
     smax = jnp.max(re, -1)
-    ss = jnp.where(smax < -tol, Verdict.STABLE, jnp.where(smax <= tol, Verdict.NEUTRAL,
-                                                           Verdict.UNSTABLE)).astype(jnp.int8)
+    ss = jnp.where(
+        smax < -tol, Verdict.STABLE, jnp.where(smax <= tol, Verdict.NEUTRAL, Verdict.UNSTABLE)
+    ).astype(jnp.int8)
     x1, x2 = jnp.real(v[..., 0, :]), jnp.real(v[..., 1, :])
     iitype = (jnp.abs(im) <= tol) & (re > tol) & (x1 * x2 > 0)
     cons = jnp.any(iitype, -1).astype(jnp.int8)

@@ -57,8 +57,14 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid."""
     b = _grid(n)
     c, s = mechanics.direction(b)
-    code = np.asarray(mechanics.class_code(jnp.asarray(c)[:, None], jnp.asarray(s)[:, None],
-                                           jnp.asarray(c)[None, :], jnp.asarray(s)[None, :]))
+    code = np.asarray(
+        mechanics.class_code(
+            jnp.asarray(c)[:, None],
+            jnp.asarray(s)[:, None],
+            jnp.asarray(c)[None, :],
+            jnp.asarray(s)[None, :],
+        )
+    )
     rng = np.random.default_rng(seed)
     out = {}
     for cls in mechanics.ALL_CLASSES:
@@ -100,13 +106,17 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
         c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form)
-        duals = set(np.asarray(mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))).ravel())
+        duals = set(
+            np.asarray(mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))).ravel()
+        )
         if len(duals) != 1:
             raise RuntimeError(f"class {cls}: dual not unique: {duals}")
         row = Row(cls=cls, dual=int(duals.pop()))
         sub = np.asarray(mechanics.subclass_code(c1, s1, c2, s2, ca[None, :], sa[None, :]))
-        cons = {m: np.broadcast_to(np.asarray(v), sub.shape) for m, v in
-                mechanics.consistent_modes(c1, s1, c2, s2, ca[None, :], sa[None, :]).items()}
+        cons = {
+            m: np.broadcast_to(np.asarray(v), sub.shape)
+            for m, v in mechanics.consistent_modes(c1, s1, c2, s2, ca[None, :], sa[None, :]).items()
+        }
         for m in MODES:
             if (cons[m] == Consistency.UNDECIDED).any():
                 raise RuntimeError(f"class {cls}: undecided {m} consistency on the sample")
@@ -126,10 +136,18 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         row.stability["FS"] = _word(mechanics.stable_FS(s2))
         # SS and II over the kappa-q sample
         kq = np.array(KAPPA_Q_SAMPLE)
-        P = {"c1": np.asarray(c1), "s1": np.asarray(s1), "c2": np.asarray(c2), "s2": np.asarray(s2),
-             "kappa": kq[None, :, 0], "q1": kq[None, :, 1], "q2": kq[None, :, 2]}
-        out = spectral.verdicts_jit(*(jnp.asarray(P[k]) for k in
-                                      ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")))
+        P = {
+            "c1": np.asarray(c1),
+            "s1": np.asarray(s1),
+            "c2": np.asarray(c2),
+            "s2": np.asarray(s2),
+            "kappa": kq[None, :, 0],
+            "q1": kq[None, :, 1],
+            "q2": kq[None, :, 2],
+        }
+        out = spectral.verdicts_jit(
+            *(jnp.asarray(P[k]) for k in ("c1", "s1", "c2", "s2", "kappa", "q1", "q2"))
+        )
         ss = _resolved("stable_SS", out["stable_SS"], P)
         ci = _resolved("consistent_II", out["consistent_II"], P)
         si = _resolved("stable_II", out["stable_II"], P)
@@ -140,8 +158,11 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         row.FI = _marker(fi)
         row.II = _marker(ci)
         row.II_stability = _word(si[ci == 1]) if (ci == 1).any() else "-"
-        row.CC = "?" if bool(np.all(mechanics.cc_possible(c1, s2))) else (
-            "" if not np.any(mechanics.cc_possible(c1, s2)) else "(?)")
+        row.CC = (
+            "?"
+            if bool(np.all(mechanics.cc_possible(c1, s2)))
+            else ("" if not np.any(mechanics.cc_possible(c1, s2)) else "(?)")
+        )
         rows.append(row)
     return rows
 
@@ -173,18 +194,28 @@ def to_markdown(rows: list[Row]) -> str:
         ii = r.II
         if ii != "-":
             ii = f"{_SHADE[r.II_stability]}{ii}{_SHADE[r.II_stability]}"
-        lines.append(f"| {r.cls} ({dual}) | " + " | ".join(cells) + f" | {r.IF} | {r.FI} | {ii} | {r.CC} |")
+        lines.append(
+            f"| {r.cls} ({dual}) | " + " | ".join(cells) + f" | {r.IF} | {r.FI} | {ii} | {r.CC} |"
+        )
     return "\n".join(lines) + "\n"
 
 
 def to_csv(rows: list[Row]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(["class", "dual"] + [f"{m}_subclasses" for m in MODES] + [f"{m}_stability" for m in MODES]
-               + ["IF", "FI", "II", "II_stability", "CC"])
+    w.writerow(
+        ["class", "dual"]
+        + [f"{m}_subclasses" for m in MODES]
+        + [f"{m}_stability" for m in MODES]
+        + ["IF", "FI", "II", "II_stability", "CC"]
+    )
     for r in rows:
-        w.writerow([r.cls, r.dual] + [" ".join(map(str, r.subclasses[m])) for m in MODES]
-                   + [r.stability[m] for m in MODES] + [r.IF, r.FI, r.II, r.II_stability, r.CC])
+        w.writerow(
+            [r.cls, r.dual]
+            + [" ".join(map(str, r.subclasses[m])) for m in MODES]
+            + [r.stability[m] for m in MODES]
+            + [r.IF, r.FI, r.II, r.II_stability, r.CC]
+        )
     return buf.getvalue()
 
 
