@@ -550,10 +550,12 @@ def run(
         for g, need, dims, shape in plan:
             kern = _jitted(g.name, need, method)
             inputs = _GROUP_INPUTS[g.name]
+            # small groups: pad to the next power of two only (same blocks, few distinct shapes)
+            T = min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
             pending = None
-            for index in tile_blocks(shape, tile_points):
+            for index in tile_blocks(shape, T):
                 block = tuple(s.stop - s.start for s in index)
-                flat = _gather(src, inputs, dims, index, block, tile_points)
+                flat = _gather(src, inputs, dims, index, block, T)
                 out = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
                 if pending is not None:
                     _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, stats, md, bar)

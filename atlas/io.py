@@ -32,7 +32,14 @@ import xarray as xr
 from .generate import DEFAULT_TILE_POINTS, Schema, block_shape, run
 from .scene import Scene
 
-__all__ = ["write_netcdf", "generate_to_file", "check_output_path", "NetCDFSink", "COMPLEVEL"]
+__all__ = [
+    "write_netcdf",
+    "generate_to_file",
+    "check_output_path",
+    "atomic_write_text",
+    "NetCDFSink",
+    "COMPLEVEL",
+]
 
 COMPLEVEL = 4
 
@@ -51,7 +58,7 @@ def check_output_path(path, overwrite: bool = False) -> str:
         raise PermissionError(f"out: directory {directory} is not writable")
     if os.path.exists(path) and not overwrite:
         raise FileExistsError(
-            f"out: {path} exists (use --overwrite / overwrite=True to replace it)"
+            f"out: {path} exists (use --overwrite to replace it)"
         )
     return path
 
@@ -66,7 +73,7 @@ def _temp_path(path: str) -> str:
 def _commit(tmp: str, path: str, overwrite: bool):
     if not overwrite and os.path.exists(path):
         raise FileExistsError(
-            f"out: {path} exists (use --overwrite / overwrite=True to replace it)"
+            f"out: {path} exists (use --overwrite to replace it)"
         )
     os.chmod(tmp, 0o644 & ~_umask())
     os.replace(tmp, path)
@@ -226,3 +233,17 @@ def generate_to_file(
     stats = dict(run.last_stats)
     stats.update(path=sink.path, bytes=os.path.getsize(sink.path))
     return stats
+
+
+def atomic_write_text(path, text: str, overwrite: bool = True) -> str:
+    """Write a text file atomically (temporary file in the same directory, then ``os.replace``)."""
+    path = check_output_path(path, overwrite)
+    tmp = _temp_path(path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        _commit(tmp, path, overwrite)
+    except BaseException:
+        _unlink(tmp)
+        raise
+    return path

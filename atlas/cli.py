@@ -1,0 +1,305 @@
+"""The ``atlas`` command line: ``generate``, ``paper``, ``simulate``, ``table``, ``bench``.
+
+A thin layer over the library.  ``atlas generate`` streams a scene into a netCDF4 file
+(:func:`atlas.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
+implement them (``atlas.paper.run``, ``atlas.simulate.run_cli``, ``atlas.table2.run_cli``,
+``atlas.bench.run``) and exit with code 2 and a one-line message if such a module is missing.
+
+Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
+existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
+code 2 -- never a traceback.  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
+``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
+~15 s compilation of the eigenvalue kernel.
+
+Examples::
+
+    atlas generate --scene fig1 --out fig1.nc
+    atlas generate --beta1 0:2pi:256 --beta2 0:2pi:256 --kappa log:0.1:10:5 --q 0,0.5 --out a.nc
+    atlas generate --scene fig1 --physical k1=100,k2=200,q1=20,q2=20 --out fig2model.nc
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import shlex
+import sys
+from pathlib import Path
+
+__all__ = ["main", "build_parser"]
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage dump) and exit code 2."""
+
+    def error(self, message):  # noqa: D401 - argparse API
+        raise _UsageError(f"{self.prog}: error: {message}")
+
+
+class _UsageError(Exception):
+    pass
+
+
+def _one_line(msg: str) -> str:
+    return " ".join(str(msg).split())
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .generate import DEFAULT_TILE_POINTS, DTYPES, METHODS
+    from .scene import ALL_OUTPUTS, BUILTIN_SCENES
+
+    p = _Parser(
+        prog="atlas",
+        description="Atlases of contact-mode consistency and stability for two sliding contacts "
+        "(Painleve's paradox).",
+    )
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    g = sub.add_parser(
+        "generate",
+        help="compute a scene into a CF netCDF4 atlas",
+        description="Compute a scene (built-in or explicit ranges) tile by tile into a CF-1.10 "
+        "netCDF4 file.  Ranges: START:STOP:N (linear; angles over a full turn exclude STOP), "
+        "log:START:STOP:N, V1,V2,... or a scalar; numbers may carry a pi suffix (0.2pi).",
+        epilog=f"built-in scenes: {', '.join(BUILTIN_SCENES)}; outputs: {', '.join(ALL_OUTPUTS)}",
+    )
+    g.add_argument("--scene", help="built-in scene to start from (options below override it)")
+    for name, what in (
+        ("beta1", "direction angle of b1 [rad]"),
+        ("beta2", "direction angle of b2 [rad]"),
+        ("alpha", "direction angle of a [rad] (needed by subclass/consistency outputs)"),
+        ("kappa", "stiffness ratio k1|b1|/(k2|b2|) [1]"),
+        ("q", "dimensionless damping q1_hat = q2_hat [1]"),
+        ("q1", "dimensionless damping of contact 1 (with --q2, instead of --q)"),
+        ("q2", "dimensionless damping of contact 2"),
+    ):
+        g.add_argument(f"--{name}", metavar="RANGE", help=what)
+    g.add_argument(
+        "--physical",
+        metavar="k1=..,k2=..[,q1=..,q2=..,b1=..,b2=..]",
+        help="physical contact parameters, converted to kappa and q (|b| default 1, q default 0)",
+    )
+    g.add_argument("--outputs", metavar="NAMES", help="comma-separated variables (default: all)")
+    g.add_argument("--out", metavar="FILE.nc", help="output file (default: SCENE.nc)")
+    g.add_argument("--method", choices=METHODS, default="certified")
+    g.add_argument("--dtype", choices=DTYPES, default="float64")
+    g.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    g.add_argument(
+        "--tile-points",
+        type=_positive_int("tile-points"),
+        default=DEFAULT_TILE_POINTS,
+        metavar="N",
+        help=f"points per tile (memory bound; default {DEFAULT_TILE_POINTS})",
+    )
+    g.add_argument(
+        "--no-resolve",
+        action="store_true",
+        help="keep undecided points instead of resolving them exactly",
+    )
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
+    pp.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    pp.add_argument("--quick", action="store_true", help="low resolution (seconds, for CI)")
+
+    ps = sub.add_parser("simulate", help="simulate the compliant-contact dynamics (Fig. 2)")
+    ps.add_argument("--case", choices=["fig2a", "fig2b", "fig2c", "fig2d", "fig2e"])
+    for name in ("beta1", "beta2", "alpha"):
+        ps.add_argument(
+            f"--{name}", type=_number(name), metavar="ANGLE", help="[rad], pi suffix ok"
+        )
+    for name in ("k1", "k2", "q1", "q2", "t-end"):
+        ps.add_argument(f"--{name}", type=_number(name), metavar="X")
+    ps.add_argument("--out", metavar="FILE", help="output file (figure or data)")
+
+    pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
+    pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
+    pt.add_argument("--out", metavar="FILE", help="output file (default: stdout)")
+
+    pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
+    pb.add_argument("--quick", action="store_true", help="small grids (CI)")
+    pb.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    return p
+
+
+def _positive_int(name):
+    def conv(text):
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
+        if n < 1:
+            raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+        return n
+
+    conv.__name__ = name
+    return conv
+
+
+def _number(name):
+    def conv(text):
+        from .scene import parse_values
+
+        try:
+            vals, is_dim = parse_values(text, name)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+        if is_dim:
+            raise argparse.ArgumentTypeError(f"{name}: expected a single number, got {text!r}")
+        return float(vals)
+
+    conv.__name__ = name
+    return conv
+
+
+def _parse_physical(text: str) -> dict:
+    from .scene import invariants
+
+    kw = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise ValueError(f"physical: expected key=value, got {item.strip()!r}")
+        key, val = (s.strip() for s in item.split("=", 1))
+        if key not in ("k1", "k2", "q1", "q2", "b1", "b2"):
+            raise ValueError(f"physical: unknown parameter {key!r} (k1, k2, q1, q2, b1, b2)")
+        if key in kw:
+            raise ValueError(f"physical: {key} given twice")
+        try:
+            kw[key] = float(val)
+        except ValueError:
+            raise ValueError(f"{key}: cannot parse {val!r} as a number") from None
+    for key in ("k1", "k2"):
+        if key not in kw:
+            raise ValueError(f"physical: {key} is required")
+    return invariants(**kw)
+
+
+def _scene_from_args(args):
+    from .scene import Scene, builtin
+
+    fields = {k: getattr(args, k) for k in ("beta1", "beta2", "alpha", "kappa", "q", "q1", "q2")}
+    if args.outputs is not None:
+        fields["outputs"] = args.outputs
+    if args.physical is not None:
+        for k in ("kappa", "q", "q1", "q2"):
+            if fields[k] is not None:
+                raise ValueError(f"physical: conflicts with --{k}")
+        inv = _parse_physical(args.physical)
+        fields["kappa"] = repr(inv["kappa"])
+        if inv["q1"] == inv["q2"]:
+            fields["q"] = repr(inv["q1"])
+        else:
+            fields["q1"], fields["q2"] = repr(inv["q1"]), repr(inv["q2"])
+    if fields["q"] is not None and (fields["q1"] is not None or fields["q2"] is not None):
+        raise ValueError("q: give either --q or --q1 and --q2, not both")
+    if args.scene:
+        return builtin(args.scene, **fields)
+    return Scene(**{k: v for k, v in fields.items() if v is not None})
+
+
+def _cmd_generate(args, argv) -> int:
+    from .io import check_output_path, generate_to_file
+
+    scene = _scene_from_args(args)
+    out = args.out or f"{scene.name}.nc"
+    check_output_path(out, args.overwrite)  # fail before any computation
+    _compile_cache()
+    history = "atlas " + " ".join(shlex.quote(a) for a in argv)
+    stats = generate_to_file(
+        scene,
+        out,
+        overwrite=args.overwrite,
+        method=args.method,
+        dtype=args.dtype,
+        resolve=not args.no_resolve,
+        tile_points=args.tile_points,
+        progress=not args.no_progress and sys.stderr.isatty() or _force_progress(),
+        history=history,
+    )
+    print(
+        f"atlas generate: {stats['path']}: {stats['points']} points in {stats['seconds']:.2f} s "
+        f"({stats['points_per_second']:.3g} points/s), {stats['bytes'] / 1e6:.2f} MB; "
+        f"undecided {stats['undecided_fast']} before, {stats['undecided']} after exact resolution",
+        file=sys.stderr,
+    )
+    return 0
+
+
+def _force_progress() -> bool:
+    return os.environ.get("ATLAS_PROGRESS", "") not in ("", "0")
+
+
+def _compile_cache():
+    """Persistent JAX compilation cache (``$ATLAS_JAX_CACHE``; ``0`` disables)."""
+    import jax
+
+    default = Path.home() / ".cache" / "painleve-atlas" / "jax"
+    where = os.environ.get("ATLAS_JAX_CACHE", str(default))
+    if where in ("", "0") or jax.config.jax_compilation_cache_dir:
+        return
+    try:
+        Path(where).mkdir(parents=True, exist_ok=True)
+        jax.config.update("jax_compilation_cache_dir", where)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
+    except (OSError, AttributeError):  # unwritable home or an old JAX: just compile
+        pass
+
+
+_DISPATCH = {
+    "paper": ("atlas.paper", "run"),
+    "simulate": ("atlas.simulate", "run_cli"),
+    "table": ("atlas.table2", "run_cli"),
+    "bench": ("atlas.bench", "run"),
+}
+
+
+def _cmd_dispatch(args) -> int:
+    module, func = _DISPATCH[args.command]
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as e:
+        if e.name != module:
+            raise
+        mod = None
+    fn = getattr(mod, func, None) if mod is not None else None
+    if fn is None:
+        print(f"atlas {args.command}: not available yet ({module}.{func} missing)", file=sys.stderr)
+        return EXIT_USAGE
+    opts = {k: v for k, v in vars(args).items() if k != "command"}
+    rc = fn(**opts)
+    return rc if isinstance(rc, int) else 0
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``atlas`` console script; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = build_parser().parse_args(argv)
+        if args.command == "generate":
+            return _cmd_generate(args, argv)
+        return _cmd_dispatch(args)
+    except _UsageError as e:
+        print(_one_line(e), file=sys.stderr)
+        return EXIT_USAGE
+    except (ValueError, OSError) as e:
+        print(f"atlas: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
+    except SystemExit as e:  # --help
+        return e.code if isinstance(e.code, int) else 0
+    except KeyboardInterrupt:
+        print("atlas: interrupted (no partial output file left)", file=sys.stderr)
+        return 130
+
+
+def _exit(code):  # pragma: no cover - trivial
+    sys.exit(code)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _exit(main())
