@@ -139,6 +139,22 @@ def _quartic_discriminant(a3, a2, a1, a0):
     return disc / np.where(scale > 0, scale, 1.0)
 
 
+def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
+    """SS margin whose zero set is *every* model-dependent SS boundary.
+
+    :func:`atlas.spectral.ss_margin` covers ``G`` (damped) and the discriminant (``Q = 0``); the
+    other condition that depends on the model is ``a2 = kappa c1 + s2 >= 0`` (``Q = 0``) or
+    ``a3 = c1 q1 + s2 q2 > 0`` (damped), whose sign changes inside classes 23 and 46.  The minimum
+    of the normalised quantities is continuous and its zero set is the boundary.
+    """
+    c1, s2 = np.asarray(c1, float), np.asarray(s2, float)
+    if q1 == 0 and q2 == 0:
+        a = (kappa * c1 + s2) / (kappa * np.abs(c1) + np.abs(s2) + 1e-300)
+    else:
+        a = (c1 * q1 + s2 * q2) / (np.abs(c1) * q1 + np.abs(s2) * q2 + 1e-300)
+    return np.minimum(np.asarray(margin, float), a)
+
+
 def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     """``Re(l_II) - max Re(other roots)`` (NaN where no II root), scaled by the root magnitude."""
     M = np.asarray(spectral.build_M(*(jnp.asarray(np.asarray(a, np.float64))
@@ -166,7 +182,7 @@ def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     return np.where(has, g, np.nan)
 
 
-def stability_map(n: int = 360, kappa: float = 0.5, q1: float = 0.0, q2: float = 0.0,
+def stability_map(n: int = 361, kappa: float = 0.5, q1: float = 0.0, q2: float = 0.0,
                   margins: bool = True):
     """Fig. 1 map on an ``n x n`` offset grid of ``(beta1, beta2)`` in ``[0, 2 pi)``.
 
@@ -215,8 +231,10 @@ def stability_map(n: int = 360, kappa: float = 0.5, q1: float = 0.0, q2: float =
     ds["spectral_abscissa"] = (dims, ev["spectral_abscissa"],
                                {"units": "1", "long_name": "max Re eigenvalue of M (scaled time)"})
     if margins:
-        ds["margin_SS"] = (dims, ev["margin_SS"], {"units": "1", "long_name":
-                                                   "smooth SS margin (zero on curved boundary)"})
+        ds["margin_SS"] = (dims, _ss_margin_full(ev["margin_SS"], C1, S2, kappa, q1, q2),
+                           {"units": "1", "long_name": "SS margin: min(ss_margin, a2 or a3 "
+                                                       "normalised); zero on model-dependent "
+                                                       "boundaries"})
         if q1 == 0 and q2 == 0:
             mii = ev["margin_SS"]  # the mu-discriminant (see module docstring)
         else:
@@ -370,6 +388,7 @@ def _atomic_savefig(fig, path, dpi=DPI):
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=dpi)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

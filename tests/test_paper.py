@@ -1,0 +1,29 @@
+"""``atlas.paper.run(quick=True)`` end to end."""
+
+import pytest
+import xarray as xr
+
+from atlas import paper
+
+FILES = ("fig1_classes.png", "fig1_stability.png", "fig1_stability_variants.png", "table2.md",
+         "table2.csv", "table2.png", "audit.md", "fig1_map.nc", "README.md")
+
+
+def test_atomic_write_text(tmp_path):
+    p = tmp_path / "a.txt"
+    paper.atomic_write_text(p, "one")
+    paper.atomic_write_text(p, "two")
+    assert p.read_text() == "two"
+    assert [f.name for f in tmp_path.iterdir()] == ["a.txt"]
+
+
+@pytest.mark.slow
+def test_run_quick(tmp_path):
+    paper.run(out=tmp_path, quick=True, progress=lambda m: None)
+    for f in FILES:
+        assert (tmp_path / f).stat().st_size > 0, f
+    ds = xr.open_dataset(tmp_path / "fig1_map.nc")
+    assert ds["stable_SS"].dtype == "int8"
+    assert "flag_meanings" in ds["stable_SS"].attrs
+    assert "NOT verified" not in (tmp_path / "audit.md").read_text()
+    assert not list(tmp_path.glob("*.tmp*"))
