@@ -366,6 +366,7 @@ def _near_change(field, cls, width=2):
 def _dashed(ax, ds, margin, where=None, color="k", lw=1.1, ls="--"):
     """Dashed zero contour of a smooth margin (optionally restricted to cells ``where``)."""
     m = np.array(ds[margin].values, float)
+    m[ds["class_code"].values == 0] = np.nan  # degenerate cells (beta2 = beta1, b2 = -b1)
     if where is not None:
         m = np.where(where, m, np.nan)
     if not np.isfinite(m).any() or np.nanmin(m) >= 0 or np.nanmax(m) <= 0:
@@ -652,7 +653,7 @@ def plot_table2(path, rows):
         cells.append(line)
         colours.append(shade)
         textc.append(["white" if c == TABLE_SHADE["unstable"] else "black" for c in shade])
-    fig, ax = plt.subplots(figsize=(8.4, 0.3 * len(rows) + 1.6))
+    fig, ax = plt.subplots(figsize=(8.4, 0.27 * len(rows) + 1.0))
     ax.axis("off")
     tab = ax.table(cellText=cells, colLabels=cols, cellColours=colours, loc="upper center",
                    cellLoc="center", colWidths=[0.16] + [0.105] * 8)

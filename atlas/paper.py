@@ -68,6 +68,10 @@ def write_netcdf(ds, path) -> Path:
     for name, var in ds.variables.items():
         if var.dtype.kind in "iub" or name in ds.coords:
             enc[name] = {"_FillValue": None}
+        if name in ds.data_vars and var.ndim:
+            enc.setdefault(name, {}).update(zlib=True, complevel=4)
+            if var.dtype == np.float64 and name.startswith("margin"):
+                enc[name]["dtype"] = "float32"
         if var.dtype == bool:
             ds[name] = var.astype(np.int8)
             ds[name].attrs.update(flag_values=np.array([0, 1], np.int8),
