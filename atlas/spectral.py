@@ -201,27 +201,6 @@ def ss_margin(c1, s1, c2, s2, kappa, q1, q2):
 # --- roots and their enclosure ------------------------------------------------------------------
 
 
-def _csqrt(z):
-    return jnp.sqrt(z)
-
-
-def _cbrt(z):
-    r = jnp.abs(z)
-    th = jnp.angle(z)
-    return jnp.where(r > 0, jnp.cbrt(r) * jnp.exp(1j * th / 3), 0)
-
-
-def _quadratic_roots(b, c):
-    """Roots of ``z^2 + b z + c`` (complex, cancellation-free)."""
-    b = b.astype(jnp.result_type(b, 1j))
-    c = c.astype(b.dtype)
-    s = _csqrt(b * b - 4 * c)
-    s = jnp.where(jnp.real(jnp.conj(b) * s) >= 0, s, -s)
-    z1 = -(b + s) / 2
-    z2 = jnp.where(z1 != 0, c / jnp.where(z1 != 0, z1, 1), -b - z1)
-    return z1, z2
-
-
 def _poly_eval(coef, z):
     """Horner evaluation of the monic polynomial with ``coef = (a3, a2, a1, a0)``."""
     acc = jnp.ones_like(z)
@@ -230,45 +209,84 @@ def _poly_eval(coef, z):
     return acc
 
 
-def quartic_roots(a3, a2, a1, a0, undamped):
-    """Approximate roots of the monic quartic (closed form + Weierstrass polishing).
+def _real_quadratic(b, c):
+    """Roots of ``y^2 + b y + c`` (real coefficients) as ``(re1, im1, re2, im2)``, cancellation-free."""
+    disc = b * b - 4 * c
+    sq = jnp.sqrt(jnp.abs(disc))
+    real = disc >= 0
+    y1 = -(b + jnp.where(b >= 0, sq, -sq)) / 2
+    y2 = jnp.where(y1 != 0, c / jnp.where(y1 != 0, y1, 1), -b - y1)
+    zero = jnp.zeros_like(b)
+    re1 = jnp.where(real, y1, -b / 2)
+    re2 = jnp.where(real, y2, -b / 2)
+    im1 = jnp.where(real, zero, sq / 2)
+    return re1, im1, re2, -im1
 
-    Undamped points (``a3 = a1 = 0``) use the exact biquadratic structure ``+-sqrt(mu)``.
+
+def _resolvent_root(p, C, D):
+    """Largest real root of ``m^3 + p m^2 + C m + D`` (real Cardano / trigonometric + Newton)."""
+    P = C - p * p / 3
+    Q = 2 * p**3 / 27 - p * C / 3 + D
+    disc = (Q / 2) ** 2 + (P / 3) ** 3
+    sd = jnp.sqrt(jnp.maximum(disc, 0))
+    w = -Q / 2 - jnp.where(Q >= 0, sd, -sd)
+    u = jnp.cbrt(w)
+    t1 = u - jnp.where(u != 0, P / (3 * jnp.where(u != 0, u, 1)), 0)
+    Pn = jnp.minimum(P, 0)
+    rad = jnp.sqrt(-Pn / 3)
+    arg = jnp.where(
+        Pn < 0, (3 * Q / (2 * jnp.where(Pn < 0, Pn, -1))) / jnp.where(rad > 0, rad, 1), 0
+    )
+    t3 = 2 * rad * jnp.cos(jnp.arccos(jnp.clip(arg, -1, 1)) / 3)
+    m = jnp.where(disc > 0, t1, t3) - p / 3
+    for _ in range(2):
+        f = ((m + p) * m + C) * m + D
+        fp = (3 * m + 2 * p) * m + C
+        m = jnp.where(fp != 0, m - f / jnp.where(fp != 0, fp, 1), m)
+    return m
+
+
+def quartic_roots(a3, a2, a1, a0, undamped):
+    """Approximate roots (complex, shape ``(..., 4)``) of the monic real quartic.
+
+    Ferrari's method in real arithmetic (the resolvent cubic of a real quartic has a real root
+    ``m >= 0``), then Weierstrass (Durand-Kerner) polishing.  Undamped points (``a3 = a1 = 0``) use
+    the biquadratic structure ``l = +-sqrt(mu)`` and are not polished (their real parts stay exact).
     """
-    cdt = jnp.result_type(a3, 1j)
-    a3c, a2c, a1c, a0c = (x.astype(cdt) for x in (a3, a2, a1, a0))
-    # biquadratic
-    mu1, mu2 = _quadratic_roots(a2, a0)
-    r1, r2 = _csqrt(mu1), _csqrt(mu2)
-    biq = (r1, -r1, r2, -r2)
-    # Ferrari: l = y - a3/4, y^4 + p y^2 + qq y + r
-    sh = a3c / 4
-    p = a2c - 6 * sh * sh
-    qq = a1c - 2 * a2c * sh + 8 * sh**3
-    r = a0c - a1c * sh + a2c * sh * sh - 3 * sh**4
-    # resolvent 8 m^3 + 8 p m^2 + (2 p^2 - 8 r) m - qq^2 = 0  ->  m^3 + B m^2 + C m + Dd
-    B, C, Dd = p, p * p / 4 - r, -qq * qq / 8
-    # depressed cubic m = t - B/3
-    P = C - B * B / 3
-    Qc = 2 * B**3 / 27 - B * C / 3 + Dd
-    disc = _csqrt(Qc * Qc / 4 + P**3 / 27)
-    u = _cbrt(-Qc / 2 + jnp.where(jnp.abs(-Qc / 2 + disc) >= jnp.abs(-Qc / 2 - disc), disc, -disc))
-    omega = jnp.exp(2j * jnp.pi / 3).astype(cdt)
-    best = jnp.zeros_like(u)
-    for kk in range(3):
-        uk = u * omega**kk
-        tk = uk - jnp.where(uk != 0, P / (3 * jnp.where(uk != 0, uk, 1)), 0)
-        mk = tk - B / 3
-        best = jnp.where(jnp.abs(mk) > jnp.abs(best), mk, best)
-    m = best
-    s2m = _csqrt(2 * m)
-    safe = jnp.where(s2m != 0, s2m, 1)
-    t = jnp.where(s2m != 0, qq / (2 * safe), 0)
-    y1, y2 = _quadratic_roots(-s2m, p / 2 + m + t)
-    y3, y4 = _quadratic_roots(s2m, p / 2 + m - t)
-    fer = (y1 - sh, y2 - sh, y3 - sh, y4 - sh)
-    z = jnp.stack([jnp.where(undamped, b, f) for b, f in zip(biq, fer)], axis=-1)
-    coef = (a3c[..., None], a2c[..., None], a1c[..., None], a0c[..., None])
+    # biquadratic: mu^2 + a2 mu + a0 = 0, l = +-sqrt(mu)
+    m1r, m1i, m2r, m2i = _real_quadratic(a2, a0)
+    mod = jnp.sqrt(m1r * m1r + m1i * m1i)
+    wr = jnp.sqrt(jnp.maximum(mod + m1r, 0) / 2)
+    wi = jnp.sqrt(jnp.maximum(mod - m1r, 0) / 2)
+    real_mu = m1i == 0
+    # real mu: +-sqrt(mu) real or +-i sqrt(-mu); complex pair mu, conj(mu): +-w, +-conj(w)
+    r1 = jnp.where(real_mu, jnp.sqrt(jnp.maximum(m1r, 0)), wr)
+    i1 = jnp.where(real_mu, jnp.sqrt(jnp.maximum(-m1r, 0)), wi)
+    r2 = jnp.where(real_mu, jnp.sqrt(jnp.maximum(m2r, 0)), wr)
+    i2 = jnp.where(real_mu, jnp.sqrt(jnp.maximum(-m2r, 0)), -wi)
+    biq = jnp.stack([r1 + 1j * i1, -r1 - 1j * i1, r2 + 1j * i2, -r2 - 1j * i2], -1)
+    # Ferrari: l = y - a3/4, y^4 + p y^2 + qq y + r = 0
+    sh = a3 / 4
+    p = a2 - 6 * sh * sh
+    qq = a1 - 2 * a2 * sh + 8 * sh**3
+    r = a0 - a1 * sh + a2 * sh * sh - 3 * sh**4
+    m = jnp.maximum(_resolvent_root(p, p * p / 4 - r, -qq * qq / 8), 0)
+    s = jnp.sqrt(2 * m)
+    t = jnp.where(s > 0, qq / (2 * jnp.where(s > 0, s, 1)), 0)
+    # qq = 0 (m = 0): y^2 = roots of z^2 + p z + r, handled by the biquadratic formula in y
+    ya = _real_quadratic(-s, p / 2 + m + t)
+    yb = _real_quadratic(s, p / 2 + m - t)
+    fer = jnp.stack(
+        [ya[0] + 1j * ya[1], ya[2] + 1j * ya[3], yb[0] + 1j * yb[1], yb[2] + 1j * yb[3]], -1
+    )
+    fer = fer - sh[..., None]
+    # weak damping: the undamped roots are a better start than Ferrari (which loses accuracy
+    # as qq -> 0); the enclosure certifies whichever start is used
+    scale = jnp.sqrt(jnp.abs(a2)) + jnp.sqrt(jnp.sqrt(jnp.abs(a0)))
+    weak = (jnp.abs(a3) < 1e-3 * scale) & (jnp.abs(a1) < 1e-3 * scale**3)
+    z = jnp.where((undamped | weak)[..., None], biq, fer)
+    cdt = z.dtype
+    coef = tuple(a.astype(cdt)[..., None] for a in (a3, a2, a1, a0))
     for _ in range(_DK_STEPS):
         w = _weierstrass(coef, z)
         z = jnp.where(undamped[..., None] | ~jnp.isfinite(w), z, z - w)
@@ -332,6 +350,10 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
     """II consistency and stability verdicts from enclosed roots (see module docstring)."""
     u = float(jnp.finfo(dtype).eps) / 2
     n = z.shape[-1]
+    # a non-finite root or radius says nothing: its disk is the whole plane
+    bad = ~(jnp.isfinite(z) & jnp.isfinite(R))
+    z = jnp.where(bad, 0, z)
+    R = jnp.where(bad, jnp.inf, R)
     x, y = jnp.real(z), jnp.imag(z)
     lo_f, hi_f = 1 - 8 * u, 1 + 8 * u
     # exact roots (known zeros) have R = 0 and never count as overlapping each other
@@ -417,6 +439,18 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     c1, s1, c2, s2, k1, k2, q1s, q2s, n = (bc(a) for a in (c1, s1, c2, s2, k1, k2, q1s, q2s, n))
     sd = det2_sign(c1, s1, c2, s2)
     dzero = sd == 0
+    # balance the root magnitudes: l -> 2^e l with 2^e ~ max(|a3|, |a2|^1/2, |a1|^1/3, |a0|^1/4)
+    coef_abs = _coefficients(*(jnp.abs(a) for a in (c1, s1, c2, s2, k1, k2, q1s, q2s)), sub=jnp.add)
+    size = jnp.maximum(
+        jnp.maximum(coef_abs[0], jnp.sqrt(coef_abs[1])),
+        jnp.maximum(jnp.cbrt(coef_abs[2]), jnp.sqrt(jnp.sqrt(coef_abs[3]))),
+    )
+    e = jnp.where(
+        jnp.isfinite(size) & (size > 0), jnp.round(jnp.log2(jnp.where(size > 0, size, 1))), 0
+    ).astype(jnp.int32)
+    k1, k2 = jnp.ldexp(k1, -2 * e), jnp.ldexp(k2, -2 * e)
+    q1s, q2s = jnp.ldexp(q1s, -e), jnp.ldexp(q2s, -e)
+    n = n + e
     coef = _coefficients(c1, s1, c2, s2, k1, k2, q1s, q2s, sub=jnp.subtract)
     coef_abs = _coefficients(*(jnp.abs(a) for a in (c1, s1, c2, s2, k1, k2, q1s, q2s)), sub=jnp.add)
     # exact zeros of a1, a0 where det B = 0 exactly
@@ -431,8 +465,8 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     cca = tuple(a[..., None] for a in coef_abs)
     R = _enclosure(cc, cca, z, dtype)
     # det B = 0: roots 0, 0 exactly, and the two roots of l^2 + a3 l + a2
-    zq1, zq2 = _quadratic_roots(a3, a2)
-    zq = jnp.stack([zq1, zq2], -1)
+    q1r, q1i, q2r, q2i = _real_quadratic(a3, a2)
+    zq = jnp.stack([q1r + 1j * q1i, q2r + 1j * q2i], -1)
     cq = (a3.astype(cdt)[..., None], a2.astype(cdt)[..., None])
     cqa = (coef_abs[0][..., None], coef_abs[1][..., None])
     Rq = _enclosure(cq, cqa, zq, dtype)
@@ -441,6 +475,25 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     z = jnp.where(dzero[..., None], zd, z)
     R = jnp.where(dzero[..., None], Rd, R)
     return z, R, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero)
+
+
+def ii_possible(c1, s1, c2, s2):
+    """``False`` where II is certainly inconsistent: no ``f > 0`` with ``B f`` in the open third
+    quadrant (the paper's necessary condition, Sec. 4.3).  Exact sign logic; where ``det B`` cannot
+    be certified the answer is ``True`` (the full analysis decides).
+
+    An II eigenvector ``x > 0`` at ``l > 0`` gives ``y = (K + l Q) x > 0`` with ``B y = -l^2 x``.
+    The open cone ``{f1 b1 + f2 b2, f > 0}`` meets the open third quadrant iff ``b1`` or ``b2`` lies
+    in it, or (``det B != 0``) the cone contains the direction ``(-1, -1)``, i.e.
+    ``sign(c2 - s2) = sign(s1 - c1) = sign(det B)``; for ``det B = 0`` the cone is a ray or a line.
+    """
+    in3 = lambda c, s: (c < 0) & (s < 0)
+    sd = det2_sign(c1, s1, c2, s2)
+    d = jnp.sign(c2 - s2).astype(jnp.int8)  # one rounding: exact sign
+    e = jnp.sign(s1 - c1).astype(jnp.int8)
+    through = (sd != 0) & (sd != UNKNOWN) & (d == sd) & (e == sd)
+    opposite = (sd == 0) & (c1 == -c2) & (s1 == -s2) & (in3(c1, s1) | in3(-c1, -s1))
+    return in3(c1, s1) | in3(c2, s2) | through | opposite | (sd == UNKNOWN)
 
 
 def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
@@ -458,13 +511,114 @@ def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
     return cons, stab, absc
 
 
-def verdicts(c1, s1, c2, s2, kappa, q1, q2, *, ii=True):
-    """All spectral verdicts: dict with ``stable_SS``, ``consistent_II``, ``stable_II``,
-    ``spectral_abscissa``, ``margin_SS`` (arrays broadcast over the inputs)."""
+def _X(k1, c1, k2, s2, *, sub):
+    return sub(k1 * c1, k2 * s2)
+
+
+def _sgn_plus_sqrt(sy, se, sdisc):
+    """sign(Y + sqrt(D)) for D = Y^2 + E, from the signs of Y, E, D (UNKNOWN propagates)."""
+    out = jnp.where(sy == 1, 1, jnp.where(sy == -1, se, jnp.where(sdisc == 1, 1, 0)))
+    unk = (sy == UNKNOWN) | ((sy == -1) & (se == UNKNOWN)) | ((sy == 0) & (sdisc == UNKNOWN))
+    return jnp.where(unk, UNKNOWN, out).astype(jnp.int8)
+
+
+def _neg(s):
+    return jnp.where(s == UNKNOWN, UNKNOWN, -s).astype(jnp.int8)
+
+
+def ii_undamped(c1, s1, c2, s2, kappa):
+    """II verdicts for ``Q = 0`` in closed form (Appendix C): ``(consistent_II, stable_II, abscissa)``.
+
+    ``l^2 = mu``, ``mu^2 + a2 mu + a0 = 0``, ``disc = X^2 + E`` with ``X = k1 c1 - k2 s2``,
+    ``E = 4 k1 k2 s1 c2``.  Real ``l > 0`` needs real ``mu > 0``: ``mu+ > 0`` iff ``det B < 0`` or
+    ``a2 < 0``; ``mu- > 0`` iff ``a2 < 0`` and ``det B > 0``.  Row 1 of the eigenvector equation:
+    ``c2 (mu + c1 k1) < 0`` with ``2 (mu_pm + c1 k1) = X +- sqrt(disc)``; row 2 (used where
+    ``c2 = 0``): ``s1 (mu + s2 k2) < 0`` with ``2 (mu_pm + s2 k2) = -X +- sqrt(disc)``.  The sign of
+    ``Y + sqrt(Y^2 + E)`` is ``+1`` for ``Y > 0`` and ``sign(E)`` for ``Y < 0``.  II is stable iff
+    ``sqrt(mu+)`` is an II root and strictly dominant (``mu+ > 0``, ``disc > 0``).
+    """
+    k1, k2, _, _, n = normalize(kappa, jnp.zeros_like(kappa), jnp.zeros_like(kappa))
+    sd = det2_sign(c1, s1, c2, s2)
+    _, _, s_a2 = evaluate_certified(_a2_undamped, k1, c1, k2, s2)
+    _, _, s_disc = evaluate_certified(_disc_undamped, k1, c1, k2, s2, s1, c2)
+    _, _, s_x = evaluate_certified(_X, k1, c1, k2, s2)
+    se = (jnp.sign(s1) * jnp.sign(c2)).astype(jnp.int8)
+    sc2, ss1 = jnp.sign(c2).astype(jnp.int8), jnp.sign(s1).astype(jnp.int8)
+    # sign of (mu_pm + c1 k1) and (mu_pm + s2 k2)
+    h1p = _sgn_plus_sqrt(s_x, se, s_disc)
+    h1m = _neg(_sgn_plus_sqrt(_neg(s_x), se, s_disc))
+    h2p = _sgn_plus_sqrt(_neg(s_x), se, s_disc)
+    h2m = _neg(_sgn_plus_sqrt(s_x, se, s_disc))
+
+    def cond(h1, h2):  # Consistency code of the eigenvector condition at that mu
+        v1 = jnp.where(h1 == UNKNOWN, 3, (sc2 * h1 < 0).astype(jnp.int8))
+        v2 = jnp.where(h2 == UNKNOWN, 3, (ss1 * h2 < 0).astype(jnp.int8))
+        return jnp.where(sc2 != 0, v1, jnp.where(ss1 != 0, v2, 3)).astype(jnp.int8)
+
+    def tri_and(a, b):
+        return jnp.where((a == 0) | (b == 0), 0, jnp.where((a == 3) | (b == 3), 3, 1)).astype(
+            jnp.int8
+        )
+
+    def tri_or(a, b):
+        return jnp.where((a == 1) | (b == 1), 1, jnp.where((a == 3) | (b == 3), 3, 0)).astype(
+            jnp.int8
+        )
+
+    def pos(sign):
+        return jnp.where(sign == UNKNOWN, 3, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
+
+    def neg(sign):
+        return jnp.where(sign == UNKNOWN, 3, (sign < 0).astype(jnp.int8)).astype(jnp.int8)
+
+    real_mu = jnp.where(s_disc == UNKNOWN, 3, (s_disc >= 0).astype(jnp.int8)).astype(jnp.int8)
+    mu_p = tri_and(real_mu, tri_or(neg(sd), neg(s_a2)))
+    mu_m = tri_and(real_mu, tri_and(neg(s_a2), pos(sd)))
+    cons_p = tri_and(mu_p, cond(h1p, h2p))
+    cons_m = tri_and(mu_m, cond(h1m, h2m))
+    cons = tri_or(cons_p, cons_m)
+    stab = tri_and(cons_p, pos(s_disc))
+    stab = jnp.where(stab == 3, int(Verdict.UNDECIDED), stab).astype(jnp.int8)
+    # abscissa: max Re sqrt(mu) over the roots of mu^2 + a2 mu + a0 (time unit of contact 2)
+    a2 = k1 * c1 + k2 * s2
+    a0 = (c1 * s2 - s1 * c2) * k1 * k2
+    m1r, m1i, m2r, _ = _real_quadratic(a2, a0)
+    mod = jnp.sqrt(m1r * m1r + m1i * m1i)
+    re_c = jnp.sqrt(jnp.maximum(mod + m1r, 0) / 2)
+    re_r = jnp.sqrt(jnp.maximum(jnp.maximum(m1r, m2r), 0))
+    absc = jnp.ldexp(jnp.where(m1i != 0, re_c, re_r), n)
+    return cons, stab, absc
+
+
+def verdicts(c1, s1, c2, s2, kappa, q1, q2, *, ii=True, damped=None):
+    """All spectral verdicts: dict with ``stable_SS``, ``consistent_II``, ``stable_II`` and
+    ``spectral_abscissa`` (arrays broadcast over the inputs).
+
+    ``damped=False`` promises ``q1 = q2 = 0`` everywhere (closed forms only, no root finding);
+    ``None`` handles any mix (undamped points still use the closed forms).
+    """
     out = {"stable_SS": ss_verdict(c1, s1, c2, s2, kappa, q1, q2)}
-    if ii:
-        cons, stab, absc = ii_verdicts(c1, s1, c2, s2, kappa, q1, q2)
-        out.update(consistent_II=cons, stable_II=stab, spectral_abscissa=absc)
+    if not ii:
+        return out
+    cu, su, au = ii_undamped(c1, s1, c2, s2, kappa)
+    if damped is False:
+        shape = out["stable_SS"].shape
+        out.update(
+            consistent_II=jnp.broadcast_to(cu, shape),
+            stable_II=jnp.broadcast_to(su, shape),
+            spectral_abscissa=jnp.broadcast_to(au, shape),
+        )
+        return out
+    cons, stab, absc = ii_verdicts(c1, s1, c2, s2, kappa, q1, q2)
+    undamped = (q1 == 0) & (q2 == 0)
+    possible = ii_possible(c1, s1, c2, s2)
+    cons = jnp.where(possible, cons, int(Consistency.INCONSISTENT))
+    stab = jnp.where(possible, stab, int(Verdict.UNSTABLE))
+    out.update(
+        consistent_II=jnp.where(undamped, cu, cons).astype(jnp.int8),
+        stable_II=jnp.where(undamped, su, stab).astype(jnp.int8),
+        spectral_abscissa=jnp.where(undamped, au, absc),
+    )
     return out
 
 
@@ -513,5 +667,5 @@ def eig_verdicts(c1, s1, c2, s2, kappa, q1, q2, *, tol=None):
     return {"stable_SS": ss, "consistent_II": cons, "stable_II": stab, "spectral_abscissa": smax}
 
 
-verdicts_jit = jax.jit(verdicts, static_argnames=("ii",))
+verdicts_jit = jax.jit(verdicts, static_argnames=("ii", "damped"))
 eig_verdicts_jit = jax.jit(eig_verdicts)
