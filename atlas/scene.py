@@ -432,7 +432,7 @@ def builtin(name: str, **overrides) -> Scene:
     if name not in BUILTIN_SCENES:
         raise ValueError(f"scene: unknown scene {name!r} (known: {', '.join(BUILTIN_SCENES)})")
     fields = dict(BUILTIN_SCENES[name])
-    if "q1" in overrides or "q2" in overrides:
+    if overrides.get("q1") is not None or overrides.get("q2") is not None:
         fields.pop("q", None)
     if overrides.get("q") is not None:
         fields.pop("q1", None)

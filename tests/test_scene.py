@@ -140,3 +140,9 @@ def test_bad_physical_names_parameter(kwargs, name):
 def test_unknown_builtin():
     with pytest.raises(ValueError, match="^scene:"):
         builtin("fig9")
+
+
+def test_builtin_overrides_none_keep_defaults():
+    a = builtin("atlas4d", beta1=None, q=None, q1=None, q2=None, kappa=None)
+    assert a.dims == ("beta1", "beta2", "kappa", "q")
+    assert a.shape == {"beta1": 256, "beta2": 256, "kappa": 9, "q": 9}
