@@ -57,9 +57,7 @@ def check_output_path(path, overwrite: bool = False) -> str:
     if not os.access(directory, os.W_OK | os.X_OK):
         raise PermissionError(f"out: directory {directory} is not writable")
     if os.path.exists(path) and not overwrite:
-        raise FileExistsError(
-            f"out: {path} exists (use --overwrite to replace it)"
-        )
+        raise FileExistsError(f"out: {path} exists (use --overwrite to replace it)")
     return path
 
 
@@ -72,9 +70,7 @@ def _temp_path(path: str) -> str:
 
 def _commit(tmp: str, path: str, overwrite: bool):
     if not overwrite and os.path.exists(path):
-        raise FileExistsError(
-            f"out: {path} exists (use --overwrite to replace it)"
-        )
+        raise FileExistsError(f"out: {path} exists (use --overwrite to replace it)")
     os.chmod(tmp, 0o644 & ~_umask())
     os.replace(tmp, path)
 
