@@ -33,11 +33,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import exact, mechanics, spectral
+from . import evaluate, mechanics, spectral
 from .verdicts import Consistency, Verdict
 
 __all__ = [
-    "CHUNK",
     "evaluate_points",
     "stability_map",
     "class_representatives",
@@ -48,13 +47,9 @@ __all__ = [
     "VARIANTS",
 ]
 
-#: fixed 1-D batch size of every kernel call (one compilation serves all maps and the audit)
-CHUNK = 1 << 14
 #: (kappa, q1, q2) of the variant maps (Fig. 1 at other model parameters)
 VARIANTS = ((0.5, 0.0, 0.0), (2.0, 0.0, 0.0), (0.5, 0.1, 0.1), (0.5, 1.0, 1.0), (2.0, 1.0, 1.0),
             (0.5, 1.0, 0.01))
-_SPEC = ("stable_SS", "consistent_II", "stable_II")
-_PAD = (math.cos(0.3), math.sin(0.3), math.cos(1.0), math.sin(1.0), 1.0, 0.0, 0.0)
 _margin_jit = jax.jit(spectral.ss_margin)
 DPI = 110
 
@@ -63,63 +58,22 @@ DPI = 110
 
 def evaluate_points(c1, s1, c2, s2, kappa, q1, q2, *, margin=False, resolve=True,
                     max_resolve=5000) -> dict:
-    """Certified spectral verdicts for broadcastable arrays, in fixed-size 1-D chunks.
+    """Certified spectral verdicts (via :func:`atlas.evaluate.spectral_points`) plus, optionally,
+    the smooth SS margin :func:`atlas.spectral.ss_margin`, for broadcastable arrays.
 
-    Parameters
-    ----------
-    c1, s1, c2, s2 : array_like
-        Direction components of ``b1``, ``b2`` [1] (from :func:`atlas.mechanics.direction`).
-    kappa, q1, q2 : array_like
-        Invariant stiffness ratio and damping (SPEC §1) [1].
-    margin : bool
-        Also return ``margin_SS`` (:func:`atlas.spectral.ss_margin`).
-    resolve : bool
-        Settle fast-path ``UNDECIDED`` verdicts with :func:`atlas.exact.resolve` (at most
-        ``max_resolve`` points; the rest stay undecided and are counted in ``n_undecided``).
-
-    Returns
-    -------
-    dict of numpy arrays (the broadcast shape): ``stable_SS``, ``consistent_II``, ``stable_II``,
-    ``spectral_abscissa`` [(time of contact 2)^-1], optionally ``margin_SS``; ints ``n_resolved``,
-    ``n_undecided``.
+    Returns numpy arrays of the broadcast shape: ``stable_SS``, ``consistent_II``, ``stable_II``,
+    ``spectral_abscissa`` [(time of contact 2)^-1], optionally ``margin_SS``; ints ``n_resolved``
+    (points settled exactly) and ``n_undecided`` (left undecided).
     """
-    arrs = np.broadcast_arrays(*(np.asarray(a, np.float64) for a in (c1, s1, c2, s2, kappa, q1, q2)))
-    shape = arrs[0].shape
-    flat = [a.ravel() for a in arrs]
-    n = flat[0].size
-    names = _SPEC + ("spectral_abscissa",) + (("margin_SS",) if margin else ())
-    out = {k: np.empty(n, np.float64 if k in ("spectral_abscissa", "margin_SS") else np.int8)
-           for k in names}
-    for start in range(0, n, CHUNK):
-        stop = min(start + CHUNK, n)
-        m = stop - start
-        args = []
-        for a, pad in zip(flat, _PAD, strict=True):
-            chunk = np.full(CHUNK, pad)
-            chunk[:m] = a[start:stop]
-            args.append(jnp.asarray(chunk))
-        o = spectral.verdicts_jit(*args)
-        for k in _SPEC + ("spectral_abscissa",):
-            out[k][start:stop] = np.asarray(o[k])[:m]
-        if margin:
-            out["margin_SS"][start:stop] = np.asarray(_margin_jit(*args))[:m]
-    und = np.zeros(n, bool)
-    for k in _SPEC:
-        und |= out[k] == 3
-    idx = np.flatnonzero(und)
-    n_res = 0
-    if resolve and idx.size:
-        sel = idx[:max_resolve]
-        pts = dict(zip(("c1", "s1", "c2", "s2", "kappa", "q1", "q2"), (a[sel] for a in flat),
-                       strict=True))
-        ex = exact.resolve(pts, names=_SPEC)
-        for k in _SPEC:
-            out[k][sel] = ex[k]
-        n_res = sel.size
-    res = {k: v.reshape(shape) for k, v in out.items()}
-    res["n_resolved"] = int(n_res)
-    res["n_undecided"] = int(sum(1 for _ in np.flatnonzero(
-        (res["stable_SS"] == 3) | (res["consistent_II"] == 3) | (res["stable_II"] == 3))))
+    res = evaluate.spectral_points(c1, s1, c2, s2, kappa, q1, q2, resolve=resolve,
+                                   max_resolve=max_resolve)
+    counts = evaluate.last_counts()
+    if margin:
+        args = [jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2)]
+        shape = res["stable_SS"].shape
+        res["margin_SS"] = np.broadcast_to(np.asarray(_margin_jit(*args)), shape).copy()
+    res["n_resolved"] = counts["undecided_before"] - counts["undecided_after"] if resolve else 0
+    res["n_undecided"] = counts["undecided_after"]
     return res
 
 
