@@ -33,6 +33,112 @@ def _atomic_savefig(fig, path: Path) -> None:
     os.replace(tmp, path)
 
 
+def _plot_trajectory(ax, res, p, name, note, n_samples=6000):
+    """Gaps ``d1(t)``, ``d2(t)`` of one simulation on ``ax``, with its outcome written on it."""
+    outcome = classify(res)
+    t = np.union1d(np.linspace(0.0, res.t_final, n_samples), res.t_events)
+    g = res.sample(t)
+    ax.plot(t, g[:, 0], lw=0.7, label=r"$d_1$")
+    ax.plot(t, g[:, 1], lw=0.7, label=r"$d_2$")
+    ax.axhline(0.0, color="k", lw=0.4)
+    ax.set_ylabel("gap [1]")
+    ax.set_title(
+        f"({name}) beta1={p['beta1'] / math.pi:.2f}pi, beta2={p['beta2'] / math.pi:.2f}pi, "
+        f"alpha={p['alpha'] / math.pi:.2f}pi, q={p['q'][0]:g}",
+        fontsize=9,
+    )
+    text = f"simulated: {outcome.label} ({res.n_events} events, {res.status.value})"
+    ax.text(
+        0.01,
+        0.97,
+        text + (f"\n{note}" if note else ""),
+        transform=ax.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
+    )
+    ax.legend(loc="upper right", fontsize=8)
+    return outcome
+
+
+def run_cli(
+    case=None,
+    beta1=None,
+    beta2=None,
+    alpha=None,
+    k1=None,
+    k2=None,
+    q1=None,
+    q2=None,
+    t_end=None,
+    out=None,
+    **_,
+) -> int:
+    """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
+    printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``)."""
+    case = case[len("fig2") :] if case and case.startswith("fig2") else case
+    p = (
+        dict(fig2_cases()[case])
+        if case
+        else {
+            "k": (100.0, 200.0),
+            "q": (0.0, 0.0),
+            "b_norm": (1.0, 1.0),
+            "a_norm": 1.0,
+            "g0": (0.0, 0.0, 0.0, 0.0),
+            "t_end": 10.0,
+        }
+    )
+    if not case and None in (beta1, beta2, alpha):
+        raise ValueError("case: give --case or all of --beta1, --beta2, --alpha")
+    for key, v in (("beta1", beta1), ("beta2", beta2), ("alpha", alpha), ("t_end", t_end)):
+        if v is not None:
+            p[key] = v
+    k = list(p["k"])
+    q = list(p["q"])
+    for i, v in ((0, k1), (1, k2)):
+        if v is not None:
+            k[i] = v
+    for i, v in ((0, q1), (1, q2)):
+        if v is not None:
+            q[i] = v
+    p["k"], p["q"] = tuple(k), tuple(q)
+    res = simulate(**p, max_events=100_000)
+    outcome = classify(res)
+    print(
+        f"{case or 'custom'}: {outcome.label}; {res.n_events} events, status {res.status.value}, "
+        f"t = {res.t_final:g}"
+    )
+    if out:
+        out = Path(out)
+        if out.suffix.lower() == ".csv":
+            rows = ["t,kind,contact,d1,d2,d1dot,d2dot,mode_after"]
+            for t, kind, c, g, m in zip(
+                res.t_events, res.kinds, res.contacts, res.states, res.modes, strict=True
+            ):
+                rows.append(
+                    ",".join(
+                        [repr(float(t)), kind, str(int(c))] + [repr(float(x)) for x in g] + [m]
+                    )
+                )
+            from .io import atomic_write_text
+
+            atomic_write_text(out, "\n".join(rows) + "\n")
+        else:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(8, 3), constrained_layout=True)
+            _plot_trajectory(ax, res, p, case or "custom", _PAPER_SAYS.get(case, ""))
+            ax.set_xlabel("time [rescaled, paper eq. 6]")
+            _atomic_savefig(fig, out)
+            plt.close(fig)
+        print(f"wrote {out}")
+    return 0
+
+
 def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     """Regenerate the paper's Fig. 2 (panels a-e): gaps ``d1(t)``, ``d2(t)`` of eq. (1), (6).
 
@@ -62,29 +168,7 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     for ax, (name, p) in zip(axes, fig2_cases().items(), strict=True):
         p = dict(p, t_end=horizons[name])
         res = simulate(**p, max_events=100_000)
-        outcome = classify(res)
-        t = np.union1d(np.linspace(0.0, res.t_final, n_samples), res.t_events)
-        g = res.sample(t)
-        ax.plot(t, g[:, 0], lw=0.7, label=r"$d_1$")
-        ax.plot(t, g[:, 1], lw=0.7, label=r"$d_2$")
-        ax.axhline(0.0, color="k", lw=0.4)
-        ax.set_ylabel("gap [1]")
-        ax.set_title(
-            f"({name}) beta1={p['beta1'] / math.pi:.2f}pi, beta2={p['beta2'] / math.pi:.2f}pi, "
-            f"alpha={p['alpha'] / math.pi:.2f}pi, q={p['q'][0]:g}",
-            fontsize=9,
-        )
-        ax.text(
-            0.01,
-            0.97,
-            f"simulated: {outcome.label} ({res.n_events} events, {res.status.value})\n"
-            f"{_PAPER_SAYS[name]}",
-            transform=ax.transAxes,
-            va="top",
-            fontsize=8,
-            bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
-        )
-        ax.legend(loc="upper right", fontsize=8)
+        _plot_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples)
     axes[-1].set_xlabel("time [rescaled, paper eq. 6]")
     path = outdir / "fig2.png"
     _atomic_savefig(fig, path)
