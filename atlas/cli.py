@@ -295,6 +295,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("atlas: interrupted (no partial output file left)", file=sys.stderr)
         return 130
+    except Exception as e:  # a bug, not bad input: still one line (ATLAS_DEBUG=1 re-raises)
+        if os.environ.get("ATLAS_DEBUG", "") not in ("", "0"):
+            raise
+        msg = f"atlas: internal error: {type(e).__name__}: {_one_line(e)}"
+        print(f"{msg} (set ATLAS_DEBUG=1 for the traceback)", file=sys.stderr)
+        return 1
 
 
 def _exit(code):  # pragma: no cover - trivial

@@ -499,15 +499,34 @@ def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
     pts = [np.broadcast_to(a, (n,))[idx] if a.ndim == 0 else a[:n][idx] for a in flat_inputs]
     if group == "spectral":
         keys = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
-        spec = [k for k in names if k in ("stable_SS", "consistent_II", "stable_II")]
-        ex = exact.resolve(dict(zip(keys, pts)), names=tuple(spec))
+        spec = tuple(k for k in names if k in ("stable_SS", "consistent_II", "stable_II"))
+
+        def solve(p):
+            return exact.resolve(dict(zip(keys, p)), names=spec)
     else:
-        ex = exact.resolve_codes(*pts)
+
+        def solve(p):
+            return exact.resolve_codes(*p)
+
+    # one point at a time (the reference loops over points anyway): a point on which the reference
+    # itself fails stays undecided and is recorded instead of aborting the whole atlas
+    ex, ok = {}, []
+    for i in range(idx.size):
+        try:
+            one = solve([p[i : i + 1] for p in pts])
+        except Exception:
+            fail = stats.setdefault("exact_failures", [])
+            fail.append(tuple(float(p[i]) for p in pts))
+            continue
+        ok.append(idx[i])
+        for k, v in one.items():
+            ex.setdefault(k, []).append(np.asarray(v)[0])
+    ok = np.asarray(ok, dtype=idx.dtype)
     for k in names:
-        if k in ex:
-            sel = und[k][idx]
-            res[k][idx[sel]] = np.asarray(ex[k])[sel].astype(res[k].dtype)
-    stats["resolved_points"] = stats.get("resolved_points", 0) + int(idx.size)
+        if k in ex and len(ok):
+            sel = und[k][ok]
+            res[k][ok[sel]] = np.asarray(ex[k])[sel].astype(res[k].dtype)
+    stats["resolved_points"] = stats.get("resolved_points", 0) + int(len(ok))
 
 
 def run(
@@ -570,6 +589,10 @@ def run(
         fast = sum(stats["undecided_fast"].values())
         final = sum(stats["undecided"].values())
         attrs = {"undecided_fast": fast, "undecided_after_resolve": final}
+        failures = stats.get("exact_failures", [])
+        if failures:
+            attrs["exact_failures"] = len(failures)
+            attrs["exact_failure_example"] = repr(failures[0])
         var_attrs = {
             k: {"undecided_fast": stats["undecided_fast"].get(k, 0), "undecided": v}
             for k, v in stats["undecided"].items()
@@ -593,6 +616,7 @@ def run(
         "undecided_fast": fast,
         "undecided": final,
         "resolved_points": stats.get("resolved_points", 0),
+        "exact_failures": stats.get("exact_failures", []),
     }
     return result
 

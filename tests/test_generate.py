@@ -210,3 +210,17 @@ def test_eig_method_and_float32():
 def test_bad_options(kw, name):
     with pytest.raises(ValueError, match=f"^{name}:"):
         generate(tiny_scene(outputs="class_code"), **kw)
+
+
+@pytest.mark.skipif(not HAVE_EXACT, reason="atlas.exact is not importable yet")
+def test_exact_failure_keeps_point_undecided(monkeypatch):
+    from atlas import exact
+
+    def broken(points, names=()):
+        raise ArithmeticError("no convergence")
+
+    monkeypatch.setattr(exact, "resolve", broken)
+    ds = generate(tiny_scene(outputs="stable_SS,stable_II"), tile_points=TILE, resolve=True)
+    n3 = int((ds.stable_SS.values == 3).sum()) + int((ds.stable_II.values == 3).sum())
+    assert n3 > 0 and ds.attrs["undecided_after_resolve"] == n3
+    assert ds.attrs["exact_failures"] > 0 and "exact_failure_example" in ds.attrs
