@@ -58,6 +58,8 @@ def _kernel(kind: str, names: tuple[str, ...]):
 
 def _run_chunked(kind, names, cols, dtype, chunk):
     n = cols[0].size
+    # small batches: the next power of two (>= 1024) instead of a full chunk of padding
+    chunk = min(chunk, max(1024, 1 << max(0, n - 1).bit_length()))
     out = {}
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)

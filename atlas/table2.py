@@ -18,10 +18,11 @@ import csv
 import io
 from dataclasses import dataclass, field
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import exact, mechanics, spectral
+from . import evaluate, mechanics
 from .verdicts import Consistency, Verdict
 
 __all__ = ["table2", "class_samples", "to_markdown", "to_csv", "run_cli", "KAPPA_Q_SAMPLE", "Row"]
@@ -75,16 +76,6 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     return out
 
 
-def _resolved(name, fast, pts):
-    """Replace undecided fast-path verdicts by exact ones."""
-    fast = np.array(fast)
-    und = fast == 3
-    if und.any():
-        sub = {k: np.broadcast_to(v, fast.shape)[und] for k, v in pts.items()}
-        fast[und] = exact.resolve(sub, names=(name,))[name]
-    return fast
-
-
 def _word(verdicts) -> str:
     v = set(int(x) for x in np.ravel(verdicts))
     v = {Verdict.STABLE if x == Verdict.NEUTRAL else x for x in v}
@@ -93,6 +84,15 @@ def _word(verdicts) -> str:
     if v == {Verdict.UNSTABLE}:
         return "unstable"
     return "model-dependent"
+
+
+@jax.jit
+def _class_kernel(c1, s1, c2, s2, ca, sa):
+    dual = mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))
+    sub = mechanics.subclass_code(c1, s1, c2, s2, ca, sa)
+    cons = mechanics.consistent_modes(c1, s1, c2, s2, ca, sa)
+    cons = {m: jnp.broadcast_to(v, sub.shape) for m, v in cons.items()}
+    return dual, sub, cons
 
 
 def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float64) -> list[Row]:
@@ -105,18 +105,14 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         pts = samples[cls]
         c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
         c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
-        # dual class (contact indices swapped; exact in vector form)
-        duals = set(
-            np.asarray(mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))).ravel()
-        )
+        # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
+        dual, sub, cons = _class_kernel(c1, s1, c2, s2, ca[None, :], sa[None, :])
+        duals = set(np.asarray(dual).ravel().tolist())
         if len(duals) != 1:
             raise RuntimeError(f"class {cls}: dual not unique: {duals}")
         row = Row(cls=cls, dual=int(duals.pop()))
-        sub = np.asarray(mechanics.subclass_code(c1, s1, c2, s2, ca[None, :], sa[None, :]))
-        cons = {
-            m: np.broadcast_to(np.asarray(v), sub.shape)
-            for m, v in mechanics.consistent_modes(c1, s1, c2, s2, ca[None, :], sa[None, :]).items()
-        }
+        sub = np.asarray(sub)
+        cons = {m: np.asarray(v) for m, v in cons.items()}
         for m in MODES:
             if (cons[m] == Consistency.UNDECIDED).any():
                 raise RuntimeError(f"class {cls}: undecided {m} consistency on the sample")
@@ -134,23 +130,20 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         row.stability["FF"] = "stable"
         row.stability["SF"] = _word(mechanics.stable_SF(c1))
         row.stability["FS"] = _word(mechanics.stable_FS(s2))
-        # SS and II over the kappa-q sample
+        # SS and II over the kappa-q sample (undecided points settled exactly)
         kq = np.array(KAPPA_Q_SAMPLE)
-        P = {
-            "c1": np.asarray(c1),
-            "s1": np.asarray(s1),
-            "c2": np.asarray(c2),
-            "s2": np.asarray(s2),
-            "kappa": kq[None, :, 0],
-            "q1": kq[None, :, 1],
-            "q2": kq[None, :, 2],
-        }
-        out = spectral.verdicts_jit(
-            *(jnp.asarray(P[k]) for k in ("c1", "s1", "c2", "s2", "kappa", "q1", "q2"))
+        v = evaluate.spectral_points(
+            c1,
+            s1,
+            c2,
+            s2,
+            kq[None, :, 0],
+            kq[None, :, 1],
+            kq[None, :, 2],
+            names=("stable_SS", "consistent_II", "stable_II"),
+            dtype=dtype,
         )
-        ss = _resolved("stable_SS", out["stable_SS"], P)
-        ci = _resolved("consistent_II", out["consistent_II"], P)
-        si = _resolved("stable_II", out["stable_II"], P)
+        ss, ci, si = v["stable_SS"], v["consistent_II"], v["stable_II"]
         row.stability["SS"] = _word(ss)
         if_ = np.asarray(mechanics.consistent_IF(c1, s1))
         fi = np.asarray(mechanics.consistent_FI(c2, s2))
