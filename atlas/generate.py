@@ -167,22 +167,24 @@ def _kernel_spectral(c1, s1, c2, s2, kappa, q1, q2, *, method, ii):
     return spectral.verdicts(c1, s1, c2, s2, kappa, q1, q2, ii=ii)
 
 
+def _variant(group: str, names: tuple[str, ...]) -> str:
+    """Kernel variant: the spectral group skips the (expensive) II root analysis if not needed."""
+    if group == "spectral" and all(n == "stable_SS" for n in names):
+        return "ss"
+    return "all"
+
+
 @functools.cache
-def _jitted(group: str, names: tuple[str, ...], method: str):
-    """One jitted kernel per (group, wanted results, method); XLA drops the unused results."""
+def _jitted(group: str, variant: str, method: str):
+    """One jitted kernel per (group, variant, method).  Every output of the group is returned, so
+    scenes asking for different subsets share one compilation per tile shape."""
     if group == "spectral":
-        ii = any(n != "stable_SS" for n in names)
-        base = functools.partial(_kernel_spectral, method=method, ii=ii)
-    else:
-        base = {"b1": _kernel_b1, "b2": _kernel_b2, "b1b2": _kernel_b1b2, "b1b2a": _kernel_b1b2a}[
-            group
-        ]
-
-    def kernel(*args):
-        res = base(*args)
-        return {n: res[n] for n in names}
-
-    return jax.jit(kernel)
+        base = functools.partial(_kernel_spectral, method=method, ii=variant == "all")
+        if variant == "ss":
+            return jax.jit(lambda *a: {"stable_SS": base(*a)["stable_SS"]})
+        return jax.jit(base)
+    kernels = {"b1": _kernel_b1, "b2": _kernel_b2, "b1b2": _kernel_b1b2, "b1b2a": _kernel_b1b2a}
+    return jax.jit(kernels[group])
 
 
 # --- schema: coordinates, variables, attributes ------------------------------------------------
@@ -570,7 +572,7 @@ def run(
     sink.begin(sch)
     try:
         for g, need, dims, shape in plan:
-            kern = _jitted(g.name, need, method)
+            kern = _jitted(g.name, _variant(g.name, need), method)
             inputs = _GROUP_INPUTS[g.name]
             # small groups: pad to the next power of two only (same blocks, few distinct shapes)
             T = min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
@@ -581,7 +583,7 @@ def run(
                 out = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
                 if pending is not None:
                     _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, stats, md, bar)
-                pending = (index, block, flat, out)
+                pending = (index, block, flat, {k: out[k] for k in need})
             if pending is not None:
                 _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, stats, md, bar)
         for name, block in md.results().items():

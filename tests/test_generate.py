@@ -112,12 +112,13 @@ def _point_inputs(b1, b2):
 
 
 def test_fig1_equals_pointwise_kernels(fig1_small):
-    """Sampled points of the fig1 scene equal the kernels evaluated on that single point."""
+    """Sampled points of the fig1 scene (random, a tie, an axis, b2 = -b1) equal the kernels
+    evaluated on that single point."""
     ds = fig1_small
     rng = np.random.default_rng(0)
-    idx = [(i, j) for i, j in rng.integers(0, 32, size=(24, 2))] + [(0, 0), (8, 24), (16, 16)]
+    idx = [(i, j) for i, j in rng.integers(0, 32, size=(6, 2))] + [(0, 0), (8, 24), (5, 21)]
     b1v, b2v = ds.beta1.values, ds.beta2.values
-    kern = jax.jit(spectral.verdicts)
+    kern = jax.jit(spectral.verdicts)  # on one point at a time
     for i, j in idx:
         c1, s1, c2, s2 = _point_inputs(b1v[i], b2v[j])
         k, q = jnp.asarray(0.5), jnp.asarray(0.0)
