@@ -56,7 +56,7 @@ __all__ = [
     "build_M",
 ]
 
-_DK_STEPS = 3
+_DK_STEPS = 1
 
 
 def normalize(kappa, q1, q2):
