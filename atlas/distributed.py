@@ -1,0 +1,662 @@
+"""Atlases beyond one process: tiles of a scene on dask workers, written into a resumable zarr store.
+
+The scene is split along ``beta1`` into *slabs* (tiles) of ``slab`` consecutive values.  Each tile is
+an ordinary :func:`atlas.generate` run on a sub-scene holding that slab; generation is
+pointwise-deterministic and the ``model_dependent_*`` reductions run over the model dimensions at
+fixed ``(beta1, beta2)``, so the concatenated tiles equal the single-process atlas bit for bit.
+
+Store layout (a local zarr directory, zarr 2 or 3)::
+
+    STORE/                  the atlas: coordinates, variables, CF attributes (SPEC §2)
+    STORE/_tiles/t000012    one empty group per finished tile; its attributes are the tile record
+
+The layout is created up front from :func:`atlas.generate.schema` of the full scene (arrays
+allocated lazily: unwritten chunks read as fill values), in a temporary directory renamed onto
+``STORE``.  A tile writes its variables into the ``beta1`` region ``[start, stop)`` (zarr chunks are
+aligned with the slabs, so concurrent tiles never touch the same chunk), reads the region back, and
+only then writes its record: the SHA-256 of the raw bytes (dtype, shape, data) of every variable's
+region, the undecided counts and timings.  Variables without a ``beta1`` dimension (``stable_FS``,
+``consistent_FI``) are computed by every tile, written by tile 0, and their checksums must agree
+across all tiles.
+
+``resume=True`` verifies every recorded tile against the store (on the workers) and recomputes
+tiles whose record is missing, unreadable, or whose bytes no longer match: after a resumed run the
+records prove that no tile is missing or corrupt.  A finished store carries the global attributes
+of :func:`atlas.generate` (undecided totals summed over the tiles) and ``atlas_complete = 1``.
+
+Schedulers
+----------
+``scheduler=None``
+    in this process, tile after tile (the same tile function, no dask);
+``"local"`` / ``"local:N"``
+    a :class:`distributed.LocalCluster` of N worker *processes* (default: the number of cores),
+    one thread each, one JAX runtime per worker with XLA's intra-op threading off
+    (:data:`WORKER_ENV`), so N workers use N cores;
+``"tcp://host:8786"`` or a :class:`distributed.Client`
+    an existing cluster.  The workers need ``painleve-atlas`` (same version and JAX version as the
+    client: the store records both and mixed versions are refused) and the store path on a shared
+    file system.  Start the workers with one thread each and the same environment, e.g.::
+
+        dask scheduler                                    # on host, port 8786
+        XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" \\
+            dask worker tcp://host:8786 --nworkers 16 --nthreads 1   # on each machine
+
+    then ``generate_distributed(scene, "/shared/atlas.zarr", scheduler="tcp://host:8786")``.
+
+Example
+-------
+>>> from atlas import Scene
+>>> from atlas.distributed import generate_distributed, open_store
+>>> scene = Scene(beta1="0:2pi:64", beta2="0:2pi:64", kappa="0.5,2", q1="0,1", q2="0,1")
+>>> summary = generate_distributed(scene, "atlas.zarr", scheduler="local:2",
+...                                to_netcdf="atlas.nc")            # doctest: +SKIP
+>>> # killed?  the same call with resume=True finishes the missing tiles
+>>> ds = open_store("atlas.zarr")                                   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+
+import numpy as np
+import xarray as xr
+
+from .generate import DEFAULT_TILE_POINTS, Schema, _check_options, generate, last_stats, schema
+from .scene import Scene
+
+__all__ = [
+    "generate_distributed",
+    "open_store",
+    "verify_store",
+    "tile_plan",
+    "WORKER_ENV",
+]
+
+#: environment of LocalCluster workers: one JAX process per worker, no intra-op thread pools
+WORKER_ENV = {
+    "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+}
+#: default points per tile (largest output): a few kernel tiles, so per-tile overhead is amortized
+DEFAULT_SLAB_POINTS = 1 << 18
+#: maximum elements per zarr chunk (chunks never straddle slabs)
+CHUNK_POINTS = 1 << 20
+TILES = "_tiles"
+PLAN_ATTR = "atlas_plan"
+FORMAT_VERSION = 1
+
+
+# --- the plan -----------------------------------------------------------------------------------
+
+
+def tile_plan(scene: Scene, slab: int | None = None) -> list[tuple[int, int]]:
+    """``[(start, stop), ...]``: the ``beta1`` slabs of a scene (one tile if ``beta1`` is fixed).
+
+    ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile.
+    """
+    if "beta1" not in scene.dims:
+        return [(0, 1)]
+    n = scene.axes["beta1"].size
+    if slab is None:
+        per = max(1, scene.points() // n)
+        slab = max(1, min(n, round(DEFAULT_SLAB_POINTS / per)))
+    try:
+        s = int(slab)
+    except (TypeError, ValueError):
+        raise ValueError(f"slab: must be a positive integer, got {slab!r}") from None
+    if s < 1 or s != slab:
+        raise ValueError(f"slab: must be a positive integer, got {slab!r}")
+    return [(a, min(a + s, n)) for a in range(0, n, s)]
+
+
+def _sub_scene(scene: Scene, start: int, stop: int) -> Scene:
+    if "beta1" not in scene.dims:
+        return scene
+    return scene.replace(beta1=np.array(scene.axes["beta1"].values[start:stop]))
+
+
+def _b1_vars(sch: Schema) -> tuple[list[str], list[str]]:
+    """(variables with a beta1 dimension, variables without: computed by every tile)."""
+    b1 = [k for k, (dims, *_) in sch.variables.items() if "beta1" in dims]
+    return b1, [k for k in sch.variables if k not in b1]
+
+
+def _chunks(sch: Schema, name: str, slab: int) -> tuple[int, ...]:
+    from .generate import block_shape
+
+    dims = sch.variables[name][0]
+    shape = tuple(sch.shape[d] for d in dims)
+    if "beta1" not in dims:
+        return shape
+    rest = block_shape(shape[1:], max(1, CHUNK_POINTS // slab)) if len(shape) > 1 else ()
+    return (min(slab, shape[0]),) + tuple(rest)
+
+
+def _digest(arr) -> str:
+    """SHA-256 of an array's dtype, shape and raw bytes (C order)."""
+    a = np.ascontiguousarray(np.asarray(arr))
+    h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
+    h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _plan(scene, sch, tiles, opts) -> dict:
+    coords = {k: _digest(v) for k, (_, v, _) in sch.coords.items()}
+    variables = {k: [list(d), np.dtype(t).str] for k, (d, t, _, _) in sch.variables.items()}
+    plan = {
+        "format": FORMAT_VERSION,
+        "scene": scene.describe(),
+        "coords": coords,
+        "variables": variables,
+        "tiles": [list(t) for t in tiles],
+        "source": sch.attrs["source"],
+        **opts,
+    }
+    plan["hash"] = hashlib.sha256(json.dumps(plan, sort_keys=True).encode()).hexdigest()
+    return plan
+
+
+# --- store helpers ------------------------------------------------------------------------------
+
+
+def _open(store) -> xr.Dataset:
+    return xr.open_zarr(store, consolidated=False, chunks=None)
+
+
+def open_store(store) -> xr.Dataset:
+    """The atlas in a zarr store (lazy; attributes as stored, flag values as JSON lists)."""
+    return _open(os.fspath(store))
+
+
+def _record_path(i: int) -> str:
+    return f"{TILES}/t{i:06d}"
+
+
+def _read_record(store: str, i: int) -> dict | None:
+    import zarr
+
+    if not os.path.isdir(os.path.join(store, TILES, f"t{i:06d}")):
+        return None
+    try:
+        rec = dict(zarr.open_group(store, path=_record_path(i), mode="r").attrs)
+    except Exception:  # truncated or unreadable metadata: the tile counts as missing
+        return None
+    return rec if rec.get("index") == i and "checksums" in rec else None
+
+
+def _drop_record(store: str, i: int):
+    shutil.rmtree(os.path.join(store, TILES, f"t{i:06d}"), ignore_errors=True)
+
+
+def _region_digests(ds: xr.Dataset, names, start, stop, b1: bool) -> dict:
+    out = {}
+    for k in names:
+        v = ds[k]
+        if b1:
+            v = v.isel(beta1=slice(start, stop))
+        out[k] = _digest(v.values)
+    return out
+
+
+def _create_layout(store: str, sch: Schema, slab: int, plan: dict):
+    """Write coordinates, attributes and lazily allocated variables to ``store`` atomically."""
+    import dask.array as da
+    import zarr
+
+    parent = os.path.dirname(os.path.abspath(store))
+    tmp = tempfile.mkdtemp(prefix=f".{os.path.basename(store)}.", suffix=".tmp", dir=parent)
+    try:
+        coords = {k: xr.Variable(d, v, a) for k, (d, v, a) in sch.coords.items()}
+        data, enc = {}, {}
+        for name, (dims, dt, attrs, _) in sch.variables.items():
+            shape = tuple(sch.shape[d] for d in dims)
+            chunks = _chunks(sch, name, slab)
+            data[name] = xr.Variable(dims, da.zeros(shape, dtype=dt, chunks=chunks or ()), attrs)
+            enc[name] = {"_FillValue": None, "chunks": chunks} if dims else {"_FillValue": None}
+        for k in coords:
+            enc[k] = {"_FillValue": None}
+        attrs = {**sch.attrs, PLAN_ATTR: json.dumps(plan, sort_keys=True), "atlas_complete": 0}
+        ds = xr.Dataset(data, coords=coords, attrs=attrs)
+        ds.to_zarr(tmp, mode="w", compute=False, encoding=enc, consolidated=False)
+        zarr.open_group(tmp, mode="r+").require_group(TILES)
+        os.chmod(tmp, 0o777 & ~_umask())
+        os.replace(tmp, store)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# --- the tile tasks (run on the workers, or in process) -----------------------------------------
+
+
+def _compute_tile(scene: Scene, start: int, stop: int, opts: dict) -> xr.Dataset:
+    """One slab of the atlas (separate function so tests can slow it down)."""
+    return generate(
+        _sub_scene(scene, start, stop),
+        method=opts["method"],
+        dtype=opts["dtype"],
+        resolve=opts["resolve"],
+        tile_points=opts["tile_points"],
+    )
+
+
+def _run_tile(store: str, scene: Scene, i: int, start: int, stop: int, opts: dict) -> dict:
+    """Compute tile ``i``, write its region, read it back, then write its record."""
+    import zarr
+
+    _drop_record(store, i)
+    t0 = time.perf_counter()
+    ds = _compute_tile(scene, start, stop, opts)
+    seconds = time.perf_counter() - t0
+    stats = last_stats()
+    has_b1 = "beta1" in ds.dims
+    b1 = [k for k in ds.data_vars if "beta1" in ds[k].dims]
+    shared = [k for k in ds.data_vars if k not in b1]
+    digests = {k: _digest(ds[k].values) for k in ds.data_vars}
+    t1 = time.perf_counter()
+    if b1:
+        part = ds[b1].drop_vars(list(ds.coords))
+        part.to_zarr(store, region={"beta1": slice(start, stop)}, consolidated=False)
+    if i == 0 and shared:
+        part = ds[shared]
+        part.drop_vars(list(part.coords)).to_zarr(store, mode="r+", consolidated=False)
+    back = _open(store)
+    written = _region_digests(back, b1, start, stop, has_b1)
+    if i == 0:
+        written.update(_region_digests(back, shared, 0, 0, False))
+    for k, h in written.items():
+        if h != digests[k]:
+            raise OSError(f"store: tile {i} variable {k} reads back different bytes")
+    rec = {
+        "index": i,
+        "start": start,
+        "stop": stop,
+        "checksums": {k: digests[k] for k in b1},
+        "shared": {k: digests[k] for k in shared},
+        "undecided_fast": {k: int(v.attrs["undecided_fast"]) for k, v in _counted(ds)},
+        "undecided": {k: int(v.attrs["undecided"]) for k, v in _counted(ds)},
+        "total_undecided_fast": int(ds.attrs["undecided_fast"]),
+        "total_undecided": int(ds.attrs["undecided_after_resolve"]),
+        "exact_failures": [list(p) for p in stats.get("exact_failures", [])],
+        "points": int(stats["points"]),
+        "seconds": seconds,
+        "write_seconds": time.perf_counter() - t1,
+        "source": ds.attrs["source"],
+        "host": os.uname().nodename,
+        "pid": os.getpid(),
+    }
+    zarr.open_group(store, path=_record_path(i), mode="w").attrs.put(rec)
+    return rec
+
+
+def _counted(ds):
+    return [(k, v) for k, v in ds.data_vars.items() if "undecided" in v.attrs]
+
+
+def _verify_tile(store: str, i: int, start: int, stop: int) -> dict | None:
+    """The tile's record if the store holds exactly the recorded bytes, else ``None``."""
+    rec = _read_record(store, i)
+    if rec is None or rec.get("start") != start or rec.get("stop") != stop:
+        return None
+    try:
+        ds = _open(store)
+        names = list(rec["checksums"])
+        got = _region_digests(ds, names, start, stop, "beta1" in ds.dims)
+        if i == 0:
+            got.update(_region_digests(ds, list(rec["shared"]), 0, 0, False))
+    except Exception:  # undecodable chunk bytes
+        return None
+    want = {**rec["checksums"], **(rec["shared"] if i == 0 else {})}
+    return rec if got == want else None
+
+
+# --- executors ----------------------------------------------------------------------------------
+
+
+class _InProcess:
+    """Runs the tile functions here, one after the other (the reference code path)."""
+
+    workers = 1
+    description = "in-process"
+
+    def map(self, fn, calls):
+        for key, args in calls:
+            yield key, fn(*args)
+
+    def close(self):
+        pass
+
+
+class _Dask:
+    def __init__(self, scheduler):
+        from distributed import Client, LocalCluster
+
+        self.cluster = None
+        if isinstance(scheduler, Client):
+            self.client, self.own = scheduler, False
+        elif isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
+            n = scheduler.partition(":")[2]
+            try:
+                n = int(n) if n else (os.cpu_count() or 1)
+            except ValueError:
+                raise ValueError(f"scheduler: expected local:N, got {scheduler!r}") from None
+            if n < 1:
+                raise ValueError(f"scheduler: need at least one worker, got {scheduler!r}")
+            self.cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                env=dict(WORKER_ENV),
+                dashboard_address=None,
+                silence_logs=40,
+            )
+            self.client, self.own = Client(self.cluster), True
+        elif isinstance(scheduler, str) and "://" in scheduler:
+            self.client, self.own = Client(scheduler), True
+        else:
+            raise ValueError(
+                f"scheduler: expected None, 'local', 'local:N' or an address, got {scheduler!r}"
+            )
+        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+        self.description = str(scheduler if isinstance(scheduler, str) else "client")
+
+    def map(self, fn, calls):
+        from distributed import as_completed
+
+        futures = {}
+        for key, args in calls:
+            futures[self.client.submit(fn, *args, pure=False)] = key
+        try:
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            self.client.cancel(list(futures))
+
+    def close(self):
+        if self.own:
+            self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def _executor(scheduler):
+    if scheduler is None:
+        return _InProcess()
+    return _Dask(scheduler)
+
+
+# --- the driver ---------------------------------------------------------------------------------
+
+
+def verify_store(store, scheduler=None) -> dict:
+    """Check every tile of a store against its record.
+
+    Returns ``{"ok": [...], "missing": [...], "corrupt": [...]}`` (tile indices): *missing* = no
+    readable record, *corrupt* = a record whose checksums the stored bytes no longer match.
+    """
+    store = os.fspath(store)
+    plan = _stored_plan(store)
+    ex = _executor(scheduler)
+    try:
+        return _verify_all(ex, store, plan["tiles"])[0]
+    finally:
+        ex.close()
+
+
+def _verify_all(ex, store, tiles):
+    report = {"ok": [], "missing": [], "corrupt": []}
+    recs = {}
+    recorded = [i for i in range(len(tiles)) if _read_record(store, i) is not None]
+    missing = set(range(len(tiles))) - set(recorded)
+    calls = [(i, (store, i, *tiles[i])) for i in recorded]
+    for i, rec in ex.map(_verify_tile, calls):
+        if rec is None:
+            report["corrupt"].append(i)
+        else:
+            report["ok"].append(i)
+            recs[i] = rec
+    report["missing"] = sorted(missing)
+    for k in report:
+        report[k].sort()
+    return report, recs
+
+
+def _stored_plan(store: str) -> dict:
+    import zarr
+
+    if not os.path.isdir(store):
+        raise FileNotFoundError(f"store: {store} does not exist")
+    try:
+        attrs = dict(zarr.open_group(store, mode="r").attrs)
+        return json.loads(attrs[PLAN_ATTR])
+    except Exception:
+        raise ValueError(f"store: {store} is not an atlas store (no {PLAN_ATTR})") from None
+
+
+def generate_distributed(
+    scene: Scene,
+    store,
+    *,
+    scheduler=None,
+    slab: int | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    method: str = "certified",
+    dtype: str = "float64",
+    resolve: bool = True,
+    tile_points: int = DEFAULT_TILE_POINTS,
+    to_netcdf=None,
+    overwrite_netcdf: bool = False,
+    progress=False,
+    history: str | None = None,
+) -> dict:
+    """Generate an atlas tile by tile (on dask workers or in process) into a resumable zarr store.
+
+    Parameters
+    ----------
+    scene : atlas.Scene
+        The atlas; it is split along ``beta1``.
+    store : str or os.PathLike
+        Zarr directory (a local or shared file system path).
+    scheduler : None, "local", "local:N", "tcp://host:port" or distributed.Client
+        Where the tiles run (see the module docstring); ``None``: in this process.
+    slab : int, optional
+        ``beta1`` values per tile (default: about :data:`DEFAULT_SLAB_POINTS` points per tile).
+    resume : bool
+        Continue an existing store: tiles whose record verifies against the stored bytes are
+        kept, missing or corrupt ones recomputed.  The store must have been created for the same
+        scene, options, slab and package/JAX versions (else ``ValueError``).
+    overwrite : bool
+        Replace an existing store (without ``resume``); otherwise an existing store raises
+        ``FileExistsError``.
+    method, dtype, resolve, tile_points
+        As for :func:`atlas.generate` (``tile_points`` = kernel tile inside each slab).
+    to_netcdf : str or os.PathLike, optional
+        Also convert the finished store to this netCDF4 file, streaming slab by slab through
+        :class:`atlas.io.NetCDFSink` (atomic; same file as ``io.write_netcdf(generate(scene))``).
+    overwrite_netcdf : bool
+        Replace an existing netCDF file.
+    progress : bool
+        tqdm progress bar over tiles on stderr.
+    history : str, optional
+        Command recorded in the ``history`` attribute.
+
+    Returns
+    -------
+    dict
+        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``points``,
+        ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
+        ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
+        ``tile_seconds`` (worker-side generation time of each computed tile, compilation
+        included), ``undecided_fast``, ``undecided``.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(scene, Scene):
+        raise ValueError("scene: expected an atlas.Scene")
+    method, dtype, tile_points = _check_options(method, dtype, tile_points)
+    store = os.path.abspath(os.fspath(store))
+    tiles = tile_plan(scene, slab)
+    slab_n = tiles[0][1] - tiles[0][0]
+    sch = schema(
+        scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
+    )
+    opts = dict(method=method, dtype=dtype, resolve=bool(resolve), tile_points=tile_points)
+    plan = _plan(scene, sch, tiles, opts)
+    if to_netcdf is not None:
+        from .io import check_output_path
+
+        check_output_path(to_netcdf, overwrite_netcdf)
+
+    exists = os.path.exists(store)
+    if exists and resume:
+        old = _stored_plan(store)
+        if old.get("hash") != plan["hash"]:
+            diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]]
+            raise ValueError(
+                f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
+            )
+    elif exists and not overwrite:
+        raise FileExistsError(f"store: {store} exists (use resume=True or overwrite=True)")
+    else:
+        if not os.path.isdir(os.path.dirname(store)):
+            raise FileNotFoundError(f"store: directory {os.path.dirname(store)} does not exist")
+        if exists:
+            shutil.rmtree(store)
+        _create_layout(store, sch, slab_n, plan)
+
+    ex = _executor(scheduler)
+    bar = _bar(progress, len(tiles))
+    try:
+        report, recs = _verify_all(ex, store, tiles) if exists and resume else (None, {})
+        todo = [i for i in range(len(tiles)) if i not in recs]
+        if bar is not None:
+            bar.update(len(recs))
+        calls = [(i, (store, scene, i, *tiles[i], opts)) for i in todo]
+        computed = {}
+        for i, rec in ex.map(_run_tile, calls):
+            recs[i] = computed[i] = rec
+            if bar is not None:
+                bar.update(1)
+        totals = _finalize(store, sch, plan, tiles, recs, computed, resumed=exists and resume)
+    finally:
+        if bar is not None:
+            bar.close()
+        ex.close()
+
+    netcdf = _to_netcdf(store, sch, tiles, totals, to_netcdf, overwrite_netcdf)
+    seconds = time.perf_counter() - t0
+    points = scene.points()
+    return {
+        "store": store,
+        "netcdf": netcdf,
+        "scheduler": ex.description,
+        "workers": ex.workers,
+        "tiles": len(tiles),
+        "slab": slab_n,
+        "points": points,
+        "computed": sorted(computed),
+        "verified": sorted(set(recs) - set(computed)),
+        "missing": report["missing"] if report else [],
+        "corrupt": report["corrupt"] if report else [],
+        "seconds": seconds,
+        "points_per_second": points / seconds if seconds > 0 else float("inf"),
+        "tile_seconds": [computed[i]["seconds"] for i in sorted(computed)],
+        "tile_points": [computed[i]["points"] for i in sorted(computed)],
+        "undecided_fast": totals["attrs"]["undecided_fast"],
+        "undecided": totals["attrs"]["undecided_after_resolve"],
+    }
+
+
+def _bar(progress, total):
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="tile", desc="atlas tiles", file=sys.stderr, leave=False)
+
+
+def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
+    """Check the records, sum the undecided counts, write the final attributes."""
+    import zarr
+
+    missing = [i for i in range(len(tiles)) if i not in recs]
+    if missing:  # pragma: no cover - every tile either verified or computed
+        raise RuntimeError(f"store: tiles {missing} missing after the run")
+    first = recs[0]
+    for i, rec in recs.items():
+        if rec["shared"] != first["shared"]:
+            raise RuntimeError(f"store: tile {i} disagrees with tile 0 on {sorted(rec['shared'])}")
+        if rec["source"] != plan["source"]:
+            raise RuntimeError(
+                f"scheduler: tile {i} ran {rec['source']!r}, expected {plan['source']!r}"
+            )
+    _, shared = _b1_vars(sch)
+    var_attrs = {}
+    for k in sch.variables:
+        vals = [(i, r) for i, r in recs.items() if k in r["undecided"]]
+        if not vals:
+            continue
+        if k in shared:
+            vals = [(0, first)]
+        var_attrs[k] = {
+            "undecided_fast": sum(r["undecided_fast"][k] for _, r in vals),
+            "undecided": sum(r["undecided"][k] for _, r in vals),
+        }
+    # the shared variables are counted by every tile; subtract the duplicates
+    dup = lambda key: sum(r[key].get(k, 0) for i, r in recs.items() if i for k in shared)
+    fast = sum(r["total_undecided_fast"] for r in recs.values()) - dup("undecided_fast")
+    final = sum(r["total_undecided"] for r in recs.values()) - dup("undecided")
+    attrs = {"undecided_fast": int(fast), "undecided_after_resolve": int(final)}
+    failures = [p for i in sorted(recs) for p in recs[i]["exact_failures"]]
+    if failures:
+        attrs["exact_failures"] = len(failures)
+        attrs["exact_failure_example"] = repr(tuple(failures[0]))
+    group = zarr.open_group(store, mode="r+")
+    history = str(group.attrs.get("history", sch.attrs["history"]))
+    if resumed:
+        now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        history += f"\n{now}: resumed, {len(computed)} of {len(tiles)} tiles recomputed"
+    for k, a in var_attrs.items():
+        group[k].attrs.update(a)
+    group.attrs.update({**attrs, "history": history, "atlas_complete": 1})
+    return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
+
+
+def _to_netcdf(store, sch, tiles, totals, path, overwrite):
+    """Stream the store into a netCDF4 file with the schema's (typed) attributes."""
+    if path is None:
+        return None
+    from .io import NetCDFSink
+
+    sink = NetCDFSink(path, overwrite)
+    sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
+    ds = _open(store)
+    b1, shared = _b1_vars(sch)
+    sink.begin(sch)
+    try:
+        for start, stop in tiles:
+            for k in b1:
+                dims = sch.variables[k][0]
+                index = tuple(slice(start, stop) if d == "beta1" else slice(None) for d in dims)
+                sink.write(k, index, ds[k].isel(beta1=slice(start, stop)).values)
+        for k in shared:
+            sink.write(k, tuple(slice(None) for _ in sch.variables[k][0]), ds[k].values)
+        return sink.finish(totals["attrs"], totals["var_attrs"])
+    except BaseException:
+        sink.abort()
+        raise
