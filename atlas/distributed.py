@@ -31,14 +31,15 @@ Schedulers
 ``"local"`` / ``"local:N"``
     a :class:`distributed.LocalCluster` of N worker *processes* (default: the number of cores),
     one thread each, one JAX runtime per worker with XLA's intra-op threading off
-    (:data:`WORKER_ENV`), so N workers use N cores;
+    (:data:`WORKER_ENV`), so N workers use N cores; the workers share the CLI's persistent JAX
+    compilation cache (:func:`worker_env`);
 ``"tcp://host:8786"`` or a :class:`distributed.Client`
     an existing cluster.  The workers need ``painleve-atlas`` (same version and JAX version as the
     client: the store records both and mixed versions are refused) and the store path on a shared
     file system.  Start the workers with one thread each and the same environment, e.g.::
 
         dask scheduler                                    # on host, port 8786
-        XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" \\
+        XLA_FLAGS="--xla_cpu_multi_thread_eigen=false" \\
             dask worker tcp://host:8786 --nworkers 16 --nthreads 1   # on each machine
 
     then ``generate_distributed(scene, "/shared/atlas.zarr", scheduler="tcp://host:8786")``.
@@ -56,6 +57,7 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import hashlib
 import json
@@ -77,15 +79,34 @@ __all__ = [
     "verify_store",
     "tile_plan",
     "WORKER_ENV",
+    "worker_env",
 ]
 
 #: environment of LocalCluster workers: one JAX process per worker, no intra-op thread pools
 WORKER_ENV = {
-    "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
+    "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false",
     "OMP_NUM_THREADS": "1",
     "MKL_NUM_THREADS": "1",
     "OPENBLAS_NUM_THREADS": "1",
 }
+
+
+def worker_env() -> dict:
+    """Environment for worker processes: :data:`WORKER_ENV` plus the persistent JAX compilation
+    cache of the CLI (``$ATLAS_JAX_CACHE``, default ``~/.cache/painleve-atlas/jax``; ``0`` = off),
+    so each worker loads the compiled kernels instead of compiling them again."""
+    env = dict(WORKER_ENV)
+    where = os.environ.get(
+        "ATLAS_JAX_CACHE", os.path.join(os.path.expanduser("~"), ".cache", "painleve-atlas", "jax")
+    )
+    if where not in ("", "0"):
+        with contextlib.suppress(OSError):
+            os.makedirs(where, exist_ok=True)
+            env["JAX_COMPILATION_CACHE_DIR"] = where
+            env.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "1.0")
+    return env
+
+
 #: default points per tile (largest output): a few kernel tiles, so per-tile overhead is amortized
 DEFAULT_SLAB_POINTS = 1 << 18
 #: maximum elements per zarr chunk (chunks never straddle slabs)
@@ -361,7 +382,7 @@ class _Dask:
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
-                env=dict(WORKER_ENV),
+                env=worker_env(),
                 dashboard_address=None,
                 silence_logs=40,
             )
