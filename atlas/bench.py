@@ -477,7 +477,7 @@ def _machine() -> dict:
 
 
 def _work_precision(cfg, cache, rng):
-    rows, bnd = [], []
+    rows = []
     refs = {}
     head_n = cfg["res"][-1]
     for case in cfg["cases"]:
