@@ -372,12 +372,7 @@ class _Dask:
             self.client, self.own = scheduler, False
         elif isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
             n = scheduler.partition(":")[2]
-            try:
-                n = int(n) if n else (os.cpu_count() or 1)
-            except ValueError:
-                raise ValueError(f"scheduler: expected local:N, got {scheduler!r}") from None
-            if n < 1:
-                raise ValueError(f"scheduler: need at least one worker, got {scheduler!r}")
+            n = int(n) if n else (os.cpu_count() or 1)
             self.cluster = LocalCluster(
                 n_workers=n,
                 threads_per_worker=1,
@@ -389,10 +384,8 @@ class _Dask:
             self.client, self.own = Client(self.cluster), True
         elif isinstance(scheduler, str) and "://" in scheduler:
             self.client, self.own = Client(scheduler), True
-        else:
-            raise ValueError(
-                f"scheduler: expected None, 'local', 'local:N' or an address, got {scheduler!r}"
-            )
+        else:  # pragma: no cover - rejected by _check_scheduler
+            raise ValueError(f"scheduler: unsupported {scheduler!r}")
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
         self.description = str(scheduler if isinstance(scheduler, str) else "client")
 
@@ -415,7 +408,25 @@ class _Dask:
             self.cluster.close()
 
 
+def _check_scheduler(scheduler):
+    """``ValueError`` naming ``scheduler`` unless it is None, local[:N], an address or a Client."""
+    if scheduler is None or (isinstance(scheduler, str) and "://" in scheduler):
+        return
+    if isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
+        n = scheduler.partition(":")[2]
+        if n == "" or (n.isdigit() and int(n) >= 1):
+            return
+        raise ValueError(f"scheduler: expected local:N with N >= 1, got {scheduler!r}")
+    if type(scheduler).__name__ == "Client":
+        return
+    raise ValueError(
+        f"scheduler: expected None, 'local', 'local:N', an address (tcp://host:8786) or a "
+        f"distributed.Client, got {scheduler!r}"
+    )
+
+
 def _executor(scheduler):
+    _check_scheduler(scheduler)
     if scheduler is None:
         return _InProcess()
     return _Dask(scheduler)
@@ -530,6 +541,7 @@ def generate_distributed(
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     method, dtype, tile_points = _check_options(method, dtype, tile_points)
+    _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab)
     slab_n = tiles[0][1] - tiles[0][0]
