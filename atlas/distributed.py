@@ -281,9 +281,9 @@ def _run_tile(store: str, scene: Scene, i: int, start: int, stop: int, opts: dic
     import zarr
 
     _drop_record(store, i)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     ds = _compute_tile(scene, start, stop, opts)
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     stats = last_stats()
     has_b1 = "beta1" in ds.dims
     b1 = [k for k in ds.data_vars if "beta1" in ds[k].dims]
@@ -316,6 +316,7 @@ def _run_tile(store: str, scene: Scene, i: int, start: int, stop: int, opts: dic
         "exact_failures": [list(p) for p in stats.get("exact_failures", [])],
         "points": int(stats["points"]),
         "seconds": seconds,
+        "cpu_seconds": cpu,
         "write_seconds": time.perf_counter() - t1,
         "source": ds.attrs["source"],
         "host": os.uname().nodename,
@@ -534,8 +535,8 @@ def generate_distributed(
         ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``points``,
         ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
         ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
-        ``tile_seconds`` (worker-side generation time of each computed tile, compilation
-        included), ``undecided_fast``, ``undecided``.
+        ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
+        computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
     """
     t0 = time.perf_counter()
     if not isinstance(scene, Scene):
@@ -609,6 +610,7 @@ def generate_distributed(
         "seconds": seconds,
         "points_per_second": points / seconds if seconds > 0 else float("inf"),
         "tile_seconds": [computed[i]["seconds"] for i in sorted(computed)],
+        "tile_cpu_seconds": [computed[i]["cpu_seconds"] for i in sorted(computed)],
         "tile_points": [computed[i]["points"] for i in sorted(computed)],
         "undecided_fast": totals["attrs"]["undecided_fast"],
         "undecided": totals["attrs"]["undecided_after_resolve"],
