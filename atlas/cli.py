@@ -24,7 +24,9 @@ import argparse
 import importlib
 import os
 import shlex
+import signal
 import sys
+import threading
 from pathlib import Path
 
 __all__ = ["main", "build_parser"]
@@ -276,9 +278,16 @@ def _cmd_dispatch(args) -> int:
     return rc if isinstance(rc, int) else 0
 
 
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
     """Entry point of the ``atlas`` console script; returns the exit code."""
+    console = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _sigterm)  # clean up temporary files like Ctrl-C does
     try:
         args = build_parser().parse_args(argv)
         if args.command == "generate":
@@ -294,6 +303,10 @@ def main(argv=None) -> int:
         return e.code if isinstance(e.code, int) else 0
     except KeyboardInterrupt:
         print("atlas: interrupted (no partial output file left)", file=sys.stderr)
+        if console:  # skip interpreter teardown under running XLA threads (it can segfault)
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(130)
         return 130
     except Exception as e:  # a bug, not bad input: still one line (ATLAS_DEBUG=1 re-raises)
         if os.environ.get("ATLAS_DEBUG", "") not in ("", "0"):

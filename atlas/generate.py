@@ -569,6 +569,7 @@ def run(
     stats = {"undecided_fast": {}, "undecided": {}}
     md = _ModelDependence(scene, outputs)
     bar = _progress_bar(progress, total, scene.name)
+    pending = None
     sink.begin(sch)
     try:
         for g, need, dims, shape in plan:
@@ -603,6 +604,11 @@ def run(
         result = sink.finish(attrs, var_attrs)
         seconds = time.perf_counter() - t0
     except BaseException:
+        try:  # let in-flight kernels finish before unwinding (exiting under them can crash XLA)
+            if pending is not None:
+                jax.block_until_ready(pending[3])
+        except BaseException:  # pragma: no cover - best effort
+            pass
         sink.abort()
         raise
     finally:

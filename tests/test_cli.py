@@ -160,3 +160,21 @@ def test_dispatch_passes_options(monkeypatch):
 def test_no_subcommand_is_usage_error(capsys):
     assert cli.main([]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
+    import signal
+    import time
+
+    out = tmp_path / "big.nc"
+    args = ["generate", "--beta1", "0:2pi:2048", "--beta2", "0:2pi:2048", "--kappa", "1,2,3,4"]
+    args += ["--q", "0.1,0.2,0.3,0.4", "--outputs", "stable_SS", "--out", str(out)]
+    p = _spawn(args, _env(tmp_path_factory))
+    deadline = time.time() + 60
+    while time.time() < deadline and not any(f.endswith(".tmp") for f in os.listdir(tmp_path)):
+        time.sleep(0.1)  # wait until the temporary file is being written
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    assert os.listdir(tmp_path) == []
