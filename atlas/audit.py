@@ -6,8 +6,8 @@ kernels (:func:`atlas.figures.evaluate_points`; undecided points settled exactly
 counterexample is re-verified point by point by the high-precision reference
 :func:`atlas.exact.point_spectral` (its eigenvalues are printed), see :func:`verify_counterexample`.
 
-Searches: (i) class interiors from an offset grid (:func:`atlas.table2.class_samples`) times a
-``kappa`` ladder at ``Q = 0`` and times :data:`atlas.table2.KAPPA_Q_SAMPLE`; (ii) seeded random
+Searches: (i) class interiors from an offset grid (:func:`atlas.tables.class_samples`) times a
+``kappa`` ladder at ``Q = 0`` and times :data:`atlas.tables.KAPPA_Q_SAMPLE`; (ii) seeded random
 points: ``beta`` uniform, ``kappa = 10^U(-6, 6)``, damping in four equal groups -- ``q = 0``;
 ``q1 = q2 = 10^U(-4, 3)``; ``q1, q2`` independent ``10^U(-3, 3)`` (ratios up to 1e6); one of them 0.
 """
@@ -24,7 +24,7 @@ import numpy as np
 
 from . import exact, mechanics
 from .figures import evaluate_points
-from .table2 import KAPPA_Q_SAMPLE, class_samples, table2
+from .tables import KAPPA_Q_SAMPLE, class_samples, table2
 from .verdicts import Consistency, Verdict
 
 __all__ = ["Claim", "Counterexample", "run_audit", "to_markdown", "write_audit",

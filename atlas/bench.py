@@ -11,7 +11,7 @@ Everything is measured in one run on this machine and reported as ratios measure
 * **hard-case suites** of :mod:`atlas.hardcases`: misclassified / undecided per method, suite, dtype;
 * **floor**: the cheapest jitted kernel that reads the same coordinates and writes the same outputs;
 * **scaling**: time and peak RSS per atlas size (a subprocess per size, streaming tiles to disk);
-* **simulation**: :func:`atlas.simulate.simulate` against ``solve_ivp`` (DOP853 / Radau).
+* **simulation**: :func:`atlas.dynamics.simulate` against ``solve_ivp`` (DOP853 / Radau).
 
 Nothing here is imported by the library; :func:`run` is called by ``atlas bench``.
 """
@@ -709,7 +709,7 @@ def _event_error(t, tags, t_ref, tags_ref):
 
 
 def _simulation(cfg):
-    from . import simulate as S
+    from . import dynamics as S
 
     rows = []
     cases = S.fig2_cases()

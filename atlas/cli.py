@@ -2,8 +2,8 @@
 
 A thin layer over the library.  ``atlas generate`` streams a scene into a netCDF4 file
 (:func:`atlas.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
-implement them (``atlas.paper.run``, ``atlas.simulate.run_cli``, ``atlas.table2.run_cli``,
-``atlas.bench.run``) and exit with code 2 and a one-line message if such a module is missing.
+implement them (``atlas.paper.run``, ``atlas.figures_dynamics.run_cli``, ``atlas.tables.run_cli``,
+``atlas.bench.run``).
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
@@ -50,7 +50,7 @@ def _one_line(msg: str) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .generate import DEFAULT_TILE_POINTS, DTYPES, METHODS
+    from .tiling import DEFAULT_TILE_POINTS, DTYPES, METHODS
     from .scene import ALL_OUTPUTS, BUILTIN_SCENES
 
     p = _Parser(
@@ -255,24 +255,15 @@ def _compile_cache():
 
 _DISPATCH = {
     "paper": ("atlas.paper", "run"),
-    "simulate": ("atlas.simulate", "run_cli"),
-    "table": ("atlas.table2", "run_cli"),
+    "simulate": ("atlas.figures_dynamics", "run_cli"),
+    "table": ("atlas.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),
 }
 
 
 def _cmd_dispatch(args) -> int:
     module, func = _DISPATCH[args.command]
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as e:
-        if e.name != module:
-            raise
-        mod = None
-    fn = getattr(mod, func, None) if mod is not None else None
-    if fn is None:
-        print(f"atlas {args.command}: not available yet ({module}.{func} missing)", file=sys.stderr)
-        return EXIT_USAGE
+    fn = getattr(importlib.import_module(module), func)
     opts = {k: v for k, v in vars(args).items() if k != "command"}
     rc = fn(**opts)
     return rc if isinstance(rc, int) else 0

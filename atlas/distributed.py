@@ -10,7 +10,7 @@ Store layout (a local zarr directory, zarr 2 or 3)::
     STORE/                  the atlas: coordinates, variables, CF attributes (SPEC §2)
     STORE/_tiles/t000012    one empty group per finished tile; its attributes are the tile record
 
-The layout is created up front from :func:`atlas.generate.schema` of the full scene (arrays
+The layout is created up front from :func:`atlas.tiling.schema` of the full scene (arrays
 allocated lazily: unwritten chunks read as fill values), in a temporary directory renamed onto
 ``STORE``.  A tile writes its variables into the ``beta1`` region ``[start, stop)`` (zarr chunks are
 aligned with the slabs, so concurrent tiles never touch the same chunk), reads the region back, and
@@ -70,7 +70,15 @@ import time
 import numpy as np
 import xarray as xr
 
-from .generate import DEFAULT_TILE_POINTS, Schema, _check_options, generate, last_stats, schema
+from .tiling import (
+    DEFAULT_TILE_POINTS,
+    Schema,
+    _check_options,
+    generate,
+    last_stats,
+    progress_bar,
+    schema,
+)
 from .scene import Scene
 
 __all__ = [
@@ -152,7 +160,7 @@ def _b1_vars(sch: Schema) -> tuple[list[str], list[str]]:
 
 
 def _chunks(sch: Schema, name: str, slab: int) -> tuple[int, ...]:
-    from .generate import block_shape
+    from .tiling import block_shape
 
     dims = sch.variables[name][0]
     shape = tuple(sch.shape[d] for d in dims)
@@ -574,7 +582,7 @@ def generate_distributed(
         _create_layout(store, sch, slab_n, plan)
 
     ex = _executor(scheduler)
-    bar = _bar(progress, len(tiles))
+    bar = progress_bar(progress, len(tiles), "atlas tiles", unit="tile")
     try:
         report, recs = _verify_all(ex, store, tiles) if exists and resume else (None, {})
         todo = [i for i in range(len(tiles)) if i not in recs]
@@ -615,14 +623,6 @@ def generate_distributed(
         "undecided_fast": totals["attrs"]["undecided_fast"],
         "undecided": totals["attrs"]["undecided_after_resolve"],
     }
-
-
-def _bar(progress, total):
-    if not progress:
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit="tile", desc="atlas tiles", file=sys.stderr, leave=False)
 
 
 def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:

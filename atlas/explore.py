@@ -6,7 +6,7 @@ The logic behind ``notebooks/explore.ipynb`` as plain, testable functions:
   optionally one ``alpha``), through the same certified driver as every other caller
   (:func:`atlas.evaluate.spectral_points`, :mod:`atlas.mechanics`); undecided values are settled by
   :mod:`atlas.exact`.  Variable names, dimensions and stored types follow the data contract
-  (SPEC §2), so a map equals the corresponding slice of an atlas from :func:`atlas.generate.generate`.
+  (SPEC §2), so a map equals the corresponding slice of an atlas from :func:`atlas.tiling.generate`.
 * :func:`inspect_point` -- everything the theory says about one point: class and subclass codes,
   Table 1 consistency, SF/FS stability, IF/FI, CC, the SS and II verdicts of the certified path
   *and* of the exact reference, the eigenvalues of ``M`` and the margins.
@@ -142,7 +142,7 @@ def _settle_codes(out: dict, c1, s1, c2, s2, ca, sa) -> int:
 
 
 def _storage(name: str, codes: np.ndarray, dtype) -> np.ndarray:
-    """Stored type of a layer, as in an atlas (SPEC §2, :mod:`atlas.generate`)."""
+    """Stored type of a layer, as in an atlas (SPEC §2, :mod:`atlas.tiling`)."""
     if name in ("stable_SF", "stable_FS"):
         return codes == int(Verdict.STABLE)
     if name in _TABLE1 or name in ("consistent_IF", "consistent_FI"):

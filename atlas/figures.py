@@ -369,11 +369,11 @@ def _legend_patches(enum, present=None, relabel=None):
 def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
     """One interior ``(beta1, beta2)`` per class and one ``alpha`` per subclass ``k = 1..6`` [rad].
 
-    The class point is the class sample (:func:`atlas.table2.class_samples`) farthest from the
+    The class point is the class sample (:func:`atlas.tables.class_samples`) farthest from the
     class boundaries (largest minimum angular gap to beta1, beta1*, and the axes); alpha for
     subclass ``k`` is the middle of the arc of ``k`` found by :func:`atlas.mechanics.subclass_code`.
     """
-    from .table2 import class_samples
+    from .tables import class_samples
 
     samples = class_samples(n, per_class=10_000)
     alpha = _offset_grid(n_alpha)

@@ -1,6 +1,6 @@
 """Figures of the simulated contact dynamics: the paper's Fig. 2 and the outcome map.
 
-Plots only; the numbers come from :mod:`atlas.simulate`.
+Plots only; the numbers come from :mod:`atlas.dynamics`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .simulate import Outcome, classify, fig2_cases, in_no_stable_subclass, simulate
+from .dynamics import Outcome, classify, fig2_cases, in_no_stable_subclass, simulate
 
 __all__ = ["FIG2_T_END", "plot_fig2", "plot_outcome_map"]
 
@@ -177,7 +177,7 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
 
 
 def plot_outcome_map(ds, path) -> Path:
-    """Plot an :func:`atlas.simulate.outcome_map` dataset.
+    """Plot an :func:`atlas.dynamics.outcome_map` dataset.
 
     Categories via ``pcolormesh`` + ``ListedColormap`` + ``BoundaryNorm`` from :class:`Outcome`;
     solid outline: subclasses 132, 133, 142, 143 and duals (drawn on a fine grid of the exact

@@ -4,7 +4,7 @@ Two ways to a file, producing the same file (same variables, types, attributes, 
 
 * :func:`write_netcdf` writes an in-memory :class:`xarray.Dataset` (from :func:`atlas.generate`)
   with the ``netcdf4`` engine;
-* :func:`generate_to_file` never holds the full arrays: :func:`atlas.generate.run` hands each tile
+* :func:`generate_to_file` never holds the full arrays: :func:`atlas.tiling.run` hands each tile
   to a :class:`NetCDFSink`, which writes it into a ``netCDF4.Dataset`` opened directly.  Memory is
   bounded by the tile (and the 2-D ``model_dependent_*`` accumulators), so atlases larger than
   memory work.  This is what ``atlas generate`` uses.
@@ -18,7 +18,7 @@ Encodings (xarray issues #1576, #6055): integer flag variables get no ``_FillVal
 fill value reads back as float), coordinates get ``_FillValue = None`` (no NaN fill), booleans are
 stored as int8 with the attribute ``dtype = "bool"`` (xarray's convention, read back as bool).
 Compression: zlib level 4 with shuffle; chunks = the generation tiles
-(:func:`atlas.generate.block_shape`), so each tile writes whole chunks.
+(:func:`atlas.tiling.block_shape`), so each tile writes whole chunks.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import tempfile
 import numpy as np
 import xarray as xr
 
-from .generate import DEFAULT_TILE_POINTS, Schema, block_shape, run
+from .tiling import DEFAULT_TILE_POINTS, Schema, block_shape, run
 from .scene import Scene
 
 __all__ = [
@@ -134,7 +134,7 @@ def write_netcdf(ds: xr.Dataset, path, overwrite: bool = False, tile_points=DEFA
 
 
 class NetCDFSink:
-    """Writes tiles from :func:`atlas.generate.run` straight into a netCDF4 file (streaming)."""
+    """Writes tiles from :func:`atlas.tiling.run` straight into a netCDF4 file (streaming)."""
 
     def __init__(self, path, overwrite: bool = False):
         self.path = check_output_path(path, overwrite)

@@ -112,7 +112,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
     Returns a dict ``{file name: seconds}``; also writes ``out/README.md`` listing them.
     """
     _compile_cache()
-    from . import audit, figures, table2
+    from . import audit, figures, tables
 
     say = progress or (lambda msg: print(f"[atlas paper] {msg}", file=sys.stderr, flush=True))
     out = Path(out)
@@ -130,9 +130,9 @@ def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
         say(f"{name} done in {timings[name]:.1f} s")
         return res
 
-    rows = step("table2", lambda: table2.table2(n=96, per_class=8 if quick else 24))
-    step("table2.md", lambda: atomic_write_text(out / "table2.md", table2.to_markdown(rows)))
-    step("table2.csv", lambda: atomic_write_text(out / "table2.csv", table2.to_csv(rows)))
+    rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
+    step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
+    step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
     step("table2.png", lambda: figures.plot_table2(out / "table2.png", rows))
     ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
     step("fig1_stability.png", lambda: figures.plot_fig1_stability(out / "fig1_stability.png", ds))

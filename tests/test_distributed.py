@@ -30,7 +30,7 @@ from atlas.distributed import (  # noqa: E402
     verify_store,
     worker_env,
 )
-from atlas.generate import generate  # noqa: E402
+from atlas.tiling import generate  # noqa: E402
 from atlas.io import write_netcdf  # noqa: E402
 from atlas.scene import Scene  # noqa: E402
 

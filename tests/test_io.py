@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 from atlas import io as aio
-from atlas.generate import block_shape, generate
+from atlas.tiling import block_shape, generate
 from atlas.io import generate_to_file, write_netcdf
 from atlas.scene import Scene
 

@@ -4,7 +4,7 @@
   (nbclient, kernel ``python3`` of the current interpreter) with a temporary working directory, so
   every file they write lands there.  Their ``QUICK = True`` first cell keeps them short.
 * The widget's redraw callback (moving the controls of :func:`atlas.explore.make_widget`) computes
-  exactly the arrays :func:`atlas.generate.generate` stores for the same parameters.
+  exactly the arrays :func:`atlas.tiling.generate` stores for the same parameters.
 """
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ ALPHA = 0.35 * math.pi
 def test_widget_map_equals_generate(kappa, q1, q2):
     _need("ipywidgets")
     from atlas import explore
-    from atlas.generate import generate
+    from atlas.tiling import generate
     from atlas.scene import Scene
 
     box = explore.make_widget(n=N, layer="class_code", alpha=ALPHA)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from atlas import table2 as t2
+from atlas import tables as t2
 
 # The paper's Table 2, transcribed: class: (dual, FF, SS, SF, FS, IF, FI, II, CC)
 PAPER = {

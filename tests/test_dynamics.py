@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from atlas import simulate as S
+from atlas import dynamics as S
 
 PI = math.pi
 CASES = S.fig2_cases()

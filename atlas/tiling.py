@@ -568,7 +568,7 @@ def run(
     t0 = time.perf_counter()
     stats = {"undecided_fast": {}, "undecided": {}}
     md = _ModelDependence(scene, outputs)
-    bar = _progress_bar(progress, total, scene.name)
+    bar = progress_bar(progress, total, f"atlas {scene.name}")
     pending = None
     sink.begin(sch)
     try:
@@ -694,14 +694,13 @@ class _ModelDependence:
         return out
 
 
-def _progress_bar(progress, total, name):
+def progress_bar(progress, total, desc, unit="pt"):
+    """A tqdm bar on stderr, or ``None`` when ``progress`` is false."""
     if not progress:
         return None
     from tqdm import tqdm
 
-    return tqdm(
-        total=total, unit="pt", unit_scale=True, desc=f"atlas {name}", file=sys.stderr, leave=False
-    )
+    return tqdm(total=total, unit=unit, unit_scale=True, desc=desc, file=sys.stderr, leave=False)
 
 
 def _check_options(method, dtype, tile_points):
@@ -752,7 +751,7 @@ def generate(
     Returns
     -------
     xarray.Dataset
-        Each variable spans only the varied parameters it depends on; see :mod:`atlas.generate`.
+        Each variable spans only the varied parameters it depends on; see :mod:`atlas.tiling`.
         For atlases larger than memory use :func:`atlas.io.generate_to_file`.
     """
     return run(

@@ -13,7 +13,7 @@ import pytest
 
 from atlas import mechanics as mech
 from atlas import spectral
-from atlas.generate import block_shape, generate, last_stats, tile_blocks
+from atlas.tiling import block_shape, generate, last_stats, tile_blocks
 from atlas.scene import ALL_OUTPUTS, Scene, builtin
 from atlas.verdicts import Consistency, Verdict
 
