@@ -174,17 +174,27 @@ def spectral_points(
     if resolve and und.any():
         from . import exact
 
-        idx = np.flatnonzero(und)
-        if max_resolve is not None:
-            idx = idx[:max_resolve]
-        pts = {
-            key: np.broadcast_to(a, shape).flat[idx].astype(np.float64)
-            for key, a in zip(_KEYS, inputs)
-        }
-        ref = exact.resolve(pts, names=tuple(flags))
+        # points undecided only in stable_SS need only the rational Hurwitz test (microseconds);
+        # the others get the full root-based reference (milliseconds)
+        und_ii = np.zeros(shape, bool)
         for k in flags:
-            sel = out[k].flat[idx] == 3
-            out[k].flat[idx[sel]] = ref[k][sel]
+            if k != "stable_SS":
+                und_ii |= out[k] == 3
+        budget = max_resolve
+        for sel_mask, sel_names in ((und & ~und_ii, ("stable_SS",)), (und_ii, tuple(flags))):
+            idx = np.flatnonzero(sel_mask)
+            if budget is not None:
+                idx, budget = idx[:budget], max(0, budget - idx.size)
+            if not idx.size:
+                continue
+            pts = {
+                key: np.broadcast_to(a, shape).flat[idx].astype(np.float64)
+                for key, a in zip(_KEYS, inputs)
+            }
+            ref = exact.resolve(pts, names=sel_names)
+            for k in sel_names:
+                sel = out[k].flat[idx] == 3
+                out[k].flat[idx[sel]] = ref[k][sel]
     after = np.zeros(shape, bool)
     for k in flags:
         after |= out[k] == 3

@@ -31,7 +31,14 @@ import sympy
 
 from .verdicts import Consistency, Verdict
 
-__all__ = ["characteristic_poly", "point_spectral", "resolve", "point_codes", "resolve_codes"]
+__all__ = [
+    "characteristic_poly",
+    "point_spectral",
+    "ss_hurwitz",
+    "resolve",
+    "point_codes",
+    "resolve_codes",
+]
 
 _lam = sympy.Symbol("lam")
 _w = sympy.Symbol("w")
@@ -178,15 +185,53 @@ def point_spectral(c1, s1, c2, s2, kappa, q1, q2) -> dict:
 _SPECTRAL = ("stable_SS", "consistent_II", "stable_II")
 
 
+def ss_hurwitz(c1, s1, c2, s2, kappa, q1, q2):
+    """Exact SS verdict from the Hurwitz conditions in rational arithmetic, or ``None``.
+
+    Microseconds a point (``fractions.Fraction`` on the float inputs), for settling ``stable_SS``
+    where the fast path could not certify a sign.  Coefficients of ``p`` (module docstring of
+    :mod:`atlas.spectral`) and, for ``Q != 0``, the Routh-Hurwitz conditions on the Hurwitz
+    determinants of the *coefficients* (not the fast path's factor ``G``): stable iff ``a3 > 0``,
+    ``H2 = a3 a2 - a1 > 0``, ``H3 = a3 a2 a1 - a1^2 - a3^2 a0 > 0`` and ``a0 > 0``; otherwise, if
+    ``a0 H3 != 0`` no root
+    lies on the imaginary axis (Orlando) and the verdict is unstable.  ``a0 H3 = 0`` returns
+    ``None`` (the caller uses :func:`point_spectral`).  For ``Q = 0``, ``l^2 = mu`` with
+    ``mu^2 + a2 mu + a0 = 0``: neutral iff ``a2^2 >= 4 a0``, ``a2 >= 0`` and ``a0 >= 0``, else
+    unstable.
+    """
+    c1, s1, c2, s2, k, q1, q2 = (Fraction(float(v)) for v in (c1, s1, c2, s2, kappa, q1, q2))
+    D = c1 * s2 - s1 * c2
+    a3 = c1 * q1 + s2 * q2
+    a2 = k * c1 + s2 + D * q1 * q2
+    a1 = D * (k * q2 + q1)
+    a0 = D * k
+    if q1 == 0 and q2 == 0:
+        neutral = a2 * a2 >= 4 * a0 and a2 >= 0 and a0 >= 0
+        return int(Verdict.NEUTRAL if neutral else Verdict.UNSTABLE)
+    h3 = a3 * a2 * a1 - a1 * a1 - a3 * a3 * a0
+    if a3 > 0 and a3 * a2 - a1 > 0 and h3 > 0 and a0 > 0:
+        return int(Verdict.STABLE)
+    if a0 != 0 and h3 != 0:
+        return int(Verdict.UNSTABLE)
+    return None
+
+
 def resolve(points: dict, names=_SPECTRAL) -> dict:
-    """Exact spectral verdicts for 1-D arrays of points (keys ``c1 s1 c2 s2 kappa q1 q2``)."""
+    """Exact spectral verdicts for 1-D arrays of points (keys ``c1 s1 c2 s2 kappa q1 q2``).
+
+    ``names == ("stable_SS",)`` takes :func:`ss_hurwitz` where it decides (the root-based
+    :func:`point_spectral` elsewhere and for every II verdict).
+    """
     keys = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
     arrs = [np.atleast_1d(np.asarray(points[k])) for k in keys]
     arrs = np.broadcast_arrays(*arrs)
     n = arrs[0].size
     out = {name: np.empty(n, np.int8) for name in names}
+    ss_only = tuple(names) == ("stable_SS",)
     for i in range(n):
-        r = point_spectral(*(float(a.ravel()[i]) for a in arrs))
+        args = [float(a.ravel()[i]) for a in arrs]
+        v = ss_hurwitz(*args) if ss_only else None
+        r = {"stable_SS": v} if v is not None else point_spectral(*args)
         for name in names:
             out[name][i] = r[name]
     return out
