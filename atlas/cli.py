@@ -117,6 +117,16 @@ def build_parser() -> argparse.ArgumentParser:
     for name in ("k1", "k2", "q1", "q2", "t-end"):
         ps.add_argument(f"--{name}", type=_number(name), metavar="X")
     ps.add_argument("--out", metavar="FILE", help="output file (figure or data)")
+    ps.add_argument(
+        "--map",
+        dest="outcome_map",
+        action="store_true",
+        help="outcome map over beta1 x beta2 (--out FILE.nc or FILE.png)",
+    )
+    ps.add_argument("--n", type=int, metavar="N", help="map: cells per axis (default 24)")
+    ps.add_argument("--kappa", type=_number("kappa"), metavar="K", help="map: default 0.5")
+    ps.add_argument("--q", type=_number("q"), metavar="Q", help="map: q1 = q2, default 0")
+    ps.add_argument("--engine", choices=["numpy", "jax"], default="numpy", help="map engine")
 
     pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
     pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")

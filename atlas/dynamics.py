@@ -9,7 +9,8 @@ contact law (paper eq. 6)::
 State ``g = (d1, d2, d1', d2')``.  A contact is *active* when ``d_i <= 0`` and the force
 ``phi_i = -k_i d_i - q_i d_i' > 0``.  For a fixed active set ``S`` the dynamics is linear with a
 constant forcing, ``g' = A_S g + c_S`` (paper eqs. 7, 8), so between switching events the state is
-advanced exactly with the matrix exponential of the augmented matrix ``E_S = [[A_S, c_S], [0, 0]]``.
+advanced exactly with the matrix exponential of the augmented matrix ``E_S = [[A_S, c_S], [0, 0]]``
+(scaling and squaring of its degree-30 Taylor polynomial, :func:`_expm`).
 
 Event detection (no crossing skipped)
 -------------------------------------
@@ -37,7 +38,6 @@ import time as _time
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.linalg
 import scipy.optimize
 
 __all__ = [
@@ -49,6 +49,15 @@ __all__ = [
     "simulate_solve_ivp",
     "fig2_cases",
     "ss_equilibrium",
+    "TrajectoryStats",
+    "trajectory_stats",
+    "classify_stats",
+    "simulate_outcome",
+    "subclass_codes",
+    "no_stable_subclass",
+    "outcome_grid",
+    "perturbed_initial_states",
+    "outcome_map",
 ]
 
 
@@ -100,6 +109,23 @@ IMPACT, LIFTOFF, FORCE_ON, FORCE_OFF = "impact", "liftoff", "force_on", "force_o
 
 _TAYLOR_DEGREE = 30
 _I2 = np.eye(2)
+
+
+def _expm(M: np.ndarray) -> np.ndarray:
+    """Matrix exponential by scaling and squaring of the degree-30 Taylor polynomial.
+
+    ``M / 2^s`` has 1-norm <= 1/2, where the truncation error is below ``0.5^31 / 31! < 1e-42``
+    (relative); ``scipy.linalg.expm`` (1.17) takes ~15 ms on small-norm 5 x 5 matrices, this ~30 us.
+    """
+    norm = float(np.abs(M).sum(axis=0).max())
+    s = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
+    X = M / 2.0**s
+    acc = np.eye(M.shape[0])
+    for n in range(_TAYLOR_DEGREE, 0, -1):
+        acc = np.eye(M.shape[0]) + (X @ acc) / n
+    for _ in range(s):
+        acc = acc @ acc
+    return acc
 
 
 def _mode_name(mask: int) -> str:
@@ -184,7 +210,7 @@ def _build_system(beta1, beta2, alpha, k, q, b_norm, a_norm, theta) -> _System:
         A = E[:4, :4]
         rho = float(np.max(np.abs(np.linalg.eigvals(A))))
         h = theta / max(rho, 0.25 * omega)
-        Phi = scipy.linalg.expm(E * h)
+        Phi = _expm(E * h)
         P = np.empty((_TAYLOR_DEGREE + 1, 5, 5))
         P[0] = np.eye(5)
         for n in range(1, _TAYLOR_DEGREE + 1):
@@ -267,6 +293,11 @@ class SimulationResult:
     message : str
     n_steps : int
         Sub-steps taken.
+    wall_time : float
+        [s].
+    scale : float
+        Length scale of the run, ``max(|d(0)|, |a| / min_i(k_i |b_i|))`` (the resting
+        penetration scale) [1]; the amplitude tests of :func:`classify` are relative to it.
     """
 
     t_events: np.ndarray
@@ -281,10 +312,13 @@ class SimulationResult:
     message: str
     n_steps: int
     wall_time: float
+    scale: float
     _system: _System = dataclasses.field(repr=False)
     _seg_t: np.ndarray = dataclasses.field(repr=False)
     _seg_z: np.ndarray = dataclasses.field(repr=False)
     _seg_mask: np.ndarray = dataclasses.field(repr=False)
+    _env_t: np.ndarray = dataclasses.field(repr=False, default=None)
+    _env_d: np.ndarray = dataclasses.field(repr=False, default=None)
 
     @property
     def n_events(self) -> int:
@@ -350,6 +384,10 @@ def _root(coef, s, hi, xtol):
             return s * 1e-300
         return _horner(c, tau)
 
+    if s * F(hi) >= 0:
+        # the bracket came from expm(E h) z, whose sign at hi differs only by rounding from the
+        # Taylor polynomial's: the sign change is at the end of the sub-step
+        return hi
     return scipy.optimize.brentq(F, 0.0, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
 
 
@@ -445,6 +483,7 @@ def simulate(
     t = 0.0
     ev_t, ev_kind, ev_c, ev_z, ev_mode = [], [], [], [], []
     seg_t, seg_z, seg_mask = [0.0], [z.copy()], [mask]
+    env_t, env_d = [0.0], [z[:2].copy()]  # gaps at every sub-step end and event (for classify)
     n_steps = 0
     status, message = Status.T_END, "reached t_end"
     while True:
@@ -456,7 +495,7 @@ def simulate(
             status, message = Status.STEP_CAP, f"{max_steps} sub-steps"
             break
         h = min(mode.h, t_end - t)
-        Phi = mode.Phi if h == mode.h else scipy.linalg.expm(mode.E * h)
+        Phi = mode.Phi if h == mode.h else _expm(mode.E * h)
         z1 = Phi @ z
         f1 = L @ z1
         fp0 = mode.LE @ z
@@ -481,6 +520,8 @@ def simulate(
         if not brackets:
             t += h
             z = z1
+            env_t.append(t)
+            env_d.append(z[:2].copy())
             if _diverged(sysm, z, mask, amp_lim, pen_lim):
                 status, message = Status.DIVERGED, _div_message(z, mask, amp_lim, pen_lim)
                 break
@@ -520,6 +561,8 @@ def simulate(
             ev_c.append(i + 1)
             ev_z.append(z_new[:4].copy())
         z = z_new
+        env_t.append(t)
+        env_d.append(z[:2].copy())
         new_mask = _mask_from_signs(s)
         for _ in range(len(ev_t) - len(ev_mode)):
             ev_mode.append(_mode_name(new_mask))
@@ -546,10 +589,13 @@ def simulate(
         message=message,
         n_steps=n_steps,
         wall_time=_time.perf_counter() - t_wall,
+        scale=scale,
         _system=sysm,
         _seg_t=np.array(seg_t),
         _seg_z=np.array(seg_z),
         _seg_mask=np.array(seg_mask, dtype=int),
+        _env_t=np.array(env_t),
+        _env_d=np.array(env_d).reshape(-1, 2),
     )
 
 
@@ -616,18 +662,93 @@ def _settled(sysm: _System, mode: _Mode, z, rtol) -> bool:
 # ----------------------------------------------------------------------------- classification
 
 
+@dataclasses.dataclass(frozen=True)
+class TrajectoryStats:
+    """What :func:`classify` reads from a trajectory (any simulator can fill it in).
+
+    Attributes
+    ----------
+    t_final : float
+        End of the run ``T`` [time].
+    status : Status
+    mode_final : str
+        Contact configuration at ``T``.
+    g_final : ndarray (4,)
+        State at ``T``.
+    scale : float
+        Length scale of the run (:attr:`SimulationResult.scale`) [1].
+    last_event : float
+        Time of the last event (0 if none) [time].
+    t_imp, v_imp : ndarray
+        Impact times [time] and impact speeds ``|d_i'|`` [1/time], in time order, including the
+        return of a gap in free flight (FF, falling back) dated ``T``.
+    c_imp : ndarray of int
+        Contact (1, 2) of each impact.
+    late_amplitude : ndarray (2,)
+        ``max |d_i|`` over the sub-step ends and events in ``[2T/3, T]`` [1].
+    """
+
+    t_final: float
+    status: Status
+    mode_final: str
+    g_final: np.ndarray
+    scale: float
+    last_event: float
+    t_imp: np.ndarray
+    v_imp: np.ndarray
+    c_imp: np.ndarray
+    late_amplitude: np.ndarray
+
+
+def trajectory_stats(res: SimulationResult) -> TrajectoryStats:
+    """:class:`TrajectoryStats` of a :func:`simulate` result."""
+    sysm = res._system
+    T = res.t_final
+    mask = ["FF", "SF", "FS", "SS"].index(res.mode_final)
+    g = res.g_final
+    acc = sysm.modes[mask].E[2:4] @ np.append(g, 1.0)
+    imp = np.array([k == IMPACT for k in res.kinds], dtype=bool)
+    t_imp = res.t_events[imp]
+    c_imp = res.contacts[imp]
+    v_imp = np.abs(res.states[imp][np.arange(imp.sum()), c_imp + 1])
+    # a free gap in flight that will come back: its impact speed, dated at the end of the run
+    for i in range(2):
+        if mask == 0 and g[i] > 0 and acc[i] < 0:  # FF: constant acceleration -a_i
+            t_imp = np.append(t_imp, T)
+            c_imp = np.append(c_imp, i + 1)
+            v_imp = np.append(v_imp, math.sqrt(g[i + 2] ** 2 + 2 * abs(acc[i]) * g[i]))
+    late = res._env_t >= 2 * T / 3
+    amp = np.abs(res._env_d[late]).max(axis=0) if late.any() else np.abs(g[:2])
+    return TrajectoryStats(
+        t_final=T,
+        status=res.status,
+        mode_final=res.mode_final,
+        g_final=g,
+        scale=res.scale,
+        last_event=float(res.t_events[-1]) if res.n_events else 0.0,
+        t_imp=t_imp,
+        v_imp=v_imp,
+        c_imp=c_imp,
+        late_amplitude=amp,
+    )
+
+
 def classify(
     res: SimulationResult,
     *,
     min_impacts: int = 6,
     growth_ratio: float = 1.25,
+    small_amplitude: float = 10.0,
     align_tol: float = 1e-2,
 ) -> Outcome:
     """Outcome class of a simulated trajectory (the label depends on the simulated horizon).
 
-    With ``T = t_final`` and the impact speeds ``|d_i'|`` at the impacts (gap ``d_i`` closing),
+    With ``T = t_final``, the impact speeds ``|d_i'|`` at the impacts (gap ``d_i`` closing),
     ``m2`` / ``m3`` = the largest impact speed with impact time in ``[T/3, 2T/3)`` /
-    ``[2T/3, T]``, the criteria are checked in this order:
+    ``[2T/3, T]``, ``s`` the run's length scale (:attr:`SimulationResult.scale`: the larger of the
+    initial gaps and the resting penetration ``|a| / min k_i |b_i|``) and ``A3`` the largest
+    ``|d_i|`` in ``[2T/3, T]`` over the contacts with an impact there, the criteria are checked in
+    this order:
 
     * ``settles_XY`` -- either the run stopped with status ``"settled"`` in mode XY (a stable mode
       is reached, the active gaps are within ``settle_rtol`` of their equilibrium and the free gaps
@@ -639,60 +760,108 @@ def classify(
       deviation from the current mode's equilibrium is aligned (``1 - |cos| < align_tol``) with the
       eigenvector of a real positive eigenvalue of ``A_S`` along which every active gap goes to
       ``-inf`` (so its force goes to ``+inf``), with every free gap open and opening.
-    * ``growing_bouncing`` -- at least ``min_impacts`` impacts and either the run diverged with an
-      event in its last 20 %, or ``m3 > growth_ratio * m2`` (still growing late in the run).
-    * ``sustained_oscillation`` -- at least ``min_impacts`` impacts, an impact in the last 10 % of
-      the run, ``m2 / growth_ratio <= m3 <= growth_ratio * m2``, status ``"t_end"`` or
-      ``"event_cap"`` with the impacts spread over more than half of ``[0, T]``.
+    * ``growing_bouncing`` -- the run diverged (a gap beyond ``1e4 s``) after at least 3 impacts
+      with an event in its last 20 % or a gap in flight falling back; otherwise a diverged run is
+      ``undetermined``.
+    * ``undetermined`` if fewer than ``min_impacts`` impacts (too short a run: see
+      :func:`simulate_outcome`, which extends the horizon).
+    * ``growing_bouncing`` -- ``m3 > growth_ratio * m2`` (still growing late in the run); or
+      ``A3 > small_amplitude * s``: the bouncing amplified the initial excursion more than
+      ``small_amplitude`` times and keeps bouncing (this includes bouncing that grew and then
+      saturated at a large amplitude, as the paper's Fig. 2c does after t ~ 300).
+    * ``sustained_oscillation`` -- small (``A3 <= small_amplitude * s``) non-growing
+      (``m2 / growth_ratio <= m3 <= growth_ratio * m2``) bouncing with an impact in the last 10 %
+      of the run, status ``"t_end"`` or ``"event_cap"`` with the impacts spread over more than half
+      of ``[0, T]``.
     * ``undetermined`` -- anything else (a Zeno-like burst at the event cap, decaying bouncing
       not yet settled, a slowly drifting mode at ``t_end``, ...).
     """
-    sysm = res._system
-    T = res.t_final
-    if res.status == Status.SETTLED:
-        return Outcome[f"SETTLES_{res.mode_final}"]
-    mask = ["FF", "SF", "FS", "SS"].index(res.mode_final)
+    return classify_stats(
+        trajectory_stats(res),
+        res._system,
+        min_impacts=min_impacts,
+        growth_ratio=growth_ratio,
+        small_amplitude=small_amplitude,
+        align_tol=align_tol,
+    )
+
+
+def classify_stats(
+    st: TrajectoryStats,
+    sysm: _System,
+    *,
+    min_impacts: int = 6,
+    growth_ratio: float = 1.25,
+    small_amplitude: float = 10.0,
+    align_tol: float = 1e-2,
+) -> Outcome:
+    """:func:`classify` from the :class:`TrajectoryStats` of a run of the system ``sysm``."""
+    T = st.t_final
+    if st.status == Status.SETTLED:
+        return Outcome[f"SETTLES_{st.mode_final}"]
+    mask = ["FF", "SF", "FS", "SS"].index(st.mode_final)
     mode = sysm.modes[mask]
-    if res.status == Status.DIVERGED and mask and _iwc_aligned(sysm, mask, res.g_final, align_tol):
+    g = st.g_final
+    if st.status == Status.DIVERGED and mask and _iwc_aligned(sysm, mask, g, align_tol):
         return Outcome.IWC
-    last_event = res.t_events[-1] if res.n_events else 0.0
-    g = res.g_final
     acc = mode.E[2:4] @ np.append(g, 1.0)
-    if res.status in (Status.T_END, Status.DIVERGED) and last_event <= 0.5 * T:
+    if st.status in (Status.T_END, Status.DIVERGED) and st.last_event <= 0.5 * T:
         lam = mode.eig
         neutral_or_stable = lam.size == 0 or np.all(lam.real <= 1e-9 * np.abs(lam).max())
         if neutral_or_stable and _free_gaps_leaving(mode, g):
-            return Outcome[f"SETTLES_{res.mode_final}"]
-    imp = np.array([k == IMPACT for k in res.kinds], dtype=bool)
-    t_imp = res.t_events[imp]
-    speeds = np.abs(res.states[imp][np.arange(imp.sum()), res.contacts[imp] + 1])
-    # a free gap in flight that will come back: its impact speed, dated at the end of the run
-    for i in range(2):
-        if mask == 0 and g[i] > 0 and acc[i] < 0:  # FF: constant acceleration -a_i
-            t_imp = np.append(t_imp, T)
-            speeds = np.append(speeds, math.sqrt(g[i + 2] ** 2 + 2 * abs(acc[i]) * g[i]))
-    if t_imp.size < min_impacts:
-        return Outcome.UNDETERMINED
-    if res.status == Status.DIVERGED:
-        # a gap beyond the amplitude limit while bouncing (an event late, or in flight and
-        # falling back): growing bouncing
+            return Outcome[f"SETTLES_{st.mode_final}"]
+    t_imp, speeds = st.t_imp, st.v_imp
+    if st.status == Status.DIVERGED:
+        # a gap beyond the amplitude limit (1e4 x scale) after repeated impacts, with an event
+        # late or a gap in flight falling back: growing bouncing
         in_flight = any(not mask >> i & 1 and acc[i] < 0 for i in range(2))
-        if last_event >= 0.8 * T or in_flight:
+        if t_imp.size >= min(3, min_impacts) and (st.last_event >= 0.8 * T or in_flight):
             return Outcome.GROWING_BOUNCING
         return Outcome.UNDETERMINED
+    if t_imp.size < min_impacts:
+        return Outcome.UNDETERMINED
     mid = speeds[(t_imp >= T / 3) & (t_imp < 2 * T / 3)]
-    late = speeds[t_imp >= 2 * T / 3]
+    late_sel = t_imp >= 2 * T / 3
+    late = speeds[late_sel]
     if mid.size == 0 or late.size == 0:
         return Outcome.UNDETERMINED
     m2, m3 = mid.max(), late.max()
     if m3 > growth_ratio * m2:
         return Outcome.GROWING_BOUNCING
+    bouncing = np.unique(st.c_imp[late_sel]) - 1
+    if st.late_amplitude[bouncing].max() > small_amplitude * st.scale:
+        return Outcome.GROWING_BOUNCING
     if m3 >= m2 / growth_ratio and t_imp[-1] >= 0.9 * T:
-        if res.status == Status.T_END or (
-            res.status == Status.EVENT_CAP and t_imp[-1] - t_imp[0] > 0.5 * T
+        if st.status == Status.T_END or (
+            st.status == Status.EVENT_CAP and t_imp[-1] - t_imp[0] > 0.5 * T
         ):
             return Outcome.SUSTAINED_OSCILLATION
     return Outcome.UNDETERMINED
+
+
+def simulate_outcome(*args, t_end: float = 150.0, horizon_cap: float = 8.0, **kwargs):
+    """:func:`simulate` then :func:`classify`, doubling ``t_end`` (up to ``horizon_cap * t_end``)
+    while the outcome is undetermined and the run simply ran out of time (status ``"t_end"``,
+    at least one event: e.g. long flights between few impacts).
+
+    Returns
+    -------
+    (Outcome, SimulationResult)
+        The outcome and the last run.
+    """
+    t_max = horizon_cap * float(t_end)
+    T = float(t_end)
+    while True:
+        res = simulate(*args, t_end=T, **kwargs)
+        out = classify(res)
+        if (
+            out != Outcome.UNDETERMINED
+            or res.status != Status.T_END
+            or res.n_events == 0
+            or 2 * T > t_max * (1 + 1e-12)
+        ):
+            return out, res
+        T *= 2
 
 
 def _free_gaps_leaving(mode: _Mode, g) -> bool:
@@ -906,64 +1075,76 @@ def fig2_cases() -> dict:
 NO_STABLE_SUBCLASSES = (132, 133, 142, 143)
 
 
-def _rank(x, others) -> int:
-    """1 + number of ``others`` below ``x`` (angles mod 2*pi); 0 on an exact tie."""
-    x = x % (2 * math.pi)
-    rank = 1
-    for o in others:
-        o = o % (2 * math.pi)
-        if o == x:
-            return 0
-        rank += o < x
-    return rank
+def subclass_codes(beta1, beta2, alpha) -> np.ndarray:
+    """Subclass codes ``ijk`` (SPEC §1) of angles [rad] via :func:`atlas.mechanics.subclass_code`
+    (the reference implementation; 0 degenerate, -1 undecided); arrays broadcast."""
+    import jax.numpy as jnp
+
+    from . import mechanics
+
+    vec = [mechanics.direction(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha)]
+    args = [jnp.asarray(v) for cs in vec for v in cs]
+    return np.asarray(mechanics.subclass_code(*args)).astype(np.int16)
 
 
-def subclass_code_local(beta1: float, beta2: float, alpha: float) -> int:
-    """Subclass code ``ijk`` of SPEC §1 (paper Sec. 3); 0 if degenerate (an exact tie).
+def no_stable_subclass(beta1, beta2, alpha) -> np.ndarray:
+    """True in subclasses 132, 133, 142, 143 or their duals (paper Sec. 6.4-6.5); arrays broadcast.
 
-    A small local helper for outlining regions in the outcome map; ``atlas.mechanics`` is the
-    reference implementation.
-
-    Parameters
-    ----------
-    beta1, beta2, alpha : float
-        Angles [rad].
+    The dual (contacts swapped) is :func:`atlas.mechanics.dual_vectors` of the direction vectors.
     """
-    hp, p, tp = math.pi / 2, math.pi, 3 * math.pi / 2
-    i = _rank(beta1, (hp, p, tp))
-    j = _rank(beta2, (beta1, beta1 + math.pi, hp, p, tp))
-    k = _rank(alpha, (beta1, beta2, hp, p, tp))
-    if 0 in (i, j, k):
-        return 0
-    return 100 * i + 10 * j + k
+    import jax.numpy as jnp
+
+    from . import mechanics
+
+    vec = [mechanics.direction(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha)]
+    args = [jnp.asarray(v) for cs in vec for v in cs]
+    code = np.asarray(mechanics.subclass_code(*args))
+    dual = np.asarray(mechanics.subclass_code(*mechanics.dual_vectors(*args)))
+    return np.isin(code, NO_STABLE_SUBCLASSES) | np.isin(dual, NO_STABLE_SUBCLASSES)
 
 
-def dual_angles_local(beta1: float, beta2: float, alpha: float):
-    """Dual point (swap the contacts): ``(pi/2 - beta2, pi/2 - beta1, pi/2 - alpha)`` [rad]."""
-    hp = math.pi / 2
-    return hp - beta2, hp - beta1, hp - alpha
+def outcome_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``beta1 = (i + 1/3) 2 pi / n``, ``beta2 = (j + 2/3) 2 pi / n`` [rad], ``i, j < n``.
 
-
-def in_no_stable_subclass(beta1: float, beta2: float, alpha: float) -> bool:
-    """True in subclasses 132, 133, 142, 143 or their duals (paper Sec. 6.4-6.5)."""
-    return (
-        subclass_code_local(beta1, beta2, alpha) in NO_STABLE_SUBCLASSES
-        or subclass_code_local(*dual_angles_local(beta1, beta2, alpha)) in NO_STABLE_SUBCLASSES
-    )
-
-
-def ss_spectral_abscissa(beta1, beta2, kappa=0.5, q=(0.0, 0.0)) -> float:
-    """max Re(eig M), ``M = [[0, I], [-B K, -B Q]]`` (paper eq. 8), scaled units (k2 = |b| = 1).
-
-    Plain floating-point ``eig``: a plotting aid for the outcome map, not a stability verdict.
+    One sample per cell of the uniform ``n x n`` grid of ``[0, 2 pi)^2`` (the Fig. 1 cells for the
+    same ``n``), offset so that no sample is degenerate for any ``n``: no angle is a multiple of
+    ``pi / 2`` and ``beta2 - beta1`` is never a multiple of ``pi``.
     """
-    q = np.broadcast_to(np.asarray(q, dtype=float), (2,))
-    B = np.array([[math.cos(beta1), math.cos(beta2)], [math.sin(beta1), math.sin(beta2)]])
-    M = np.zeros((4, 4))
-    M[:2, 2:] = _I2
-    M[2:, :2] = -B @ np.diag([kappa, 1.0])
-    M[2:, 2:] = -B @ np.diag(q)
-    return float(np.max(np.linalg.eigvals(M).real))
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n!r}")
+    step = 2 * math.pi / n
+    return (np.arange(n) + 1 / 3) * step, (np.arange(n) + 2 / 3) * step
+
+
+def perturbed_initial_states(
+    beta1_values, beta2_values, alpha, kappa, n_perturb=1, seed=0, perturbation=1e-2
+) -> np.ndarray:
+    """Initial states of :func:`outcome_map`, shape ``(n1, n2, n_perturb, 4)``.
+
+    Seeded perturbations of the SS equilibrium ``d* = -K^{-1} B^{-1} a`` (paper eq. 8):
+    ``d = d* + perturbation * |d*| * xi``, ``d' = perturbation * |d*| * xi'`` with standard normal
+    ``xi``; where the SS mode is inconsistent, ``d = -perturbation * |xi| / min(kappa, 1)``
+    (both gaps pushed into contact), ``d' = perturbation * xi' / min(kappa, 1)``.
+    """
+    rng = np.random.default_rng(seed)
+    b1 = np.atleast_1d(np.asarray(beta1_values, dtype=float))
+    b2 = np.atleast_1d(np.asarray(beta2_values, dtype=float))
+    out = np.empty((b1.size, b2.size, int(n_perturb), 4))
+    for i, x1 in enumerate(b1):
+        for j, x2 in enumerate(b2):
+            d_eq = ss_equilibrium(x1, x2, alpha, k=(kappa, 1.0))
+            for m in range(int(n_perturb)):
+                xi = rng.standard_normal(4)
+                if d_eq is not None:
+                    s = np.abs(d_eq).max()
+                    out[i, j, m, :2] = d_eq + perturbation * s * xi[:2]
+                    out[i, j, m, 2:] = perturbation * s * xi[2:]
+                else:
+                    s = 1.0 / min(kappa, 1.0)
+                    out[i, j, m, :2] = -perturbation * s * np.abs(xi[:2])
+                    out[i, j, m, 2:] = perturbation * s * xi[2:]
+    return out
 
 
 def outcome_map(
@@ -976,22 +1157,23 @@ def outcome_map(
     seed: int = 0,
     perturbation: float = 1e-2,
     t_end: float = 150.0,
+    horizon_cap: float = 8.0,
     max_events: int = 2000,
+    engine: str = "numpy",
     progress=None,
 ):
     """Simulated outcome over a ``(beta1, beta2)`` grid (what the dynamics actually do).
 
     Scaled parameters (SPEC §1): ``|b_1| = |b_2| = |a| = 1``, ``k = (kappa, 1)``,
-    ``q = (q1_hat, q2_hat)``; time in units of ``1 / sqrt(k2 |b2|)``.  Initial conditions are
-    seeded random perturbations of the SS equilibrium ``d* = -K^{-1} B^{-1} a`` (paper eq. 8):
-    ``d = d* + perturbation * |d*| * xi``, ``d' = perturbation * |d*| * xi'`` with standard normal
-    ``xi``; where the SS mode is inconsistent, the perturbation is applied to the state at rest
-    with zero gaps, gaps pushed into contact: ``d = -perturbation * |xi| / kappa_min``.
+    ``q = (q1_hat, q2_hat)``; time in units of ``1 / sqrt(k2 |b2|)``.  Initial conditions from
+    :func:`perturbed_initial_states`.  Each run is classified by :func:`classify`; undetermined
+    runs that ran out of time are extended (``t_end`` doubled, up to ``horizon_cap * t_end``, see
+    :func:`simulate_outcome`).
 
     Parameters
     ----------
     beta1_values, beta2_values : array_like
-        Grid of contact directions [rad].
+        Grid of contact directions [rad] (e.g. :func:`outcome_grid`).
     kappa : float
         ``k1 |b1| / (k2 |b2|)`` [1].
     q : float or (float, float)
@@ -1005,17 +1187,21 @@ def outcome_map(
         Seed of ``numpy.random.default_rng``.
     perturbation : float
         Relative size of the perturbation [1].
-    t_end, max_events
-        Horizon [scaled time] and event cap per trajectory (see :func:`simulate`).
+    t_end, horizon_cap, max_events
+        Horizon [scaled time], its extension factor, and event cap per trajectory.
+    engine : {"numpy", "jax"}
+        ``"numpy"``: :func:`simulate` run by run; ``"jax"``: the batched stepper of
+        :mod:`atlas.dynamics_jax` (one ``vmap`` over all runs, extension runs batched too).
     progress : callable, optional
-        Called with ``(done, total)`` after each grid point.
+        Called with ``(done, total)`` after each grid point (numpy engine).
 
     Returns
     -------
     xarray.Dataset
         ``outcome`` (int8, CF flags from :class:`Outcome`) and ``agreement`` (float32) over
-        ``(beta1, beta2)``; ``no_stable_subclass`` (bool): subclasses 132, 133, 142, 143 or duals;
-        ``ss_spectral_abscissa`` (float64, eig-based plotting aid).
+        ``(beta1, beta2)``; ``no_stable_subclass`` (bool): subclasses 132, 133, 142, 143 or duals.
+        Attributes record the parameters, ``trajectories``, ``seconds`` and
+        ``trajectories_per_second``.
     """
     import xarray as xr
 
@@ -1029,51 +1215,57 @@ def outcome_map(
     if int(n_perturb) < 1:
         raise ValueError(f"n_perturb must be >= 1, got {n_perturb!r}")
     perturbation = float(_check_finite("perturbation", perturbation, positive=True))
-    rng = np.random.default_rng(seed)
+    t_end = float(_check_finite("t_end", t_end, positive=True))
+    horizon_cap = float(_check_finite("horizon_cap", horizon_cap, positive=True))
+    if horizon_cap < 1:
+        raise ValueError(f"horizon_cap must be >= 1, got {horizon_cap!r}")
+    if engine not in ("numpy", "jax"):
+        raise ValueError(f"engine must be 'numpy' or 'jax', got {engine!r}")
+    g0 = perturbed_initial_states(b1, b2, alpha, kappa, n_perturb, seed, perturbation)
     k = (kappa, 1.0)
-    out = np.zeros((b1.size, b2.size), dtype=np.int8)
-    agree = np.zeros((b1.size, b2.size), dtype=np.float32)
-    region = np.zeros((b1.size, b2.size), dtype=bool)
-    absc = np.zeros((b1.size, b2.size))
-    n_traj = 0
     t0 = _time.perf_counter()
-    total = b1.size * b2.size
-    for i, x1 in enumerate(b1):
-        for j, x2 in enumerate(b2):
-            d_eq = ss_equilibrium(x1, x2, alpha, k=k)
-            codes = []
-            for _ in range(int(n_perturb)):
-                xi = rng.standard_normal(4)
-                if d_eq is not None:
-                    s = np.abs(d_eq).max()
-                    g0 = np.concatenate(
-                        [d_eq + perturbation * s * xi[:2], perturbation * s * xi[2:]]
+    if engine == "jax":
+        from . import dynamics_jax
+
+        codes = dynamics_jax.outcomes(
+            b1, b2, alpha, k, qq, g0, t_end=t_end, horizon_cap=horizon_cap, max_events=max_events
+        )
+    else:
+        codes = np.zeros(g0.shape[:3], dtype=np.int8)
+        total = b1.size * b2.size
+        for i, x1 in enumerate(b1):
+            for j, x2 in enumerate(b2):
+                for m in range(g0.shape[2]):
+                    out, _ = simulate_outcome(
+                        x1,
+                        x2,
+                        alpha,
+                        k=k,
+                        q=qq,
+                        g0=g0[i, j, m],
+                        t_end=t_end,
+                        horizon_cap=horizon_cap,
+                        max_events=max_events,
                     )
-                else:
-                    s = 1.0 / min(kappa, 1.0)
-                    g0 = np.concatenate(
-                        [-perturbation * s * np.abs(xi[:2]), perturbation * s * xi[2:]]
-                    )
-                res = simulate(x1, x2, alpha, k=k, q=qq, g0=g0, t_end=t_end, max_events=max_events)
-                codes.append(int(classify(res)))
-                n_traj += 1
-            vals, counts = np.unique(codes, return_counts=True)
-            best = int(vals[np.argmax(counts)])
-            out[i, j] = best
-            agree[i, j] = counts.max() / len(codes)
-            region[i, j] = in_no_stable_subclass(x1, x2, alpha)
-            absc[i, j] = ss_spectral_abscissa(x1, x2, kappa, qq)
-            if progress is not None:
-                progress(i * b2.size + j + 1, total)
+                    codes[i, j, m] = int(out)
+                if progress is not None:
+                    progress(i * b2.size + j + 1, total)
     wall = _time.perf_counter() - t0
+    n_traj = codes.size
+    # most frequent class per pixel (ties: the smallest code)
+    counts = np.stack([(codes == int(o)).sum(axis=2) for o in Outcome], axis=-1)
+    out = np.array([int(o) for o in Outcome], dtype=np.int8)[counts.argmax(axis=-1)]
+    agree = (counts.max(axis=-1) / codes.shape[2]).astype(np.float32)
+    B1, B2 = np.meshgrid(b1, b2, indexing="ij")
+    region = no_stable_subclass(B1, B2, np.full(B1.shape, alpha))
     flags = {
         "long_name": "simulated outcome of perturbed SS equilibrium",
         "flag_values": np.array([int(m) for m in Outcome], dtype=np.int8),
         "flag_meanings": " ".join(m.label for m in Outcome),
     }
     coords = {
-        "beta1": ("beta1", b1, {"units": "rad", "long_name": "direction of b_1"}),
-        "beta2": ("beta2", b2, {"units": "rad", "long_name": "direction of b_2"}),
+        "beta1": ("beta1", b1, {"units": "rad", "long_name": "direction of b1"}),
+        "beta2": ("beta2", b2, {"units": "rad", "long_name": "direction of b2"}),
     }
     ds = xr.Dataset(
         {
@@ -1088,18 +1280,13 @@ def outcome_map(
                 region,
                 {"long_name": "subclass 132, 133, 142, 143 or dual (paper Sec. 6.4-6.5)"},
             ),
-            "ss_spectral_abscissa": (
-                ("beta1", "beta2"),
-                absc,
-                {"units": "1", "long_name": "max Re eig of SS matrix (eig, plotting aid)"},
-            ),
         },
         coords=coords,
         attrs={
             "title": "Outcome map of the compliant two-contact dynamics",
-            "references": "Varkonyi, Dynamics of mechanical systems with multiple sliding "
+            "references": "Varkonyi, P. L.: Dynamics of mechanical systems with multiple sliding "
             "contacts: new faces of Painleve's paradox (Sec. 4.1, 6.4-6.5, Fig. 2)",
-            "method": "exact event-driven simulation (atlas.simulate)",
+            "method": f"exact event-driven simulation ({engine} engine), atlas.dynamics.classify",
             "kappa": kappa,
             "q1": float(qq[0]),
             "q2": float(qq[1]),
@@ -1108,9 +1295,12 @@ def outcome_map(
             "n_perturb": int(n_perturb),
             "seed": int(seed),
             "perturbation": perturbation,
-            "t_end": float(t_end),
+            "t_end": t_end,
+            "horizon_cap": horizon_cap,
             "max_events": int(max_events),
-            "trajectories": n_traj,
+            "engine": engine,
+            "trajectories": int(n_traj),
+            "seconds": wall,
             "trajectories_per_second": n_traj / wall if wall > 0 else float("nan"),
         },
     )

@@ -11,9 +11,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .dynamics import Outcome, classify, fig2_cases, in_no_stable_subclass, simulate
+from .dynamics import Outcome, classify, fig2_cases, simulate
 
-__all__ = ["FIG2_T_END", "plot_fig2", "plot_outcome_map"]
+__all__ = [
+    "FIG2_T_END",
+    "PAPER_MAP_N",
+    "plot_fig2",
+    "plot_outcome_map",
+    "write_outcome_map",
+    "outcome_map_files",
+]
 
 #: simulated horizon of each Fig. 2 panel (the paper does not state its time axes) [time]
 FIG2_T_END = {"a": 400.0, "b": 20.0, "c": 400.0, "d": 40.0, "e": 100.0}
@@ -72,10 +79,22 @@ def run_cli(
     q2=None,
     t_end=None,
     out=None,
+    outcome_map=False,
+    n=None,
+    kappa=None,
+    q=None,
+    engine="numpy",
     **_,
 ) -> int:
     """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
-    printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``)."""
+    printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``).
+
+    With ``--map``: the outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` at
+    ``(kappa, q1 = q2 = q, alpha)`` (defaults 24, 0.5, 0, 0.35 pi; ``--t-end`` default 150),
+    outcome counts printed; ``--out`` writes it as netCDF (``.nc``) or as the figure beside the
+    Fig. 1 theory map (``.png``/``.pdf``)."""
+    if outcome_map:
+        return _run_map(n, kappa, q, alpha, t_end, out, engine, case)
     case = case[len("fig2") :] if case and case.startswith("fig2") else case
     p = (
         dict(fig2_cases()[case])
@@ -139,6 +158,40 @@ def run_cli(
     return 0
 
 
+def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
+    from .dynamics import outcome_grid
+    from .dynamics import outcome_map as compute
+
+    if case:
+        raise ValueError("case: --case and --map exclude each other")
+    n = 24 if n is None else int(n)
+    if n < 1:
+        raise ValueError(f"n: must be >= 1, got {n}")
+    suffix = Path(out).suffix.lower() if out else ""
+    if out and suffix not in (".nc", ".png", ".pdf"):
+        raise ValueError(f"out: expected FILE.nc, FILE.png or FILE.pdf, got {out!r}")
+    kw = {"kappa": 0.5 if kappa is None else kappa, "q": 0.0 if q is None else q}
+    if alpha is not None:
+        kw["alpha"] = alpha
+    if t_end is not None:
+        kw["t_end"] = t_end
+    b1, b2 = outcome_grid(n)
+    ds = compute(b1, b2, engine=engine, **kw)
+    vals, counts = np.unique(ds["outcome"].values, return_counts=True)
+    summary = ", ".join(f"{Outcome(int(v)).label} {c}" for v, c in zip(vals, counts, strict=True))
+    print(
+        f"outcome map {n}x{n}: {summary}; {ds.attrs['trajectories']} trajectories in "
+        f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine})"
+    )
+    if out:
+        if suffix == ".nc":
+            write_outcome_map(ds, out)
+        else:
+            plot_outcome_map(ds, out)
+        print(f"wrote {out}")
+    return 0
+
+
 def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     """Regenerate the paper's Fig. 2 (panels a-e): gaps ``d1(t)``, ``d2(t)`` of eq. (1), (6).
 
@@ -176,64 +229,180 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     return [path]
 
 
-def plot_outcome_map(ds, path) -> Path:
-    """Plot an :func:`atlas.dynamics.outcome_map` dataset.
+#: grid of the outcome map in ``atlas paper`` (quick mode, full) [cells per axis]
+PAPER_MAP_N = (6, 48)
 
-    Categories via ``pcolormesh`` + ``ListedColormap`` + ``BoundaryNorm`` from :class:`Outcome`;
-    solid outline: subclasses 132, 133, 142, 143 and duals (drawn on a fine grid of the exact
-    subclass test); dashed: zero level of the SS spectral abscissa (smooth margin; eig-based).
+
+def write_outcome_map(ds, path, overwrite: bool = True, history: str | None = None) -> str:
+    """Write an :func:`atlas.dynamics.outcome_map` dataset to netCDF4, atomically.
+
+    Through :func:`atlas.io.write_netcdf` (temporary file + ``os.replace``; no ``_FillValue`` on
+    the int8 flags or the coordinates), with the CF global attributes of the atlases
+    (``Conventions``, ``source``, ``history``).
+    """
+    import datetime
+
+    import jax
+    import xarray as xr
+
+    from . import __version__
+    from .io import write_netcdf
+
+    ds = ds.copy()
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    call = history or (
+        f"atlas.dynamics.outcome_map(kappa={ds.attrs['kappa']:g}, q=({ds.attrs['q1']:g}, "
+        f"{ds.attrs['q2']:g}), alpha={ds.attrs['alpha']:.6g}, n={ds.sizes['beta1']}x"
+        f"{ds.sizes['beta2']}, engine={ds.attrs.get('engine', 'numpy')!r})"
+    )
+    ds.attrs.update(
+        Conventions="CF-1.10",
+        source=f"painleve-atlas {__version__} (JAX {jax.__version__}, numpy {np.__version__}, "
+        f"xarray {xr.__version__})",
+        history=f"{now}: {call}",
+    )
+    return write_netcdf(ds, path, overwrite=overwrite)
+
+
+def _theory_panel(ax, theory):
+    """The Fig. 1 theory map (certified kernels, :func:`atlas.figures.stability_map`) of the same
+    ``(kappa, q)``: SS stability as in Fig. 1, orange where SS is unstable and no impact without
+    collision is stable (IF, FI consistent; II stable), the Fig. 1 overview layer."""
+    from . import figures
+    from .verdicts import Consistency, Verdict
+
+    n = theory.sizes["beta1"]
+    ss = theory["stable_SS"].values
+    iwc = (
+        np.broadcast_to(theory["consistent_IF"].values[:, None], (n, n))
+        | np.broadcast_to(theory["consistent_FI"].values[None, :], (n, n))
+        | (
+            (theory["consistent_II"].values == Consistency.CONSISTENT)
+            & (theory["stable_II"].values == Verdict.STABLE)
+        )
+    )
+    nothing = (ss != Verdict.STABLE) & (ss != Verdict.NEUTRAL) & ~iwc
+    figures._categorical(ax, theory, ss, Verdict)
+    edges = np.linspace(0, 2 * np.pi, n + 1)
+    ax.pcolormesh(
+        edges,
+        edges,
+        np.ma.masked_where(~nothing, np.ones((n, n))).T,
+        cmap=_single_cmap(figures.NOTHING_COLOR),
+        rasterized=True,
+    )
+    if "margin_SS" in theory:
+        figures._dashed(ax, theory, "margin_SS", where=figures._ss_boundary_cells(theory))
+    figures._class_lines(ax)
+    return set(np.unique(ss).tolist())
+
+
+def _single_cmap(color):
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([color])
+
+
+def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
+    """Outcome map beside the Fig. 1 theory map of the same ``(kappa, q)``.
+
+    Left: the simulated outcome per cell (:class:`atlas.dynamics.Outcome` colours, ``pcolormesh``
+    + ``ListedColormap`` + ``BoundaryNorm``), one sample per cell of the uniform grid of
+    ``[0, 2 pi)^2``.  Right: ``theory`` (an :func:`atlas.figures.stability_map` dataset; computed
+    at 121 x 121 if not given): SS stability, orange where no mode or impact without collision is
+    stable.  Both: solid black outline of subclasses 132, 133, 142, 143 and their duals at the
+    map's ``alpha`` (paper Sec. 6.4-6.5; :func:`atlas.dynamics.no_stable_subclass` on an
+    ``n_outline`` grid), thin lines: class boundaries.
 
     Returns
     -------
     pathlib.Path
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
+    from . import figures
+    from .dynamics import no_stable_subclass
+    from .verdicts import Verdict
+
+    kappa, q1, q2 = (float(ds.attrs[k]) for k in ("kappa", "q1", "q2"))
+    alpha = float(ds.attrs["alpha"])
+    if theory is None:
+        theory = figures.stability_map(121, kappa, q1, q2)
+    elif not all(
+        math.isclose(float(theory[k]), v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2))
+    ):
+        raise ValueError("theory: (kappa, q1, q2) differ from the outcome map's")
+    plt = figures._plt()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(13.5, 6.8))
     codes = [int(m) for m in Outcome]
     cmap = ListedColormap([Outcome(c).color for c in codes])
     norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
-    b1 = ds["beta1"].values
-    b2 = ds["beta2"].values
-    fig, ax = plt.subplots(figsize=(7.5, 6), constrained_layout=True)
-    ax.pcolormesh(
-        b1 / math.pi, b2 / math.pi, ds["outcome"].values.T, cmap=cmap, norm=norm, shading="nearest"
+    n1, n2 = ds.sizes["beta1"], ds.sizes["beta2"]
+    ax0.pcolormesh(
+        np.linspace(0, 2 * np.pi, n1 + 1),
+        np.linspace(0, 2 * np.pi, n2 + 1),
+        ds["outcome"].values.T,
+        cmap=cmap,
+        norm=norm,
+        rasterized=True,
     )
-    alpha = float(ds.attrs["alpha"])
-    f1 = np.linspace(b1.min(), b1.max(), 300)
-    f2 = np.linspace(b2.min(), b2.max(), 300)
-    region = np.array([[in_no_stable_subclass(x, y, alpha) for x in f1] for y in f2], float)
-    if region.any() and not region.all():
-        ax.contour(f1 / math.pi, f2 / math.pi, region, levels=[0.5], colors="k", linewidths=1.2)
-    absc = ds["ss_spectral_abscissa"].values.T
-    level = 1e-6 * max(1.0, float(np.nanmax(np.abs(absc))))
-    if np.nanmin(absc) < level < np.nanmax(absc):
-        ax.contour(
-            b1 / math.pi,
-            b2 / math.pi,
-            absc,
-            levels=[level],
-            colors="k",
-            linestyles="--",
-            linewidths=0.8,
-        )
+    figures._class_lines(ax0)
+    ss_codes = _theory_panel(ax1, theory)
+    f = (np.arange(n_outline) + 0.5) * (2 * np.pi / n_outline)
+    F1, F2 = np.meshgrid(f, f, indexing="ij")
+    region = no_stable_subclass(F1, F2, np.full(F1.shape, alpha)).astype(float)
+    for ax in (ax0, ax1):
+        if region.any():
+            ax.contour(f, f, region.T, levels=[0.5], colors="k", linewidths=1.6, zorder=8)
+        figures._pi_axis(ax)
+        ax.set_xlabel(r"$\beta_1$")
+        ax.set_ylabel(r"$\beta_2$")
     present = sorted(set(np.unique(ds["outcome"].values).tolist()))
-    handles = [Patch(color=Outcome(c).color, label=Outcome(c).label) for c in present]
-    handles.append(Patch(facecolor="none", edgecolor="k", label="subclass 132/133/142/143 + duals"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    ax.set_xlabel(r"$\beta_1$ [$\pi$ rad]")
-    ax.set_ylabel(r"$\beta_2$ [$\pi$ rad]")
-    ax.set_title(
-        f"simulated outcome, kappa={ds.attrs['kappa']:g}, q=({ds.attrs['q1']:g}, "
-        f"{ds.attrs['q2']:g}), alpha={alpha / math.pi:.2f}pi; dashed: SS spectral abscissa = 0",
+    h0 = [Patch(color=Outcome(c).color, label=Outcome(c).label) for c in present]
+    h0.append(Line2D([], [], color="k", lw=1.6, label="subclasses 132/133/142/143 + duals"))
+    ax0.legend(handles=h0, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
+    h1 = figures._legend_patches(Verdict, ss_codes, {Verdict.NEUTRAL: "SS neutral (q = 0)"})
+    h1 = [Patch(facecolor=p.get_facecolor(), label=p.get_label()) for p in h1]
+    for p in h1:
+        if not p.get_label().startswith("SS"):
+            p.set_label("SS " + p.get_label())
+    h1.append(Patch(color=figures.NOTHING_COLOR, label="SS unstable, no stable IWC"))
+    h1.append(Line2D([], [], color="k", lw=1.1, ls="--", label="SS boundary (smooth margin)"))
+    ax1.legend(handles=h1, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8)
+    und = int((ds["outcome"].values == int(Outcome.UNDETERMINED)).sum())
+    ax0.set_title(
+        f"simulated ({n1}x{n2} cells, {ds.attrs['n_perturb']} run(s) each, t <= "
+        f"{ds.attrs['t_end']:g} x up to {ds.attrs.get('horizon_cap', 1):g}; {und} undetermined)",
         fontsize=9,
     )
-    _atomic_savefig(fig, path)
+    ax1.set_title(
+        f"theory (Fig. 1, certified kernels, {theory.sizes['beta1']}$^2$ cells)", fontsize=9
+    )
+    fig.suptitle(
+        f"Outcome of a perturbed SS equilibrium vs theory: kappa = {kappa:g}, q = ({q1:g}, "
+        f"{q2:g}), alpha = {alpha / math.pi:.3g} pi",
+        fontsize=10,
+    )
+    fig.subplots_adjust(left=0.06, right=0.98, top=0.9, bottom=0.22, wspace=0.2)
+    figures._atomic_savefig(fig, path)
     plt.close(fig)
     return path
+
+
+def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
+    """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
+    ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
+    :func:`plot_outcome_map`).  ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
+    from .dynamics import outcome_grid, outcome_map
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    b1, b2 = outcome_grid(n)
+    ds = outcome_map(b1, b2, **kwargs)
+    nc = Path(write_outcome_map(ds, out / "outcome_map.nc"))
+    png = plot_outcome_map(ds, out / "outcome_map.png", theory=theory)
+    return [nc, png]

@@ -155,6 +155,8 @@ def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
             notes.append("fig2.png skipped in quick mode (simulation).")
         else:
             step("fig2.png", lambda: plot_fig2(out))
+        from .figures_dynamics import PAPER_MAP_N, outcome_map_files  # outcome map beside Fig. 1
+        step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
     total = time.perf_counter() - t_all
     counts = {s: sum(1 for c in claims if c.status == s and c.id != "META")
               for s in ("confirmed", "refuted", "imprecise")}
@@ -198,4 +200,9 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
               "## Table 2", "", "![table 2](table2.png)", ""]
     if (out / "fig2.png").exists():
         lines += ["## Fig. 2 (simulations)", "", "![fig2](fig2.png)", ""]
+    if (out / "outcome_map.png").exists():
+        lines += ["## Outcome map (simulated, beside the Fig. 1 theory map)", "",
+                  "[outcome_map.nc](outcome_map.nc): outcome of a perturbed SS equilibrium per "
+                  "cell (atlas.dynamics.outcome_map); outlined: subclasses 132/133/142/143 + duals.",
+                  "", "![outcome map](outcome_map.png)", ""]
     atomic_write_text(out / "README.md", "\n".join(lines))
