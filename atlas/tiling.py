@@ -502,32 +502,32 @@ def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
     if group == "spectral":
         keys = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
         spec = tuple(k for k in names if k in ("stable_SS", "consistent_II", "stable_II"))
+        ss_only = np.ones(idx.size, bool)
+        for k in spec:
+            if k != "stable_SS":
+                ss_only &= ~und[k][idx]
 
-        def solve(p):
-            return exact.resolve(dict(zip(keys, p)), names=spec)
+        def solve(p, i):  # SS-only points: the rational Hurwitz test (exact.resolve decides)
+            return exact.resolve(dict(zip(keys, p)), names=("stable_SS",) if ss_only[i] else spec)
     else:
 
-        def solve(p):
+        def solve(p, i):
             return exact.resolve_codes(*p)
 
     # one point at a time (the reference loops over points anyway): a point on which the reference
     # itself fails stays undecided and is recorded instead of aborting the whole atlas
-    ex, ok = {}, []
+    ok = []
     for i in range(idx.size):
         try:
-            one = solve([p[i : i + 1] for p in pts])
+            one = solve([p[i : i + 1] for p in pts], i)
         except Exception:
             fail = stats.setdefault("exact_failures", [])
             fail.append(tuple(float(p[i]) for p in pts))
             continue
         ok.append(idx[i])
         for k, v in one.items():
-            ex.setdefault(k, []).append(np.asarray(v)[0])
-    ok = np.asarray(ok, dtype=idx.dtype)
-    for k in names:
-        if k in ex and len(ok):
-            sel = und[k][ok]
-            res[k][ok[sel]] = np.asarray(ex[k])[sel].astype(res[k].dtype)
+            if k in und and und[k][idx[i]]:
+                res[k][idx[i]] = np.asarray(v)[0]
     stats["resolved_points"] = stats.get("resolved_points", 0) + int(len(ok))
 
 
