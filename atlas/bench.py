@@ -66,6 +66,27 @@ CONFIG = {
         sim_repeats=3,
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         large_check=100,
+        atlases=(
+            ("fig1", ["--scene", "fig1"]),
+            ("fig1-model", ["--scene", "fig1-model"]),
+            ("atlas4d", ["--scene", "atlas4d"]),
+            (
+                "4-D, 1e9 points, SS only",
+                [
+                    "--beta1",
+                    "0:2pi:1024",
+                    "--beta2",
+                    "0:2pi:1024",
+                    "--kappa",
+                    "log:0.01:100:31",
+                    "--q",
+                    "log:0.001:10:31",
+                    "--outputs",
+                    "stable_SS,model_dependent_SS",
+                    "--no-resolve",
+                ],
+            ),
+        ),
     ),
     True: dict(
         res=(32, 64),
@@ -95,6 +116,12 @@ CONFIG = {
         sim_repeats=1,
         large_n=0,
         large_check=10,
+        atlases=(
+            (
+                "tiny 4-D",
+                ["--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5,2", "--q", "0,0.1"],
+            ),
+        ),
     ),
 }
 
@@ -758,6 +785,52 @@ def _scaling(cfg):
     return rows
 
 
+_CLI_PEAK = (
+    "import sys; from atlas import cli; from atlas.bench import _vm; rc = cli.main(sys.argv[1:]); "
+    "print('BENCH_PEAK_MB', _vm('VmHWM')); sys.exit(rc)"
+)
+
+
+def _atlases(cfg):
+    """End to end through the real CLI (``atlas generate`` in a subprocess, write included):
+    wall time, points/s of the run's own summary, file size and the subprocess's peak RSS."""
+    rows = []
+    for label, args in cfg["atlases"]:
+        _log(f"atlas generate {label} (subprocess)")
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "a.nc"
+            cmd = [sys.executable, "-c", _CLI_PEAK, "generate", *args, "--out", str(out)]
+            env = dict(os.environ, PYTHONWARNINGS="ignore", ATLAS_PROGRESS="0")
+            t0 = time.perf_counter()
+            p = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
+            wall = time.perf_counter() - t0
+            size = out.stat().st_size if out.exists() else 0
+        summary = [ln for ln in p.stderr.splitlines() if ln.startswith("atlas generate:")]
+        peak = [ln for ln in p.stdout.splitlines() if ln.startswith("BENCH_PEAK_MB")]
+        if p.returncode or not summary or not peak:
+            _log(f"atlas generate {label} failed: {p.stderr.strip().splitlines()[-1:]}")
+            continue
+        words = summary[-1].translate(str.maketrans(",();", "    ")).split()
+        points = int(words[words.index("points") - 1])
+        pps = float(words[words.index("points/s") - 1])
+        und = [int(w) for w, nxt in zip(words, words[1:]) if nxt in ("before", "after")]
+        rows.append(
+            dict(
+                atlas=label,
+                command="atlas generate " + " ".join(args),
+                points=points,
+                wall_seconds=wall,
+                points_per_second=pps,
+                file_mb=size / 1e6,
+                bytes_per_point=size / points,
+                peak_rss_mb=float(peak[-1].split()[1]),
+                undecided_before=und[0] if und else "",
+                undecided_after=und[1] if len(und) > 1 else "",
+            )
+        )
+    return rows
+
+
 def _gap_events(t, kinds, contacts):
     sel = [i for i, k in enumerate(kinds) if k in ("impact", "liftoff")]
     return np.asarray(t)[sel], [(contacts[i], kinds[i]) for i in sel]
@@ -1064,7 +1137,7 @@ def _plots(out, wp, scaling, sim, cfg):
     return files
 
 
-def _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large=()):
+def _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large=(), atlases=()):
     L = []
     a = L.append
     a("# atlas bench: speed against error\n")
@@ -1330,6 +1403,32 @@ def _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large=()):
     a("")
     a(_scaling_note(scaling, cfg))
     a("\n![scaling](bench_scaling.png)\n")
+    if atlases:
+        a("### End to end: `atlas generate` (issue 3)\n")
+        a(
+            "The real CLI in a fresh subprocess, netCDF write included: wall time includes interpreter "
+            "start-up and JAX compilation (the persistent compilation cache of the CLI may be warm); "
+            "points/s is the run's own summary line; peak RSS = `VmHWM` of the subprocess. Undecided = "
+            "before / after exact settlement (`--no-resolve`: not settled).\n"
+        )
+        a(
+            _table(
+                atlases,
+                [
+                    "atlas",
+                    "command",
+                    "points",
+                    "wall_seconds",
+                    "points_per_second",
+                    "file_mb",
+                    "bytes_per_point",
+                    "peak_rss_mb",
+                    "undecided_before",
+                    "undecided_after",
+                ],
+            )
+        )
+        a("")
     a("## Simulation\n")
     a(
         "Fig. 2 cases (`simulate.fig2_cases`). Error = max |event time - reference| over the "
@@ -1429,6 +1528,7 @@ def run(quick: bool = False, out: str = "outputs", **_) -> int:
         large = _large(cfg, cache, rng)
         suites = _suites(cfg, cache, rng)
         scaling = _scaling(cfg)
+        atlases = _atlases(cfg)
         sim = _simulation(cfg)
     head = _headline(wp, cfg)
     meta["notes"] += [
@@ -1447,11 +1547,12 @@ def run(quick: bool = False, out: str = "outputs", **_) -> int:
     if large:
         _write_csv(out / "bench_large.csv", large)
     _write_csv(out / "bench_scaling.csv", scaling)
+    _write_csv(out / "bench_atlases.csv", atlases)
     _write_csv(out / "bench_simulation.csv", sim)
     _plots(out, wp, scaling, sim, cfg)
     meta["duration"] = time.perf_counter() - t_start
-    text = _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large)
-    js = dict(meta=meta, headline=head, large=large)
+    text = _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large, atlases)
+    js = dict(meta=meta, headline=head, large=large, atlases=atlases)
     (out / "bench_headline.json").write_text(json.dumps(js, indent=1, default=_json_default))
     from .io import atomic_write_text
 
