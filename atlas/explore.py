@@ -11,7 +11,10 @@ The logic behind ``notebooks/explore.ipynb`` as plain, testable functions:
   Table 1 consistency, SF/FS stability, IF/FI, CC, the SS and II verdicts of the certified path
   *and* of the exact reference, the eigenvalues of ``M`` and the margins.
 * :class:`Explorer` -- the state and callbacks of the widget (no ipywidgets needed);
-  :func:`make_widget` wires it to ipywidgets controls (imported only there).
+  :func:`make_widget` wires it to ipywidgets controls (imported only there; clicking the map needs
+  ipympl, the ``notebook`` extra).  Redraws are bounded: undecided cells beyond
+  :data:`LIVE_MAX_RESOLVE` exact settlements are drawn as undecided until settled on request
+  (see :class:`Explorer`); :func:`measure_redraw` times a slider move.
 
 Grid: cell centres ``beta = (i + 1/2) 2 pi / n`` [rad].  The widget offers odd ``n`` only: for even
 ``n`` the centres ``beta`` and ``beta + pi`` are both on the grid, i.e. a whole line of cells lies
@@ -42,7 +45,11 @@ __all__ = [
     "layer_rgba",
     "Explorer",
     "make_widget",
+    "measure_redraw",
+    "format_redraw",
     "LAYERS",
+    "OVERLAYS",
+    "LIVE_MAX_RESOLVE",
     "ALPHA_LAYERS",
     "SPECTRAL_LAYERS",
     "RESOLUTIONS",
@@ -559,6 +566,13 @@ def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, s
 
 # --------------------------------------------------------------------------- widget state
 
+#: exact settlements per redraw: at most this many undecided points of the spectral layers are
+#: settled by :mod:`atlas.exact` when a control moves (up to ~20-100 ms each: the II verdicts need
+#: the root reference); the rest are drawn as undecided until :meth:`Explorer.settle`
+LIVE_MAX_RESOLVE = 16
+#: overlays the widget can draw over the selected layer
+OVERLAYS = ("class boundaries", "SS boundary")
+
 #: layers the widget computes together (one compiled kernel per group; switching between the
 #: layers of a group needs no recomputation)
 LAYER_GROUPS = (
@@ -582,9 +596,32 @@ def _companions(layer: str) -> tuple[str, ...]:
 class Explorer:
     """State and callbacks of the exploration widget, independent of ipywidgets.
 
-    :meth:`update` sets parameters and recomputes the map (:func:`compute_map`) -- this is the
-    widget's redraw callback; :meth:`inspect` is its click callback.  ``timings`` holds the last
-    compute / render times [ms].
+    :meth:`update` sets parameters and recomputes the map (:func:`compute_map`) -- the widget's
+    redraw callback; :meth:`settle` is its "settle undecided" button; :meth:`inspect` its click
+    callback.  ``timings`` holds the last compute / render times [ms].
+
+    Bounded interactivity (a design decision).  A slider move runs the certified fast path on the
+    whole grid (milliseconds to a few hundred milliseconds at 513 x 513, see
+    :func:`measure_redraw`) and settles at most ``max_resolve`` (default :data:`LIVE_MAX_RESOLVE`)
+    of the points it leaves undecided with the exact reference, which costs up to ~20-100 ms per
+    point (the II verdicts need the root reference; SS-only points take a rational Hurwitz test).
+    Uncapped settlement could stall a slider move for seconds (an even grid puts a whole line of
+    cells on ``det B = 0``).  Cells that stay undecided are drawn in the ``undecided`` colour of
+    :mod:`atlas.verdicts` (with its legend entry) and counted in :meth:`status`; every verdict
+    drawn is certified.  :meth:`settle` settles all of them on request (``max_resolve=None``
+    gives the old always-settle behaviour).  The angle-only layers (class and subclass codes,
+    Table 1) are always settled in full: their exact reference is cheap rational arithmetic.
+
+    One layer at a time (a design decision).  The layer dropdown chooses one categorical map;
+    ``overlays`` adds what combines without ambiguity: the straight class boundaries and the
+    curved SS boundary (dashed zero contour of the smooth ``margin_SS``, as in Fig. 1).  Stacking
+    several categorical layers as translucent colours makes the colours unreadable, and contours
+    of 0/1 labels are staircases of the grid, not boundaries; the point inspector gives every
+    verdict at a point instead.
+
+    The widget's sliders redraw when released (``continuous_update=False``): a redraw of the II
+    layers with damping takes a few hundred milliseconds at 513 x 513, and a drag would otherwise
+    queue one redraw per intermediate value.
     """
 
     def __init__(
@@ -597,7 +634,8 @@ class Explorer:
         layer="stable_SS",
         dtype="float64",
         resolve=True,
-        max_resolve=None,
+        max_resolve=LIVE_MAX_RESOLVE,
+        overlays=("class boundaries",),
     ):
         self.params = dict(
             kappa=float(kappa),
@@ -609,11 +647,15 @@ class Explorer:
             dtype=dtype,
             resolve=bool(resolve),
             max_resolve=max_resolve,
+            overlays=tuple(overlays),
         )
         self.ds: xr.Dataset | None = None
+        self.margin: xr.DataArray | None = None
         self._last_key = None
+        self._margin_key = None
         self.timings: dict[str, float] = {}
         self.point: tuple[float, float] | None = None
+        self.last_inspection: dict | None = None
 
     def update(self, **changes) -> xr.Dataset:
         """Apply parameter changes and recompute the selected layer; returns the map."""
@@ -621,15 +663,30 @@ class Explorer:
         if unknown:
             raise ValueError(f"unknown parameter(s) {sorted(unknown)}")
         p = {**self.params, **changes}
+        p["overlays"] = tuple(p["overlays"])
+        bad = [o for o in p["overlays"] if o not in OVERLAYS]
+        if bad:
+            raise ValueError(f"overlays: unknown overlay(s) {bad} (known: {', '.join(OVERLAYS)})")
+        mr = p["max_resolve"]
+        if mr is not None and (int(mr) != mr or mr < 0):
+            raise ValueError(f"max_resolve: must be None or an integer >= 0, got {mr!r}")
         group = _companions(p["layer"])
         _check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
         self.params = p
+        self._update_margin()
         key = self._key(group)
         if self.ds is not None and key == self._last_key:
-            self.timings["compute_ms"] = 0.0  # only the displayed layer changed
+            self.timings["compute_ms"] = 0.0  # only the displayed layer or the overlays changed
             return self.ds
         t = time.perf_counter()
-        self.ds = compute_map(
+        self.ds = self._compute(group, p["max_resolve"])
+        self._last_key = key
+        self.timings["compute_ms"] = 1e3 * (time.perf_counter() - t)
+        return self.ds
+
+    def _compute(self, group, max_resolve, resolve=None) -> xr.Dataset:
+        p = self.params
+        return compute_map(
             p["kappa"],
             p["q1"],
             p["q2"],
@@ -637,11 +694,40 @@ class Explorer:
             dtype=p["dtype"],
             layers=group,
             alpha=p["alpha"] if p["layer"] in ALPHA_LAYERS else None,
-            resolve=p["resolve"],
-            max_resolve=p["max_resolve"],
+            resolve=p["resolve"] if resolve is None else resolve,
+            max_resolve=max_resolve,
         )
-        self._last_key = key
-        self.timings["compute_ms"] = 1e3 * (time.perf_counter() - t)
+
+    def _update_margin(self):
+        """The smooth SS margin for the "SS boundary" overlay (one jitted kernel, cached)."""
+        p = self.params
+        if "SS boundary" not in p["overlays"]:
+            self.timings["margin_ms"] = 0.0
+            return
+        key = (p["n"], p["dtype"], p["kappa"], p["q1"], p["q2"])
+        if key == self._margin_key:
+            self.timings["margin_ms"] = 0.0
+            return
+        t = time.perf_counter()
+        m = compute_map(
+            p["kappa"], p["q1"], p["q2"], n=p["n"], dtype=p["dtype"], layers=("margin_SS",)
+        )
+        self.margin, self._margin_key = m["margin_SS"], key
+        self.timings["margin_ms"] = 1e3 * (time.perf_counter() - t)
+
+    def settle(self) -> xr.Dataset:
+        """Settle every undecided cell of the current layer group exactly (the "settle
+        undecided" button).  Costs ~20-100 ms per undecided point; the settled map is kept until
+        a parameter of the group changes."""
+        if self.ds is None:
+            self.update()
+        t = time.perf_counter()
+        if self.ds.attrs["n_undecided"] > 0 or not self.params["resolve"]:
+            n_fast = self.ds.attrs["n_undecided_fast"]
+            self.ds = self._compute(_companions(self.params["layer"]), None, resolve=True)
+            self.ds.attrs["n_undecided_fast"] = n_fast
+            self._last_key = self._key(_companions(self.params["layer"]))
+        self.timings["settle_ms"] = 1e3 * (time.perf_counter() - t)
         return self.ds
 
     def _key(self, group):
@@ -663,7 +749,7 @@ class Explorer:
         """The point inspector at ``(beta1, beta2)`` [rad] with the current model and alpha."""
         p = self.params
         self.point = (float(beta1) % (2 * math.pi), float(beta2) % (2 * math.pi))
-        return inspect_point(
+        self.last_inspection = inspect_point(
             *self.point,
             alpha=p["alpha"],
             kappa=p["kappa"],
@@ -671,62 +757,240 @@ class Explorer:
             q2=p["q2"],
             dtype=p["dtype"],
         )
+        return self.last_inspection
 
     def status(self) -> str:
         p, ds = self.params, self.ds
         q = f"q = {p['q1']:g}" if p["q1"] == p["q2"] else f"q1 = {p['q1']:g}, q2 = {p['q2']:g}"
-        und = (
-            ""
-            if ds is None
-            else (
+        und = ""
+        if ds is not None:
+            und = (
                 f"; undecided: {ds.attrs['n_undecided_fast']} fast, "
                 f"{ds.attrs['n_undecided']} after exact settlement"
             )
-        )
+            if ds.attrs["n_undecided"]:
+                und += " (drawn as undecided; 'settle undecided' settles them)"
         t = self.timings
         return (
             f"{p['layer']} at kappa = {p['kappa']:.4g}, {q}, {p['n']}^2 cells: "
-            f"compute {t.get('compute_ms', float('nan')):.0f} ms, "
+            f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )
+
+
+# --------------------------------------------------------------------------- the map figure
+
+
+def _class_lines(ax) -> list:
+    """The straight (model-independent) class boundaries: axes of beta1, beta2; beta2 = beta1
+    (+ pi).  Returns the artists."""
+    tp = 2 * math.pi
+    kw = dict(color="k", lw=0.5, alpha=0.6)
+    arts = []
+    for a in (0.5 * math.pi, math.pi, 1.5 * math.pi):
+        arts += [ax.axvline(a, **kw), ax.axhline(a, **kw)]
+    x = np.array([0.0, tp])
+    arts += ax.plot(x, x, **kw)
+    arts += ax.plot([0, math.pi], [math.pi, tp], **kw)
+    arts += ax.plot([math.pi, tp], [0, math.pi], **kw)
+    return arts
+
+
+class _MapView:
+    """The widget's map on a matplotlib axes: the selected layer as an image, its legend, the
+    overlays and the marker of the inspected point.  :meth:`render` is the figure half of a
+    redraw (the canvas draw is the caller's: ``draw_idle`` on ipympl, ``draw`` on Agg)."""
+
+    def __init__(self, ax):
+        from matplotlib.lines import Line2D
+
+        self.ax, self.fig = ax, ax.figure
+        pi = math.pi
+        self.im = ax.imshow(
+            np.zeros((1, 1, 4)),
+            origin="lower",
+            extent=(0, 2 * pi, 0, 2 * pi),
+            interpolation="nearest",
+        )
+        self.lines = _class_lines(ax)
+        (self.marker,) = ax.plot([], [], "o", mfc="none", mec="C3", ms=10, mew=2)
+        self.contour = None
+        self._ss_handle = Line2D([], [], color="k", ls="--", lw=0.8, label="SS boundary")
+        ax.set_xlabel(r"$\beta_1$")
+        ax.set_ylabel(r"$\beta_2$")
+        ticks = np.arange(5) * pi / 2
+        ax.set_xticks(ticks, ["0", "π/2", "π", "3π/2", "2π"])
+        ax.set_yticks(ticks, ["0", "π/2", "π", "3π/2", "2π"])
+        ax.set_xlim(0, 2 * pi)
+        ax.set_ylim(0, 2 * pi)
+
+    def render(self, ex: Explorer):
+        from matplotlib.patches import Patch
+
+        ax, p = self.ax, ex.params
+        self.im.set_data(ex.image())
+        t = time.perf_counter()
+        for a in self.lines:
+            a.set_visible("class boundaries" in p["overlays"])
+        if self.contour is not None:
+            self.contour.remove()
+            self.contour = None
+        handles = [
+            Patch(facecolor=c, edgecolor="0.5", label=lbl)
+            for c, lbl in legend_entries(p["layer"], ex.ds)
+        ]
+        if "SS boundary" in p["overlays"] and ex.margin is not None:
+            m = ex.margin.values
+            if np.nanmin(m) < 0 < np.nanmax(m):  # else no zero contour (and a warning)
+                self.contour = ax.contour(
+                    ex.margin.beta1,
+                    ex.margin.beta2,
+                    m.T,
+                    levels=[0.0],
+                    colors="k",
+                    linestyles="--",
+                    linewidths=0.8,
+                )
+                handles.append(self._ss_handle)
+        if ax.get_legend() is not None:
+            ax.get_legend().remove()
+        if handles:
+            ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.85)
+        ax.set_title(p["layer"], fontsize=10)
+        self.marker.set_data(
+            [] if ex.point is None else [ex.point[0]], [] if ex.point is None else [ex.point[1]]
+        )
+        ex.timings["overlay_ms"] = 1e3 * (time.perf_counter() - t)
+
+
+def measure_redraw(
+    n: int = 513,
+    kappa: float = 0.5,
+    cases=((0.0, 0.0), (0.1, 0.1), (1.0, 0.01)),
+    layers=("stable_SS", "stable_II"),
+    repeats: int = 5,
+    max_resolve: int | None = LIVE_MAX_RESOLVE,
+    overlays=("class boundaries", "SS boundary"),
+    dtype="float64",
+) -> list[dict]:
+    """Time one slider-move redraw of the widget's map at ``n x n`` cells.
+
+    For each layer and each ``(q1, q2)`` in ``cases``: an :class:`Explorer` and the widget's map
+    figure (:class:`_MapView` on an offscreen Agg canvas) are set up and drawn once (compiling
+    the kernels), then ``repeats`` times ``kappa`` moves one slider step (x 10^0.05) and the
+    redraw runs: :meth:`Explorer.update` (map computation with at most ``max_resolve`` exact
+    settlements, plus the margin for the SS-boundary overlay), :meth:`_MapView.render` (RGBA
+    image, legend, contour) and ``canvas.draw()``.  Not included: PNG encoding and transport to
+    the browser (ipympl), which do not depend on the model.
+
+    Returns one dict per (layer, case) with ``n``, ``layer``, ``q1``, ``q2``, the times [ms] of
+    the fastest repeat (``total_ms``, ``compute_ms``, ``render_ms``, ``draw_ms``) and its
+    undecided counts ``n_undecided_fast``, ``n_undecided`` (after the capped settlement).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    if repeats < 1:
+        raise ValueError(f"repeats: must be >= 1, got {repeats}")
+    rows = []
+    for layer in layers:
+        for q1, q2 in cases:
+            ex = Explorer(
+                kappa=kappa,
+                q1=q1,
+                q2=q2,
+                n=n,
+                layer=layer,
+                dtype=dtype,
+                max_resolve=max_resolve,
+                overlays=overlays,
+            )
+            fig = Figure(figsize=(5.6, 5.6))
+            FigureCanvasAgg(fig)
+            view = _MapView(fig.add_subplot())
+            ex.update()
+            view.render(ex)
+            fig.canvas.draw()
+            best = None
+            for i in range(repeats):
+                t0 = time.perf_counter()
+                ex.update(kappa=kappa * 10 ** (0.05 * (i + 1)))
+                t1 = time.perf_counter()
+                view.render(ex)
+                t2 = time.perf_counter()
+                fig.canvas.draw()
+                t3 = time.perf_counter()
+                row = dict(
+                    n=n,
+                    layer=layer,
+                    q1=float(q1),
+                    q2=float(q2),
+                    kappa=ex.params["kappa"],
+                    total_ms=1e3 * (t3 - t0),
+                    compute_ms=1e3 * (t1 - t0),
+                    render_ms=1e3 * (t2 - t1),
+                    draw_ms=1e3 * (t3 - t2),
+                    n_undecided_fast=int(ex.ds.attrs["n_undecided_fast"]),
+                    n_undecided=int(ex.ds.attrs["n_undecided"]),
+                )
+                if best is None or row["total_ms"] < best["total_ms"]:
+                    best = row
+            rows.append(best)
+    return rows
+
+
+def format_redraw(rows: list[dict]) -> str:
+    """A table of :func:`measure_redraw` results."""
+    lines = [
+        f"{'layer':<12} {'q1':>5} {'q2':>5} {'total':>7} {'compute':>8} {'render':>7} "
+        f"{'draw':>6}  undecided fast -> left   [ms, n = {rows[0]['n'] if rows else '-'}]"
+    ]
+    for r in rows:
+        lines.append(
+            f"{r['layer']:<12} {r['q1']:>5g} {r['q2']:>5g} {r['total_ms']:>7.0f} "
+            f"{r['compute_ms']:>8.0f} {r['render_ms']:>7.0f} {r['draw_ms']:>6.0f}  "
+            f"{r['n_undecided_fast']:>14d} -> {r['n_undecided']}"
+        )
+    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- ipywidgets UI
 
 
-def _class_lines(ax):
-    """The straight (model-independent) class boundaries: axes of beta1, beta2; beta2 = beta1
-    (+ pi)."""
-    tp = 2 * math.pi
-    kw = dict(color="k", lw=0.5, alpha=0.6)
-    for a in (0.5 * math.pi, math.pi, 1.5 * math.pi):
-        ax.axvline(a, **kw)
-        ax.axhline(a, **kw)
-    x = np.array([0.0, tp])
-    ax.plot(x, x, **kw)
-    ax.plot([0, math.pi], [math.pi, tp], **kw)
-    ax.plot([math.pi, tp], [0, math.pi], **kw)
-
-
 def make_widget(explorer: Explorer | None = None, **initial):
     """An ipywidgets UI over :class:`Explorer`: kappa (log slider), q or q1 and q2, alpha,
-    resolution, layer; the map redraws on every change; clicking the map (interactive matplotlib
-    backend such as ipympl) or entering beta1, beta2 fills the point inspector.
+    resolution, layer, overlays, exact settlements per redraw and a "settle undecided" button;
+    the map redraws on every change; clicking the map fills the point inspector (needs an
+    interactive matplotlib backend: ``%matplotlib widget`` with ipympl, the ``notebook`` extra),
+    as does entering beta1, beta2 and pressing "inspect point".
 
-    Returns an ``ipywidgets.VBox``; its ``explorer`` attribute is the :class:`Explorer` and
-    ``controls`` the dict of control widgets.
+    Returns an ``ipywidgets.VBox``; its ``explorer`` attribute is the :class:`Explorer`,
+    ``controls`` the dict of control widgets, ``figure`` the map's figure (its canvas has the
+    click handler connected to ``button_press_event``) and ``callbacks`` the callbacks.
     """
     import io
 
     import ipywidgets as W
     import matplotlib
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Patch
 
     ex = explorer or Explorer(**initial)
     p = ex.params
     pi = math.pi
     style = {"description_width": "80px"}
+
+    def slider(name, value, lo, hi, step, desc=None, fmt=".3g"):
+        return W.FloatSlider(
+            value=value,
+            min=lo,
+            max=hi,
+            step=step,
+            description=desc or name,
+            readout_format=fmt,
+            continuous_update=False,  # one redraw per move, not a queue of them while dragging
+            style=style,
+        )
+
     ctl = {
         "kappa": W.FloatLogSlider(
             value=p["kappa"],
@@ -736,45 +1000,14 @@ def make_widget(explorer: Explorer | None = None, **initial):
             step=0.05,
             description="kappa",
             readout_format=".3g",
+            continuous_update=False,
             style=style,
         ),
         "separate": W.Checkbox(value=p["q1"] != p["q2"], description="q1, q2 separately"),
-        "q": W.FloatSlider(
-            value=p["q1"],
-            min=0.0,
-            max=5.0,
-            step=0.01,
-            description="q",
-            readout_format=".3g",
-            style=style,
-        ),
-        "q1": W.FloatSlider(
-            value=p["q1"],
-            min=0.0,
-            max=5.0,
-            step=0.01,
-            description="q1",
-            readout_format=".3g",
-            style=style,
-        ),
-        "q2": W.FloatSlider(
-            value=p["q2"],
-            min=0.0,
-            max=5.0,
-            step=0.01,
-            description="q2",
-            readout_format=".3g",
-            style=style,
-        ),
-        "alpha": W.FloatSlider(
-            value=p["alpha"] / pi,
-            min=0.0,
-            max=2.0,
-            step=0.005,
-            description="alpha / pi",
-            readout_format=".3f",
-            style=style,
-        ),
+        "q": slider("q", p["q1"], 0.0, 5.0, 0.01),
+        "q1": slider("q1", p["q1"], 0.0, 5.0, 0.01),
+        "q2": slider("q2", p["q2"], 0.0, 5.0, 0.01),
+        "alpha": slider("alpha", p["alpha"] / pi, 0.0, 2.0, 0.005, "alpha / pi", ".3f"),
         "n": W.Dropdown(
             options=sorted(set(RESOLUTIONS) | {p["n"]}),
             value=p["n"],
@@ -784,7 +1017,21 @@ def make_widget(explorer: Explorer | None = None, **initial):
         "layer": W.Dropdown(
             options=list(LAYERS), value=p["layer"], description="layer", style=style
         ),
-        "resolve": W.Checkbox(value=p["resolve"], description="settle undecided exactly"),
+        "overlays": W.SelectMultiple(
+            options=list(OVERLAYS),
+            value=tuple(p["overlays"]),
+            rows=len(OVERLAYS),
+            description="overlays",
+            style=style,
+        ),
+        "max_resolve": W.BoundedIntText(
+            value=LIVE_MAX_RESOLVE if p["max_resolve"] is None else int(p["max_resolve"]),
+            min=0,
+            max=10**9,
+            description="exact / redraw",
+            style=style,
+        ),
+        "settle": W.Button(description="settle undecided"),
         "beta1": W.FloatText(value=0.25, description="beta1 / pi", style=style),
         "beta2": W.FloatText(value=0.75, description="beta2 / pi", style=style),
         "inspect": W.Button(description="inspect point"),
@@ -792,46 +1039,21 @@ def make_widget(explorer: Explorer | None = None, **initial):
     status = W.HTML()
     inspector = W.HTML("<pre>click the map or enter beta1, beta2 and press 'inspect point'</pre>")
 
-    fig, ax = plt.subplots(figsize=(5.6, 5.6))
-    interactive = "ipympl" in matplotlib.get_backend() or "widget" in matplotlib.get_backend()
-    im = ax.imshow(
-        ex.image(), origin="lower", extent=(0, 2 * pi, 0, 2 * pi), interpolation="nearest"
-    )
-    _class_lines(ax)
-    (marker,) = ax.plot([], [], "o", mfc="none", mec="C3", ms=10, mew=2)
-    ax.set_xlabel(r"$\beta_1$")
-    ax.set_ylabel(r"$\beta_2$")
-    ticks = np.arange(5) * pi / 2
-    ax.set_xticks(ticks, ["0", "π/2", "π", "3π/2", "2π"])
-    ax.set_yticks(ticks, ["0", "π/2", "π", "3π/2", "2π"])
-    ax.set_xlim(0, 2 * pi)
-    ax.set_ylim(0, 2 * pi)
+    backend = matplotlib.get_backend()
+    interactive = "ipympl" in backend or "widget" in backend
+    with plt.ioff():  # shown inside the box, not a second time at the end of the cell
+        fig, ax = plt.subplots(figsize=(5.6, 5.6))
+    view = _MapView(ax)
     image = None
     if interactive:
         fig.canvas.header_visible = False
-        view = fig.canvas
+        shown = fig.canvas
     else:
         plt.close(fig)
         image = W.Image(format="png")
-        view = image
+        shown = image
 
-    def render():
-        img = ex.image()
-        im.set_data(img)
-        if ax.get_legend() is not None:
-            ax.get_legend().remove()
-        layer = ex.params["layer"]
-        items = legend_entries(layer, ex.ds)
-        if items:
-            ax.legend(
-                handles=[Patch(facecolor=c, edgecolor="0.5", label=lbl) for c, lbl in items],
-                loc="upper right",
-                fontsize=7,
-                framealpha=0.85,
-            )
-        ax.set_title(layer, fontsize=10)
-        if ex.point is not None:
-            marker.set_data([ex.point[0]], [ex.point[1]])
+    def draw():
         t = time.perf_counter()
         if interactive:
             fig.canvas.draw_idle()
@@ -840,6 +1062,10 @@ def make_widget(explorer: Explorer | None = None, **initial):
             fig.savefig(buf, format="png", dpi=80)
             image.value = buf.getvalue()
         ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - t)
+
+    def render():
+        view.render(ex)
+        draw()
         status.value = f"<tt>{ex.status()}, draw {ex.timings['draw_ms']:.0f} ms</tt>"
 
     def model_changes():
@@ -853,7 +1079,8 @@ def make_widget(explorer: Explorer | None = None, **initial):
             alpha=float(ctl["alpha"].value) * pi,
             n=int(ctl["n"].value),
             layer=ctl["layer"].value,
-            resolve=bool(ctl["resolve"].value),
+            overlays=tuple(ctl["overlays"].value),
+            max_resolve=int(ctl["max_resolve"].value),
         )
 
     def on_change(_change=None):
@@ -865,38 +1092,50 @@ def make_widget(explorer: Explorer | None = None, **initial):
         if ex.point is not None:
             show_point(*ex.point)
 
+    def on_settle(_b=None):
+        ex.settle()
+        render()
+
     def show_point(b1, b2):
         info = ex.inspect(b1, b2)
         inspector.value = "<pre>" + format_inspection(info) + "</pre>"
-        marker.set_data([ex.point[0]], [ex.point[1]])
-        if interactive:
-            fig.canvas.draw_idle()
+        view.marker.set_data([ex.point[0]], [ex.point[1]])
+        draw()
 
     def on_inspect(_b=None):
         show_point(ctl["beta1"].value * pi, ctl["beta2"].value * pi)
-        if not interactive:
-            render()
 
     def on_click(event):
-        if event.inaxes is not ax or event.xdata is None:
+        """``button_press_event`` handler: inspect the clicked ``(beta1, beta2)``."""
+        toolbar = getattr(fig.canvas, "toolbar", None)
+        if getattr(toolbar, "mode", "") != "":  # pan / zoom in progress
+            return
+        if event.inaxes is not ax or event.xdata is None or event.ydata is None:
             return
         ctl["beta1"].value = round(event.xdata / pi, 6)
         ctl["beta2"].value = round(event.ydata / pi, 6)
         show_point(event.xdata, event.ydata)
 
-    for key in ("kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "resolve"):
+    watched = ("kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
+    for key in watched + ("max_resolve",):
         ctl[key].observe(on_change, names="value")
     ctl["inspect"].on_click(on_inspect)
-    if interactive:
-        fig.canvas.mpl_connect("button_press_event", on_click)
+    ctl["settle"].on_click(on_settle)
+    # connected on every backend; only interactive canvases (ipympl) deliver clicks from a browser
+    cid = fig.canvas.mpl_connect("button_press_event", on_click)
     on_change()
-    controls = W.VBox(
-        [ctl[k] for k in ("kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "resolve")]
-    )
+    controls = W.VBox([ctl[k] for k in watched + ("max_resolve", "settle")])
     point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]])
-    box = W.VBox([W.HBox([controls, view]), status, point, inspector])
+    box = W.VBox([W.HBox([controls, shown]), status, point, inspector])
     box.explorer = ex
     box.controls = ctl
     box.figure = fig
-    box.callbacks = {"change": on_change, "inspect": on_inspect, "click": on_click}
+    box.inspector = inspector
+    box.click_cid = cid
+    box.callbacks = {
+        "change": on_change,
+        "inspect": on_inspect,
+        "click": on_click,
+        "settle": on_settle,
+    }
     return box

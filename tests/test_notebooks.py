@@ -131,8 +131,8 @@ ALPHA = 0.35 * math.pi
 def test_widget_map_equals_generate(kappa, q1, q2):
     _need("ipywidgets")
     from atlas import explore
-    from atlas.tiling import generate
     from atlas.scene import Scene
+    from atlas.tiling import generate
 
     box = explore.make_widget(n=N, layer="class_code", alpha=ALPHA)
     c, ex = box.controls, box.explorer
@@ -190,6 +190,140 @@ def test_inspector_agrees_with_exact_and_map():
             atol=1e-9,
         )
         assert "class" in explore.format_inspection(info)
+
+
+def _click(box, beta1, beta2, button=1):
+    """Deliver a synthetic left click at data point ``(beta1, beta2)`` through the canvas's
+    ``button_press_event`` callbacks (what ipympl does for a click in the browser)."""
+    from matplotlib.backend_bases import MouseEvent
+
+    fig = box.figure
+    ax = fig.axes[0]
+    x, y = ax.transData.transform((beta1, beta2))
+    event = MouseEvent("button_press_event", fig.canvas, x, y, button=button)
+    fig.canvas.callbacks.process("button_press_event", event)
+    return event
+
+
+def test_click_on_map_inspects_that_point():
+    _need("ipywidgets")
+    from atlas import exact, explore
+
+    kappa, q = 0.5, 2**0.5
+    box = explore.make_widget(n=N, layer="stable_II", kappa=kappa, q1=q, alpha=ALPHA)
+    ex, c = box.explorer, box.controls
+    assert ex.point is None
+    # a click outside the axes (in the figure margin) does nothing
+    _click(box, -0.5, 1.0)
+    assert ex.point is None and ex.last_inspection is None
+
+    seen = set()
+    for b1, b2 in ((0.15 * math.pi, 1.07 * math.pi), (0.6, 4.0), (5.5, 2.2), (3.0, 0.4)):
+        event = _click(box, b1, b2)
+        assert event.inaxes is box.figure.axes[0]
+        info = ex.last_inspection
+        assert info is not None
+        np.testing.assert_allclose(ex.point, (b1, b2), atol=1e-9)
+        assert (info["beta1"], info["beta2"]) == ex.point
+        np.testing.assert_allclose(
+            (c["beta1"].value, c["beta2"].value), (b1 / math.pi, b2 / math.pi), atol=1e-6
+        )
+        assert explore.format_inspection(info) in box.inspector.value
+        # truth: the exact reference at the clicked point, directions from numpy
+        d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
+        ref = exact.point_spectral(*d, kappa, q, q)
+        codes = exact.point_codes(*d, np.cos(ALPHA), np.sin(ALPHA))
+        for k in ("stable_SS", "consistent_II", "stable_II"):
+            assert info["spectral"][k] == int(ref[k]), (b1, b2, k)
+        assert info["class_code"] == codes["class_code"]
+        assert info["subclass_code"] == codes["subclass_code"]
+        np.testing.assert_allclose(
+            np.sort_complex(info["eigenvalues"]),
+            np.sort_complex(np.asarray(ref["roots"], complex)),
+            atol=1e-9,
+        )
+        seen.add(codes["class_code"])
+        # the marker sits on the clicked point
+        np.testing.assert_allclose(np.ravel(box.figure.axes[0].lines[-1].get_data()), ex.point)
+    assert len(seen) >= 3  # the clicks landed in different classes
+
+
+def test_redraw_capped_then_settle_undecided():
+    """An even grid puts cells on det B = 0 (undecided for the fast path): a redraw settles at most
+    ``max_resolve`` of them and draws the rest in the undecided colour; the "settle undecided"
+    button settles all, giving the atlas's map."""
+    _need("ipywidgets")
+    from matplotlib.colors import to_rgba
+
+    from atlas import explore
+    from atlas.scene import Scene
+    from atlas.tiling import generate
+    from atlas.verdicts import Verdict
+
+    n, cap, kappa, q = 64, 5, 0.5, 0.3
+    box = explore.make_widget(n=n, layer="stable_SS", kappa=kappa, q1=q, max_resolve=cap)
+    ex = box.explorer
+    fast = ex.ds.attrs["n_undecided_fast"]
+    assert fast > cap
+    assert ex.ds.attrs["n_undecided"] == fast - cap
+    undecided = ex.ds["stable_SS"].values == int(Verdict.UNDECIDED)
+    assert undecided.sum() == fast - cap
+    img = ex.image()
+    red = np.all(np.isclose(img, to_rgba(Verdict.UNDECIDED.color)), axis=-1)
+    np.testing.assert_array_equal(red, undecided.T)  # image is (beta2, beta1)
+    labels = [t.get_text() for t in box.figure.axes[0].get_legend().get_texts()]
+    assert Verdict.UNDECIDED.label in labels
+    assert "settle undecided" in ex.status()
+
+    box.callbacks["settle"]()
+    assert ex.ds.attrs["n_undecided"] == 0
+    assert ex.ds.attrs["n_undecided_fast"] == fast
+    beta = explore.beta_grid(n)
+    ref = generate(Scene(beta1=beta, beta2=beta, kappa=kappa, q=q, outputs=["stable_SS"]))
+    np.testing.assert_array_equal(ex.ds["stable_SS"].values, ref["stable_SS"].values)
+    labels = [t.get_text() for t in box.figure.axes[0].get_legend().get_texts()]
+    assert Verdict.UNDECIDED.label not in labels
+    # the next slider move is capped again
+    box.controls["kappa"].value = 0.6
+    assert ex.ds.attrs["n_undecided"] == max(0, ex.ds.attrs["n_undecided_fast"] - cap)
+
+
+def test_overlays_and_measure_redraw():
+    _need("ipywidgets")
+    from atlas import explore
+
+    box = explore.make_widget(n=N, layer="consistent_II", kappa=0.5, q1=0.3)
+    c, ax = box.controls, box.figure.axes[0]
+    c["overlays"].value = ("SS boundary",)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "SS boundary" in labels
+    assert not any(a.get_visible() for a in ax.lines[:-1])  # class boundaries hidden
+    # the dashed contour is the zero set of the smooth margin (values at its vertices ~ 0)
+    m = explore.compute_map(0.5, 0.3, n=N, layers=("margin_SS",))["margin_SS"]
+    from scipy.interpolate import RegularGridInterpolator
+
+    f = RegularGridInterpolator((m.beta1.values, m.beta2.values), m.values)
+    paths = [p for p in ax.collections[-1].get_paths() if len(p.vertices)]
+    assert paths
+    v = np.concatenate([p.vertices for p in paths])
+    inside = np.all((v > m.beta1.values[0]) & (v < m.beta1.values[-1]), axis=1)
+    assert np.abs(f(v[inside])).max() < 1e-9 + 0.05 * np.abs(m.values).max()
+    c["overlays"].value = ("class boundaries",)
+    assert all(a.get_visible() for a in ax.lines[:-1])
+    assert "SS boundary" not in [t.get_text() for t in ax.get_legend().get_texts()]
+    with pytest.raises(ValueError, match="overlays"):
+        box.explorer.update(overlays=("nope",))
+
+    rows = explore.measure_redraw(
+        n=16, cases=((0.3, 0.3),), layers=("stable_SS",), repeats=2, max_resolve=3
+    )
+    (r,) = rows
+    assert r["n"] == 16 and r["layer"] == "stable_SS" and (r["q1"], r["q2"]) == (0.3, 0.3)
+    assert r["total_ms"] >= r["compute_ms"] > 0
+    want = explore.compute_map(r["kappa"], 0.3, n=16, layers=("stable_SS",), resolve=False)
+    assert r["n_undecided_fast"] == want.attrs["n_undecided_fast"] > 3
+    assert r["n_undecided"] == r["n_undecided_fast"] - 3
+    assert "stable_SS" in explore.format_redraw(rows)
 
 
 def test_compute_map_rejects_bad_input():
