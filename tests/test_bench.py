@@ -23,7 +23,12 @@ def test_quick_run_fills_headline(tmp_path):
         "## Work-precision",
     ):
         assert word in md
-    head = json.loads((tmp_path / "bench_headline.json").read_text())["headline"]
+    js = json.loads((tmp_path / "bench_headline.json").read_text())
+    head = js["headline"]
+    # the end-to-end CLI run of the tiny atlas: its size and settlement are known up front
+    (e2e,) = js["atlases"]
+    assert e2e["points"] == 16 * 16 * 2 * 2 and e2e["undecided_after"] == 0
+    assert e2e["file_mb"] > 0 and e2e["peak_rss_mb"] > 0
     cols = (
         "case",
         "dtype",
@@ -54,6 +59,7 @@ def test_quick_run_fills_headline(tmp_path):
         "bench_simulation.png",
         "bench_work_precision.csv",
         "bench_suites.csv",
+        "bench_atlases.csv",
     ):
         assert (tmp_path / name).stat().st_size > 0
     # the table in bench.md has no empty cells
