@@ -54,8 +54,12 @@ def check_output_path(path, overwrite: bool = False) -> str:
         raise IsADirectoryError(f"out: {path} is a directory")
     if not os.path.isdir(directory):
         raise FileNotFoundError(f"out: directory {directory} does not exist")
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise PermissionError(f"out: directory {directory} is not writable")
+    try:  # a real probe: os.access says yes to root even on a read-only file system
+        fd, probe = tempfile.mkstemp(prefix=".atlas-probe-", dir=directory)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise PermissionError(f"out: directory {directory} is not writable ({e.strerror})") from None
     if os.path.exists(path) and not overwrite:
         raise FileExistsError(f"out: {path} exists (use --overwrite to replace it)")
     return path

@@ -208,3 +208,12 @@ def test_peak_rss_bounded_by_tile(tmp_path):
     assert big[0] >= 1e8
     assert big[3] < 2048
     assert big[3] < small[3] * 1.5 + 100
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+def test_unwritable_directory_is_refused_up_front():
+    """A directory nobody can create files in (/proc, even for root) fails before any work."""
+    from atlas.io import check_output_path
+
+    with pytest.raises(OSError, match="^out: directory /proc is not writable"):
+        check_output_path("/proc/atlas.nc")
