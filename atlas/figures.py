@@ -48,16 +48,24 @@ __all__ = [
 ]
 
 #: (kappa, q1, q2) of the variant maps (Fig. 1 at other model parameters)
-VARIANTS = ((0.5, 0.0, 0.0), (2.0, 0.0, 0.0), (0.5, 0.1, 0.1), (0.5, 1.0, 1.0), (2.0, 1.0, 1.0),
-            (0.5, 1.0, 0.01))
+VARIANTS = (
+    (0.5, 0.0, 0.0),
+    (2.0, 0.0, 0.0),
+    (0.5, 0.1, 0.1),
+    (0.5, 1.0, 1.0),
+    (2.0, 1.0, 1.0),
+    (0.5, 1.0, 0.01),
+)
 _margin_jit = jax.jit(spectral.ss_margin)
 DPI = 110
 
 
 # --------------------------------------------------------------------------- computing the maps
 
-def evaluate_points(c1, s1, c2, s2, kappa, q1, q2, *, margin=False, resolve=True,
-                    max_resolve=5000) -> dict:
+
+def evaluate_points(
+    c1, s1, c2, s2, kappa, q1, q2, *, margin=False, resolve=True, max_resolve=5000
+) -> dict:
     """Certified spectral verdicts (via :func:`atlas.evaluate.spectral_points`) plus, optionally,
     the smooth SS margin :func:`atlas.spectral.ss_margin`, for broadcastable arrays.
 
@@ -65,8 +73,9 @@ def evaluate_points(c1, s1, c2, s2, kappa, q1, q2, *, margin=False, resolve=True
     ``spectral_abscissa`` [(time of contact 2)^-1], optionally ``margin_SS``; ints ``n_resolved``
     (points settled exactly) and ``n_undecided`` (left undecided).
     """
-    res = evaluate.spectral_points(c1, s1, c2, s2, kappa, q1, q2, resolve=resolve,
-                                   max_resolve=max_resolve)
+    res = evaluate.spectral_points(
+        c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve
+    )
     counts = evaluate.last_counts()
     if margin:
         args = [jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2)]
@@ -85,10 +94,24 @@ def _offset_grid(n):
 def _quartic_discriminant(a3, a2, a1, a0):
     """Discriminant of the monic quartic, divided by a positive degree-12 scale (smooth, bounded)."""
     b, c, d, e = a3, a2, a1, a0
-    disc = (256 * e**3 - 192 * b * d * e**2 - 128 * c**2 * e**2 + 144 * c * d**2 * e - 27 * d**4
-            + 144 * b**2 * c * e**2 - 6 * b**2 * d**2 * e - 80 * b * c**2 * d * e + 18 * b * c * d**3
-            + 16 * c**4 * e - 4 * c**3 * d**2 - 27 * b**4 * e**2 + 18 * b**3 * c * d * e
-            - 4 * b**3 * d**3 - 4 * b**2 * c**3 * e + b**2 * c**2 * d**2)
+    disc = (
+        256 * e**3
+        - 192 * b * d * e**2
+        - 128 * c**2 * e**2
+        + 144 * c * d**2 * e
+        - 27 * d**4
+        + 144 * b**2 * c * e**2
+        - 6 * b**2 * d**2 * e
+        - 80 * b * c**2 * d * e
+        + 18 * b * c * d**3
+        + 16 * c**4 * e
+        - 4 * c**3 * d**2
+        - 27 * b**4 * e**2
+        + 18 * b**3 * c * d * e
+        - 4 * b**3 * d**3
+        - 4 * b**2 * c**3 * e
+        + b**2 * c**2 * d**2
+    )
     scale = (np.abs(b) + np.abs(c) ** 0.5 + np.abs(d) ** (1 / 3) + np.abs(e) ** 0.25) ** 12
     return disc / np.where(scale > 0, scale, 1.0)
 
@@ -111,12 +134,17 @@ def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
 
 def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     """``Re(l_II) - max Re(other roots)`` (NaN where no II root), scaled by the root magnitude."""
-    M = np.asarray(spectral.build_M(*(jnp.asarray(np.asarray(a, np.float64))
-                                      for a in (c1, s1, c2, s2, kappa, q1, q2))))
+    M = np.asarray(
+        spectral.build_M(
+            *(jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2))
+        )
+    )
     w = np.linalg.eigvals(M)
     shape = w.shape[:-1]
-    bc = [np.broadcast_to(np.asarray(a, np.float64), shape)[..., None]
-          for a in (c1, s1, c2, s2, kappa, q1, q2)]
+    bc = [
+        np.broadcast_to(np.asarray(a, np.float64), shape)[..., None]
+        for a in (c1, s1, c2, s2, kappa, q1, q2)
+    ]
     C1, S1, C2, S2, K, Q1, Q2 = bc
     scale = np.max(np.abs(w), -1, keepdims=True) + 1e-300
     re = w.real
@@ -136,8 +164,9 @@ def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     return np.where(has, g, np.nan)
 
 
-def stability_map(n: int = 361, kappa: float = 0.5, q1: float = 0.0, q2: float = 0.0,
-                  margins: bool = True):
+def stability_map(
+    n: int = 361, kappa: float = 0.5, q1: float = 0.0, q2: float = 0.0, margins: bool = True
+):
     """Fig. 1 map on an ``n x n`` offset grid of ``(beta1, beta2)`` in ``[0, 2 pi)``.
 
     Returns an ``xarray.Dataset`` with the SPEC §2 variables (``class_code``, ``stable_SF``,
@@ -155,56 +184,94 @@ def stability_map(n: int = 361, kappa: float = 0.5, q1: float = 0.0, q2: float =
     C1, S1 = c[:, None], s[:, None]
     C2, S2 = c[None, :], s[None, :]
     ev = evaluate_points(C1, S1, C2, S2, kappa, q1, q2, margin=True)
-    cls = np.asarray(mechanics.class_code(jnp.asarray(C1), jnp.asarray(S1), jnp.asarray(C2),
-                                          jnp.asarray(S2)))
+    cls = np.asarray(
+        mechanics.class_code(jnp.asarray(C1), jnp.asarray(S1), jnp.asarray(C2), jnp.asarray(S2))
+    )
     dims = ("beta1", "beta2")
-    ds = xr.Dataset(coords={
-        "beta1": ("beta1", b, {"units": "rad", "long_name": "direction of b1"}),
-        "beta2": ("beta2", b, {"units": "rad", "long_name": "direction of b2"}),
-        "kappa": ((), float(kappa), {"units": "1", "long_name": "k1|b1|/(k2|b2|)"}),
-        "q1": ((), float(q1), {"units": "1", "long_name": "q1|b1|/sqrt(k2|b2|)"}),
-        "q2": ((), float(q2), {"units": "1", "long_name": "q2|b2|/sqrt(k2|b2|)"}),
-    })
+    ds = xr.Dataset(
+        coords={
+            "beta1": ("beta1", b, {"units": "rad", "long_name": "direction of b1"}),
+            "beta2": ("beta2", b, {"units": "rad", "long_name": "direction of b2"}),
+            "kappa": ((), float(kappa), {"units": "1", "long_name": "k1|b1|/(k2|b2|)"}),
+            "q1": ((), float(q1), {"units": "1", "long_name": "q1|b1|/sqrt(k2|b2|)"}),
+            "q2": ((), float(q2), {"units": "1", "long_name": "q2|b2|/sqrt(k2|b2|)"}),
+        }
+    )
     ds["class_code"] = (dims, cls.astype(np.int8), {"long_name": "class code ij (0 = degenerate)"})
-    ds["stable_SF"] = ("beta1", np.asarray(mechanics.stable_SF(jnp.asarray(c))),
-                       flag_attrs(Verdict, "stability of SF"))
-    ds["stable_FS"] = ("beta2", np.asarray(mechanics.stable_FS(jnp.asarray(s))),
-                       flag_attrs(Verdict, "stability of FS"))
-    ds["consistent_IF"] = ("beta1", np.asarray(mechanics.consistent_IF(jnp.asarray(c),
-                                                                        jnp.asarray(s))).astype(bool),
-                           {"long_name": "IF impact without collision consistent (and stable)"})
-    ds["consistent_FI"] = ("beta2", np.asarray(mechanics.consistent_FI(jnp.asarray(c),
-                                                                        jnp.asarray(s))).astype(bool),
-                           {"long_name": "FI impact without collision consistent (and stable)"})
-    ds["cc_possible"] = (dims, np.asarray(mechanics.cc_possible(jnp.asarray(C1), jnp.asarray(S2)))
-                         .astype(bool) & np.ones((n, n), bool),
-                         {"long_name": "necessary condition for CC inverse chattering"})
+    ds["stable_SF"] = (
+        "beta1",
+        np.asarray(mechanics.stable_SF(jnp.asarray(c))),
+        flag_attrs(Verdict, "stability of SF"),
+    )
+    ds["stable_FS"] = (
+        "beta2",
+        np.asarray(mechanics.stable_FS(jnp.asarray(s))),
+        flag_attrs(Verdict, "stability of FS"),
+    )
+    ds["consistent_IF"] = (
+        "beta1",
+        np.asarray(mechanics.consistent_IF(jnp.asarray(c), jnp.asarray(s))).astype(bool),
+        {"long_name": "IF impact without collision consistent (and stable)"},
+    )
+    ds["consistent_FI"] = (
+        "beta2",
+        np.asarray(mechanics.consistent_FI(jnp.asarray(c), jnp.asarray(s))).astype(bool),
+        {"long_name": "FI impact without collision consistent (and stable)"},
+    )
+    ds["cc_possible"] = (
+        dims,
+        np.asarray(mechanics.cc_possible(jnp.asarray(C1), jnp.asarray(S2))).astype(bool)
+        & np.ones((n, n), bool),
+        {"long_name": "necessary condition for CC inverse chattering"},
+    )
     ds["stable_SS"] = (dims, ev["stable_SS"], flag_attrs(Verdict, "stability of SS"))
     ds["consistent_II"] = (dims, ev["consistent_II"], flag_attrs(Consistency, "consistency of II"))
     ds["stable_II"] = (dims, ev["stable_II"], flag_attrs(Verdict, "stability of II"))
-    ds["spectral_abscissa"] = (dims, ev["spectral_abscissa"],
-                               {"units": "1", "long_name": "max Re eigenvalue of M (scaled time)"})
+    ds["spectral_abscissa"] = (
+        dims,
+        ev["spectral_abscissa"],
+        {"units": "1", "long_name": "max Re eigenvalue of M (scaled time)"},
+    )
     if margins:
-        ds["margin_SS"] = (dims, _ss_margin_full(ev["margin_SS"], C1, S2, kappa, q1, q2),
-                           {"units": "1", "long_name": "SS margin: min(ss_margin, a2 or a3 "
-                                                       "normalised); zero on model-dependent "
-                                                       "boundaries"})
+        ds["margin_SS"] = (
+            dims,
+            _ss_margin_full(ev["margin_SS"], C1, S2, kappa, q1, q2),
+            {
+                "units": "1",
+                "long_name": "SS margin: min(ss_margin, a2 or a3 "
+                "normalised); zero on model-dependent "
+                "boundaries",
+            },
+        )
         if q1 == 0 and q2 == 0:
             mii = ev["margin_SS"]  # the mu-discriminant (see module docstring)
         else:
-            a3, a2, a1, a0 = (np.asarray(x) for x in spectral.coefficients(
-                *(jnp.asarray(v) for v in (C1, S1, C2, S2)), jnp.asarray(float(kappa)),
-                jnp.asarray(float(q1)), jnp.asarray(float(q2))))
+            a3, a2, a1, a0 = (
+                np.asarray(x)
+                for x in spectral.coefficients(
+                    *(jnp.asarray(v) for v in (C1, S1, C2, S2)),
+                    jnp.asarray(float(kappa)),
+                    jnp.asarray(float(q1)),
+                    jnp.asarray(float(q2)),
+                )
+            )
             mii = np.broadcast_to(_quartic_discriminant(a3, a2, a1, a0), (n, n))
-        ds["margin_II_consistent"] = (dims, np.array(mii), {"units": "1", "long_name":
-                                      "scaled discriminant (zero where II consistency changes)"})
-        ds["margin_II_stable"] = (dims, _ii_root_margin(C1, S1, C2, S2, kappa, q1, q2),
-                                  {"units": "1", "long_name": "Re(l_II) - max Re(other roots)"})
+        ds["margin_II_consistent"] = (
+            dims,
+            np.array(mii),
+            {"units": "1", "long_name": "scaled discriminant (zero where II consistency changes)"},
+        )
+        ds["margin_II_stable"] = (
+            dims,
+            _ii_root_margin(C1, S1, C2, S2, kappa, q1, q2),
+            {"units": "1", "long_name": "Re(l_II) - max Re(other roots)"},
+        )
     ds.attrs.update(n_resolved=ev["n_resolved"], n_undecided=ev["n_undecided"])
     return ds
 
 
 # --------------------------------------------------------------------------- plotting helpers
+
 
 def _plt():
     import matplotlib
@@ -259,8 +326,17 @@ def _label_positions(ds):
 
 def _class_labels(ax, pos, fs=6.5):
     for code, (x, y) in pos.items():
-        ax.text(x, y, str(code), ha="center", va="center", fontsize=fs, zorder=6, clip_on=True,
-                bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.75))
+        ax.text(
+            x,
+            y,
+            str(code),
+            ha="center",
+            va="center",
+            fontsize=fs,
+            zorder=6,
+            clip_on=True,
+            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.75),
+        )
 
 
 def _categorical(ax, ds, field, enum, mask=None):
@@ -287,16 +363,28 @@ def _boolean(ax, ds, flag, color):
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     edges = np.linspace(0, 2 * np.pi, ds.sizes["beta1"] + 1)
-    return ax.pcolormesh(edges, edges, np.asarray(flag, float).T,
-                         cmap=ListedColormap(["white", color]), norm=BoundaryNorm([-.5, .5, 1.5], 2),
-                         rasterized=True)
+    return ax.pcolormesh(
+        edges,
+        edges,
+        np.asarray(flag, float).T,
+        cmap=ListedColormap(["white", color]),
+        norm=BoundaryNorm([-0.5, 0.5, 1.5], 2),
+        rasterized=True,
+    )
 
 
 def _hatch(ax, ds, flag):
     """Light hatching over the cells where ``flag`` holds (fill only; boundaries are drawn apart)."""
     b = ds["beta1"].values
-    ax.contourf(b, b, np.where(flag, 1.0, np.nan).T, levels=[0.5, 1.5], colors="none",
-                hatches=["///"], zorder=2)
+    ax.contourf(
+        b,
+        b,
+        np.where(flag, 1.0, np.nan).T,
+        levels=[0.5, 1.5],
+        colors="none",
+        hatches=["///"],
+        zorder=2,
+    )
 
 
 def _near_change(field, cls, width=2):
@@ -366,6 +454,9 @@ def _legend_patches(enum, present=None, relabel=None):
 
 # --------------------------------------------------------------------------- Fig. 1, classes
 
+_subclass_jit = jax.jit(mechanics.subclass_code)  # eager, the 24 calls took ~20 s of op dispatch
+
+
 def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
     """One interior ``(beta1, beta2)`` per class and one ``alpha`` per subclass ``k = 1..6`` [rad].
 
@@ -389,7 +480,7 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
         beta1, beta2 = float(b1[best]), float(b2[best])
         c1, s1 = mechanics.direction(beta1)
         c2, s2 = mechanics.direction(beta2)
-        sub = np.asarray(mechanics.subclass_code(*(jnp.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
+        sub = np.asarray(_subclass_jit(*(jnp.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
         alphas = {}
         for k in range(1, 7):
             hit = alpha[sub == 10 * cls + k]
@@ -414,26 +505,53 @@ def plot_fig1_classes(path, reps: dict | None = None):
         ax.plot([0, np.cos(b1s)], [0, np.sin(b1s)], ls=":", color="C3", lw=0.9)
         for k, a in r["alpha"].items():
             ax.plot([0, 0.78 * np.cos(a)], [0, 0.78 * np.sin(a)], ls="--", color="0.35", lw=0.8)
-            ax.text(0.93 * np.cos(a), 0.93 * np.sin(a), str(k), ha="center", va="center",
-                    fontsize=7, color="0.2")
+            ax.text(
+                0.93 * np.cos(a),
+                0.93 * np.sin(a),
+                str(k),
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="0.2",
+            )
         for j, (key, col) in enumerate((("beta1", "C3"), ("beta2", "C0"))):
             b = r[key]
-            ax.annotate("", xy=(np.cos(b), np.sin(b)), xytext=(0, 0),
-                        arrowprops=dict(arrowstyle="-|>", color=col, lw=1.6, mutation_scale=9))
-            ax.text(1.22 * np.cos(b), 1.22 * np.sin(b), f"$b_{j + 1}$", color=col, fontsize=8,
-                    ha="center", va="center")
+            ax.annotate(
+                "",
+                xy=(np.cos(b), np.sin(b)),
+                xytext=(0, 0),
+                arrowprops=dict(arrowstyle="-|>", color=col, lw=1.6, mutation_scale=9),
+            )
+            ax.text(
+                1.22 * np.cos(b),
+                1.22 * np.sin(b),
+                f"$b_{j + 1}$",
+                color=col,
+                fontsize=8,
+                ha="center",
+                va="center",
+            )
         ax.set_xlim(-1.4, 1.4)
         ax.set_ylim(-1.4, 1.4)
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        dual = mechanics.class_code(*(jnp.asarray(v) for v in mechanics.dual_vectors(
-            *mechanics.direction(r["beta1"]), *mechanics.direction(r["beta2"]))))
+        dual = mechanics.class_code(
+            *(
+                jnp.asarray(v)
+                for v in mechanics.dual_vectors(
+                    *mechanics.direction(r["beta1"]), *mechanics.direction(r["beta2"])
+                )
+            )
+        )
         dual = int(dual)
         ax.set_title(f"class {cls} ({'same' if dual == cls else dual})", fontsize=9)
-    fig.suptitle("Fig. 1 (classes): directions of $b_1$, $b_2$ (solid) and of $a$ for subclasses "
-                 "k = 1..6 (dashed); dotted: $-b_1$; at representative points found by the kernels; (dual) in "
-                 "brackets", fontsize=10)
+    fig.suptitle(
+        "Fig. 1 (classes): directions of $b_1$, $b_2$ (solid) and of $a$ for subclasses "
+        "k = 1..6 (dashed); dotted: $-b_1$; at representative points found by the kernels; (dual) in "
+        "brackets",
+        fontsize=10,
+    )
     fig.tight_layout(rect=(0, 0, 1, 0.97))
     _atomic_savefig(fig, path)
     plt.close(fig)
@@ -464,19 +582,27 @@ def _panels(axes, ds, pos, *, labels=True):
     layers = [
         ("SF stability ($b_{11} > 0$)", lambda ax: _categorical(ax, ds, sf, Verdict), []),
         ("FS stability ($b_{22} > 0$)", lambda ax: _categorical(ax, ds, fs, Verdict), []),
-        ("SS stability", lambda ax: _categorical(ax, ds, ss, Verdict),
-         [("margin_SS", ss_cells)]),
+        ("SS stability", lambda ax: _categorical(ax, ds, ss, Verdict), [("margin_SS", ss_cells)]),
         ("IF consistent (then stable)", lambda ax: _categorical(ax, ds, IF, Consistency), []),
         ("FI consistent (then stable)", lambda ax: _categorical(ax, ds, FI, Consistency), []),
-        ("II consistency", lambda ax: _categorical(ax, ds, ci, Consistency),
-         [("margin_II_consistent", ci_cells)]),
-        ("II stability (hatched: II inconsistent)",
-         lambda ax: (_categorical(ax, ds, si, Verdict, mask=ci == Consistency.CONSISTENT),
-                     _hatch(ax, ds, ci != Consistency.CONSISTENT)),
-         [("margin_II_stable", si_cells), ("margin_II_consistent", ci_cells)]),
-        ("SS unstable, no stable IWC (orange; Sec. 6.4)",
-         lambda ax: _boolean(ax, ds, nothing, NOTHING_COLOR),
-         [("margin_SS", ss_cells)]),
+        (
+            "II consistency",
+            lambda ax: _categorical(ax, ds, ci, Consistency),
+            [("margin_II_consistent", ci_cells)],
+        ),
+        (
+            "II stability (hatched: II inconsistent)",
+            lambda ax: (
+                _categorical(ax, ds, si, Verdict, mask=ci == Consistency.CONSISTENT),
+                _hatch(ax, ds, ci != Consistency.CONSISTENT),
+            ),
+            [("margin_II_stable", si_cells), ("margin_II_consistent", ci_cells)],
+        ),
+        (
+            "SS unstable, no stable IWC (orange; Sec. 6.4)",
+            lambda ax: _boolean(ax, ds, nothing, NOTHING_COLOR),
+            [("margin_SS", ss_cells)],
+        ),
     ]
     for ax, (title, draw, dashed) in zip(axes, layers, strict=True):
         ax.set_facecolor("white")
@@ -507,24 +633,40 @@ def plot_fig1_stability(path, ds):
     from matplotlib.lines import Line2D
 
     plt = _plt()
-    fig, axes = plt.subplots(2, 4, figsize=(15.5, 8.6))
+    fig, axes = plt.subplots(2, 4, figsize=(15.5, 9.4))
     pos = _label_positions(ds)
     kappa, q1, q2 = _panels(axes.ravel(), ds, pos)
-    present_v = set(np.unique(ds["stable_SS"].values).tolist()) | {0, 1} | set(
-        np.unique(ds["stable_II"].values).tolist())
+    present_v = (
+        set(np.unique(ds["stable_SS"].values).tolist())
+        | {0, 1}
+        | set(np.unique(ds["stable_II"].values).tolist())
+    )
     handles = _legend_patches(Verdict, present_v, _NEUTRAL_LABEL)
-    handles += _legend_patches(Consistency, set(np.unique(ds["consistent_II"].values).tolist())
-                               | {0, 1})
-    handles += [Line2D([], [], color="k", lw=0.6, label="class boundary (model-independent)"),
-                Line2D([], [], color="k", lw=1.1, ls="--",
-                       label="model-dependent boundary (zero of smooth margin)")]
+    handles += _legend_patches(
+        Consistency, set(np.unique(ds["consistent_II"].values).tolist()) | {0, 1}
+    )
+    handles += [
+        Line2D([], [], color="k", lw=0.6, label="class boundary (model-independent)"),
+        Line2D(
+            [],
+            [],
+            color="k",
+            lw=1.1,
+            ls="--",
+            label="model-dependent boundary (zero of smooth margin)",
+        ),
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8.5, frameon=False)
     und = int(ds.attrs.get("n_undecided", 0))
-    fig.suptitle(f"Fig. 1 (stability map), {_param_text(kappa, q1, q2)}; grid "
-                 f"{ds.sizes['beta1']}$^2$, {ds.attrs.get('n_resolved', 0)} cells settled by the "
-                 f"exact reference, {und} undecided. FF (always stable when consistent) not shown.",
-                 fontsize=10)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.96), h_pad=2.2)
+    fig.suptitle(
+        f"Fig. 1 (stability map), {_param_text(kappa, q1, q2)}; grid "
+        f"{ds.sizes['beta1']}$^2$, {ds.attrs.get('n_resolved', 0)} cells settled by the "
+        f"exact reference, {und} undecided. FF (always stable when consistent) not shown.",
+        fontsize=10,
+    )
+    # explicit margins: tight_layout mis-sizes the equal-aspect panels, so the bottom row's titles
+    # ran into the top row's tick labels; hspace leaves room for tick labels + title
+    fig.subplots_adjust(left=0.045, right=0.99, bottom=0.13, top=0.92, wspace=0.2, hspace=0.34)
     _atomic_savefig(fig, path)
     plt.close(fig)
     return Path(path)
@@ -550,33 +692,58 @@ def plot_fig1_variants(path, maps: list):
         b = ds["beta1"].values
         hatch = np.where(ci == Consistency.CONSISTENT, 1.0, 0.0)
         ax.contourf(b, b, hatch.T, levels=[0.5, 1.5], colors="none", hatches=["////"], zorder=3)
-        ax.contourf(b, b, np.where(ci == Consistency.CONSISTENT, 1.0, np.nan).T, levels=[0.5, 1.5],
-                    colors=[Consistency.CONSISTENT.color], alpha=0.25, zorder=2)
+        ax.contourf(
+            b,
+            b,
+            np.where(ci == Consistency.CONSISTENT, 1.0, np.nan).T,
+            levels=[0.5, 1.5],
+            colors=[Consistency.CONSISTENT.color],
+            alpha=0.25,
+            zorder=2,
+        )
         _dashed(ax, ref, "margin_SS", where=ref_cells, color="C3", lw=0.9, ls="-")
         _dashed(ax, ds, "margin_SS", where=_ss_boundary_cells(ds))
-        _dashed(ax, ds, "margin_II_consistent",
-                where=_near_change(ci, ds["class_code"].values), color=Consistency.CONSISTENT.color,
-                lw=1.3)
+        _dashed(
+            ax,
+            ds,
+            "margin_II_consistent",
+            where=_near_change(ci, ds["class_code"].values),
+            color=Consistency.CONSISTENT.color,
+            lw=1.3,
+        )
         _class_lines(ax, lw=0.5)
         _class_labels(ax, pos, fs=5.5)
         _pi_axis(ax)
         ax.tick_params(labelsize=7)
         ax.set_title(_param_text(*(float(ds[k]) for k in ("kappa", "q1", "q2"))), fontsize=9)
-    for ax in axes.ravel()[len(maps):]:
+    for ax in axes.ravel()[len(maps) :]:
         ax.axis("off")
-    handles = _legend_patches(Verdict, {0, 1, 2}, {Verdict.STABLE: "SS stable",
-                                                   Verdict.UNSTABLE: "SS unstable",
-                                                   Verdict.NEUTRAL: "SS neutral (q = 0)"})
-    handles += [Patch(facecolor=Consistency.CONSISTENT.color, alpha=0.4, hatch="////",
-                      label="II consistent"),
-                Line2D([], [], color="k", ls="--", label="SS boundary (margin zero)"),
-                Line2D([], [], color=Consistency.CONSISTENT.color, ls="--",
-                       label="II consistency boundary"),
-                Line2D([], [], color="C3", label=r"SS boundary at $\kappa$=0.5, q=0 (reference)")]
+    handles = _legend_patches(
+        Verdict,
+        {0, 1, 2},
+        {
+            Verdict.STABLE: "SS stable",
+            Verdict.UNSTABLE: "SS unstable",
+            Verdict.NEUTRAL: "SS neutral (q = 0)",
+        },
+    )
+    handles += [
+        Patch(
+            facecolor=Consistency.CONSISTENT.color, alpha=0.4, hatch="////", label="II consistent"
+        ),
+        Line2D([], [], color="k", ls="--", label="SS boundary (margin zero)"),
+        Line2D(
+            [], [], color=Consistency.CONSISTENT.color, ls="--", label="II consistency boundary"
+        ),
+        Line2D([], [], color="C3", label=r"SS boundary at $\kappa$=0.5, q=0 (reference)"),
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8.5, frameon=False)
-    fig.suptitle("Fig. 1 at other model parameters: the dashed (model-dependent) boundaries move; "
-                 "the straight class boundaries do not", fontsize=10)
-    fig.tight_layout(rect=(0, 0.06, 1, 0.96))
+    fig.suptitle(
+        "Fig. 1 at other model parameters: the dashed (model-dependent) boundaries move; "
+        "the straight class boundaries do not",
+        fontsize=10,
+    )
+    fig.subplots_adjust(left=0.05, right=0.99, bottom=0.1, top=0.93, wspace=0.18, hspace=0.3)
     _atomic_savefig(fig, path)
     plt.close(fig)
     return Path(path)
@@ -585,7 +752,12 @@ def plot_fig1_variants(path, maps: list):
 # --------------------------------------------------------------------------- Table 2 figure
 
 #: the paper's Table 2 shading (the reverse of the maps: there *stable* is dark)
-TABLE_SHADE = {"unstable": "#4d4d4d", "model-dependent": "#c8c8c8", "stable": "#ffffff", "-": "#ffffff"}
+TABLE_SHADE = {
+    "unstable": "#4d4d4d",
+    "model-dependent": "#c8c8c8",
+    "stable": "#ffffff",
+    "-": "#ffffff",
+}
 
 
 def plot_table2(path, rows):
@@ -602,15 +774,25 @@ def plot_table2(path, rows):
             line.append(ks)
             shade.append(TABLE_SHADE[r.stability[m]] if ks else "#ffffff")
         line += [r.IF, r.FI, r.II, r.CC]
-        shade += ["#ffffff", "#ffffff",
-                  TABLE_SHADE[r.II_stability] if r.II != "-" else "#ffffff", "#ffffff"]
+        shade += [
+            "#ffffff",
+            "#ffffff",
+            TABLE_SHADE[r.II_stability] if r.II != "-" else "#ffffff",
+            "#ffffff",
+        ]
         cells.append(line)
         colours.append(shade)
         textc.append(["white" if c == TABLE_SHADE["unstable"] else "black" for c in shade])
     fig, ax = plt.subplots(figsize=(8.4, 0.27 * len(rows) + 1.0))
     ax.axis("off")
-    tab = ax.table(cellText=cells, colLabels=cols, cellColours=colours, loc="upper center",
-                   cellLoc="center", colWidths=[0.16] + [0.105] * 8)
+    tab = ax.table(
+        cellText=cells,
+        colLabels=cols,
+        cellColours=colours,
+        loc="upper center",
+        cellLoc="center",
+        colWidths=[0.16] + [0.105] * 8,
+    )
     tab.auto_set_font_size(False)
     tab.set_fontsize(8.5)
     tab.scale(1, 1.25)
@@ -620,10 +802,12 @@ def plot_table2(path, rows):
             cell.set_text_props(weight="bold")
         elif j > 0:
             cell.get_text().set_color(textc[i - 1][j])
-    ax.set_title("Table 2 (regenerated): subclasses k where a mode is consistent; background: "
-                 "dark = unstable,\nlight = model-dependent, white = stable. IWC markers: x "
-                 "consistent, (x) model-dependent, - never; CC: ? = necessary condition holds",
-                 fontsize=8.5)
+    ax.set_title(
+        "Table 2 (regenerated): subclasses k where a mode is consistent; background: "
+        "dark = unstable,\nlight = model-dependent, white = stable. IWC markers: x "
+        "consistent, (x) model-dependent, - never; CC: ? = necessary condition holds",
+        fontsize=8.5,
+    )
     fig.tight_layout()
     _atomic_savefig(fig, path)
     plt.close(fig)

@@ -105,7 +105,7 @@ def _compile_cache():
         pass
 
 
-def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
+def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, **_) -> dict:
     """Regenerate Fig. 1 (classes, stability map, variants), Table 2 (md, csv, png), the audit,
     Fig. 2 (if :mod:`atlas.figures_dynamics` is available) and ``fig1_map.nc`` into ``out``.
 
@@ -117,7 +117,8 @@ def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
     say = progress or (lambda msg: print(f"[atlas paper] {msg}", file=sys.stderr, flush=True))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    n_map, n_var = (121, 61) if quick else (361, 201)  # odd: no cell on beta2 = beta1 + pi
+    quick = quick or ci  # ci: the CI test's size (smallest grids, audit.run_audit(ci=True))
+    n_map, n_var = (41, 41) if ci else (121, 61) if quick else (361, 201)  # odd: no beta1* cells
     timings: dict[str, float] = {}
     notes: list[str] = []
     t_all = time.perf_counter()
@@ -144,7 +145,8 @@ def run(out: str = "outputs", quick: bool = False, progress=None, **_) -> dict:
                 lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS])
     step("fig1_stability_variants.png",
          lambda: figures.plot_fig1_variants(out / "fig1_stability_variants.png", maps))
-    claims = step("audit (compute)", lambda: audit.run_audit(quick=quick, progress=say, rows=rows))
+    claims = step("audit (compute)",
+                  lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci))
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
     try:
         from .figures_dynamics import plot_fig2

@@ -7,8 +7,8 @@ over the class's sample of (beta1, beta2) and of the kappa-q sample :data:`KAPPA
 ``(x)`` model-dependent, ``-`` never; II also gets a stability word) and the CC marker (``?`` where the
 necessary condition ``b11 > 0, b22 > 0`` holds).
 
-Sampling: class interiors come from an offset grid of ``n x n`` angles (no grid point lies on an axis
-or on ``beta2 = beta1``); each subclass is sampled with ``n_alpha`` offset values of alpha.  Points the
+Sampling: class interiors come from an offset grid of ``n x n`` angles (no grid point lies on an axis;
+those on ``beta2 = beta1`` or ``beta2 = beta1 + pi`` are left out), closed under the dual map; each subclass is sampled with ``n_alpha`` offset values of alpha.  Points the
 fast kernels leave undecided are settled by :mod:`atlas.exact`.
 """
 
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass, field
 
 import jax
@@ -25,14 +26,58 @@ import numpy as np
 from . import evaluate, mechanics
 from .verdicts import Consistency, Verdict
 
-__all__ = ["table2", "class_samples", "to_markdown", "to_csv", "run_cli", "KAPPA_Q_SAMPLE", "Row"]
+__all__ = [
+    "table2",
+    "class_samples",
+    "dual_kq",
+    "to_markdown",
+    "to_csv",
+    "run_cli",
+    "KAPPA_Q_SAMPLE",
+    "Row",
+    "KEY",
+]
 
-#: (kappa, q1, q2) sample over which "model-dependent" is judged
-KAPPA_Q_SAMPLE = tuple(
-    (k, q1, q2)
-    for k in (0.1, 0.5, 1.0, 2.0, 10.0)
-    for (q1, q2) in ((0.0, 0.0), (0.01, 0.01), (0.3, 0.3), (2.0, 2.0), (0.01, 1.0), (1.0, 0.01))
+
+def dual_kq(kappa, q1, q2):
+    """``(kappa, q1, q2)`` of the dual system (contact indices swapped, SPEC §1).
+
+    ``kappa = k1|b1|/(k2|b2|)`` becomes ``1/kappa``; the damping is scaled by contact 2, which is
+    the old contact 1 after the swap, so ``q1' = q2/sqrt(kappa)`` and ``q2' = q1/sqrt(kappa)``
+    (time rescaled by ``sqrt(kappa)``: eigenvalues scale, stability verdicts do not change).
+    """
+    r = math.sqrt(kappa)
+    return (1.0 / kappa, q2 / r, q1 / r)
+
+
+def _closed_under_dual(base) -> tuple:
+    out = []
+    for t in base:
+        for u in (t, dual_kq(*t)):
+            u = tuple(float(f"{x:.12g}") for x in u)  # 1/(1/k) etc. land on the same values
+            if u not in out:
+                out.append(u)
+    return tuple(out)
+
+
+#: kappa ladder of the model-dependence sample (symmetric under kappa -> 1/kappa)
+KAPPAS = (1e-5, 1e-3, 0.1, 0.5, 1.0, 2.0, 10.0, 1e3, 1e5)
+#: damping pairs (q1, q2) of the sample before closing it under the dual map
+Q_PAIRS = (
+    (0.0, 0.0),
+    (0.01, 0.01),
+    (0.3, 0.3),
+    (2.0, 2.0),
+    (30.0, 30.0),
+    (0.01, 1.0),
+    (1.0, 0.01),
+    (1e-3, 10.0),
+    (10.0, 1e-3),
 )
+
+#: (kappa, q1, q2) sample over which "model-dependent" is judged: ``KAPPAS x Q_PAIRS`` closed under
+#: :func:`dual_kq`, so a class and its dual are judged on the same systems (seen from either contact)
+KAPPA_Q_SAMPLE = _closed_under_dual((k, q1, q2) for k in KAPPAS for (q1, q2) in Q_PAIRS)
 
 MODES = ("FF", "SS", "SF", "FS")
 
@@ -54,26 +99,63 @@ def _grid(n):
     return (np.arange(n) + 0.5) * (2 * np.pi / n)
 
 
+_class_code_jit = jax.jit(mechanics.class_code)  # eager op dispatch took ~10 s
+
+
 def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
-    """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid."""
+    """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid.
+
+    The samples are closed under the dual map (:func:`atlas.mechanics.dual_angles`): the sample of
+    a class's dual is the dual image of the class's sample (a self-dual class's sample contains
+    the dual of each of its points), so a class and its dual are judged on the same systems.
+    ``n`` must be a multiple of 4, which makes the offset grid itself closed under the dual map:
+    grid index ``i`` maps to ``n/4 - 1 - i`` (mod ``n``), exactly.
+    """
+    if n % 4:
+        raise ValueError(f"n: must be a multiple of 4 (dual-closed grid), not {n}")
     b = _grid(n)
     c, s = mechanics.direction(b)
     code = np.asarray(
-        mechanics.class_code(
+        _class_code_jit(
             jnp.asarray(c)[:, None],
             jnp.asarray(s)[:, None],
             jnp.asarray(c)[None, :],
             jnp.asarray(s)[None, :],
         )
     )
+    # beta2 = beta1 (det B = 0) and beta2 = beta1 + pi (the tie with beta1*) are grid points for
+    # even n; they are degenerate (code 0) whatever the rounded cos/sin say
+    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    code = np.where(np.isin((jj - ii) % n, (0, n // 2)), 0, code)
     rng = np.random.default_rng(seed)
+
+    def dual_idx(idx):
+        return np.stack([(n // 4 - 1 - idx[:, 1]) % n, (n // 4 - 1 - idx[:, 0]) % n], -1)
+
     out = {}
     for cls in mechanics.ALL_CLASSES:
+        if cls in out:
+            continue
         idx = np.argwhere(code == cls)
+        if not len(idx):
+            out[cls] = np.zeros((0, 2))
+            continue
+        dcls = {int(x) for x in code[tuple(dual_idx(idx).T)]}
+        if len(dcls) != 1:
+            raise RuntimeError(f"class {cls}: dual grid points in classes {sorted(dcls)}")
+        dcls = dcls.pop()
+        if dcls == cls:  # self-dual: half the points, plus their duals
+            take = min(len(idx), max(1, per_class // 2))
+            idx = idx[rng.choice(len(idx), take, replace=False)] if len(idx) > take else idx
+            idx = np.unique(np.concatenate([idx, dual_idx(idx)]), axis=0)
+            out[cls] = np.stack([b[idx[:, 0]], b[idx[:, 1]]], -1)
+            continue
         if len(idx) > per_class:
             idx = idx[rng.choice(len(idx), per_class, replace=False)]
-        out[cls] = np.stack([b[idx[:, 0]], b[idx[:, 1]]], -1) if len(idx) else np.zeros((0, 2))
-    return out
+        out[cls] = np.stack([b[idx[:, 0]], b[idx[:, 1]]], -1)
+        didx = dual_idx(idx)
+        out[dcls] = np.stack([b[didx[:, 0]], b[didx[:, 1]]], -1)
+    return {cls: out[cls] for cls in mechanics.ALL_CLASSES}
 
 
 def _word(verdicts) -> str:
@@ -101,8 +183,12 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
     alpha = _grid(n_alpha)
     ca, sa = (jnp.asarray(v) for v in mechanics.direction(alpha, dtype))
     rows = []
+    # one array shape for every class (repeat the last point; sets of verdicts are unchanged), so
+    # each jitted kernel compiles once instead of once per distinct class sample size
+    size = max(len(p) for p in samples.values())
     for cls in mechanics.ALL_CLASSES:
         pts = samples[cls]
+        pts = np.concatenate([pts, np.repeat(pts[-1:], size - len(pts), 0)])
         c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
         c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
@@ -171,6 +257,17 @@ def _marker(flags) -> str:
 
 _SHADE = {"stable": "", "unstable": "**", "model-dependent": "_"}
 
+#: the key printed under the Markdown table
+KEY = (
+    "Key: a subclass list (FF, SS, SF, FS) or the II marker in **bold** = unstable (the paper's dark "
+    "background), in _italics_ = model-dependent (light: the verdict changes with the contact model, "
+    "i.e. with (kappa, q1, q2) or within the class), plain = stable (white; the neutral q = 0 case "
+    "counts as stable, as in Fig. 1). IF, FI, II markers: x = consistent throughout the class, "
+    "(x) = model-dependent, - = never; IF and FI are stable whenever consistent. CC: ? = the "
+    "necessary condition b11 > 0, b22 > 0 holds. Class (dual): the class obtained by swapping the "
+    "contact indices ('same' = self-dual)."
+)
+
 
 def to_markdown(rows: list[Row]) -> str:
     """Markdown table; unstable entries in **bold** (paper: dark), model-dependent in _italics_
@@ -190,7 +287,7 @@ def to_markdown(rows: list[Row]) -> str:
         lines.append(
             f"| {r.cls} ({dual}) | " + " | ".join(cells) + f" | {r.IF} | {r.FI} | {ii} | {r.CC} |"
         )
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n\n" + KEY + "\n"
 
 
 def to_csv(rows: list[Row]) -> str:

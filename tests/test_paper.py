@@ -5,8 +5,17 @@ import xarray as xr
 
 from atlas import paper
 
-FILES = ("fig1_classes.png", "fig1_stability.png", "fig1_stability_variants.png", "table2.md",
-         "table2.csv", "table2.png", "audit.md", "fig1_map.nc", "README.md")
+FILES = (
+    "fig1_classes.png",
+    "fig1_stability.png",
+    "fig1_stability_variants.png",
+    "table2.md",
+    "table2.csv",
+    "table2.png",
+    "audit.md",
+    "fig1_map.nc",
+    "README.md",
+)
 
 
 def test_atomic_write_text(tmp_path):
@@ -17,9 +26,7 @@ def test_atomic_write_text(tmp_path):
     assert [f.name for f in tmp_path.iterdir()] == ["a.txt"]
 
 
-@pytest.mark.slow
-def test_run_quick(tmp_path):
-    paper.run(out=tmp_path, quick=True, progress=lambda m: None)
+def _check_outputs(tmp_path):
     for f in FILES:
         assert (tmp_path / f).stat().st_size > 0, f
     ds = xr.open_dataset(tmp_path / "fig1_map.nc")
@@ -27,3 +34,17 @@ def test_run_quick(tmp_path):
     assert "flag_meanings" in ds["stable_SS"].attrs
     assert "NOT verified" not in (tmp_path / "audit.md").read_text()
     assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_run_ci(tmp_path):
+    """`atlas paper` end to end at the CI size (smallest grids, reduced audit), not marked slow."""
+    timings = paper.run(out=tmp_path, ci=True, progress=lambda m: None)
+    _check_outputs(tmp_path)
+    assert "quick = True, ci = True" in (tmp_path / "audit.md").read_text()
+    assert {"table2", "fig1 map (compute)", "audit (compute)"} <= set(timings)
+
+
+@pytest.mark.slow
+def test_run_quick(tmp_path):
+    paper.run(out=tmp_path, quick=True, progress=lambda m: None)
+    _check_outputs(tmp_path)

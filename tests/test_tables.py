@@ -1,7 +1,9 @@
 """Table 2 regenerated from the kernels equals the paper's, cell by cell."""
 
+import numpy as np
 import pytest
 
+from atlas import exact, mechanics
 from atlas import tables as t2
 
 # The paper's Table 2, transcribed: class: (dual, FF, SS, SF, FS, IF, FI, II, CC)
@@ -72,6 +74,89 @@ def test_sf_fs_stability_words(rows):
 
 def test_markdown_and_csv(rows):
     md = t2.to_markdown(list(rows.values()))
-    assert md.count("\n") == 26 and "| 25 (same) |" in md
+    assert md.split("\n\n")[0].count("\n") == 25 and "| 25 (same) |" in md
     csv = t2.to_csv(list(rows.values()))
     assert csv.splitlines()[0].startswith("class,dual,FF_subclasses")
+
+
+# ---- duality: a class and its dual get the same words (SF <-> FS, IF <-> FI) -------------------
+
+DUAL_MODE = {"FF": "FF", "SS": "SS", "SF": "FS", "FS": "SF"}
+
+
+def test_words_equal_dual_words_for_every_mode(rows):
+    for cls, r in rows.items():
+        d = rows[r.dual]
+        for m, md in DUAL_MODE.items():
+            assert r.stability[m] == d.stability[md], (cls, m)
+        assert r.II_stability == d.II_stability, cls
+        assert (r.II, r.IF, r.FI) == (d.II, d.FI, d.IF), cls
+
+
+def test_kappa_q_sample_closed_under_dual_map():
+    """(kappa, q1, q2) -> (1/kappa, q2/sqrt(kappa), q1/sqrt(kappa)) maps the sample onto itself."""
+    sample = {tuple(round(x, 9) for x in t) for t in t2.KAPPA_Q_SAMPLE}
+    for k, q1, q2 in t2.KAPPA_Q_SAMPLE:
+        dual = (1 / k, q2 / k**0.5, q1 / k**0.5)
+        assert any(
+            all(abs(a - b) <= 1e-9 * max(1.0, abs(b)) for a, b in zip(dual, t)) for t in sample
+        ), (k, q1, q2)
+    kappas = {t[0] for t in t2.KAPPA_Q_SAMPLE}
+    assert min(kappas) <= 1e-5 and max(kappas) >= 1e5
+
+
+def test_class_samples_closed_under_dual_map():
+    smp = t2.class_samples(96, 12)
+    for cls, pts in smp.items():
+        b1, b2 = mechanics.dual_angles(pts[:, 0], pts[:, 1])
+        c1, s1 = mechanics.direction(b1)
+        c2, s2 = mechanics.direction(b2)
+        duals = {exact.point_codes(*v)["class_code"] for v in zip(c1, s1, c2, s2)}
+        assert len(duals) == 1
+        target = smp[duals.pop()]
+        got = {(round(a, 9), round(b, 9)) for a, b in zip(b1, b2)}
+        assert got == {(round(a, 9), round(b, 9)) for a, b in target}, cls
+
+
+def test_dual_map_preserves_exact_verdicts():
+    """The dual system (angles and (kappa, q1, q2) mapped) has the same exact verdicts."""
+    rng = np.random.default_rng(3)
+    pts = [(1.38541667 * np.pi, 0.40625 * np.pi, 0.1, 1.0, 0.01)]  # class 32, II unstable
+    for _ in range(6):
+        b1, b2 = rng.uniform(0, 2 * np.pi, 2)
+        pts.append((b1, b2, 10 ** rng.uniform(-3, 3), *(10 ** rng.uniform(-2, 1, 2))))
+    for b1, b2, k, q1, q2 in pts:
+        d1, d2 = mechanics.dual_angles(b1, b2)
+        a = exact.point_spectral(*_dirs(b1, b2), k, q1, q2)
+        b = exact.point_spectral(*_dirs(d1, d2), *t2.dual_kq(k, q1, q2))
+        for key in ("stable_SS", "consistent_II", "stable_II"):
+            assert a[key] == b[key], (key, b1, b2)
+
+
+def test_ii_class_15_and_32_model_dependent(rows):
+    """Exact reference: II in class 32 at (kappa, q) = (0.1, 1, 0.01) is consistent and unstable, and
+    so is its dual point in class 15; at Q = 0 both are stable. Table 2 must shade both light."""
+    b1, b2 = 1.38541667 * np.pi, 0.40625 * np.pi
+    d1, d2 = mechanics.dual_angles(b1, b2)
+    for (x1, x2), kq, cls in (
+        ((b1, b2), (0.1, 1.0, 0.01), 32),
+        ((d1, d2), t2.dual_kq(0.1, 1.0, 0.01), 15),
+    ):
+        c = _dirs(x1, x2)
+        assert exact.point_codes(*c)["class_code"] == cls
+        r = exact.point_spectral(*c, *kq)
+        assert (r["consistent_II"], r["stable_II"]) == (1, 0)
+        r0 = exact.point_spectral(*c, kq[0], 0.0, 0.0)
+        assert (r0["consistent_II"], r0["stable_II"]) == (1, 1)
+    assert rows[15].II_stability == rows[32].II_stability == "model-dependent"
+
+
+def _dirs(b1, b2):
+    c1, s1 = mechanics.direction(b1)
+    c2, s2 = mechanics.direction(b2)
+    return float(c1), float(s1), float(c2), float(s2)
+
+
+def test_markdown_has_key(rows):
+    md = t2.to_markdown(list(rows.values()))
+    assert "**bold** = unstable" in md and "_italics_ = model-dependent" in md
