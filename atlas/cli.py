@@ -11,9 +11,16 @@ code 2 -- never a traceback.  JAX compilations are cached on disk (``$ATLAS_JAX_
 ``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
 ~15 s compilation of the eigenvalue kernel.
 
+With ``--scheduler`` (``inprocess``, ``local[:N]``, ``tcp://HOST:PORT``) or ``--store``,
+``atlas generate`` runs the scene tile by tile into a resumable zarr store
+(:func:`atlas.distributed.generate_distributed`); ``--resume`` continues a killed run and ``--out``
+converts the finished store to netCDF.
+
 Examples::
 
     atlas generate --scene fig1 --out fig1.nc
+    atlas generate --scene fig1 --scheduler local:2 --out fig1.nc      # fig1.zarr, then fig1.nc
+    atlas generate --scene fig1 --scheduler local:2 --out fig1.nc --resume   # after a kill
     atlas generate --beta1 0:2pi:256 --beta2 0:2pi:256 --kappa log:0.1:10:5 --q 0,0.5 --out a.nc
     atlas generate --scene fig1 --physical k1=100,k2=200,q1=20,q2=20 --out fig2model.nc
 """
@@ -50,8 +57,8 @@ def _one_line(msg: str) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .tiling import DEFAULT_TILE_POINTS, DTYPES, METHODS
     from .scene import ALL_OUTPUTS, BUILTIN_SCENES
+    from .tiling import DEFAULT_TILE_POINTS, DTYPES, METHODS
 
     p = _Parser(
         prog="atlas",
@@ -103,6 +110,32 @@ def build_parser() -> argparse.ArgumentParser:
         help="keep undecided points instead of resolving them exactly",
     )
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    d = g.add_argument_group(
+        "distributed (dask)",
+        "--scheduler, --store, --resume or --slab run the scene tile by tile into a resumable zarr store "
+        "(atlas.distributed.generate_distributed; needs the dask extra); --out then converts the "
+        "finished store to netCDF.",
+    )
+    d.add_argument(
+        "--scheduler",
+        metavar="WHERE",
+        help="inprocess, local (one worker per core), local:N (N workers) or the address of a "
+        "running dask scheduler (tcp://HOST:PORT)",
+    )
+    d.add_argument(
+        "--store", metavar="PATH.zarr", help="zarr store of the tiles (default: --out with .zarr)"
+    )
+    d.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an existing store: keep verified tiles, recompute missing or corrupt ones",
+    )
+    d.add_argument(
+        "--slab",
+        type=_positive_int("slab"),
+        metavar="N",
+        help="beta1 values per tile (default: about 2**18 points per tile)",
+    )
 
     pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
     pp.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
@@ -219,6 +252,8 @@ def _cmd_generate(args, argv) -> int:
     from .io import check_output_path, generate_to_file
 
     scene = _scene_from_args(args)
+    if args.scheduler is not None or args.store is not None or args.resume or args.slab:
+        return _cmd_generate_distributed(args, argv, scene)
     out = args.out or f"{scene.name}.nc"
     check_output_path(out, args.overwrite)  # fail before any computation
     _compile_cache()
@@ -238,6 +273,89 @@ def _cmd_generate(args, argv) -> int:
         f"atlas generate: {stats['path']}: {stats['points']} points in {stats['seconds']:.2f} s "
         f"({stats['points_per_second']:.3g} points/s), {stats['bytes'] / 1e6:.2f} MB; "
         f"undecided {stats['undecided_fast']} before, {stats['undecided']} after exact resolution",
+        file=sys.stderr,
+    )
+    return 0
+
+
+def _scheduler_arg(text: str):
+    """``--scheduler`` -> the ``scheduler`` argument of ``generate_distributed``."""
+    if text == "inprocess":
+        return None
+    kind, _, n = text.partition(":")
+    if kind == "local":
+        if text == "local" or (n.isdigit() and int(n) >= 1):
+            return text
+        raise ValueError(f"scheduler: expected local:N with N >= 1, got {text!r}")
+    proto, sep, address = text.partition("://")
+    if sep and proto and address:
+        return text
+    raise ValueError(
+        f"scheduler: expected inprocess, local, local:N or a scheduler address tcp://HOST:PORT, "
+        f"got {text!r}"
+    )
+
+
+def _cmd_generate_distributed(args, argv, scene) -> int:
+    """``atlas generate --scheduler/--store/--resume``: tiles into a zarr store, then netCDF."""
+    from .io import check_output_path
+
+    scheduler = _scheduler_arg(args.scheduler or "inprocess")
+    try:
+        import zarr  # noqa: F401
+
+        if scheduler is not None:
+            import distributed  # noqa: F401
+    except ImportError as e:  # pragma: no cover - the dask extra is missing
+        raise ValueError(
+            f"scheduler: needs the dask extra (pip install -e '.[dask]'): {e}"
+        ) from None
+    from .distributed import generate_distributed
+
+    stem = args.out or f"{scene.name}.nc"
+    store = args.store or (os.path.splitext(stem)[0] + ".zarr")
+    if args.resume and args.overwrite:
+        raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
+    if args.resume and not os.path.exists(store):
+        raise FileNotFoundError(f"resume: store {store} does not exist")
+    if os.path.exists(store) and not (args.resume or args.overwrite):
+        raise FileExistsError(
+            f"store: {store} exists (use --resume to continue it or --overwrite to replace it)"
+        )
+    if args.out is not None:
+        check_output_path(args.out, args.overwrite)  # fail before any computation
+    _compile_cache()
+    history = "atlas " + " ".join(shlex.quote(a) for a in argv)
+    try:
+        s = generate_distributed(
+            scene,
+            store,
+            scheduler=scheduler,
+            slab=args.slab,
+            resume=args.resume,
+            overwrite=args.overwrite,
+            method=args.method,
+            dtype=args.dtype,
+            resolve=not args.no_resolve,
+            tile_points=args.tile_points,
+            to_netcdf=args.out,
+            overwrite_netcdf=args.overwrite,
+            progress=not args.no_progress and sys.stderr.isatty() or _force_progress(),
+            history=history,
+        )
+    except KeyboardInterrupt:
+        if not os.path.isdir(store):
+            raise
+        raise KeyboardInterrupt(
+            f"finished tiles are kept in {store}: continue with the same command and --resume"
+        ) from None
+    where = s["store"] if s["netcdf"] is None else f"{s['netcdf']} (store {s['store']})"
+    print(
+        f"atlas generate: {where}: {s['points']} points in {s['seconds']:.2f} s "
+        f"({s['points_per_second']:.3g} points/s) on {s['scheduler']} with {s['workers']} "
+        f"worker(s); {s['tiles']} tiles: {len(s['computed'])} computed, {len(s['verified'])} "
+        f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
+        f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution",
         file=sys.stderr,
     )
     return 0
@@ -302,8 +420,9 @@ def main(argv=None) -> int:
         return EXIT_USAGE
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
-    except KeyboardInterrupt:
-        print("atlas: interrupted (no partial output file left)", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        why = _one_line(e) or "no partial output file left"
+        print(f"atlas: interrupted ({why})", file=sys.stderr)
         if console:  # skip interpreter teardown under running XLA threads (it can segfault)
             sys.stdout.flush()
             sys.stderr.flush()

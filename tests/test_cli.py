@@ -197,3 +197,119 @@ def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
     assert p.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     assert os.listdir(tmp_path) == []
+
+
+# --- atlas generate --scheduler/--store/--resume (atlas.distributed through the CLI) ---------------
+
+SCENE5 = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8", "--kappa", "0.5,2"]
+SCENE5 += ["--q1", "0,1", "--q2", "0,0.5", "--tile-points", "128", "--no-progress"]
+# a beta1-free variable (stable_FS: shared by all tiles) and a reduction over the model dimensions
+SCENE5 += ["--outputs", "class_code,stable_SS,model_dependent_SS,stable_SF,stable_FS"]
+
+
+def _run(procs, timeout=300):
+    outs = []
+    for p in procs:
+        _, err = p.communicate(timeout=timeout)
+        outs.append((p.returncode, err))
+    return outs
+
+
+def _same_netcdf(a, b):
+    """Same variables, coordinates, dtypes, raw bytes, attributes (global ones but ``history``)."""
+    with xr.open_dataset(a) as x, xr.open_dataset(b) as y:
+        x, y = x.load(), y.load()
+    assert set(x.variables) == set(y.variables)
+    for k in y.variables:
+        assert x[k].dims == y[k].dims and x[k].dtype == y[k].dtype, k
+        assert x[k].values.tobytes() == y[k].values.tobytes(), k
+        assert x[k].attrs.keys() == y[k].attrs.keys(), k
+        for name, v in y[k].attrs.items():
+            np.testing.assert_array_equal(x[k].attrs[name], v)
+    drop = lambda attrs: {k: v for k, v in attrs.items() if k != "history"}  # noqa: E731
+    assert drop(x.attrs) == drop(y.attrs)
+
+
+@pytest.fixture(scope="module")
+def distributed_run(tmp_path_factory):
+    """The in-process ``atlas generate`` file and ``--scheduler inprocess --slab 2`` (4 tiles)."""
+    pytest.importorskip("zarr")
+    d = tmp_path_factory.mktemp("dist")
+    env = _env(tmp_path_factory)
+    # one after the other: the second run loads the first one's compilations from the disk cache
+    ((rc, err),) = _run([_spawn(["generate", *SCENE5, "--out", str(d / "ref.nc")], env)])
+    assert rc == 0, err
+    args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
+    ((rc, err),) = _run([_spawn([*args, "--out", str(d / "a.nc")], env)])
+    assert rc == 0, err
+    return d, err
+
+
+def test_generate_scheduler_inprocess_then_resume(distributed_run):
+    d, err = distributed_run
+    summary = err.strip().splitlines()[-1]
+    assert str(d / "a.zarr") in summary and "4 tiles: 4 computed, 0 verified" in summary
+    assert "in-process" in summary and "points/s" in summary
+    _same_netcdf(d / "a.nc", d / "ref.nc")
+    # lose one tile's record, damage another's bytes: --resume recomputes exactly those two
+    import shutil
+
+    import zarr
+
+    shutil.rmtree(d / "a.zarr" / "_tiles" / "t000001")
+    g = zarr.open_group(str(d / "a.zarr"), mode="r+")
+    g["class_code"][6:8] = 0
+    args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
+    args += ["--store", str(d / "a.zarr"), "--out", str(d / "b.nc"), "--resume"]
+    ((rc, err),) = _run([_spawn(args, _env_of(d))])
+    assert rc == 0, err
+    summary = err.strip().splitlines()[-1]
+    assert "4 tiles: 2 computed, 2 verified, 1 missing and 1 corrupt before" in summary, summary
+    _same_netcdf(d / "b.nc", d / "ref.nc")
+    with xr.open_dataset(d / "b.nc") as ds:
+        assert "resumed, 2 of 4 tiles recomputed" in ds.attrs["history"]
+
+
+def _env_of(d):
+    env = dict(os.environ)
+    env["ATLAS_JAX_CACHE"] = str(d.parent / "jaxcache")
+    env.pop("ATLAS_PROGRESS", None)
+    return env
+
+
+def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
+    """One line ``atlas: error: PARAMETER: ...``, exit code 2, existing files untouched."""
+    d, _ = distributed_run
+    store = d / "a.zarr"
+    before = sorted(str(p) for p in store.rglob("*"))
+    bad = [
+        (["--scheduler", "nowhere"], "scheduler:"),
+        (["--resume", "--store", str(tmp_path / "none.zarr")], "resume:"),
+        (["--store", str(store), "--resume", "--kappa", "0.5,3"], "store:"),  # another scene
+    ]
+    # the first ones through the real CLI (in subprocesses), the rest through cli.main meanwhile
+    base = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
+    procs = [_spawn([*base, *extra], _env_of(d)) for extra, _ in bad]
+    more = [
+        (["--scheduler", "local:0"], "scheduler:"),
+        (["--scheduler", "tcp://"], "scheduler:"),
+        (["--resume", "--overwrite", "--store", str(store)], "resume:"),
+        (["--store", str(store)], "store:"),  # exists: neither --resume nor --overwrite
+        (["--store", str(store), "--resume", "--slab", "4"], "store:"),  # another tiling
+        (["--store", str(store), "--resume", "--method", "eig"], "store:"),  # other options
+        (["--store", str(tmp_path / "no" / "x.zarr")], "store:"),
+        (["--store", str(tmp_path / "x.zarr"), "--out", str(d / "ref.nc")], "out:"),
+        (["--store", str(tmp_path / "x.zarr"), "--slab", "0"], "slab"),
+    ]
+    got = []
+    for extra, _ in more:
+        rc = cli.main([*base, *extra])
+        got.append((rc, capsys.readouterr().err))
+    got = _run(procs, timeout=120) + got
+    for (extra, name), (rc, err) in zip(bad + more, got, strict=True):
+        assert rc == 2, (extra, err)
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in err, (extra, err)
+        assert "error: " in lines[0] and name in lines[0], (extra, lines[0])
+    assert sorted(str(p) for p in store.rglob("*")) == before
+    assert os.listdir(tmp_path) == []
