@@ -30,9 +30,9 @@ from atlas.distributed import (  # noqa: E402
     verify_store,
     worker_env,
 )
-from atlas.tiling import generate  # noqa: E402
 from atlas.io import write_netcdf  # noqa: E402
 from atlas.scene import Scene  # noqa: E402
+from atlas.tiling import generate  # noqa: E402
 
 TP = 128  # kernel tile (points): one spectral compilation for the reference and the slabs
 SCENE = dict(beta1="0:2pi:8", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
