@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     d = g.add_argument_group(
         "distributed (dask)",
-        "--scheduler, --store, --resume or --slab run the scene tile by tile into a resumable zarr store "
+        "--scheduler, --store, --resume, --slab or --block2 run the scene tile by tile into a resumable zarr store "
         "(atlas.distributed.generate_distributed; needs the dask extra); --out then converts the "
         "finished store to netCDF.",
     )
@@ -134,7 +134,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--slab",
         type=_positive_int("slab"),
         metavar="N",
-        help="beta1 values per tile (default: about 2**18 points per tile)",
+        help="beta1 values per tile (default: about 2**18 points per tile, and beta2 split too "
+        "when one beta1 value holds more)",
+    )
+    d.add_argument(
+        "--block2",
+        type=_positive_int("block2"),
+        metavar="N",
+        help="beta2 values per tile: 2-D (beta1, beta2) tiles (default: see --slab)",
     )
 
     pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
@@ -252,7 +259,8 @@ def _cmd_generate(args, argv) -> int:
     from .io import check_output_path, generate_to_file
 
     scene = _scene_from_args(args)
-    if args.scheduler is not None or args.store is not None or args.resume or args.slab:
+    dist = (args.scheduler, args.store, args.slab, args.block2)
+    if args.resume or any(a is not None for a in dist):
         return _cmd_generate_distributed(args, argv, scene)
     out = args.out or f"{scene.name}.nc"
     check_output_path(out, args.overwrite)  # fail before any computation
@@ -332,6 +340,7 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
             store,
             scheduler=scheduler,
             slab=args.slab,
+            block2=args.block2,
             resume=args.resume,
             overwrite=args.overwrite,
             method=args.method,

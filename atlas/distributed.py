@@ -1,9 +1,11 @@
 """Atlases beyond one process: tiles of a scene on dask workers, written into a resumable zarr store.
 
-The scene is split along ``beta1`` into *slabs* (tiles) of ``slab`` consecutive values.  Each tile is
-an ordinary :func:`atlas.generate` run on a sub-scene holding that slab; generation is
-pointwise-deterministic and the ``model_dependent_*`` reductions run over the model dimensions at
-fixed ``(beta1, beta2)``, so the concatenated tiles equal the single-process atlas bit for bit.
+The scene is split along ``beta1`` into *slabs* of ``slab`` consecutive values, and, when one
+``beta1`` value alone holds more points than a tile should (or ``block2`` is given), along ``beta2``
+too, into 2-D ``(beta1, beta2)`` blocks (:func:`tile_plan`).  Each tile is an ordinary
+:func:`atlas.generate` run on a sub-scene holding its block; generation is pointwise-deterministic
+and the ``model_dependent_*`` reductions run over the model dimensions at fixed ``(beta1, beta2)``,
+so the assembled tiles equal the single-process atlas bit for bit.
 
 Store layout (a local zarr directory, zarr 2 or 3)::
 
@@ -12,12 +14,14 @@ Store layout (a local zarr directory, zarr 2 or 3)::
 
 The layout is created up front from :func:`atlas.tiling.schema` of the full scene (arrays
 allocated lazily: unwritten chunks read as fill values), in a temporary directory renamed onto
-``STORE``.  A tile writes its variables into the ``beta1`` region ``[start, stop)`` (zarr chunks are
-aligned with the slabs, so concurrent tiles never touch the same chunk), reads the region back, and
-only then writes its record: the SHA-256 of the raw bytes (dtype, shape, data) of every variable's
-region, the undecided counts and timings.  Variables without a ``beta1`` dimension (``stable_FS``,
-``consistent_FI``) are computed by every tile, written by tile 0, and their checksums must agree
-across all tiles.
+``STORE``.  A tile writes its variables into its region (``beta1`` in ``[start, stop)``, and
+``beta2`` in ``[start2, stop2)`` for 2-D blocks; zarr chunks are aligned with the tiles, so
+concurrent tiles never touch the same chunk), reads the region back, and only then writes its
+record: the SHA-256 of the raw bytes (dtype, shape, data) of every variable's region, the undecided
+counts and timings.  A variable lacking a split dimension (``stable_FS`` and ``consistent_FI`` have
+no ``beta1``, ``stable_SF`` no ``beta2``) is computed by every tile that covers its region and
+written by the first of them along the missing dimension; their checksums (``shared`` in the
+record) must agree.
 
 ``resume=True`` verifies every recorded tile against the store (on the workers) and recomputes
 tiles whose record is missing, unreadable, or whose bytes no longer match: after a resumed run the
@@ -127,47 +131,90 @@ FORMAT_VERSION = 1
 # --- the plan -----------------------------------------------------------------------------------
 
 
-def tile_plan(scene: Scene, slab: int | None = None) -> list[tuple[int, int]]:
-    """``[(start, stop), ...]``: the ``beta1`` slabs of a scene (one tile if ``beta1`` is fixed).
+def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> list[tuple]:
+    """The tiles of a scene: ``[(start, stop), ...]`` (``beta1`` slabs; one tile if ``beta1`` is
+    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks).
 
-    ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile.
+    ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile; if then one ``beta1``
+    value alone holds more than that and ``block2`` is not given, ``beta2`` is split into blocks of
+    about that many points as well.  ``block2`` = ``beta2`` values per tile.
     """
-    if "beta1" not in scene.dims:
-        return [(0, 1)]
-    n = scene.axes["beta1"].size
+    n1 = scene.axes["beta1"].size if "beta1" in scene.dims else 1
+    n2 = scene.axes["beta2"].size if "beta2" in scene.dims else 1
+    per = max(1, scene.points() // n1)
     if slab is None:
-        per = max(1, scene.points() // n)
-        slab = max(1, min(n, round(DEFAULT_SLAB_POINTS / per)))
+        slab = max(1, min(n1, round(DEFAULT_SLAB_POINTS / per)))
+        if block2 is None and per > DEFAULT_SLAB_POINTS and n2 > 1:
+            block2 = max(1, round(DEFAULT_SLAB_POINTS / max(1, per // n2)))
+            block2 = None if block2 >= n2 else block2
+    s = _positive("slab", slab)
+    b1 = [(a, min(a + s, n1)) for a in range(0, n1, s)]
+    if block2 is None:
+        return b1
+    b = _positive("block2", block2)
+    if "beta2" not in scene.dims:
+        raise ValueError("block2: the scene has a single beta2 value")
+    return [(a, e, c, min(c + b, n2)) for a, e in b1 for c in range(0, n2, b)]
+
+
+def _positive(name, value) -> int:
     try:
-        s = int(slab)
+        n = int(value)
     except (TypeError, ValueError):
-        raise ValueError(f"slab: must be a positive integer, got {slab!r}") from None
-    if s < 1 or s != slab:
-        raise ValueError(f"slab: must be a positive integer, got {slab!r}")
-    return [(a, min(a + s, n)) for a in range(0, n, s)]
+        raise ValueError(f"{name}: must be a positive integer, got {value!r}") from None
+    if n < 1 or n != value:
+        raise ValueError(f"{name}: must be a positive integer, got {value!r}")
+    return n
 
 
-def _sub_scene(scene: Scene, start: int, stop: int) -> Scene:
-    if "beta1" not in scene.dims:
-        return scene
-    return scene.replace(beta1=np.array(scene.axes["beta1"].values[start:stop]))
+def _sub_scene(scene: Scene, tile) -> Scene:
+    kw = {}
+    if "beta1" in scene.dims:
+        kw["beta1"] = np.array(scene.axes["beta1"].values[tile[0] : tile[1]])
+    if len(tile) == 4:
+        kw["beta2"] = np.array(scene.axes["beta2"].values[tile[2] : tile[3]])
+    return scene.replace(**kw) if kw else scene
 
 
-def _b1_vars(sch: Schema) -> tuple[list[str], list[str]]:
-    """(variables with a beta1 dimension, variables without: computed by every tile)."""
-    b1 = [k for k, (dims, *_) in sch.variables.items() if "beta1" in dims]
-    return b1, [k for k in sch.variables if k not in b1]
+def _split(has_beta1: bool, tile) -> dict:
+    """``{dim: (start, stop)}``: the dimensions a tile is a range of."""
+    out = {"beta1": (tile[0], tile[1])} if has_beta1 else {}
+    if len(tile) == 4:
+        out["beta2"] = (tile[2], tile[3])
+    return out
 
 
-def _chunks(sch: Schema, name: str, slab: int) -> tuple[int, ...]:
+def _region(dims, split) -> dict:
+    """A variable's region in a tile (``{}``: the whole variable)."""
+    return {d: slice(*split[d]) for d in split if d in dims}
+
+
+def _unique(dims, split) -> bool:
+    """The variable's region in this tile belongs to no other tile (it has every split dim)."""
+    return all(d in dims for d in split)
+
+
+def _owns(dims, split) -> bool:
+    """The tile writes the variable's region: it is the first tile along the dims it lacks."""
+    return all(d in dims or split[d][0] == 0 for d in split)
+
+
+def _chunks(sch: Schema, name: str, slab: int, block2: int | None = None) -> tuple[int, ...]:
+    """Zarr chunks aligned with the tiles: ``slab`` along beta1, ``block2`` along a split beta2."""
     from .tiling import block_shape
 
     dims = sch.variables[name][0]
     shape = tuple(sch.shape[d] for d in dims)
-    if "beta1" not in dims:
+    fixed = {"beta1": slab} if "beta1" in dims else {}
+    if block2 is not None and "beta2" in dims:
+        fixed["beta2"] = block2
+    if not fixed:
         return shape
-    rest = block_shape(shape[1:], max(1, CHUNK_POINTS // slab)) if len(shape) > 1 else ()
-    return (min(slab, shape[0]),) + tuple(rest)
+    rest = [n for d, n in zip(dims, shape) if d not in fixed]
+    rest = iter(
+        block_shape(tuple(rest), max(1, CHUNK_POINTS // int(np.prod(list(fixed.values())))))
+    )
+    return tuple(min(fixed[d], n) if d in fixed else next(rest) for d, n in zip(dims, shape))
 
 
 def _digest(arr) -> str:
@@ -226,17 +273,11 @@ def _drop_record(store: str, i: int):
     shutil.rmtree(os.path.join(store, TILES, f"t{i:06d}"), ignore_errors=True)
 
 
-def _region_digests(ds: xr.Dataset, names, start, stop, b1: bool) -> dict:
-    out = {}
-    for k in names:
-        v = ds[k]
-        if b1:
-            v = v.isel(beta1=slice(start, stop))
-        out[k] = _digest(v.values)
-    return out
+def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
+    return {k: _digest(ds[k].isel(_region(ds[k].dims, split)).values) for k in names}
 
 
-def _create_layout(store: str, sch: Schema, slab: int, plan: dict):
+def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):
     """Write coordinates, attributes and lazily allocated variables to ``store`` atomically."""
     import dask.array as da
     import zarr
@@ -248,7 +289,7 @@ def _create_layout(store: str, sch: Schema, slab: int, plan: dict):
         data, enc = {}, {}
         for name, (dims, dt, attrs, _) in sch.variables.items():
             shape = tuple(sch.shape[d] for d in dims)
-            chunks = _chunks(sch, name, slab)
+            chunks = _chunks(sch, name, slab, block2)
             data[name] = xr.Variable(dims, da.zeros(shape, dtype=dt, chunks=chunks or ()), attrs)
             enc[name] = {"_FillValue": None, "chunks": chunks} if dims else {"_FillValue": None}
         for k in coords:
@@ -273,10 +314,10 @@ def _umask() -> int:
 # --- the tile tasks (run on the workers, or in process) -----------------------------------------
 
 
-def _compute_tile(scene: Scene, start: int, stop: int, opts: dict) -> xr.Dataset:
-    """One slab of the atlas (separate function so tests can slow it down)."""
+def _compute_tile(scene: Scene, tile, opts: dict) -> xr.Dataset:
+    """One tile of the atlas (separate function so tests can slow it down)."""
     return generate(
-        _sub_scene(scene, start, stop),
+        _sub_scene(scene, tile),
         method=opts["method"],
         dtype=opts["dtype"],
         resolve=opts["resolve"],
@@ -284,39 +325,47 @@ def _compute_tile(scene: Scene, start: int, stop: int, opts: dict) -> xr.Dataset
     )
 
 
-def _run_tile(store: str, scene: Scene, i: int, start: int, stop: int, opts: dict) -> dict:
-    """Compute tile ``i``, write its region, read it back, then write its record."""
+def _tile_fields(tile) -> dict:
+    out = {"start": tile[0], "stop": tile[1]}
+    if len(tile) == 4:
+        out.update(start2=tile[2], stop2=tile[3])
+    return out
+
+
+def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
+    """Compute tile ``i``, write the regions it owns, read them back, then write its record."""
     import zarr
 
     _drop_record(store, i)
     t0, c0 = time.perf_counter(), time.process_time()
-    ds = _compute_tile(scene, start, stop, opts)
+    ds = _compute_tile(scene, tile, opts)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     stats = last_stats()
-    has_b1 = "beta1" in ds.dims
-    b1 = [k for k in ds.data_vars if "beta1" in ds[k].dims]
-    shared = [k for k in ds.data_vars if k not in b1]
-    digests = {k: _digest(ds[k].values) for k in ds.data_vars}
+    split = _split("beta1" in ds.dims, tile)
+    names = list(ds.data_vars)
+    digests = {k: _digest(ds[k].values) for k in names}
+    owned = [k for k in names if _owns(ds[k].dims, split)]
     t1 = time.perf_counter()
-    if b1:
-        part = ds[b1].drop_vars(list(ds.coords))
-        part.to_zarr(store, region={"beta1": slice(start, stop)}, consolidated=False)
-    if i == 0 and shared:
-        part = ds[shared]
-        part.drop_vars(list(part.coords)).to_zarr(store, mode="r+", consolidated=False)
-    back = _open(store)
-    written = _region_digests(back, b1, start, stop, has_b1)
-    if i == 0:
-        written.update(_region_digests(back, shared, 0, 0, False))
+    groups = {}
+    for k in owned:  # one write per region shape (all variables of a write share its dims)
+        groups.setdefault(tuple(_region(ds[k].dims, split)), []).append(k)
+    for key, ks in groups.items():
+        part = ds[ks]
+        part = part.drop_vars(list(part.coords))
+        if key:
+            region = {d: slice(*split[d]) for d in key}
+            part.to_zarr(store, region=region, consolidated=False)
+        else:
+            part.to_zarr(store, mode="r+", consolidated=False)
+    written = _region_digests(_open(store), owned, split)
     for k, h in written.items():
         if h != digests[k]:
             raise OSError(f"store: tile {i} variable {k} reads back different bytes")
     rec = {
         "index": i,
-        "start": start,
-        "stop": stop,
-        "checksums": {k: digests[k] for k in b1},
-        "shared": {k: digests[k] for k in shared},
+        **_tile_fields(tile),
+        "checksums": {k: digests[k] for k in names if _unique(ds[k].dims, split)},
+        "shared": {k: digests[k] for k in names if not _unique(ds[k].dims, split)},
         "undecided_fast": {k: int(v.attrs["undecided_fast"]) for k, v in _counted(ds)},
         "undecided": {k: int(v.attrs["undecided"]) for k, v in _counted(ds)},
         "total_undecided_fast": int(ds.attrs["undecided_fast"]),
@@ -338,20 +387,19 @@ def _counted(ds):
     return [(k, v) for k, v in ds.data_vars.items() if "undecided" in v.attrs]
 
 
-def _verify_tile(store: str, i: int, start: int, stop: int) -> dict | None:
-    """The tile's record if the store holds exactly the recorded bytes, else ``None``."""
+def _verify_tile(store: str, i: int, tile) -> dict | None:
+    """The tile's record if the store holds exactly the recorded bytes of the regions it owns."""
     rec = _read_record(store, i)
-    if rec is None or rec.get("start") != start or rec.get("stop") != stop:
+    if rec is None or any(rec.get(k) != v for k, v in _tile_fields(tile).items()):
         return None
     try:
         ds = _open(store)
-        names = list(rec["checksums"])
-        got = _region_digests(ds, names, start, stop, "beta1" in ds.dims)
-        if i == 0:
-            got.update(_region_digests(ds, list(rec["shared"]), 0, 0, False))
+        split = _split("beta1" in ds.dims, tile)
+        recorded = {**rec["checksums"], **rec["shared"]}
+        want = {k: h for k, h in recorded.items() if _owns(ds[k].dims, split)}
+        got = _region_digests(ds, list(want), split)
     except Exception:  # undecodable chunk bytes
         return None
-    want = {**rec["checksums"], **(rec["shared"] if i == 0 else {})}
     return rec if got == want else None
 
 
@@ -467,7 +515,7 @@ def _verify_all(ex, store, tiles):
     recs = {}
     recorded = [i for i in range(len(tiles)) if _read_record(store, i) is not None]
     missing = set(range(len(tiles))) - set(recorded)
-    calls = [(i, (store, i, *tiles[i])) for i in recorded]
+    calls = [(i, (store, i, tuple(tiles[i]))) for i in recorded]
     for i, rec in ex.map(_verify_tile, calls):
         if rec is None:
             report["corrupt"].append(i)
@@ -498,6 +546,7 @@ def generate_distributed(
     *,
     scheduler=None,
     slab: int | None = None,
+    block2: int | None = None,
     resume: bool = False,
     overwrite: bool = False,
     method: str = "certified",
@@ -514,17 +563,20 @@ def generate_distributed(
     Parameters
     ----------
     scene : atlas.Scene
-        The atlas; it is split along ``beta1``.
+        The atlas; it is split along ``beta1`` (and ``beta2``, see :func:`tile_plan`).
     store : str or os.PathLike
         Zarr directory (a local or shared file system path).
     scheduler : None, "local", "local:N", "tcp://host:port" or distributed.Client
         Where the tiles run (see the module docstring); ``None``: in this process.
     slab : int, optional
         ``beta1`` values per tile (default: about :data:`DEFAULT_SLAB_POINTS` points per tile).
+    block2 : int, optional
+        ``beta2`` values per tile (2-D tiles); by default ``beta2`` is split only when ``slab`` is
+        not given and one ``beta1`` value holds more than :data:`DEFAULT_SLAB_POINTS` points.
     resume : bool
         Continue an existing store: tiles whose record verifies against the stored bytes are
         kept, missing or corrupt ones recomputed.  The store must have been created for the same
-        scene, options, slab and package/JAX versions (else ``ValueError``).
+        scene, options, tiles and package/JAX versions (else ``ValueError``).
     overwrite : bool
         Replace an existing store (without ``resume``); otherwise an existing store raises
         ``FileExistsError``.
@@ -543,7 +595,8 @@ def generate_distributed(
     Returns
     -------
     dict
-        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``points``,
+        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
+        (``None``: beta2 not split), ``points``,
         ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
         ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
         ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
@@ -555,8 +608,9 @@ def generate_distributed(
     method, dtype, tile_points = _check_options(method, dtype, tile_points)
     _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
-    tiles = tile_plan(scene, slab)
+    tiles = tile_plan(scene, slab, block2)
     slab_n = tiles[0][1] - tiles[0][0]
+    block2_n = tiles[0][3] - tiles[0][2] if len(tiles[0]) == 4 else None
     sch = schema(
         scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
     )
@@ -582,7 +636,7 @@ def generate_distributed(
             raise FileNotFoundError(f"store: directory {os.path.dirname(store)} does not exist")
         if exists:
             shutil.rmtree(store)
-        _create_layout(store, sch, slab_n, plan)
+        _create_layout(store, sch, slab_n, plan, block2_n)
 
     ex = _executor(scheduler)
     bar = progress_bar(progress, len(tiles), "atlas tiles", unit="tile")
@@ -591,7 +645,7 @@ def generate_distributed(
         todo = [i for i in range(len(tiles)) if i not in recs]
         if bar is not None:
             bar.update(len(recs))
-        calls = [(i, (store, scene, i, *tiles[i], opts)) for i in todo]
+        calls = [(i, (store, scene, i, tiles[i], opts)) for i in todo]
         computed = {}
         for i, rec in ex.map(_run_tile, calls):
             recs[i] = computed[i] = rec
@@ -613,6 +667,7 @@ def generate_distributed(
         "workers": ex.workers,
         "tiles": len(tiles),
         "slab": slab_n,
+        "block2": block2_n,
         "points": points,
         "computed": sorted(computed),
         "verified": sorted(set(recs) - set(computed)),
@@ -635,30 +690,32 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     missing = [i for i in range(len(tiles)) if i not in recs]
     if missing:  # pragma: no cover - every tile either verified or computed
         raise RuntimeError(f"store: tiles {missing} missing after the run")
-    first = recs[0]
-    for i, rec in recs.items():
-        if rec["shared"] != first["shared"]:
-            raise RuntimeError(f"store: tile {i} disagrees with tile 0 on {sorted(rec['shared'])}")
+    dims = {k: v[0] for k, v in sch.variables.items()}
+    has_b1 = "beta1" in sch.shape
+    seen = {}  # (variable, region) -> (tile, checksum): tiles sharing a region must agree
+    var_attrs, fast, final = {}, 0, 0
+    for i in sorted(recs):
+        rec, split = recs[i], _split(has_b1, tiles[i])
         if rec["source"] != plan["source"]:
             raise RuntimeError(
                 f"scheduler: tile {i} ran {rec['source']!r}, expected {plan['source']!r}"
             )
-    _, shared = _b1_vars(sch)
-    var_attrs = {}
-    for k in sch.variables:
-        vals = [(i, r) for i, r in recs.items() if k in r["undecided"]]
-        if not vals:
-            continue
-        if k in shared:
-            vals = [(0, first)]
-        var_attrs[k] = {
-            "undecided_fast": sum(r["undecided_fast"][k] for _, r in vals),
-            "undecided": sum(r["undecided"][k] for _, r in vals),
-        }
-    # the shared variables are counted by every tile; subtract the duplicates
-    dup = lambda key: sum(r[key].get(k, 0) for i, r in recs.items() if i for k in shared)
-    fast = sum(r["total_undecided_fast"] for r in recs.values()) - dup("undecided_fast")
-    final = sum(r["total_undecided"] for r in recs.values()) - dup("undecided")
+        for k, h in rec["shared"].items():
+            key = (k, tuple(split[d] for d in split if d in dims[k]))
+            j, h0 = seen.setdefault(key, (i, h))
+            if h0 != h:
+                raise RuntimeError(f"store: tile {i} disagrees with tile {j} on {k}")
+        # variables a tile computes but does not own are counted by their owner
+        fast += rec["total_undecided_fast"]
+        final += rec["total_undecided"]
+        for k in rec["undecided"]:
+            if _owns(dims[k], split):
+                a = var_attrs.setdefault(k, {"undecided_fast": 0, "undecided": 0})
+                a["undecided_fast"] += rec["undecided_fast"][k]
+                a["undecided"] += rec["undecided"][k]
+            else:
+                fast -= rec["undecided_fast"][k]
+                final -= rec["undecided"][k]
     attrs = {"undecided_fast": int(fast), "undecided_after_resolve": int(final)}
     failures = [p for i in sorted(recs) for p in recs[i]["exact_failures"]]
     if failures:
@@ -684,16 +741,16 @@ def _to_netcdf(store, sch, tiles, totals, path, overwrite):
     sink = NetCDFSink(path, overwrite)
     sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
     ds = _open(store)
-    b1, shared = _b1_vars(sch)
+    has_b1 = "beta1" in sch.shape
     sink.begin(sch)
     try:
-        for start, stop in tiles:
-            for k in b1:
-                dims = sch.variables[k][0]
-                index = tuple(slice(start, stop) if d == "beta1" else slice(None) for d in dims)
-                sink.write(k, index, ds[k].isel(beta1=slice(start, stop)).values)
-        for k in shared:
-            sink.write(k, tuple(slice(None) for _ in sch.variables[k][0]), ds[k].values)
+        for tile in tiles:  # every region once, from the tile that owns it
+            split = _split(has_b1, tile)
+            for k, (dims, *_) in sch.variables.items():
+                if _owns(dims, split):
+                    reg = _region(dims, split)
+                    index = tuple(reg.get(d, slice(None)) for d in dims)
+                    sink.write(k, index, ds[k].isel(reg).values)
         return sink.finish(totals["attrs"], totals["var_attrs"])
     except BaseException:
         sink.abort()
@@ -723,10 +780,10 @@ def _use_compile_cache():
             jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
 
 
-def _warm(scene: Scene, start: int, stop: int, opts: dict) -> float:
+def _warm(scene: Scene, tile, opts: dict) -> float:
     """Compile (or load from the cache) the kernels of one tile; returns the seconds it took."""
     t0 = time.perf_counter()
-    _compute_tile(scene, start, stop, opts)
+    _compute_tile(scene, tile, opts)
     return time.perf_counter() - t0
 
 
@@ -734,7 +791,7 @@ def _measure_one(scene, store, scheduler, slab, opts, n_workers):
     tiles = tile_plan(scene, slab)
     t0 = time.perf_counter()
     if scheduler is None:
-        _warm(scene, *tiles[0], opts)
+        _warm(scene, tiles[0], opts)
         client = cluster = None
     else:
         from distributed import Client, LocalCluster
@@ -749,7 +806,7 @@ def _measure_one(scene, store, scheduler, slab, opts, n_workers):
         )
         client = Client(cluster)
         client.wait_for_workers(n_workers)
-        client.run(_warm, scene, *tiles[0], opts)  # every worker compiles before the clock runs
+        client.run(_warm, scene, tiles[0], opts)  # every worker compiles before the clock runs
     warm = time.perf_counter() - t0
     try:
         s = generate_distributed(scene, store, scheduler=client, slab=slab, overwrite=True, **opts)
@@ -882,9 +939,24 @@ def _measure_markdown(rep: dict, projected_points: float) -> str:
         )
     lines += [
         "",
-        "Per-tile columns are medians over the tiles, measured on the workers.  The in-process "
-        "run uses XLA's intra-op threads (both cores); the workers run one thread each.",
+        "Per-tile columns are medians over the tiles, measured on the workers (CPU = process "
+        "CPU time, all threads).  The in-process run uses XLA's intra-op threads; the workers "
+        "run one dask thread each with XLA's Eigen thread pool off.",
         "",
+    ]
+    one = next((r for r in rep["runs"] if r["scheduler"] != "in-process"), None)
+    if one is not None and one["tile_cpu_seconds"] > 1.2 * one["tile_seconds"]:
+        lines += [
+            f"**Caveat**: a 1-worker tile took {one['tile_cpu_seconds']:.2f} s of CPU in "
+            f"{one['tile_seconds']:.2f} s of wall time, i.e. one worker process still used about "
+            f"{one['tile_cpu_seconds'] / one['tile_seconds']:.1f} cores (other threads than the "
+            "dask one, presumably XLA's own; not investigated further).  On this 2-core machine the 1-worker "
+            "run therefore already used most of the machine, and the 2-worker ratio understates "
+            "how throughput scales with cores; the CPU-time projection below is the per-core "
+            "one.",
+            "",
+        ]
+    lines += [
         f"## Projection: {projected_points:.0e} points",
         "",
         f"Per-tile cost on one worker (generate + write, 1-worker run): "
@@ -903,9 +975,10 @@ def _measure_markdown(rep: dict, projected_points: float) -> str:
         lines.append(f"| {n} | {_hours(sec)} | {_hours(rep['projection_cpu'][n])} |")
     lines += [
         "",
-        "Tiles are `beta1` slabs: one tile holds at least n_beta2 x n_kappa x n_q1 x n_q2 points "
-        "(slab = 1), so such a projection needs a scene whose per-`beta1` plane is no larger than "
-        "a tile (see README, *Atlases on a cluster*).",
+        "Tiles are `beta1` slabs, or `(beta1, beta2)` blocks when one `beta1` value holds more "
+        "than 2**18 points, so a 1e11-point scene gets tiles of about the measured size as long "
+        "as n_kappa x n_q1 x n_q2 (one `(beta1, beta2)` pair, the smallest tile) is no larger "
+        "(see README, *Atlases on a cluster*).",
         "",
     ]
     return "\n".join(lines)

@@ -300,6 +300,8 @@ def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
         (["--store", str(tmp_path / "no" / "x.zarr")], "store:"),
         (["--store", str(tmp_path / "x.zarr"), "--out", str(d / "ref.nc")], "out:"),
         (["--store", str(tmp_path / "x.zarr"), "--slab", "0"], "slab"),
+        (["--store", str(tmp_path / "x.zarr"), "--block2", "0"], "block2"),
+        (["--store", str(tmp_path / "x.zarr"), "--block2", "2", "--beta2", "1"], "block2:"),
     ]
     got = []
     for extra, _ in more:

@@ -88,6 +88,52 @@ def test_tile_plan():
     assert tile_plan(scene()) == [(0, 8)]  # default: ~2**18 points per tile
     with pytest.raises(ValueError, match="^slab:"):
         tile_plan(scene(), 0)
+    # 2-D (beta1, beta2) blocks, given explicitly
+    assert tile_plan(scene(), 4, 3) == [
+        (0, 4, 0, 3),
+        (0, 4, 3, 6),
+        (0, 4, 6, 8),
+        (4, 8, 0, 3),
+        (4, 8, 3, 6),
+        (4, 8, 6, 8),
+    ]
+    with pytest.raises(ValueError, match="^block2:"):
+        tile_plan(scene(), 2, 0)
+    with pytest.raises(ValueError, match="^block2:"):
+        tile_plan(scene(beta2=0.2), 2, 2)
+    # ... and by default when one beta1 value holds 1024 * 512 = 2**19 points > 2**18 per tile
+    big = scene(beta1="0:2pi:4", beta2="0:2pi:1024", kappa="log:0.1:10:32", q1="0:1:4", q2="0:1:4")
+    assert tile_plan(big) == [(a, a + 1, c, c + 512) for a in range(4) for c in (0, 512)]
+    assert tile_plan(big, slab=2) == [(0, 2), (2, 4)]  # an explicit slab alone: beta1 slabs
+
+
+def test_2d_blocks_equal_generate_and_resume(reference, tmp_path):
+    """Uneven (beta1, beta2) blocks: same bytes as generate(); shared regions written once."""
+    store = tmp_path / "b.zarr"
+    summary = generate_distributed(
+        scene(), store, slab=4, block2=3, tile_points=TP, to_netcdf=tmp_path / "b.nc"
+    )
+    assert summary["tiles"] == 6 and summary["block2"] == 3
+    assert summary["undecided_fast"] == reference.attrs["undecided_fast"]
+    got = open_store(store).load()
+    same_bytes(got, reference)
+    for k in reference.data_vars:
+        for a in ("undecided", "undecided_fast"):
+            if a in reference[k].attrs:
+                assert got[k].attrs[a] == reference[k].attrs[a], (k, a)
+    with xr.open_dataset(tmp_path / "b.nc") as nc:
+        same_bytes(nc.load(), reference)
+    rec = _read_record(str(store), 4)  # beta1 [4, 8), beta2 [3, 6)
+    assert (rec["start"], rec["stop"], rec["start2"], rec["stop2"]) == (4, 8, 3, 6)
+    assert set(rec["shared"]) == {"stable_FS", "consistent_FI", "stable_SF", "consistent_IF"}
+    # stable_SF (no beta2) belongs to the tiles at beta2 block 0: corrupt it for beta1 [4, 8)
+    g = zarr.open_group(str(store), mode="r+")
+    g["stable_SF"][4:8] = ~np.asarray(reference["stable_SF"].values[4:8])
+    shutil.rmtree(store / TILES / "t000001")
+    assert verify_store(store) == {"ok": [0, 2, 4, 5], "missing": [1], "corrupt": [3]}
+    summary = generate_distributed(scene(), store, slab=4, block2=3, tile_points=TP, resume=True)
+    assert summary["computed"] == [1, 3]
+    same_bytes(open_store(store).load(), reference)
 
 
 def test_in_process_equals_generate(inproc, reference, tmp_path):
