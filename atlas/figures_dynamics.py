@@ -218,14 +218,33 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(5, 1, figsize=(8, 13), constrained_layout=True)
+    rows = [
+        "| panel | beta1, beta2, alpha | k; q (physical) | simulated (horizon) | the paper says |",
+        "|---|---|---|---|---|",
+    ]
     for ax, (name, p) in zip(axes, fig2_cases().items(), strict=True):
         p = dict(p, t_end=horizons[name])
         res = simulate(**p, max_events=100_000)
-        _plot_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples)
+        outcome = _plot_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples)
+        ang = ", ".join(f"{p[k] / math.pi:.2f} pi" for k in ("beta1", "beta2", "alpha"))
+        rows.append(
+            f"| {name} | {ang} | {p['k'][0]:g}, {p['k'][1]:g}; {p['q'][0]:g}, {p['q'][1]:g} "
+            f"| **{outcome.label}** "
+            f"(t <= {p['t_end']:g}, {res.n_events} events) | {_PAPER_SAYS[name]} |"
+        )
     axes[-1].set_xlabel("time [rescaled, paper eq. 6]")
     path = outdir / "fig2.png"
     _atomic_savefig(fig, path)
     plt.close(fig)
+    from .io import atomic_write_text
+
+    atomic_write_text(
+        outdir / "fig2.md",
+        "Fig. 2, simulated outcome per panel (`atlas.figures_dynamics.plot_fig2`; the caption and "
+        "the text of Sec. 6.4-6.5 disagree on panels d and e: the simulation decides).\n\n"
+        + "\n".join(rows)
+        + "\n",
+    )
     return [path]
 
 

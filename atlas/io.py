@@ -59,7 +59,9 @@ def check_output_path(path, overwrite: bool = False) -> str:
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
-        raise PermissionError(f"out: directory {directory} is not writable ({e.strerror})") from None
+        raise PermissionError(
+            f"out: directory {directory} is not writable ({e.strerror})"
+        ) from None
     if os.path.exists(path) and not overwrite:
         raise FileExistsError(f"out: {path} exists (use --overwrite to replace it)")
     return path

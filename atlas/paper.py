@@ -17,8 +17,10 @@ from pathlib import Path
 
 __all__ = ["run", "atomic_write_text", "write_netcdf"]
 
-REFERENCE = ("P. L. Varkonyi, Dynamics of mechanical systems with multiple sliding contacts: new "
-             "faces of Painleve's paradox")
+REFERENCE = (
+    "P. L. Varkonyi, Dynamics of mechanical systems with multiple sliding contacts: new "
+    "faces of Painleve's paradox"
+)
 
 
 def atomic_write_text(path, text: str) -> Path:
@@ -53,17 +55,19 @@ def write_netcdf(ds, path) -> Path:
     from . import __version__
 
     ds = ds.copy()
-    ds.attrs.update({
-        "Conventions": "CF-1.10",
-        "title": f"Fig. 1 map of the paper (kappa = {float(ds['kappa']):g}, q1 = "
-                 f"{float(ds['q1']):g}, q2 = {float(ds['q2']):g})",
-        "source": f"painleve-atlas {__version__}, jax {jax.__version__}",
-        "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} "
-                   f"{' '.join(sys.argv) or 'python'} (atlas.paper.run)",
-        "references": REFERENCE,
-        "scene": "fig1: beta1 x beta2 offset grid over [0, 2 pi), certified fast kernels, float64, "
-                 "undecided cells settled by atlas.exact",
-    })
+    ds.attrs.update(
+        {
+            "Conventions": "CF-1.10",
+            "title": f"Fig. 1 map of the paper (kappa = {float(ds['kappa']):g}, q1 = "
+            f"{float(ds['q1']):g}, q2 = {float(ds['q2']):g})",
+            "source": f"painleve-atlas {__version__}, jax {jax.__version__}",
+            "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} "
+            f"{' '.join(sys.argv) or 'python'} (atlas.paper.run)",
+            "references": REFERENCE,
+            "scene": "fig1: beta1 x beta2 offset grid over [0, 2 pi), certified fast kernels, float64, "
+            "undecided cells settled by atlas.exact",
+        }
+    )
     enc = {}
     for name, var in ds.variables.items():
         if var.dtype.kind in "iub" or name in ds.coords:
@@ -74,8 +78,7 @@ def write_netcdf(ds, path) -> Path:
                 enc[name]["dtype"] = "float32"
         if var.dtype == bool:
             ds[name] = var.astype(np.int8)
-            ds[name].attrs.update(flag_values=np.array([0, 1], np.int8),
-                                  flag_meanings="false true")
+            ds[name].attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings="false true")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.nc", dir=path.parent)
@@ -94,7 +97,9 @@ def write_netcdf(ds, path) -> Path:
 def _compile_cache():
     import jax
 
-    where = os.environ.get("ATLAS_JAX_CACHE", str(Path.home() / ".cache" / "painleve-atlas" / "jax"))
+    where = os.environ.get(
+        "ATLAS_JAX_CACHE", str(Path.home() / ".cache" / "painleve-atlas" / "jax")
+    )
     if where == "0" or jax.config.jax_compilation_cache_dir:
         return
     try:
@@ -137,16 +142,24 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     step("table2.png", lambda: figures.plot_table2(out / "table2.png", rows))
     ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
     step("fig1_stability.png", lambda: figures.plot_fig1_stability(out / "fig1_stability.png", ds))
-    step("fig1_map.nc", lambda: write_netcdf(ds[[v for v in ds.data_vars
-                                                 if v != "margin_II_stable"]],
-                                             out / "fig1_map.nc"))
+    step(
+        "fig1_map.nc",
+        lambda: write_netcdf(
+            ds[[v for v in ds.data_vars if v != "margin_II_stable"]], out / "fig1_map.nc"
+        ),
+    )
     step("fig1_classes.png", lambda: figures.plot_fig1_classes(out / "fig1_classes.png"))
-    maps = step("fig1 variants (compute)",
-                lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS])
-    step("fig1_stability_variants.png",
-         lambda: figures.plot_fig1_variants(out / "fig1_stability_variants.png", maps))
-    claims = step("audit (compute)",
-                  lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci))
+    maps = step(
+        "fig1 variants (compute)",
+        lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
+    )
+    step(
+        "fig1_stability_variants.png",
+        lambda: figures.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
+    )
+    claims = step(
+        "audit (compute)", lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci)
+    )
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
     try:
         from .figures_dynamics import plot_fig2
@@ -158,10 +171,13 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         else:
             step("fig2.png", lambda: plot_fig2(out))
         from .figures_dynamics import PAPER_MAP_N, outcome_map_files  # outcome map beside Fig. 1
+
         step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
     total = time.perf_counter() - t_all
-    counts = {s: sum(1 for c in claims if c.status == s and c.id != "META")
-              for s in ("confirmed", "refuted", "imprecise")}
+    counts = {
+        s: sum(1 for c in claims if c.status == s and c.id != "META")
+        for s in ("confirmed", "refuted", "imprecise")
+    }
     _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds)
     say(f"all done in {total:.1f} s -> {out}")
     return dict(timings, total=total)
@@ -170,41 +186,80 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
 def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
     from . import figures
 
-    files = sorted(p.name for p in out.iterdir() if p.is_file() and not p.name.startswith("bench")
-                   and p.name != "README.md" and ".tmp" not in p.name)
+    files = sorted(
+        p.name
+        for p in out.iterdir()
+        if p.is_file()
+        and not p.name.startswith("bench")
+        and p.name != "README.md"
+        and ".tmp" not in p.name
+    )
     lines = [
-        "# Regenerated figures and tables (`atlas paper`)", "",
+        "# Regenerated figures and tables (`atlas paper`)",
+        "",
         f"Made by `atlas.paper.run(quick={quick})` on "
         f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} in {total:.1f} s "
         f"(Fig. 1 map {n_map}^2 cells, variants {n_var}^2; {ds.attrs.get('n_resolved', 0)} map "
-        f"cells settled by the exact reference, {ds.attrs.get('n_undecided', 0)} undecided).", "",
+        f"cells settled by the exact reference, {ds.attrs.get('n_undecided', 0)} undecided).",
+        "",
         f"Audit of the paper's claims ([audit.md](audit.md)): {counts['confirmed']} confirmed, "
-        f"{counts['refuted']} refuted, {counts['imprecise']} imprecise.", "",
-        "| file | size | seconds |", "|---|---|---|"]
-    tmap = {"fig1 map (compute)": "fig1_stability.png", "fig1 variants (compute)":
-            "fig1_stability_variants.png", "audit (compute)": "audit.md"}
+        f"{counts['refuted']} refuted, {counts['imprecise']} imprecise.",
+        "",
+        "| file | size | seconds |",
+        "|---|---|---|",
+    ]
+    tmap = {
+        "fig1 map (compute)": "fig1_stability.png",
+        "fig1 variants (compute)": "fig1_stability_variants.png",
+        "audit (compute)": "audit.md",
+    }
     per_file = {}
     for k, v in timings.items():
         per_file[tmap.get(k, k)] = per_file.get(tmap.get(k, k), 0.0) + v
     for f in files:
         size = (out / f).stat().st_size
         sec = per_file.get(f)
-        lines.append(f"| [{f}]({f}) | {size / 1024:.0f} kB | {'' if sec is None else f'{sec:.1f}'} |")
-    lines += ["", *(f"* {n}" for n in notes), "",
-              "## Fig. 1: classes", "", "![fig1 classes](fig1_classes.png)", "",
-              "## Fig. 1: stability map (kappa = 0.5, q = 0)", "",
-              "Dashed: zero sets of smooth margins (model-dependent boundaries); solid: class "
-              "boundaries. Neutral (q = 0) is drawn in its own shade; the paper draws it as stable.",
-              "", "![fig1 stability](fig1_stability.png)", "",
-              "## Fig. 1 at other (kappa, q1, q2)", "",
-              "Variants: " + ", ".join(f"({k:g}, {a:g}, {b:g})" for k, a, b in figures.VARIANTS),
-              "", "![fig1 variants](fig1_stability_variants.png)", "",
-              "## Table 2", "", "![table 2](table2.png)", ""]
+        lines.append(
+            f"| [{f}]({f}) | {size / 1024:.0f} kB | {'' if sec is None else f'{sec:.1f}'} |"
+        )
+    lines += [
+        "",
+        *(f"* {n}" for n in notes),
+        "",
+        "## Fig. 1: classes",
+        "",
+        "![fig1 classes](fig1_classes.png)",
+        "",
+        "## Fig. 1: stability map (kappa = 0.5, q = 0)",
+        "",
+        "Dashed: zero sets of smooth margins (model-dependent boundaries); solid: class "
+        "boundaries. Neutral (q = 0) is drawn in its own shade; the paper draws it as stable.",
+        "",
+        "![fig1 stability](fig1_stability.png)",
+        "",
+        "## Fig. 1 at other (kappa, q1, q2)",
+        "",
+        "Variants: " + ", ".join(f"({k:g}, {a:g}, {b:g})" for k, a, b in figures.VARIANTS),
+        "",
+        "![fig1 variants](fig1_stability_variants.png)",
+        "",
+        "## Table 2",
+        "",
+        "![table 2](table2.png)",
+        "",
+    ]
     if (out / "fig2.png").exists():
         lines += ["## Fig. 2 (simulations)", "", "![fig2](fig2.png)", ""]
+        if (out / "fig2.md").exists():
+            lines += [(out / "fig2.md").read_text(), ""]
     if (out / "outcome_map.png").exists():
-        lines += ["## Outcome map (simulated, beside the Fig. 1 theory map)", "",
-                  "[outcome_map.nc](outcome_map.nc): outcome of a perturbed SS equilibrium per "
-                  "cell (atlas.dynamics.outcome_map); outlined: subclasses 132/133/142/143 + duals.",
-                  "", "![outcome map](outcome_map.png)", ""]
+        lines += [
+            "## Outcome map (simulated, beside the Fig. 1 theory map)",
+            "",
+            "[outcome_map.nc](outcome_map.nc): outcome of a perturbed SS equilibrium per "
+            "cell (atlas.dynamics.outcome_map); outlined: subclasses 132/133/142/143 + duals.",
+            "",
+            "![outcome map](outcome_map.png)",
+            "",
+        ]
     atomic_write_text(out / "README.md", "\n".join(lines))

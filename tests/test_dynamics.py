@@ -417,3 +417,27 @@ def test_outcome_map_files_beside_theory(tmp_path):
     assert all(f.stat().st_size > 0 for f in files)
     with pytest.raises(ValueError, match="theory"):
         outcome_map_files(tmp_path, n=2, theory=theory, kappa=2.0)
+
+
+def test_fig2_table_states_the_simulated_outcomes(tmp_path):
+    """``plot_fig2`` writes the panel outcomes beside what the paper says (caption and text
+    disagree on d and e; the expected labels are the paper's caption, which the simulation
+    confirms: see the Fig. 2 outcome tests above)."""
+    from atlas.figures_dynamics import plot_fig2
+
+    plot_fig2(tmp_path, n_samples=200)
+    rows = {
+        line.split("|")[1].strip(): line
+        for line in (tmp_path / "fig2.md").read_text().splitlines()
+        if line.startswith("| ") and not line.startswith("| panel")
+    }
+    expect = dict(
+        a="growing_bouncing",
+        b="settles_SS",
+        c="growing_bouncing",
+        d="sustained_oscillation",
+        e="growing_bouncing",
+    )
+    for panel, label in expect.items():
+        assert f"**{label}**" in rows[panel], rows[panel]
+    assert "caption:" in rows["d"] and "text:" in rows["e"]

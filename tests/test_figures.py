@@ -17,7 +17,9 @@ def test_schema(ds):
     assert ds["stable_SS"].dims == ("beta1", "beta2")
     assert ds["stable_SF"].dims == ("beta1",)
     assert ds["stable_SS"].dtype == np.int8
-    assert set(np.unique(ds["class_code"].values)) <= set(mechanics.ALL_CLASSES) | {0}  # 0: beta2 = beta1
+    assert set(np.unique(ds["class_code"].values)) <= set(mechanics.ALL_CLASSES) | {
+        0
+    }  # 0: beta2 = beta1
     assert ds.attrs["n_undecided"] == 0
 
 
