@@ -29,8 +29,8 @@ import tempfile
 import numpy as np
 import xarray as xr
 
-from .tiling import DEFAULT_TILE_POINTS, Schema, block_shape, run
 from .scene import Scene
+from .tiling import DEFAULT_TILE_POINTS, Schema, block_shape, run
 
 __all__ = [
     "write_netcdf",

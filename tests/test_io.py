@@ -11,9 +11,9 @@ import pytest
 import xarray as xr
 
 from atlas import io as aio
-from atlas.tiling import block_shape, generate
 from atlas.io import generate_to_file, write_netcdf
 from atlas.scene import Scene
+from atlas.tiling import block_shape, generate
 
 TILE = 1024
 

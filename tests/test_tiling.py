@@ -13,8 +13,8 @@ import pytest
 
 from atlas import mechanics as mech
 from atlas import spectral
-from atlas.tiling import block_shape, generate, last_stats, tile_blocks
 from atlas.scene import ALL_OUTPUTS, Scene, builtin
+from atlas.tiling import block_shape, generate, last_stats, tile_blocks
 from atlas.verdicts import Consistency, Verdict
 
 TILE = 1024
