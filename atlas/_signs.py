@@ -1,30 +1,42 @@
 """Certified signs of floating-point polynomial expressions (pure JAX).
 
-A polynomial quantity ``P`` is evaluated twice by the same code: once as written (``sub`` is
-subtraction) and once with every input replaced by its absolute value and every subtraction by an
-addition (``P_abs``).  For an expression of depth at most ``n`` evaluated in IEEE arithmetic with unit
-roundoff ``u`` and exact inputs,
+A polynomial quantity ``P`` is written once as a Python function of its inputs and a ``sub``
+argument, and evaluated twice by that code: as written (``sub`` is subtraction), giving ``fl(P)``,
+and with every input replaced by its absolute value and every subtraction by an addition, giving
+``fl(P_abs)``.  The error bound is **derived from the expression itself** by :func:`error_model`,
+which runs the same function on symbolic stand-ins (:class:`_Tracer`):
 
-    |fl(P) - P| <= gamma_n * P_abs + floor,     gamma_n = n u / (1 - n u)
+* every ``+``, ``-`` and ``*`` (and every multiplication by a constant that is not a power of two)
+  rounds once: ``fl(x o y) = (x o y)(1 + d) + e``, ``|d| <= u``, ``|e| <= tiny`` (``e`` covers results
+  flushed to zero below the smallest normal number: XLA on CPU flushes subnormals; where the result
+  is normal, ``e = 0``).  Fused multiply-add only removes roundings, so the bounds hold with or
+  without FMA contraction;
+* the *rounding count* ``n`` of the expression is the largest number of factors ``(1 + d)`` in any
+  monomial of ``fl(P)``: ``max(n_x, n_y) + 1`` for a sum, ``n_x + n_y + 1`` for a product;
+* the *underflow floor* ``E`` (in units of ``tiny``) bounds the absolute error from the ``e`` terms,
+  given magnitude bounds of the inputs (the callers scale every input to ``|x| <= bound``):
+  ``E = (E_x + E_y)(1 + u) + 1`` for a sum and ``(E_x M_y + E_y M_x + E_x E_y)(1 + u) + 1`` for a
+  product, ``M`` the magnitude bounds (themselves inflated by ``1 + gamma_n``).
 
-(Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., §3.1), where ``floor`` covers
-results flushed to zero below the smallest normal number (XLA on CPU flushes subnormals): each of the
-at most ``n_ops`` operations can lose ``tiny`` absolutely, amplified by at most ``amplification`` by
-the downstream factors (all inputs are scaled to magnitude <= 2 before evaluation).  The computed
-``fl(P_abs)`` is itself rounded, so the bound used is ``gamma_n (1 + gamma_n) fl(P_abs) + floor``.
-A sign is *certified* when ``|fl(P)|`` exceeds that bound; otherwise it is ``UNKNOWN``.  Non-finite
-values are never certified.  An exact zero is certified only where the caller knows it structurally.
+Then (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., Lemma 3.1 and §3.1)
+``|fl(P) - P| <= gamma_n P_abs + E tiny`` with ``gamma_n = n u / (1 - n u)``, and the computed
+``A = fl(P_abs) >= (1 - gamma_n) P_abs - E tiny``, so ``|fl(P) - P| <= gamma_n / (1 - gamma_n)
+(A + E tiny) + E tiny =: bound``; the bound is itself evaluated with a relative margin of ``8 u``.
+A sign is *certified* when ``|fl(P)| > bound``; otherwise it is ``UNKNOWN``.  Non-finite values are
+never certified.  An exact zero is certified only where the caller knows it structurally.
 """
 
 from __future__ import annotations
+
+import functools
 
 import jax.numpy as jnp
 
 #: sign code for "floating point could not certify the sign"
 UNKNOWN = 2
 
-N_DEPTH = 24  # generous bound on expression depth (the deepest expression here has depth < 12)
-AMPLIFICATION = 4096.0
+#: magnitude bound assumed for every input of :func:`evaluate_certified` unless told otherwise
+INPUT_BOUND = 2.0
 
 
 def gamma(n: int, dtype) -> float:
@@ -32,7 +44,74 @@ def gamma(n: int, dtype) -> float:
     return n * u / (1.0 - n * u)
 
 
-def certified_sign(value, abs_value, exact_zero=None, n: int = N_DEPTH):
+class _Tracer:
+    """Symbolic float: rounding count ``n``, magnitude bound ``mag``, underflow floor ``err``."""
+
+    __slots__ = ("n", "mag", "err", "u")
+
+    def __init__(self, n, mag, err, u):
+        self.n, self.mag, self.err, self.u = n, mag, err, u
+
+    @staticmethod
+    def _lift(x, like):
+        if isinstance(x, _Tracer):
+            return x
+        v = abs(float(x))
+        if float(x) != int(x):  # pragma: no cover - expressions use integer constants only
+            raise TypeError("expression constants must be integers")
+        return _Tracer(0, v, 0.0, like.u)
+
+    def _sum(self, other):
+        o = self._lift(other, self)
+        n = max(self.n, o.n) + 1
+        return _Tracer(n, self.mag + o.mag, (self.err + o.err) * (1 + self.u) + 1, self.u)
+
+    def _prod(self, other):
+        o = self._lift(other, self)
+        if o.n == 0 and o.err == 0 and not isinstance(other, _Tracer):
+            c = o.mag  # an integer constant: exact if a power of two (no overflow: checked later)
+            exact = c >= 1 and float(c).hex().startswith("0x1.0000000000000p")
+            n = self.n + (0 if exact else 1)
+            err = self.err * c * (1 + self.u) + (0 if exact else 1)
+            return _Tracer(n, self.mag * c, err, self.u)
+        n = self.n + o.n + 1
+        ma, mb = self._inflated(), o._inflated()
+        err = (self.err * mb + o.err * ma + self.err * o.err) * (1 + self.u) + 1
+        return _Tracer(n, self.mag * o.mag, err, self.u)
+
+    def _inflated(self):
+        g = self.n * self.u / (1 - self.n * self.u)
+        return self.mag * (1 + g)
+
+    __add__ = __radd__ = __sub__ = __rsub__ = _sum
+    __mul__ = __rmul__ = _prod
+
+    def __neg__(self):
+        return self
+
+    def __pow__(self, k):
+        out = self
+        for _ in range(int(k) - 1):
+            out = out * self
+        return out
+
+
+def _add(a, b):
+    return a + b
+
+
+@functools.cache
+def error_model(fn, n_args: int, dtype_name: str, bounds: tuple | None = None) -> tuple[int, float]:
+    """``(n, E)`` of expression ``fn`` (see the module docstring): rounding count and underflow
+    floor in units of the smallest normal number, for inputs bounded by ``bounds`` (default
+    :data:`INPUT_BOUND` each)."""
+    u = float(jnp.finfo(dtype_name).eps) / 2.0
+    bounds = bounds or (INPUT_BOUND,) * n_args
+    t = fn(*(_Tracer(0, float(b), 0.0, u) for b in bounds), sub=_add)
+    return t.n, t.err
+
+
+def certified_sign(value, abs_value, exact_zero=None, n: int = 0, floor: float = 0.0):
     """Sign code in {-1, 0, +1, UNKNOWN} (int8) of the exact quantity behind ``value``.
 
     Parameters
@@ -43,11 +122,16 @@ def certified_sign(value, abs_value, exact_zero=None, n: int = N_DEPTH):
         Evaluation of the same expression on absolute values with additions only.
     exact_zero : bool array, optional
         Where the caller knows the exact quantity is zero (structural zero).
+    n, floor : int, float
+        Rounding count and underflow floor (units of ``tiny``) of the expression
+        (:func:`error_model`).
     """
     dtype = value.dtype
+    u = float(jnp.finfo(dtype).eps) / 2.0
     g = gamma(n, dtype)
     tiny = float(jnp.finfo(dtype).tiny)
-    bound = g * (1.0 + g) * abs_value + n * AMPLIFICATION * tiny
+    e = floor * tiny
+    bound = (g / (1.0 - g) * (1 + 8 * u)) * (abs_value + e) + e * (1 + 8 * u)
     ok = jnp.isfinite(value) & jnp.isfinite(bound)
     s = jnp.where(value > bound, 1, jnp.where(value < -bound, -1, UNKNOWN))
     s = jnp.where(ok, s, UNKNOWN)
@@ -56,11 +140,17 @@ def certified_sign(value, abs_value, exact_zero=None, n: int = N_DEPTH):
     return s.astype(jnp.int8)
 
 
-def evaluate_certified(fn, *args, exact_zero=None):
-    """Evaluate ``fn(*args, sub)`` with its certified sign; returns ``(value, abs_value, sign)``."""
+def evaluate_certified(fn, *args, exact_zero=None, bounds: tuple | None = None):
+    """Evaluate ``fn(*args, sub)`` with its certified sign; returns ``(value, abs_value, sign)``.
+
+    Every input must satisfy ``|x| <= bound`` (``bounds``, default :data:`INPUT_BOUND`): the
+    underflow floor is derived from these bounds (:func:`error_model`).
+    """
+    dtype = jnp.result_type(*args)
+    n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds)
     value = fn(*args, sub=jnp.subtract)
     abs_value = fn(*(jnp.abs(a) for a in args), sub=jnp.add)
-    return value, abs_value, certified_sign(value, abs_value, exact_zero)
+    return value, abs_value, certified_sign(value, abs_value, exact_zero, n=n, floor=floor)
 
 
 def det2(ux, uy, vx, vy, *, sub=jnp.subtract):
@@ -82,7 +172,8 @@ def det2_sign(ux, uy, vx, vy):
     same = ((ux == vx) & (uy == vy)) | ((ux == -vx) & (uy == -vy))
     value = det2(ux, uy, vx, vy)
     abs_value = det2(jnp.abs(ux), jnp.abs(uy), jnp.abs(vx), jnp.abs(vy), sub=jnp.add)
-    return certified_sign(value, abs_value, exact_zero=same | (abs_value == 0), n=4)
+    n, floor = error_model(det2, 4, jnp.dtype(value.dtype).name, (1.0, 1.0, 1.0, 1.0))
+    return certified_sign(value, abs_value, exact_zero=same | (abs_value == 0), n=n, floor=floor)
 
 
 def sign_of(x):
