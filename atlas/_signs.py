@@ -23,7 +23,8 @@ Then (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., Lemma 3
 ``A = fl(P_abs) >= (1 - gamma_n) P_abs - E tiny``, so ``|fl(P) - P| <= gamma_n / (1 - gamma_n)
 (A + E tiny) + E tiny =: bound``; the bound is itself evaluated with a relative margin of ``8 u``.
 A sign is *certified* when ``|fl(P)| > bound``; otherwise it is ``UNKNOWN``.  Non-finite values are
-never certified.  An exact zero is certified only where the caller knows it structurally.
+never certified.  An exact zero is certified only structurally: where every monomial of the
+expression has an input that is exactly zero (:func:`structural_zero`), or where the caller knows it.
 """
 
 from __future__ import annotations
@@ -140,17 +141,37 @@ def certified_sign(value, abs_value, exact_zero=None, n: int = 0, floor: float =
     return s.astype(jnp.int8)
 
 
-def evaluate_certified(fn, *args, exact_zero=None, bounds: tuple | None = None):
+def evaluate_certified(fn, *args, exact_zero=None, bounds: tuple | None = None, majorants=None):
     """Evaluate ``fn(*args, sub)`` with its certified sign; returns ``(value, abs_value, sign)``.
 
     Every input must satisfy ``|x| <= bound`` (``bounds``, default :data:`INPUT_BOUND`): the
-    underflow floor is derived from these bounds (:func:`error_model`).
+    underflow floor is derived from these bounds (:func:`error_model`).  ``majorants`` (one per
+    input, ``>= |x|``; scalars allowed) replace ``|x|`` in ``abs_value``: ``P_abs`` is monotone in
+    every ``|x|``, so the bound stays valid, is looser, and costs almost nothing where the
+    majorants are constants or per-axis arrays (the compiler folds the ones).
     """
     dtype = jnp.result_type(*args)
     n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds)
     value = fn(*args, sub=jnp.subtract)
-    abs_value = fn(*(jnp.abs(a) for a in args), sub=jnp.add)
+    if majorants is None:
+        majorants = [jnp.abs(a) for a in args]
+    abs_value = fn(*(jnp.asarray(m, dtype) for m in majorants), sub=jnp.add)
+    zero = structural_zero(fn, *args)
+    exact_zero = zero if exact_zero is None else (exact_zero | zero)
     return value, abs_value, certified_sign(value, abs_value, exact_zero, n=n, floor=floor)
+
+
+def structural_zero(fn, *args):
+    """``True`` where every monomial of ``fn`` as written has an input that is exactly zero.
+
+    ``fn`` is evaluated on the indicators ``x != 0`` (0 or 1) with additions only: a sum of
+    non-negative small integers, computed exactly, that is zero iff each monomial has a zero
+    factor, so the exact value is zero (underflow cannot fake it, unlike ``abs_value == 0``).
+    This certifies the exact zeros of the axis lines (``s1 = 0``, ``c2 = 0``) and of ``q_j = 0``.
+    """
+    dtype = jnp.result_type(*args)
+    ind = [(jnp.asarray(a) != 0).astype(dtype) for a in args]
+    return fn(*ind, sub=jnp.add) == 0
 
 
 def det2(ux, uy, vx, vy, *, sub=jnp.subtract):

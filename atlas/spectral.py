@@ -122,6 +122,18 @@ def _damping_scale(q1s, q2s):
     return r1, r2, w2, w4
 
 
+def lost_to_underflow(originals, scaled):
+    """``True`` where a nonzero input became zero (flushed) by an exact power-of-two scaling.
+
+    The error models of :mod:`atlas._signs` take their inputs as exact, so such points get no
+    certified sign (they are left to the exact tier).
+    """
+    out = False
+    for o, sc in zip(originals, scaled):
+        out = out | ((o != 0) & (sc == 0))
+    return out
+
+
 def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
     k1, k2, q1s, q2s, n = normalize(kappa, q1, q2)
     sd = det2_sign(c1, s1, c2, s2)
@@ -132,17 +144,19 @@ def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
     # equal damping: sign(a3) = sign(c1 + s2), one rounding of a sum -> exact sign
     s_a3 = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(jnp.int8), s_a3)
     G, G_abs, s_G = evaluate_certified(_G, s1, c2, k1, c1, k2, s2, r1, r2, w2, w4)
+    lost = lost_to_underflow((kappa, kappa, q1, q2, q1, q2), (k1, k2, q1s, q2s, r1, r2))
+    unk = lambda sg: jnp.where(lost, UNKNOWN, sg).astype(jnp.int8)  # noqa: E731
     return dict(
         sd=sd,
-        s_a2u=s_a2u,
-        s_disc=s_disc,
-        s_a3=s_a3,
-        s_G=s_G,
+        s_a2u=unk(s_a2u),
+        s_disc=unk(s_disc),
+        s_a3=unk(s_a3),
+        s_G=unk(s_G),
         disc=disc,
         disc_abs=disc_abs,
         G=G,
         G_abs=G_abs,
-        damped=(q1s > 0) | (q2s > 0),
+        damped=(q1 > 0) | (q2 > 0),
     )
 
 
@@ -176,7 +190,9 @@ def _ss_from_signs(p):
     dpos = jnp.where(
         (s_a3 == -1) | (s_a3 == 0),
         U,
-        jnp.where(s_a3 == 1, jnp.where(s_G == 1, S, jnp.where(s_G == -1, U, X)), X),
+        jnp.where(
+            s_a3 == 1, jnp.where(s_G == 1, S, jnp.where(s_G == -1, U, jnp.where(s_G == 0, N, X))), X
+        ),
     )
     dmp = jnp.where(sd == -1, U, jnp.where(sd == 0, d0, jnp.where(sd == 1, dpos, X)))
     return jnp.where(p["damped"], dmp, und).astype(jnp.int8)
@@ -579,6 +595,9 @@ def ii_undamped(c1, s1, c2, s2, kappa):
     cons = tri_or(cons_p, cons_m)
     stab = tri_and(cons_p, pos(s_disc))
     stab = jnp.where(stab == 3, int(Verdict.UNDECIDED), stab).astype(jnp.int8)
+    lost = lost_to_underflow((kappa, kappa), (k1, k2))
+    cons = jnp.where(lost, int(Consistency.UNDECIDED), cons).astype(jnp.int8)
+    stab = jnp.where(lost, int(Verdict.UNDECIDED), stab).astype(jnp.int8)
     # abscissa: max Re sqrt(mu) over the roots of mu^2 + a2 mu + a0 (time unit of contact 2)
     a2 = k1 * c1 + k2 * s2
     a0 = (c1 * s2 - s1 * c2) * k1 * k2
