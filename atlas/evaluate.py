@@ -50,7 +50,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     elif kind == "codes":
         return jax.jit(functools.partial(rootfree.codes, **static))
     elif kind == "tier2":
-        return jax.jit(rootfree.tier2)
+        return jax.jit(functools.partial(rootfree.tier2, **static))
     elif kind == "undamped_abscissa":
         fn = lambda *a: spectral.verdicts(*a, damped=False)  # noqa: E731
     elif kind == "roots":
@@ -117,8 +117,16 @@ def _blocks(shape, limit):
         yield (slice(i, min(i + step, shape[0])),)
 
 
+def _pow2(n: int) -> int:
+    return 1 << max(0, n - 1).bit_length()
+
+
 def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
-    """Packed codes of :func:`atlas.rootfree.codes` over the broadcast grid, in slabs."""
+    """Packed codes of :func:`atlas.rootfree.codes` over the broadcast grid, in slabs.
+
+    Every axis of a slab is padded (edge values) to a power of two, so grids of many sizes share
+    a few compilations (and the persistent compilation cache of the CLI).
+    """
     kern = _kernel("codes", ss=ss, ii=ii, damped=damped)
     nd = len(shape)
     full = [a.reshape((1,) * (nd - a.ndim) + a.shape) for a in inputs]
@@ -127,8 +135,13 @@ def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
         args = []
         for a in full:
             ix = tuple(s if a.shape[d] > 1 else slice(None) for d, s in enumerate(blk))
-            args.append(a[ix])
-        code[blk] = np.broadcast_to(np.asarray(kern(*args)), code[blk].shape)
+            part = a[ix]
+            pad = [(0, _pow2(m) - m if m > 1 else 0) for m in part.shape]
+            args.append(np.pad(part, pad, mode="edge") if any(p for _, p in pad) else part)
+        res = np.asarray(kern(*args))
+        sub = code[blk]
+        res = np.broadcast_to(res, np.broadcast_shapes(res.shape, (1,) * sub.ndim))
+        code[blk] = res[tuple(slice(0, m) for m in sub.shape)]
     return code
 
 
@@ -166,7 +179,7 @@ def spectral_points(
     stats : dict, optional
         Filled with the diagnostics of the call: ``points``, ``tier2_points``, ``roots_points``
         (points that needed root enclosures), ``undecided_before`` and ``undecided_after`` exact
-        settlement.
+        settlement (points with any verdict undecided), ``undecided_by_name`` (per output, before).
     """
     names = tuple(names)
     bad = set(names) - set(SPECTRAL_NAMES)
@@ -196,16 +209,20 @@ def spectral_points(
         ss, cons, stab, later = rootfree.unpack(code)
         verdict = {"stable_SS": ss, "consistent_II": cons, "stable_II": stab}
         out = {k: verdict[k] for k in flags}
+        _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, ss=want_ss, ii=want_ii)
         if want_ii:
-            _settle_ii(inputs, shape, dtype, chunk, cons, stab, later, counts)
+            _roots_pass(inputs, shape, dtype, chunk, cons, stab, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
     und = np.zeros(shape, bool)
+    counts["undecided_by_name"] = {}
     for k in flags:
-        und |= out[k] == _UND
+        u = out[k] == _UND
+        counts["undecided_by_name"][k] = int(u.sum())
+        und |= u
     counts["undecided_before"] = int(und.sum())
     if resolve and und.any():
-        _settle_exact(inputs, shape, out, flags, und, max_resolve)
+        _settle_exact(inputs, shape, out, flags, und, max_resolve, counts)
     after = np.zeros(shape, bool)
     for k in flags:
         after |= out[k] == _UND
@@ -214,23 +231,32 @@ def spectral_points(
     return out
 
 
-def _settle_ii(inputs, shape, dtype, chunk, cons, stab, later, counts):
-    """Tiers 2 and 3 for the II verdicts, in place on ``cons`` and ``stab``."""
+def _fill(arr, idx, new):
+    """``arr.flat[idx] = new`` where ``arr`` is still undecided (in place)."""
+    flat = arr.reshape(-1)
+    flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
+
+
+def _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, *, ss, ii):
+    """Tier 2 (:func:`atlas.rootfree.tier2`) on the points flagged by the first pass, in place."""
     idx = np.flatnonzero(later)
     counts["tier2_points"] = int(idx.size)
     if idx.size:
-        res = _run_chunked(_kernel("tier2"), _gather(inputs, shape, idx), dtype, chunk)
-        for arr, new in ((cons, res[0]), (stab, res[1])):
-            flat = arr.reshape(-1)
-            flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
+        kern = _kernel("tier2", ss=ss, ii=ii)
+        res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
+        for i, k in enumerate(("stable_SS", "consistent_II", "stable_II")):
+            _fill(verdict[k], idx, res[i])
+
+
+def _roots_pass(inputs, shape, dtype, chunk, cons, stab, counts):
+    """Tier 3: root enclosures where an II verdict is still undecided, in place."""
     idx = np.flatnonzero((cons == _UND) | (stab == _UND))
     counts["roots_points"] = int(idx.size)
     if idx.size:
         kern = _kernel("roots", ("consistent_II", "stable_II"))
         res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
-        for arr, new in ((cons, res["consistent_II"]), (stab, res["stable_II"])):
-            flat = arr.reshape(-1)
-            flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
+        _fill(cons, idx, res["consistent_II"])
+        _fill(stab, idx, res["stable_II"])
 
 
 def _abscissa(inputs, shape, dtype, chunk, undamped_q):
@@ -248,7 +274,7 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
     return absc
 
 
-def _settle_exact(inputs, shape, out, flags, und, max_resolve):
+def _settle_exact(inputs, shape, out, flags, und, max_resolve, counts):
     """Tier 4: exact verdicts (:func:`atlas.exact.resolve`) where a flag is still undecided."""
     from . import exact
 
@@ -266,11 +292,29 @@ def _settle_exact(inputs, shape, out, flags, und, max_resolve):
             continue
         cols = _gather(inputs, shape, idx)
         pts = {key: c.astype(np.float64) for key, c in zip(_KEYS, cols)}
-        ref = exact.resolve(pts, names=sel_names)
+        try:
+            ref = exact.resolve(pts, names=sel_names)
+        except Exception:  # the exact tier must not raise; if it does, keep those points undecided
+            ref = _resolve_each(exact, pts, sel_names, counts)
         for k in sel_names:
-            flat = out[k].reshape(-1)
-            sel = flat[idx] == _UND
-            flat[idx[sel]] = ref[k][sel]
+            _fill(out[k], idx, ref[k])
+
+
+def _resolve_each(exact, pts, names, counts):
+    """Point-by-point settlement after a failure: failing points stay undecided and are recorded
+    in ``counts["exact_failures"]`` (a long atlas run is never aborted by one point)."""
+    n = len(pts["c1"])
+    ref = {k: np.full(n, _UND, np.int8) for k in names}
+    for i in range(n):
+        one = {key: v[i : i + 1] for key, v in pts.items()}
+        try:
+            res = exact.resolve(one, names=names)
+        except Exception:
+            counts.setdefault("exact_failures", []).append(tuple(float(v[0]) for v in one.values()))
+            continue
+        for k in names:
+            ref[k][i] = res[k][0]
+    return ref
 
 
 def _report(counts, stats):

@@ -49,11 +49,19 @@ root ``r1`` of ``h1`` (``c1 < 0``) with ``s1 f2(r1) < 0``; ``s1 = 0`` symmetric;
 ``max(k) <= 1``, then ``l -> 2^e l`` brings ``k1, k2, q1, q2`` to ``<= 1``, the input bound of every
 error model here (:func:`atlas._signs.error_model`).
 
+**Two passes.**  :func:`codes` (every point) evaluates each polynomial once and bounds its rounding
+error with the majorants ``|c|, |s| <= 1``, ``k_j <= max k``, ``q_j <= max q`` (no per-point
+absolute-value evaluation); :func:`tier2` (the few points left, gathered) uses the sharp bound on
+the absolute values and adds the shifted Routh counts.  Both are certified; the first is cheaper
+and looser.
+
 **Soundness.**  XLA may duplicate a cheap sub-expression into several fusions, compiled with and
 without fused multiply-add; each copy is a valid certified sign, but two copies can disagree on
-*whether* they are certified.  All sign codes are therefore computed once, behind
-``jax.lax.optimization_barrier``, and every decision reads that one copy; the kernel returns one
-packed ``uint8`` (:func:`pack`).
+*whether* they are certified, and a value that is an *input* of a certified expression (the shift
+``s`` of :func:`tier2`, the roots ``z`` of :mod:`atlas.spectral`) must be one rounded number.  All
+sign codes and such inputs are therefore computed once, behind ``jax.lax.optimization_barrier``,
+and every decision reads that one copy; the kernel returns one packed ``uint8`` (:func:`pack`).
+Decisions use certified signs only ("not certified positive" is never read as "<= 0").
 """
 
 from __future__ import annotations
@@ -441,17 +449,22 @@ def _count_right(args, s):
     return jnp.where(ok, v, -1), sb0
 
 
-def tier2(c1, s1, c2, s2, kappa, q1, q2, iters: int = 24):
-    """Second pass on the damped points the first pass of :func:`codes` left undecided:
-    ``(consistent_II, stable_II)``.
+def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, iters: int = 24):
+    """Second pass on the points the first pass of :func:`codes` left undecided:
+    ``(stable_SS, consistent_II, stable_II)`` (``UNDECIDED`` for outputs not asked for).
 
-    Every sign of :func:`ii_damped` (with the Sturm count), then dominance where three roots have
+    ``stable_SS`` by :func:`atlas.spectral.ss_verdict` (sharp error bounds).  II: every sign of :func:`ii_damped` (with the Sturm count), then dominance where three roots have
     ``Re > 0`` and the largest real root ``l*`` is II: ``Disc > 0``: four simple real roots, ``l*``
     strictly dominant -> stable.  ``Disc < 0``: ``l*``, a negative root and a complex pair; a float
     estimate ``x`` of ``l*`` (bracketed Newton) gives shifts ``s = x (1 -/+ 4 sqrt(eps))``; one root
     right of ``s_lo`` with ``p(s_lo) < 0`` proves ``l* > s_lo >= Re(pair)`` (stable); two roots right
     of ``s_hi`` (the pair) prove the pair dominates (unstable).  Otherwise ``UNDECIDED``.
     """
+    shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in (c1, s1, c2, s2, kappa, q1, q2)))
+    xs = jnp.full(shape, X, jnp.int8)
+    ss_code = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+    if not ii:
+        return ss_code, xs, xs
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(_CHEAP) | frozenset(_STURM), sharp=True)
     cons, stab, dominance = _ii_decide(g)
     k1, k2, q1s, q2s = _balance(kappa, q1, q2)
@@ -471,14 +484,20 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, iters: int = 24):
         xn = x - f / jnp.where(fp != 0, fp, 1)
         x = jnp.where((xn > lo) & (xn < hi) & (fp != 0), xn, 0.5 * (lo + hi))
     delta = 4 * float(jnp.finfo(c1.dtype).eps) ** 0.5
-    n_lo, p_lo = _count_right(args, x * (1 - delta))
-    n_hi, p_hi = _count_right(args, x * (1 + delta))
+    # the shifts are inputs of the certified expressions: one rounded copy each (an FMA could
+    # otherwise use the unrounded product x (1 -/+ delta) in some terms and not in others)
+    s_lo, s_hi = jax.lax.optimization_barrier((x * (1 - delta), x * (1 + delta)))
+    n_lo, p_lo = _count_right(args, s_lo)
+    n_hi, p_hi = _count_right(args, s_hi)
     n_lo, p_lo, n_hi, p_hi = jax.lax.optimization_barrier((n_lo, p_lo, n_hi, p_hi))
     stable = (s_disc == 1) | ((s_disc == -1) & (n_lo == 1) & (p_lo == -1))
     unstable = (s_disc == -1) & (n_hi == 2) & (p_hi == 1)
     S, U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
     dom = jnp.where(stable, S, jnp.where(unstable, U, X))
-    return cons, jnp.where(dominance, dom, stab).astype(jnp.int8)
+    stab = jnp.where(dominance, dom, stab)
+    damped = (q1 != 0) | (q2 != 0)
+    cons, stab = jnp.where(damped, cons, X), jnp.where(damped, stab, X)
+    return ss_code, cons.astype(jnp.int8), stab.astype(jnp.int8)
 
 
 # --- the packed kernel ----------------------------------------------------------------------------
@@ -509,7 +528,7 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     ``stable_SS`` by the decision logic of :mod:`atlas.spectral` on the signs computed here (one
     copy shared with II); II from the closed form :func:`atlas.spectral.ii_undamped` where
     ``q1 = q2 = 0`` (except diagonal ``B``) and from the first pass of :func:`ii_damped` elsewhere.
-    Bit 6 marks damped points whose II verdicts are left for :func:`tier2`.  ``damped=True``
+    Bit 6 marks points with a verdict left for :func:`tier2` (``stable_SS``, or II where damped).  ``damped=True``
     (``False``) promises every point is damped (undamped) and skips the other branch.  Outputs not
     asked for are packed as ``UNDECIDED``.
     """
@@ -528,7 +547,7 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     else:
         s = xs
     if not ii:
-        return pack(jnp.broadcast_to(s, shape), xs, xs, jnp.zeros(shape, bool))
+        return pack(jnp.broadcast_to(s, shape), xs, xs, jnp.broadcast_to(s == X, shape))
     cd, sdm, _ = _ii_decide(g)
     if damped is True:
         cons, stab = cd, sdm
@@ -538,6 +557,8 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
         use_u = ~is_damped & ~((c2 == 0) & (s1 == 0))
         cons, stab = jnp.where(use_u, cu, cd), jnp.where(use_u, su, sdm)
     later = is_damped & ((cons == X) | (stab == X))
+    if ss:
+        later = later | (s == X)
     return pack(
         jnp.broadcast_to(s, shape),
         jnp.broadcast_to(cons, shape),

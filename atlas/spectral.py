@@ -475,7 +475,9 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     a0 = jnp.where(dzero, 0, a0)
     coef = (a3, a2, a1, a0)
     undamped = (q1s == 0) & (q2s == 0)
-    z = quartic_roots(a3, a2, a1, a0, undamped)
+    # one copy of the roots: every enclosure radius and every decision reads the same z (XLA could
+    # otherwise recompute z inside several fusions, with and without FMA contraction)
+    z = jax.lax.optimization_barrier(quartic_roots(a3, a2, a1, a0, undamped))
     cdt = z.dtype
     cc = tuple(a.astype(cdt)[..., None] for a in coef)
     cca = tuple(a[..., None] for a in coef_abs)
@@ -490,6 +492,7 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     Rd = jnp.concatenate([Rq, jnp.zeros_like(Rq)], -1)
     z = jnp.where(dzero[..., None], zd, z)
     R = jnp.where(dzero[..., None], Rd, R)
+    z, R, dzero = jax.lax.optimization_barrier((z, R, dzero))
     return z, R, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero)
 
 

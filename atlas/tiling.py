@@ -11,7 +11,9 @@ partial).  For each tile the host gathers the inputs from direction vectors comp
 coordinate** (:func:`atlas.mechanics.direction`), flattens and pads them to exactly ``tile_points``
 values (so the jitted kernel compiles once per ``tile_points`` and dtype), and dispatches the kernel
 asynchronously; the previous tile is finished (undecided points resolved exactly, codes converted to
-the stored types) while the next one computes.  Finished tiles go to a *sink*:
+the stored types) while the next one computes.  The certified spectral group instead hands each
+hyperslab, as broadcastable per-axis inputs, to :func:`atlas.evaluate.spectral_points` (its tiers
+and its exact settlement: the one copy of that logic).  Finished tiles go to a *sink*:
 :func:`generate` keeps them in memory and returns a Dataset; :func:`atlas.io.generate_to_file`
 writes each tile straight into a netCDF4 file, so memory is bounded by the tile, not the atlas.
 
@@ -46,8 +48,8 @@ import jax
 import numpy as np
 import xarray as xr
 
+from . import evaluate, spectral
 from . import mechanics as mech
-from . import spectral
 from .scene import Scene
 from .verdicts import UNDECIDED_CODE, Consistency, Verdict, flag_attrs
 
@@ -161,29 +163,18 @@ def _kernel_b1b2a(c1, s1, c2, s2, ca, sa):
     return out
 
 
-def _kernel_spectral(c1, s1, c2, s2, kappa, q1, q2, *, method, ii):
-    if method == "eig":
-        return spectral.eig_verdicts(c1, s1, c2, s2, kappa, q1, q2)
-    return spectral.verdicts(c1, s1, c2, s2, kappa, q1, q2, ii=ii)
-
-
-def _variant(group: str, names: tuple[str, ...]) -> str:
-    """Kernel variant: the spectral group skips the (expensive) II root analysis if not needed."""
-    if group == "spectral" and all(n == "stable_SS" for n in names):
-        return "ss"
-    return "all"
-
-
 @functools.cache
-def _jitted(group: str, variant: str, method: str):
-    """One jitted kernel per (group, variant, method).  Every output of the group is returned, so
-    scenes asking for different subsets share one compilation per tile shape."""
-    if group == "spectral":
-        base = functools.partial(_kernel_spectral, method=method, ii=variant == "all")
-        if variant == "ss":
-            return jax.jit(lambda *a: {"stable_SS": base(*a)["stable_SS"]})
-        return jax.jit(base)
-    kernels = {"b1": _kernel_b1, "b2": _kernel_b2, "b1b2": _kernel_b1b2, "b1b2a": _kernel_b1b2a}
+def _jitted(group: str):
+    """One jitted kernel per group (the spectral group: the uncertified ``eig`` baseline; the
+    certified spectral verdicts go through :func:`atlas.evaluate.spectral_points`).  Every output
+    of the group is returned, so scenes asking for different subsets share one compilation."""
+    kernels = {
+        "b1": _kernel_b1,
+        "b2": _kernel_b2,
+        "b1b2": _kernel_b1b2,
+        "b1b2a": _kernel_b1b2a,
+        "spectral": spectral.eig_verdicts,
+    }
     return jax.jit(kernels[group])
 
 
@@ -487,8 +478,35 @@ def _exact():
     return exact
 
 
+def _block_inputs(src, inputs, dims, index, block):
+    """Broadcastable (block-shaped) inputs of one hyperslab: each varied parameter along its axis."""
+    out = []
+    for key in inputs:
+        param, vals = src[key]
+        if vals.ndim == 0:
+            out.append(vals)
+            continue
+        ax = dims.index(param)
+        shp = [1] * len(dims)
+        shp[ax] = block[ax]
+        out.append(vals[index[ax]].reshape(shp))
+    return out
+
+
+def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
+    """Certified spectral verdicts of one tile (all tiers and the exact settlement)."""
+    args = _block_inputs(src, _GROUP_INPUTS["spectral"], dims, index, block)
+    st = {}
+    res = evaluate.spectral_points(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
+    settled = st["undecided_before"] - st["undecided_after"] if resolve else 0
+    stats["resolved_points"] = stats.get("resolved_points", 0) + settled
+    stats.setdefault("exact_failures", []).extend(st.get("exact_failures", []))
+    res = {k: np.broadcast_to(v, block).reshape(-1) for k, v in res.items()}
+    return res, st["undecided_by_name"]
+
+
 def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
-    """Replace undecided values of one tile by the exact reference, in place."""
+    """Replace undecided class/subclass codes of one tile by the exact reference, in place."""
     exact = _exact()
     names = [k for k in res if k != "spectral_abscissa"]
     und = {k: _undecided(k, res[k]) for k in names}
@@ -499,20 +517,9 @@ def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
     if idx.size == 0 or exact is None:
         return
     pts = [np.broadcast_to(a, (n,))[idx] if a.ndim == 0 else a[:n][idx] for a in flat_inputs]
-    if group == "spectral":
-        keys = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
-        spec = tuple(k for k in names if k in ("stable_SS", "consistent_II", "stable_II"))
-        ss_only = np.ones(idx.size, bool)
-        for k in spec:
-            if k != "stable_SS":
-                ss_only &= ~und[k][idx]
 
-        def solve(p, i):  # SS-only points: the rational Hurwitz test (exact.resolve decides)
-            return exact.resolve(dict(zip(keys, p)), names=("stable_SS",) if ss_only[i] else spec)
-    else:
-
-        def solve(p, i):
-            return exact.resolve_codes(*p)
+    def solve(p, i):
+        return exact.resolve_codes(*p)
 
     # one point at a time (the reference loops over points anyway): a point on which the reference
     # itself fails stays undecided and is recorded instead of aborting the whole atlas
@@ -573,13 +580,19 @@ def run(
     sink.begin(sch)
     try:
         for g, need, dims, shape in plan:
-            kern = _jitted(g.name, _variant(g.name, need), method)
+            kern = _jitted(g.name)
             inputs = _GROUP_INPUTS[g.name]
             # small groups: pad to the next power of two only (same blocks, few distinct shapes)
             T = min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
             pending = None
             for index in tile_blocks(shape, T):
                 block = tuple(s.stop - s.start for s in index)
+                if g.name == "spectral" and method == "certified":
+                    res, fast = _spectral_tile(src, dims, index, block, need, dtype, resolve, stats)
+                    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md)
+                    if bar is not None:
+                        bar.update(math.prod(block))
+                    continue
                 flat = _gather(src, inputs, dims, index, block, T)
                 out = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
                 if pending is not None:
@@ -638,19 +651,24 @@ def _finish_tile(g, dims, index, block, flat, out, sink, outputs, dtype, resolve
     res = {
         k: np.array(np.broadcast_to(np.asarray(v).reshape(-1), (size,))[:n]) for k, v in out.items()
     }
-    for k, v in res.items():
-        stats["undecided_fast"][k] = stats["undecided_fast"].get(k, 0) + int(_undecided(k, v).sum())
+    fast = {k: int(_undecided(k, v).sum()) for k, v in res.items()}
     if resolve:
         _resolve(g.name, res, flat, n, stats)
+    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md)
+    if bar is not None:
+        bar.update(n)
+
+
+def _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md):
+    """Count, record model dependence and write the finished (flat) results of one tile."""
     for k, v in res.items():
+        stats["undecided_fast"][k] = stats["undecided_fast"].get(k, 0) + fast.get(k, 0)
         stats["undecided"][k] = stats["undecided"].get(k, 0) + int(_undecided(k, v).sum())
     if g.name == "spectral":
         md.update(dims, index, block, res)
     for k, v in res.items():
         if k in outputs:
             sink.write(k, index, _to_storage(k, v.reshape(block), dtype))
-    if bar is not None:
-        bar.update(n)
 
 
 class _ModelDependence:
