@@ -67,6 +67,16 @@ CONFIG = {
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         large_check=100,
         atlases=(
+            (
+                "issue 12: axis scene",
+                ["--beta1", "0:2pi:64", "--beta2", "0:2pi:64", "--kappa", "0.5,2"]
+                + ["--q1", "0,0.1", "--q2", "0,0.2", "--alpha", "0.35pi"],
+            ),
+            (
+                "issue 12: shifted scene",
+                ["--beta1", "0.003pi:2.003pi:64", "--beta2", "0.003pi:2.003pi:64"]
+                + ["--kappa", "0.5,2", "--q1", "0.05,0.1", "--q2", "0.05,0.2", "--alpha", "0.35pi"],
+            ),
             ("fig1", ["--scene", "fig1"]),
             ("fig1-model", ["--scene", "fig1-model"]),
             ("atlas4d", ["--scene", "atlas4d"]),
@@ -117,6 +127,16 @@ CONFIG = {
         large_n=0,
         large_check=10,
         atlases=(
+            (
+                "issue 12: axis scene",
+                ["--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5,2"]
+                + ["--q1", "0,0.1", "--q2", "0,0.2", "--alpha", "0.35pi"],
+            ),
+            (
+                "issue 12: shifted scene",
+                ["--beta1", "0.003pi:2.003pi:16", "--beta2", "0.003pi:2.003pi:16"]
+                + ["--kappa", "0.5,2", "--q1", "0.05,0.1", "--q2", "0.05,0.2", "--alpha", "0.35pi"],
+            ),
             (
                 "tiny 4-D",
                 ["--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5,2", "--q", "0,0.1"],
@@ -632,6 +652,7 @@ def _suites(cfg, cache, rng):
             pts = {k: a.astype(np.float64) for k, a in zip(KEYS, args)}
             _log(f"suite {sname} {dtype}: {idx.size} points")
             ref = cache.get(pts)
+            exact_us = _exact_us_per_point(pts)
             for m in ("certified", "certified+exact", "verdicts_jit", "eig"):
                 if m == "certified+exact":
                     from . import evaluate
@@ -650,10 +671,19 @@ def _suites(cfg, cache, rng):
                         points=int(idx.size),
                         misclassified=bad,
                         undecided=und,
+                        exact_us_per_point=exact_us,
                         **{f"bad_{k}": v for k, v in per.items()},
                     )
                 )
     return rows
+
+
+def _exact_us_per_point(pts) -> float:
+    """Microseconds a point of the exact tier (:func:`atlas.exact.resolve`, every flag verdict)."""
+    from . import exact
+
+    t = _timeit(lambda: exact.resolve(pts, names=FLAGS), budget=1.0, max_repeats=3, min_repeats=1)
+    return t / len(pts["c1"]) * 1e6
 
 
 def _scale_worker(n_target: int, q: float, dtype: str) -> dict:
@@ -1429,6 +1459,7 @@ def _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large=(), at
             )
         )
         a("")
+    a(_issue12_section(head, suites, atlases))
     a("## Simulation\n")
     a(
         "Fig. 2 cases (`simulate.fig2_cases`). Error = max |event time - reference| over the "
@@ -1447,6 +1478,50 @@ def _report(meta, head, wp, refs, suites, scaling, sim, cfg, cache, large=(), at
         f"* Exact reference: {len(cache.store)} distinct points evaluated in "
         f"{cache.seconds:.0f} s; {cache.failures} failed (counted as undecided)."
     )
+    return "\n".join(L) + "\n"
+
+
+#: points/s of ``atlas generate --scene atlas4d`` before issue 12 (outputs/bench.md of 77e2e98)
+_ATLAS4D_BEFORE = 19_800
+
+
+def _issue12_section(head, suites, atlases) -> str:
+    """Targets of issue 12 (exact at kernel speed), from rows measured in this run."""
+    L = ["### Issue 12: exact at kernel speed\n"]
+    a = L.append
+    a(
+        "Damped, all three flag verdicts, results on the host, no exact settlement (`certified`: "
+        "root-free first pass, tier 2, enclosures for what is left); targets <= 25 ns/point f64, "
+        "<= 15 f32, >= 150x `eig`.\n"
+    )
+    rows = [r for r in head if r["method"] == "certified" and r["case"].startswith("(c")]
+    a(_table(rows, ["case", "dtype", "ns_per_point", "eig_over_method", "method_over_floor"]))
+    ex = [r for r in suites if r["method"] == "certified" and "exact_us_per_point" in r]
+    if ex:
+        worst = max(ex, key=lambda r: r["exact_us_per_point"])
+        a(
+            f"\nExact tier (`exact.resolve`, every flag verdict): worst hard suite "
+            f"**{_fmt(worst['exact_us_per_point'])} us/point** ({worst['suite']}, {worst['dtype']}; "
+            "target <= 200); per suite in `bench_suites.csv` (`exact_us_per_point`).\n"
+        )
+    by = {r["atlas"]: r for r in atlases}
+    ax, sh = by.get("issue 12: axis scene"), by.get("issue 12: shifted scene")
+    if ax and sh:
+        ratio = sh["points_per_second"] / ax["points_per_second"]
+        a(
+            f"Axis-including scene vs the same scene shifted off the axes (both q > 0): "
+            f"{_fmt(ax['points_per_second'])} vs {_fmt(sh['points_per_second'])} points/s, "
+            f"ratio **{_fmt(ratio)}** (target <= 1.5; 6.5 before); undecided after settlement "
+            f"{ax['undecided_after']} and {sh['undecided_after']}.\n"
+        )
+    if "atlas4d" in by:
+        r = by["atlas4d"]
+        a(
+            f"`atlas4d`: {_fmt(r['points_per_second'])} points/s = "
+            f"**{_fmt(r['points_per_second'] / _ATLAS4D_BEFORE)}x** the {_ATLAS4D_BEFORE} points/s "
+            f"before (target >= 20x); undecided after settlement **{r['undecided_after']}** "
+            "(target 0).\n"
+        )
     return "\n".join(L) + "\n"
 
 

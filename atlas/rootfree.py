@@ -249,7 +249,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     if "a3" in names:  # equal damping: sign(a3) = sign(c1 + s2), one rounding of a sum: exact
         sg["a3"] = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(jnp.int8), sg["a3"])
     lost = spectral.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
-    for name in names:
+    for name in sorted(names):  # sorted: the same program (and compilation-cache key) every run
         sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(jnp.int8)
     # A = B = 0 exactly (h1 == h2): c1 == s2 and q1 == q2, k1 == k2 as floats
     sg["h1_eq_h2"] = (c1 == s2) & (q1s == q2s) & (k1 == k2) & ~lost
