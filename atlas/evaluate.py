@@ -92,6 +92,8 @@ def _run_chunked(kernel, cols, dtype, chunk):
 
 def _gather(inputs, shape, idx):
     """1-D columns of the inputs at flat indices ``idx`` of the broadcast ``shape``."""
+    if not shape:  # one point given as scalars
+        return [np.broadcast_to(a, idx.shape) for a in inputs]
     sub = np.unravel_index(idx, shape)
     cols = []
     for a in inputs:
