@@ -119,15 +119,19 @@ def _blocks(shape, limit):
         yield (slice(i, min(i + step, shape[0])),)
 
 
-def _pow2(n: int) -> int:
-    return 1 << max(0, n - 1).bit_length()
+def _bucket(n: int) -> int:
+    """``n`` rounded up to 8-16 multiples of a power of two (<= 12.5 % padding, 8 sizes/octave)."""
+    if n <= 16:
+        return 1 << max(0, n - 1).bit_length()
+    granule = 1 << (n.bit_length() - 4)
+    return -(-n // granule) * granule
 
 
 def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
     """Packed codes of :func:`atlas.rootfree.codes` over the broadcast grid, in slabs.
 
-    Every axis of a slab is padded (edge values) to a power of two, so grids of many sizes share
-    a few compilations (and the persistent compilation cache of the CLI).
+    Every axis of a slab is padded (edge values) to a size of :func:`_bucket`, so grids of many
+    sizes share a few compilations (and the persistent compilation cache of the CLI).
     """
     kern = _kernel("codes", ss=ss, ii=ii, damped=damped)
     nd = len(shape)
@@ -138,7 +142,7 @@ def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
         for a in full:
             ix = tuple(s if a.shape[d] > 1 else slice(None) for d, s in enumerate(blk))
             part = a[ix]
-            pad = [(0, _pow2(m) - m if m > 1 else 0) for m in part.shape]
+            pad = [(0, _bucket(m) - m if m > 1 else 0) for m in part.shape]
             args.append(np.pad(part, pad, mode="edge") if any(p for _, p in pad) else part)
         res = np.asarray(kern(*args))
         sub = code[blk]
