@@ -80,9 +80,9 @@ def _run_chunked(kernel, cols, dtype, chunk):
             c[: stop - start] = a[start:stop]
             args.append(c)
         res = kernel(*args)
-        res = {
-            k: np.asarray(v) for k, v in (res.items() if isinstance(res, dict) else enumerate(res))
-        }
+        if not isinstance(res, dict):
+            res = dict(enumerate(res if isinstance(res, (tuple, list)) else (res,)))
+        res = {k: np.asarray(v) for k, v in res.items()}
         if out is None:
             out = {k: np.empty(n, v.dtype) for k, v in res.items()}
         for k, v in res.items():
@@ -274,9 +274,8 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
         absc[...] = np.broadcast_to(np.asarray(res["spectral_abscissa"]), shape)
     idx = np.flatnonzero(~und)
     if idx.size:
-        kern = _kernel("roots", ("spectral_abscissa",))
-        res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
-        absc.reshape(-1)[idx] = res["spectral_abscissa"]
+        res = _run_chunked(spectral.abscissa, _gather(inputs, shape, idx), dtype, chunk)
+        absc.reshape(-1)[idx] = res[0]
     return absc
 
 

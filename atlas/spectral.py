@@ -702,6 +702,14 @@ _stage1_jit = jax.jit(_roots_and_radii)
 _stage2_jit = jax.jit(_ii_stage2)
 
 
+@jax.jit
+def abscissa(c1, s1, c2, s2, kappa, q1, q2):
+    """Spectral abscissa (max Re of the roots, time unit of contact 2) from the root finder alone,
+    for display (not certified)."""
+    z, _, extra = _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2)
+    return jnp.ldexp(jnp.max(jnp.real(z), -1), extra[8])
+
+
 def ii_verdicts_two_stage(c1, s1, c2, s2, kappa, q1, q2):
     """Same results as :func:`ii_verdicts`, as two compiled stages (roots, then decisions).
 
