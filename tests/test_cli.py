@@ -186,8 +186,9 @@ def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
     import time
 
     out = tmp_path / "big.nc"
-    args = ["generate", "--beta1", "0:2pi:2048", "--beta2", "0:2pi:2048", "--kappa", "1,2,3,4"]
-    args += ["--q", "0.1,0.2,0.3,0.4", "--outputs", "stable_SS", "--out", str(out)]
+    # ~1e9 points: minutes of work at 1e7 points/s, so the signal arrives mid-run
+    args = ["generate", "--beta1", "0:2pi:4096", "--beta2", "0:2pi:4096", "--kappa", "log:1:4:8"]
+    args += ["--q", "log:0.1:0.4:8", "--outputs", "stable_SS", "--out", str(out)]
     p = _spawn(args, _env(tmp_path_factory))
     deadline = time.time() + 60
     while time.time() < deadline and not any(f.endswith(".tmp") for f in os.listdir(tmp_path)):
