@@ -35,7 +35,8 @@ Schedulers
 ``"local"`` / ``"local:N"``
     a :class:`distributed.LocalCluster` of N worker *processes* (default: the number of cores),
     one thread each, one JAX runtime per worker with XLA's intra-op threading off
-    (:data:`WORKER_ENV`), so N workers use N cores; the workers share the CLI's persistent JAX
+    (:data:`WORKER_ENV`) and each worker pinned to its own core (:func:`pin_to_cpus`: XLA's task
+    pool ignores the flags), so N workers use N cores; the workers share the CLI's persistent JAX
     compilation cache (:func:`worker_env`);
 ``"tcp://host:8786"`` or a :class:`distributed.Client`
     an existing cluster.  The workers need ``painleve-atlas`` (same version and JAX version as the
@@ -91,6 +92,8 @@ __all__ = [
     "tile_plan",
     "WORKER_ENV",
     "worker_env",
+    "local_cluster",
+    "pin_to_cpus",
     "measure_throughput",
 ]
 
@@ -101,6 +104,48 @@ WORKER_ENV = {
     "MKL_NUM_THREADS": "1",
     "OPENBLAS_NUM_THREADS": "1",
 }
+
+
+def pin_to_cpus(cpus) -> list[int]:
+    """Restrict every thread of this process to ``cpus`` (Linux); returns the threads pinned.
+
+    XLA splits large fusions into parallel tasks on its own thread pool whatever ``XLA_FLAGS`` say
+    (measured: one worker used 1.5-1.8 cores with ``--xla_cpu_multi_thread_eigen=false``), so a
+    LocalCluster of N workers on N cores oversubscribed them (2 workers gave 1.12x one worker).
+    Affinity is per thread on Linux: every existing thread is set, and threads created later
+    inherit it.  A no-op (empty list) where ``os.sched_setaffinity`` does not exist.
+    """
+    if not hasattr(os, "sched_setaffinity"):  # pragma: no cover - macOS, Windows
+        return []
+    done = []
+    for tid in os.listdir("/proc/self/task"):
+        with contextlib.suppress(OSError):
+            os.sched_setaffinity(int(tid), set(cpus))
+            done.append(int(tid))
+    return done
+
+
+def local_cluster(n_workers: int):
+    """``(cluster, client)``: a LocalCluster of ``n_workers`` single-thread worker processes with
+    :func:`worker_env`, worker ``i`` pinned to core ``i mod ncores`` (:func:`pin_to_cpus`), so N
+    workers use N cores."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=n_workers,
+        threads_per_worker=1,
+        processes=True,
+        env=worker_env(),
+        dashboard_address=None,
+        silence_logs=40,
+    )
+    client = Client(cluster)
+    client.wait_for_workers(n_workers)
+    cores = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    if cores and n_workers <= len(cores):
+        for i, addr in enumerate(sorted(client.scheduler_info()["workers"])):
+            client.run(pin_to_cpus, [cores[i]], workers=[addr])
+    return cluster, client
 
 
 def worker_env() -> dict:
@@ -422,7 +467,7 @@ class _InProcess:
 
 class _Dask:
     def __init__(self, scheduler):
-        from distributed import Client, LocalCluster
+        from distributed import Client
 
         self.cluster = None
         if isinstance(scheduler, Client):
@@ -430,15 +475,8 @@ class _Dask:
         elif isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
             n = scheduler.partition(":")[2]
             n = int(n) if n else (os.cpu_count() or 1)
-            self.cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                env=worker_env(),
-                dashboard_address=None,
-                silence_logs=40,
-            )
-            self.client, self.own = Client(self.cluster), True
+            self.cluster, self.client = local_cluster(n)
+            self.own = True
         elif isinstance(scheduler, str) and "://" in scheduler:
             try:
                 self.client, self.own = Client(scheduler), True
@@ -794,18 +832,7 @@ def _measure_one(scene, store, scheduler, slab, opts, n_workers):
         _warm(scene, tiles[0], opts)
         client = cluster = None
     else:
-        from distributed import Client, LocalCluster
-
-        cluster = LocalCluster(
-            n_workers=n_workers,
-            threads_per_worker=1,
-            processes=True,
-            env=worker_env(),
-            dashboard_address=None,
-            silence_logs=40,
-        )
-        client = Client(cluster)
-        client.wait_for_workers(n_workers)
+        cluster, client = local_cluster(n_workers)
         client.run(_warm, scene, tiles[0], opts)  # every worker compiles before the clock runs
     warm = time.perf_counter() - t0
     try:
@@ -941,7 +968,10 @@ def _measure_markdown(rep: dict, projected_points: float) -> str:
         "",
         "Per-tile columns are medians over the tiles, measured on the workers (CPU = process "
         "CPU time, all threads).  The in-process run uses XLA's intra-op threads; the workers "
-        "run one dask thread each with XLA's Eigen thread pool off.",
+        "run one dask thread each with XLA's Eigen thread pool off, every thread pinned to the "
+        "worker's own core (`pin_to_cpus`): XLA splits large fusions over its task pool whatever "
+        "the flags say, so unpinned workers used 1.5-1.8 cores each and oversubscribed the "
+        "machine (CPU / wall = cores used per worker).",
         "",
     ]
     one = next((r for r in rep["runs"] if r["scheduler"] != "in-process"), None)
@@ -950,7 +980,7 @@ def _measure_markdown(rep: dict, projected_points: float) -> str:
             f"**Caveat**: a 1-worker tile took {one['tile_cpu_seconds']:.2f} s of CPU in "
             f"{one['tile_seconds']:.2f} s of wall time, i.e. one worker process still used about "
             f"{one['tile_cpu_seconds'] / one['tile_seconds']:.1f} cores (other threads than the "
-            "dask one, presumably XLA's own; not investigated further).  On this 2-core machine the 1-worker "
+            "dask one: pinning failed?).  On this 2-core machine the 1-worker "
             "run therefore already used most of the machine, and the 2-worker ratio understates "
             "how throughput scales with cores; the CPU-time projection below is the per-core "
             "one.",

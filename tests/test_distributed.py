@@ -298,3 +298,39 @@ def test_fixed_beta1_is_one_tile(tmp_path):
     summary = generate_distributed(sc, tmp_path / "f.zarr")
     assert summary["tiles"] == 1
     same_bytes(open_store(tmp_path / "f.zarr").load(), generate(sc))
+
+
+def _thread_affinities():
+    import os
+
+    return sorted(
+        {tuple(sorted(os.sched_getaffinity(int(t)))) for t in os.listdir("/proc/self/task")}
+    )
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
+def test_local_cluster_pins_each_worker_to_one_core():
+    """Every thread of a LocalCluster worker (XLA's task pool included) runs on one core, and the
+    worker has the single-thread XLA environment."""
+    import jax.numpy as jnp  # noqa: F401  (XLA's pools exist in this process too)
+
+    from atlas.distributed import WORKER_ENV, local_cluster
+
+    cluster, client = local_cluster(1)
+    try:
+
+        def probe():
+            import os
+
+            import jax.numpy as jnp
+
+            jnp.ones(1 << 16).sum().block_until_ready()  # start XLA's threads
+            return _thread_affinities(), os.environ.get("XLA_FLAGS")
+
+        (res,) = client.run(probe).values()
+    finally:
+        client.close()
+        cluster.close()
+    affinities, flags = res
+    assert len(affinities) == 1 and len(affinities[0]) == 1, affinities
+    assert flags == WORKER_ENV["XLA_FLAGS"]
