@@ -445,8 +445,9 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
     return consistent.astype(jnp.int8), stable.astype(jnp.int8)
 
 
-def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
-    dtype = c1.dtype
+def _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2):
+    """Broadcast inputs, coefficients of ``p`` after the exact scalings that balance the root
+    magnitudes, their absolute-value bounds, and the scaled parameters."""
     k1, k2, q1s, q2s, n = normalize(kappa, q1, q2)
     shape = jnp.broadcast_shapes(
         c1.shape, s1.shape, c2.shape, s2.shape, kappa.shape, q1.shape, q2.shape
@@ -474,6 +475,14 @@ def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
     a1 = jnp.where(dzero, 0, a1)
     a0 = jnp.where(dzero, 0, a0)
     coef = (a3, a2, a1, a0)
+    return coef, coef_abs, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero)
+
+
+def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
+    dtype = c1.dtype
+    coef, coef_abs, extra = _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2)
+    a3, a2, a1, a0 = coef
+    c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero = extra
     undamped = (q1s == 0) & (q2s == 0)
     # one copy of the roots: every enclosure radius and every decision reads the same z (XLA could
     # otherwise recompute z inside several fusions, with and without FMA contraction)
@@ -706,8 +715,12 @@ _stage2_jit = jax.jit(_ii_stage2)
 def abscissa(c1, s1, c2, s2, kappa, q1, q2):
     """Spectral abscissa (max Re of the roots, time unit of contact 2) from the root finder alone,
     for display (not certified)."""
-    z, _, extra = _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2)
-    return jnp.ldexp(jnp.max(jnp.real(z), -1), extra[8])
+    (a3, a2, a1, a0), _, extra = _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2)
+    q1s, q2s, n, dzero = extra[6:]
+    z = quartic_roots(a3, a2, a1, a0, (q1s == 0) & (q2s == 0))
+    qr, _, qr2, _ = _real_quadratic(a3, a2)  # det B = 0: roots 0, 0 and those of l^2 + a3 l + a2
+    zmax = jnp.where(dzero, jnp.maximum(jnp.maximum(qr, qr2), 0), jnp.max(jnp.real(z), -1))
+    return jnp.ldexp(zmax, n)
 
 
 def ii_verdicts_two_stage(c1, s1, c2, s2, kappa, q1, q2):
