@@ -522,6 +522,25 @@ def unpack(code):
     )
 
 
+def _ii_undamped(c1, s1, c2, s2, kappa):
+    """II verdicts for ``q1 = q2 = 0``: :func:`atlas.spectral.ii_undamped`, and for diagonal ``B``
+    (``c2 = s1 = 0``, where its eigenvector rows say nothing) the closed form: ``p = h1 h2`` with
+    ``h1 = l^2 + c1 k1``, ``h2 = l^2 + s2 k2``; II needs a common positive root (``c1, s2 < 0``,
+    ``c1 k1 = s2 k2``): a double eigenvalue, never stable."""
+    cu, su, _ = spectral.ii_undamped(c1, s1, c2, s2, kappa)
+    k1, k2 = spectral.normalize(kappa, jnp.zeros_like(kappa), jnp.zeros_like(kappa))[:2]
+    sx = evaluate_certified(spectral._X, k1, c1, k2, s2)[2]
+    common = (c1 < 0) & (s2 < 0) & (c1 == s2) & (k1 == k2)
+    apart = (c1 >= 0) | (s2 >= 0) | (sx == 1) | (sx == -1)
+    cons_d = jnp.where(common, 1, jnp.where(apart, 0, X))
+    stab_d = jnp.where(cons_d == X, X, int(Verdict.UNSTABLE))
+    diag = (c2 == 0) & (s1 == 0)
+    lost = spectral.lost_to_underflow((kappa, kappa), (k1, k2))
+    cons = jnp.where(diag, jnp.where(lost, X, cons_d), cu)
+    stab = jnp.where(diag, jnp.where(lost, X, stab_d), su)
+    return cons.astype(jnp.int8), stab.astype(jnp.int8)
+
+
 def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, damped=None):
     """Packed certified verdicts of every point: one fused kernel, no roots (:func:`pack`).
 
@@ -534,11 +553,19 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     """
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     xs = jnp.full(shape, X, jnp.int8)
+    if not ii:  # SS alone: the cheaper signs of atlas.spectral (no shared work to amortize)
+        s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+        return pack(jnp.broadcast_to(s, shape), xs, xs, jnp.broadcast_to(s == X, shape))
+    if damped is False:  # all undamped: closed forms only
+        s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+        cons, stab = _ii_undamped(c1, s1, c2, s2, kappa)
+        later = (s == X) if ss else jnp.zeros(shape, bool)
+        bc = lambda a: jnp.broadcast_to(a, shape)  # noqa: E731
+        return pack(bc(s), bc(cons), bc(stab), bc(later))
     names = set()
     if ss:
         names |= set(_SS_NAMES) | ({"disc_u"} if damped is not True else set())
-    if ii:
-        names |= set(_CHEAP) | set(_STURM)
+    names |= set(_CHEAP) | set(_STURM)
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(names))
     is_damped = (q1 != 0) | (q2 != 0)
     if ss:
@@ -546,16 +573,12 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
         s = spectral._ss_from_signs({**parts, "damped": is_damped})
     else:
         s = xs
-    if not ii:
-        return pack(jnp.broadcast_to(s, shape), xs, xs, jnp.broadcast_to(s == X, shape))
     cd, sdm, _ = _ii_decide(g)
     if damped is True:
         cons, stab = cd, sdm
     else:
-        cu, su, _ = spectral.ii_undamped(c1, s1, c2, s2, kappa)
-        # the diagonal-B closed form of ii_damped holds for q1 = q2 = 0 too
-        use_u = ~is_damped & ~((c2 == 0) & (s1 == 0))
-        cons, stab = jnp.where(use_u, cu, cd), jnp.where(use_u, su, sdm)
+        cu, su = _ii_undamped(c1, s1, c2, s2, kappa)
+        cons, stab = jnp.where(is_damped, cd, cu), jnp.where(is_damped, sdm, su)
     later = is_damped & ((cons == X) | (stab == X))
     if ss:
         later = later | (s == X)
