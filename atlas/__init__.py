@@ -1,20 +1,25 @@
-"""painleve-atlas: atlases of contact-mode consistency and stability for two sliding contacts."""
+"""painleve-atlas: atlases of contact-mode consistency and stability for two sliding contacts.
 
-import jax as _jax
+The package is layered; imports go one way (checked by import-linter in CI, see ``pyproject.toml``):
+``atlas.core`` (mathematics) <- ``atlas.data`` (scenes, engine, I/O) <- ``atlas.dynamics`` (time)
+<- ``atlas.paper`` / ``atlas.explore`` / ``atlas.bench`` <- ``atlas.cli``.
+"""
 
-_jax.config.update("jax_enable_x64", True)  # float64 kernels are first-class (SPEC §4)
+from atlas.core.config import __version__, enable_x64
 
-from importlib.metadata import PackageNotFoundError as _PNF  # noqa: E402
-from importlib.metadata import version as _version  # noqa: E402
+enable_x64()  # float64 kernels are first-class (SPEC §4)
 
-try:
-    __version__ = _version("painleve-atlas")
-except _PNF:  # pragma: no cover - running from a source tree without installation
-    __version__ = "0+unknown"
+from atlas import _compat  # noqa: E402
+from atlas.data.engine import generate as generate  # noqa: E402
+from atlas.data.scene import Scene as Scene  # noqa: E402
+from atlas.dynamics.model import simulate as simulate  # noqa: E402
+from atlas.paper.tables import table2 as table2  # noqa: E402
 
-from .dynamics import simulate as simulate  # noqa: E402
-from .scene import Scene as Scene  # noqa: E402
-from .tables import table2 as table2  # noqa: E402
-from .tiling import generate as generate  # noqa: E402
+_compat.install()
+
+
+def __getattr__(name):  # old flat modules as attributes: ``from atlas import tiling``
+    return _compat.moved_attribute(name)
+
 
 __all__ = ["Scene", "generate", "simulate", "table2", "__version__"]

@@ -1,8 +1,8 @@
 """The ``atlas`` command line: ``generate``, ``paper``, ``simulate``, ``table``, ``bench``.
 
 A thin layer over the library.  ``atlas generate`` streams a scene into a netCDF4 file
-(:func:`atlas.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
-implement them (``atlas.paper.run``, ``atlas.figures_dynamics.run_cli``, ``atlas.tables.run_cli``,
+(:func:`atlas.data.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
+implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, ``atlas.paper.tables.run_cli``,
 ``atlas.bench.run``).
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
@@ -13,7 +13,7 @@ code 2 -- never a traceback.  JAX compilations are cached on disk (``$ATLAS_JAX_
 
 With ``--scheduler`` (``inprocess``, ``local[:N]``, ``tcp://HOST:PORT``) or ``--store``,
 ``atlas generate`` runs the scene tile by tile into a resumable zarr store
-(:func:`atlas.distributed.generate_distributed`); ``--resume`` continues a killed run and ``--out``
+(:func:`atlas.data.distributed.generate_distributed`); ``--resume`` continues a killed run and ``--out``
 converts the finished store to netCDF.
 
 Examples::
@@ -34,7 +34,8 @@ import shlex
 import signal
 import sys
 import threading
-from pathlib import Path
+
+from atlas.core.config import use_compile_cache
 
 __all__ = ["main", "build_parser"]
 
@@ -57,8 +58,8 @@ def _one_line(msg: str) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .scene import ALL_OUTPUTS, BUILTIN_SCENES
-    from .tiling import DEFAULT_TILE_POINTS, DTYPES, METHODS
+    from atlas.data.engine import DEFAULT_TILE_POINTS, DTYPES, METHODS
+    from atlas.data.scene import ALL_OUTPUTS, BUILTIN_SCENES
 
     p = _Parser(
         prog="atlas",
@@ -113,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     d = g.add_argument_group(
         "distributed (dask)",
         "--scheduler, --store, --resume, --slab or --block2 run the scene tile by tile into a resumable zarr store "
-        "(atlas.distributed.generate_distributed; needs the dask extra); --out then converts the "
+        "(atlas.data.distributed.generate_distributed; needs the dask extra); --out then converts the "
         "finished store to netCDF.",
     )
     d.add_argument(
@@ -194,7 +195,7 @@ def _positive_int(name):
 
 def _number(name):
     def conv(text):
-        from .scene import parse_values
+        from atlas.data.scene import parse_values
 
         try:
             vals, is_dim = parse_values(text, name)
@@ -209,7 +210,7 @@ def _number(name):
 
 
 def _parse_physical(text: str) -> dict:
-    from .scene import invariants
+    from atlas.data.scene import invariants
 
     kw = {}
     for item in text.split(","):
@@ -233,7 +234,7 @@ def _parse_physical(text: str) -> dict:
 
 
 def _scene_from_args(args):
-    from .scene import Scene, builtin
+    from atlas.data.scene import Scene, builtin
 
     fields = {k: getattr(args, k) for k in ("beta1", "beta2", "alpha", "kappa", "q", "q1", "q2")}
     if args.outputs is not None:
@@ -256,7 +257,7 @@ def _scene_from_args(args):
 
 
 def _cmd_generate(args, argv) -> int:
-    from .io import check_output_path, generate_to_file
+    from atlas.data.io import check_output_path, generate_to_file
 
     scene = _scene_from_args(args)
     dist = (args.scheduler, args.store, args.slab, args.block2)
@@ -264,7 +265,7 @@ def _cmd_generate(args, argv) -> int:
         return _cmd_generate_distributed(args, argv, scene)
     out = args.out or f"{scene.name}.nc"
     check_output_path(out, args.overwrite)  # fail before any computation
-    _compile_cache()
+    use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     stats = generate_to_file(
         scene,
@@ -306,7 +307,7 @@ def _scheduler_arg(text: str):
 
 def _cmd_generate_distributed(args, argv, scene) -> int:
     """``atlas generate --scheduler/--store/--resume``: tiles into a zarr store, then netCDF."""
-    from .io import check_output_path
+    from atlas.data.io import check_output_path
 
     scheduler = _scheduler_arg(args.scheduler or "inprocess")
     try:
@@ -318,7 +319,7 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         raise ValueError(
             f"scheduler: needs the dask extra (pip install -e '.[dask]'): {e}"
         ) from None
-    from .distributed import generate_distributed
+    from atlas.data.distributed import generate_distributed
 
     stem = args.out or f"{scene.name}.nc"
     store = args.store or (os.path.splitext(stem)[0] + ".zarr")
@@ -332,7 +333,7 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         )
     if args.out is not None:
         check_output_path(args.out, args.overwrite)  # fail before any computation
-    _compile_cache()
+    use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     try:
         s = generate_distributed(
@@ -374,26 +375,10 @@ def _force_progress() -> bool:
     return os.environ.get("ATLAS_PROGRESS", "") not in ("", "0")
 
 
-def _compile_cache():
-    """Persistent JAX compilation cache (``$ATLAS_JAX_CACHE``; ``0`` disables)."""
-    import jax
-
-    default = Path.home() / ".cache" / "painleve-atlas" / "jax"
-    where = os.environ.get("ATLAS_JAX_CACHE", str(default))
-    if where in ("", "0") or jax.config.jax_compilation_cache_dir:
-        return
-    try:
-        Path(where).mkdir(parents=True, exist_ok=True)
-        jax.config.update("jax_compilation_cache_dir", where)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
-    except (OSError, AttributeError):  # unwritable home or an old JAX: just compile
-        pass
-
-
 _DISPATCH = {
     "paper": ("atlas.paper", "run"),
-    "simulate": ("atlas.figures_dynamics", "run_cli"),
-    "table": ("atlas.tables", "run_cli"),
+    "simulate": ("atlas.paper.figures_dynamics", "run_cli"),
+    "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),
 }
 

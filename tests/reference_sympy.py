@@ -1,6 +1,6 @@
 """Independent sympy/mpmath reference for the exact tier (tests only).
 
-The package's previous exact classifier, kept verbatim as a cross-check of :mod:`atlas.exact`:
+The package's previous exact classifier, kept verbatim as a cross-check of :mod:`atlas.core.exact`:
 
 * ``p(l) = det(l^2 I + B (K + l Q))`` is formed from its definition with sympy polynomials over QQ
   (``B = [[c1, c2], [s1, s2]]``, ``K = diag(kappa, 1)``, ``Q = diag(q1, q2)``);
@@ -26,7 +26,7 @@ from fractions import Fraction
 import mpmath
 import sympy
 
-from atlas.verdicts import Consistency, Verdict
+from atlas.core.verdicts import Consistency, Verdict
 
 __all__ = ["characteristic_poly", "point_spectral"]
 

@@ -200,7 +200,7 @@ def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
     assert os.listdir(tmp_path) == []
 
 
-# --- atlas generate --scheduler/--store/--resume (atlas.distributed through the CLI) ---------------
+# --- atlas generate --scheduler/--store/--resume (atlas.data.distributed through the CLI) ---------------
 
 SCENE5 = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8", "--kappa", "0.5,2"]
 SCENE5 += ["--q1", "0,1", "--q2", "0,0.5", "--tile-points", "128", "--no-progress"]

@@ -1,0 +1,11 @@
+"""Layer 1, the mathematics: numpy/JAX only, no I/O, no xarray.
+
+* :mod:`~atlas.core.verdicts`  the verdict and class codes (SPEC §2) and their CF flag attributes;
+* :mod:`~atlas.core.signs`     certified signs of polynomials in float arithmetic (error models);
+* :mod:`~atlas.core.mechanics` B, its invariants, the class code and the consistency of FF, SF, FS;
+* :mod:`~atlas.core.spectral`  the SS and II eigen-structure of M, with certified root enclosures;
+* :mod:`~atlas.core.rootfree`  the root-free damped II verdicts (tiers 1 and 2);
+* :mod:`~atlas.core.exact`     the exact integer/rational tier that settles every remaining point;
+* :mod:`~atlas.core.points`    the tier driver: verdicts of arbitrary point sets, certified;
+* :mod:`~atlas.core.hardcases` the hard-case suites (near-boundary points with 50-digit references).
+"""

@@ -1,0 +1,222 @@
+"""Named, seeded hard-case suites (SPEC §4), shared by the tests and ``atlas bench``.
+
+Each suite returns 1-D arrays ``beta1, beta2`` [rad], direction components ``c1, s1, c2, s2`` [1],
+``kappa`` [1], ``q1, q2`` [1] in the requested dtype.  Boundary locations are computed in 50-digit
+arithmetic (mpmath) and then offset by relative amounts ``1e-4 .. 0`` before rounding to the dtype, so
+"offset 0" is the float nearest to the exact boundary.
+"""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+
+from atlas.core.mechanics import direction
+
+__all__ = ["SUITES", "suite", "OFFSETS"]
+
+OFFSETS = (1e-4, 1e-8, 1e-12, 1e-15, 0.0, -1e-15, -1e-12, -1e-8, -1e-4)
+_mp = mpmath.mp
+
+
+def _pack(beta1, beta2, kappa, q1, q2, dtype):
+    dtype = np.dtype(dtype)
+    beta1, beta2, kappa, q1, q2 = np.broadcast_arrays(
+        *(np.asarray(v, np.float64) for v in (beta1, beta2, kappa, q1, q2))
+    )
+    b1 = np.mod(beta1, 2 * np.pi).astype(dtype)
+    b2 = np.mod(beta2, 2 * np.pi).astype(dtype)
+    c1, s1 = direction(b1, dtype)
+    c2, s2 = direction(b2, dtype)
+    return {
+        "beta1": b1,
+        "beta2": b2,
+        "c1": c1,
+        "s1": s1,
+        "c2": c2,
+        "s2": s2,
+        "kappa": kappa.astype(dtype),
+        "q1": q1.astype(dtype),
+        "q2": q2.astype(dtype),
+    }
+
+
+def _q_to_zero(rng, dtype):
+    n = 24
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+    kap = 10 ** rng.uniform(-1, 1, n)
+    qs = np.array([0.0, 1e-30, 1e-20, 1e-12, 1e-6, 1e-4, 1e-2])
+    B1, Q = np.meshgrid(b1, qs, indexing="ij")
+    B2, _ = np.meshgrid(b2, qs, indexing="ij")
+    K, _ = np.meshgrid(kap, qs, indexing="ij")
+    return _pack(B1.ravel(), B2.ravel(), K.ravel(), Q.ravel(), Q.ravel(), dtype)
+
+
+def _G_parts(b1, b2, kap):
+    """G/q^2 = G2 + q^2 X for q1 = q2 = q (kappa, 1 stiffness), 50 digits."""
+    with mpmath.workdps(50):
+        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+        k = mpmath.mpf(kap)
+        det = c1 * s2 - s1 * c2
+        m = k + 1
+        g2 = s1 * c2 * m**2 + (k * c1 - s2) ** 2
+        x = det * (c1 + s2) * m
+        return g2, x, det, c1 + s2
+
+
+def _near_hurwitz(rng, dtype):
+    """q offsets around the damped SS stability boundary G = 0 (Hurwitz H3 = 0)."""
+    rows = []
+    while len(rows) < 10 * len(OFFSETS):
+        b1, b2 = rng.uniform(0, 2 * np.pi, 2)
+        kap = 10 ** rng.uniform(-1, 1)
+        g2, x, det, a3 = _G_parts(b1, b2, kap)
+        if det > 0 and a3 > 0 and g2 * x < 0:
+            with mpmath.workdps(50):
+                qstar = mpmath.sqrt(-g2 / x)
+            rows += [(b1, b2, kap, float(qstar * (1 + mpmath.mpf(d)))) for d in OFFSETS]
+    b1, b2, kap, q = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q, q, dtype)
+
+
+def _near_discriminant(rng, dtype):
+    """q = 0, kappa offsets around disc = (k c1 - s2)^2 + 4 k s1 c2 = 0 (double mu: double roots)."""
+    rows = []
+    while len(rows) < 10 * len(OFFSETS):
+        b1, b2 = rng.uniform(0, 2 * np.pi, 2)
+        with mpmath.workdps(50):
+            c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+            # c1^2 k^2 + (4 s1 c2 - 2 c1 s2) k + s2^2 = 0
+            A, B, C = c1**2, 4 * s1 * c2 - 2 * c1 * s2, s2**2
+            disc = B * B - 4 * A * C
+            if disc <= 0:
+                continue
+            for kstar in ((-B + mpmath.sqrt(disc)) / (2 * A), (-B - mpmath.sqrt(disc)) / (2 * A)):
+                if 1e-3 < kstar < 1e3:
+                    rows += [(b1, b2, float(kstar * (1 + mpmath.mpf(d))), 0.0) for d in OFFSETS]
+                    break
+    b1, b2, kap, q = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q, q, dtype)
+
+
+def _near_detB(rng, dtype):
+    """beta2 -> beta1 and beta2 -> beta1 + pi (det B -> 0), relative offsets."""
+    n = 8
+    b1 = rng.uniform(0.1, 2 * np.pi - 0.1, n)
+    kap = 10 ** rng.uniform(-1, 1, n)
+    q = np.where(rng.random(n) < 0.5, 0.0, 10 ** rng.uniform(-3, 0, n))
+    rows = []
+    for i in range(n):
+        for base in (b1[i], b1[i] + np.pi):
+            for d in OFFSETS:
+                rows.append((b1[i], base * (1 + d), kap[i], q[i]))
+    b1_, b2_, k_, q_ = map(np.array, zip(*rows))
+    return _pack(b1_, b2_, k_, q_, q_, dtype)
+
+
+def _offdiag_to_zero(rng, dtype):
+    """b12 -> 0 (beta2 -> pi/2, 3pi/2) or b21 -> 0 (beta1 -> 0, pi)."""
+    rows = []
+    offs = (1e-4, 1e-8, 1e-12, 1e-16, 0.0, -1e-8)
+    for _ in range(4):
+        other = rng.uniform(0, 2 * np.pi)
+        kap = 10 ** rng.uniform(-1, 1)
+        q = rng.choice([0.0, 0.05, 1.0])
+        for base in (np.pi / 2, 1.5 * np.pi):
+            rows += [(other, base * (1 + d), kap, q) for d in offs]
+        for base in (np.pi, 2 * np.pi):
+            rows += [(base * (1 + d), other, kap, q) for d in offs]
+        rows += [(d, other, kap, q) for d in (1e-4, 1e-8, 1e-16)]
+    b1, b2, kap, q = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q, q, dtype)
+
+
+def _n_real_roots(b1, b2, kap, q):
+    with mpmath.workdps(40):
+        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+        det = c1 * s2 - s1 * c2
+        co = [1, c1 * q + s2 * q, kap * c1 + s2 + det * q * q, det * (kap * q + q), det * kap]
+        r = mpmath.polyroots(co, maxsteps=200, extraprec=80)
+        return sum(1 for z in r if abs(mpmath.im(z)) < mpmath.mpf(10) ** -25)
+
+
+def _double_roots(rng, dtype):
+    """Damped cases where two real roots merge into a complex pair (real-complex switch).
+
+    beta2 is scanned for a change in the number of real roots, bisected to 40 digits, offset.
+    """
+    rows = []
+    tries = 0
+    while len(rows) < 6 * len(OFFSETS) and tries < 200:
+        tries += 1
+        b1 = rng.uniform(0, 2 * np.pi)
+        kap = 10 ** rng.uniform(-1, 1)
+        q = 10 ** rng.uniform(-2, 0)
+        grid = np.linspace(0, 2 * np.pi, 41)[1:-1]
+        counts = [_n_real_roots(b1, g, kap, q) for g in grid]
+        hits = [i for i in range(len(grid) - 1) if counts[i] != counts[i + 1]]
+        if not hits:
+            continue
+        i = hits[rng.integers(len(hits))]
+        lo, hi, clo = mpmath.mpf(grid[i]), mpmath.mpf(grid[i + 1]), counts[i]
+        with mpmath.workdps(40):
+            for _ in range(60):
+                mid = (lo + hi) / 2
+                if _n_real_roots(b1, mid, kap, q) == clo:
+                    lo = mid
+                else:
+                    hi = mid
+            bstar = (lo + hi) / 2
+            rows += [(b1, float(bstar * (1 + mpmath.mpf(d))), kap, q) for d in OFFSETS]
+    b1, b2, kap, q = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q, q, dtype)
+
+
+def _extreme_ratios(rng, dtype):
+    """kappa and q1/q2 ratios up to 1e24."""
+    n = 6
+    rows = []
+    for _ in range(n):
+        b1, b2 = rng.uniform(0, 2 * np.pi, 2)
+        for kap in (1e-24, 1e-12, 1.0, 1e12, 1e24):
+            for q1, q2 in ((0.0, 0.0), (1e-12, 1e12), (1e12, 1e-12), (1.0, 1e-24), (1e-24, 1.0)):
+                rows.append((b1, b2, kap, q1, q2))
+    b1, b2, kap, q1, q2 = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q1, q2, dtype)
+
+
+def _class_boundaries(rng, dtype):
+    """Angles exactly on class boundaries: axes, beta2 = beta1, beta2 = beta1 + pi."""
+    axes = [0.0, np.pi / 2, np.pi, 1.5 * np.pi]
+    rows = []
+    for kap, q in ((0.5, 0.0), (2.0, 0.1)):
+        for a in axes:
+            for b in axes:
+                rows.append((a, b, kap, q))
+            r = rng.uniform(0, 2 * np.pi)
+            rows += [(a, r, kap, q), (r, a, kap, q)]
+        for _ in range(6):
+            r = rng.uniform(0, 2 * np.pi)
+            rows += [(r, r, kap, q), (r, r + np.pi, kap, q)]
+    b1, b2, kap, q = map(np.array, zip(*rows))
+    return _pack(b1, b2, kap, q, q, dtype)
+
+
+SUITES = {
+    "q_to_zero": _q_to_zero,
+    "near_hurwitz": _near_hurwitz,
+    "near_discriminant": _near_discriminant,
+    "near_detB": _near_detB,
+    "offdiag_to_zero": _offdiag_to_zero,
+    "double_roots": _double_roots,
+    "extreme_ratios": _extreme_ratios,
+    "class_boundaries": _class_boundaries,
+}
+
+
+def suite(name: str, dtype=np.float64, seed: int = 0) -> dict:
+    """The named hard-case suite as arrays in ``dtype`` (seeded, reproducible)."""
+    if name not in SUITES:
+        raise ValueError(f"suite: unknown name {name!r}; choose from {', '.join(SUITES)}")
+    rng = np.random.default_rng([seed, list(SUITES).index(name)])
+    return SUITES[name](rng, dtype)

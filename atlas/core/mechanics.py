@@ -1,0 +1,238 @@
+"""Mechanics of two sliding contacts: directions, class codes, duals, Table 1, SF/FS/IF/FI/CC.
+
+Convention (decided here, see README "Conventions"): an angle enters the computation only through its
+direction vector ``(cos, sin)`` rounded to the working dtype, and the float nearest to a multiple of
+``pi/2`` (in that dtype) gives the exact axis vector.  Every verdict is an exact function of these
+direction vectors (and of ``kappa``, ``q``); the fast kernels certify their signs and the exact
+reference (:mod:`atlas.core.exact`) evaluates the same rational numbers exactly.  Ties are therefore exact
+events of the direction vectors: ``beta2 == beta1``, ``b2 == -b1``, axis directions.
+
+All functions below except :func:`direction` are pure ``jax.numpy`` functions of arrays that
+broadcast against each other (no I/O, jit/vmap-able).  Codes use :data:`atlas.core.verdicts.UNDECIDED_CODE`
+(-1) or ``Consistency.UNDECIDED`` (3) where a cross product could not be certified.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from atlas.core.signs import UNKNOWN, det2_sign, sign_of
+from atlas.core.verdicts import UNDECIDED_CODE, Verdict
+
+__all__ = [
+    "direction",
+    "class_code",
+    "subclass_code",
+    "dual_angles",
+    "dual_vectors",
+    "consistent_modes",
+    "stable_SF",
+    "stable_FS",
+    "consistent_IF",
+    "consistent_FI",
+    "cc_possible",
+    "ALL_CLASSES",
+]
+
+TWO_PI = 2.0 * np.pi
+
+#: the 24 class codes ij in Table 2 order
+ALL_CLASSES = tuple(10 * i + j for i in range(1, 5) for j in range(1, 7))
+
+
+def direction(angle, dtype=np.float64):
+    """Direction vector ``(cos angle, sin angle)`` [1] of angles [rad], rounded to ``dtype``.
+
+    Angles are reduced modulo ``2 pi``; the float nearest to ``k pi / 2`` in ``dtype`` (and to
+    ``2 pi``) yields the exact axis vector.  Host-side numpy: it runs once per coordinate value.
+    """
+    dtype = np.dtype(dtype)
+    x = np.asarray(angle, dtype=dtype)
+    if not np.all(np.isfinite(x)):
+        raise ValueError("angle: must be finite")
+    x = np.where((x >= 0) & (x < dtype.type(TWO_PI)), x, np.mod(x, dtype.type(TWO_PI)))
+    c = np.cos(x.astype(np.float64)).astype(dtype)
+    s = np.sin(x.astype(np.float64)).astype(dtype)
+    axes = [
+        (0.0, 1.0, 0.0),
+        (np.pi / 2, 0.0, 1.0),
+        (np.pi, -1.0, 0.0),
+        (1.5 * np.pi, 0.0, -1.0),
+        (TWO_PI, 1.0, 0.0),
+    ]
+    for a, ca, sa in axes:
+        hit = x == dtype.type(a)
+        c = np.where(hit, dtype.type(ca), c)
+        s = np.where(hit, dtype.type(sa), s)
+    return c, s
+
+
+def _half(c, s):
+    """0 if the angle is in [0, pi), 1 if in [pi, 2 pi) (exact)."""
+    return jnp.where((s > 0) | ((s == 0) & (c > 0)), 0, 1)
+
+
+def _angle_less(uc, us, vc, vs, cross_uv):
+    """Three-valued comparison of angles in [0, 2 pi): -1 (u < v), 0 (equal), +1, or UNKNOWN.
+
+    ``cross_uv`` is the certified sign of ``u x v``.
+    """
+    hu, hv = _half(uc, us), _half(vc, vs)
+    same = jnp.where(cross_uv == UNKNOWN, UNKNOWN, -cross_uv)
+    return jnp.where(hu < hv, -1, jnp.where(hu > hv, 1, same)).astype(jnp.int8)
+
+
+def _rank(target_c, target_s, others):
+    """Rank (1-based) of the target angle among ``others`` + itself; 0 on a tie, -1 if undecided.
+
+    ``others`` is a list of ``(c, s, cross_other_target)``.
+    """
+    rank = jnp.ones(jnp.broadcast_shapes(target_c.shape, *(o[0].shape for o in others)), jnp.int8)
+    tie = jnp.zeros(rank.shape, bool)
+    unk = jnp.zeros(rank.shape, bool)
+    for c, s, cross in others:
+        cmp = _angle_less(c, s, target_c, target_s, cross)
+        rank = rank + (cmp == -1)
+        tie = tie | (cmp == 0)
+        unk = unk | (cmp == UNKNOWN)
+    return jnp.where(unk, UNDECIDED_CODE, jnp.where(tie, 0, rank)).astype(jnp.int8)
+
+
+def _axes_like(x):
+    one, zero = jnp.ones_like(x), jnp.zeros_like(x)
+    return [(zero, one), (-one, zero), (zero, -one)]  # pi/2, pi, 3 pi/2
+
+
+def _axis_cross(ac, as_, vc, vs):
+    # cross products with axis vectors are exact (one product is zero, the other is +-component)
+    return sign_of(ac * vs - as_ * vc)
+
+
+def class_code(c1, s1, c2, s2):
+    """Class code ``ij`` (paper Sec. 3, SPEC §1) from the directions of ``b1``, ``b2``.
+
+    ``i`` = rank of beta1 in {beta1, pi/2, pi, 3pi/2}; ``j`` = rank of beta2 in
+    {beta1, beta1*, beta2, pi/2, pi, 3pi/2}.  0 = degenerate (tie), -1 = undecided (int8).
+    """
+    axes = _axes_like(c1)
+    i = _rank(c1, s1, [(ac, as_, _axis_cross(ac, as_, c1, s1)) for ac, as_ in axes])
+    d12 = det2_sign(c1, s1, c2, s2)
+    d12n = jnp.where(d12 == UNKNOWN, UNKNOWN, -d12).astype(jnp.int8)
+    others = [(c1, s1, d12), (-c1, -s1, d12n)]
+    others += [(ac, as_, _axis_cross(ac, as_, c2, s2)) for ac, as_ in _axes_like(c2)]
+    j = _rank(c2, s2, others)
+    code = 10 * i.astype(jnp.int16) + j
+    code = jnp.where((i == 0) | (j == 0), 0, code)
+    code = jnp.where((i == UNDECIDED_CODE) | (j == UNDECIDED_CODE), UNDECIDED_CODE, code)
+    return code.astype(jnp.int8)
+
+
+def subclass_code(c1, s1, c2, s2, ca, sa):
+    """Subclass code ``ijk``: ``k`` = rank of alpha in {alpha, beta1, beta2, pi/2, pi, 3pi/2}.
+
+    0 = degenerate, -1 = undecided (int16).
+    """
+    ij = class_code(c1, s1, c2, s2).astype(jnp.int16)
+    others = [(c1, s1, det2_sign(c1, s1, ca, sa)), (c2, s2, det2_sign(c2, s2, ca, sa))]
+    others += [(ac, as_, _axis_cross(ac, as_, ca, sa)) for ac, as_ in _axes_like(ca)]
+    k = _rank(ca, sa, others).astype(jnp.int16)
+    code = 10 * ij + k
+    code = jnp.where((ij == 0) | (k == 0), 0, code)
+    code = jnp.where((ij == UNDECIDED_CODE) | (k == UNDECIDED_CODE), UNDECIDED_CODE, code)
+    return code.astype(jnp.int16)
+
+
+def dual_angles(beta1, beta2, alpha=None):
+    """Dual (contact indices swapped): ``(pi/2 - beta2, pi/2 - beta1, pi/2 - alpha)`` mod 2 pi."""
+    out = [
+        np.mod(np.pi / 2 - np.asarray(beta2), TWO_PI),
+        np.mod(np.pi / 2 - np.asarray(beta1), TWO_PI),
+    ]
+    if alpha is not None:
+        out.append(np.mod(np.pi / 2 - np.asarray(alpha), TWO_PI))
+    return tuple(out)
+
+
+def dual_vectors(c1, s1, c2, s2, ca=None, sa=None):
+    """Dual in vector form (exact): ``b1' = (s2, c2)``, ``b2' = (s1, c1)``, ``a' = (sa, ca)``."""
+    out = (s2, c2, s1, c1)
+    if ca is not None:
+        out = out + (sa, ca)
+    return out
+
+
+def _and3(*flags):
+    """Three-valued AND of Consistency codes (0 dominates, then UNDECIDED)."""
+    out = jnp.ones(jnp.broadcast_shapes(*(f.shape for f in flags)), jnp.int8)
+    for f in flags:
+        out = jnp.where((out == 0) | (f == 0), 0, jnp.where((out == 3) | (f == 3), 3, 1))
+    return out.astype(jnp.int8)
+
+
+def _positive(sign):
+    """Consistency code of ``sign > 0`` for a certified sign code."""
+    return jnp.where(sign == UNKNOWN, 3, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
+
+
+def consistent_modes(c1, s1, c2, s2, ca, sa):
+    """Table 1 (Appendix A): consistency of FF, SF, FS, SS as ``Consistency`` codes (int8).
+
+    FF: ``a1 < 0 & a2 < 0``; SF: ``b11 a1 > 0 & (b21/b11) a1 > a2``; FS symmetric;
+    SS: ``a`` strictly inside the cone of ``b1, b2`` (a degenerate cone, ``det B = 0``, has no
+    interior, so SS is inconsistent there).
+    """
+    sc1, ss2, sca, ssa = sign_of(c1), sign_of(s2), sign_of(ca), sign_of(sa)
+    ff = ((ca < 0) & (sa < 0)).astype(jnp.int8)
+    # SF: c1 ca > 0  and  c1 * (ca s1 - sa c1) > 0
+    a_b1 = det2_sign(ca, sa, c1, s1)
+    sf = _and3(_positive(sc1 * sca), _positive(_mul_sign(sc1, a_b1)))
+    # FS: s2 sa > 0  and  s2 * (c2 sa - s2 ca) > 0
+    b2_a = det2_sign(c2, s2, ca, sa)
+    fs = _and3(_positive(ss2 * ssa), _positive(_mul_sign(ss2, b2_a)))
+    # SS: f1 = (a x b2)/D, f2 = (b1 x a)/D, D = b1 x b2, both > 0
+    d = det2_sign(c1, s1, c2, s2)
+    a_b2 = _neg_sign(b2_a)
+    b1_a = _neg_sign(a_b1)
+    ss = _and3(_positive(_mul_sign(d, a_b2)), _positive(_mul_sign(d, b1_a)))
+    return {"FF": ff, "SF": sf, "FS": fs, "SS": ss}
+
+
+def _mul_sign(a, b):
+    return jnp.where((a == UNKNOWN) | (b == UNKNOWN), UNKNOWN, a * b).astype(jnp.int8)
+
+
+def _neg_sign(a):
+    return jnp.where(a == UNKNOWN, UNKNOWN, -a).astype(jnp.int8)
+
+
+def _stable_from_diagonal(b_jj):
+    # matrix (7): det = b_jj k_j, trace = -b_jj q_j (Appendix B); b_jj = 0 gives a double zero root
+    return jnp.where(
+        b_jj > 0, Verdict.STABLE, jnp.where(b_jj < 0, Verdict.UNSTABLE, Verdict.NEUTRAL)
+    ).astype(jnp.int8)
+
+
+def stable_SF(c1):
+    """SF stability (Sec. 4.2, App. B): stable iff ``b11 > 0``; ``b11 = 0`` is neutral."""
+    return _stable_from_diagonal(c1)
+
+
+def stable_FS(s2):
+    """FS stability: stable iff ``b22 > 0``; ``b22 = 0`` is neutral."""
+    return _stable_from_diagonal(s2)
+
+
+def consistent_IF(c1, s1):
+    """IF consistency (Sec. 4.3, SPEC-corrected): ``b11 < 0`` and ``b21 > 0``; stable if consistent."""
+    return ((c1 < 0) & (s1 > 0)).astype(jnp.int8)
+
+
+def consistent_FI(c2, s2):
+    """FI consistency: ``b22 < 0`` and ``b12 > 0``; stable if consistent."""
+    return ((s2 < 0) & (c2 > 0)).astype(jnp.int8)
+
+
+def cc_possible(c1, s2):
+    """Necessary condition for CC inverse chattering (Sec. 5.2): ``b11 > 0`` and ``b22 > 0``."""
+    return ((c1 > 0) & (s2 > 0)).astype(bool)

@@ -1,0 +1,1000 @@
+"""Atlases beyond one process: tiles of a scene on dask workers, written into a resumable zarr store.
+
+The scene is split along ``beta1`` into *slabs* of ``slab`` consecutive values, and, when one
+``beta1`` value alone holds more points than a tile should (or ``block2`` is given), along ``beta2``
+too, into 2-D ``(beta1, beta2)`` blocks (:func:`tile_plan`).  Each tile is an ordinary
+:func:`atlas.generate` run on a sub-scene holding its block; generation is pointwise-deterministic
+and the ``model_dependent_*`` reductions run over the model dimensions at fixed ``(beta1, beta2)``,
+so the assembled tiles equal the single-process atlas bit for bit.
+
+Store layout (a local zarr directory, zarr 2 or 3)::
+
+    STORE/                  the atlas: coordinates, variables, CF attributes (SPEC §2)
+    STORE/_tiles/t000012    one empty group per finished tile; its attributes are the tile record
+
+The layout is created up front from :func:`atlas.data.engine.schema` of the full scene (arrays
+allocated lazily: unwritten chunks read as fill values), in a temporary directory renamed onto
+``STORE``.  A tile writes its variables into its region (``beta1`` in ``[start, stop)``, and
+``beta2`` in ``[start2, stop2)`` for 2-D blocks; zarr chunks are aligned with the tiles, so
+concurrent tiles never touch the same chunk), reads the region back, and only then writes its
+record: the SHA-256 of the raw bytes (dtype, shape, data) of every variable's region, the undecided
+counts and timings.  A variable lacking a split dimension (``stable_FS`` and ``consistent_FI`` have
+no ``beta1``, ``stable_SF`` no ``beta2``) is computed by every tile that covers its region and
+written by the first of them along the missing dimension; their checksums (``shared`` in the
+record) must agree.
+
+``resume=True`` verifies every recorded tile against the store (on the workers) and recomputes
+tiles whose record is missing, unreadable, or whose bytes no longer match: after a resumed run the
+records prove that no tile is missing or corrupt.  A finished store carries the global attributes
+of :func:`atlas.generate` (undecided totals summed over the tiles) and ``atlas_complete = 1``.
+
+Schedulers
+----------
+``scheduler=None``
+    in this process, tile after tile (the same tile function, no dask);
+``"local"`` / ``"local:N"``
+    a :class:`distributed.LocalCluster` of N worker *processes* (default: the number of cores),
+    one thread each, one JAX runtime per worker with XLA's intra-op threading off
+    (:data:`WORKER_ENV`) and each worker pinned to its own core (:func:`pin_to_cpus`: XLA's task
+    pool ignores the flags), so N workers use N cores; the workers share the CLI's persistent JAX
+    compilation cache (:func:`worker_env`);
+``"tcp://host:8786"`` or a :class:`distributed.Client`
+    an existing cluster.  The workers need ``painleve-atlas`` (same version and JAX version as the
+    client: the store records both and mixed versions are refused) and the store path on a shared
+    file system.  Start the workers with one thread each and the same environment, e.g.::
+
+        dask scheduler                                    # on host, port 8786
+        XLA_FLAGS="--xla_cpu_multi_thread_eigen=false" \\
+            dask worker tcp://host:8786 --nworkers 16 --nthreads 1   # on each machine
+
+    then ``generate_distributed(scene, "/shared/atlas.zarr", scheduler="tcp://host:8786")``.
+
+Example
+-------
+>>> from atlas import Scene
+>>> from atlas.data.distributed import generate_distributed, open_store
+>>> scene = Scene(beta1="0:2pi:64", beta2="0:2pi:64", kappa="0.5,2", q1="0,1", q2="0,1")
+>>> summary = generate_distributed(scene, "atlas.zarr", scheduler="local:2",
+...                                to_netcdf="atlas.nc")            # doctest: +SKIP
+>>> # killed?  the same call with resume=True finishes the missing tiles
+>>> ds = open_store("atlas.zarr")                                   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+import time
+
+import numpy as np
+import xarray as xr
+
+from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir, use_compile_cache
+from atlas.data.engine import (
+    DEFAULT_TILE_POINTS,
+    Schema,
+    _check_options,
+    generate,
+    last_stats,
+    progress_bar,
+    schema,
+)
+from atlas.data.scene import Scene
+
+__all__ = [
+    "generate_distributed",
+    "open_store",
+    "verify_store",
+    "tile_plan",
+    "WORKER_ENV",
+    "worker_env",
+    "local_cluster",
+    "pin_to_cpus",
+    "measure_throughput",
+]
+
+#: environment of LocalCluster workers: one JAX process per worker, no intra-op thread pools
+WORKER_ENV = {
+    "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+}
+
+
+def pin_to_cpus(cpus) -> list[int]:
+    """Restrict every thread of this process to ``cpus`` (Linux); returns the threads pinned.
+
+    XLA splits large fusions into parallel tasks on its own thread pool whatever ``XLA_FLAGS`` say
+    (measured: one worker used 1.5-1.8 cores with ``--xla_cpu_multi_thread_eigen=false``), so a
+    LocalCluster of N workers on N cores oversubscribed them (2 workers gave 1.12x one worker).
+    Affinity is per thread on Linux: every existing thread is set, and threads created later
+    inherit it.  A no-op (empty list) where ``os.sched_setaffinity`` does not exist.
+    """
+    if not hasattr(os, "sched_setaffinity"):  # pragma: no cover - macOS, Windows
+        return []
+    done = []
+    for tid in os.listdir("/proc/self/task"):
+        with contextlib.suppress(OSError):
+            os.sched_setaffinity(int(tid), set(cpus))
+            done.append(int(tid))
+    return done
+
+
+def local_cluster(n_workers: int):
+    """``(cluster, client)``: a LocalCluster of ``n_workers`` single-thread worker processes with
+    :func:`worker_env`, worker ``i`` pinned to core ``i mod ncores`` (:func:`pin_to_cpus`), so N
+    workers use N cores."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=n_workers,
+        threads_per_worker=1,
+        processes=True,
+        env=worker_env(),
+        dashboard_address=None,
+        silence_logs=40,
+    )
+    client = Client(cluster)
+    client.wait_for_workers(n_workers)
+    cores = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    if cores and n_workers <= len(cores):
+        for i, addr in enumerate(sorted(client.scheduler_info()["workers"])):
+            client.run(pin_to_cpus, [cores[i]], workers=[addr])
+    return cluster, client
+
+
+def worker_env() -> dict:
+    """Environment for worker processes: :data:`WORKER_ENV` plus the persistent JAX compilation
+    cache of the CLI (``$ATLAS_JAX_CACHE``, default ``~/.cache/painleve-atlas/jax``; ``0`` = off),
+    so each worker loads the compiled kernels instead of compiling them again."""
+    env = dict(WORKER_ENV)
+    where = compile_cache_dir()
+    if where is not None:
+        env["JAX_COMPILATION_CACHE_DIR"] = where
+        env.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(CACHE_MIN_COMPILE_SECONDS))
+    return env
+
+
+#: default points per tile (largest output): a few kernel tiles, so per-tile overhead is amortized
+DEFAULT_SLAB_POINTS = 1 << 18
+#: maximum elements per zarr chunk (chunks never straddle slabs)
+CHUNK_POINTS = 1 << 20
+TILES = "_tiles"
+PLAN_ATTR = "atlas_plan"
+FORMAT_VERSION = 1
+
+
+# --- the plan -----------------------------------------------------------------------------------
+
+
+def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> list[tuple]:
+    """The tiles of a scene: ``[(start, stop), ...]`` (``beta1`` slabs; one tile if ``beta1`` is
+    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks).
+
+    ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile; if then one ``beta1``
+    value alone holds more than that and ``block2`` is not given, ``beta2`` is split into blocks of
+    about that many points as well.  ``block2`` = ``beta2`` values per tile.
+    """
+    n1 = scene.axes["beta1"].size if "beta1" in scene.dims else 1
+    n2 = scene.axes["beta2"].size if "beta2" in scene.dims else 1
+    per = max(1, scene.points() // n1)
+    if slab is None:
+        slab = max(1, min(n1, round(DEFAULT_SLAB_POINTS / per)))
+        if block2 is None and per > DEFAULT_SLAB_POINTS and n2 > 1:
+            block2 = max(1, round(DEFAULT_SLAB_POINTS / max(1, per // n2)))
+            block2 = None if block2 >= n2 else block2
+    s = _positive("slab", slab)
+    b1 = [(a, min(a + s, n1)) for a in range(0, n1, s)]
+    if block2 is None:
+        return b1
+    b = _positive("block2", block2)
+    if "beta2" not in scene.dims:
+        raise ValueError("block2: the scene has a single beta2 value")
+    return [(a, e, c, min(c + b, n2)) for a, e in b1 for c in range(0, n2, b)]
+
+
+def _positive(name, value) -> int:
+    try:
+        n = int(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a positive integer, got {value!r}") from None
+    if n < 1 or n != value:
+        raise ValueError(f"{name}: must be a positive integer, got {value!r}")
+    return n
+
+
+def _sub_scene(scene: Scene, tile) -> Scene:
+    kw = {}
+    if "beta1" in scene.dims:
+        kw["beta1"] = np.array(scene.axes["beta1"].values[tile[0] : tile[1]])
+    if len(tile) == 4:
+        kw["beta2"] = np.array(scene.axes["beta2"].values[tile[2] : tile[3]])
+    return scene.replace(**kw) if kw else scene
+
+
+def _split(has_beta1: bool, tile) -> dict:
+    """``{dim: (start, stop)}``: the dimensions a tile is a range of."""
+    out = {"beta1": (tile[0], tile[1])} if has_beta1 else {}
+    if len(tile) == 4:
+        out["beta2"] = (tile[2], tile[3])
+    return out
+
+
+def _region(dims, split) -> dict:
+    """A variable's region in a tile (``{}``: the whole variable)."""
+    return {d: slice(*split[d]) for d in split if d in dims}
+
+
+def _unique(dims, split) -> bool:
+    """The variable's region in this tile belongs to no other tile (it has every split dim)."""
+    return all(d in dims for d in split)
+
+
+def _owns(dims, split) -> bool:
+    """The tile writes the variable's region: it is the first tile along the dims it lacks."""
+    return all(d in dims or split[d][0] == 0 for d in split)
+
+
+def _chunks(sch: Schema, name: str, slab: int, block2: int | None = None) -> tuple[int, ...]:
+    """Zarr chunks aligned with the tiles: ``slab`` along beta1, ``block2`` along a split beta2."""
+    from atlas.data.engine import block_shape
+
+    dims = sch.variables[name][0]
+    shape = tuple(sch.shape[d] for d in dims)
+    fixed = {"beta1": slab} if "beta1" in dims else {}
+    if block2 is not None and "beta2" in dims:
+        fixed["beta2"] = block2
+    if not fixed:
+        return shape
+    rest = [n for d, n in zip(dims, shape) if d not in fixed]
+    rest = iter(
+        block_shape(tuple(rest), max(1, CHUNK_POINTS // int(np.prod(list(fixed.values())))))
+    )
+    return tuple(min(fixed[d], n) if d in fixed else next(rest) for d, n in zip(dims, shape))
+
+
+def _digest(arr) -> str:
+    """SHA-256 of an array's dtype, shape and raw bytes (C order)."""
+    a = np.ascontiguousarray(np.asarray(arr))
+    h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
+    h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _plan(scene, sch, tiles, opts) -> dict:
+    coords = {k: _digest(v) for k, (_, v, _) in sch.coords.items()}
+    variables = {k: [list(d), np.dtype(t).str] for k, (d, t, _, _) in sch.variables.items()}
+    plan = {
+        "format": FORMAT_VERSION,
+        "scene": scene.describe(),
+        "coords": coords,
+        "variables": variables,
+        "tiles": [list(t) for t in tiles],
+        "source": sch.attrs["source"],
+        **opts,
+    }
+    plan["hash"] = hashlib.sha256(json.dumps(plan, sort_keys=True).encode()).hexdigest()
+    return plan
+
+
+# --- store helpers ------------------------------------------------------------------------------
+
+
+def _open(store) -> xr.Dataset:
+    return xr.open_zarr(store, consolidated=False, chunks=None)
+
+
+def open_store(store) -> xr.Dataset:
+    """The atlas in a zarr store (lazy; attributes as stored, flag values as JSON lists)."""
+    return _open(os.fspath(store))
+
+
+def _record_path(i: int) -> str:
+    return f"{TILES}/t{i:06d}"
+
+
+def _read_record(store: str, i: int) -> dict | None:
+    import zarr
+
+    if not os.path.isdir(os.path.join(store, TILES, f"t{i:06d}")):
+        return None
+    try:
+        rec = dict(zarr.open_group(store, path=_record_path(i), mode="r").attrs)
+    except Exception:  # truncated or unreadable metadata: the tile counts as missing
+        return None
+    return rec if rec.get("index") == i and "checksums" in rec else None
+
+
+def _drop_record(store: str, i: int):
+    shutil.rmtree(os.path.join(store, TILES, f"t{i:06d}"), ignore_errors=True)
+
+
+def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
+    return {k: _digest(ds[k].isel(_region(ds[k].dims, split)).values) for k in names}
+
+
+def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):
+    """Write coordinates, attributes and lazily allocated variables to ``store`` atomically."""
+    import dask.array as da
+    import zarr
+
+    parent = os.path.dirname(os.path.abspath(store))
+    tmp = tempfile.mkdtemp(prefix=f".{os.path.basename(store)}.", suffix=".tmp", dir=parent)
+    try:
+        coords = {k: xr.Variable(d, v, a) for k, (d, v, a) in sch.coords.items()}
+        data, enc = {}, {}
+        for name, (dims, dt, attrs, _) in sch.variables.items():
+            shape = tuple(sch.shape[d] for d in dims)
+            chunks = _chunks(sch, name, slab, block2)
+            data[name] = xr.Variable(dims, da.zeros(shape, dtype=dt, chunks=chunks or ()), attrs)
+            enc[name] = {"_FillValue": None, "chunks": chunks} if dims else {"_FillValue": None}
+        for k in coords:
+            enc[k] = {"_FillValue": None}
+        attrs = {**sch.attrs, PLAN_ATTR: json.dumps(plan, sort_keys=True), "atlas_complete": 0}
+        ds = xr.Dataset(data, coords=coords, attrs=attrs)
+        ds.to_zarr(tmp, mode="w", compute=False, encoding=enc, consolidated=False)
+        zarr.open_group(tmp, mode="r+").require_group(TILES)
+        os.chmod(tmp, 0o777 & ~_umask())
+        os.replace(tmp, store)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# --- the tile tasks (run on the workers, or in process) -----------------------------------------
+
+
+def _compute_tile(scene: Scene, tile, opts: dict) -> xr.Dataset:
+    """One tile of the atlas (separate function so tests can slow it down)."""
+    return generate(
+        _sub_scene(scene, tile),
+        method=opts["method"],
+        dtype=opts["dtype"],
+        resolve=opts["resolve"],
+        tile_points=opts["tile_points"],
+    )
+
+
+def _tile_fields(tile) -> dict:
+    out = {"start": tile[0], "stop": tile[1]}
+    if len(tile) == 4:
+        out.update(start2=tile[2], stop2=tile[3])
+    return out
+
+
+def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
+    """Compute tile ``i``, write the regions it owns, read them back, then write its record."""
+    import zarr
+
+    _drop_record(store, i)
+    t0, c0 = time.perf_counter(), time.process_time()
+    ds = _compute_tile(scene, tile, opts)
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    stats = last_stats()
+    split = _split("beta1" in ds.dims, tile)
+    names = list(ds.data_vars)
+    digests = {k: _digest(ds[k].values) for k in names}
+    owned = [k for k in names if _owns(ds[k].dims, split)]
+    t1 = time.perf_counter()
+    groups = {}
+    for k in owned:  # one write per region shape (all variables of a write share its dims)
+        groups.setdefault(tuple(_region(ds[k].dims, split)), []).append(k)
+    for key, ks in groups.items():
+        part = ds[ks]
+        part = part.drop_vars(list(part.coords))
+        if key:
+            region = {d: slice(*split[d]) for d in key}
+            part.to_zarr(store, region=region, consolidated=False)
+        else:
+            part.to_zarr(store, mode="r+", consolidated=False)
+    written = _region_digests(_open(store), owned, split)
+    for k, h in written.items():
+        if h != digests[k]:
+            raise OSError(f"store: tile {i} variable {k} reads back different bytes")
+    rec = {
+        "index": i,
+        **_tile_fields(tile),
+        "checksums": {k: digests[k] for k in names if _unique(ds[k].dims, split)},
+        "shared": {k: digests[k] for k in names if not _unique(ds[k].dims, split)},
+        "undecided_fast": {k: int(v.attrs["undecided_fast"]) for k, v in _counted(ds)},
+        "undecided": {k: int(v.attrs["undecided"]) for k, v in _counted(ds)},
+        "total_undecided_fast": int(ds.attrs["undecided_fast"]),
+        "total_undecided": int(ds.attrs["undecided_after_resolve"]),
+        "exact_failures": [list(p) for p in stats.get("exact_failures", [])],
+        "points": int(stats["points"]),
+        "seconds": seconds,
+        "cpu_seconds": cpu,
+        "write_seconds": time.perf_counter() - t1,
+        "source": ds.attrs["source"],
+        "host": os.uname().nodename,
+        "pid": os.getpid(),
+    }
+    zarr.open_group(store, path=_record_path(i), mode="w").attrs.put(rec)
+    return rec
+
+
+def _counted(ds):
+    return [(k, v) for k, v in ds.data_vars.items() if "undecided" in v.attrs]
+
+
+def _verify_tile(store: str, i: int, tile) -> dict | None:
+    """The tile's record if the store holds exactly the recorded bytes of the regions it owns."""
+    rec = _read_record(store, i)
+    if rec is None or any(rec.get(k) != v for k, v in _tile_fields(tile).items()):
+        return None
+    try:
+        ds = _open(store)
+        split = _split("beta1" in ds.dims, tile)
+        recorded = {**rec["checksums"], **rec["shared"]}
+        want = {k: h for k, h in recorded.items() if _owns(ds[k].dims, split)}
+        got = _region_digests(ds, list(want), split)
+    except Exception:  # undecodable chunk bytes
+        return None
+    return rec if got == want else None
+
+
+# --- executors ----------------------------------------------------------------------------------
+
+
+class _InProcess:
+    """Runs the tile functions here, one after the other (the reference code path)."""
+
+    workers = 1
+    description = "in-process"
+
+    def map(self, fn, calls):
+        for key, args in calls:
+            yield key, fn(*args)
+
+    def close(self):
+        pass
+
+
+class _Dask:
+    def __init__(self, scheduler):
+        from distributed import Client
+
+        self.cluster = None
+        if isinstance(scheduler, Client):
+            self.client, self.own = scheduler, False
+        elif isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
+            n = scheduler.partition(":")[2]
+            n = int(n) if n else (os.cpu_count() or 1)
+            self.cluster, self.client = local_cluster(n)
+            self.own = True
+        elif isinstance(scheduler, str) and "://" in scheduler:
+            try:
+                self.client, self.own = Client(scheduler), True
+            except (OSError, TimeoutError) as e:  # unreachable or not a dask scheduler
+                raise OSError(f"scheduler: cannot connect to {scheduler}: {e}") from None
+        else:  # pragma: no cover - rejected by _check_scheduler
+            raise ValueError(f"scheduler: unsupported {scheduler!r}")
+        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+        self.description = str(scheduler if isinstance(scheduler, str) else "client")
+
+    def map(self, fn, calls):
+        from distributed import as_completed
+
+        futures = {}
+        for key, args in calls:
+            futures[self.client.submit(fn, *args, pure=False)] = key
+        try:
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            self.client.cancel(list(futures))
+
+    def close(self):
+        if self.own:
+            self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def _check_scheduler(scheduler):
+    """``ValueError`` naming ``scheduler`` unless it is None, local[:N], an address or a Client."""
+    if scheduler is None or (isinstance(scheduler, str) and "://" in scheduler):
+        return
+    if isinstance(scheduler, str) and scheduler.split(":")[0] == "local":
+        n = scheduler.partition(":")[2]
+        if n == "" or (n.isdigit() and int(n) >= 1):
+            return
+        raise ValueError(f"scheduler: expected local:N with N >= 1, got {scheduler!r}")
+    if type(scheduler).__name__ == "Client":
+        return
+    raise ValueError(
+        f"scheduler: expected None, 'local', 'local:N', an address (tcp://host:8786) or a "
+        f"distributed.Client, got {scheduler!r}"
+    )
+
+
+def _executor(scheduler):
+    _check_scheduler(scheduler)
+    if scheduler is None:
+        return _InProcess()
+    return _Dask(scheduler)
+
+
+# --- the driver ---------------------------------------------------------------------------------
+
+
+def verify_store(store, scheduler=None) -> dict:
+    """Check every tile of a store against its record.
+
+    Returns ``{"ok": [...], "missing": [...], "corrupt": [...]}`` (tile indices): *missing* = no
+    readable record, *corrupt* = a record whose checksums the stored bytes no longer match.
+    """
+    store = os.fspath(store)
+    plan = _stored_plan(store)
+    ex = _executor(scheduler)
+    try:
+        return _verify_all(ex, store, plan["tiles"])[0]
+    finally:
+        ex.close()
+
+
+def _verify_all(ex, store, tiles):
+    report = {"ok": [], "missing": [], "corrupt": []}
+    recs = {}
+    recorded = [i for i in range(len(tiles)) if _read_record(store, i) is not None]
+    missing = set(range(len(tiles))) - set(recorded)
+    calls = [(i, (store, i, tuple(tiles[i]))) for i in recorded]
+    for i, rec in ex.map(_verify_tile, calls):
+        if rec is None:
+            report["corrupt"].append(i)
+        else:
+            report["ok"].append(i)
+            recs[i] = rec
+    report["missing"] = sorted(missing)
+    for k in report:
+        report[k].sort()
+    return report, recs
+
+
+def _stored_plan(store: str) -> dict:
+    import zarr
+
+    if not os.path.isdir(store):
+        raise FileNotFoundError(f"store: {store} does not exist")
+    try:
+        attrs = dict(zarr.open_group(store, mode="r").attrs)
+        return json.loads(attrs[PLAN_ATTR])
+    except Exception:
+        raise ValueError(f"store: {store} is not an atlas store (no {PLAN_ATTR})") from None
+
+
+def generate_distributed(
+    scene: Scene,
+    store,
+    *,
+    scheduler=None,
+    slab: int | None = None,
+    block2: int | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    method: str = "certified",
+    dtype: str = "float64",
+    resolve: bool = True,
+    tile_points: int = DEFAULT_TILE_POINTS,
+    to_netcdf=None,
+    overwrite_netcdf: bool = False,
+    progress=False,
+    history: str | None = None,
+) -> dict:
+    """Generate an atlas tile by tile (on dask workers or in process) into a resumable zarr store.
+
+    Parameters
+    ----------
+    scene : atlas.Scene
+        The atlas; it is split along ``beta1`` (and ``beta2``, see :func:`tile_plan`).
+    store : str or os.PathLike
+        Zarr directory (a local or shared file system path).
+    scheduler : None, "local", "local:N", "tcp://host:port" or distributed.Client
+        Where the tiles run (see the module docstring); ``None``: in this process.
+    slab : int, optional
+        ``beta1`` values per tile (default: about :data:`DEFAULT_SLAB_POINTS` points per tile).
+    block2 : int, optional
+        ``beta2`` values per tile (2-D tiles); by default ``beta2`` is split only when ``slab`` is
+        not given and one ``beta1`` value holds more than :data:`DEFAULT_SLAB_POINTS` points.
+    resume : bool
+        Continue an existing store: tiles whose record verifies against the stored bytes are
+        kept, missing or corrupt ones recomputed.  The store must have been created for the same
+        scene, options, tiles and package/JAX versions (else ``ValueError``).
+    overwrite : bool
+        Replace an existing store (without ``resume``); otherwise an existing store raises
+        ``FileExistsError``.
+    method, dtype, resolve, tile_points
+        As for :func:`atlas.generate` (``tile_points`` = kernel tile inside each slab).
+    to_netcdf : str or os.PathLike, optional
+        Also convert the finished store to this netCDF4 file, streaming slab by slab through
+        :class:`atlas.data.io.NetCDFSink` (atomic; same file as ``io.write_netcdf(generate(scene))``).
+    overwrite_netcdf : bool
+        Replace an existing netCDF file.
+    progress : bool
+        tqdm progress bar over tiles on stderr.
+    history : str, optional
+        Command recorded in the ``history`` attribute.
+
+    Returns
+    -------
+    dict
+        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
+        (``None``: beta2 not split), ``points``,
+        ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
+        ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
+        ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
+        computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(scene, Scene):
+        raise ValueError("scene: expected an atlas.Scene")
+    method, dtype, tile_points = _check_options(method, dtype, tile_points)
+    _check_scheduler(scheduler)
+    store = os.path.abspath(os.fspath(store))
+    tiles = tile_plan(scene, slab, block2)
+    slab_n = tiles[0][1] - tiles[0][0]
+    block2_n = tiles[0][3] - tiles[0][2] if len(tiles[0]) == 4 else None
+    sch = schema(
+        scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
+    )
+    opts = dict(method=method, dtype=dtype, resolve=bool(resolve), tile_points=tile_points)
+    plan = _plan(scene, sch, tiles, opts)
+    if to_netcdf is not None:
+        from atlas.data.io import check_output_path
+
+        check_output_path(to_netcdf, overwrite_netcdf)
+
+    exists = os.path.exists(store)
+    if exists and resume:
+        old = _stored_plan(store)
+        if old.get("hash") != plan["hash"]:
+            diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]]
+            raise ValueError(
+                f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
+            )
+    elif exists and not overwrite:
+        raise FileExistsError(f"store: {store} exists (use resume=True or overwrite=True)")
+    else:
+        if not os.path.isdir(os.path.dirname(store)):
+            raise FileNotFoundError(f"store: directory {os.path.dirname(store)} does not exist")
+        if exists:
+            shutil.rmtree(store)
+        _create_layout(store, sch, slab_n, plan, block2_n)
+
+    ex = _executor(scheduler)
+    bar = progress_bar(progress, len(tiles), "atlas tiles", unit="tile")
+    try:
+        report, recs = _verify_all(ex, store, tiles) if exists and resume else (None, {})
+        todo = [i for i in range(len(tiles)) if i not in recs]
+        if bar is not None:
+            bar.update(len(recs))
+        calls = [(i, (store, scene, i, tiles[i], opts)) for i in todo]
+        computed = {}
+        for i, rec in ex.map(_run_tile, calls):
+            recs[i] = computed[i] = rec
+            if bar is not None:
+                bar.update(1)
+        totals = _finalize(store, sch, plan, tiles, recs, computed, resumed=exists and resume)
+    finally:
+        if bar is not None:
+            bar.close()
+        ex.close()
+
+    netcdf = _to_netcdf(store, sch, tiles, totals, to_netcdf, overwrite_netcdf)
+    seconds = time.perf_counter() - t0
+    points = scene.points()
+    return {
+        "store": store,
+        "netcdf": netcdf,
+        "scheduler": ex.description,
+        "workers": ex.workers,
+        "tiles": len(tiles),
+        "slab": slab_n,
+        "block2": block2_n,
+        "points": points,
+        "computed": sorted(computed),
+        "verified": sorted(set(recs) - set(computed)),
+        "missing": report["missing"] if report else [],
+        "corrupt": report["corrupt"] if report else [],
+        "seconds": seconds,
+        "points_per_second": points / seconds if seconds > 0 else float("inf"),
+        "tile_seconds": [computed[i]["seconds"] for i in sorted(computed)],
+        "tile_cpu_seconds": [computed[i]["cpu_seconds"] for i in sorted(computed)],
+        "tile_points": [computed[i]["points"] for i in sorted(computed)],
+        "undecided_fast": totals["attrs"]["undecided_fast"],
+        "undecided": totals["attrs"]["undecided_after_resolve"],
+    }
+
+
+def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
+    """Check the records, sum the undecided counts, write the final attributes."""
+    import zarr
+
+    missing = [i for i in range(len(tiles)) if i not in recs]
+    if missing:  # pragma: no cover - every tile either verified or computed
+        raise RuntimeError(f"store: tiles {missing} missing after the run")
+    dims = {k: v[0] for k, v in sch.variables.items()}
+    has_b1 = "beta1" in sch.shape
+    seen = {}  # (variable, region) -> (tile, checksum): tiles sharing a region must agree
+    var_attrs, fast, final = {}, 0, 0
+    for i in sorted(recs):
+        rec, split = recs[i], _split(has_b1, tiles[i])
+        if rec["source"] != plan["source"]:
+            raise RuntimeError(
+                f"scheduler: tile {i} ran {rec['source']!r}, expected {plan['source']!r}"
+            )
+        for k, h in rec["shared"].items():
+            key = (k, tuple(split[d] for d in split if d in dims[k]))
+            j, h0 = seen.setdefault(key, (i, h))
+            if h0 != h:
+                raise RuntimeError(f"store: tile {i} disagrees with tile {j} on {k}")
+        # variables a tile computes but does not own are counted by their owner
+        fast += rec["total_undecided_fast"]
+        final += rec["total_undecided"]
+        for k in rec["undecided"]:
+            if _owns(dims[k], split):
+                a = var_attrs.setdefault(k, {"undecided_fast": 0, "undecided": 0})
+                a["undecided_fast"] += rec["undecided_fast"][k]
+                a["undecided"] += rec["undecided"][k]
+            else:
+                fast -= rec["undecided_fast"][k]
+                final -= rec["undecided"][k]
+    attrs = {"undecided_fast": int(fast), "undecided_after_resolve": int(final)}
+    failures = [p for i in sorted(recs) for p in recs[i]["exact_failures"]]
+    if failures:
+        attrs["exact_failures"] = len(failures)
+        attrs["exact_failure_example"] = repr(tuple(failures[0]))
+    group = zarr.open_group(store, mode="r+")
+    history = str(group.attrs.get("history", sch.attrs["history"]))
+    if resumed:
+        now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        history += f"\n{now}: resumed, {len(computed)} of {len(tiles)} tiles recomputed"
+    for k, a in var_attrs.items():
+        group[k].attrs.update(a)
+    group.attrs.update({**attrs, "history": history, "atlas_complete": 1})
+    return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
+
+
+def _to_netcdf(store, sch, tiles, totals, path, overwrite):
+    """Stream the store into a netCDF4 file with the schema's (typed) attributes."""
+    if path is None:
+        return None
+    from atlas.data.io import NetCDFSink
+
+    sink = NetCDFSink(path, overwrite)
+    sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
+    ds = _open(store)
+    has_b1 = "beta1" in sch.shape
+    sink.begin(sch)
+    try:
+        for tile in tiles:  # every region once, from the tile that owns it
+            split = _split(has_b1, tile)
+            for k, (dims, *_) in sch.variables.items():
+                if _owns(dims, split):
+                    reg = _region(dims, split)
+                    index = tuple(reg.get(d, slice(None)) for d in dims)
+                    sink.write(k, index, ds[k].isel(reg).values)
+        return sink.finish(totals["attrs"], totals["var_attrs"])
+    except BaseException:
+        sink.abort()
+        raise
+
+
+# --- measurement --------------------------------------------------------------------------------
+
+#: the measured scene: 5-D, 2**21 points, grids off the axis directions (no exact resolution)
+MEASURE_SCENE = dict(
+    beta1="0.1:6.1:256",
+    beta2="0.05:6.1:64",
+    kappa="log:0.5:2:8",
+    q1="log:0.1:1:4",
+    q2="log:0.1:1:4",
+)
+
+
+def _warm(scene: Scene, tile, opts: dict) -> float:
+    """Compile (or load from the cache) the kernels of one tile; returns the seconds it took."""
+    t0 = time.perf_counter()
+    _compute_tile(scene, tile, opts)
+    return time.perf_counter() - t0
+
+
+def _measure_one(scene, store, scheduler, slab, opts, n_workers):
+    tiles = tile_plan(scene, slab)
+    t0 = time.perf_counter()
+    if scheduler is None:
+        _warm(scene, tiles[0], opts)
+        client = cluster = None
+    else:
+        cluster, client = local_cluster(n_workers)
+        client.run(_warm, scene, tiles[0], opts)  # every worker compiles before the clock runs
+    warm = time.perf_counter() - t0
+    try:
+        s = generate_distributed(scene, store, scheduler=client, slab=slab, overwrite=True, **opts)
+    finally:
+        if client is not None:
+            client.close()
+            cluster.close()
+    recs = [_read_record(store, i) for i in range(s["tiles"])]
+    return {
+        "scheduler": "in-process" if scheduler is None else f"LocalCluster, {n_workers} worker(s)",
+        "workers": n_workers,
+        "warmup_seconds": warm,
+        "seconds": s["seconds"],
+        "points": s["points"],
+        "points_per_second": s["points_per_second"],
+        "tiles": s["tiles"],
+        "tile_points": s["tile_points"][0],
+        "tile_seconds": float(np.median(s["tile_seconds"])),
+        "tile_cpu_seconds": float(np.median(s["tile_cpu_seconds"])),
+        "write_seconds": float(np.median([r["write_seconds"] for r in recs])),
+        "checksums": [r["checksums"] for r in recs],
+    }
+
+
+def measure_throughput(
+    out="outputs",
+    *,
+    scene: Scene | None = None,
+    workers=(1, 2),
+    slab: int | None = None,
+    tile_points: int = DEFAULT_TILE_POINTS,
+    projected_points: float = 1e11,
+    projected_workers=(2, 16, 128),
+) -> dict:
+    """Throughput of :func:`generate_distributed` in process and on LocalClusters; writes
+    ``OUT/distributed.md``.
+
+    Every configuration is timed after a warm-up in which each process (this one, or every worker)
+    computes the first tile, so compilation is excluded (the persistent compilation cache is shared).
+    The per-tile cost of the 1-worker run (worker-side generation + writing the region and the
+    record) projects the wall time of ``projected_points`` points on N workers, assuming tiles of
+    the measured size and perfect scaling (each worker on its own core, the shared store not a
+    bottleneck).
+
+    Returns the numbers of the report (``runs``, ``ratio``, ``projection``).
+    """
+    import platform
+
+    use_compile_cache(worker_env().get("JAX_COMPILATION_CACHE_DIR"))
+    scene = Scene(**MEASURE_SCENE) if scene is None else scene
+    opts = dict(method="certified", dtype="float64", resolve=True, tile_points=tile_points)
+    load0 = os.getloadavg()
+    runs = []
+    with tempfile.TemporaryDirectory(prefix="atlas-measure-") as tmp:
+        for n in (0, *workers):
+            store = os.path.join(tmp, f"w{n}.zarr")
+            runs.append(_measure_one(scene, store, "local" if n else None, slab, opts, max(n, 1)))
+    load1 = os.getloadavg()
+    identical = all(r["checksums"] == runs[0]["checksums"] for r in runs)
+    by = {r["workers"]: r for r in runs[1:]}
+    base = by.get(1, runs[0])
+    ratio = {n: r["points_per_second"] / base["points_per_second"] for n, r in by.items()}
+    per_tile = base["tile_seconds"] + base["write_seconds"]
+    per_tile_cpu = base["tile_cpu_seconds"] + base["write_seconds"]
+    n_tiles = int(np.ceil(projected_points / base["tile_points"]))
+    rounds = {n: int(np.ceil(n_tiles / n)) for n in projected_workers}
+    projection = {n: k * per_tile for n, k in rounds.items()}
+    projection_cpu = {n: k * per_tile_cpu for n, k in rounds.items()}
+    report = {
+        "scene": scene.describe(),
+        "points": scene.points(),
+        "runs": [{k: v for k, v in r.items() if k != "checksums"} for r in runs],
+        "identical": identical,
+        "ratio": ratio,
+        "per_tile_seconds": per_tile,
+        "per_tile_cpu_seconds": per_tile_cpu,
+        "projected_tiles": n_tiles,
+        "projection": projection,
+        "projection_cpu": projection_cpu,
+        "machine": f"{platform.node()}: {os.cpu_count()} cores, {platform.machine()}, "
+        f"{platform.system()} {platform.release()}, Python {platform.python_version()}",
+        "load": (load0, load1),
+    }
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "distributed.md"), "w") as f:
+            f.write(_measure_markdown(report, projected_points))
+    return report
+
+
+def _hours(seconds: float) -> str:
+    if seconds < 3600:
+        return f"{seconds / 60:.1f} min"
+    if seconds < 3 * 86400:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
+
+
+def _measure_markdown(rep: dict, projected_points: float) -> str:
+    import jax
+
+    r0 = rep["runs"][0]
+    lines = [
+        "# Distributed generation: throughput",
+        "",
+        'Generated by `python -c "from atlas.data import distributed; '
+        "distributed.measure_throughput(out='outputs')\"`.",
+        "",
+        f"* machine: {rep['machine']}; JAX {jax.__version__}.  **The machine is shared** with other "
+        f"jobs (load average {rep['load'][0][0]:.1f} before, {rep['load'][1][0]:.1f} after the "
+        "measurement), so the numbers are noisy and pessimistic.",
+        f"* scene: `{rep['scene']}`, {rep['points']:,} points, {r0['tiles']} tiles of "
+        f"{r0['tile_points']:,} points (beta1 slabs), certified method, float64, exact resolution "
+        "on.",
+        "* each configuration is timed after a warm-up (every process computes one tile first; the "
+        "persistent compilation cache is shared), so compilation is excluded.",
+        f"* all runs wrote bit-identical tiles (per-tile SHA-256): **{rep['identical']}**.",
+        "",
+        "| run | wall [s] | points/s | ratio to 1 worker | per tile: generate [s] | "
+        "CPU [s] | write [s] | warm-up [s] |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rep["runs"]:
+        ratio = rep["ratio"].get(r["workers"]) if r["scheduler"] != "in-process" else None
+        ratio = "" if ratio is None else f"{ratio:.2f}"
+        lines.append(
+            f"| {r['scheduler']} | {r['seconds']:.1f} | {r['points_per_second']:,.0f} | {ratio} | "
+            f"{r['tile_seconds']:.2f} | {r['tile_cpu_seconds']:.2f} | {r['write_seconds']:.2f} | "
+            f"{r['warmup_seconds']:.1f} |"
+        )
+    lines += [
+        "",
+        "Per-tile columns are medians over the tiles, measured on the workers (CPU = process "
+        "CPU time, all threads).  The in-process run uses XLA's intra-op threads; the workers "
+        "run one dask thread each with XLA's Eigen thread pool off, every thread pinned to the "
+        "worker's own core (`pin_to_cpus`): XLA splits large fusions over its task pool whatever "
+        "the flags say, so unpinned workers used 1.5-1.8 cores each and oversubscribed the "
+        "machine (CPU / wall = cores used per worker).",
+        "",
+    ]
+    one = next((r for r in rep["runs"] if r["scheduler"] != "in-process"), None)
+    if one is not None and one["tile_cpu_seconds"] > 1.2 * one["tile_seconds"]:
+        lines += [
+            f"**Caveat**: a 1-worker tile took {one['tile_cpu_seconds']:.2f} s of CPU in "
+            f"{one['tile_seconds']:.2f} s of wall time, i.e. one worker process still used about "
+            f"{one['tile_cpu_seconds'] / one['tile_seconds']:.1f} cores (other threads than the "
+            "dask one: pinning failed?).  On this 2-core machine the 1-worker "
+            "run therefore already used most of the machine, and the 2-worker ratio understates "
+            "how throughput scales with cores; the CPU-time projection below is the per-core "
+            "one.",
+            "",
+        ]
+    lines += [
+        f"## Projection: {projected_points:.0e} points",
+        "",
+        f"Per-tile cost on one worker (generate + write, 1-worker run): "
+        f"**{rep['per_tile_seconds']:.2f} s** wall as measured here, "
+        f"{rep['per_tile_cpu_seconds']:.2f} s with CPU time in place of the generation's wall "
+        f"time (what a dedicated core would take), for {rep['runs'][1]['tile_points']:,} points; "
+        f"{projected_points:.0e} points = {rep['projected_tiles']:,} such tiles.  Wall time = "
+        "ceil(tiles / N) x per-tile cost, assuming one core per worker, perfect scaling and a "
+        "shared file system that keeps up (the 2-worker ratio above is what this shared 2-core "
+        "machine achieved; the driver's scheduling overhead per tile is not included).",
+        "",
+        "| workers N | projected wall time (measured wall per tile) | (CPU per tile) |",
+        "|---:|---:|---:|",
+    ]
+    for n, sec in rep["projection"].items():
+        lines.append(f"| {n} | {_hours(sec)} | {_hours(rep['projection_cpu'][n])} |")
+    lines += [
+        "",
+        "Tiles are `beta1` slabs, or `(beta1, beta2)` blocks when one `beta1` value holds more "
+        "than 2**18 points, so a 1e11-point scene gets tiles of about the measured size as long "
+        "as n_kappa x n_q1 x n_q2 (one `(beta1, beta2)` pair, the smallest tile) is no larger "
+        "(see README, *Atlases on a cluster*).",
+        "",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,415 @@
+"""Figures of the simulated contact dynamics: the paper's Fig. 2 and the outcome map.
+
+Plots only; the numbers come from :mod:`atlas.dynamics`.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from atlas.core import config
+from atlas.data.io import savefig
+from atlas.dynamics.model import Outcome, classify, fig2_cases, simulate
+
+__all__ = [
+    "FIG2_T_END",
+    "PAPER_MAP_N",
+    "plot_fig2",
+    "plot_outcome_map",
+    "write_outcome_map",
+    "outcome_map_files",
+]
+
+#: simulated horizon of each Fig. 2 panel (the paper does not state its time axes) [time]
+FIG2_T_END = {"a": 400.0, "b": 20.0, "c": 400.0, "d": 40.0, "e": 100.0}
+
+_PAPER_SAYS = {
+    "a": "paper: inverse chattering (growing)",
+    "b": "paper: SS stable, settles",
+    "c": "paper: inverse chattering (growing)",
+    "d": "caption: sustained small oscillation; text: growing, simultaneous impacts",
+    "e": "caption: growing, simultaneous impacts; text: sustained micro-oscillation",
+}
+
+
+def _plot_trajectory(ax, res, p, name, note, n_samples=6000):
+    """Gaps ``d1(t)``, ``d2(t)`` of one simulation on ``ax``, with its outcome written on it."""
+    outcome = classify(res)
+    t = np.union1d(np.linspace(0.0, res.t_final, n_samples), res.t_events)
+    g = res.sample(t)
+    ax.plot(t, g[:, 0], lw=0.7, label=r"$d_1$")
+    ax.plot(t, g[:, 1], lw=0.7, label=r"$d_2$")
+    ax.axhline(0.0, color="k", lw=0.4)
+    ax.set_ylabel("gap [1]")
+    ax.set_title(
+        f"({name}) beta1={p['beta1'] / math.pi:.2f}pi, beta2={p['beta2'] / math.pi:.2f}pi, "
+        f"alpha={p['alpha'] / math.pi:.2f}pi, q={p['q'][0]:g}",
+        fontsize=9,
+    )
+    text = f"simulated: {outcome.label} ({res.n_events} events, {res.status.value})"
+    ax.text(
+        0.01,
+        0.97,
+        text + (f"\n{note}" if note else ""),
+        transform=ax.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
+    )
+    ax.legend(loc="upper right", fontsize=8)
+    return outcome
+
+
+def run_cli(
+    case=None,
+    beta1=None,
+    beta2=None,
+    alpha=None,
+    k1=None,
+    k2=None,
+    q1=None,
+    q2=None,
+    t_end=None,
+    out=None,
+    outcome_map=False,
+    n=None,
+    kappa=None,
+    q=None,
+    engine="numpy",
+    **_,
+) -> int:
+    """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
+    printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``).
+
+    With ``--map``: the outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` at
+    ``(kappa, q1 = q2 = q, alpha)`` (defaults 24, 0.5, 0, 0.35 pi; ``--t-end`` default 150),
+    outcome counts printed; ``--out`` writes it as netCDF (``.nc``) or as the figure beside the
+    Fig. 1 theory map (``.png``/``.pdf``)."""
+    if outcome_map:
+        return _run_map(n, kappa, q, alpha, t_end, out, engine, case)
+    case = case[len("fig2") :] if case and case.startswith("fig2") else case
+    p = (
+        dict(fig2_cases()[case])
+        if case
+        else {
+            "k": (100.0, 200.0),
+            "q": (0.0, 0.0),
+            "b_norm": (1.0, 1.0),
+            "a_norm": 1.0,
+            "g0": (0.0, 0.0, 0.0, 0.0),
+            "t_end": 10.0,
+        }
+    )
+    if not case and None in (beta1, beta2, alpha):
+        raise ValueError("case: give --case or all of --beta1, --beta2, --alpha")
+    for key, v in (("beta1", beta1), ("beta2", beta2), ("alpha", alpha), ("t_end", t_end)):
+        if v is not None:
+            p[key] = v
+    k = list(p["k"])
+    q = list(p["q"])
+    for i, v in ((0, k1), (1, k2)):
+        if v is not None:
+            k[i] = v
+    for i, v in ((0, q1), (1, q2)):
+        if v is not None:
+            q[i] = v
+    p["k"], p["q"] = tuple(k), tuple(q)
+    res = simulate(**p, max_events=100_000)
+    outcome = classify(res)
+    print(
+        f"{case or 'custom'}: {outcome.label}; {res.n_events} events, status {res.status.value}, "
+        f"t = {res.t_final:g}"
+    )
+    if out:
+        out = Path(out)
+        if out.suffix.lower() == ".csv":
+            rows = ["t,kind,contact,d1,d2,d1dot,d2dot,mode_after"]
+            for t, kind, c, g, m in zip(
+                res.t_events, res.kinds, res.contacts, res.states, res.modes, strict=True
+            ):
+                rows.append(
+                    ",".join(
+                        [repr(float(t)), kind, str(int(c))] + [repr(float(x)) for x in g] + [m]
+                    )
+                )
+            from atlas.data.io import atomic_write_text
+
+            atomic_write_text(out, "\n".join(rows) + "\n")
+        else:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(8, 3), constrained_layout=True)
+            _plot_trajectory(ax, res, p, case or "custom", _PAPER_SAYS.get(case, ""))
+            ax.set_xlabel("time [rescaled, paper eq. 6]")
+            savefig(fig, out)
+            plt.close(fig)
+        print(f"wrote {out}")
+    return 0
+
+
+def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
+    from atlas.dynamics.model import outcome_grid
+    from atlas.dynamics.model import outcome_map as compute
+
+    if case:
+        raise ValueError("case: --case and --map exclude each other")
+    n = 24 if n is None else int(n)
+    if n < 1:
+        raise ValueError(f"n: must be >= 1, got {n}")
+    suffix = Path(out).suffix.lower() if out else ""
+    if out and suffix not in (".nc", ".png", ".pdf"):
+        raise ValueError(f"out: expected FILE.nc, FILE.png or FILE.pdf, got {out!r}")
+    kw = {"kappa": 0.5 if kappa is None else kappa, "q": 0.0 if q is None else q}
+    if alpha is not None:
+        kw["alpha"] = alpha
+    if t_end is not None:
+        kw["t_end"] = t_end
+    b1, b2 = outcome_grid(n)
+    ds = compute(b1, b2, engine=engine, **kw)
+    vals, counts = np.unique(ds["outcome"].values, return_counts=True)
+    summary = ", ".join(f"{Outcome(int(v)).label} {c}" for v, c in zip(vals, counts, strict=True))
+    print(
+        f"outcome map {n}x{n}: {summary}; {ds.attrs['trajectories']} trajectories in "
+        f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine})"
+    )
+    if out:
+        if suffix == ".nc":
+            write_outcome_map(ds, out)
+        else:
+            plot_outcome_map(ds, out)
+        print(f"wrote {out}")
+    return 0
+
+
+def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
+    """Regenerate the paper's Fig. 2 (panels a-e): gaps ``d1(t)``, ``d2(t)`` of eq. (1), (6).
+
+    Parameters
+    ----------
+    outdir : path-like
+        Output directory (created if missing).
+    t_end : dict, optional
+        Horizon per panel, default :data:`FIG2_T_END` [time].
+    n_samples : int
+        Samples of the exact dense output per panel (event times are added).
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``[outdir / "fig2.png"]``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    horizons = dict(FIG2_T_END, **(t_end or {}))
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    fig, axes = plt.subplots(5, 1, figsize=(8, 13), constrained_layout=True)
+    rows = [
+        "| panel | beta1, beta2, alpha | k; q (physical) | simulated (horizon) | the paper says |",
+        "|---|---|---|---|---|",
+    ]
+    for ax, (name, p) in zip(axes, fig2_cases().items(), strict=True):
+        p = dict(p, t_end=horizons[name])
+        res = simulate(**p, max_events=100_000)
+        outcome = _plot_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples)
+        ang = ", ".join(f"{p[k] / math.pi:.2f} pi" for k in ("beta1", "beta2", "alpha"))
+        rows.append(
+            f"| {name} | {ang} | {p['k'][0]:g}, {p['k'][1]:g}; {p['q'][0]:g}, {p['q'][1]:g} "
+            f"| **{outcome.label}** "
+            f"(t <= {p['t_end']:g}, {res.n_events} events) | {_PAPER_SAYS[name]} |"
+        )
+    axes[-1].set_xlabel("time [rescaled, paper eq. 6]")
+    path = outdir / "fig2.png"
+    savefig(fig, path)
+    plt.close(fig)
+    from atlas.data.io import atomic_write_text
+
+    atomic_write_text(
+        outdir / "fig2.md",
+        "Fig. 2, simulated outcome per panel (`atlas.paper.figures_dynamics.plot_fig2`; the caption and "
+        "the text of Sec. 6.4-6.5 disagree on panels d and e: the simulation decides).\n\n"
+        + "\n".join(rows)
+        + "\n",
+    )
+    return [path]
+
+
+#: grid of the outcome map in ``atlas paper`` (quick mode, full) [cells per axis]
+PAPER_MAP_N = (6, 48)
+
+
+def write_outcome_map(ds, path, overwrite: bool = True, history: str | None = None) -> str:
+    """Write an :func:`atlas.dynamics.outcome_map` dataset to netCDF4, atomically.
+
+    Through :func:`atlas.data.io.write_netcdf` (temporary file + ``os.replace``; no ``_FillValue`` on
+    the int8 flags or the coordinates), with the CF global attributes of the atlases
+    (``Conventions``, ``source``, ``history``).
+    """
+
+    from atlas.data.io import write_netcdf
+
+    ds = ds.copy()
+    call = history or (
+        f"atlas.dynamics.outcome_map(kappa={ds.attrs['kappa']:g}, q=({ds.attrs['q1']:g}, "
+        f"{ds.attrs['q2']:g}), alpha={ds.attrs['alpha']:.6g}, n={ds.sizes['beta1']}x"
+        f"{ds.sizes['beta2']}, engine={ds.attrs.get('engine', 'numpy')!r})"
+    )
+    ds.attrs.update(
+        Conventions="CF-1.10",
+        source=config.source(),
+        history=config.history(call),
+    )
+    return write_netcdf(ds, path, overwrite=overwrite)
+
+
+def _theory_panel(ax, theory):
+    """The Fig. 1 theory map (certified kernels, :func:`atlas.paper.figures.stability_map`) of the same
+    ``(kappa, q)``: SS stability as in Fig. 1, orange where SS is unstable and no impact without
+    collision is stable (IF, FI consistent; II stable), the Fig. 1 overview layer."""
+    from atlas.core.verdicts import Consistency, Verdict
+    from atlas.paper import figures
+
+    n = theory.sizes["beta1"]
+    ss = theory["stable_SS"].values
+    iwc = (
+        np.broadcast_to(theory["consistent_IF"].values[:, None], (n, n))
+        | np.broadcast_to(theory["consistent_FI"].values[None, :], (n, n))
+        | (
+            (theory["consistent_II"].values == Consistency.CONSISTENT)
+            & (theory["stable_II"].values == Verdict.STABLE)
+        )
+    )
+    nothing = (ss != Verdict.STABLE) & (ss != Verdict.NEUTRAL) & ~iwc
+    figures._categorical(ax, theory, ss, Verdict)
+    edges = np.linspace(0, 2 * np.pi, n + 1)
+    ax.pcolormesh(
+        edges,
+        edges,
+        np.ma.masked_where(~nothing, np.ones((n, n))).T,
+        cmap=_single_cmap(figures.NOTHING_COLOR),
+        rasterized=True,
+    )
+    if "margin_SS" in theory:
+        figures._dashed(ax, theory, "margin_SS", where=figures._ss_boundary_cells(theory))
+    figures._class_lines(ax)
+    return set(np.unique(ss).tolist())
+
+
+def _single_cmap(color):
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([color])
+
+
+def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
+    """Outcome map beside the Fig. 1 theory map of the same ``(kappa, q)``.
+
+    Left: the simulated outcome per cell (:class:`atlas.dynamics.Outcome` colours, ``pcolormesh``
+    + ``ListedColormap`` + ``BoundaryNorm``), one sample per cell of the uniform grid of
+    ``[0, 2 pi)^2``.  Right: ``theory`` (an :func:`atlas.paper.figures.stability_map` dataset; computed
+    at 121 x 121 if not given): SS stability, orange where no mode or impact without collision is
+    stable.  Both: solid black outline of subclasses 132, 133, 142, 143 and their duals at the
+    map's ``alpha`` (paper Sec. 6.4-6.5; :func:`atlas.dynamics.no_stable_subclass` on an
+    ``n_outline`` grid), thin lines: class boundaries.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from atlas.core.verdicts import Verdict
+    from atlas.dynamics.model import no_stable_subclass
+    from atlas.paper import figures
+
+    kappa, q1, q2 = (float(ds.attrs[k]) for k in ("kappa", "q1", "q2"))
+    alpha = float(ds.attrs["alpha"])
+    if theory is None:
+        theory = figures.stability_map(121, kappa, q1, q2)
+    elif not all(
+        math.isclose(float(theory[k]), v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2))
+    ):
+        raise ValueError("theory: (kappa, q1, q2) differ from the outcome map's")
+    plt = figures._plt()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(13.5, 6.8))
+    codes = [int(m) for m in Outcome]
+    cmap = ListedColormap([Outcome(c).color for c in codes])
+    norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
+    n1, n2 = ds.sizes["beta1"], ds.sizes["beta2"]
+    ax0.pcolormesh(
+        np.linspace(0, 2 * np.pi, n1 + 1),
+        np.linspace(0, 2 * np.pi, n2 + 1),
+        ds["outcome"].values.T,
+        cmap=cmap,
+        norm=norm,
+        rasterized=True,
+    )
+    figures._class_lines(ax0)
+    ss_codes = _theory_panel(ax1, theory)
+    f = (np.arange(n_outline) + 0.5) * (2 * np.pi / n_outline)
+    F1, F2 = np.meshgrid(f, f, indexing="ij")
+    region = no_stable_subclass(F1, F2, np.full(F1.shape, alpha)).astype(float)
+    for ax in (ax0, ax1):
+        if region.any():
+            ax.contour(f, f, region.T, levels=[0.5], colors="k", linewidths=1.6, zorder=8)
+        figures._pi_axis(ax)
+        ax.set_xlabel(r"$\beta_1$")
+        ax.set_ylabel(r"$\beta_2$")
+    present = sorted(set(np.unique(ds["outcome"].values).tolist()))
+    h0 = [Patch(color=Outcome(c).color, label=Outcome(c).label) for c in present]
+    h0.append(Line2D([], [], color="k", lw=1.6, label="subclasses 132/133/142/143 + duals"))
+    ax0.legend(handles=h0, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
+    h1 = figures._legend_patches(Verdict, ss_codes, {Verdict.NEUTRAL: "SS neutral (q = 0)"})
+    h1 = [Patch(facecolor=p.get_facecolor(), label=p.get_label()) for p in h1]
+    for p in h1:
+        if not p.get_label().startswith("SS"):
+            p.set_label("SS " + p.get_label())
+    h1.append(Patch(color=figures.NOTHING_COLOR, label="SS unstable, no stable IWC"))
+    h1.append(Line2D([], [], color="k", lw=1.1, ls="--", label="SS boundary (smooth margin)"))
+    ax1.legend(handles=h1, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8)
+    und = int((ds["outcome"].values == int(Outcome.UNDETERMINED)).sum())
+    ax0.set_title(
+        f"simulated ({n1}x{n2} cells, {ds.attrs['n_perturb']} run(s) each, t <= "
+        f"{ds.attrs['t_end']:g} x up to {ds.attrs.get('horizon_cap', 1):g}; {und} undetermined)",
+        fontsize=9,
+    )
+    ax1.set_title(
+        f"theory (Fig. 1, certified kernels, {theory.sizes['beta1']}$^2$ cells)", fontsize=9
+    )
+    fig.suptitle(
+        f"Outcome of a perturbed SS equilibrium vs theory: kappa = {kappa:g}, q = ({q1:g}, "
+        f"{q2:g}), alpha = {alpha / math.pi:.3g} pi",
+        fontsize=10,
+    )
+    fig.subplots_adjust(left=0.06, right=0.98, top=0.9, bottom=0.22, wspace=0.2)
+    savefig(fig, path)
+    plt.close(fig)
+    return path
+
+
+def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
+    """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
+    ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
+    :func:`plot_outcome_map`).  ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
+    from atlas.dynamics.model import outcome_grid, outcome_map
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    b1, b2 = outcome_grid(n)
+    ds = outcome_map(b1, b2, **kwargs)
+    nc = Path(write_outcome_map(ds, out / "outcome_map.nc"))
+    png = plot_outcome_map(ds, out / "outcome_map.png", theory=theory)
+    return [nc, png]

@@ -1,0 +1,159 @@
+"""Root-free certified verdicts (atlas.core.rootfree) against the exact tier and closed forms."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from atlas.core import exact, hardcases, rootfree, spectral
+from atlas.core.mechanics import direction
+from atlas.core.verdicts import Verdict
+
+KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
+NAMES = ("stable_SS", "consistent_II", "stable_II")
+_codes = jax.jit(rootfree.codes)
+_tier2 = jax.jit(rootfree.tier2)
+
+
+def kernel_verdicts(pts, dtype):
+    """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier)."""
+    cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
+    first = [a[: cols[0].size] for a in rootfree.unpack(_codes(*_padded(cols)))]
+    idx = np.flatnonzero(first[3])
+    if idx.size:
+        second = _tier2(*_padded([c[idx] for c in cols]))
+        for a, b in zip(first[:3], second):
+            a[idx] = np.where(a[idx] == 3, np.asarray(b)[: idx.size], a[idx])
+    return dict(zip(NAMES, first[:3])), cols
+
+
+def _padded(cols):
+    """Pad to a power of two >= 1024 (repeating the first point): few compilations."""
+    n = cols[0].size
+    m = max(1024, 1 << (n - 1).bit_length())
+    return [jnp.asarray(np.concatenate([c, np.full(m - n, c[0], c.dtype)])) for c in cols]
+
+
+def assert_agrees_with_exact(pts, dtype, label, min_decided=0.5):
+    got, cols = kernel_verdicts(pts, dtype)
+    ref = exact.resolve(dict(zip(KEYS, (c.astype(np.float64) for c in cols))), names=NAMES)
+    for k in NAMES:
+        decided = got[k] != 3
+        bad = np.flatnonzero(decided & (got[k] != ref[k]))
+        assert bad.size == 0, (label, k, [[float(c[i]) for c in cols] for i in bad[:3]])
+        assert decided.mean() >= min_decided, (label, k, decided.mean())
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("name", list(hardcases.SUITES))
+def test_hard_suites_agree_with_exact(name, dtype):
+    assert_agrees_with_exact(hardcases.suite(name, dtype), dtype, name, min_decided=0.0)
+
+
+def _random(rng, n, dtype, q1_zero=False, q2_zero=False, span=1.0):
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, n)).astype(dtype)
+    c1, s1 = direction(b1, dtype)
+    c2, s2 = direction(b2, dtype)
+    kap, q1, q2 = 10 ** rng.uniform(-span, span, (3, n))
+    q1 = np.zeros(n) if q1_zero else q1
+    q2 = np.zeros(n) if q2_zero else q2
+    return dict(c1=c1, s1=s1, c2=c2, s2=s2, kappa=kap, q1=q1, q2=q2)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize(
+    "case",
+    [
+        dict(),  # q1 != q2, ratios within 10
+        dict(q1_zero=True),
+        dict(q2_zero=True),
+        dict(span=12.0),  # kappa, q1, q2 from 1e-12 to 1e12
+    ],
+)
+def test_random_damped_agree_with_exact(case, dtype):
+    rng = np.random.default_rng([7, len(case), int(case.get("span", 1)), np.dtype(dtype).itemsize])
+    pts = _random(rng, 300, dtype, **case)
+    assert_agrees_with_exact(pts, dtype, str(case), min_decided=0.3)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_axis_grid_agrees_with_exact(dtype):
+    """A 16 x 16 beta grid through every axis line (beta = 0, pi/2, ...), one q = 0 or both."""
+    g = (np.arange(16) * (2 * np.pi / 16)).astype(dtype)
+    B1, B2, K, Q1, Q2 = np.meshgrid(g, g, [0.5, 2.0], [0.0, 0.1], [0.0, 0.2], indexing="ij")
+    c1, s1 = direction(B1.ravel(), dtype)
+    c2, s2 = direction(B2.ravel(), dtype)
+    pts = dict(c1=c1, s1=s1, c2=c2, s2=s2, kappa=K.ravel(), q1=Q1.ravel(), q2=Q2.ravel())
+    assert_agrees_with_exact(pts, dtype, "axis grid", min_decided=0.9)
+    got, _ = kernel_verdicts(pts, dtype)
+    # off the anti-diagonal beta2 = beta1 + pi (where det B ~ 0 needs exact arithmetic in f64)
+    # the axis lines and q = 0 planes are decided in closed form
+    anti = np.isclose(np.mod(B2.ravel() - B1.ravel(), 2 * np.pi), np.pi, atol=1e-4)
+    for k in NAMES:
+        assert np.all(got[k][~anti] != 3), k
+
+
+@pytest.mark.parametrize("q", [0.1, 0.5, 1.0, 0.0])
+def test_double_root_diagonal(q):
+    """b1 = (-1, 0), b2 = (0, -1), kappa = 1, q1 = q2: p = (l^2 - 1 - q l)^2, h1 == h2, so the
+    positive root is a double II root: consistent, never stable (not simple)."""
+    got, _ = kernel_verdicts(
+        dict(c1=-1.0, s1=0.0, c2=0.0, s2=-1.0, kappa=1.0, q1=q, q2=q), np.float64
+    )
+    assert got["consistent_II"][0] == 1
+    assert got["stable_II"][0] == Verdict.UNSTABLE
+
+
+def test_closed_forms_c2_zero():
+    """c2 = 0 (b2 = (0, 1)): p = h1 h2; h2 = l^2 + (1 + q2 l) has no root with Re >= 0, h1 has
+    one positive root r1 (c1 < 0), strictly dominant; row 2 gives x1 x2 > 0 iff s1 < 0."""
+    for beta1, cons in ((1.2 * np.pi, 1), (0.8 * np.pi, 0)):
+        c1, s1 = direction(np.float64(beta1), np.float64)
+        got, _ = kernel_verdicts(
+            dict(c1=c1, s1=s1, c2=0.0, s2=1.0, kappa=0.7, q1=0.1, q2=0.3), np.float64
+        )
+        assert got["consistent_II"][0] == cons
+        assert got["stable_II"][0] == (Verdict.STABLE if cons else Verdict.UNSTABLE)
+
+
+def test_closed_form_det_zero():
+    """det B = 0 exactly: B = [[-1/2, 1/2], [-1/2, 1/2]] (columns b1 = -b2; the formulas hold for
+    any B), kappa = 2, q1 = q2 = 0.1: p = l^2 (l^2 + a3 l + a2) with a3 = c1 q1 + s2 q2 = 0 and
+    a2 = kappa c1 + s2 = -1/2, roots 0, 0, +-sqrt(1/2).  Every positive root is II iff
+    c2 s2 > 0 (true), and sqrt(1/2) is simple and dominant: consistent and stable."""
+    got, _ = kernel_verdicts(
+        dict(c1=-0.5, s1=-0.5, c2=0.5, s2=0.5, kappa=2.0, q1=0.1, q2=0.1), np.float64
+    )
+    assert got["consistent_II"][0] == 1
+    assert got["stable_II"][0] == Verdict.STABLE
+
+
+def test_ss_matches_spectral_where_both_decide():
+    """SS from the shared signs never contradicts :func:`atlas.core.spectral.ss_verdict`."""
+    rng = np.random.default_rng(3)
+    for dtype in (np.float64, np.float32):
+        pts = _random(rng, 8000, dtype, span=6.0)
+        pts["q1"][::7] = 0
+        got, cols = kernel_verdicts(pts, dtype)
+        ref = np.asarray(spectral.ss_verdict(*(jnp.asarray(c) for c in cols)))
+        both = (got["stable_SS"] != 3) & (ref != 3)
+        assert np.all(got["stable_SS"][both] == ref[both])
+        assert both.mean() > 0.98
+
+
+def test_one_copy_of_every_sign_and_shift():
+    """The soundness rule (module docstring): the compiled kernels keep optimization barriers."""
+    x = jnp.ones(8)
+    for fn in (rootfree.codes, rootfree.tier2):
+        text = jax.jit(fn).lower(x, x, x, x, x, x, x).as_text()
+        assert "optimization_barrier" in text, fn.__name__
+    text = jax.jit(spectral.ii_verdicts).lower(x, x, x, x, x, x, x).as_text()
+    assert "optimization_barrier" in text
+
+
+def test_pack_roundtrip():
+    ss, cons, stab = np.array([0, 1, 2, 3]), np.array([3, 0, 1, 3]), np.array([1, 3, 0, 2])
+    flag = np.array([True, False, True, False])
+    got = rootfree.unpack(rootfree.pack(ss, cons, stab, flag))
+    for a, b in zip(got, (ss, cons, stab, flag)):
+        assert np.array_equal(a, b)

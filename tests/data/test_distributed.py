@@ -1,0 +1,336 @@
+"""Tests for atlas.data.distributed: dask tiles == in-process atlas bit for bit, kill + resume, corruption.
+
+The kernels compile once per tile shape; every test uses slabs of 2 beta1 values of the same 5-D
+scene (and ``tile_points=128``), so the in-process runs share one set of compilations, and the
+LocalCluster workers and the killed subprocess share the persistent JAX compilation cache.
+"""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+pytest.importorskip("dask")
+pytest.importorskip("distributed")
+zarr = pytest.importorskip("zarr")
+
+from atlas.data.distributed import (  # noqa: E402
+    TILES,
+    _read_record,
+    generate_distributed,
+    open_store,
+    tile_plan,
+    verify_store,
+    worker_env,
+)
+from atlas.data.engine import generate  # noqa: E402
+from atlas.data.io import write_netcdf  # noqa: E402
+from atlas.data.scene import Scene  # noqa: E402
+
+TP = 128  # kernel tile (points): one spectral compilation for the reference and the slabs
+SCENE = dict(beta1="0:2pi:8", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
+
+
+def scene(**kw):
+    return Scene(**{**SCENE, **kw})
+
+
+def same_bytes(a: xr.Dataset, b: xr.Dataset, names=None):
+    """Every variable and coordinate: same dims, dtype and raw bytes."""
+    names = list(b.variables) if names is None else names
+    assert set(a.variables) == set(b.variables)
+    for k in names:
+        va, vb = np.asarray(a[k].values), np.asarray(b[k].values)
+        assert a[k].dims == b[k].dims, k
+        assert va.dtype == vb.dtype, (k, va.dtype, vb.dtype)
+        assert va.tobytes() == vb.tobytes(), k
+
+
+def chunk_files(array_dir, first: int):
+    """Chunk files of a zarr array (format 2 or 3) whose first chunk index is ``first``."""
+    out = []
+    for p in array_dir.rglob("*"):
+        rel = p.relative_to(array_dir).parts
+        if not p.is_file() or rel[0] in ("zarr.json", ".zarray", ".zattrs"):
+            continue
+        key = rel[1] if rel[0] == "c" else rel[0].split(".")[0]
+        if key == str(first):
+            out.append(p)
+    assert out
+    return out
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return generate(scene(), tile_points=TP)
+
+
+@pytest.fixture(scope="module")
+def inproc(tmp_path_factory, reference):
+    d = tmp_path_factory.mktemp("inproc")
+    summary = generate_distributed(
+        scene(), d / "a.zarr", slab=2, tile_points=TP, to_netcdf=d / "a.nc"
+    )
+    return d, summary
+
+
+def test_tile_plan():
+    assert tile_plan(scene(), 3) == [(0, 3), (3, 6), (6, 8)]
+    assert tile_plan(scene(), 100) == [(0, 8)]
+    assert tile_plan(scene(beta1=0.3)) == [(0, 1)]
+    assert tile_plan(scene()) == [(0, 8)]  # default: ~2**18 points per tile
+    with pytest.raises(ValueError, match="^slab:"):
+        tile_plan(scene(), 0)
+    # 2-D (beta1, beta2) blocks, given explicitly
+    assert tile_plan(scene(), 4, 3) == [
+        (0, 4, 0, 3),
+        (0, 4, 3, 6),
+        (0, 4, 6, 8),
+        (4, 8, 0, 3),
+        (4, 8, 3, 6),
+        (4, 8, 6, 8),
+    ]
+    with pytest.raises(ValueError, match="^block2:"):
+        tile_plan(scene(), 2, 0)
+    with pytest.raises(ValueError, match="^block2:"):
+        tile_plan(scene(beta2=0.2), 2, 2)
+    # ... and by default when one beta1 value holds 1024 * 512 = 2**19 points > 2**18 per tile
+    big = scene(beta1="0:2pi:4", beta2="0:2pi:1024", kappa="log:0.1:10:32", q1="0:1:4", q2="0:1:4")
+    assert tile_plan(big) == [(a, a + 1, c, c + 512) for a in range(4) for c in (0, 512)]
+    assert tile_plan(big, slab=2) == [(0, 2), (2, 4)]  # an explicit slab alone: beta1 slabs
+
+
+def test_2d_blocks_equal_generate_and_resume(reference, tmp_path):
+    """Uneven (beta1, beta2) blocks: same bytes as generate(); shared regions written once."""
+    store = tmp_path / "b.zarr"
+    summary = generate_distributed(
+        scene(), store, slab=4, block2=3, tile_points=TP, to_netcdf=tmp_path / "b.nc"
+    )
+    assert summary["tiles"] == 6 and summary["block2"] == 3
+    assert summary["undecided_fast"] == reference.attrs["undecided_fast"]
+    got = open_store(store).load()
+    same_bytes(got, reference)
+    for k in reference.data_vars:
+        for a in ("undecided", "undecided_fast"):
+            if a in reference[k].attrs:
+                assert got[k].attrs[a] == reference[k].attrs[a], (k, a)
+    with xr.open_dataset(tmp_path / "b.nc") as nc:
+        same_bytes(nc.load(), reference)
+    rec = _read_record(str(store), 4)  # beta1 [4, 8), beta2 [3, 6)
+    assert (rec["start"], rec["stop"], rec["start2"], rec["stop2"]) == (4, 8, 3, 6)
+    assert set(rec["shared"]) == {"stable_FS", "consistent_FI", "stable_SF", "consistent_IF"}
+    # stable_SF (no beta2) belongs to the tiles at beta2 block 0: corrupt it for beta1 [4, 8)
+    g = zarr.open_group(str(store), mode="r+")
+    g["stable_SF"][4:8] = ~np.asarray(reference["stable_SF"].values[4:8])
+    shutil.rmtree(store / TILES / "t000001")
+    assert verify_store(store) == {"ok": [0, 2, 4, 5], "missing": [1], "corrupt": [3]}
+    summary = generate_distributed(scene(), store, slab=4, block2=3, tile_points=TP, resume=True)
+    assert summary["computed"] == [1, 3]
+    same_bytes(open_store(store).load(), reference)
+
+
+def test_in_process_equals_generate(inproc, reference, tmp_path):
+    d, summary = inproc
+    assert summary["tiles"] == 4 and summary["computed"] == [0, 1, 2, 3]
+    assert summary["undecided_fast"] == reference.attrs["undecided_fast"]
+    same_bytes(open_store(d / "a.zarr").load(), reference)
+    # the netCDF conversion: same file content as write_netcdf(generate(...)) but the history time
+    write_netcdf(reference, tmp_path / "ref.nc", tile_points=TP)
+    with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(d / "a.nc") as got:
+        got, ref = got.load(), ref.load()
+    same_bytes(got, ref)
+    for k in ref.variables:
+        assert got[k].attrs.keys() == ref[k].attrs.keys(), k
+        for a, v in ref[k].attrs.items():
+            np.testing.assert_array_equal(got[k].attrs[a], v)
+            assert np.asarray(got[k].attrs[a]).dtype == np.asarray(v).dtype, (k, a)
+        assert got[k].encoding.get("chunksizes") == ref[k].encoding.get("chunksizes"), k
+    assert {k: v for k, v in got.attrs.items() if k != "history"} == {
+        k: v for k, v in ref.attrs.items() if k != "history"
+    }
+    # the store: complete, every tile recorded, shared (beta1-free) variables equal in all tiles
+    attrs = dict(zarr.open_group(str(d / "a.zarr"), mode="r").attrs)
+    assert attrs["atlas_complete"] == 1
+    recs = [
+        dict(zarr.open_group(str(d / "a.zarr"), path=f"{TILES}/t{i:06d}").attrs) for i in range(4)
+    ]
+    assert {r["start"] for r in recs} == {0, 2, 4, 6}
+    assert set(recs[0]["shared"]) == {"stable_FS", "consistent_FI"}
+    assert all(r["shared"] == recs[0]["shared"] for r in recs)
+    assert verify_store(d / "a.zarr") == {"ok": [0, 1, 2, 3], "missing": [], "corrupt": []}
+
+
+def test_local_cluster_equals_in_process(inproc, reference, tmp_path):
+    summary = generate_distributed(
+        scene(), tmp_path / "c.zarr", scheduler="local:2", slab=2, tile_points=TP
+    )
+    assert summary["workers"] == 2 and summary["computed"] == [0, 1, 2, 3]
+    got = open_store(tmp_path / "c.zarr").load()
+    same_bytes(got, reference)
+    same_bytes(got, open_store(inproc[0] / "a.zarr").load())
+    assert got.attrs["undecided_fast"] == reference.attrs["undecided_fast"]
+
+
+_KILLED = textwrap.dedent(
+    """
+    import sys, time
+    import atlas.data.distributed as d
+    from atlas.data.scene import Scene
+
+    compute = d._compute_tile
+
+    def slow(*args):  # slow tiles, so the run is killed half-way
+        out = compute(*args)
+        time.sleep(0.5)
+        return out
+
+    d._compute_tile = slow
+    scene = Scene(beta1="0:2pi:16", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
+    d.generate_distributed(scene, sys.argv[1], slab=2, tile_points=128)
+    """
+)
+
+
+def test_killed_run_resumes(tmp_path):
+    store = tmp_path / "k.zarr"
+    script = tmp_path / "run.py"
+    script.write_text(_KILLED)
+    env = {**os.environ, **worker_env()}  # the workers' flags: shares their compilation cache
+    proc = subprocess.Popen(
+        [sys.executable, str(script), str(store)],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    deadline = time.monotonic() + 180
+    try:
+        while True:
+            done = sum(_read_record(str(store), i) is not None for i in range(8))
+            if done >= 2 or proc.poll() is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, proc.stderr.read().decode()[-2000:]
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        proc.stderr.close()
+    report = verify_store(store)
+    assert report["corrupt"] == [] and 2 <= len(report["ok"]) < 8
+    assert report["missing"] == sorted(set(range(8)) - set(report["ok"]))
+    assert dict(zarr.open_group(str(store), mode="r").attrs)["atlas_complete"] == 0
+
+    big = Scene(beta1="0:2pi:16", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
+    summary = generate_distributed(big, store, slab=2, tile_points=TP, resume=True)
+    assert summary["verified"] == report["ok"]
+    assert summary["computed"] == report["missing"]
+    assert verify_store(store)["ok"] == list(range(8))
+    same_bytes(open_store(store).load(), generate(big, tile_points=TP))
+    assert "resumed" in open_store(store).attrs["history"]
+
+
+def test_corrupt_tiles_detected_and_recomputed(inproc, reference, tmp_path):
+    store = tmp_path / "x.zarr"
+    shutil.copytree(inproc[0] / "a.zarr", store)
+    # tile 1: valid data, wrong values (a region rewritten behind the records' back)
+    ds = open_store(store).load()
+    bad = ds[["class_code"]].isel(beta1=slice(2, 4))
+    bad = bad.drop_vars(list(bad.coords))
+    bad["class_code"] = bad["class_code"] * 0 + 11
+    bad.to_zarr(store, region={"beta1": slice(2, 4)}, consolidated=False)
+    # tile 3: raw chunk bytes overwritten (undecodable)
+    for chunk in chunk_files(store / "spectral_abscissa", 3):
+        chunk.write_bytes(b"\x00garbage" * 8)
+    # tile 2: record lost
+    shutil.rmtree(store / TILES / "t000002")
+    assert verify_store(store) == {"ok": [0], "missing": [2], "corrupt": [1, 3]}
+
+    summary = generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
+    assert summary["corrupt"] == [1, 3] and summary["missing"] == [2]
+    assert summary["computed"] == [1, 2, 3] and summary["verified"] == [0]
+    same_bytes(open_store(store).load(), reference)
+    assert verify_store(store)["ok"] == [0, 1, 2, 3]
+
+
+def test_corrupt_shared_variable_recomputes_tile_0(inproc, reference, tmp_path):
+    store = tmp_path / "s.zarr"
+    shutil.copytree(inproc[0] / "a.zarr", store)
+    g = zarr.open_group(str(store), mode="r+")
+    g["stable_FS"][:] = ~np.asarray(reference["stable_FS"].values)
+    assert verify_store(store)["corrupt"] == [0]
+    summary = generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
+    assert summary["computed"] == [0]
+    same_bytes(open_store(store).load(), reference)
+
+
+def test_store_guards(inproc, tmp_path):
+    d = inproc[0]
+    with pytest.raises(FileExistsError, match="^store:"):
+        generate_distributed(scene(), d / "a.zarr", slab=2, tile_points=TP)
+    with pytest.raises(ValueError, match="^store: .*different atlas.*tiles"):
+        generate_distributed(scene(), d / "a.zarr", slab=4, tile_points=TP, resume=True)
+    with pytest.raises(ValueError, match="^store: .*different atlas"):
+        generate_distributed(
+            scene(kappa="0.5,3"), d / "a.zarr", slab=2, tile_points=TP, resume=True
+        )
+    with pytest.raises(ValueError, match="^scheduler:"):
+        generate_distributed(scene(), tmp_path / "b.zarr", scheduler="nowhere", slab=2)
+    with pytest.raises(ValueError, match="^store: .*not an atlas store"):
+        (tmp_path / "empty").mkdir()
+        generate_distributed(scene(), tmp_path / "empty", resume=True)
+    with pytest.raises(FileNotFoundError, match="^store:"):
+        generate_distributed(scene(), tmp_path / "no" / "b.zarr")
+    # a complete store resumes without computing anything
+    summary = generate_distributed(scene(), d / "a.zarr", slab=2, tile_points=TP, resume=True)
+    assert summary["computed"] == [] and summary["verified"] == [0, 1, 2, 3]
+
+
+def test_fixed_beta1_is_one_tile(tmp_path):
+    sc = Scene(beta1=0.3, beta2="0:2pi:8", outputs="class_code,stable_FS")
+    summary = generate_distributed(sc, tmp_path / "f.zarr")
+    assert summary["tiles"] == 1
+    same_bytes(open_store(tmp_path / "f.zarr").load(), generate(sc))
+
+
+def _thread_affinities():
+    import os
+
+    return sorted(
+        {tuple(sorted(os.sched_getaffinity(int(t)))) for t in os.listdir("/proc/self/task")}
+    )
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
+def test_local_cluster_pins_each_worker_to_one_core():
+    """Every thread of a LocalCluster worker (XLA's task pool included) runs on one core, and the
+    worker has the single-thread XLA environment."""
+    import jax.numpy as jnp  # noqa: F401  (XLA's pools exist in this process too)
+
+    from atlas.data.distributed import WORKER_ENV, local_cluster
+
+    cluster, client = local_cluster(1)
+    try:
+
+        def probe():
+            import os
+
+            import jax.numpy as jnp
+
+            jnp.ones(1 << 16).sum().block_until_ready()  # start XLA's threads
+            return _thread_affinities(), os.environ.get("XLA_FLAGS")
+
+        (res,) = client.run(probe).values()
+    finally:
+        client.close()
+        cluster.close()
+    affinities, flags = res
+    assert len(affinities) == 1 and len(affinities[0]) == 1, affinities
+    assert flags == WORKER_ENV["XLA_FLAGS"]
