@@ -280,57 +280,80 @@ def ii_damped(c1, s1, c2, s2, kappa, q1, q2, *, sturm: bool = True):
     return _ii_decide(_signs(c1, s1, c2, s2, kappa, q1, q2, names))
 
 
-def _ii_decide(g):
-    """The case analysis of the module docstring on the sign codes ``g`` of :func:`_signs`."""
-    shape = g["D"].shape
+def _P(s):
+    return s == 1
 
-    def P(s):
-        return s == 1
 
-    def N(s):
-        return s == -1
+def _N(s):
+    return s == -1
 
-    def K(s):  # certified nonzero
-        return (s == 1) | (s == -1)
 
-    def nonneg(s):
-        return (s == 1) | (s == 0)
+def _K(s):  # certified nonzero
+    return (s == 1) | (s == -1)
 
+
+def _nonneg(s):
+    return (s == 1) | (s == 0)
+
+
+_S, _U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
+
+
+def _h1_at_r2(g):
+    """Certified ``h1(r2) > 0`` and ``< 0`` at the positive root ``r2`` of ``h2`` (module docstring:
+    ``sign(A r2 + B)``, through ``W`` where ``A`` and ``B`` have opposite signs)."""
+    sA, sB, sW = g["A"], g["B"], g["W"]
+    pos = (_nonneg(sA) & _nonneg(sB) & (_P(sA) | _P(sB))) | (_P(sA) & _N(sB) & _N(sW))
+    pos = pos | (_N(sA) & _P(sB) & _P(sW))
+    nonpos_a, nonpos_b = _N(sA) | (sA == 0), _N(sB) | (sB == 0)
+    neg = (nonpos_a & nonpos_b & (_N(sA) | _N(sB))) | (_P(sA) & _N(sB) & _P(sW))
+    neg = neg | (_N(sA) & _P(sB) & _N(sW))
+    return pos, neg
+
+
+def _hard_count(g):
+    """The hard arcs (0 or 2 crossings): Descartes, then the Sturm count of positive roots.
+    Returns the consistency code and "exactly two positive roots" (certified)."""
+    one = jnp.ones(g["D"].shape, jnp.int8)
+    descartes_none = _nonneg(g["a3"]) & _nonneg(g["a2"])
+    sP2, sC2, sT1, sT0, sDl = g["P2"], g["C2"], g["T1"], g["T0"], g["disc"]
+    sturm_ok = _K(sP2) & _K(sC2) & _K(sT1) & _K(sT0) & _K(sDl)
+    npos = _variations(one, one, sC2, -sT0, sDl) - _variations(one, one, sP2, -sT1, sDl)
+    cons = jnp.where(
+        descartes_none | (sturm_ok & (npos == 0)), 0, jnp.where(sturm_ok & (npos > 0), 1, X)
+    )
+    return cons, sturm_ok & (npos == 2) & ~descartes_none
+
+
+def _routh(g):
+    """Certified count of roots of ``p`` with ``Re > 0`` (Routh: ``a3, H2, H3 = D G, a0``), and
+    whether it is certified; ``a3 = 0`` exactly by the epsilon method (``a1 = D m != 0``)."""
+    s_a3, s_H2, s_G, sd = g["a3"], g["H2"], g["G"], g["D"]
+    one = jnp.ones(sd.shape, jnp.int8)
+    ok = _K(s_a3) & _K(s_H2) & _K(s_G) & _K(sd)
+    nrhp = _variations(one, s_a3, s_a3 * s_H2, s_H2 * sd * s_G, sd)
+    a3_zero = (s_a3 == 0) & _K(sd)
+    return ok | a3_zero, jnp.where(a3_zero, jnp.where(sd == 1, 2, 1), nrhp)
+
+
+def _main_branch(g, h1pos, h1neg):
+    """``c2 != 0``, ``s1 != 0``, ``det B`` certified nonzero: the quadrant analysis.
+    Returns (consistency, stability, needs tier 2)."""
     sc1, ss1, sc2, ss2, sd = g["c1"], g["s1"], g["c2"], g["s2"], g["D"]
     c1p, c1n, s2p, s2n = sc1 > 0, sc1 < 0, ss2 > 0, ss2 < 0
-    Dp, Dn = P(sd), N(sd)
-    S, U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
+    Dp, Dn = _P(sd), _N(sd)
     g0pos = ss1 == sc2
     qI, qIII = g0pos & (sc2 < 0), g0pos & (sc2 > 0)
     qII, qIV = ~g0pos & (sc2 > 0), ~g0pos & (sc2 < 0)
-    # sign of h1 at the positive root r2 of h2 (s2 < 0)
-    sA, sB, sW = g["A"], g["B"], g["W"]
-    h1pos = (nonneg(sA) & nonneg(sB) & (P(sA) | P(sB))) | (P(sA) & N(sB) & N(sW))
-    h1pos = h1pos | (N(sA) & P(sB) & P(sW))
-    h1neg = ((N(sA) | (sA == 0)) & (N(sB) | (sB == 0)) & (N(sA) | N(sB))) | (P(sA) & N(sB) & P(sW))
-    h1neg = h1neg | (N(sA) & P(sB) & N(sW))
-    # hard cases (p(0) > 0, a1 > 0): Descartes, then the Sturm count of positive roots
-    s_a3, s_a2 = g["a3"], g["a2"]
-    descartes_none = nonneg(s_a3) & nonneg(s_a2)
-    sP2, sC2, sT1, sT0, sDl = g["P2"], g["C2"], g["T1"], g["T0"], g["disc"]
-    sturm_ok = K(sP2) & K(sC2) & K(sT1) & K(sT0) & K(sDl)
-    one = jnp.ones(shape, jnp.int8)
-    npos = _variations(one, one, sC2, -sT0, sDl) - _variations(one, one, sP2, -sT1, sDl)
-    hard_cons = jnp.where(
-        descartes_none | (sturm_ok & (npos == 0)), 0, jnp.where(sturm_ok & (npos > 0), 1, X)
-    )
-    hard_two = sturm_ok & (npos == 2) & ~descartes_none
-    # --- main branch: c2 != 0, s1 != 0, det B certified nonzero
-    main = (sc2 != 0) & (ss1 != 0) & K(sd)
-    startI = (sc1 >= 0) & (ss2 >= 0)
-    cons = jnp.full(shape, X, jnp.int8)
+    hard_cons, hard_two = _hard_count(g)
+    startI, startIII = (sc1 >= 0) & (ss2 >= 0), c1n & s2n
+    cons = jnp.full(sd.shape, X, jnp.int8)
     cons = jnp.where(qI, jnp.where(startI & Dp, 0, jnp.where(~startI | Dn, 1, X)), cons)
-    startIII = c1n & s2n
     cons = jnp.where(qIII, jnp.where(startIII & Dp, 1, jnp.where(~startIII | Dn, 0, X)), cons)
     enter2 = c1n & ((s2p & Dp) | (ss2 == 0))  # QII entered at a D > 0 start or from the f1 axis
     qii = jnp.where(sc1 >= 0, 0, jnp.where(c1n & s2p & Dn, 1, jnp.where(enter2, hard_cons, X)))
-    from3 = c1n & s2n  # QIII start: QII is entered iff h1(r2) < 0
-    qii = jnp.where(from3, jnp.where(h1pos, 0, jnp.where(h1neg, hard_cons, X)), qii)
+    # QIII start: QII is entered iff h1(r2) < 0
+    qii = jnp.where(startIII, jnp.where(h1pos, 0, jnp.where(h1neg, hard_cons, X)), qii)
     cons = jnp.where(qII, qii, cons)
     enter4 = s2n & ((c1p & Dp) | (sc1 == 0))
     qiv = jnp.where(ss2 >= 0, 0, jnp.where(s2n & c1p & Dn, 1, jnp.where(enter4, hard_cons, X)))
@@ -339,64 +362,76 @@ def _ii_decide(g):
     # consistency decided without a Sturm count: the II root is a transversal crossing
     not_hard = qI | qIII | (qII & ((sc1 >= 0) | (c1n & s2p & Dn)))
     not_hard = not_hard | (qIV & ((ss2 >= 0) | (s2n & c1p & Dn)))
-    s_H2, s_G = g["H2"], g["G"]
-    routh_ok = K(s_a3) & K(s_H2) & K(s_G) & K(sd)
-    nrhp = _variations(one, s_a3, s_a3 * s_H2, s_H2 * sd * s_G, sd)
-    # a3 = 0 exactly (e.g. c1 = 0 = q2): epsilon method, a1 = D m != 0 keeps roots off the axis
-    a3_zero = (s_a3 == 0) & K(sd)
-    routh_ok = routh_ok | a3_zero
-    nrhp = jnp.where(a3_zero, jnp.where(sd == 1, 2, 1), nrhp)
-    dom = routh_ok & ((nrhp == 1) | (nrhp == 2)) & (not_hard | hard_two)
-    stab = jnp.where((cons == 0) | qIII, U, jnp.where((cons == 1) & dom, S, X))
-    tier2_main = (cons == 1) & ~qIII & routh_ok & (nrhp == 3) & (stab == X) & (not_hard | hard_two)
-    # --- c2 = 0, s1 != 0: II root r1 of h1 (c1 < 0) with s1 f2(r1) < 0
-    f2r1_pos = (ss2 >= 0) | (s2n & h1neg)
-    f2r1_neg = s2n & h1pos
-    b1 = (sc2 == 0) & (ss1 != 0)
-    pos_or_x = lambda c, v: jnp.where(c, v, X)  # noqa: E731
-    cons_b1 = jnp.where(
-        sc1 >= 0, 0, jnp.where(f2r1_pos, ss1 < 0, pos_or_x(f2r1_neg, ss1 > 0).astype(jnp.int8))
+    routh_ok, nrhp = _routh(g)
+    simple = not_hard | hard_two
+    dom = routh_ok & ((nrhp == 1) | (nrhp == 2)) & simple
+    stab = jnp.where((cons == 0) | qIII, _U, jnp.where((cons == 1) & dom, _S, X))
+    tier2 = (cons == 1) & ~qIII & routh_ok & (nrhp == 3) & (stab == X) & simple
+    return cons, stab, tier2
+
+
+def _one_factor_branch(s_own, s_root, s_other, other_pos, other_neg):
+    """One factor carries the II root.  ``c2 = 0``: ``p = h1 h2``, the II root is the positive root
+    ``r1`` of ``h1`` (needs ``c1 < 0``) with ``s1 f2(r1) < 0``: call with (s1, c1, s2, ...).
+    ``s1 = 0``: the root ``r2`` of ``h2`` (``s2 < 0``) with ``c2 f1(r2) < 0``: (c2, s2, c1, ...).
+    ``other_pos``/``other_neg``: the other ``f`` certified positive/negative at the root when it
+    starts negative (from :func:`_h1_at_r2`)."""
+    f_pos = (s_other >= 0) | ((s_other < 0) & other_pos)
+    f_neg = (s_other < 0) & other_neg
+    decided_neg = jnp.where(f_neg, (s_own > 0).astype(jnp.int8), X)
+    cons = jnp.where(s_root >= 0, 0, jnp.where(f_pos, s_own < 0, decided_neg).astype(jnp.int8))
+    stab = jnp.where(
+        s_root >= 0, _U, jnp.where(f_pos, jnp.where(s_own < 0, _S, _U), jnp.where(f_neg, _U, X))
     )
-    stab_b1 = jnp.where(
-        sc1 >= 0, U, jnp.where(f2r1_pos, jnp.where(ss1 < 0, S, U), jnp.where(f2r1_neg, U, X))
-    )
-    # --- s1 = 0, c2 != 0: II root r2 of h2 (s2 < 0) with c2 f1(r2) < 0
-    f1r2_pos = (sc1 >= 0) | (c1n & h1pos)
-    f1r2_neg = c1n & h1neg
-    b2 = (ss1 == 0) & (sc2 != 0)
-    cons_b2 = jnp.where(
-        ss2 >= 0, 0, jnp.where(f1r2_pos, sc2 < 0, pos_or_x(f1r2_neg, sc2 > 0).astype(jnp.int8))
-    )
-    stab_b2 = jnp.where(
-        ss2 >= 0, U, jnp.where(f1r2_pos, jnp.where(sc2 < 0, S, U), jnp.where(f1r2_neg, U, X))
-    )
-    # --- c2 = s1 = 0 (diagonal B): II iff h1 and h2 share their positive root; never stable
-    b4 = (sc2 == 0) & (ss1 == 0)
-    common = c1n & s2n & g["h1_eq_h2"]
-    no_common = (sc1 >= 0) | (ss2 >= 0) | (~g["h1_eq_h2"] & K(sW)) | h1pos | h1neg
-    cons_b4 = jnp.where(common, 1, jnp.where(no_common, 0, X))
-    stab_b4 = jnp.where(cons_b4 == X, X, U)
-    # --- det B = 0 exactly (c2, s1 not both 0): p = l^2 (l^2 + a3 l + a2)
-    b3 = (sd == 0) & ~b4
+    return cons, stab
+
+
+def _diagonal_branch(g, h1pos, h1neg):
+    """``c2 = s1 = 0`` (diagonal ``B``): II iff ``h1`` and ``h2`` share their positive root (a
+    double eigenvalue: never stable)."""
+    sc1, ss2 = g["c1"], g["s2"]
+    common = (sc1 < 0) & (ss2 < 0) & g["h1_eq_h2"]
+    no_common = (sc1 >= 0) | (ss2 >= 0) | (~g["h1_eq_h2"] & _K(g["W"])) | h1pos | h1neg
+    cons = jnp.where(common, 1, jnp.where(no_common, 0, X))
+    return cons, jnp.where(cons == X, X, _U)
+
+
+def _singular_branch(g):
+    """``det B = 0`` exactly: ``p = l^2 (l^2 + a3 l + a2)``; a positive root is II iff ``c2 s2 > 0``
+    (``c1 s1 > 0`` if ``c2 = 0``)."""
+    sc1, ss1, sc2, ss2, s_a3 = g["c1"], g["s1"], g["c2"], g["s2"], g["a3"]
     ii_sign = jnp.where(sc2 != 0, sc2 * ss2 > 0, ss1 * sc1 > 0)
     s_a2d, s_dq = g["a2_d0"], g["disc_d0"]
-    haspos_y = N(s_a2d) | (N(s_a3) & nonneg(s_dq))
-    haspos_n = nonneg(s_a2d) & (nonneg(s_a3) | N(s_dq))
-    dom_y = N(s_a2d) | (N(s_a3) & P(s_dq))
-    dom_n = nonneg(s_a2d) & (nonneg(s_a3) | N(s_dq) | (s_dq == 0))
-    cons_b3 = jnp.where(~ii_sign | haspos_n, 0, jnp.where(haspos_y, 1, X))
-    stab_b3 = jnp.where(~ii_sign | dom_n, U, jnp.where(dom_y, S, X))
+    haspos_y = _N(s_a2d) | (_N(s_a3) & _nonneg(s_dq))
+    haspos_n = _nonneg(s_a2d) & (_nonneg(s_a3) | _N(s_dq))
+    dom_y = _N(s_a2d) | (_N(s_a3) & _P(s_dq))
+    dom_n = _nonneg(s_a2d) & (_nonneg(s_a3) | _N(s_dq) | (s_dq == 0))
+    cons = jnp.where(~ii_sign | haspos_n, 0, jnp.where(haspos_y, 1, X))
+    stab = jnp.where(~ii_sign | dom_n, _U, jnp.where(dom_y, _S, X))
+    return cons, stab
 
-    def pick(main_v, v1, v2, v3, v4):
-        out = jnp.where(main, main_v, X)
-        out = jnp.where(b1 & ~b3, v1, out)
-        out = jnp.where(b2 & ~b3, v2, out)
-        out = jnp.where(b3, v3, out)
-        return jnp.where(b4, v4, out).astype(jnp.int8)
 
-    cons = pick(cons, cons_b1, cons_b2, cons_b3, cons_b4)
-    stab = pick(stab, stab_b1, stab_b2, stab_b3, stab_b4)
-    return cons, stab, main & tier2_main
+def _ii_decide(g):
+    """The case analysis of the module docstring on the sign codes ``g`` of :func:`_signs`:
+    (consistent_II, stable_II, needs tier 2), int8 codes."""
+    sc1, ss1, sc2, ss2, sd = g["c1"], g["s1"], g["c2"], g["s2"], g["D"]
+    h1pos, h1neg = _h1_at_r2(g)
+    main = (sc2 != 0) & (ss1 != 0) & _K(sd)
+    main_cons, main_stab, main_tier2 = _main_branch(g, h1pos, h1neg)
+    singular = (sd == 0) & ~((sc2 == 0) & (ss1 == 0))
+    # sign of f2 at r1 = -(sign of h1 at r2) where both start negative (r2 < r1 iff h1(r2) < 0)
+    branches = [  # (where, (consistency, stability)), later ones win
+        (main, (main_cons, main_stab)),
+        ((sc2 == 0) & (ss1 != 0) & ~singular, _one_factor_branch(ss1, sc1, ss2, h1neg, h1pos)),
+        ((ss1 == 0) & (sc2 != 0) & ~singular, _one_factor_branch(sc2, ss2, sc1, h1pos, h1neg)),
+        (singular, _singular_branch(g)),
+        ((sc2 == 0) & (ss1 == 0), _diagonal_branch(g, h1pos, h1neg)),
+    ]
+    cons = stab = jnp.full(sd.shape, X, jnp.int8)
+    for where, (c, st) in branches:
+        cons = jnp.where(where, c, cons)
+        stab = jnp.where(where, st, stab)
+    return cons.astype(jnp.int8), stab.astype(jnp.int8), main & main_tier2
 
 
 # --- tier 2: dominance when three roots lie right of the imaginary axis ---------------------------
