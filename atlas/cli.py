@@ -58,9 +58,6 @@ def _one_line(msg: str) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from atlas.data.engine import DEFAULT_TILE_POINTS, DTYPES, METHODS
-    from atlas.data.scene import ALL_OUTPUTS, BUILTIN_SCENES
-
     p = _Parser(
         prog="atlas",
         description="Atlases of contact-mode consistency and stability for two sliding contacts "
@@ -68,6 +65,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    for add in (_add_generate, _add_paper, _add_simulate, _add_table, _add_bench):
+        add(sub)
+    return p
+
+
+def _add_generate(sub) -> None:
+    from atlas.data.engine import DEFAULT_TILE_POINTS, DTYPES, METHODS
+    from atlas.data.scene import ALL_OUTPUTS, BUILTIN_SCENES
 
     g = sub.add_parser(
         "generate",
@@ -111,6 +116,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="keep undecided points instead of resolving them exactly",
     )
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_distributed(g)
+
+
+def _add_distributed(g) -> None:
     d = g.add_argument_group(
         "distributed (dask)",
         "--scheduler, --store, --resume, --slab or --block2 run the scene tile by tile into a resumable zarr store "
@@ -145,10 +154,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="beta2 values per tile: 2-D (beta1, beta2) tiles (default: see --slab)",
     )
 
+
+def _add_paper(sub) -> None:
     pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
     pp.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
     pp.add_argument("--quick", action="store_true", help="low resolution (seconds, for CI)")
 
+
+def _add_simulate(sub) -> None:
     ps = sub.add_parser("simulate", help="simulate the compliant-contact dynamics (Fig. 2)")
     ps.add_argument("--case", choices=["fig2a", "fig2b", "fig2c", "fig2d", "fig2e"])
     for name in ("beta1", "beta2", "alpha"):
@@ -169,14 +182,17 @@ def build_parser() -> argparse.ArgumentParser:
     ps.add_argument("--q", type=_number("q"), metavar="Q", help="map: q1 = q2, default 0")
     ps.add_argument("--engine", choices=["numpy", "jax"], default="numpy", help="map engine")
 
+
+def _add_table(sub) -> None:
     pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
     pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
     pt.add_argument("--out", metavar="FILE", help="output file (default: stdout)")
 
+
+def _add_bench(sub) -> None:
     pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
     pb.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
-    return p
 
 
 def _positive_int(name):
