@@ -564,7 +564,7 @@ def _ii_undamped(c1, s1, c2, s2, kappa):
     ``c1 k1 = s2 k2``): a double eigenvalue, never stable."""
     cu, su, _ = spectral.ii_undamped(c1, s1, c2, s2, kappa)
     k1, k2 = spectral.normalize(kappa, jnp.zeros_like(kappa), jnp.zeros_like(kappa))[:2]
-    sx = evaluate_certified(spectral._X, k1, c1, k2, s2)[2]
+    sx = evaluate_certified(spectral.x_undamped, k1, c1, k2, s2)[2]
     common = (c1 < 0) & (s2 < 0) & (c1 == s2) & (k1 == k2)
     apart = (c1 >= 0) | (s2 >= 0) | (sx == 1) | (sx == -1)
     cons_d = jnp.where(common, 1, jnp.where(apart, 0, X))
@@ -605,7 +605,7 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     is_damped = (q1 != 0) | (q2 != 0)
     if ss:
         parts = dict(sd=g["D"], s_a2u=g["a2_d0"], s_disc=g["disc_u"], s_a3=g["a3"], s_G=g["G"])
-        s = spectral._ss_from_signs({**parts, "damped": is_damped})
+        s = spectral.ss_from_signs({**parts, "damped": is_damped})
     else:
         s = xs
     cd, sdm, _ = _ii_decide(g)

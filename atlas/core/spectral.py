@@ -174,7 +174,8 @@ def _any_neg(*signs):
     return out
 
 
-def _ss_from_signs(p):
+def ss_from_signs(p):
+    """The SS verdict (Hurwitz, paper Sec. 4.2) from the certified sign codes ``p`` of its parts."""
     U, S, N, X = (
         int(Verdict.UNSTABLE),
         int(Verdict.STABLE),
@@ -200,7 +201,7 @@ def _ss_from_signs(p):
 
 def ss_verdict(c1, s1, c2, s2, kappa, q1, q2):
     """Certified SS stability verdict (``Verdict`` codes, int8); see the module docstring."""
-    return _ss_from_signs(_sign_parts(c1, s1, c2, s2, kappa, q1, q2))
+    return ss_from_signs(_sign_parts(c1, s1, c2, s2, kappa, q1, q2))
 
 
 def ss_margin(c1, s1, c2, s2, kappa, q1, q2):
@@ -539,7 +540,8 @@ def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
     return cons, stab, absc
 
 
-def _X(k1, c1, k2, s2, *, sub):
+def x_undamped(k1, c1, k2, s2, *, sub):
+    """``X = k1 c1 - k2 s2`` of :func:`ii_undamped` (``h1 - h2`` of the undamped factors)."""
     return sub(k1 * c1, k2 * s2)
 
 
@@ -569,7 +571,7 @@ def ii_undamped(c1, s1, c2, s2, kappa):
     sd = det2_sign(c1, s1, c2, s2)
     _, _, s_a2 = evaluate_certified(_a2_undamped, k1, c1, k2, s2)
     _, _, s_disc = evaluate_certified(_disc_undamped, k1, c1, k2, s2, s1, c2)
-    _, _, s_x = evaluate_certified(_X, k1, c1, k2, s2)
+    _, _, s_x = evaluate_certified(x_undamped, k1, c1, k2, s2)
     se = (jnp.sign(s1) * jnp.sign(c2)).astype(jnp.int8)
     sc2, ss1 = jnp.sign(c2).astype(jnp.int8), jnp.sign(s1).astype(jnp.int8)
     # sign of (mu_pm + c1 k1) and (mu_pm + s2 k2)
