@@ -32,6 +32,14 @@ lambda tau, sqrt(lambda) omega)`` (``a -> lambda a``); contacts ``(k, c) -> (lam
 :func:`mobility` and :func:`free_acceleration` use only ``+ - * /`` on their arguments, so they
 evaluate floats, numpy arrays and :class:`fractions.Fraction` alike (the exact tier of the
 realisability audit).  Layer 1: numpy and JAX only.
+
+**Built-in bodies** (classmethods): :meth:`Mechanism.ladder` (floor and wall; the classical
+Painleve rod at its foot, threshold ``mu = 4/3``: P. Painleve 1905, F. Genot & B. Brogliato,
+Eur. J. Mech. A 18 (1999) 653-677, A. R. Champneys & P. L. Varkonyi, IMA J. Appl. Math. 81 (2016)
+538-568), :meth:`Mechanism.two_legged` (a chair or biped on a floor, the two-contact postures of
+Y. Or & E. Rimon, Nonlinear Dyn. 67 (2012) 1647-1668) and :meth:`Mechanism.leaning_rod` (a rod on
+the floor resting on a table edge).  Their default numbers are illustrative, except the ladder's
+4-to-1 angle.
 """
 
 from __future__ import annotations
@@ -48,7 +56,7 @@ from atlas.core import exact, points
 from atlas.core import mechanics as mech
 from atlas.core.verdicts import UNDECIDED_CODE, Verdict
 
-__all__ = ["Mechanism", "mobility", "free_acceleration", "verdicts_at", "VERDICT_NAMES"]
+__all__ = ["Mechanism", "mobility", "free_acceleration", "tangent", "verdicts_at", "VERDICT_NAMES"]
 
 #: the atlas outputs a single mechanism has (SPEC §2; the ``model_dependent_*`` reductions need
 #: several model samples and are not among them)
@@ -303,12 +311,15 @@ class Mechanism:
     # --- built-in bodies -------------------------------------------------------------------
 
     @classmethod
-    def ladder(cls, *, L=4.0, theta=math.atan(4.0), m=15.0, mu_floor=0.4, mu_wall=0.4, **kw):
+    def ladder(cls, *, L=4.0, theta=math.acos(0.25), m=15.0, mu_floor=0.4, mu_wall=0.4, **kw):
         """A uniform ladder (rod, ``I = m L^2 / 12``) on a floor (contact 1, its foot) leaning on
         a wall on its left (contact 2, its top), at ``theta`` [rad] from the floor, slipping down:
         the foot slides away from the wall (``s1 = +1`` along ``t1 = (1, 0)``), the top slides down
         (``s2 = +1`` along ``t2 = (0, -1)``).  Default geometry: the 4-to-1 rule for leaning
-        ladders (``tan theta = 4``); mass and friction are illustrative."""
+        ladders (foot one quarter of the length from the wall, ``cos theta = 1/4``, US OSHA
+        29 CFR 1926.1053(b)(5)(i)); mass and friction are illustrative.  The foot alone has
+        Painleve's paradox (``b11 < 0``) iff ``mu_floor > (1 + 3 cos^2) / (3 sin cos)``, at least
+        4/3 (at ``tan theta = 2``): the classical rod (Genot & Brogliato 1999)."""
         c, s = math.cos(theta), math.sin(theta)
         half = L / 2
         body = dict(m=m, I=m * L * L / 12, r1=(half * c, -half * s), r2=(-half * c, half * s))
