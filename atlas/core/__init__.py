@@ -3,6 +3,7 @@
 * :mod:`~atlas.core.verdicts`  the verdict and class codes (SPEC §2) and their CF flag attributes;
 * :mod:`~atlas.core.signs`     certified signs of polynomials in float arithmetic (error models);
 * :mod:`~atlas.core.mechanics` B, its invariants, the class code and the consistency of FF, SF, FS;
+* :mod:`~atlas.core.mechanism` a rigid body with two sliding contacts -> B, a, invariants, verdicts;
 * :mod:`~atlas.core.spectral`  the SS and II eigen-structure of M, with certified root enclosures;
 * :mod:`~atlas.core.rootfree`  the root-free damped II verdicts (tiers 1 and 2);
 * :mod:`~atlas.core.exact`     the exact integer/rational tier that settles every remaining point;

@@ -14,6 +14,8 @@ broadcast against each other (no I/O, jit/vmap-able).  Codes use :data:`atlas.co
 
 from __future__ import annotations
 
+import math
+
 import jax.numpy as jnp
 import numpy as np
 
@@ -32,6 +34,7 @@ __all__ = [
     "consistent_IF",
     "consistent_FI",
     "cc_possible",
+    "invariants",
     "ALL_CLASSES",
 ]
 
@@ -236,3 +239,47 @@ def consistent_FI(c2, s2):
 def cc_possible(c1, s2):
     """Necessary condition for CC inverse chattering (Sec. 5.2): ``b11 > 0`` and ``b22 > 0``."""
     return ((c1 > 0) & (s2 > 0)).astype(bool)
+
+
+def invariants(k1, k2, q1=0.0, q2=0.0, b1=1.0, b2=1.0) -> dict:
+    """Physical contact parameters -> model invariants (SPEC §1).
+
+    Parameters
+    ----------
+    k1, k2 : float
+        Contact stiffnesses [force/length], ``> 0``.
+    q1, q2 : float
+        Contact damping coefficients [force time/length], ``>= 0``.
+    b1, b2 : float
+        Norms ``|b_1|``, ``|b_2|`` of the columns of ``B`` [1/mass], ``> 0``.
+
+    Returns
+    -------
+    dict
+        ``kappa = k1 |b1| / (k2 |b2|)``, ``q1 = q1 |b1| / sqrt(k2 |b2|)``,
+        ``q2 = q2 |b2| / sqrt(k2 |b2|)`` (time scaled by contact 2).  Paper Fig. 2
+        (``k = (100, 200)``, ``q = (20, 20)``, ``|b| = 1``) gives ``kappa = 0.5``,
+        ``q1 = q2 = sqrt(2)``.
+    """
+    vals = {"k1": k1, "k2": k2, "q1": q1, "q2": q2, "b1": b1, "b2": b2}
+    out = {}
+    for key, v in vals.items():
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"{key}: cannot interpret {v!r} as a number") from None
+        if not math.isfinite(x):
+            raise ValueError(f"{key}: must be finite, got {v!r}")
+        if key in ("q1", "q2"):
+            if x < 0:
+                raise ValueError(f"{key}: damping must be >= 0, got {x}")
+        elif x <= 0:
+            what = "stiffness" if key.startswith("k") else "|b|"
+            raise ValueError(f"{key}: {what} must be > 0, got {x}")
+        out[key] = x
+    scale = math.sqrt(out["k2"] * out["b2"])
+    return {
+        "kappa": out["k1"] * out["b1"] / (out["k2"] * out["b2"]),
+        "q1": out["q1"] * out["b1"] / scale,
+        "q2": out["q2"] * out["b2"] / scale,
+    }

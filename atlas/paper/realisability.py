@@ -1,0 +1,315 @@
+"""Realisability audit (issue 14 part 3): a single rigid body under its weight in each subclass.
+
+The paper (Sec. 3) claims that "a single planar rigid body with two contacts, and its own weight as
+external load can belong to any of the subclasses if the positions and directions of contacts as
+well as the friction coefficients are chosen appropriately".  :func:`search` checks the claim on a
+stated set of bodies with *rational* parameters:
+
+* ``m = 1`` kg, ``I = 1`` kg m^2 (radius of gyration 1 m: only ``r / sqrt(I/m)`` matters),
+  gravity ``g = (0, -981/100)`` m/s^2, no external force or torque, no rotation (``omega = 0``);
+* contact positions ``r_j`` on the grid ``[-3, 3]^2`` m with step 1/4 m;
+* normals ``n_j``: the 4 axis directions and the 56 rational unit vectors ``(+-p/h, +-q/h)``,
+  ``(+-q/h, +-p/h)`` of the primitive Pythagorean triples with ``h <= 41`` (60 directions, gaps
+  <= 12.7 degrees);
+* friction ``mu_j in {0, 1/10, ..., MU_MAX}`` (``MU_MAX = 2``) and sliding signs ``s_j = +-1``.
+
+Random bodies from this set (fixed seed) are classified in float64 by the package's own certified
+kernels (:func:`atlas.core.mechanics.subclass_code`); for each subclass the body farthest from every
+boundary of the subclass is kept (``margin``: sine of the smallest angle between the direction of
+``b1``, ``b2`` or ``a`` and the axes or another of them).  Every kept example is then re-verified in
+exact rational arithmetic: ``B`` and ``a`` of eq. (1) evaluated on :class:`fractions.Fraction`
+inputs by :func:`atlas.core.mechanism.mobility` / :func:`~atlas.core.mechanism.free_acceleration`,
+and the codes by :func:`atlas.core.exact.point_codes` on integer (hence exactly representable)
+multiples of the columns of ``B`` and of ``a``.
+
+No impossibility argument is needed when every subclass has a verified example; a subclass without
+one is reported as "none found in the searched set" (the search is not a proof of impossibility),
+except where an argument applies.  The one known here: **without friction** (``mu1 = mu2 = 0``)
+``B = J M^-1 J^T`` is symmetric positive definite (``b12 = b21``, ``b11, b22, det B > 0``), so ``b1``
+and ``b2`` lie in the first quadrant with ``beta1 < beta2`` (class 12) or ``b1`` in the fourth and
+``b2`` in the second with ``beta2 < beta1*`` (class 42): only the 12 subclasses of
+:data:`FRICTIONLESS_CLASSES` exist, every other subclass needs friction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from fractions import Fraction
+
+import numpy as np
+
+from atlas.core import exact
+from atlas.core import mechanics as mech
+from atlas.core.mechanism import Mechanism, free_acceleration, mobility
+
+__all__ = [
+    "ALL_SUBCLASSES",
+    "MU_MAX",
+    "FRICTIONLESS_CLASSES",
+    "Realisation",
+    "search",
+    "exact_codes",
+    "mechanism",
+    "markdown",
+]
+
+#: the 144 subclass codes ijk (SPEC §1)
+ALL_SUBCLASSES = tuple(10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7))
+MU_MAX = Fraction(2)
+#: the only classes a body without friction can be in (module docstring)
+FRICTIONLESS_CLASSES = (12, 42)
+_MU_STEP = Fraction(1, 10)
+_R_MAX, _R_STEP = 3, Fraction(1, 4)
+_G = (Fraction(0), Fraction(-981, 100))
+_TRIPLES = (
+    (3, 4, 5),
+    (5, 12, 13),
+    (8, 15, 17),
+    (7, 24, 25),
+    (20, 21, 29),
+    (12, 35, 37),
+    (9, 40, 41),
+)
+
+
+def _normals() -> tuple[tuple[Fraction, Fraction], ...]:
+    """The searched rational unit normals (module docstring)."""
+    out = {(Fraction(1), Fraction(0)), (Fraction(0), Fraction(1))}
+    out |= {(Fraction(-1), Fraction(0)), (Fraction(0), Fraction(-1))}
+    for p, q, h in _TRIPLES:
+        for x, y in ((p, q), (q, p)):
+            for sx in (1, -1):
+                for sy in (1, -1):
+                    out.add((Fraction(sx * x, h), Fraction(sy * y, h)))
+    return tuple(sorted(out, key=lambda n: math.atan2(n[1], n[0])))
+
+
+NORMALS = _normals()
+
+
+@dataclasses.dataclass(frozen=True)
+class Realisation:
+    """One subclass's outcome: an exactly verified body, or none in the searched set.
+
+    ``params``: the :class:`~atlas.core.mechanism.Mechanism` parameters (``m, I, r1, r2, n1, n2,
+    mu1, mu2, s1, s2, g``) as Fractions, or ``None``; ``verified``: the exact subclass code of
+    ``params`` is ``subclass``; ``margin``: sine of the angular distance to the nearest boundary of
+    the subclass (float64); ``impossible``: an impossibility argument for the searched set, if one
+    applies.
+    """
+
+    subclass: int
+    params: dict | None
+    verified: bool
+    margin: float
+    note: str
+    impossible: str | None = None
+
+    @property
+    def found(self) -> bool:
+        return self.params is not None
+
+
+def _sample(rng, n: int, mu_max: Fraction) -> dict:
+    """``n`` random bodies of the searched set, as integer indices."""
+    steps = int(_R_MAX / _R_STEP)
+    ix = {f"r{j}": rng.integers(-steps, steps + 1, size=(n, 2)) for j in (1, 2)}
+    ix.update({f"n{j}": rng.integers(0, len(NORMALS), size=n) for j in (1, 2)})
+    ix.update({f"mu{j}": rng.integers(0, int(mu_max / _MU_STEP) + 1, size=n) for j in (1, 2)})
+    ix.update({f"s{j}": rng.choice(np.array([1, -1]), size=n) for j in (1, 2)})
+    return ix
+
+
+def _floats(ix: dict):
+    """``(b1, b2, a)`` as float64 ``(x, y)`` arrays of the sampled bodies."""
+    nrm = np.array(NORMALS, dtype=float)
+    r = tuple(tuple(ix[f"r{j}"][:, k] * float(_R_STEP) for k in (0, 1)) for j in (1, 2))
+    n = tuple(tuple(nrm[ix[f"n{j}"], k] for k in (0, 1)) for j in (1, 2))
+    mu = tuple(ix[f"mu{j}"] * float(_MU_STEP) for j in (1, 2))
+    s = (ix["s1"], ix["s2"])
+    B = mobility(1.0, 1.0, r, n, mu, s)
+    a = free_acceleration(1.0, 1.0, r, n, tuple(float(x) for x in _G))
+    return (B[0][0], B[1][0]), (B[0][1], B[1][1]), a
+
+
+def _unit(v):
+    norm = np.hypot(v[0], v[1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return v[0] / norm, v[1] / norm
+
+
+def _classify(ix: dict):
+    """Certified float64 subclass codes (-1/0 where undecided/degenerate) and margins."""
+    b1, b2, a = (_unit(v) for v in _floats(ix))
+    ok = np.isfinite(b1[0]) & np.isfinite(b2[0]) & np.isfinite(a[0])
+    ok &= np.any(ix["r1"] != ix["r2"], axis=1)  # distinct contacts (a valid Mechanism)
+    b1, b2, a = ([np.where(ok, c, 1.0) for c in v] for v in (b1, b2, a))
+    code = np.asarray(mech.subclass_code(*b1, *b2, *a)).astype(int)
+    code = np.where(ok, code, 0)
+    cross = lambda u, v: np.abs(u[0] * v[1] - u[1] * v[0])  # noqa: E731
+    parts = [np.abs(c) for c in (*b1, *b2, *a)] + [cross(b1, b2), cross(b1, a), cross(b2, a)]
+    return code, np.min(parts, axis=0)
+
+
+def _params(ix: dict, i: int) -> dict:
+    """Exact (Fraction) Mechanism parameters of sample ``i``."""
+    out = {"m": Fraction(1), "I": Fraction(1), "g": _G}
+    for j in (1, 2):
+        out[f"r{j}"] = tuple(int(v) * _R_STEP for v in ix[f"r{j}"][i])
+        out[f"n{j}"] = NORMALS[int(ix[f"n{j}"][i])]
+        out[f"mu{j}"] = int(ix[f"mu{j}"][i]) * _MU_STEP
+        out[f"s{j}"] = int(ix[f"s{j}"][i])
+    return out
+
+
+def _integer_direction(v) -> tuple[int, int]:
+    """A positive integer multiple of a rational 2-vector, reduced, exactly representable as floats."""
+    den = math.lcm(v[0].denominator, v[1].denominator)
+    x, y = int(v[0] * den), int(v[1] * den)
+    gcd = math.gcd(x, y) or 1
+    x, y = x // gcd, y // gcd
+    if max(abs(x), abs(y)) >= 2**53:
+        raise ValueError("params: rational components too large for an exact float")
+    return x, y
+
+
+def exact_codes(params: dict) -> dict:
+    """Exact class/subclass codes and Table 1 consistency of a body with rational parameters.
+
+    ``B`` and ``a`` (eq. 1) in :class:`~fractions.Fraction` arithmetic; the codes depend only on the
+    directions of ``b1``, ``b2``, ``a``, which :func:`atlas.core.exact.point_codes` ranks exactly.
+    """
+    p = {k: v for k, v in params.items()}
+    r, n, mu, s = (p["r1"], p["r2"]), (p["n1"], p["n2"]), (p["mu1"], p["mu2"]), (p["s1"], p["s2"])
+    for key, v in (("n1", n[0]), ("n2", n[1])):
+        if v[0] * v[0] + v[1] * v[1] != 1:
+            raise ValueError(f"{key}: must be an exact rational unit vector")
+    B = mobility(p["m"], p["I"], r, n, mu, s)
+    a = free_acceleration(p["m"], p["I"], r, n, p["g"])
+    vecs = [(B[0][0], B[1][0]), (B[0][1], B[1][1]), a]
+    if any(v == (0, 0) for v in vecs):
+        return {"class_code": 0, "subclass_code": 0}
+    dirs = [float(c) for v in vecs for c in _integer_direction(v)]
+    return exact.point_codes(*dirs)
+
+
+def mechanism(params: dict, **kw) -> Mechanism:
+    """The float :class:`~atlas.core.mechanism.Mechanism` of exact parameters (``kw``: k, c, name)."""
+    return Mechanism(**{k: _as_float(v) for k, v in params.items()}, **kw)
+
+
+def _as_float(v):
+    if isinstance(v, tuple):
+        return tuple(float(x) for x in v)
+    return v if isinstance(v, int) else float(v)
+
+
+def _best(code, margin, best: dict, ix: dict) -> None:
+    """Keep, per subclass, the sample with the largest margin (in place)."""
+    order = np.lexsort((-margin, code))
+    first = np.ones(order.size, bool)
+    first[1:] = code[order][1:] != code[order][:-1]
+    for i in order[first]:
+        c = int(code[i])
+        if c > 0 and (c not in best or margin[i] > best[c][0]):
+            best[c] = (float(margin[i]), _params(ix, i))
+
+
+def search(
+    samples: int = 1 << 19,
+    *,
+    seed: int = 0,
+    mu_max=MU_MAX,
+    chunk: int = 1 << 17,
+    stats: dict | None = None,
+) -> dict:
+    """Per subclass, a verified single-body realisation or "none found in the searched set".
+
+    Parameters
+    ----------
+    samples : int
+        Random bodies drawn from the searched set (module docstring).
+    seed : int
+        Seed of :func:`numpy.random.default_rng` (the result is deterministic).
+    mu_max : Fraction or str
+        Largest friction coefficient searched (a multiple of 1/10; default 2).
+    stats : dict, optional
+        Filled with ``samples``, ``seconds_search``, ``seconds_verify``, ``found``, ``verified``.
+
+    Returns
+    -------
+    dict
+        ``{subclass code: Realisation}`` for all 144 subclasses, in Table 2 order.
+    """
+    if samples < 1:
+        raise ValueError(f"samples: must be >= 1, got {samples}")
+    mu_max = Fraction(mu_max)
+    if mu_max < 0 or mu_max % _MU_STEP:
+        raise ValueError(f"mu_max: must be a non-negative multiple of 1/10, got {mu_max}")
+    rng = np.random.default_rng(seed)
+    best: dict = {}
+    t0 = time.perf_counter()
+    for start in range(0, samples, chunk):
+        ix = _sample(rng, min(chunk, samples - start), mu_max)
+        code, margin = _classify(ix)
+        _best(code, margin, best, ix)
+    t1 = time.perf_counter()
+    out = {c: _verify(c, best.get(c), samples, mu_max) for c in ALL_SUBCLASSES}
+    if stats is not None:
+        stats.update(
+            samples=samples,
+            mu_max=mu_max,
+            seconds_search=t1 - t0,
+            seconds_verify=time.perf_counter() - t1,
+            found=sum(r.found for r in out.values()),
+            verified=sum(r.verified for r in out.values()),
+        )
+    return out
+
+
+def _verify(code: int, hit, samples: int, mu_max: Fraction) -> Realisation:
+    if hit is None:
+        if mu_max == 0 and code // 10 not in FRICTIONLESS_CLASSES:
+            why = "impossible without friction: B symmetric positive definite (classes 12, 42 only)"
+            return Realisation(code, None, False, 0.0, why, why)
+        note = f"none found in the searched set ({samples} bodies); no impossibility argument known"
+        return Realisation(code, None, False, 0.0, note)
+    margin, params = hit
+    got = exact_codes(params)["subclass_code"]
+    if got != code:  # pragma: no cover - the float kernels are certified; kept as a guard
+        return Realisation(code, params, False, margin, f"exact subclass {got} differs")
+    return Realisation(code, params, True, margin, "verified exactly")
+
+
+def _fmt(v) -> str:
+    if isinstance(v, tuple):
+        return "(" + ", ".join(_fmt(x) for x in v) + ")"
+    return str(v)
+
+
+def markdown(result: dict, stats: dict | None = None) -> str:
+    """A Markdown section: the count and one row per subclass (body parameters, margin)."""
+    found = sum(r.verified for r in result.values())
+    mu_max = (stats or {}).get("mu_max", MU_MAX)
+    lines = [
+        "## Realisability of the 144 subclasses by one rigid body under its weight",
+        "",
+        f"{found} / {len(result)} subclasses realised, each re-verified exactly (rational arithmetic).",
+        f"Searched set: m = 1 kg, I = 1 kg m^2, g = (0, -9.81) m/s^2, r_j in [-3, 3]^2 m (step 1/4),"
+        f" {len(NORMALS)} rational unit normals, mu_j in [0, {mu_max}] (step 1/10),"
+        " s_j = +-1, no rotation, no other load.",
+    ]
+    if stats:
+        lines.append(
+            f"{stats['samples']} bodies searched in {stats['seconds_search']:.1f} s, "
+            f"examples verified in {stats['seconds_verify']:.2f} s."
+        )
+    lines += ["", "| subclass | r1 | r2 | n1 | n2 | mu1 | mu2 | s1 | s2 | margin | note |"]
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    keys = ("r1", "r2", "n1", "n2", "mu1", "mu2", "s1", "s2")
+    for code, r in result.items():
+        cells = [_fmt(r.params[k]) for k in keys] if r.found else ["-"] * len(keys)
+        lines.append(f"| {code} | " + " | ".join(cells) + f" | {r.margin:.3f} | {r.note} |")
+    return "\n".join(lines) + "\n"
