@@ -7,13 +7,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import exact, mechanics
-from atlas.paper.audit.printed import PAPER_TABLE2
+from atlas.paper.audit.printed import MODES, PAPER_TABLE2
 from atlas.paper.audit.records import Finding
 from atlas.paper.audit.registry import claim
 from atlas.paper.audit.samples import PI, directions, fmt_classes
 from atlas.paper.tables import class_kernel
-
-MODES = ("FF", "SS", "SF", "FS")
 
 
 def dense_alpha(class_points: dict, blocks: int):

@@ -70,9 +70,8 @@ class Context:
 
     def computed(self) -> set:
         """Names of the samples computed so far."""
-        return {k for k, v in type(self).__dict__.items() if isinstance(v, cached_property)} & set(
-            vars(self)
-        )
+        lazy = {k for k, v in vars(type(self)).items() if isinstance(v, cached_property)}
+        return lazy & set(vars(self))
 
     # ---- evaluated points ---------------------------------------------------------------------
 

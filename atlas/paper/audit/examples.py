@@ -9,12 +9,11 @@ import numpy as np
 from atlas.core import exact, mechanics
 from atlas.core.spectral import ss_margin
 from atlas.core.verdicts import Verdict
+from atlas.paper.audit.printed import MODES
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
 from atlas.paper.audit.registry import claim
 from atlas.paper.audit.samples import PI, first, fmt_classes
 from atlas.paper.audit.verify import mode_2x2_exact
-
-MODES = ("FF", "SS", "SF", "FS")
 
 
 def consistent_in(rows, cls, k) -> list[str]:

@@ -26,3 +26,6 @@ SS_CURVED = (13, 14, 23, 31, 41, 46)
 
 #: a contact mode and the mode it becomes in the dual class (contacts swapped: SF <-> FS)
 DUAL_MODES = (("FF", "FF"), ("SS", "SS"), ("SF", "FS"), ("FS", "SF"))
+
+#: the contact modes of Table 1 (F: free, S: sliding; first letter contact 1)
+MODES = ("FF", "SS", "SF", "FS")
