@@ -30,6 +30,7 @@ from atlas.core.verdicts import Consistency, Verdict
 __all__ = [
     "table2",
     "class_samples",
+    "class_kernel",
     "dual_kq",
     "to_markdown",
     "to_csv",
@@ -170,7 +171,11 @@ def _word(verdicts) -> str:
 
 
 @jax.jit
-def _class_kernel(c1, s1, c2, s2, ca, sa):
+def class_kernel(c1, s1, c2, s2, ca, sa):
+    """Dual class code, subclass code and Table 1 consistency of every mode (jitted; broadcast).
+
+    Shared with the audit's Sec. 6.2 check so both compile the same shapes once.
+    """
     dual = mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))
     sub = mechanics.subclass_code(c1, s1, c2, s2, ca, sa)
     cons = mechanics.consistent_modes(c1, s1, c2, s2, ca, sa)
@@ -193,7 +198,7 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
         c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
-        dual, sub, cons = _class_kernel(c1, s1, c2, s2, ca[None, :], sa[None, :])
+        dual, sub, cons = class_kernel(c1, s1, c2, s2, ca[None, :], sa[None, :])
         duals = set(np.asarray(dual).ravel().tolist())
         if len(duals) != 1:
             raise RuntimeError(f"class {cls}: dual not unique: {duals}")

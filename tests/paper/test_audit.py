@@ -1,6 +1,7 @@
 """The audit: every counterexample is re-verified by the exact reference."""
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -37,38 +38,77 @@ def test_wrong_expectation_is_not_verified():
     assert not audit.verify_counterexample(cx)
 
 
-def _check_claims(claims):
-    cxs = [cx for c in claims for cx in c.counterexamples]
-    assert cxs
-    for cx in cxs:  # every counterexample re-verified from scratch by the exact reference
+def _check_claim(c):
+    """Status known; counterexamples re-verified from scratch by the exact reference; refuted and
+    imprecise claims carry their evidence (a verified counterexample or a corrected statement)."""
+    assert c.status in ("confirmed", "refuted", "imprecise"), c.id
+    for cx in c.counterexamples:
         fresh = audit.Counterexample(
             cx.beta1, cx.beta2, cx.kappa, cx.q1, cx.q2, dict(cx.expect), matrix=cx.matrix
         )
         assert audit.verify_counterexample(fresh), cx
-    assert {c.status for c in claims} <= {"confirmed", "refuted", "imprecise"}
-    text = audit.to_markdown(claims)
-    assert "NOT verified" not in text
-    by_id = {c.id: c for c in claims}
-    # refuted / imprecise claims carry their evidence: a verified counterexample or a corrected text
+    assert "NOT verified" not in audit.to_markdown([c])
+    if c.status in ("refuted", "imprecise"):
+        assert c.counterexamples or c.corrected, c.id
+
+
+def _check_t2s(c):  # Table 2 and the audit agree, and Table 2 is dual-symmetric
+    assert c.data["vs_dual"] == []
+    assert "II 15: paper stable, computed model-dependent" in c.data["vs_paper"]
+    assert "II 32: paper stable, computed model-dependent" in c.data["vs_paper"]
+    assert c.status == "refuted"
+
+
+def _check_s62(c):  # the new Sec. 6.2 claim is computed (and holds)
+    assert c.status == "confirmed" and c.data["points"] > 10_000
+    assert c.data["exact_disagreements"] == 0
+
+
+def _check_qd(c):  # the corrected Q3 names the classes Table 2 shades model-dependent
+    assert "15, 32" in c.corrected
+
+
+#: what a claim must show beyond :func:`_check_claim`, by id
+SPECIFIC = {"T2S": _check_t2s, "QD": _check_qd, "S62": _check_s62}
+
+
+def _check_claims(claims):
+    assert [c.id for c in claims] == list(audit.CLAIMS)
+    assert any(c.counterexamples for c in claims)
     for c in claims:
-        if c.status in ("refuted", "imprecise"):
-            assert c.counterexamples or c.corrected, c.id
-    # Table 2 and the audit agree, and Table 2 is dual-symmetric
-    t2s = by_id["T2S"]
-    assert t2s.data["vs_dual"] == []
-    assert "II 15: paper stable, computed model-dependent" in t2s.data["vs_paper"]
-    assert "II 32: paper stable, computed model-dependent" in t2s.data["vs_paper"]
-    assert t2s.status == "refuted"
-    assert "15, 32" in by_id["QD"].corrected
-    # the new Sec. 6.2 claim is computed (and holds)
-    assert by_id["S62"].status == "confirmed" and by_id["S62"].data["points"] > 10_000
-    assert by_id["S62"].data["exact_disagreements"] == 0
-    return by_id
+        _check_claim(c)
+        if c.id in SPECIFIC:
+            SPECIFIC[c.id](c)
+    return {c.id: c for c in claims}
 
 
-def test_run_audit_ci_all_counterexamples_verified():
-    """The CI-sized audit (not marked slow): every check runs, every counterexample re-verified."""
-    _check_claims(audit.run_audit(ci=True))
+@pytest.fixture(scope="module")
+def ci_context():
+    """One CI-sized context for the module: each sample computed once, on first use."""
+    return audit.Context(ci=True)
+
+
+@pytest.mark.parametrize("claim_id", list(audit.CLAIMS))
+def test_claim_alone_ci(ci_context, claim_id):
+    """Each claim run alone at the CI size (not marked slow); its counterexamples re-verified."""
+    (c,) = audit.run_audit(select=[claim_id], context=ci_context)
+    assert c.id == claim_id
+    _check_claim(c)
+    if claim_id in SPECIFIC:
+        SPECIFIC[claim_id](c)
+
+
+def test_one_claim_computes_only_its_samples():
+    ctx = audit.Context(ci=True)
+    audit.run_audit(select="Z", context=ctx)  # the Ziegler band needs no shared sample
+    assert ctx.computed() == set()
+    audit.run_audit(select=["T1", "S144"], context=ctx)
+    assert ctx.computed() == {"table1_points"}
+
+
+def test_select_unknown_claim():
+    with pytest.raises(ValueError, match="select: unknown claim ids \\['T9'\\]"):
+        audit.run_audit(select=["T1", "T9"])
 
 
 @pytest.mark.slow
@@ -81,7 +121,9 @@ def test_run_audit_quick_all_counterexamples_verified():
 
 
 def test_app_b_status_from_counts():
-    c = audit._app_b(300)
+    ctx = audit.Context(sizes=replace(audit.Sizes.of(ci=True), n_matrix7=300))
+    c = audit.CLAIMS["B1"](ctx)
+    assert ctx.computed() == {"matrix7"}
     counts = c.data["counts"]
     # q1 = 0 with b11 > 0: neutral, so the claim's "negative real parts" fails on every such point
     assert counts["b>0, q=0"][0] > 0 and counts["b>0, q=0"][1] == 0
