@@ -394,14 +394,7 @@ def run(
     )
     outputs = scene.output_names
     src = _axis_inputs(scene, dtype)
-    plan = []
-    for g in _groups(scene):
-        need = _needed(g, outputs)
-        if not need:
-            continue
-        dims = tuple(p for p in g.params if scene.axes[p].is_dim)
-        shape = tuple(scene.axes[d].size for d in dims)
-        plan.append((g, need, dims, shape))
+    plan = _plan(scene, outputs)
     total = sum(math.prod(shape) for _, _, _, shape in plan)
     t0 = time.perf_counter()
     counts = {"undecided_fast": {}, "undecided": {}}
@@ -461,19 +454,35 @@ def run(
         if bar is not None:
             bar.close()
     if stats is not None:
-        points = scene.points()
-        stats.update(
-            scene=scene.name,
-            points=points,
-            values=total,
-            seconds=seconds,
-            points_per_second=points / seconds if seconds > 0 else float("inf"),
-            undecided_fast=fast,
-            undecided=final,
-            resolved_points=counts.get("resolved_points", 0),
-            exact_failures=counts.get("exact_failures", []),
-        )
+        stats.update(_summary(scene, total, seconds, counts))
     return result
+
+
+def _plan(scene: Scene, outputs) -> list[tuple]:
+    """``(group, kernel results needed, varied dims, shape)`` of every group with work to do."""
+    plan = []
+    for g in _groups(scene):
+        need = _needed(g, outputs)
+        if need:
+            dims = tuple(p for p in g.params if scene.axes[p].is_dim)
+            plan.append((g, need, dims, tuple(scene.axes[d].size for d in dims)))
+    return plan
+
+
+def _summary(scene: Scene, values: int, seconds: float, counts: dict) -> dict:
+    """The run's summary handed to the caller (see :func:`run`)."""
+    points = scene.points()
+    return {
+        "scene": scene.name,
+        "points": points,
+        "values": values,
+        "seconds": seconds,
+        "points_per_second": points / seconds if seconds > 0 else float("inf"),
+        "undecided_fast": sum(counts["undecided_fast"].values()),
+        "undecided": sum(counts["undecided"].values()),
+        "resolved_points": counts.get("resolved_points", 0),
+        "exact_failures": counts.get("exact_failures", []),
+    }
 
 
 def _finish_tile(g, dims, index, block, flat, out, sink, outputs, dtype, resolve, stats, md, bar):
