@@ -9,7 +9,7 @@ events of the direction vectors: ``beta2 == beta1``, ``b2 == -b1``, axis directi
 
 All functions below except :func:`direction` are pure ``jax.numpy`` functions of arrays that
 broadcast against each other (no I/O, jit/vmap-able).  Codes use :data:`atlas.core.verdicts.UNDECIDED_CODE`
-(-1) or ``Consistency.UNDECIDED`` (3) where a cross product could not be certified.
+(-1) or :data:`atlas.core.verdicts.UNDECIDED_FLAG` (3) where a cross product could not be certified.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core.signs import UNKNOWN, det2_sign, sign_of
-from atlas.core.verdicts import UNDECIDED_CODE, Verdict
+from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Verdict
 
 __all__ = [
     "direction",
@@ -169,13 +169,14 @@ def _and3(*flags):
     """Three-valued AND of Consistency codes (0 dominates, then UNDECIDED)."""
     out = jnp.ones(jnp.broadcast_shapes(*(f.shape for f in flags)), jnp.int8)
     for f in flags:
-        out = jnp.where((out == 0) | (f == 0), 0, jnp.where((out == 3) | (f == 3), 3, 1))
+        und = (out == UNDECIDED_FLAG) | (f == UNDECIDED_FLAG)
+        out = jnp.where((out == 0) | (f == 0), 0, jnp.where(und, UNDECIDED_FLAG, 1))
     return out.astype(jnp.int8)
 
 
 def _positive(sign):
     """Consistency code of ``sign > 0`` for a certified sign code."""
-    return jnp.where(sign == UNKNOWN, 3, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
+    return jnp.where(sign == UNKNOWN, UNDECIDED_FLAG, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
 
 
 def consistent_modes(c1, s1, c2, s2, ca, sa):

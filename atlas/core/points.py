@@ -26,10 +26,10 @@ import math
 import jax
 import numpy as np
 
-from atlas.core import rootfree, spectral
-from atlas.core.verdicts import Verdict
+from atlas.core import exact, rootfree, spectral
+from atlas.core.verdicts import UNDECIDED_FLAG
 
-__all__ = ["spectral_points", "SPECTRAL_NAMES", "CHUNK", "BLOCK", "last_counts"]
+__all__ = ["spectral_points", "settle_codes", "SPECTRAL_NAMES", "CHUNK", "BLOCK"]
 
 SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa")
 #: length of the padded chunks of the later tiers
@@ -38,8 +38,7 @@ CHUNK = 1 << 16
 BLOCK = 1 << 22
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 _PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # B = I, kappa = 1, undamped: a regular point
-_UND = int(Verdict.UNDECIDED)
-_LAST: dict = {}
+_UND = UNDECIDED_FLAG
 
 
 @functools.cache
@@ -281,8 +280,6 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
 
 def _settle_exact(inputs, shape, out, flags, und, max_resolve, counts):
     """Tier 4: exact verdicts (:func:`atlas.core.exact.resolve`) where a flag is still undecided."""
-    from atlas.core import exact
-
     # points undecided only in stable_SS need only the rational Hurwitz test (microseconds)
     und_ii = np.zeros(shape, bool)
     for k in flags:
@@ -325,11 +322,55 @@ def _resolve_each(exact, pts, names, counts):
 def _report(counts, stats):
     if stats is not None:
         stats.update(counts)
-    _LAST.clear()
-    _LAST.update(counts)
 
 
-def last_counts() -> dict:
-    """Diagnostics of the last :func:`spectral_points` call in this process (see its ``stats``;
-    prefer ``stats=``, which is safe with threads)."""
-    return dict(_LAST)
+def settle_codes(codes: dict, undecided: dict, c1, s1, c2, s2, ca=None, sa=None, *, stats=None):
+    """Exact class/subclass codes and Table 1 flags where the fast kernels left them undecided.
+
+    ``codes``: arrays of one shape (``class_code``, ``subclass_code``, ``consistent_FF`` ...),
+    replaced in place at the points where the matching mask of ``undecided`` holds; the inputs
+    (direction components [1], ``ca, sa`` only for the ``alpha`` outputs) broadcast to that shape.
+    The exact reference is :func:`atlas.core.exact.resolve_codes` (rational arithmetic).  A point on
+    which it fails stays undecided and is recorded in ``stats["exact_failures"]`` (a long atlas run
+    is never aborted by one point).  Returns the number of points settled (also added to
+    ``stats["resolved_points"]``).
+    """
+    undecided = {k: np.asarray(u) for k, u in undecided.items() if k in codes}
+    if not undecided:
+        return 0
+    shape = next(iter(undecided.values())).shape
+    idx = np.flatnonzero(np.logical_or.reduce([u.reshape(-1) for u in undecided.values()]))
+    if idx.size == 0:
+        return 0
+    args = (c1, s1, c2, s2) if ca is None else (c1, s1, c2, s2, ca, sa)
+    pts = [np.broadcast_to(np.asarray(a), shape).reshape(-1)[idx] for a in args]
+    try:
+        ref, ok = exact.resolve_codes(*pts), np.ones(idx.size, bool)
+    except Exception:  # settle point by point; failing points stay undecided
+        ref, ok = _codes_each(pts, list(undecided), stats)
+    for k, u in undecided.items():
+        sel = u.reshape(-1)[idx] & ok
+        codes[k].reshape(-1)[idx[sel]] = np.asarray(ref[k])[sel]
+    settled = int(ok.sum())
+    if stats is not None:
+        stats["resolved_points"] = stats.get("resolved_points", 0) + settled
+    return settled
+
+
+def _codes_each(pts, names, stats):
+    """:func:`atlas.core.exact.resolve_codes` point by point, recording the points that fail."""
+    n = pts[0].size
+    ref = {k: np.zeros(n, np.int64) for k in names}
+    ok = np.zeros(n, bool)
+    for i in range(n):
+        try:
+            one = exact.resolve_codes(*(p[i : i + 1] for p in pts))
+        except Exception:
+            if stats is not None:
+                fail = stats.setdefault("exact_failures", [])
+                fail.append(tuple(float(p[i]) for p in pts))
+            continue
+        ok[i] = True
+        for k in names:
+            ref[k][i] = one[k][0]
+    return ref, ok

@@ -71,12 +71,11 @@ import jax.numpy as jnp
 
 from atlas.core import spectral
 from atlas.core.signs import UNKNOWN, det2_sign, evaluate_certified
-from atlas.core.verdicts import Consistency, Verdict
+from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
 __all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT"]
 
-X = int(Verdict.UNDECIDED)
-assert X == int(Consistency.UNDECIDED)
+X = UNDECIDED_FLAG  # = Verdict.UNDECIDED = Consistency.UNDECIDED
 #: bit of the packed code that marks points for :func:`tier2`
 TIER2_BIT = 6
 

@@ -33,8 +33,10 @@ import functools
 
 import jax.numpy as jnp
 
-#: sign code for "floating point could not certify the sign"
-UNKNOWN = 2
+from atlas.core.verdicts import UNKNOWN_SIGN
+
+#: sign code for "floating point could not certify the sign" (:data:`atlas.core.verdicts.UNKNOWN_SIGN`)
+UNKNOWN = UNKNOWN_SIGN
 
 #: magnitude bound assumed for every input of :func:`evaluate_certified` unless told otherwise
 INPUT_BOUND = 2.0

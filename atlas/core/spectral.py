@@ -42,7 +42,7 @@ import jax
 import jax.numpy as jnp
 
 from atlas.core.signs import UNKNOWN, det2_sign, evaluate_certified, gamma
-from atlas.core.verdicts import Consistency, Verdict
+from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
 
 __all__ = [
     "normalize",
@@ -580,35 +580,36 @@ def ii_undamped(c1, s1, c2, s2, kappa):
     h2p = _sgn_plus_sqrt(_neg(s_x), se, s_disc)
     h2m = _neg(_sgn_plus_sqrt(s_x, se, s_disc))
 
+    X3 = UNDECIDED_FLAG  # three-valued logic: 0 false, 1 true, undecided
+
     def cond(h1, h2):  # Consistency code of the eigenvector condition at that mu
-        v1 = jnp.where(h1 == UNKNOWN, 3, (sc2 * h1 < 0).astype(jnp.int8))
-        v2 = jnp.where(h2 == UNKNOWN, 3, (ss1 * h2 < 0).astype(jnp.int8))
-        return jnp.where(sc2 != 0, v1, jnp.where(ss1 != 0, v2, 3)).astype(jnp.int8)
+        v1 = jnp.where(h1 == UNKNOWN, X3, (sc2 * h1 < 0).astype(jnp.int8))
+        v2 = jnp.where(h2 == UNKNOWN, X3, (ss1 * h2 < 0).astype(jnp.int8))
+        return jnp.where(sc2 != 0, v1, jnp.where(ss1 != 0, v2, X3)).astype(jnp.int8)
 
     def tri_and(a, b):
-        return jnp.where((a == 0) | (b == 0), 0, jnp.where((a == 3) | (b == 3), 3, 1)).astype(
+        return jnp.where((a == 0) | (b == 0), 0, jnp.where((a == X3) | (b == X3), X3, 1)).astype(
             jnp.int8
         )
 
     def tri_or(a, b):
-        return jnp.where((a == 1) | (b == 1), 1, jnp.where((a == 3) | (b == 3), 3, 0)).astype(
+        return jnp.where((a == 1) | (b == 1), 1, jnp.where((a == X3) | (b == X3), X3, 0)).astype(
             jnp.int8
         )
 
     def pos(sign):
-        return jnp.where(sign == UNKNOWN, 3, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
+        return jnp.where(sign == UNKNOWN, X3, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
 
     def neg(sign):
-        return jnp.where(sign == UNKNOWN, 3, (sign < 0).astype(jnp.int8)).astype(jnp.int8)
+        return jnp.where(sign == UNKNOWN, X3, (sign < 0).astype(jnp.int8)).astype(jnp.int8)
 
-    real_mu = jnp.where(s_disc == UNKNOWN, 3, (s_disc >= 0).astype(jnp.int8)).astype(jnp.int8)
+    real_mu = jnp.where(s_disc == UNKNOWN, X3, (s_disc >= 0).astype(jnp.int8)).astype(jnp.int8)
     mu_p = tri_and(real_mu, tri_or(neg(sd), neg(s_a2)))
     mu_m = tri_and(real_mu, tri_and(neg(s_a2), pos(sd)))
     cons_p = tri_and(mu_p, cond(h1p, h2p))
     cons_m = tri_and(mu_m, cond(h1m, h2m))
     cons = tri_or(cons_p, cons_m)
     stab = tri_and(cons_p, pos(s_disc))
-    stab = jnp.where(stab == 3, int(Verdict.UNDECIDED), stab).astype(jnp.int8)
     lost = lost_to_underflow((kappa, kappa), (k1, k2))
     cons = jnp.where(lost, int(Consistency.UNDECIDED), cons).astype(jnp.int8)
     stab = jnp.where(lost, int(Verdict.UNDECIDED), stab).astype(jnp.int8)

@@ -8,7 +8,25 @@ from __future__ import annotations
 
 import enum
 
-__all__ = ["Verdict", "Consistency", "flag_attrs", "UNDECIDED_CODE"]
+import numpy as np
+
+__all__ = [
+    "Verdict",
+    "Consistency",
+    "flag_attrs",
+    "UNDECIDED_FLAG",
+    "UNDECIDED_CODE",
+    "UNKNOWN_SIGN",
+]
+
+# The three encodings of "floating point could not certify this" (SPEC §2); nothing else in the
+# package spells them as literals.
+#: a verdict flag (:class:`Verdict`, :class:`Consistency`) that is undecided
+UNDECIDED_FLAG = 3
+#: an integer code array (``class_code``, ``subclass_code``) whose value is undecided
+UNDECIDED_CODE = -1
+#: a certified sign (-1, 0, +1) that could not be certified (:mod:`atlas.core.signs`)
+UNKNOWN_SIGN = 2
 
 
 class Verdict(enum.IntEnum):
@@ -22,7 +40,7 @@ class Verdict(enum.IntEnum):
     UNSTABLE = 0
     STABLE = 1
     NEUTRAL = 2
-    UNDECIDED = 3
+    UNDECIDED = UNDECIDED_FLAG
 
     @property
     def label(self) -> str:
@@ -38,7 +56,7 @@ class Consistency(enum.IntEnum):
 
     INCONSISTENT = 0
     CONSISTENT = 1
-    UNDECIDED = 3
+    UNDECIDED = UNDECIDED_FLAG
 
     @property
     def label(self) -> str:
@@ -48,9 +66,6 @@ class Consistency(enum.IntEnum):
     def color(self) -> str:
         return _CONSISTENCY_STYLE[self][1]
 
-
-#: code used by integer code arrays (class/subclass codes) while a sign is still uncertain
-UNDECIDED_CODE = -1
 
 _VERDICT_STYLE = {
     Verdict.UNSTABLE: ("unstable", "#f7f7f7"),
@@ -67,8 +82,6 @@ _CONSISTENCY_STYLE = {
 
 def flag_attrs(codes: type[enum.IntEnum], long_name: str) -> dict:
     """CF flag attributes (``flag_values``, ``flag_meanings``, ``long_name``) for an enumeration."""
-    import numpy as np
-
     members = list(codes)
     return {
         "long_name": long_name,

@@ -80,7 +80,6 @@ from atlas.data.engine import (
     Schema,
     _check_options,
     generate,
-    last_stats,
     progress_bar,
     schema,
 )
@@ -356,15 +355,18 @@ def _umask() -> int:
 # --- the tile tasks (run on the workers, or in process) -----------------------------------------
 
 
-def _compute_tile(scene: Scene, tile, opts: dict) -> xr.Dataset:
-    """One tile of the atlas (separate function so tests can slow it down)."""
-    return generate(
+def _compute_tile(scene: Scene, tile, opts: dict) -> tuple[xr.Dataset, dict]:
+    """One tile of the atlas and its run summary (separate function so tests can slow it down)."""
+    stats: dict = {}
+    ds = generate(
         _sub_scene(scene, tile),
         method=opts["method"],
         dtype=opts["dtype"],
         resolve=opts["resolve"],
         tile_points=opts["tile_points"],
+        stats=stats,
     )
+    return ds, stats
 
 
 def _tile_fields(tile) -> dict:
@@ -380,9 +382,8 @@ def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
 
     _drop_record(store, i)
     t0, c0 = time.perf_counter(), time.process_time()
-    ds = _compute_tile(scene, tile, opts)
+    ds, stats = _compute_tile(scene, tile, opts)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
-    stats = last_stats()
     split = _split("beta1" in ds.dims, tile)
     names = list(ds.data_vars)
     digests = {k: _digest(ds[k].values) for k in names}

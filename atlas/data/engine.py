@@ -51,7 +51,17 @@ import xarray as xr
 from atlas.core import config, spectral
 from atlas.core import mechanics as mech
 from atlas.core import points as evaluate
-from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict, flag_attrs
+from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
+from atlas.data.outputs import (
+    GROUPS,
+    OUTPUTS,
+    coord_attrs,
+    in_group,
+    storage_dtype,
+    to_storage,
+    undecided,
+    variable_attrs,
+)
 from atlas.data.scene import Scene
 
 __all__ = [
@@ -74,7 +84,6 @@ REFERENCES = (
     "Varkonyi, P. L.: Dynamics of mechanical systems with multiple sliding contacts: "
     "new faces of Painleve's paradox."
 )
-U3 = int(Verdict.UNDECIDED)
 
 # --- tiling -------------------------------------------------------------------------------------
 
@@ -116,30 +125,25 @@ class _Group:
     outputs: tuple[str, ...]  # outputs it can produce
 
 
-_CONSISTENCY = ("consistent_FF", "consistent_SF", "consistent_FS", "consistent_SS")
-_SPECTRAL = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa")
-_MODEL_DEP = ("model_dependent_SS", "model_dependent_II")
+_MODEL_DEP = in_group("model_dependence")
 
 
 def _groups(scene: Scene) -> list[_Group]:
-    model = scene.model_names
-    return [
-        _Group("b1", ("beta1",), ("stable_SF", "consistent_IF")),
-        _Group("b2", ("beta2",), ("stable_FS", "consistent_FI")),
-        _Group("b1b2", ("beta1", "beta2"), ("class_code", "cc_possible")),
-        _Group("b1b2a", ("beta1", "beta2", "alpha"), ("subclass_code",) + _CONSISTENCY),
-        _Group("spectral", ("beta1", "beta2") + model, _SPECTRAL),
-    ]
+    """The kernel groups of an atlas (:data:`atlas.data.outputs.GROUPS`; model dependence is a
+    reduction of the spectral group, not a kernel)."""
+    out = []
+    for name in GROUPS:
+        names = in_group(name)
+        if name != "model_dependence":
+            out.append(_Group(name, scene.depends(names[0]), names))
+    return out
 
 
 def _needed(group: _Group, outputs: tuple[str, ...]) -> tuple[str, ...]:
-    """Kernel results a group must compute for the wanted outputs (incl. model dependence)."""
-    need = [o for o in group.outputs if o in outputs]
-    if group.name == "spectral":
-        if "model_dependent_SS" in outputs and "stable_SS" not in need:
-            need.append("stable_SS")
-        if "model_dependent_II" in outputs:
-            need += [o for o in ("consistent_II", "stable_II") if o not in need]
+    """Kernel results a group must compute for the wanted outputs (incl. what reductions read)."""
+    need = {o for o in group.outputs if o in outputs}
+    for o in outputs:
+        need.update(n for n in OUTPUTS[o].needs if n in group.outputs)
     return tuple(o for o in group.outputs if o in need)
 
 
@@ -181,129 +185,6 @@ def _jitted(group: str):
 
 # --- schema: coordinates, variables, attributes ------------------------------------------------
 
-_COORD_ATTRS = {
-    "beta1": dict(
-        units="rad", long_name="direction angle of b1 (response of the gaps to contact 1)"
-    ),
-    "beta2": dict(
-        units="rad", long_name="direction angle of b2 (response of the gaps to contact 2)"
-    ),
-    "alpha": dict(units="rad", long_name="direction angle of a (free relative acceleration)"),
-    "kappa": dict(units="1", long_name="stiffness ratio k1 |b1| / (k2 |b2|)"),
-    "q": dict(units="1", long_name="dimensionless damping q1_hat = q2_hat = q |b| / sqrt(k2 |b2|)"),
-    "q1": dict(units="1", long_name="dimensionless damping q1_hat = q1 |b1| / sqrt(k2 |b2|)"),
-    "q2": dict(units="1", long_name="dimensionless damping q2_hat = q2 |b2| / sqrt(k2 |b2|)"),
-}
-
-
-def _bool_flags(long_name: str, false: str, true: str, comment: str | None = None) -> dict:
-    out = {
-        "long_name": long_name,
-        "flag_values": np.array([0, 1], np.int8),
-        "flag_meanings": f"{false} {true}",
-    }
-    if comment:
-        out["comment"] = comment
-    return out
-
-
-def _code_flags(codes: list[int], prefix: str, dtype) -> dict:
-    values = [UNDECIDED_CODE, 0] + codes
-    meanings = ["undecided", "degenerate"] + [f"{prefix}_{c}" for c in codes]
-    return {"flag_values": np.array(values, dtype), "flag_meanings": " ".join(meanings)}
-
-
-_SUBCLASSES = [10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7)]
-
-
-def _variable_attrs(name: str) -> dict:
-    if name == "class_code":
-        return {
-            "long_name": "class code ij (rank of beta1, beta2; paper Sec. 3)",
-            **_code_flags(list(mech.ALL_CLASSES), "class", np.int8),
-        }
-    if name == "subclass_code":
-        return {
-            "long_name": "subclass code ijk (rank of alpha; paper Sec. 3)",
-            **_code_flags(_SUBCLASSES, "subclass", np.int16),
-        }
-    if name in _CONSISTENCY:
-        mode = name[-2:]
-        return _bool_flags(
-            f"consistency of the {mode} contact mode (paper Table 1, Appendix A)",
-            "inconsistent",
-            "consistent",
-        )
-    if name in ("stable_SF", "stable_FS"):
-        mode, b = ("SF", "b11") if name == "stable_SF" else ("FS", "b22")
-        return _bool_flags(
-            f"stability of the {mode} contact mode (paper Sec. 4.2)",
-            "not_stable",
-            "stable",
-            f"stable iff {b} > 0; {b} = 0 (neutral) is stored as not_stable",
-        )
-    if name in ("consistent_IF", "consistent_FI"):
-        cond = "b11 < 0 and b21 > 0" if name == "consistent_IF" else "b22 < 0 and b12 > 0"
-        return _bool_flags(
-            f"consistency of the {name[-2:]} impact without collision (paper Sec. 4.3)",
-            "inconsistent",
-            "consistent",
-            f"consistent iff {cond}; stable whenever consistent",
-        )
-    if name == "cc_possible":
-        return _bool_flags(
-            "CC inverse chattering possible (paper Sec. 5.2)",
-            "impossible",
-            "possible",
-            "necessary condition b11 > 0 and b22 > 0",
-        )
-    if name == "stable_SS":
-        a = flag_attrs(
-            Verdict, "stability verdict of the SS contact mode (eigenvalues of M, eq. 9)"
-        )
-        a["comment"] = "neutral: no eigenvalue with Re > 0, some with Re = 0 (q = 0; Fig. 1 stable)"
-        return a
-    if name == "consistent_II":
-        return flag_attrs(Consistency, "consistency of the II impact without collision (Sec. 4.3)")
-    if name == "stable_II":
-        a = flag_attrs(Verdict, "stability verdict of the II impact without collision (Sec. 4.3)")
-        a["comment"] = "stable iff the strictly dominant eigenvalue of M is a II eigenvalue"
-        return a
-    if name == "spectral_abscissa":
-        return {
-            "long_name": "spectral abscissa of M: max real part of its eigenvalues",
-            "units": "1",
-            "comment": "time scaled by contact 2 (unit 1/sqrt(k2 |b2|)); approximate, not certified",
-        }
-    if name == "model_dependent_SS":
-        return _bool_flags(
-            "SS stability verdict varies over the model samples (kappa, q)",
-            "model_independent",
-            "model_dependent",
-            "more than one decided verdict over the samples; neutral counted as stable",
-        )
-    if name == "model_dependent_II":
-        return _bool_flags(
-            "II verdict varies over the model samples (kappa, q)",
-            "model_independent",
-            "model_dependent",
-            "more than one decided state among inconsistent, consistent-unstable, "
-            "consistent-stable over the samples",
-        )
-    raise KeyError(name)
-
-
-def _storage_dtype(name: str, dtype: str):
-    if name == "class_code":
-        return np.dtype(np.int8)
-    if name == "subclass_code":
-        return np.dtype(np.int16)
-    if name in ("stable_SS", "consistent_II", "stable_II"):
-        return np.dtype(np.int8)
-    if name == "spectral_abscissa":
-        return np.dtype(dtype)
-    return np.dtype(bool)
-
 
 @dataclass
 class Schema:
@@ -336,13 +217,13 @@ def schema(
     coords = {}
     for key, ax in scene.axes.items():
         dims = (key,) if ax.is_dim else ()
-        coords[key] = (dims, ax.values, dict(_COORD_ATTRS[key]))
+        coords[key] = (dims, ax.values, coord_attrs(key))
     variables = {}
     for name in scene.output_names:
         dims = scene.output_dims(name)
         shape = tuple(scene.axes[d].size for d in dims)
         chunks = block_shape(shape, tile_points) if dims else None
-        variables[name] = (dims, _storage_dtype(name, dtype), _variable_attrs(name), chunks)
+        variables[name] = (dims, storage_dtype(name, dtype), variable_attrs(name), chunks)
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
         "Conventions": "CF-1.10",
@@ -448,32 +329,6 @@ def _gather(src, inputs, dims, index, block, T):
     return out
 
 
-def _to_storage(name: str, codes: np.ndarray, dtype: str) -> np.ndarray:
-    if name in ("stable_SF", "stable_FS"):
-        return codes == int(Verdict.STABLE)
-    if name in _CONSISTENCY or name in ("consistent_IF", "consistent_FI"):
-        return codes == 1
-    if name == "cc_possible":
-        return codes.astype(bool)
-    return codes.astype(_storage_dtype(name, dtype))
-
-
-def _undecided(name: str, codes: np.ndarray) -> np.ndarray:
-    if name in ("class_code", "subclass_code"):
-        return codes == UNDECIDED_CODE
-    if name in _CONSISTENCY or name in ("stable_SS", "consistent_II", "stable_II"):
-        return codes == U3
-    return np.zeros(codes.shape, bool)
-
-
-def _exact():
-    try:
-        from atlas.core import exact
-    except ImportError:  # pragma: no cover - exact.py not available
-        return None
-    return exact
-
-
 def _block_inputs(src, inputs, dims, index, block):
     """Broadcastable (block-shaped) inputs of one hyperslab: each varied parameter along its axis."""
     out = []
@@ -502,36 +357,13 @@ def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
 
 
 def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
-    """Replace undecided class/subclass codes of one tile by the exact reference, in place."""
-    exact = _exact()
-    names = [k for k in res if k != "spectral_abscissa"]
-    und = {k: _undecided(k, res[k]) for k in names}
-    anyu = np.zeros(n, bool)
-    for k in names:
-        anyu |= und[k]
-    idx = np.flatnonzero(anyu)
-    if idx.size == 0 or exact is None:
+    """Settle undecided class/subclass codes and Table 1 flags of one tile exactly, in place
+    (:func:`atlas.core.points.settle_codes`; the spectral group is settled by its own driver)."""
+    masks = {k: undecided(k, v) for k, v in res.items() if OUTPUTS[k].undecided is not None}
+    if group == "spectral" or not masks:  # b1, b2: never undecided
         return
-    pts = [np.broadcast_to(a, (n,))[idx] if a.ndim == 0 else a[:n][idx] for a in flat_inputs]
-
-    def solve(p, i):
-        return exact.resolve_codes(*p)
-
-    # one point at a time (the reference loops over points anyway): a point on which the reference
-    # itself fails stays undecided and is recorded instead of aborting the whole atlas
-    ok = []
-    for i in range(idx.size):
-        try:
-            one = solve([p[i : i + 1] for p in pts], i)
-        except Exception:
-            fail = stats.setdefault("exact_failures", [])
-            fail.append(tuple(float(p[i]) for p in pts))
-            continue
-        ok.append(idx[i])
-        for k, v in one.items():
-            if k in und and und[k][idx[i]]:
-                res[k][idx[i]] = np.asarray(v)[0]
-    stats["resolved_points"] = stats.get("resolved_points", 0) + int(len(ok))
+    pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
+    evaluate.settle_codes(res, masks, *pts, stats=stats)
 
 
 def run(
@@ -544,12 +376,15 @@ def run(
     tile_points: int = DEFAULT_TILE_POINTS,
     progress=False,
     history: str | None = None,
+    stats: dict | None = None,
 ):
     """Compute every output of ``scene`` tile by tile into ``sink``; returns ``sink.finish(...)``.
 
     ``sink`` has ``begin(schema)``, ``write(name, index, block)``, ``finish(attrs, var_attrs)`` and
-    ``abort()``; see :class:`MemorySink` and :class:`atlas.data.io.NetCDFSink`.  After the run,
-    ``run.last_stats`` holds the summary (points, seconds, points per second, undecided counts).
+    ``abort()``; see :class:`MemorySink` and :class:`atlas.data.io.NetCDFSink`.  ``stats``, if
+    given, is filled with the run's summary: ``scene``, ``points``, ``values`` (computed values over
+    all groups), ``seconds``, ``points_per_second``, ``undecided_fast``, ``undecided`` (after exact
+    resolution), ``resolved_points``, ``exact_failures`` (the points the exact tier failed on).
     """
     method, dtype, tile_points = _check_options(method, dtype, tile_points)
     if not isinstance(scene, Scene):
@@ -559,17 +394,10 @@ def run(
     )
     outputs = scene.output_names
     src = _axis_inputs(scene, dtype)
-    plan = []
-    for g in _groups(scene):
-        need = _needed(g, outputs)
-        if not need:
-            continue
-        dims = tuple(p for p in g.params if scene.axes[p].is_dim)
-        shape = tuple(scene.axes[d].size for d in dims)
-        plan.append((g, need, dims, shape))
+    plan = _plan(scene, outputs)
     total = sum(math.prod(shape) for _, _, _, shape in plan)
     t0 = time.perf_counter()
-    stats = {"undecided_fast": {}, "undecided": {}}
+    counts = {"undecided_fast": {}, "undecided": {}}
     md = _ModelDependence(scene, outputs)
     bar = progress_bar(progress, total, f"atlas {scene.name}")
     pending = None
@@ -584,30 +412,32 @@ def run(
             for index in tile_blocks(shape, T):
                 block = tuple(s.stop - s.start for s in index)
                 if g.name == "spectral" and method == "certified":
-                    res, fast = _spectral_tile(src, dims, index, block, need, dtype, resolve, stats)
-                    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md)
+                    res, fast = _spectral_tile(
+                        src, dims, index, block, need, dtype, resolve, counts
+                    )
+                    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, counts, md)
                     if bar is not None:
                         bar.update(math.prod(block))
                     continue
                 flat = _gather(src, inputs, dims, index, block, T)
                 out = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
                 if pending is not None:
-                    _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, stats, md, bar)
+                    _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, counts, md, bar)
                 pending = (index, block, flat, {k: out[k] for k in need})
             if pending is not None:
-                _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, stats, md, bar)
+                _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, counts, md, bar)
         for name, block in md.results().items():
             sink.write(name, tuple(slice(None) for _ in block.shape), block)
-        fast = sum(stats["undecided_fast"].values())
-        final = sum(stats["undecided"].values())
+        fast = sum(counts["undecided_fast"].values())
+        final = sum(counts["undecided"].values())
         attrs = {"undecided_fast": fast, "undecided_after_resolve": final}
-        failures = stats.get("exact_failures", [])
+        failures = counts.get("exact_failures", [])
         if failures:
             attrs["exact_failures"] = len(failures)
             attrs["exact_failure_example"] = repr(failures[0])
         var_attrs = {
-            k: {"undecided_fast": stats["undecided_fast"].get(k, 0), "undecided": v}
-            for k, v in stats["undecided"].items()
+            k: {"undecided_fast": counts["undecided_fast"].get(k, 0), "undecided": v}
+            for k, v in counts["undecided"].items()
             if k in sch.variables
         }
         result = sink.finish(attrs, var_attrs)
@@ -623,22 +453,36 @@ def run(
     finally:
         if bar is not None:
             bar.close()
-    points = scene.points()
-    run.last_stats = {
-        "scene": scene.name,
-        "points": points,
-        "values": total,
-        "seconds": seconds,
-        "points_per_second": points / seconds if seconds > 0 else float("inf"),
-        "undecided_fast": fast,
-        "undecided": final,
-        "resolved_points": stats.get("resolved_points", 0),
-        "exact_failures": stats.get("exact_failures", []),
-    }
+    if stats is not None:
+        stats.update(_summary(scene, total, seconds, counts))
     return result
 
 
-run.last_stats = {}
+def _plan(scene: Scene, outputs) -> list[tuple]:
+    """``(group, kernel results needed, varied dims, shape)`` of every group with work to do."""
+    plan = []
+    for g in _groups(scene):
+        need = _needed(g, outputs)
+        if need:
+            dims = tuple(p for p in g.params if scene.axes[p].is_dim)
+            plan.append((g, need, dims, tuple(scene.axes[d].size for d in dims)))
+    return plan
+
+
+def _summary(scene: Scene, values: int, seconds: float, counts: dict) -> dict:
+    """The run's summary handed to the caller (see :func:`run`)."""
+    points = scene.points()
+    return {
+        "scene": scene.name,
+        "points": points,
+        "values": values,
+        "seconds": seconds,
+        "points_per_second": points / seconds if seconds > 0 else float("inf"),
+        "undecided_fast": sum(counts["undecided_fast"].values()),
+        "undecided": sum(counts["undecided"].values()),
+        "resolved_points": counts.get("resolved_points", 0),
+        "exact_failures": counts.get("exact_failures", []),
+    }
 
 
 def _finish_tile(g, dims, index, block, flat, out, sink, outputs, dtype, resolve, stats, md, bar):
@@ -647,7 +491,7 @@ def _finish_tile(g, dims, index, block, flat, out, sink, outputs, dtype, resolve
     res = {
         k: np.array(np.broadcast_to(np.asarray(v).reshape(-1), (size,))[:n]) for k, v in out.items()
     }
-    fast = {k: int(_undecided(k, v).sum()) for k, v in res.items()}
+    fast = {k: int(undecided(k, v).sum()) for k, v in res.items()}
     if resolve:
         _resolve(g.name, res, flat, n, stats)
     _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md)
@@ -659,12 +503,12 @@ def _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, m
     """Count, record model dependence and write the finished (flat) results of one tile."""
     for k, v in res.items():
         stats["undecided_fast"][k] = stats["undecided_fast"].get(k, 0) + fast.get(k, 0)
-        stats["undecided"][k] = stats["undecided"].get(k, 0) + int(_undecided(k, v).sum())
+        stats["undecided"][k] = stats["undecided"].get(k, 0) + int(undecided(k, v).sum())
     if g.name == "spectral":
         md.update(dims, index, block, res)
     for k, v in res.items():
         if k in outputs:
-            sink.write(k, index, _to_storage(k, v.reshape(block), dtype))
+            sink.write(k, index, to_storage(k, v.reshape(block), dtype))
 
 
 class _ModelDependence:
@@ -693,9 +537,13 @@ class _ModelDependence:
                 c = res["consistent_II"].reshape(block)
                 s = res["stable_II"].reshape(block)
                 bits = np.where(
-                    (c == U3) | (s == U3),
+                    (c == UNDECIDED_FLAG) | (s == UNDECIDED_FLAG),
                     0,
-                    np.where(c == 0, 1, np.where(s == int(Verdict.STABLE), 4, 2)),
+                    np.where(
+                        c == int(Consistency.INCONSISTENT),
+                        1,
+                        np.where(s == int(Verdict.STABLE), 4, 2),
+                    ),
                 )
             bits = np.bitwise_or.reduce(bits.astype(np.uint8), axis=red) if red else bits
             self.bits[o][keep] |= bits.astype(np.uint8)
@@ -741,6 +589,7 @@ def generate(
     tile_points: int = DEFAULT_TILE_POINTS,
     progress=False,
     history: str | None = None,
+    stats: dict | None = None,
 ) -> xr.Dataset:
     """Compute an atlas in memory (SPEC §2).
 
@@ -761,6 +610,8 @@ def generate(
         tqdm progress bar on stderr.
     history : str, optional
         Command recorded in the ``history`` attribute (default: the Python call).
+    stats : dict, optional
+        Filled with the run's summary (points, seconds, undecided counts; see :func:`run`).
 
     Returns
     -------
@@ -777,9 +628,5 @@ def generate(
         tile_points=tile_points,
         progress=progress,
         history=history,
+        stats=stats,
     )
-
-
-def last_stats() -> dict:
-    """Summary of the last :func:`run` in this process (points, seconds, points/s, undecided)."""
-    return dict(run.last_stats)

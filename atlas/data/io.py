@@ -254,6 +254,7 @@ def generate_to_file(
     ``undecided`` (after exact resolution), ``path``, ``bytes`` (file size).
     """
     sink = NetCDFSink(path, overwrite)
+    stats: dict = {}
     run(
         scene,
         sink,
@@ -263,7 +264,7 @@ def generate_to_file(
         tile_points=tile_points,
         progress=progress,
         history=history,
+        stats=stats,
     )
-    stats = dict(run.last_stats)
     stats.update(path=sink.path, bytes=os.path.getsize(sink.path))
     return stats

@@ -39,6 +39,8 @@ from functools import cached_property
 
 import numpy as np
 
+from atlas.data.outputs import ATLAS_OUTPUTS, OUTPUTS, in_group
+
 __all__ = [
     "Scene",
     "Axis",
@@ -55,27 +57,9 @@ ANGLES = ("beta1", "beta2", "alpha")
 MODEL = ("kappa", "q", "q1", "q2")
 
 #: which parameters each output depends on (SPEC §2); "model" = the spectral parameters of the scene
-OUTPUT_DEPENDS: dict[str, tuple[str, ...]] = {
-    "class_code": ("beta1", "beta2"),
-    "subclass_code": ("beta1", "beta2", "alpha"),
-    "consistent_FF": ("beta1", "beta2", "alpha"),
-    "consistent_SF": ("beta1", "beta2", "alpha"),
-    "consistent_FS": ("beta1", "beta2", "alpha"),
-    "consistent_SS": ("beta1", "beta2", "alpha"),
-    "stable_SF": ("beta1",),
-    "consistent_IF": ("beta1",),
-    "stable_FS": ("beta2",),
-    "consistent_FI": ("beta2",),
-    "cc_possible": ("beta1", "beta2"),
-    "stable_SS": ("beta1", "beta2", "model"),
-    "consistent_II": ("beta1", "beta2", "model"),
-    "stable_II": ("beta1", "beta2", "model"),
-    "spectral_abscissa": ("beta1", "beta2", "model"),
-    "model_dependent_SS": ("beta1", "beta2"),
-    "model_dependent_II": ("beta1", "beta2"),
-}
-ALL_OUTPUTS = tuple(OUTPUT_DEPENDS)
-_MODEL_DEPENDENT = ("model_dependent_SS", "model_dependent_II")
+OUTPUT_DEPENDS: dict[str, tuple[str, ...]] = {n: OUTPUTS[n].depends for n in ATLAS_OUTPUTS}
+ALL_OUTPUTS = ATLAS_OUTPUTS
+_MODEL_DEPENDENT = in_group("model_dependence")
 
 
 def _parse_number(text: str, name: str) -> float:

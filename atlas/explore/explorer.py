@@ -37,6 +37,14 @@ from atlas.core import exact, spectral
 from atlas.core import mechanics as mech
 from atlas.core import points as evaluate
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
+from atlas.data.outputs import (
+    OUTPUTS,
+    coord_attrs,
+    in_group,
+    to_storage,
+    undecided,
+    variable_attrs,
+)
 
 __all__ = [
     "beta_grid",
@@ -57,32 +65,17 @@ __all__ = [
 ]
 
 #: layers that depend on beta1 and/or beta2 only
-BETA_LAYERS = (
-    "class_code",
-    "cc_possible",
-    "stable_SF",
-    "consistent_IF",
-    "stable_FS",
-    "consistent_FI",
-)
+BETA_LAYERS = in_group("b1b2") + in_group("b1") + in_group("b2")
 #: layers that also need alpha (Table 1, subclass code)
-ALPHA_LAYERS = ("subclass_code", "consistent_FF", "consistent_SF", "consistent_FS", "consistent_SS")
-#: layers that depend on the model (kappa, q1, q2)
-SPECTRAL_LAYERS = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa", "margin_SS")
+ALPHA_LAYERS = in_group("b1b2a")
+#: layers that depend on the model (kappa, q1, q2): the spectral verdicts and the smooth SS margin
+SPECTRAL_LAYERS = in_group("spectral") + ("margin_SS",)
 LAYERS = BETA_LAYERS + ALPHA_LAYERS + SPECTRAL_LAYERS
 DEFAULT_LAYERS = ("class_code", "stable_SS", "consistent_II", "stable_II")
 #: resolutions offered by the widget (odd: no cell centre on beta2 = beta1 + pi)
 RESOLUTIONS = (65, 129, 257, 513, 1025)
 
-_DIMS = {
-    "class_code": ("beta1", "beta2"),
-    "cc_possible": ("beta1", "beta2"),
-    "stable_SF": ("beta1",),
-    "consistent_IF": ("beta1",),
-    "stable_FS": ("beta2",),
-    "consistent_FI": ("beta2",),
-}
-_TABLE1 = ("consistent_FF", "consistent_SF", "consistent_FS", "consistent_SS")
+_TABLE1 = tuple(k for k in ALPHA_LAYERS if k.startswith("consistent_"))
 _FLAGS = ("stable_SS", "consistent_II", "stable_II")
 
 
@@ -120,50 +113,6 @@ def _mech_kernel(names: tuple[str, ...]):
 @functools.cache
 def _margin_kernel():
     return jax.jit(spectral.ss_margin)
-
-
-def _settle_codes(out: dict, c1, s1, c2, s2, ca, sa) -> int:
-    """Replace undecided class/subclass codes and Table 1 flags by the exact reference, in place."""
-    und = {}
-    for k, v in out.items():
-        if k in ("class_code", "subclass_code"):
-            und[k] = v == UNDECIDED_CODE
-        elif k in _TABLE1:
-            und[k] = v == int(Consistency.UNDECIDED)
-    if not und:
-        return 0
-    shape = next(iter(out.values())).shape
-    anyu = np.zeros(shape, bool)
-    for u in und.values():
-        anyu |= u
-    idx = np.flatnonzero(anyu)
-    if idx.size == 0:
-        return 0
-    pts = [np.broadcast_to(a, shape).flat[idx] for a in (c1, s1, c2, s2)]
-    if ca is not None:
-        pts += [np.broadcast_to(a, shape).flat[idx] for a in (ca, sa)]
-    ref = exact.resolve_codes(*pts)
-    for k, u in und.items():
-        sel = u.flat[idx]
-        out[k].flat[idx[sel]] = np.asarray(ref[k])[sel]
-    return int(idx.size)
-
-
-def _storage(name: str, codes: np.ndarray, dtype) -> np.ndarray:
-    """Stored type of a layer, as in an atlas (SPEC §2, :mod:`atlas.data.engine`)."""
-    if name in ("stable_SF", "stable_FS"):
-        return codes == int(Verdict.STABLE)
-    if name in _TABLE1 or name in ("consistent_IF", "consistent_FI"):
-        return codes == 1
-    if name == "cc_possible":
-        return codes.astype(bool)
-    if name == "class_code":
-        return codes.astype(np.int8)
-    if name == "subclass_code":
-        return codes.astype(np.int16)
-    if name in _FLAGS:
-        return codes.astype(np.int8)
-    return codes.astype(dtype)  # spectral_abscissa, margin_SS
 
 
 def _check_model(kappa, q1, q2):
@@ -239,17 +188,14 @@ def compute_map(
     b = beta_grid(n) if beta is None else np.asarray(beta, np.float64).reshape(-1)
     c, s = (np.asarray(x, dt) for x in mech.direction(b, dt))
     C1, S1, C2, S2 = c[:, None], s[:, None], c[None, :], s[None, :]
-    coords = {
-        "beta1": ("beta1", b, {"units": "rad", "long_name": "direction angle of b1"}),
-        "beta2": ("beta2", b, {"units": "rad", "long_name": "direction angle of b2"}),
-        "kappa": ((), kappa, {"units": "1", "long_name": "stiffness ratio k1 |b1| / (k2 |b2|)"}),
-        "q1": ((), q1, {"units": "1", "long_name": "dimensionless damping q1_hat"}),
-        "q2": ((), q2, {"units": "1", "long_name": "dimensionless damping q2_hat"}),
-    }
+    coords = {k: (k, b, coord_attrs(k)) for k in ("beta1", "beta2")}
+    coords.update(
+        {k: ((), v, coord_attrs(k)) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2))}
+    )
     ca = sa = None
     if alpha is not None:
         ca, sa = (np.asarray(x, dt) for x in mech.direction(float(alpha), dt))
-        coords["alpha"] = ((), float(alpha), {"units": "rad", "long_name": "direction angle of a"})
+        coords["alpha"] = ((), float(alpha), coord_attrs("alpha"))
     out: dict[str, tuple] = {}
 
     # --- 1-D layers (one value per coordinate)
@@ -261,7 +207,7 @@ def compute_map(
     }
     for k, f in one_d.items():
         if k in layers:
-            out[k] = (_DIMS[k], _storage(k, np.asarray(f()), dt))
+            out[k] = (OUTPUTS[k].depends, to_storage(k, np.asarray(f()), dt))
 
     # --- angle layers on the plane
     names = tuple(k for k in layers if k in ("class_code", "cc_possible") + ALPHA_LAYERS)
@@ -276,13 +222,14 @@ def compute_map(
         full = (b.size, b.size)
         res = {k: np.broadcast_to(v, full).copy() for k, v in res.items()}
         if resolve:
-            _settle_codes(res, C1, S1, C2, S2, ca, sa)
+            masks = {k: undecided(k, v) for k, v in res.items()}
+            evaluate.settle_codes(res, masks, C1, S1, C2, S2, ca, sa)
         for k in names:
-            out[k] = (("beta1", "beta2"), _storage(k, res[k], dt))
+            out[k] = (("beta1", "beta2"), to_storage(k, res[k], dt))
 
     # --- spectral layers
     spec = tuple(k for k in layers if k in evaluate.SPECTRAL_NAMES)
-    attrs = {"n_undecided_fast": 0, "n_undecided": 0}
+    counts = {"undecided_before": 0, "undecided_after": 0}
     if spec:
         res = evaluate.spectral_points(
             C1,
@@ -296,39 +243,31 @@ def compute_map(
             dtype=dt,
             resolve=resolve,
             max_resolve=max_resolve,
+            stats=counts,
         )
-        counts = evaluate.last_counts()
-        attrs = {
-            "n_undecided_fast": counts["undecided_before"],
-            "n_undecided": counts["undecided_after"],
-        }
         for k in spec:
-            out[k] = (("beta1", "beta2"), _storage(k, res[k], dt))
+            out[k] = (("beta1", "beta2"), to_storage(k, res[k], dt))
     if "margin_SS" in layers:
         m = _margin_kernel()(
             *(jnp.asarray(a) for a in (C1, S1, C2, S2)),
             *(jnp.asarray(dt.type(v)) for v in (kappa, q1, q2)),
         )
-        out["margin_SS"] = (("beta1", "beta2"), np.asarray(m).astype(dt))
+        out["margin_SS"] = (("beta1", "beta2"), to_storage("margin_SS", m, dt))
     ds = xr.Dataset({k: out[k] for k in layers}, coords=coords)
     for k in layers:
-        ds[k].attrs.update(_layer_attrs(k))
-    ds.attrs.update(attrs, dtype=str(dt), seconds=time.perf_counter() - t0)
+        ds[k].attrs.update(variable_attrs(k))
+    if "margin_SS" in layers:
+        ds["margin_SS"].attrs["comment"] = _MARGIN_COMMENT
+    ds.attrs.update(
+        n_undecided_fast=counts["undecided_before"],
+        n_undecided=counts["undecided_after"],
+        dtype=str(dt),
+        seconds=time.perf_counter() - t0,
+    )
     return ds
 
 
-def _layer_attrs(name: str) -> dict:
-    from atlas.core.verdicts import flag_attrs
-
-    if name in ("stable_SS", "stable_II"):
-        return flag_attrs(Verdict, name.replace("_", " "))
-    if name == "consistent_II":
-        return flag_attrs(Consistency, "consistency of II")
-    if name == "margin_SS":
-        return {"units": "1", "long_name": "smooth SS margin (zero on the curved SS boundary)"}
-    if name == "spectral_abscissa":
-        return {"units": "1", "long_name": "max Re eigenvalue of M (time scaled by contact 2)"}
-    return {"long_name": name.replace("_", " ")}
+_MARGIN_COMMENT = "atlas.core.spectral.ss_margin: zero on the curved SS boundary"
 
 
 # --------------------------------------------------------------------------- point inspector
@@ -511,9 +450,7 @@ def _category_colors(name: str) -> dict:
     if name in ("class_code", "subclass_code"):
         import matplotlib
 
-        codes = list(mech.ALL_CLASSES)
-        if name == "subclass_code":
-            codes = [10 * c + k for c in codes for k in range(1, 7)]
+        codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]  # CF flags, SPEC §2
         cmap = matplotlib.colormaps["tab20"]
         cols = {c: matplotlib.colors.to_hex(cmap(i % 20)) for i, c in enumerate(codes)}
         cols[0] = "#ffffff"

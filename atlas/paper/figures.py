@@ -35,6 +35,7 @@ from atlas.core import mechanics, spectral
 from atlas.core import points as evaluate
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.io import savefig
+from atlas.data.outputs import OUTPUTS, coord_attrs, to_storage, undecided, variable_attrs
 
 __all__ = [
     "evaluate_points",
@@ -73,10 +74,10 @@ def evaluate_points(
     ``spectral_abscissa`` [(time of contact 2)^-1], optionally ``margin_SS``; ints ``n_resolved``
     (points settled exactly) and ``n_undecided`` (left undecided).
     """
+    counts: dict = {}
     res = evaluate.spectral_points(
-        c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve
+        c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve, stats=counts
     )
-    counts = evaluate.last_counts()
     if margin:
         args = [jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2)]
         shape = res["stable_SS"].shape
@@ -172,102 +173,83 @@ def stability_map(
     Returns an ``xarray.Dataset`` with the SPEC §2 variables (``class_code``, ``stable_SF``,
     ``stable_FS``, ``consistent_IF``, ``consistent_FI``, ``cc_possible``, ``stable_SS``,
     ``consistent_II``, ``stable_II``, ``spectral_abscissa``) plus the smooth margins
-    ``margin_SS``, ``margin_II_consistent``, ``margin_II_stable`` used for the dashed contours.
-    ``kappa``, ``q1``, ``q2`` are scalar coordinates.
+    ``margin_SS``, ``margin_II_consistent``, ``margin_II_stable`` used for the dashed contours,
+    with the stored types and attributes of :mod:`atlas.data.outputs` (an atlas slice: ``stable_SF``
+    is ``True`` iff stable).  ``kappa``, ``q1``, ``q2`` are scalar coordinates.
     """
     import xarray as xr
-
-    from atlas.core.verdicts import flag_attrs
 
     b = _offset_grid(n)
     c, s = mechanics.direction(b)
     C1, S1 = c[:, None], s[:, None]
     C2, S2 = c[None, :], s[None, :]
     ev = evaluate_points(C1, S1, C2, S2, kappa, q1, q2, margin=True)
-    cls = np.asarray(
-        mechanics.class_code(jnp.asarray(C1), jnp.asarray(S1), jnp.asarray(C2), jnp.asarray(S2))
-    )
-    dims = ("beta1", "beta2")
-    ds = xr.Dataset(
-        coords={
-            "beta1": ("beta1", b, {"units": "rad", "long_name": "direction of b1"}),
-            "beta2": ("beta2", b, {"units": "rad", "long_name": "direction of b2"}),
-            "kappa": ((), float(kappa), {"units": "1", "long_name": "k1|b1|/(k2|b2|)"}),
-            "q1": ((), float(q1), {"units": "1", "long_name": "q1|b1|/sqrt(k2|b2|)"}),
-            "q2": ((), float(q2), {"units": "1", "long_name": "q2|b2|/sqrt(k2|b2|)"}),
-        }
-    )
-    ds["class_code"] = (dims, cls.astype(np.int8), {"long_name": "class code ij (0 = degenerate)"})
-    ds["stable_SF"] = (
-        "beta1",
-        np.asarray(mechanics.stable_SF(jnp.asarray(c))),
-        flag_attrs(Verdict, "stability of SF"),
-    )
-    ds["stable_FS"] = (
-        "beta2",
-        np.asarray(mechanics.stable_FS(jnp.asarray(s))),
-        flag_attrs(Verdict, "stability of FS"),
-    )
-    ds["consistent_IF"] = (
-        "beta1",
-        np.asarray(mechanics.consistent_IF(jnp.asarray(c), jnp.asarray(s))).astype(bool),
-        {"long_name": "IF impact without collision consistent (and stable)"},
-    )
-    ds["consistent_FI"] = (
-        "beta2",
-        np.asarray(mechanics.consistent_FI(jnp.asarray(c), jnp.asarray(s))).astype(bool),
-        {"long_name": "FI impact without collision consistent (and stable)"},
-    )
-    ds["cc_possible"] = (
-        dims,
-        np.asarray(mechanics.cc_possible(jnp.asarray(C1), jnp.asarray(S2))).astype(bool)
-        & np.ones((n, n), bool),
-        {"long_name": "necessary condition for CC inverse chattering"},
-    )
-    ds["stable_SS"] = (dims, ev["stable_SS"], flag_attrs(Verdict, "stability of SS"))
-    ds["consistent_II"] = (dims, ev["consistent_II"], flag_attrs(Consistency, "consistency of II"))
-    ds["stable_II"] = (dims, ev["stable_II"], flag_attrs(Verdict, "stability of II"))
-    ds["spectral_abscissa"] = (
-        dims,
-        ev["spectral_abscissa"],
-        {"units": "1", "long_name": "max Re eigenvalue of M (scaled time)"},
-    )
+    raw = {**_mechanics_layers(c, s), **{k: ev[k] for k in evaluate.SPECTRAL_NAMES}}
     if margins:
-        ds["margin_SS"] = (
-            dims,
-            _ss_margin_full(ev["margin_SS"], C1, S2, kappa, q1, q2),
-            {
-                "units": "1",
-                "long_name": "SS margin: min(ss_margin, a2 or a3 "
-                "normalised); zero on model-dependent "
-                "boundaries",
-            },
-        )
-        if q1 == 0 and q2 == 0:
-            mii = ev["margin_SS"]  # the mu-discriminant (see module docstring)
-        else:
-            a3, a2, a1, a0 = (
-                np.asarray(x)
-                for x in spectral.coefficients(
-                    *(jnp.asarray(v) for v in (C1, S1, C2, S2)),
-                    jnp.asarray(float(kappa)),
-                    jnp.asarray(float(q1)),
-                    jnp.asarray(float(q2)),
-                )
-            )
-            mii = np.broadcast_to(_quartic_discriminant(a3, a2, a1, a0), (n, n))
-        ds["margin_II_consistent"] = (
-            dims,
-            np.array(mii),
-            {"units": "1", "long_name": "scaled discriminant (zero where II consistency changes)"},
-        )
-        ds["margin_II_stable"] = (
-            dims,
-            _ii_root_margin(C1, S1, C2, S2, kappa, q1, q2),
-            {"units": "1", "long_name": "Re(l_II) - max Re(other roots)"},
-        )
+        raw.update(_margin_layers(ev["margin_SS"], C1, S1, C2, S2, kappa, q1, q2))
+    coords = {k: (k, b, coord_attrs(k)) for k in ("beta1", "beta2")}
+    coords.update({k: ((), float(v), coord_attrs(k)) for k, v in zip(_MODEL, (kappa, q1, q2))})
+    data = {
+        k: (_map_dims(k), to_storage(k, v, np.float64), variable_attrs(k)) for k, v in raw.items()
+    }
+    ds = xr.Dataset(data, coords=coords)
+    if margins:
+        ds["margin_SS"].attrs["comment"] = _MARGIN_SS_COMMENT
     ds.attrs.update(n_resolved=ev["n_resolved"], n_undecided=ev["n_undecided"])
     return ds
+
+
+_MODEL = ("kappa", "q1", "q2")
+_MARGIN_SS_COMMENT = (
+    "min(atlas.core.spectral.ss_margin, a2 (q = 0) or a3 (damped) normalised): "
+    "zero on every model-dependent SS boundary"
+)
+
+
+def _map_dims(name: str) -> tuple[str, ...]:
+    """Dimensions of an output on the map: its angles (the model is a scalar coordinate)."""
+    return tuple(d for d in OUTPUTS[name].depends if d in ("beta1", "beta2"))
+
+
+def _mechanics_layers(c, s) -> dict:
+    """Raw codes of the model-independent layers on the offset grid (class codes settled exactly)."""
+    n = c.size
+    C1, S1, C2, S2 = c[:, None], s[:, None], c[None, :], s[None, :]
+    j = [jnp.asarray(a) for a in (C1, S1, C2, S2)]
+    raw = {
+        "class_code": np.broadcast_to(np.asarray(mechanics.class_code(*j)), (n, n)).copy(),
+        "stable_SF": np.asarray(mechanics.stable_SF(jnp.asarray(c))),
+        "stable_FS": np.asarray(mechanics.stable_FS(jnp.asarray(s))),
+        "consistent_IF": np.asarray(mechanics.consistent_IF(jnp.asarray(c), jnp.asarray(s))),
+        "consistent_FI": np.asarray(mechanics.consistent_FI(jnp.asarray(c), jnp.asarray(s))),
+        "cc_possible": np.broadcast_to(np.asarray(mechanics.cc_possible(j[0], j[3])), (n, n)),
+    }
+    masks = {"class_code": undecided("class_code", raw["class_code"])}
+    evaluate.settle_codes(raw, masks, C1, S1, C2, S2)
+    return raw
+
+
+def _margin_layers(ss_margin, C1, S1, C2, S2, kappa, q1, q2) -> dict:
+    """The smooth margins whose zero contours are drawn as the model-dependent boundaries."""
+    n = C1.size
+    if q1 == 0 and q2 == 0:
+        mii = ss_margin  # the mu-discriminant (see module docstring)
+    else:
+        a3, a2, a1, a0 = (
+            np.asarray(x)
+            for x in spectral.coefficients(
+                *(jnp.asarray(v) for v in (C1, S1, C2, S2)),
+                jnp.asarray(float(kappa)),
+                jnp.asarray(float(q1)),
+                jnp.asarray(float(q2)),
+            )
+        )
+        mii = np.broadcast_to(_quartic_discriminant(a3, a2, a1, a0), (n, n))
+    return {
+        "margin_SS": _ss_margin_full(ss_margin, C1, S2, kappa, q1, q2),
+        "margin_II_consistent": np.array(mii),
+        "margin_II_stable": _ii_root_margin(C1, S1, C2, S2, kappa, q1, q2),
+    }
 
 
 # --------------------------------------------------------------------------- plotting helpers

@@ -13,8 +13,8 @@ import pytest
 
 from atlas.core import mechanics as mech
 from atlas.core import spectral
-from atlas.core.verdicts import Consistency, Verdict
-from atlas.data.engine import block_shape, generate, last_stats, tile_blocks
+from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
+from atlas.data.engine import block_shape, generate, tile_blocks
 from atlas.data.scene import ALL_OUTPUTS, Scene, builtin
 
 TILE = 1024
@@ -181,14 +181,19 @@ def test_unresolved_counts_reported(tiny):
 
 @pytest.mark.skipif(not HAVE_EXACT, reason="atlas.core.exact is not importable yet")
 def test_resolve_leaves_no_undecided(fig1_small):
-    ds = generate(tiny_scene(), tile_points=TILE, resolve=True)
+    st = {}
+    ds = generate(tiny_scene(), tile_points=TILE, resolve=True, stats=st)
     assert ds.attrs["undecided_fast"] > 0  # the fast path did leave some
     assert ds.attrs["undecided_after_resolve"] == 0
     for n in ("stable_SS", "consistent_II", "stable_II"):
         assert not (ds[n].values == Consistency.UNDECIDED).any()
-    assert not (ds.class_code.values == -1).any() and not (ds.subclass_code.values == -1).any()
+    assert not (ds.class_code.values == UNDECIDED_CODE).any()
+    assert not (ds.subclass_code.values == UNDECIDED_CODE).any()
     assert fig1_small.attrs["undecided_after_resolve"] == 0
-    assert last_stats()["undecided"] == 0
+    # the run's summary is returned to the caller, not kept in a module global
+    assert st["undecided"] == 0 and st["undecided_fast"] == ds.attrs["undecided_fast"]
+    assert st["points"] == tiny_scene().points() and st["resolved_points"] > 0
+    assert st["exact_failures"] == []
 
 
 def test_eig_method_and_float32():

@@ -1,0 +1,159 @@
+"""The output registry: every Dataset the package builds takes names, types and attributes from it.
+
+Reference values are the data contract (SPEC §2) and the verdict enumerations, not the registry
+itself: a stored ``stable_SF`` is ``True`` iff the verdict is *stable* (neutral stored as False), a
+stored Table 1 flag is ``True`` iff consistent, undecided verdict flags are 3 and undecided codes -1.
+"""
+
+import numpy as np
+import pytest
+
+from atlas.core import verdicts
+from atlas.core.verdicts import Consistency, Verdict
+from atlas.data import outputs
+from atlas.data.engine import generate
+from atlas.data.scene import ALL_OUTPUTS, Scene
+from atlas.explore.explorer import LAYERS, beta_grid, compute_map
+from atlas.paper.figures import stability_map
+
+N = 15  # odd: no cell centre on beta2 = beta1 + pi
+GRID = beta_grid(N)  # the offset grid of stability_map
+ALPHA, KAPPA, Q1, Q2 = 0.7, 0.5, 0.3, 0.1
+#: attributes a builder adds to the registry's: run diagnostics and the margin's recipe
+EXTRA = {"undecided_fast", "undecided", "comment"}
+
+
+def _same(a: dict, b: dict) -> bool:
+    if a.keys() != b.keys():
+        return False
+    return all(
+        np.array_equal(a[k], b[k]) if isinstance(a[k], np.ndarray) else a[k] == b[k] for k in a
+    )
+
+
+@pytest.fixture(scope="module")
+def atlas_full():
+    """Every atlas output (alpha and the model varied, so model dependence is defined)."""
+    s = Scene(beta1="0:2pi:6", beta2="0:2pi:5", alpha="0.3,1.1", kappa="0.5,2", q="0,0.3")
+    return generate(s, tile_points=1024)
+
+
+@pytest.fixture(scope="module")
+def atlas_slice():
+    """The atlas on the figure's grid at one model: comparable with the map and the figure."""
+    s = Scene(beta1=GRID, beta2=GRID, alpha=ALPHA, kappa=KAPPA, q1=Q1, q2=Q2)
+    return generate(s, tile_points=1024)
+
+
+@pytest.fixture(scope="module")
+def explorer_map():
+    return compute_map(KAPPA, Q1, Q2, beta=GRID, layers=LAYERS, alpha=ALPHA)
+
+
+@pytest.fixture(scope="module")
+def figure_map():
+    return stability_map(N, KAPPA, Q1, Q2)
+
+
+def test_registry_lists_the_spec_outputs_in_order():
+    assert outputs.ATLAS_OUTPUTS == ALL_OUTPUTS
+    spec = (
+        "class_code subclass_code consistent_FF consistent_SF consistent_FS consistent_SS "
+        "stable_SF consistent_IF stable_FS consistent_FI cc_possible stable_SS consistent_II "
+        "stable_II spectral_abscissa model_dependent_SS model_dependent_II"
+    ).split()
+    assert list(ALL_OUTPUTS) == spec
+
+
+def test_every_output_appears_with_its_attributes(atlas_full):
+    s = Scene(beta1="0:2pi:6", beta2="0:2pi:5", alpha="0.3,1.1", kappa="0.5,2", q="0,0.3")
+    assert set(atlas_full.data_vars) == set(outputs.ATLAS_OUTPUTS)
+    for name in outputs.ATLAS_OUTPUTS:
+        v = atlas_full[name]
+        reg = outputs.variable_attrs(name)
+        assert _same({k: v.attrs[k] for k in reg}, reg), name
+        assert set(v.attrs) - set(reg) <= EXTRA, name
+        assert v.dims == s.output_dims(name)
+        assert v.dtype == outputs.storage_dtype(name, "float64")
+    for name, c in atlas_full.coords.items():
+        assert dict(c.attrs) == outputs.coord_attrs(name)
+
+
+def test_flag_attributes_are_cf_consistent():
+    for name, o in outputs.OUTPUTS.items():
+        a = outputs.variable_attrs(name)
+        assert a["long_name"]
+        if "flag_values" in a:
+            assert len(a["flag_meanings"].split()) == len(a["flag_values"]), name
+        if o.undecided is not None and o.storage != "bool":
+            # undecided values are stored, so the flags must name them
+            i = list(a["flag_values"]).index(o.undecided)
+            assert a["flag_meanings"].split()[i] == "undecided", name
+        if o.storage == "float":
+            assert a["units"] == "1"
+
+
+def test_undecided_encodings():
+    assert verdicts.UNDECIDED_FLAG == int(Verdict.UNDECIDED) == int(Consistency.UNDECIDED) == 3
+    assert verdicts.UNDECIDED_CODE == -1
+    assert outputs.OUTPUTS["class_code"].undecided == -1
+    assert outputs.OUTPUTS["stable_SS"].undecided == 3
+    codes = np.array([-1, 0, 11, 46])
+    assert outputs.undecided("class_code", codes).tolist() == [True, False, False, False]
+    assert not outputs.undecided("stable_SF", np.array([0, 1, 2])).any()
+
+
+def test_storage_follows_the_contract():
+    # SPEC §2: stable_SF bool, True iff stable (neutral b11 = 0 stored as not stable)
+    v = np.array([0, 1, 2], np.int8)
+    assert outputs.to_storage("stable_SF", v, "float64").tolist() == [False, True, False]
+    # Table 1 flags: True iff consistent; an undecided flag (left by resolve=False) is False
+    c = np.array([0, 1, 3], np.int8)
+    assert outputs.to_storage("consistent_SS", c, "float64").tolist() == [False, True, False]
+    assert outputs.to_storage("stable_SS", v, "float64").dtype == np.int8
+    assert outputs.to_storage("subclass_code", np.array([466]), "float64").dtype == np.int16
+    assert outputs.to_storage("spectral_abscissa", np.zeros(2), "float32").dtype == np.float32
+
+
+def test_groups_share_their_parameters():
+    for g in outputs.GROUPS:
+        deps = {outputs.OUTPUTS[n].depends for n in outputs.in_group(g)}
+        assert len(deps) == 1, g
+    for o in outputs.OUTPUTS.values():
+        for n in o.needs:
+            assert outputs.OUTPUTS[n].group == "spectral"
+
+
+def test_builders_agree_on_shared_variables_and_coords(atlas_slice, explorer_map, figure_map):
+    built = {"atlas": atlas_slice, "explorer": explorer_map, "figure": figure_map}
+    for a, da in built.items():
+        for b, db in built.items():
+            if a >= b:
+                continue
+            shared = set(da.data_vars) & set(db.data_vars)
+            assert shared, (a, b)
+            for k in shared:
+                ka = {x: y for x, y in da[k].attrs.items() if x not in EXTRA}
+                kb = {x: y for x, y in db[k].attrs.items() if x not in EXTRA}
+                assert _same(ka, kb), (a, b, k)
+                assert da[k].dtype == db[k].dtype, (a, b, k)
+                assert da[k].dims == db[k].dims, (a, b, k)
+            for k in set(da.coords) & set(db.coords):
+                assert dict(da[k].attrs) == dict(db[k].attrs), (a, b, k)
+    assert {"stable_SF", "class_code", "stable_II"} <= set(figure_map.data_vars)
+
+
+def test_map_and_figure_equal_the_atlas_slice(atlas_slice, explorer_map, figure_map):
+    """The same grid and model give the same stored values, whoever builds the Dataset."""
+    for ds in (explorer_map, figure_map):
+        for k in set(ds.data_vars) & set(atlas_slice.data_vars):
+            np.testing.assert_array_equal(ds[k].values, atlas_slice[k].values, err_msg=k)
+
+
+def test_display_margins_are_not_atlas_outputs(figure_map, explorer_map):
+    for m in ("margin_SS", "margin_II_consistent", "margin_II_stable"):
+        assert m not in outputs.ATLAS_OUTPUTS
+        assert m in figure_map
+    assert (
+        explorer_map["margin_SS"].attrs["long_name"] == figure_map["margin_SS"].attrs["long_name"]
+    )
