@@ -65,7 +65,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for add in (_add_generate, _add_paper, _add_simulate, _add_table, _add_bench):
+    for add in (_add_generate, _add_mechanism, _add_paper, _add_simulate, _add_table, _add_bench):
         add(sub)
     return p
 
@@ -153,6 +153,30 @@ def _add_distributed(g) -> None:
         metavar="N",
         help="beta2 values per tile: 2-D (beta1, beta2) tiles (default: see --slab)",
     )
+
+
+def _add_mechanism(sub) -> None:
+    from atlas.data.mechanisms import MECHANISM_SCENES
+
+    pm = sub.add_parser(
+        "mechanism",
+        help="atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
+        description="Sweep a built-in body over its physical axes into a CF netCDF4 file: the "
+        "invariants, B and a of eq. (1), and every verdict.  Without --out, print a summary.",
+        epilog="; ".join(
+            f"{n}: " + ", ".join(f"--{a} [{u}] (default {d})" for a, (d, u, *_r) in sc.axes.items())
+            for n, sc in MECHANISM_SCENES.items()
+        ),
+    )
+    pm.add_argument("name", choices=sorted(MECHANISM_SCENES), help="built-in mechanism scene")
+    axes = sorted({a for sc in MECHANISM_SCENES.values() for a in sc.axes})
+    for a in axes:
+        pm.add_argument(
+            f"--{a}", metavar="RANGE", help="physical axis (START:STOP:N, values, scalar)"
+        )
+    pm.add_argument("--out", metavar="FILE.nc", help="output file")
+    pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")
 
 
 def _add_paper(sub) -> None:
@@ -393,6 +417,7 @@ def _force_progress() -> bool:
 
 _DISPATCH = {
     "paper": ("atlas.paper", "run"),
+    "mechanism": ("atlas.data.mechanisms", "run_cli"),
     "simulate": ("atlas.paper.figures_dynamics", "run_cli"),
     "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),

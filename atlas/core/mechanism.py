@@ -52,11 +52,20 @@ from functools import cached_property
 import jax
 import numpy as np
 
-from atlas.core import exact, points
 from atlas.core import mechanics as mech
+from atlas.core import points
 from atlas.core.verdicts import UNDECIDED_CODE, Verdict
 
-__all__ = ["Mechanism", "mobility", "free_acceleration", "tangent", "verdicts_at", "VERDICT_NAMES"]
+__all__ = [
+    "Mechanism",
+    "BODIES",
+    "body_invariants",
+    "mobility",
+    "free_acceleration",
+    "tangent",
+    "verdicts_at",
+    "VERDICT_NAMES",
+]
 
 #: the atlas outputs a single mechanism has (SPEC §2; the ``model_dependent_*`` reductions need
 #: several model samples and are not among them)
@@ -311,47 +320,120 @@ class Mechanism:
     # --- built-in bodies -------------------------------------------------------------------
 
     @classmethod
-    def ladder(cls, *, L=4.0, theta=math.acos(0.25), m=15.0, mu_floor=0.4, mu_wall=0.4, **kw):
-        """A uniform ladder (rod, ``I = m L^2 / 12``) on a floor (contact 1, its foot) leaning on
-        a wall on its left (contact 2, its top), at ``theta`` [rad] from the floor, slipping down:
-        the foot slides away from the wall (``s1 = +1`` along ``t1 = (1, 0)``), the top slides down
-        (``s2 = +1`` along ``t2 = (0, -1)``).  Default geometry: the 4-to-1 rule for leaning
-        ladders (foot one quarter of the length from the wall, ``cos theta = 1/4``, US OSHA
-        29 CFR 1926.1053(b)(5)(i)); mass and friction are illustrative.  The foot alone has
-        Painleve's paradox (``b11 < 0``) iff ``mu_floor > (1 + 3 cos^2) / (3 sin cos)``, at least
-        4/3 (at ``tan theta = 2``): the classical rod (Genot & Brogliato 1999)."""
-        c, s = math.cos(theta), math.sin(theta)
-        half = L / 2
-        body = dict(m=m, I=m * L * L / 12, r1=(half * c, -half * s), r2=(-half * c, half * s))
-        body.update(n1=(0.0, 1.0), n2=(1.0, 0.0), mu1=mu_floor, mu2=mu_wall, name="ladder")
-        return cls(**{**body, **kw})
+    def ladder(cls, **kw):
+        """A leaning ladder (:func:`ladder_body`; keyword arguments of that function or of the
+        dataclass)."""
+        return cls._built(ladder_body, kw)
 
     @classmethod
-    def two_legged(cls, *, d=0.2, h=0.5, m=5.0, I=None, mu1=0.3, mu2=0.3, **kw):
-        """A body on two legs on a floor (a chair, a two-legged rod, a biped's feet): leg 1 at
-        ``(-d, -h)``, leg 2 at ``(+d, -h)`` from the centre of mass, both sliding along ``+x``
-        (leg 2 leads).  ``I`` defaults to a uniform ``2d x 2h`` plate, ``m (d^2 + h^2) / 3``.
-        The leading leg has Painleve's paradox (``b22 < 0``) iff ``mu2 h d > I/m + d^2`` (for the
-        plate: ``mu2 > (4 d^2 + h^2) / (3 h d) >= 4/3``).  Illustrative numbers (a chair)."""
-        if I is None:
-            I = m * (d * d + h * h) / 3
-        body = dict(m=m, I=I, r1=(-d, -h), r2=(d, -h), n1=(0.0, 1.0), n2=(0.0, 1.0))
-        return cls(**{**body, "mu1": mu1, "mu2": mu2, "name": "two_legged", **kw})
+    def two_legged(cls, **kw):
+        """A body on two legs on a floor (:func:`two_legged_body`)."""
+        return cls._built(two_legged_body, kw)
 
     @classmethod
-    def leaning_rod(
-        cls, *, L=1.0, theta=math.pi / 6, e=0.25, m=1.0, mu_floor=0.5, mu_edge=0.5, **kw
-    ):
-        """A uniform rod (``I = m L^2 / 12``) with its lower end on the floor (contact 1) resting on
-        a table edge (contact 2) at distance ``e`` [m] above the centre along the rod, at ``theta``
-        from the floor, slipping down: the foot slides away (``+x``), the rod slides down over the
-        edge (the edge's normal is perpendicular to the rod).  Illustrative numbers."""
-        c, s = math.cos(theta), math.sin(theta)
-        half = L / 2
-        body = dict(m=m, I=m * L * L / 12, r1=(half * c, -half * s), r2=(-e * c, e * s))
-        body.update(n1=(0.0, 1.0), n2=(s, c), mu1=mu_floor, mu2=mu_edge, name="leaning_rod")
-        body.update(s1=(1.0, 0.0), s2=(c, -s))
-        return cls(**{**body, **kw})
+    def leaning_rod(cls, **kw):
+        """A rod on the floor resting on a table edge (:func:`leaning_rod_body`)."""
+        return cls._built(leaning_rod_body, kw)
+
+    @classmethod
+    def _built(cls, body, kw):
+        names = body.__code__.co_varnames[: body.__code__.co_kwonlyargcount]
+        geometry = {k: kw.pop(k) for k in list(kw) if k in names}
+        return cls(**{**body(**geometry), **kw})
+
+
+# --- built-in bodies: array-friendly geometry (numpy broadcasting over any parameter) ----------
+
+
+def ladder_body(*, L=4.0, theta=math.acos(0.25), m=15.0, mu_floor=0.4, mu_wall=0.4) -> dict:
+    """A uniform ladder (rod, ``I = m L^2 / 12``) on a floor (contact 1, its foot) leaning on a
+    wall on its left (contact 2, its top), at ``theta`` [rad] from the floor, slipping down: the
+    foot slides away from the wall (``s1 = +1`` along ``t1 = (1, 0)``), the top slides down
+    (``s2 = +1`` along ``t2 = (0, -1)``).  Default geometry: the 4-to-1 rule for leaning ladders
+    (foot one quarter of the length from the wall, ``cos theta = 1/4``, US OSHA 29 CFR
+    1926.1053(b)(5)(i)); mass and friction are illustrative.  The foot alone has Painleve's paradox
+    (``b11 < 0``) iff ``mu_floor > (1 + 3 cos^2) / (3 sin cos)``, at least 4/3 (at
+    ``tan theta = 2``): the classical rod (Genot & Brogliato 1999)."""
+    c, s, half = np.cos(theta), np.sin(theta), L / 2
+    return dict(
+        m=m,
+        I=m * L * L / 12,
+        r1=(half * c, -half * s),
+        r2=(-half * c, half * s),
+        n1=(0.0, 1.0),
+        n2=(1.0, 0.0),
+        mu1=mu_floor,
+        mu2=mu_wall,
+        s1=1,
+        s2=1,
+        name="ladder",
+    )
+
+
+def two_legged_body(*, d=0.2, h=0.5, m=5.0, I=None, mu1=0.3, mu2=0.3) -> dict:
+    """A body on two legs on a floor (a chair, a two-legged rod, a biped's feet): leg 1 at
+    ``(-d, -h)``, leg 2 at ``(+d, -h)`` from the centre of mass, both sliding along ``+x`` (leg 2
+    leads).  ``I`` defaults to a uniform ``2d x 2h`` plate, ``m (d^2 + h^2) / 3``.  The leading leg
+    has Painleve's paradox (``b22 < 0``) iff ``mu2 h d > I/m + d^2`` (for the plate:
+    ``mu2 > (4 d^2 + h^2) / (3 h d) >= 4/3``).  Illustrative numbers (a chair)."""
+    if I is None:
+        I = m * (d * d + h * h) / 3
+    return dict(
+        m=m,
+        I=I,
+        r1=(-d, -h),
+        r2=(d, -h),
+        n1=(0.0, 1.0),
+        n2=(0.0, 1.0),
+        mu1=mu1,
+        mu2=mu2,
+        s1=1,
+        s2=1,
+        name="two_legged",
+    )
+
+
+def leaning_rod_body(*, L=1.0, theta=math.pi / 6, e=0.25, m=1.0, mu_floor=0.5, mu_edge=0.5) -> dict:
+    """A uniform rod (``I = m L^2 / 12``) with its lower end on the floor (contact 1) resting on a
+    table edge (contact 2) at distance ``e`` [m] above the centre along the rod, at ``theta`` from
+    the floor, slipping down: the foot slides away (``+x``), the rod slides down over the edge (the
+    edge's normal ``(sin, cos)`` is perpendicular to the rod, its tangent ``(cos, -sin)`` points
+    down the rod: ``s2 = +1``).  Illustrative numbers."""
+    c, s, half = np.cos(theta), np.sin(theta), L / 2
+    return dict(
+        m=m,
+        I=m * L * L / 12,
+        r1=(half * c, -half * s),
+        r2=(-e * c, e * s),
+        n1=(0.0, 1.0),
+        n2=(s, c),
+        mu1=mu_floor,
+        mu2=mu_edge,
+        s1=1,
+        s2=1,
+        name="leaning_rod",
+    )
+
+
+def body_invariants(body: dict, k1=1e5, k2=1e5, c1=0.0, c2=0.0) -> dict:
+    """Invariants (SPEC §1) of a body given as arrays (the geometry functions above): ``beta1,
+    beta2, alpha`` [rad, in [0, 2 pi)], ``kappa, q1, q2`` [1], and ``B`` [1/kg], ``a`` [m/s^2] as
+    ``b11 ... a2``; every entry broadcasts over the parameters' shapes.  ``g = (0, -9.81)``."""
+    r, n = (body["r1"], body["r2"]), (body["n1"], body["n2"])
+    (b11, b12), (b21, b22) = mobility(
+        body["m"], body["I"], r, n, (body["mu1"], body["mu2"]), (body["s1"], body["s2"])
+    )
+    a1, a2 = free_acceleration(body["m"], body["I"], r, n, (0.0, -9.81))
+    ang = lambda x, y: np.mod(np.arctan2(y, x), _TWO_PI) + 0.0  # noqa: E731
+    nb1, nb2 = np.hypot(b11, b21), np.hypot(b12, b22)
+    scale = np.sqrt(k2 * nb2)
+    out = dict(beta1=ang(b11, b21), beta2=ang(b12, b22), alpha=ang(a1, a2))
+    out.update(kappa=k1 * nb1 / (k2 * nb2), q1=c1 * nb1 / scale, q2=c2 * nb2 / scale)
+    out.update(b11=b11, b12=b12, b21=b21, b22=b22, a1=a1, a2=a2)
+    return {k: np.asarray(v, np.float64) for k, v in out.items()}
+
+
+BODIES = {"ladder": ladder_body, "two_legged": two_legged_body, "leaning_rod": leaning_rod_body}
 
 
 def _angle(x, y) -> float:
@@ -380,14 +462,10 @@ _CONSISTENCY = ("consistent_FF", "consistent_SF", "consistent_FS", "consistent_S
 
 
 def _settle_codes(codes: dict, dirs: list) -> None:
-    """Replace undecided class/subclass/Table 1 codes by :func:`atlas.core.exact.point_codes`."""
-    und = (codes["class_code"] == UNDECIDED_CODE) | (codes["subclass_code"] == UNDECIDED_CODE)
-    for k in _CONSISTENCY:
-        und |= codes[k] == int(Verdict.UNDECIDED)
-    for i in np.flatnonzero(und):
-        ref = exact.point_codes(*(float(d.reshape(-1)[i]) for d in dirs))
-        for k, v in ref.items():
-            codes[k].reshape(-1)[i] = v
+    """Undecided class/subclass/Table 1 codes settled exactly (:func:`atlas.core.points.settle_codes`)."""
+    undecided = {k: codes[k] == UNDECIDED_CODE for k in ("class_code", "subclass_code")}
+    undecided.update({k: codes[k] == int(Verdict.UNDECIDED) for k in _CONSISTENCY})
+    points.settle_codes(codes, undecided, *dirs)
 
 
 def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64") -> dict:

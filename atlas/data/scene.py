@@ -39,6 +39,7 @@ from functools import cached_property
 
 import numpy as np
 
+from atlas.core.mechanics import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
 from atlas.data.outputs import ATLAS_OUTPUTS, OUTPUTS, in_group
 
 __all__ = [
@@ -171,50 +172,6 @@ def _finish(vals: np.ndarray, is_dim: bool, name: str):
     if name in ("q", "q1", "q2") and np.any(vals < 0):
         raise ValueError(f"{name}: must be >= 0, got {float(np.min(vals))}")
     return vals, is_dim
-
-
-def invariants(k1, k2, q1=0.0, q2=0.0, b1=1.0, b2=1.0) -> dict:
-    """Physical contact parameters -> invariants (SPEC §1).
-
-    Parameters
-    ----------
-    k1, k2 : float
-        Contact stiffnesses [force/length], ``> 0``.
-    q1, q2 : float
-        Contact damping coefficients [force time/length], ``>= 0``.
-    b1, b2 : float
-        Norms ``|b_1|``, ``|b_2|`` of the columns of ``B`` [1/mass], ``> 0``.
-
-    Returns
-    -------
-    dict
-        ``kappa = k1 |b1| / (k2 |b2|)``, ``q1 = q1 |b1| / sqrt(k2 |b2|)``,
-        ``q2 = q2 |b2| / sqrt(k2 |b2|)`` (time scaled by contact 2).  Paper Fig. 2
-        (``k = (100, 200)``, ``q = (20, 20)``, ``|b| = 1``) gives ``kappa = 0.5``,
-        ``q1 = q2 = sqrt(2)``.
-    """
-    vals = {"k1": k1, "k2": k2, "q1": q1, "q2": q2, "b1": b1, "b2": b2}
-    out = {}
-    for key, v in vals.items():
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            raise ValueError(f"{key}: cannot interpret {v!r} as a number") from None
-        if not math.isfinite(x):
-            raise ValueError(f"{key}: must be finite, got {v!r}")
-        if key in ("q1", "q2"):
-            if x < 0:
-                raise ValueError(f"{key}: damping must be >= 0, got {x}")
-        elif x <= 0:
-            what = "stiffness" if key.startswith("k") else "|b|"
-            raise ValueError(f"{key}: {what} must be > 0, got {x}")
-        out[key] = x
-    scale = math.sqrt(out["k2"] * out["b2"])
-    return {
-        "kappa": out["k1"] * out["b1"] / (out["k2"] * out["b2"]),
-        "q1": out["q1"] * out["b1"] / scale,
-        "q2": out["q2"] * out["b2"] / scale,
-    }
 
 
 @dataclasses.dataclass(frozen=True)

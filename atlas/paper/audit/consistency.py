@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import exact, mechanics
+from atlas.core.verdicts import Consistency
 from atlas.paper.audit.printed import MODES, PAPER_TABLE2
 from atlas.paper.audit.records import Finding
 from atlas.paper.audit.registry import claim
@@ -81,7 +82,7 @@ def subclass_consistency(ctx) -> Finding:
     sub = np.concatenate([sub, t1.subclass.ravel()])
     cons = {m: np.concatenate([cons[m], t1.consistent[m].ravel()]) for m in cons}
     valid = sub > 0
-    n_und = int(sum(np.sum(cons[m][valid] == 3) for m in cons))
+    n_und = int(sum(np.sum(cons[m][valid] == Consistency.UNDECIDED) for m in cons))
     varying = _varying(sub, cons)
     n_sys = sum(len(p) for p in ctx.class_points.values())
     n62 = int(valid.sum())
