@@ -16,6 +16,7 @@ from pathlib import Path
 from atlas.core import config
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
+from atlas.paper import figure_ladder, realisability
 
 __all__ = ["run", "atomic_write_text", "write_netcdf"]
 
@@ -56,6 +57,13 @@ def write_netcdf(ds, path) -> Path:
     with atomic_path(path, suffix=".tmp.nc") as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", encoding=enc)
     return path
+
+
+def _write_realisability(path) -> None:
+    """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
+    stats: dict = {}
+    found = realisability.search(1 << 19, stats=stats)
+    atomic_write_text(path, realisability.markdown(found, stats))
 
 
 def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, **_) -> dict:
@@ -109,6 +117,10 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         "audit (compute)", lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci)
     )
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
+    step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
+    step(
+        "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
+    )
     try:
         from atlas.paper.figures_dynamics import plot_fig2
     except ImportError as e:  # another module of the package; optional here

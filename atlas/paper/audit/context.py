@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from atlas.core import mechanics
+from atlas.paper import realisability
 from atlas.paper.audit import samples
 from atlas.paper.audit.samples import Points
 from atlas.paper.tables import KAPPA_Q_SAMPLE, class_samples, table2
@@ -74,6 +75,13 @@ class Context:
         return lazy & set(vars(self))
 
     # ---- evaluated points ---------------------------------------------------------------------
+
+    @cached_property
+    def realisations(self) -> tuple[dict, dict]:
+        """:func:`atlas.paper.realisability.search` (2^19 random bodies, mu <= 2) and its stats."""
+        self.say("searching single rigid bodies for the 144 subclasses")
+        stats: dict = {}
+        return realisability.search(1 << 19, stats=stats), stats
 
     @cached_property
     def class_points(self) -> dict:
