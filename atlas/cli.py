@@ -175,7 +175,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
-    pb.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    pb.add_argument(
+        "--out", metavar="DIR", help="output directory (default: outputs, --quick: outputs/quick)"
+    )
     return p
 
 
