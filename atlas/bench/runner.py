@@ -118,7 +118,7 @@ def run(quick: bool = False, out: str | None = None, config: str | None = None, 
         mode=mode,
         quick=mode != "full",
         start=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        command=_command(quick, out),
+        command=_command(mode, out),
         machine=machine(),
         notes=list(NOTES),
     )
@@ -132,7 +132,7 @@ def run(quick: bool = False, out: str | None = None, config: str | None = None, 
     return 0
 
 
-def _command(quick, out) -> str:
+def _command(mode, out) -> str:
     """The command line of this run, and the call it made."""
     argv = sys.argv[:]
     if argv and argv[0] in ("-c", ""):
@@ -141,7 +141,8 @@ def _command(quick, out) -> str:
         head = " ".join([Path(argv[0]).name] + argv[1:])
     else:
         head = "python"
-    return f"{head} (bench.run(quick={bool(quick)}, out={str(out)!r}))"
+    call = f"quick={mode == 'quick'}" if mode in ("quick", "full") else f"config={mode!r}"
+    return f"{head} (bench.run({call}, out={str(out)!r}))"
 
 
 def _json_default(x):

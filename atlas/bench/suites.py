@@ -274,12 +274,13 @@ def parse_summary(line: str) -> dict:
     ``atlas generate`` (``atlas generate: ...: P points in S s (R points/s) ...; undecided U
     before, V after exact resolution``)."""
     words = line.translate(str.maketrans(",();", "    ")).split()
-    und = [int(w) for w, nxt in zip(words, words[1:]) if nxt in ("before", "after")]
+    i = len(words) - 1 - words[::-1].index("undecided") if "undecided" in words else len(words)
+    und = words[i + 1 : i + 4 : 2]  # "undecided U before V after"
     return dict(
         points=int(words[words.index("points") - 1]),
         points_per_second=float(words[words.index("points/s") - 1]),
-        undecided_before=und[0] if und else "",
-        undecided_after=und[1] if len(und) > 1 else "",
+        undecided_before=int(und[0]) if und else "",
+        undecided_after=int(und[1]) if len(und) > 1 else "",
     )
 
 
