@@ -216,7 +216,9 @@ def _add_table(sub) -> None:
 def _add_bench(sub) -> None:
     pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
-    pb.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    pb.add_argument(
+        "--out", metavar="DIR", help="output directory (default: outputs, --quick: outputs/quick)"
+    )
 
 
 def _positive_int(name):

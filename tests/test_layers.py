@@ -21,7 +21,11 @@ def _lint(root: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONPATH=str(root))
     return subprocess.run(
         [str(LINT), "--no-cache", "--config", str(root / "pyproject.toml")],
-        cwd=root, env=env, capture_output=True, text=True, timeout=300,
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 
@@ -40,7 +44,9 @@ def test_package_keeps_the_layer_contracts():
     ],
 )
 def test_a_lower_layer_importing_upward_breaks_the_contract(tmp_path, module, line, contract):
-    shutil.copytree(ROOT / "atlas", tmp_path / "atlas", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(
+        ROOT / "atlas", tmp_path / "atlas", ignore=shutil.ignore_patterns("__pycache__")
+    )
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
     target = tmp_path / "atlas" / module
     target.write_text(target.read_text() + "\n" + line + "\n")

@@ -1,5 +1,15 @@
-"""Layer 4, measurement: ``atlas bench`` (speed against error, scaling, hard cases, simulation)."""
+"""Layer 4, measurement: ``atlas bench`` (speed against error, scaling, hard cases, simulation).
 
-from atlas.bench.runner import CONFIG, run
+Modules: :mod:`~atlas.bench.config` (what a run measures: ``full``, ``quick``, ``tiny``),
+:mod:`~atlas.bench.timing` (clocks, memory, subprocess workers), :mod:`~atlas.bench.grids` (one
+beta grid, every method, checked exactly), :mod:`~atlas.bench.boundaries` (contours, Hausdorff
+distance), :mod:`~atlas.bench.suites` and :mod:`~atlas.bench.simulation` (the measured sections),
+:mod:`~atlas.bench.report` and :mod:`~atlas.bench.plots` (``bench.md`` and its figures),
+:mod:`~atlas.bench.runner` (:func:`run`, the entry point of ``atlas bench``), and
+:mod:`~atlas.bench.distributed` (throughput of distributed generation, ``distributed.md``).
+"""
+
+from atlas.bench.config import CONFIG
+from atlas.bench.runner import run
 
 __all__ = ["CONFIG", "run"]

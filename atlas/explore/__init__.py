@@ -23,8 +23,23 @@ from atlas.explore.explorer import (
 )
 
 __all__ = [
-    "ALPHA_LAYERS", "BETA_LAYERS", "DEFAULT_LAYERS", "LAYER_GROUPS", "LAYERS", "LIVE_MAX_RESOLVE",
-    "OVERLAYS", "RESOLUTIONS", "SPECTRAL_LAYERS", "Explorer", "beta_grid", "compute_map",
-    "format_inspection", "format_redraw", "inspect_point", "layer_rgba", "legend_entries",
-    "make_widget", "measure_redraw",
+    "ALPHA_LAYERS",
+    "BETA_LAYERS",
+    "DEFAULT_LAYERS",
+    "LAYER_GROUPS",
+    "LAYERS",
+    "LIVE_MAX_RESOLVE",
+    "OVERLAYS",
+    "RESOLUTIONS",
+    "SPECTRAL_LAYERS",
+    "Explorer",
+    "beta_grid",
+    "compute_map",
+    "format_inspection",
+    "format_redraw",
+    "inspect_point",
+    "layer_rgba",
+    "legend_entries",
+    "make_widget",
+    "measure_redraw",
 ]

@@ -23,9 +23,9 @@ zarr = pytest.importorskip("zarr")
 
 from atlas.data.distributed import (  # noqa: E402
     TILES,
-    _read_record,
     generate_distributed,
     open_store,
+    read_record,
     tile_plan,
     verify_store,
     worker_env,
@@ -123,7 +123,7 @@ def test_2d_blocks_equal_generate_and_resume(reference, tmp_path):
                 assert got[k].attrs[a] == reference[k].attrs[a], (k, a)
     with xr.open_dataset(tmp_path / "b.nc") as nc:
         same_bytes(nc.load(), reference)
-    rec = _read_record(str(store), 4)  # beta1 [4, 8), beta2 [3, 6)
+    rec = read_record(str(store), 4)  # beta1 [4, 8), beta2 [3, 6)
     assert (rec["start"], rec["stop"], rec["start2"], rec["stop2"]) == (4, 8, 3, 6)
     assert set(rec["shared"]) == {"stable_FS", "consistent_FI", "stable_SF", "consistent_IF"}
     # stable_SF (no beta2) belongs to the tiles at beta2 block 0: corrupt it for beta1 [4, 8)
@@ -184,14 +184,14 @@ _KILLED = textwrap.dedent(
     import atlas.data.distributed as d
     from atlas.data.scene import Scene
 
-    compute = d._compute_tile
+    compute = d.compute_tile
 
     def slow(*args):  # slow tiles, so the run is killed half-way
         out = compute(*args)
         time.sleep(0.5)
         return out
 
-    d._compute_tile = slow
+    d.compute_tile = slow
     scene = Scene(beta1="0:2pi:16", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
     d.generate_distributed(scene, sys.argv[1], slab=2, tile_points=128)
     """
@@ -212,7 +212,7 @@ def test_killed_run_resumes(tmp_path):
     deadline = time.monotonic() + 180
     try:
         while True:
-            done = sum(_read_record(str(store), i) is not None for i in range(8))
+            done = sum(read_record(str(store), i) is not None for i in range(8))
             if done >= 2 or proc.poll() is not None or time.monotonic() > deadline:
                 break
             time.sleep(0.05)

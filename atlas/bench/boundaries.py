@@ -1,0 +1,104 @@
+"""Drawn boundaries and their distance: contours of verdict masks and margins, Hausdorff distance.
+
+The work-precision section measures how far the SS and II boundaries drawn from a coarse grid
+lie from the same boundaries drawn from a finer reference grid (distances in radians of beta).
+"""
+
+from __future__ import annotations
+
+import math
+
+import contourpy
+import jax.numpy as jnp
+import numpy as np
+from scipy.spatial import cKDTree
+
+from atlas.core import spectral
+
+__all__ = ["contour_lines", "hausdorff", "masks", "ss_margin"]
+
+
+def contour_lines(beta, field, level):
+    """Polylines (list of ``(m, 2)`` arrays, radians) of ``field == level`` on the grid
+    ``beta x beta`` (marching squares with linear interpolation: contourpy, matplotlib's engine)."""
+    gen = contourpy.contour_generator(beta, beta, np.asarray(field, np.float64).T)
+    return [ln for ln in gen.lines(level) if len(ln) >= 2]
+
+
+def _densify(lines, step):
+    """The polylines with points inserted so that no segment is longer than ``step``."""
+    out = []
+    for ln in lines:
+        seg = np.diff(ln, axis=0)
+        length = np.hypot(seg[:, 0], seg[:, 1])
+        k = np.maximum(1, np.ceil(length / step).astype(int))
+        pts = [ln[:1]]
+        for i in range(len(seg)):
+            t = (np.arange(1, k[i] + 1) / k[i])[:, None]
+            pts.append(ln[i] + t * seg[i])
+        out.append(np.concatenate(pts))
+    return out
+
+
+def _neighbours(b_lines):
+    """Vertices of the polylines ``b`` and, per vertex, the index of the next and previous vertex
+    on the same polyline (-1 at the ends)."""
+    verts = np.concatenate(b_lines)
+    lengths = [len(ln) for ln in b_lines]
+    nxt = np.concatenate([np.r_[np.arange(1, n), -1] for n in lengths])
+    off = np.cumsum([0] + lengths[:-1])
+    nxt = np.where(nxt >= 0, nxt + np.repeat(off, lengths), -1)
+    prev = np.full(len(verts), -1)
+    has_next = nxt >= 0
+    prev[nxt[has_next]] = np.flatnonzero(has_next)
+    return verts, nxt, prev
+
+
+def _directed(a_pts, b_lines):
+    """max over points ``a`` of the distance to the polylines ``b`` (segments at the 8 nearest
+    vertices)."""
+    verts, nxt, prev = _neighbours(b_lines)
+    k = min(8, len(verts))
+    _, idx = cKDTree(verts).query(a_pts, k=k)
+    idx = idx.reshape(len(a_pts), k)
+    best = np.full(len(a_pts), np.inf)
+    for j in range(k):
+        i0 = idx[:, j]
+        best = np.minimum(best, np.hypot(*(a_pts - verts[i0]).T))
+        for other in (nxt[i0], prev[i0]):
+            ok = other >= 0
+            p, q = verts[i0[ok]], verts[other[ok]]
+            d = q - p
+            den = np.maximum((d * d).sum(1), 1e-300)
+            t = np.clip(((a_pts[ok] - p) * d).sum(1) / den, 0, 1)
+            proj = p + t[:, None] * d
+            best[ok] = np.minimum(best[ok], np.hypot(*(a_pts[ok] - proj).T))
+    return float(best.max()) if len(best) else math.nan
+
+
+def hausdorff(lines_a, lines_b, step):
+    """Hausdorff distance [rad] between two sets of polylines (each densified to ``step`` and
+    measured point-to-segment against the other); 0 if both are empty, NaN if one is."""
+    if not lines_a or not lines_b:
+        return math.nan if (lines_a or lines_b) else 0.0
+    a = np.concatenate(_densify(lines_a, step))
+    b = np.concatenate(_densify(lines_b, step))
+    return max(_directed(a, lines_b), _directed(b, lines_a))
+
+
+def masks(res: dict, damped: bool) -> dict:
+    """0/1 masks drawn as boundaries: SS stable (damped; neutral is measure-zero there) or
+    stable-or-neutral (q = 0, drawn stable in Fig. 1), II consistent; undecided -> 0."""
+    out = {}
+    if "stable_SS" in res:
+        ss = np.asarray(res["stable_SS"])
+        out["SS"] = ((ss == 1) if damped else ((ss == 1) | (ss == 2))).astype(np.float64)
+    if "consistent_II" in res:
+        out["II"] = (np.asarray(res["consistent_II"]) == 1).astype(np.float64)
+    return out
+
+
+def ss_margin(args):
+    """The smooth SS margin :func:`atlas.core.spectral.ss_margin` on the broadcast grid ``args``
+    (float64 on the host); its zero contour is the SS boundary."""
+    return np.asarray(spectral.ss_margin(*(jnp.asarray(a) for a in args)), np.float64)

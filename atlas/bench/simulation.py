@@ -1,0 +1,102 @@
+"""The simulation section: :func:`atlas.dynamics.model.simulate` (exact event times) against
+``solve_ivp`` (DOP853, Radau) on the Fig. 2 cases, event-time error against cost.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from atlas.bench.timing import log, timeit
+from atlas.dynamics import model
+
+__all__ = ["event_error", "gap_events", "simulation"]
+
+#: the reference of ``simulate``: ``solve_ivp`` at tight tolerances
+_TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-16)
+
+
+def gap_events(t, kinds, contacts):
+    """Times and ``(contact, kind)`` tags of the impacts and lift-offs (force on/off events are
+    the simulator's bookkeeping, not events of the motion)."""
+    sel = [i for i, k in enumerate(kinds) if k in ("impact", "liftoff")]
+    return np.asarray(t)[sel], [(contacts[i], kinds[i]) for i in sel]
+
+
+def event_error(t, tags, t_ref, tags_ref) -> tuple[float, int]:
+    """``(max |t - t_ref|, matching leading events)``; the error is ``inf`` when the sequences of
+    events differ (reported as ``mismatch``)."""
+    n = min(len(t), len(t_ref))
+    match = 0
+    while match < n and tags[match] == tags_ref[match]:
+        match += 1
+    if len(t) != len(t_ref) or match < n:
+        return math.inf, match
+    return (float(np.max(np.abs(t - t_ref))) if n else 0.0), match
+
+
+def _timed(fn, cfg):
+    """Minimum time of ``fn`` over ``sim_repeats`` runs after one untimed run, and its result."""
+    box = {}
+
+    def call():
+        box["r"] = fn()
+
+    t = timeit(call, budget=0.5, max_repeats=cfg["sim_repeats"], min_repeats=1)
+    return t, box["r"]
+
+
+def _exact_row(name, kw, cfg):
+    """The ``simulate`` row of a case and its gap events (the reference of ``solve_ivp``)."""
+    t_sim, r = _timed(lambda: model.simulate(**kw), cfg)
+    te, tags = gap_events(r.t_events, r.kinds, r.contacts)
+    log(f"simulation case {name}: {len(te)} gap events")
+    tight = model.simulate_solve_ivp(**kw, **_TIGHT)
+    err, _ = event_error(
+        te, tags, *gap_events(tight["t_events"], tight["kinds"], tight["contacts"])
+    )
+    row = dict(
+        case=name,
+        method="simulate (exact)",
+        rtol="",
+        seconds=t_sim,
+        events=len(te),
+        error=err,
+        reference="solve_ivp DOP853 rtol=1e-13",
+        nfev="",
+    )
+    return row, te, tags
+
+
+def simulation(cfg) -> list[dict]:
+    """Rows of ``simulate`` (against tight DOP853) and of ``solve_ivp`` per method and rtol
+    (atol = 1e-3 rtol, against ``simulate``) for the cases ``sim_cases``."""
+    rows = []
+    cases = model.fig2_cases()
+    for name in cfg["sim_cases"]:
+        kw = cases[name]
+        row, te, tags = _exact_row(name, kw, cfg)
+        rows.append(row)
+        for method, rtols in cfg["sim_methods"]:
+            for rtol in rtols:
+                t, d = _timed(
+                    lambda kw=kw, m=method, r=rtol: model.simulate_solve_ivp(
+                        **kw, method=m, rtol=r, atol=r * 1e-3
+                    ),
+                    cfg,
+                )
+                ti, itags = gap_events(d["t_events"], d["kinds"], d["contacts"])
+                rows.append(
+                    dict(
+                        case=name,
+                        method=f"solve_ivp {method}",
+                        rtol=rtol,
+                        seconds=t,
+                        events=len(ti),
+                        error=event_error(ti, itags, te, tags)[0],
+                        reference="simulate",
+                        nfev=d["nfev"],
+                    )
+                )
+    return rows

@@ -1,0 +1,88 @@
+"""Fixtures of tests/bench: a small made-up result set of an ``atlas bench`` run (no
+measurement), rows of every section with the keys the measuring code writes, numbers by hand."""
+
+import math
+
+import pytest
+
+from atlas.bench.config import CONFIG, METHODS
+from atlas.bench.report import Results
+from atlas.bench.suites import headline
+
+#: speed of each method [ns/point]; eig is 2000x the certified driver (target met)
+NS = {"certified": 10.0, "certified+exact": 12.0, "verdicts_jit": 20.0, "eig": 20000.0}
+
+
+def _wp_row(case, dtype, n, method, outputs="all"):
+    pts = (n + 1) ** 2
+    return dict(
+        case=case, dtype=dtype, n=n, h=2 * math.pi / n, points=pts, outputs=outputs,
+        method=method, seconds=NS[method] * pts * 1e-9, ns_per_point=NS[method],
+        floor_ns=0.5, checked=20, misclassified=1 if method == "eig" else 0, sample=15,
+        misclassified_sample=0, undecided=3 if method == "certified" else 0,
+        undecided_before=3, settle_capped=False, roots_points="",
+        # first-order convergence: H = h / 2
+        hausdorff_SS_mask=math.pi / n, hausdorff_II_mask=math.pi / n,
+        hausdorff_SS_margin=(2 * math.pi / n) ** 2,
+    )  # fmt: skip
+
+
+def fake_results(mode="full") -> Results:
+    """Rows of every section for the configuration ``mode`` (large grid and atlases included)."""
+    cfg = CONFIG[mode]
+    wp = [
+        _wp_row(c[0], dt, n, m) for c in cfg["cases"] for dt in ("float32", "float64")
+        for n in cfg["res"] for m in METHODS
+    ]  # fmt: skip
+    wp += [
+        _wp_row("q=0.1", dt, cfg["res"][-1], m, "SS")
+        for dt in ("float32", "float64")
+        for m in METHODS
+    ]
+    large = [
+        dict(_wp_row("q=0", "float64", 3162, m), label="all verdicts, q=0", eig_over_method=2.0,
+             method_over_floor=20.0)
+        for m in ("certified", "eig")
+    ]  # fmt: skip
+    suites = [
+        dict(suite=s, dtype="float64", method=m, points=10, misclassified=0, undecided=1,
+             exact_us_per_point=40.0 + i, bad_stable_SS=0, bad_consistent_II=0, bad_stable_II=0)
+        for i, s in enumerate(("near_hurwitz", "class_boundaries")) for m in METHODS
+    ]  # fmt: skip
+    scaling = [
+        dict(driver="spectral_points tiles", q=0.0, dtype="float64", points=p, seconds=p * 1e-8,
+             ns_per_point=10.0, peak_rss_mb=500.0, rss_after_warmup_mb=400.0, undecided=0,
+             bytes_written=3 * p, wall_seconds=p * 1e-8 + 2)
+        for p in (10**6, 10**7)
+    ]  # fmt: skip
+    atlases = [
+        dict(atlas=label, command="atlas generate --scene x", points=1000, wall_seconds=2.0,
+             points_per_second=pps, file_mb=0.1, bytes_per_point=100.0, peak_rss_mb=600.0,
+             undecided_before=5, undecided_after=0)
+        for label, pps in (("issue 12: axis scene", 1e5), ("issue 12: shifted scene", 1.2e5),
+                           ("atlas4d", 19_800 * 25))
+    ]  # fmt: skip
+    sim = [
+        dict(case="d", method="simulate (exact)", rtol="", seconds=0.02, events=21, error=1e-13,
+             reference="solve_ivp DOP853 rtol=1e-13", nfev=""),
+        dict(case="d", method="solve_ivp DOP853", rtol=1e-3, seconds=0.05, events=20,
+             error=math.inf, reference="simulate", nfev=1500),
+    ]  # fmt: skip
+    refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
+    meta = dict(
+        mode=mode, quick=mode != "full", start="2024-06-01T12:00:00+0000",
+        command="atlas bench", duration=1234.0, notes=["a note"],
+        machine=dict(nproc=2, cpu="cpu", ram="8.0 GiB", load="1.00 1.00 1.00", python="3.11",
+                     jax="0.4", numpy="2.0", platform="Linux", jax_backend="cpu"),
+    )  # fmt: skip
+    return Results(
+        meta=meta, cfg=cfg, head=headline(wp, cfg), wp=wp, refs=refs, suites=suites,
+        scaling=scaling, sim=sim, large=large, atlases=atlases,
+        exact=dict(points=42, seconds=3.0, failures=0),
+    )  # fmt: skip
+
+
+@pytest.fixture
+def results():
+    """The made-up results of a full run."""
+    return fake_results("full")

@@ -1,0 +1,50 @@
+"""``atlas.bench.boundaries``: contours and Hausdorff distances against closed forms."""
+
+import numpy as np
+import pytest
+
+from atlas.bench.boundaries import contour_lines, hausdorff, masks
+
+BETA = np.linspace(0, 2 * np.pi, 129)
+X, Y = np.meshgrid(BETA, BETA, indexing="ij")  # field[i, j] at (beta1 = BETA[i], beta2 = BETA[j])
+
+
+def test_contour_of_a_linear_field_is_the_line():
+    (line,) = contour_lines(BETA, X - 1.0, 0.0)  # beta1 = 1 for every beta2
+    np.testing.assert_allclose(line[:, 0], 1.0, atol=1e-12)
+    assert line[:, 1].min() == pytest.approx(0.0) and line[:, 1].max() == pytest.approx(2 * np.pi)
+
+
+def test_hausdorff_of_shifted_circle():
+    a = contour_lines(BETA, (X - 3) ** 2 + (Y - 3) ** 2 - 1, 0.0)
+    b = contour_lines(BETA, (X - 3.1) ** 2 + (Y - 3) ** 2 - 1, 0.0)
+    assert hausdorff(a, b, 0.01) == pytest.approx(0.1, abs=2e-3)
+    assert hausdorff(a, a, 0.01) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_hausdorff_of_concentric_circles_is_the_radius_gap():
+    a = contour_lines(BETA, (X - 3) ** 2 + (Y - 3) ** 2 - 1.0, 0.0)
+    b = contour_lines(BETA, (X - 3) ** 2 + (Y - 3) ** 2 - 1.5**2, 0.0)
+    assert hausdorff(a, b, 0.01) == pytest.approx(0.5, abs=2e-3)
+
+
+def test_hausdorff_point_to_segment_not_to_vertices():
+    """Two parallel segments 0.3 apart, vertices far apart: the distance is 0.3 exactly."""
+    a = [np.array([[0.0, 0.0], [10.0, 0.0]])]
+    b = [np.array([[-1.0, 0.3], [11.0, 0.3]])]
+    assert hausdorff(a, b, 0.5) == pytest.approx(np.hypot(1.0, 0.3))  # b's ends stick out by 1
+    b = [np.array([[0.0, 0.3], [10.0, 0.3]])]
+    assert hausdorff(a, b, 0.5) == pytest.approx(0.3)
+
+
+def test_hausdorff_of_empty_sets():
+    line = [np.array([[0.0, 0.0], [1.0, 0.0]])]
+    assert hausdorff([], [], 0.1) == 0.0
+    assert np.isnan(hausdorff(line, [], 0.1)) and np.isnan(hausdorff([], line, 0.1))
+
+
+def test_masks_undamped_draws_neutral_as_stable():
+    res = {"stable_SS": np.array([0, 1, 2, 3]), "consistent_II": np.array([1, 0, 3, 1])}
+    np.testing.assert_array_equal(masks(res, damped=False)["SS"], [0, 1, 1, 0])
+    np.testing.assert_array_equal(masks(res, damped=True)["SS"], [0, 1, 0, 0])
+    np.testing.assert_array_equal(masks(res, damped=True)["II"], [1, 0, 0, 1])

@@ -1,0 +1,122 @@
+"""``atlas.bench.report``: bench.md from a made-up result set (no measurement)."""
+
+import csv
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from atlas.bench import report
+
+COMMITTED = Path(__file__).resolve().parents[2] / "outputs" / "bench.md"
+
+
+def _skeleton(md: str) -> list[str]:
+    """Headings and table header rows of a report, in order (what a run's numbers don't change)."""
+    lines = md.splitlines()
+    out = []
+    for i, ln in enumerate(lines):
+        if ln.startswith("#"):
+            out.append(re.sub(r"\(\d+ x \d+ = [\d,]+ points", "(N points", ln))
+        elif ln.startswith("|") and i + 1 < len(lines) and lines[i + 1].startswith("|---"):
+            out.append(ln)
+    return out
+
+
+def test_full_report_has_the_sections_and_columns_of_the_committed_one(results):
+    """Same headings and table columns, in the same order, as outputs/bench.md of the full run."""
+    if not COMMITTED.exists():
+        pytest.skip("no committed outputs/bench.md")
+    assert _skeleton(report.build_report(results)) == _skeleton(COMMITTED.read_text())
+
+
+def test_sections_in_order(results):
+    md = report.build_report(results)
+    heads = [ln for ln in md.splitlines() if ln.startswith("#")]
+    assert heads == [
+        "# atlas bench: speed against error",
+        "## Headline",
+        "### At 1e7 points (3163 x 3163 = 10,004,569 points, issue 2)",
+        "## Work-precision",
+        "## Hard-case suites",
+        "## Scaling",
+        "### End to end: `atlas generate` (issue 3)",
+        "### Issue 12: exact at kernel speed",
+        "## Simulation",
+        "## Notes, omissions",
+    ]
+    assert "Mode: **full**" in md and "total duration **1234 s**" in md
+    assert "* a note" in md and "Exact reference: 42 distinct points evaluated in 3 s" in md
+
+
+def test_optional_sections_left_out(results):
+    results.large, results.atlases = [], []
+    md = report.build_report(results)
+    assert "### At 1e7 points" not in md and "### End to end" not in md
+    assert "## Scaling" in md and "### Issue 12" in md
+
+
+def test_numbers_of_the_made_up_run(results):
+    """Values follow from the made-up rows: eig costs 2000x certified, H = h/2 and h^2."""
+    md = report.build_report(results)
+    head = results.head
+    cert = [r for r in head if r["method"] == "certified"]
+    assert cert and all(r["eig_over_method"] == pytest.approx(2000.0) for r in cert)
+    met = sum(r["target_1000x"] == "met" for r in head)
+    notmet = sum(r["target_1000x"] == "not met" for r in head)
+    assert f"met in {met} of {met + notmet} rows" in md
+    assert met == 4 * 2 * 3  # 4 cases x 2 dtypes x (certified, +exact, verdicts_jit: >= 1000x)
+    # convergence orders: margin error h^2, mask errors h/2
+    assert "* q=0: SS margin 2, SS mask 1, II mask 1" in md
+    # issue 12: shifted/axis = 1.2, atlas4d = 25x the 19,800 points/s before
+    assert "ratio **1.2**" in md and "**25x** the 19800 points/s" in md
+    assert "worst hard suite **41 us/point** (class_boundaries" in md
+    # the suites' totals: 2 suites x 10 points, 1 undecided each
+    assert "certified float64: 0 misclassified, 2 undecided of 20" in md
+    assert "| d | solve_ivp DOP853 | 0.001 | 0.05 | 20 | mismatch | 1500 |" in md
+
+
+def test_tables_have_no_empty_cells(results):
+    md = report.build_report(results)
+    rows = [ln for ln in md.splitlines() if ln.startswith("| (")]
+    assert rows and all("|  |" not in ln for ln in rows)
+
+
+@pytest.mark.parametrize(
+    "x, text",
+    [
+        ("abc", "abc"),
+        (None, "n/a"),
+        (math.nan, "n/a"),
+        (math.inf, "mismatch"),
+        (7, "7"),
+        (0.0, "0"),
+        (1234.6, "1235"),
+        (0.0123456, "0.0123"),
+        (-250.2, "-250"),
+    ],
+)
+def test_fmt(x, text):
+    assert report.fmt(x) == text
+
+
+def test_table_headers_and_missing_cells():
+    md = report.table([{"a": 1, "b": 0.5}, {"a": 2}], [("a", "A"), "b"])
+    assert md.splitlines() == ["| A | b |", "|---|---|", "| 1 | 0.5 |", "| 2 |  |"]
+
+
+def test_slope_of_power_laws():
+    x = [1.0, 2.0, 4.0, 8.0]
+    assert report.slope(x, [v**2 for v in x]) == pytest.approx(2.0)
+    assert report.slope(x, [3 / v for v in x]) == pytest.approx(-1.0)
+    assert math.isnan(report.slope(x, [1.0, math.nan, 0.0, -1.0]))  # fewer than 2 usable
+
+
+def test_write_csv_columns_in_order_of_appearance(tmp_path):
+    path = tmp_path / "t.csv"
+    report.write_csv(path, [{"a": 1}, {"b": 2, "a": 3}])
+    with open(path) as fh:
+        assert list(csv.reader(fh)) == [["a", "b"], ["1", ""], ["3", "2"]]
+    report.write_csv(tmp_path / "none.csv", [])
+    assert not (tmp_path / "none.csv").exists()
