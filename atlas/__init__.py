@@ -12,7 +12,7 @@ enable_x64()  # float64 kernels are first-class (SPEC §4)
 from atlas import _compat  # noqa: E402
 from atlas.data.engine import generate as generate  # noqa: E402
 from atlas.data.scene import Scene as Scene  # noqa: E402
-from atlas.dynamics.model import simulate as simulate  # noqa: E402
+from atlas.dynamics.simulator import simulate as simulate  # noqa: E402
 from atlas.paper.tables import table2 as table2  # noqa: E402
 
 _compat.install()

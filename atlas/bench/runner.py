@@ -869,7 +869,7 @@ def _event_error(t, tags, t_ref, tags_ref):
 
 
 def _simulation(cfg):
-    from atlas.dynamics import model as S
+    from atlas import dynamics as S
 
     rows = []
     cases = S.fig2_cases()
