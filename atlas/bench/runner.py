@@ -1016,19 +1016,22 @@ def _slope(xs, ys):
     return float(np.polyfit(np.log(xs[ok]), np.log(ys[ok]), 1)[0])
 
 
+def _subplots(*args, figsize, **kwargs):
+    """``plt.subplots`` without pyplot (no backend selection, nothing to close)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(*args, **kwargs)
+
+
 def _plots(out, wp, scaling, sim, cfg):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     files = []
     colors = {"certified": "C0", "certified+exact": "C1", "verdicts_jit": "C2", "eig": "C3"}
     marks = {"float32": "s", "float64": "o"}
     all_rows = [r for r in wp if r["outputs"] == "all"]
     cases = [c[0] for c in cfg["cases"]]
     # 1. work-precision: boundary error against cost per grid
-    fig, axes = plt.subplots(2, len(cases), figsize=(4.2 * len(cases), 7.5), squeeze=False)
+    fig, axes = _subplots(2, len(cases), figsize=(4.2 * len(cases), 7.5), squeeze=False)
     for j, case in enumerate(cases):
         for i, (col, lab) in enumerate(
             (("hausdorff_SS_mask", "SS boundary"), ("hausdorff_II_mask", "II boundary"))
@@ -1080,10 +1083,9 @@ def _plots(out, wp, scaling, sim, cfg):
     fig.tight_layout()
     p = Path(out) / "bench_work_precision.png"
     fig.savefig(p, dpi=110)
-    plt.close(fig)
     files.append(p)
     # 2. convergence in h
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
+    fig, axes = _subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
     for j, case in enumerate(cases):
         ax = axes[0, j]
         rs = sorted(
@@ -1114,10 +1116,9 @@ def _plots(out, wp, scaling, sim, cfg):
     fig.tight_layout()
     p = Path(out) / "bench_convergence.png"
     fig.savefig(p, dpi=110)
-    plt.close(fig)
     files.append(p)
     # 3. scaling
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.8))
+    fig, (a1, a2) = _subplots(1, 2, figsize=(9, 3.8))
     for q in sorted({r["q"] for r in scaling}):
         for drv in sorted({r["driver"] for r in scaling}):
             rs = [r for r in scaling if r["q"] == q and r["driver"] == drv]
@@ -1137,10 +1138,9 @@ def _plots(out, wp, scaling, sim, cfg):
     fig.tight_layout()
     p = Path(out) / "bench_scaling.png"
     fig.savefig(p, dpi=110)
-    plt.close(fig)
     files.append(p)
     # 4. simulation
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, ax = _subplots(figsize=(6, 4.2))
     for k, m in enumerate(sorted({r["method"] for r in sim})):
         rs = [r for r in sim if r["method"] == m and np.isfinite(r["error"]) and r["error"] > 0]
         ax.loglog([r["seconds"] for r in rs], [r["error"] for r in rs], "os^v"[k % 4], label=m)
@@ -1154,7 +1154,6 @@ def _plots(out, wp, scaling, sim, cfg):
     fig.tight_layout()
     p = Path(out) / "bench_simulation.png"
     fig.savefig(p, dpi=110)
-    plt.close(fig)
     files.append(p)
     return files
 
