@@ -105,7 +105,7 @@ def fig2_runs(t_end: dict | None = None) -> dict:
 
 def draw_fig2(fig, runs: dict, n_samples: int = 6000) -> list:
     """Fig. 2 (panels a-e, one per row) on ``fig`` from :func:`fig2_runs`."""
-    axes = fig.subplots(len(runs), 1)
+    axes = fig.subplots(len(runs), 1, squeeze=False)[:, 0]
     art = []
     for ax, (name, (p, res, outcome)) in zip(axes, runs.items(), strict=True):
         art += draw_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples, outcome)
