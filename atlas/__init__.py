@@ -14,7 +14,7 @@ from atlas.core.mechanism import Mechanism as Mechanism  # noqa: E402
 from atlas.data.engine import generate as generate  # noqa: E402
 from atlas.data.mechanisms import mechanism_atlas as mechanism_atlas  # noqa: E402
 from atlas.data.scene import Scene as Scene  # noqa: E402
-from atlas.dynamics.model import simulate as simulate  # noqa: E402
+from atlas.dynamics.simulator import simulate as simulate  # noqa: E402
 from atlas.paper.tables import table2 as table2  # noqa: E402
 
 _compat.install()

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from atlas.bench.config import METHODS
 from atlas.data.io import savefig
@@ -19,20 +20,16 @@ _MARKS = {"float32": "s", "float64": "o"}
 _DPI = 110
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+def _subplots(*args, figsize, **kwargs):
+    """``plt.subplots`` without pyplot (no backend selection, no global state, nothing to close)."""
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(*args, **kwargs)
 
 
-def _save(plt, fig, out, name) -> Path:
+def _save(fig, out, name) -> Path:
     fig.tight_layout()
     path = Path(out) / name
     savefig(fig, path, dpi=_DPI)
-    plt.close(fig)
     return path
 
 
@@ -81,8 +78,7 @@ def _work_precision_panel(ax, wp, case, col, with_margin):
 
 def plot_work_precision(out, wp, cases) -> Path:
     """Boundary error (Hausdorff distance [rad]) against time per grid, SS and II, per case."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(2, len(cases), figsize=(4.2 * len(cases), 7.5), squeeze=False)
+    fig, axes = _subplots(2, len(cases), figsize=(4.2 * len(cases), 7.5), squeeze=False)
     for j, case in enumerate(cases):
         for i, (col, lab) in enumerate(
             (("hausdorff_SS_mask", "SS boundary"), ("hausdorff_II_mask", "II boundary"))
@@ -90,13 +86,12 @@ def plot_work_precision(out, wp, cases) -> Path:
             _work_precision_panel(axes[i, j], wp, case, col, with_margin=i == 0)
             axes[i, j].set_title(f"{case}: {lab}")
     axes[0, 0].legend(fontsize=6)
-    return _save(plt, fig, out, "bench_work_precision.png")
+    return _save(fig, out, "bench_work_precision.png")
 
 
 def plot_convergence(out, wp, cases) -> Path:
     """Boundary error against grid spacing h (float64, certified+exact), with h/2 and h^2."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
+    fig, axes = _subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
     for j, case in enumerate(cases):
         ax = axes[0, j]
         rs = _series(wp, case, "certified+exact", "float64")
@@ -115,13 +110,12 @@ def plot_convergence(out, wp, cases) -> Path:
         ax.set_ylabel("Hausdorff distance [rad]")
         ax.grid(True, which="both", alpha=0.3)
     axes[0, 0].legend(fontsize=7)
-    return _save(plt, fig, out, "bench_convergence.png")
+    return _save(fig, out, "bench_convergence.png")
 
 
 def plot_scaling(out, scaling) -> Path:
     """Time [s] and peak RSS [MB] against atlas points, per driver and q."""
-    plt = _pyplot()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.8))
+    fig, (a1, a2) = _subplots(1, 2, figsize=(9, 3.8))
     for q in sorted({r["q"] for r in scaling}):
         for drv in sorted({r["driver"] for r in scaling}):
             rs = [r for r in scaling if r["q"] == q and r["driver"] == drv]
@@ -138,13 +132,12 @@ def plot_scaling(out, scaling) -> Path:
     for a in (a1, a2):
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=7)
-    return _save(plt, fig, out, "bench_scaling.png")
+    return _save(fig, out, "bench_scaling.png")
 
 
 def plot_simulation(out, sim) -> Path:
     """Max event-time error against time per run, per method (cases annotated)."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, ax = _subplots(figsize=(6, 4.2))
     for k, m in enumerate(sorted({r["method"] for r in sim})):
         rs = [r for r in sim if r["method"] == m and np.isfinite(r["error"]) and r["error"] > 0]
         ax.loglog([r["seconds"] for r in rs], [r["error"] for r in rs], "os^v"[k % 4], label=m)
@@ -155,7 +148,7 @@ def plot_simulation(out, sim) -> Path:
     ax.set_title("Fig. 2 cases: event-time error against cost")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(plt, fig, out, "bench_simulation.png")
+    return _save(fig, out, "bench_simulation.png")
 
 
 def plot_all(out, wp, scaling, sim, cfg) -> list[Path]:

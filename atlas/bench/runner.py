@@ -11,7 +11,7 @@ Everything is measured in one run on this machine and reported as ratios measure
 * **hard-case suites** of :mod:`atlas.core.hardcases`: misclassified / undecided per method;
 * **scaling** and **end to end**: time and peak RSS per atlas size, ``atlas generate``
   (:mod:`atlas.bench.suites`, subprocesses of :mod:`atlas.bench.timing`);
-* **simulation**: :func:`atlas.dynamics.model.simulate` against ``solve_ivp``
+* **simulation**: :func:`atlas.dynamics.simulate` against ``solve_ivp``
   (:mod:`atlas.bench.simulation`).
 
 The report is built by :mod:`atlas.bench.report`, the figures by :mod:`atlas.bench.plots`.

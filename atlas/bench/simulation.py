@@ -1,4 +1,4 @@
-"""The simulation section: :func:`atlas.dynamics.model.simulate` (exact event times) against
+"""The simulation section: :func:`atlas.dynamics.simulate` (exact event times) against
 ``solve_ivp`` (DOP853, Radau) on the Fig. 2 cases, event-time error against cost.
 """
 
@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
+from atlas import dynamics
 from atlas.bench.timing import log, timeit
-from atlas.dynamics import model
 
 __all__ = ["event_error", "gap_events", "simulation"]
 
@@ -49,10 +49,10 @@ def _timed(fn, cfg):
 
 def _exact_row(name, kw, cfg):
     """The ``simulate`` row of a case and its gap events (the reference of ``solve_ivp``)."""
-    t_sim, r = _timed(lambda: model.simulate(**kw), cfg)
+    t_sim, r = _timed(lambda: dynamics.simulate(**kw), cfg)
     te, tags = gap_events(r.t_events, r.kinds, r.contacts)
     log(f"simulation case {name}: {len(te)} gap events")
-    tight = model.simulate_solve_ivp(**kw, **_TIGHT)
+    tight = dynamics.simulate_solve_ivp(**kw, **_TIGHT)
     err, _ = event_error(
         te, tags, *gap_events(tight["t_events"], tight["kinds"], tight["contacts"])
     )
@@ -73,7 +73,7 @@ def simulation(cfg) -> list[dict]:
     """Rows of ``simulate`` (against tight DOP853) and of ``solve_ivp`` per method and rtol
     (atol = 1e-3 rtol, against ``simulate``) for the cases ``sim_cases``."""
     rows = []
-    cases = model.fig2_cases()
+    cases = dynamics.fig2_cases()
     for name in cfg["sim_cases"]:
         kw = cases[name]
         row, te, tags = _exact_row(name, kw, cfg)
@@ -81,7 +81,7 @@ def simulation(cfg) -> list[dict]:
         for method, rtols in cfg["sim_methods"]:
             for rtol in rtols:
                 t, d = _timed(
-                    lambda kw=kw, m=method, r=rtol: model.simulate_solve_ivp(
+                    lambda kw=kw, m=method, r=rtol: dynamics.simulate_solve_ivp(
                         **kw, method=m, rtol=r, atol=r * 1e-3
                     ),
                     cfg,

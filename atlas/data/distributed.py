@@ -78,7 +78,7 @@ from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
 from atlas.data.engine import (
     DEFAULT_TILE_POINTS,
     Schema,
-    _check_options,
+    check_options,
     generate,
     progress_bar,
     schema,
@@ -645,7 +645,7 @@ def generate_distributed(
     t0 = time.perf_counter()
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
-    method, dtype, tile_points = _check_options(method, dtype, tile_points)
+    method, dtype, tile_points = check_options(method, dtype, tile_points)
     _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab, block2)

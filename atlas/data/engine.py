@@ -66,6 +66,7 @@ from atlas.data.scene import Scene
 
 __all__ = [
     "generate",
+    "check_options",
     "run",
     "schema",
     "tile_blocks",
@@ -386,7 +387,7 @@ def run(
     all groups), ``seconds``, ``points_per_second``, ``undecided_fast``, ``undecided`` (after exact
     resolution), ``resolved_points``, ``exact_failures`` (the points the exact tier failed on).
     """
-    method, dtype, tile_points = _check_options(method, dtype, tile_points)
+    method, dtype, tile_points = check_options(method, dtype, tile_points)
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     sch = schema(
@@ -565,7 +566,8 @@ def progress_bar(progress, total, desc, unit="pt"):
     return tqdm(total=total, unit=unit, unit_scale=True, desc=desc, file=sys.stderr, leave=False)
 
 
-def _check_options(method, dtype, tile_points):
+def check_options(method, dtype, tile_points) -> tuple[str, str, int]:
+    """``(method, dtype, tile_points)`` validated and normalised (one-line error naming the bad one)."""
     if method not in METHODS:
         raise ValueError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
     dtype = str(np.dtype(dtype)) if dtype in DTYPES or dtype in (np.float32, np.float64) else dtype

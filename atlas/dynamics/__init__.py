@@ -1,29 +1,37 @@
 """Layer 3, time: the piecewise-linear compliant model, its exact event-driven simulator (numpy) and a
-batched JAX engine, outcome classification and outcome maps (paper Sec. 5, Fig. 2)."""
+batched JAX engine, outcome classification and outcome maps (paper Sec. 5, Fig. 2).
 
-from atlas.dynamics.model import (
-    FORCE_OFF,
-    FORCE_ON,
-    IMPACT,
-    LIFTOFF,
-    NO_STABLE_SUBCLASSES,
-    Outcome,
-    SimulationResult,
-    Status,
+Modules: :mod:`~atlas.dynamics.system` (modes, matrices, enumerations), :mod:`~atlas.dynamics.simulator`
+(NumPy engine), :mod:`~atlas.dynamics.jax_engine` (batched JAX engine),
+:mod:`~atlas.dynamics.classification`, :mod:`~atlas.dynamics.reference` (solve_ivp cross-check),
+:mod:`~atlas.dynamics.outcome` (Fig. 2 cases, outcome maps; chooses the engine)."""
+
+from atlas.dynamics.classification import (
     TrajectoryStats,
     classify,
     classify_stats,
+    trajectory_stats,
+)
+from atlas.dynamics.outcome import (
+    NO_STABLE_SUBCLASSES,
     fig2_cases,
     no_stable_subclass,
     outcome_grid,
     outcome_map,
     perturbed_initial_states,
-    simulate,
     simulate_outcome,
-    simulate_solve_ivp,
-    ss_equilibrium,
     subclass_codes,
-    trajectory_stats,
+)
+from atlas.dynamics.reference import simulate_solve_ivp
+from atlas.dynamics.simulator import SimulationResult, simulate
+from atlas.dynamics.system import (
+    FORCE_OFF,
+    FORCE_ON,
+    IMPACT,
+    LIFTOFF,
+    Outcome,
+    Status,
+    ss_equilibrium,
 )
 
 __all__ = [

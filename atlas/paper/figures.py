@@ -36,6 +36,7 @@ from atlas.core import points as evaluate
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.io import savefig
 from atlas.data.outputs import OUTPUTS, coord_attrs, to_storage, undecided, variable_attrs
+from atlas.paper import drawing
 
 __all__ = [
     "evaluate_points",
@@ -45,6 +46,14 @@ __all__ = [
     "plot_fig1_stability",
     "plot_fig1_variants",
     "plot_table2",
+    "draw_class_diagram",
+    "draw_fig1_classes",
+    "draw_fig1_layer",
+    "draw_fig1_stability",
+    "draw_fig1_variant",
+    "draw_fig1_variants",
+    "draw_table2",
+    "FIG1_LAYERS",
     "VARIANTS",
 ]
 
@@ -252,172 +261,6 @@ def _margin_layers(ss_margin, C1, S1, C2, S2, kappa, q1, q2) -> dict:
     }
 
 
-# --------------------------------------------------------------------------- plotting helpers
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    plt.rcParams.update({"hatch.color": "0.55", "hatch.linewidth": 0.5})
-    return plt
-
-
-def _pi_axis(ax, which="both"):
-    ticks = np.arange(5) * np.pi / 2
-    labels = ["0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$", r"$2\pi$"]
-    if which in ("both", "x"):
-        ax.set_xticks(ticks, labels)
-    if which in ("both", "y"):
-        ax.set_yticks(ticks, labels)
-    ax.set_xlim(0, 2 * np.pi)
-    ax.set_ylim(0, 2 * np.pi)
-    ax.set_aspect("equal")
-
-
-def _class_lines(ax, lw=0.6):
-    """Straight class boundaries: axis directions of b1, b2 and beta2 = beta1, beta1 +- pi."""
-    kw = dict(color="k", lw=lw, zorder=5)
-    for v in (np.pi / 2, np.pi, 1.5 * np.pi):
-        ax.axvline(v, **kw)
-        ax.axhline(v, **kw)
-    t = np.array([0, 2 * np.pi])
-    ax.plot(t, t, **kw)
-    ax.plot(t, t + np.pi, **kw)
-    ax.plot(t, t - np.pi, **kw)
-
-
-def _label_positions(ds):
-    """Most interior cell of each class (max distance to the class's complement)."""
-    from scipy.ndimage import distance_transform_edt
-
-    cls = ds["class_code"].values
-    b1, b2 = ds["beta1"].values, ds["beta2"].values
-    pos = {}
-    for code in mechanics.ALL_CLASSES:
-        mask = cls == code
-        if not mask.any():
-            continue
-        d = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
-        i, j = np.unravel_index(np.argmax(d), d.shape)
-        pos[code] = (b1[i], b2[j])
-    return pos
-
-
-def _class_labels(ax, pos, fs=6.5):
-    for code, (x, y) in pos.items():
-        ax.text(
-            x,
-            y,
-            str(code),
-            ha="center",
-            va="center",
-            fontsize=fs,
-            zorder=6,
-            clip_on=True,
-            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.75),
-        )
-
-
-def _categorical(ax, ds, field, enum, mask=None):
-    """``pcolormesh`` of a categorical field with colours from the verdict enumeration."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
-    members = list(enum)
-    codes = [int(m) for m in members]
-    cmap = ListedColormap([m.color for m in members])
-    bounds = np.array(codes + [codes[-1] + 1], float) - 0.5
-    norm = BoundaryNorm(bounds, cmap.N)
-    vals = np.asarray(field, float)
-    if mask is not None:
-        vals = np.ma.masked_where(~mask, vals)
-    edges = np.linspace(0, 2 * np.pi, ds.sizes["beta1"] + 1)
-    return ax.pcolormesh(edges, edges, vals.T, cmap=cmap, norm=norm, rasterized=True)
-
-
-NOTHING_COLOR = "#fdae6b"
-
-
-def _boolean(ax, ds, flag, color):
-    """Two-colour ``pcolormesh`` of a boolean layer (white / ``color``)."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
-    edges = np.linspace(0, 2 * np.pi, ds.sizes["beta1"] + 1)
-    return ax.pcolormesh(
-        edges,
-        edges,
-        np.asarray(flag, float).T,
-        cmap=ListedColormap(["white", color]),
-        norm=BoundaryNorm([-0.5, 0.5, 1.5], 2),
-        rasterized=True,
-    )
-
-
-def _hatch(ax, ds, flag):
-    """Light hatching over the cells where ``flag`` holds (fill only; boundaries are drawn apart)."""
-    b = ds["beta1"].values
-    ax.contourf(
-        b,
-        b,
-        np.where(flag, 1.0, np.nan).T,
-        levels=[0.5, 1.5],
-        colors="none",
-        hatches=["///"],
-        zorder=2,
-    )
-
-
-def _near_change(field, cls, width=2):
-    """Cells within ``width`` of a change of ``field`` between cells of the same class."""
-    from scipy.ndimage import binary_dilation
-
-    ch = np.zeros(field.shape, bool)
-    for axis in (0, 1):
-        d = np.diff(field, axis=axis) != 0
-        same = np.diff(cls, axis=axis) == 0
-        e = d & same
-        sl_a = [slice(None)] * 2
-        sl_b = [slice(None)] * 2
-        sl_a[axis] = slice(0, -1)
-        sl_b[axis] = slice(1, None)
-        ch[tuple(sl_a)] |= e
-        ch[tuple(sl_b)] |= e
-    return binary_dilation(ch, iterations=width) if ch.any() else ch
-
-
-def _dashed(ax, ds, margin, where=None, color="k", lw=1.1, ls="--"):
-    """Dashed zero contour of a smooth margin (optionally restricted to cells ``where``)."""
-    m = np.array(ds[margin].values, float)
-    m[ds["class_code"].values == 0] = np.nan  # degenerate cells (beta2 = beta1, b2 = -b1)
-    if where is not None:
-        m = np.where(where, m, np.nan)
-    if not np.isfinite(m).any() or np.nanmin(m) >= 0 or np.nanmax(m) <= 0:
-        return None
-    b = ds["beta1"].values
-    return ax.contour(b, b, m.T, levels=[0.0], colors=color, linewidths=lw, linestyles=ls, zorder=7)
-
-
-def _ss_boundary_cells(ds):
-    """Cells next to a change of the SS verdict inside one class (neutral counted as stable)."""
-    v = ds["stable_SS"].values.copy()
-    v[v == Verdict.NEUTRAL] = Verdict.STABLE
-    return _near_change(v, ds["class_code"].values)
-
-
-def _legend_patches(enum, present=None, relabel=None):
-    from matplotlib.patches import Patch
-
-    out = []
-    for m in enum:
-        if present is not None and int(m) not in present:
-            continue
-        label = (relabel or {}).get(m, m.label)
-        out.append(Patch(facecolor=m.color, edgecolor="0.4", lw=0.5, label=label))
-    return out
-
-
 # --------------------------------------------------------------------------- Fig. 1, classes
 
 _subclass_jit = jax.jit(mechanics.subclass_code)  # eager, the 24 calls took ~20 s of op dispatch
@@ -456,21 +299,20 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
     return out
 
 
-def plot_fig1_classes(path, reps: dict | None = None):
-    """Fig. 1 (class diagram): ``b1``, ``b2`` (solid) and ``a`` for each subclass (dashed, k)."""
-    plt = _plt()
-    reps = reps or class_representatives()
-    fig, axes = plt.subplots(4, 6, figsize=(13, 9.2))
+def draw_class_diagram(ax, cls: int, rep: dict) -> list:
+    """One class of Fig. 1 on ``ax``: ``b1``, ``b2`` (arrows), ``-b1`` (dotted) and ``a`` for each
+    subclass ``k`` (dashed), at the representative point ``rep`` of :func:`class_representatives`.
+
+    Returns the artists drawn.
+    """
     t = np.linspace(0, 2 * np.pi, 200)
-    for ax, cls in zip(axes.ravel(), mechanics.ALL_CLASSES, strict=True):
-        r = reps[cls]
-        ax.plot(np.cos(t), np.sin(t), color="0.85", lw=0.6)
-        ax.axhline(0, color="0.6", lw=0.5)
-        ax.axvline(0, color="0.6", lw=0.5)
-        b1s = r["beta1"] + np.pi
-        ax.plot([0, np.cos(b1s)], [0, np.sin(b1s)], ls=":", color="C3", lw=0.9)
-        for k, a in r["alpha"].items():
-            ax.plot([0, 0.78 * np.cos(a)], [0, 0.78 * np.sin(a)], ls="--", color="0.35", lw=0.8)
+    art = ax.plot(np.cos(t), np.sin(t), color="0.85", lw=0.6)
+    art += [ax.axhline(0, color="0.6", lw=0.5), ax.axvline(0, color="0.6", lw=0.5)]
+    b1s = rep["beta1"] + np.pi
+    art += ax.plot([0, np.cos(b1s)], [0, np.sin(b1s)], ls=":", color="C3", lw=0.9)
+    for k, a in rep["alpha"].items():
+        art += ax.plot([0, 0.78 * np.cos(a)], [0, 0.78 * np.sin(a)], ls="--", color="0.35", lw=0.8)
+        art.append(
             ax.text(
                 0.93 * np.cos(a),
                 0.93 * np.sin(a),
@@ -480,14 +322,18 @@ def plot_fig1_classes(path, reps: dict | None = None):
                 fontsize=7,
                 color="0.2",
             )
-        for j, (key, col) in enumerate((("beta1", "C3"), ("beta2", "C0"))):
-            b = r[key]
+        )
+    for j, (key, col) in enumerate((("beta1", "C3"), ("beta2", "C0"))):
+        b = rep[key]
+        art.append(
             ax.annotate(
                 "",
                 xy=(np.cos(b), np.sin(b)),
                 xytext=(0, 0),
                 arrowprops=dict(arrowstyle="-|>", color=col, lw=1.6, mutation_scale=9),
             )
+        )
+        art.append(
             ax.text(
                 1.22 * np.cos(b),
                 1.22 * np.sin(b),
@@ -497,30 +343,53 @@ def plot_fig1_classes(path, reps: dict | None = None):
                 ha="center",
                 va="center",
             )
-        ax.set_xlim(-1.4, 1.4)
-        ax.set_ylim(-1.4, 1.4)
-        ax.set_aspect("equal")
-        ax.set_xticks([])
-        ax.set_yticks([])
-        dual = mechanics.class_code(
-            *(
-                jnp.asarray(v)
-                for v in mechanics.dual_vectors(
-                    *mechanics.direction(r["beta1"]), *mechanics.direction(r["beta2"])
-                )
+        )
+    ax.set_xlim(-1.4, 1.4)
+    ax.set_ylim(-1.4, 1.4)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    dual = mechanics.class_code(
+        *(
+            jnp.asarray(v)
+            for v in mechanics.dual_vectors(
+                *mechanics.direction(rep["beta1"]), *mechanics.direction(rep["beta2"])
             )
         )
-        dual = int(dual)
-        ax.set_title(f"class {cls} ({'same' if dual == cls else dual})", fontsize=9)
-    fig.suptitle(
-        "Fig. 1 (classes): directions of $b_1$, $b_2$ (solid) and of $a$ for subclasses "
-        "k = 1..6 (dashed); dotted: $-b_1$; at representative points found by the kernels; (dual) in "
-        "brackets",
-        fontsize=10,
+    )
+    dual = int(dual)
+    art.append(ax.set_title(f"class {cls} ({'same' if dual == cls else dual})", fontsize=9))
+    return art
+
+
+def draw_fig1_classes(fig, reps: dict | None = None) -> list:
+    """Fig. 1 (class diagram) on ``fig``: a 4 x 6 grid of :func:`draw_class_diagram`."""
+    reps = reps or class_representatives()
+    axes = fig.subplots(4, 6)
+    art = []
+    for ax, cls in zip(axes.ravel(), mechanics.ALL_CLASSES, strict=True):
+        art += draw_class_diagram(ax, cls, reps[cls])
+    art.append(
+        fig.suptitle(
+            "Fig. 1 (classes): directions of $b_1$, $b_2$ (solid) and of $a$ for subclasses "
+            "k = 1..6 (dashed); dotted: $-b_1$; at representative points found by the kernels; "
+            "(dual) in brackets",
+            fontsize=10,
+        )
     )
     fig.tight_layout(rect=(0, 0, 1, 0.97))
+    return art
+
+
+def plot_fig1_classes(path, reps: dict | None = None):
+    """Write Fig. 1 (class diagram, :func:`draw_fig1_classes`) to ``path``."""
+    fig = drawing.new_figure(figsize=(13, 9.2))
+    draw_fig1_classes(fig, reps)
+    return _save(fig, path)
+
+
+def _save(fig, path) -> Path:
     savefig(fig, path, dpi=DPI)
-    plt.close(fig)
     return Path(path)
 
 
@@ -528,65 +397,92 @@ def plot_fig1_classes(path, reps: dict | None = None):
 
 _NEUTRAL_LABEL = {Verdict.NEUTRAL: "neutral (drawn as stable in the paper)"}
 
+#: the layers of Fig. 1 (stability map), in panel order
+FIG1_LAYERS = ("SF", "FS", "SS", "IF", "FI", "II_consistency", "II_stability", "nothing_stable")
 
-def _panels(axes, ds, pos, *, labels=True):
-    """The seven layers of Fig. 1 plus the 'nothing stable' overview, one per axis."""
-    cls = ds["class_code"].values
+_LAYER_TITLES = {
+    "SF": "SF stability ($b_{11} > 0$)",
+    "FS": "FS stability ($b_{22} > 0$)",
+    "SS": "SS stability",
+    "IF": "IF consistent (then stable)",
+    "FI": "FI consistent (then stable)",
+    "II_consistency": "II consistency",
+    "II_stability": "II stability (hatched: II inconsistent)",
+    "nothing_stable": "SS unstable, no stable IWC (orange; Sec. 6.4)",
+}
+
+
+def _layer_fields(ds) -> dict:
+    """The fields of the Fig. 1 layers on the full ``(beta1, beta2)`` grid."""
     n = ds.sizes["beta1"]
-    ones = np.ones((n, n), bool)
-    sf = np.broadcast_to(ds["stable_SF"].values[:, None], (n, n))
-    fs = np.broadcast_to(ds["stable_FS"].values[None, :], (n, n))
     IF = np.broadcast_to(ds["consistent_IF"].values[:, None], (n, n)).astype(np.int8)
     FI = np.broadcast_to(ds["consistent_FI"].values[None, :], (n, n)).astype(np.int8)
-    ss, ci, si = (ds[k].values for k in ("stable_SS", "consistent_II", "stable_II"))
+    ss, si = ds["stable_SS"].values, ds["stable_II"].values
     ss_ok = (ss == Verdict.STABLE) | (ss == Verdict.NEUTRAL)
-    nothing = ~ss_ok & (IF == 0) & (FI == 0) & (si != Verdict.STABLE)
-    kappa, q1, q2 = (float(ds[k]) for k in ("kappa", "q1", "q2"))
-    ss_cells = _ss_boundary_cells(ds)
-    ci_cells = _near_change(ci, cls)
-    si_cells = _near_change(si, cls) & (ci == Consistency.CONSISTENT)
-    layers = [
-        ("SF stability ($b_{11} > 0$)", lambda ax: _categorical(ax, ds, sf, Verdict), []),
-        ("FS stability ($b_{22} > 0$)", lambda ax: _categorical(ax, ds, fs, Verdict), []),
-        ("SS stability", lambda ax: _categorical(ax, ds, ss, Verdict), [("margin_SS", ss_cells)]),
-        ("IF consistent (then stable)", lambda ax: _categorical(ax, ds, IF, Consistency), []),
-        ("FI consistent (then stable)", lambda ax: _categorical(ax, ds, FI, Consistency), []),
-        (
-            "II consistency",
-            lambda ax: _categorical(ax, ds, ci, Consistency),
-            [("margin_II_consistent", ci_cells)],
-        ),
-        (
-            "II stability (hatched: II inconsistent)",
-            lambda ax: (
-                _categorical(ax, ds, si, Verdict, mask=ci == Consistency.CONSISTENT),
-                _hatch(ax, ds, ci != Consistency.CONSISTENT),
-            ),
-            [("margin_II_stable", si_cells), ("margin_II_consistent", ci_cells)],
-        ),
-        (
-            "SS unstable, no stable IWC (orange; Sec. 6.4)",
-            lambda ax: _boolean(ax, ds, nothing, NOTHING_COLOR),
-            [("margin_SS", ss_cells)],
-        ),
-    ]
-    for ax, (title, draw, dashed) in zip(axes, layers, strict=True):
-        ax.set_facecolor("white")
-        draw(ax)
-        for m, cells in dashed:
-            if m in ds:
-                _dashed(ax, ds, m, where=cells & ones)
-        _class_lines(ax)
-        if labels:
-            _class_labels(ax, pos)
-        _pi_axis(ax)
-        ax.set_title(title, fontsize=9)
-        ax.tick_params(labelsize=7)
-    for ax in axes[-4:]:
-        ax.set_xlabel(r"$\beta_1$", fontsize=9)
-    for ax in axes[::4]:
-        ax.set_ylabel(r"$\beta_2$", fontsize=9)
-    return kappa, q1, q2
+    return {
+        "SF": np.broadcast_to(ds["stable_SF"].values[:, None], (n, n)),
+        "FS": np.broadcast_to(ds["stable_FS"].values[None, :], (n, n)),
+        "SS": ss,
+        "IF": IF,
+        "FI": FI,
+        "II_consistency": ds["consistent_II"].values,
+        "II_stability": si,
+        "nothing_stable": ~ss_ok & (IF == 0) & (FI == 0) & (si != Verdict.STABLE),
+    }
+
+
+def _layer_boundaries(ds, layer) -> list:
+    """``(margin, cells)`` of the dashed model-dependent boundaries of a layer."""
+    cls = ds["class_code"].values
+    ci = ds["consistent_II"].values
+    if layer in ("SS", "nothing_stable"):
+        return [("margin_SS", drawing.ss_boundary_cells(ds))]
+    if layer == "II_consistency":
+        return [("margin_II_consistent", drawing.near_change(ci, cls))]
+    if layer == "II_stability":
+        si_cells = drawing.near_change(ds["stable_II"].values, cls) & (ci == Consistency.CONSISTENT)
+        return [
+            ("margin_II_stable", si_cells),
+            ("margin_II_consistent", drawing.near_change(ci, cls)),
+        ]
+    return []
+
+
+@drawing.hatch_style
+def draw_fig1_layer(ax, ds, layer: str, pos: dict | None = None) -> list:
+    """One panel of Fig. 1 (stability map) on ``ax``: the layer (one of :data:`FIG1_LAYERS`) of a
+    :func:`stability_map` dataset, its dashed model-dependent boundaries, the class boundaries and
+    (if ``pos``, from :func:`atlas.paper.drawing.label_positions`) the class labels.
+
+    Returns the artists drawn.
+    """
+    if layer not in FIG1_LAYERS:
+        raise ValueError(f"layer: expected one of {FIG1_LAYERS}, got {layer!r}")
+    field = _layer_fields(ds)[layer]
+    ci = ds["consistent_II"].values
+    ax.set_facecolor("white")
+    if layer in ("SF", "FS", "SS"):
+        art = [drawing.categorical(ax, ds, field, Verdict)]
+    elif layer in ("IF", "FI", "II_consistency"):
+        art = [drawing.categorical(ax, ds, field, Consistency)]
+    elif layer == "II_stability":
+        art = [
+            drawing.categorical(ax, ds, field, Verdict, mask=ci == Consistency.CONSISTENT),
+            drawing.hatch(ax, ds, ci != Consistency.CONSISTENT),
+        ]
+    else:
+        art = [drawing.boolean(ax, ds, field, drawing.NOTHING_COLOR)]
+    n = ds.sizes["beta1"]
+    for m, cells in _layer_boundaries(ds, layer):
+        if m in ds:
+            art.append(drawing.dashed(ax, ds, m, where=cells & np.ones((n, n), bool)))
+    art += drawing.class_lines(ax)
+    if pos is not None:
+        art += drawing.class_labels(ax, pos)
+    drawing.pi_axis(ax)
+    art.append(ax.set_title(_LAYER_TITLES[layer], fontsize=9))
+    ax.tick_params(labelsize=7)
+    return [a for a in art if a is not None]
 
 
 def _param_text(kappa, q1, q2):
@@ -594,21 +490,16 @@ def _param_text(kappa, q1, q2):
     return rf"$\kappa$ = {kappa:g}, {q}"
 
 
-def plot_fig1_stability(path, ds):
-    """Fig. 1 (stability map): 8 panels in the beta1-beta2 plane, legend from the verdict enums."""
+def _fig1_legend(fig, ds):
     from matplotlib.lines import Line2D
 
-    plt = _plt()
-    fig, axes = plt.subplots(2, 4, figsize=(15.5, 9.4))
-    pos = _label_positions(ds)
-    kappa, q1, q2 = _panels(axes.ravel(), ds, pos)
     present_v = (
         set(np.unique(ds["stable_SS"].values).tolist())
         | {0, 1}
         | set(np.unique(ds["stable_II"].values).tolist())
     )
-    handles = _legend_patches(Verdict, present_v, _NEUTRAL_LABEL)
-    handles += _legend_patches(
+    handles = drawing.legend_patches(Verdict, present_v, _NEUTRAL_LABEL)
+    handles += drawing.legend_patches(
         Consistency, set(np.unique(ds["consistent_II"].values).tolist()) | {0, 1}
     )
     handles += [
@@ -622,42 +513,58 @@ def plot_fig1_stability(path, ds):
             label="model-dependent boundary (zero of smooth margin)",
         ),
     ]
-    fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8.5, frameon=False)
+    return fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8.5, frameon=False)
+
+
+def draw_fig1_stability(fig, ds) -> list:
+    """Fig. 1 (stability map) on ``fig``: the 8 layers of :func:`draw_fig1_layer` in a 2 x 4 grid,
+    legend from the verdict enumerations, title with the parameters and decision counts."""
+    axes = fig.subplots(2, 4).ravel()
+    pos = drawing.label_positions(ds)
+    art = []
+    for ax, layer in zip(axes, FIG1_LAYERS, strict=True):
+        art += draw_fig1_layer(ax, ds, layer, pos)
+    for ax in axes[-4:]:
+        ax.set_xlabel(r"$\beta_1$", fontsize=9)
+    for ax in axes[::4]:
+        ax.set_ylabel(r"$\beta_2$", fontsize=9)
+    kappa, q1, q2 = (float(ds[k]) for k in ("kappa", "q1", "q2"))
+    art.append(_fig1_legend(fig, ds))
     und = int(ds.attrs.get("n_undecided", 0))
-    fig.suptitle(
-        f"Fig. 1 (stability map), {_param_text(kappa, q1, q2)}; grid "
-        f"{ds.sizes['beta1']}$^2$, {ds.attrs.get('n_resolved', 0)} cells settled by the "
-        f"exact reference, {und} undecided. FF (always stable when consistent) not shown.",
-        fontsize=10,
+    art.append(
+        fig.suptitle(
+            f"Fig. 1 (stability map), {_param_text(kappa, q1, q2)}; grid "
+            f"{ds.sizes['beta1']}$^2$, {ds.attrs.get('n_resolved', 0)} cells settled by the "
+            f"exact reference, {und} undecided. FF (always stable when consistent) not shown.",
+            fontsize=10,
+        )
     )
     # explicit margins: tight_layout mis-sizes the equal-aspect panels, so the bottom row's titles
     # ran into the top row's tick labels; hspace leaves room for tick labels + title
     fig.subplots_adjust(left=0.045, right=0.99, bottom=0.13, top=0.92, wspace=0.2, hspace=0.34)
-    savefig(fig, path, dpi=DPI)
-    plt.close(fig)
-    return Path(path)
+    return art
 
 
-def plot_fig1_variants(path, maps: list):
-    """SS stability + II consistency at several (kappa, q1, q2); the reference (first map)'s
-    dashed SS boundary is repeated in red in every panel to show how the boundaries move."""
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+def plot_fig1_stability(path, ds):
+    """Write Fig. 1 (stability map, :func:`draw_fig1_stability`) to ``path``."""
+    fig = drawing.new_figure(figsize=(15.5, 9.4))
+    draw_fig1_stability(fig, ds)
+    return _save(fig, path)
 
-    plt = _plt()
-    ncol = 3
-    nrow = math.ceil(len(maps) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.7 * nrow + 0.8), squeeze=False)
-    ref = maps[0]
-    ref_cells = _ss_boundary_cells(ref)
-    pos = _label_positions(ref)
-    for ax, ds in zip(axes.ravel(), maps, strict=False):
-        ss = ds["stable_SS"].values
-        _categorical(ax, ds, ss, Verdict)
-        ci = ds["consistent_II"].values
-        b = ds["beta1"].values
-        hatch = np.where(ci == Consistency.CONSISTENT, 1.0, 0.0)
+
+@drawing.hatch_style
+def draw_fig1_variant(ax, ds, ref, pos: dict | None = None) -> list:
+    """SS stability and II consistency (hatched) of one :func:`stability_map` on ``ax``, with the
+    reference map ``ref``'s SS boundary in red (how the model-dependent boundaries move)."""
+    ss = ds["stable_SS"].values
+    art = [drawing.categorical(ax, ds, ss, Verdict)]
+    ci = ds["consistent_II"].values
+    b = ds["beta1"].values
+    hatch = np.where(ci == Consistency.CONSISTENT, 1.0, 0.0)
+    art.append(
         ax.contourf(b, b, hatch.T, levels=[0.5, 1.5], colors="none", hatches=["////"], zorder=3)
+    )
+    art.append(
         ax.contourf(
             b,
             b,
@@ -667,24 +574,37 @@ def plot_fig1_variants(path, maps: list):
             alpha=0.25,
             zorder=2,
         )
-        _dashed(ax, ref, "margin_SS", where=ref_cells, color="C3", lw=0.9, ls="-")
-        _dashed(ax, ds, "margin_SS", where=_ss_boundary_cells(ds))
-        _dashed(
+    )
+    ref_cells = drawing.ss_boundary_cells(ref)
+    art.append(drawing.dashed(ax, ref, "margin_SS", where=ref_cells, color="C3", lw=0.9, ls="-"))
+    art.append(drawing.dashed(ax, ds, "margin_SS", where=drawing.ss_boundary_cells(ds)))
+    art.append(
+        drawing.dashed(
             ax,
             ds,
             "margin_II_consistent",
-            where=_near_change(ci, ds["class_code"].values),
+            where=drawing.near_change(ci, ds["class_code"].values),
             color=Consistency.CONSISTENT.color,
             lw=1.3,
         )
-        _class_lines(ax, lw=0.5)
-        _class_labels(ax, pos, fs=5.5)
-        _pi_axis(ax)
-        ax.tick_params(labelsize=7)
+    )
+    art += drawing.class_lines(ax, lw=0.5)
+    if pos is not None:
+        art += drawing.class_labels(ax, pos, fs=5.5)
+    drawing.pi_axis(ax)
+    ax.tick_params(labelsize=7)
+    art.append(
         ax.set_title(_param_text(*(float(ds[k]) for k in ("kappa", "q1", "q2"))), fontsize=9)
-    for ax in axes.ravel()[len(maps) :]:
-        ax.axis("off")
-    handles = _legend_patches(
+    )
+    return [a for a in art if a is not None]
+
+
+@drawing.hatch_style
+def _variants_legend(fig):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles = drawing.legend_patches(
         Verdict,
         {0, 1, 2},
         {
@@ -703,16 +623,39 @@ def plot_fig1_variants(path, maps: list):
         ),
         Line2D([], [], color="C3", label=r"SS boundary at $\kappa$=0.5, q=0 (reference)"),
     ]
-    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8.5, frameon=False)
-    fig.suptitle(
-        "Fig. 1 at other model parameters: the dashed (model-dependent) boundaries move; "
-        "the straight class boundaries do not",
-        fontsize=10,
+    return fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8.5, frameon=False)
+
+
+def draw_fig1_variants(fig, maps: list) -> list:
+    """SS stability + II consistency at several (kappa, q1, q2) on ``fig``, 3 per row
+    (:func:`draw_fig1_variant`); the reference (first map)'s SS boundary repeated in red."""
+    ncol = 3
+    nrow = math.ceil(len(maps) / ncol)
+    axes = fig.subplots(nrow, ncol, squeeze=False).ravel()
+    pos = drawing.label_positions(maps[0])
+    art = []
+    for ax, ds in zip(axes, maps, strict=False):
+        art += draw_fig1_variant(ax, ds, maps[0], pos)
+    for ax in axes[len(maps) :]:
+        ax.axis("off")
+    art.append(_variants_legend(fig))
+    art.append(
+        fig.suptitle(
+            "Fig. 1 at other model parameters: the dashed (model-dependent) boundaries move; "
+            "the straight class boundaries do not",
+            fontsize=10,
+        )
     )
     fig.subplots_adjust(left=0.05, right=0.99, bottom=0.1, top=0.93, wspace=0.18, hspace=0.3)
-    savefig(fig, path, dpi=DPI)
-    plt.close(fig)
-    return Path(path)
+    return art
+
+
+def plot_fig1_variants(path, maps: list):
+    """Write the Fig. 1 variants (:func:`draw_fig1_variants`) to ``path``."""
+    nrow = math.ceil(len(maps) / 3)
+    fig = drawing.new_figure(figsize=(4.6 * 3, 4.7 * nrow + 0.8))
+    draw_fig1_variants(fig, maps)
+    return _save(fig, path)
 
 
 # --------------------------------------------------------------------------- Table 2 figure
@@ -726,10 +669,8 @@ TABLE_SHADE = {
 }
 
 
-def plot_table2(path, rows):
-    """Table 2 as a figure: unstable dark, model-dependent light, stable white (paper's shading)."""
-    plt = _plt()
-    cols = ["class (dual)", "FF", "SS", "SF", "FS", "IF", "FI", "II", "CC"]
+def _table2_cells(rows):
+    """Cell texts, background colours and text colours of the Table 2 figure."""
     cells, colours, textc = [], [], []
     for r in rows:
         dual = "same" if r.dual == r.cls else str(r.dual)
@@ -749,7 +690,14 @@ def plot_table2(path, rows):
         cells.append(line)
         colours.append(shade)
         textc.append(["white" if c == TABLE_SHADE["unstable"] else "black" for c in shade])
-    fig, ax = plt.subplots(figsize=(8.4, 0.27 * len(rows) + 1.0))
+    return cells, colours, textc
+
+
+def draw_table2(ax, rows) -> list:
+    """Table 2 on ``ax`` (axis off): unstable dark, model-dependent light, stable white (the
+    paper's shading); ``rows`` from :func:`atlas.paper.tables.table2`.  Returns [table, title]."""
+    cols = ["class (dual)", "FF", "SS", "SF", "FS", "IF", "FI", "II", "CC"]
+    cells, colours, textc = _table2_cells(rows)
     ax.axis("off")
     tab = ax.table(
         cellText=cells,
@@ -768,13 +716,18 @@ def plot_table2(path, rows):
             cell.set_text_props(weight="bold")
         elif j > 0:
             cell.get_text().set_color(textc[i - 1][j])
-    ax.set_title(
+    title = ax.set_title(
         "Table 2 (regenerated): subclasses k where a mode is consistent; background: "
         "dark = unstable,\nlight = model-dependent, white = stable. IWC markers: x "
         "consistent, (x) model-dependent, - never; CC: ? = necessary condition holds",
         fontsize=8.5,
     )
+    return [tab, title]
+
+
+def plot_table2(path, rows):
+    """Write Table 2 as a figure (:func:`draw_table2`) to ``path``."""
+    fig = drawing.new_figure(figsize=(8.4, 0.27 * len(rows) + 1.0))
+    draw_table2(fig.subplots(), rows)
     fig.tight_layout()
-    savefig(fig, path, dpi=DPI)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)

@@ -1,6 +1,7 @@
 """Figures of the simulated contact dynamics: the paper's Fig. 2 and the outcome map.
 
-Plots only; the numbers come from :mod:`atlas.dynamics`.
+Plots only; the numbers come from :mod:`atlas.dynamics`.  The ``draw_*`` functions draw on a given
+``ax`` (or ``fig``) and return the artists; the ``plot_*`` wrappers make a figure and save it.
 """
 
 from __future__ import annotations
@@ -11,12 +12,29 @@ from pathlib import Path
 import numpy as np
 
 from atlas.core import config
-from atlas.data.io import savefig
-from atlas.dynamics.model import Outcome, classify, fig2_cases, simulate
+from atlas.core.verdicts import Consistency, Verdict
+from atlas.data.io import atomic_write_text, savefig
+from atlas.dynamics import (
+    Outcome,
+    classify,
+    fig2_cases,
+    no_stable_subclass,
+    outcome_grid,
+    outcome_map,
+    simulate,
+)
+from atlas.paper import drawing
+from atlas.paper.figures import stability_map
 
 __all__ = [
     "FIG2_T_END",
     "PAPER_MAP_N",
+    "draw_trajectory",
+    "draw_fig2",
+    "draw_outcome",
+    "draw_theory",
+    "draw_outcome_map",
+    "fig2_runs",
     "plot_fig2",
     "plot_outcome_map",
     "write_outcome_map",
@@ -33,34 +51,117 @@ _PAPER_SAYS = {
     "d": "caption: sustained small oscillation; text: growing, simultaneous impacts",
     "e": "caption: growing, simultaneous impacts; text: sustained micro-oscillation",
 }
+_TIME_LABEL = "time [rescaled, paper eq. 6]"
 
 
-def _plot_trajectory(ax, res, p, name, note, n_samples=6000):
-    """Gaps ``d1(t)``, ``d2(t)`` of one simulation on ``ax``, with its outcome written on it."""
-    outcome = classify(res)
+# --------------------------------------------------------------------------- Fig. 2
+
+
+def draw_trajectory(ax, res, p, name, note="", n_samples=6000, outcome=None) -> list:
+    """Gaps ``d1(t)``, ``d2(t)`` of one simulation ``res`` (parameters ``p``) on ``ax``, titled
+    ``(name) angles``, with its outcome (:func:`atlas.dynamics.classify` unless given) and
+    ``note`` written on it.  Returns the artists drawn."""
+    outcome = classify(res) if outcome is None else outcome
     t = np.union1d(np.linspace(0.0, res.t_final, n_samples), res.t_events)
     g = res.sample(t)
-    ax.plot(t, g[:, 0], lw=0.7, label=r"$d_1$")
-    ax.plot(t, g[:, 1], lw=0.7, label=r"$d_2$")
-    ax.axhline(0.0, color="k", lw=0.4)
+    art = ax.plot(t, g[:, 0], lw=0.7, label=r"$d_1$")
+    art += ax.plot(t, g[:, 1], lw=0.7, label=r"$d_2$")
+    art.append(ax.axhline(0.0, color="k", lw=0.4))
     ax.set_ylabel("gap [1]")
-    ax.set_title(
-        f"({name}) beta1={p['beta1'] / math.pi:.2f}pi, beta2={p['beta2'] / math.pi:.2f}pi, "
-        f"alpha={p['alpha'] / math.pi:.2f}pi, q={p['q'][0]:g}",
-        fontsize=9,
+    art.append(
+        ax.set_title(
+            f"({name}) beta1={p['beta1'] / math.pi:.2f}pi, beta2={p['beta2'] / math.pi:.2f}pi, "
+            f"alpha={p['alpha'] / math.pi:.2f}pi, q={p['q'][0]:g}",
+            fontsize=9,
+        )
     )
     text = f"simulated: {outcome.label} ({res.n_events} events, {res.status.value})"
-    ax.text(
-        0.01,
-        0.97,
-        text + (f"\n{note}" if note else ""),
-        transform=ax.transAxes,
-        va="top",
-        fontsize=8,
-        bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
+    art.append(
+        ax.text(
+            0.01,
+            0.97,
+            text + (f"\n{note}" if note else ""),
+            transform=ax.transAxes,
+            va="top",
+            fontsize=8,
+            bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
+        )
     )
-    ax.legend(loc="upper right", fontsize=8)
-    return outcome
+    art.append(ax.legend(loc="upper right", fontsize=8))
+    return art
+
+
+def fig2_runs(t_end: dict | None = None) -> dict:
+    """The simulations of Fig. 2: ``{panel: (parameters, SimulationResult, Outcome)}`` over the
+    horizons ``t_end`` (default :data:`FIG2_T_END`) [time]."""
+    horizons = dict(FIG2_T_END, **(t_end or {}))
+    runs = {}
+    for name, p in fig2_cases().items():
+        p = dict(p, t_end=horizons[name])
+        res = simulate(**p, max_events=100_000)
+        runs[name] = (p, res, classify(res))
+    return runs
+
+
+def draw_fig2(fig, runs: dict, n_samples: int = 6000) -> list:
+    """Fig. 2 (panels a-e, one per row) on ``fig`` from :func:`fig2_runs`."""
+    axes = fig.subplots(len(runs), 1, squeeze=False)[:, 0]
+    art = []
+    for ax, (name, (p, res, outcome)) in zip(axes, runs.items(), strict=True):
+        art += draw_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples, outcome)
+    axes[-1].set_xlabel(_TIME_LABEL)
+    return art
+
+
+def _fig2_table(runs) -> str:
+    rows = [
+        "| panel | beta1, beta2, alpha | k; q (physical) | simulated (horizon) | the paper says |",
+        "|---|---|---|---|---|",
+    ]
+    for name, (p, res, outcome) in runs.items():
+        ang = ", ".join(f"{p[k] / math.pi:.2f} pi" for k in ("beta1", "beta2", "alpha"))
+        rows.append(
+            f"| {name} | {ang} | {p['k'][0]:g}, {p['k'][1]:g}; {p['q'][0]:g}, {p['q'][1]:g} "
+            f"| **{outcome.label}** "
+            f"(t <= {p['t_end']:g}, {res.n_events} events) | {_PAPER_SAYS[name]} |"
+        )
+    return (
+        "Fig. 2, simulated outcome per panel (`atlas.paper.figures_dynamics.plot_fig2`; the "
+        "caption and the text of Sec. 6.4-6.5 disagree on panels d and e: the simulation "
+        "decides).\n\n" + "\n".join(rows) + "\n"
+    )
+
+
+def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
+    """Regenerate the paper's Fig. 2 (panels a-e): gaps ``d1(t)``, ``d2(t)`` of eq. (1), (6).
+
+    Parameters
+    ----------
+    outdir : path-like
+        Output directory (created if missing).
+    t_end : dict, optional
+        Horizon per panel, default :data:`FIG2_T_END` [time].
+    n_samples : int
+        Samples of the exact dense output per panel (event times are added).
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``[outdir / "fig2.png"]``; ``outdir / "fig2.md"`` (the outcomes beside what the paper
+        says) is written too.
+    """
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    runs = fig2_runs(t_end)
+    fig = drawing.new_figure(figsize=(8, 13), constrained_layout=True)
+    draw_fig2(fig, runs, n_samples)
+    path = outdir / "fig2.png"
+    savefig(fig, path)
+    atomic_write_text(outdir / "fig2.md", _fig2_table(runs))
+    return [path]
+
+
+# --------------------------------------------------------------------------- atlas simulate
 
 
 def run_cli(
@@ -91,6 +192,32 @@ def run_cli(
     if outcome_map:
         return _run_map(n, kappa, q, alpha, t_end, out, engine, case)
     case = case[len("fig2") :] if case and case.startswith("fig2") else case
+    p = _case_params(case, beta1, beta2, alpha, t_end, (k1, k2), (q1, q2))
+    res = simulate(**p, max_events=100_000)
+    outcome = classify(res)
+    print(
+        f"{case or 'custom'}: {outcome.label}; {res.n_events} events, status {res.status.value}, "
+        f"t = {res.t_final:g}"
+    )
+    if out:
+        out = Path(out)
+        if out.suffix.lower() == ".csv":
+            atomic_write_text(out, _events_csv(res))
+        else:
+            fig = drawing.new_figure(figsize=(8, 3), constrained_layout=True)
+            ax = fig.subplots()
+            draw_trajectory(
+                ax, res, p, case or "custom", _PAPER_SAYS.get(case, ""), outcome=outcome
+            )
+            ax.set_xlabel(_TIME_LABEL)
+            savefig(fig, out)
+        print(f"wrote {out}")
+    return 0
+
+
+def _case_params(case, beta1, beta2, alpha, t_end, k, q) -> dict:
+    """Keyword arguments of :func:`atlas.dynamics.simulate`: a Fig. 2 case (or the default
+    physical parameters) with the given values overriding."""
     p = (
         dict(fig2_cases()[case])
         if case
@@ -108,55 +235,23 @@ def run_cli(
     for key, v in (("beta1", beta1), ("beta2", beta2), ("alpha", alpha), ("t_end", t_end)):
         if v is not None:
             p[key] = v
-    k = list(p["k"])
-    q = list(p["q"])
-    for i, v in ((0, k1), (1, k2)):
-        if v is not None:
-            k[i] = v
-    for i, v in ((0, q1), (1, q2)):
-        if v is not None:
-            q[i] = v
-    p["k"], p["q"] = tuple(k), tuple(q)
-    res = simulate(**p, max_events=100_000)
-    outcome = classify(res)
-    print(
-        f"{case or 'custom'}: {outcome.label}; {res.n_events} events, status {res.status.value}, "
-        f"t = {res.t_final:g}"
-    )
-    if out:
-        out = Path(out)
-        if out.suffix.lower() == ".csv":
-            rows = ["t,kind,contact,d1,d2,d1dot,d2dot,mode_after"]
-            for t, kind, c, g, m in zip(
-                res.t_events, res.kinds, res.contacts, res.states, res.modes, strict=True
-            ):
-                rows.append(
-                    ",".join(
-                        [repr(float(t)), kind, str(int(c))] + [repr(float(x)) for x in g] + [m]
-                    )
-                )
-            from atlas.data.io import atomic_write_text
+    p["k"] = tuple(old if new is None else new for old, new in zip(p["k"], k, strict=True))
+    p["q"] = tuple(old if new is None else new for old, new in zip(p["q"], q, strict=True))
+    return p
 
-            atomic_write_text(out, "\n".join(rows) + "\n")
-        else:
-            import matplotlib
 
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
-
-            fig, ax = plt.subplots(figsize=(8, 3), constrained_layout=True)
-            _plot_trajectory(ax, res, p, case or "custom", _PAPER_SAYS.get(case, ""))
-            ax.set_xlabel("time [rescaled, paper eq. 6]")
-            savefig(fig, out)
-            plt.close(fig)
-        print(f"wrote {out}")
-    return 0
+def _events_csv(res) -> str:
+    rows = ["t,kind,contact,d1,d2,d1dot,d2dot,mode_after"]
+    for t, kind, c, g, m in zip(
+        res.t_events, res.kinds, res.contacts, res.states, res.modes, strict=True
+    ):
+        rows.append(
+            ",".join([repr(float(t)), kind, str(int(c))] + [repr(float(x)) for x in g] + [m])
+        )
+    return "\n".join(rows) + "\n"
 
 
 def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
-    from atlas.dynamics.model import outcome_grid
-    from atlas.dynamics.model import outcome_map as compute
-
     if case:
         raise ValueError("case: --case and --map exclude each other")
     n = 24 if n is None else int(n)
@@ -171,7 +266,7 @@ def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
     if t_end is not None:
         kw["t_end"] = t_end
     b1, b2 = outcome_grid(n)
-    ds = compute(b1, b2, engine=engine, **kw)
+    ds = outcome_map(b1, b2, engine=engine, **kw)
     vals, counts = np.unique(ds["outcome"].values, return_counts=True)
     summary = ", ".join(f"{Outcome(int(v)).label} {c}" for v, c in zip(vals, counts, strict=True))
     print(
@@ -185,62 +280,6 @@ def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
             plot_outcome_map(ds, out)
         print(f"wrote {out}")
     return 0
-
-
-def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
-    """Regenerate the paper's Fig. 2 (panels a-e): gaps ``d1(t)``, ``d2(t)`` of eq. (1), (6).
-
-    Parameters
-    ----------
-    outdir : path-like
-        Output directory (created if missing).
-    t_end : dict, optional
-        Horizon per panel, default :data:`FIG2_T_END` [time].
-    n_samples : int
-        Samples of the exact dense output per panel (event times are added).
-
-    Returns
-    -------
-    list of pathlib.Path
-        ``[outdir / "fig2.png"]``.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    horizons = dict(FIG2_T_END, **(t_end or {}))
-    outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
-    fig, axes = plt.subplots(5, 1, figsize=(8, 13), constrained_layout=True)
-    rows = [
-        "| panel | beta1, beta2, alpha | k; q (physical) | simulated (horizon) | the paper says |",
-        "|---|---|---|---|---|",
-    ]
-    for ax, (name, p) in zip(axes, fig2_cases().items(), strict=True):
-        p = dict(p, t_end=horizons[name])
-        res = simulate(**p, max_events=100_000)
-        outcome = _plot_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples)
-        ang = ", ".join(f"{p[k] / math.pi:.2f} pi" for k in ("beta1", "beta2", "alpha"))
-        rows.append(
-            f"| {name} | {ang} | {p['k'][0]:g}, {p['k'][1]:g}; {p['q'][0]:g}, {p['q'][1]:g} "
-            f"| **{outcome.label}** "
-            f"(t <= {p['t_end']:g}, {res.n_events} events) | {_PAPER_SAYS[name]} |"
-        )
-    axes[-1].set_xlabel("time [rescaled, paper eq. 6]")
-    path = outdir / "fig2.png"
-    savefig(fig, path)
-    plt.close(fig)
-    from atlas.data.io import atomic_write_text
-
-    atomic_write_text(
-        outdir / "fig2.md",
-        "Fig. 2, simulated outcome per panel (`atlas.paper.figures_dynamics.plot_fig2`; the caption and "
-        "the text of Sec. 6.4-6.5 disagree on panels d and e: the simulation decides).\n\n"
-        + "\n".join(rows)
-        + "\n",
-    )
-    return [path]
 
 
 #: grid of the outcome map in ``atlas paper`` (quick mode, full) [cells per axis]
@@ -271,12 +310,15 @@ def write_outcome_map(ds, path, overwrite: bool = True, history: str | None = No
     return write_netcdf(ds, path, overwrite=overwrite)
 
 
-def _theory_panel(ax, theory):
-    """The Fig. 1 theory map (certified kernels, :func:`atlas.paper.figures.stability_map`) of the same
-    ``(kappa, q)``: SS stability as in Fig. 1, orange where SS is unstable and no impact without
-    collision is stable (IF, FI consistent; II stable), the Fig. 1 overview layer."""
-    from atlas.core.verdicts import Consistency, Verdict
-    from atlas.paper import figures
+# --------------------------------------------------------------------------- outcome map
+
+
+def draw_theory(ax, theory) -> list:
+    """The Fig. 1 theory map (certified kernels, :func:`atlas.paper.figures.stability_map`) on
+    ``ax``: SS stability as in Fig. 1, orange where SS is unstable and no impact without collision
+    is stable (IF, FI consistent; II stable), the Fig. 1 overview layer, the dashed SS boundary and
+    the class boundaries.  Returns the artists drawn."""
+    from matplotlib.colors import ListedColormap
 
     n = theory.sizes["beta1"]
     ss = theory["stable_SS"].values
@@ -289,67 +331,51 @@ def _theory_panel(ax, theory):
         )
     )
     nothing = (ss != Verdict.STABLE) & (ss != Verdict.NEUTRAL) & ~iwc
-    figures._categorical(ax, theory, ss, Verdict)
+    art = [drawing.categorical(ax, theory, ss, Verdict)]
     edges = np.linspace(0, 2 * np.pi, n + 1)
-    ax.pcolormesh(
-        edges,
-        edges,
-        np.ma.masked_where(~nothing, np.ones((n, n))).T,
-        cmap=_single_cmap(figures.NOTHING_COLOR),
-        rasterized=True,
+    art.append(
+        ax.pcolormesh(
+            edges,
+            edges,
+            np.ma.masked_where(~nothing, np.ones((n, n))).T,
+            cmap=ListedColormap([drawing.NOTHING_COLOR]),
+            rasterized=True,
+        )
     )
     if "margin_SS" in theory:
-        figures._dashed(ax, theory, "margin_SS", where=figures._ss_boundary_cells(theory))
-    figures._class_lines(ax)
-    return set(np.unique(ss).tolist())
+        art.append(drawing.dashed(ax, theory, "margin_SS", where=drawing.ss_boundary_cells(theory)))
+    art += drawing.class_lines(ax)
+    return [a for a in art if a is not None]
 
 
-def _single_cmap(color):
-    from matplotlib.colors import ListedColormap
-
-    return ListedColormap([color])
-
-
-def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
-    """Outcome map beside the Fig. 1 theory map of the same ``(kappa, q)``.
-
-    Left: the simulated outcome per cell (:class:`atlas.dynamics.Outcome` colours, ``pcolormesh``
-    + ``ListedColormap`` + ``BoundaryNorm``), one sample per cell of the uniform grid of
-    ``[0, 2 pi)^2``.  Right: ``theory`` (an :func:`atlas.paper.figures.stability_map` dataset; computed
-    at 121 x 121 if not given): SS stability, orange where no mode or impact without collision is
-    stable.  Both: solid black outline of subclasses 132, 133, 142, 143 and their duals at the
-    map's ``alpha`` (paper Sec. 6.4-6.5; :func:`atlas.dynamics.no_stable_subclass` on an
-    ``n_outline`` grid), thin lines: class boundaries.
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    from matplotlib.colors import BoundaryNorm, ListedColormap
+def _theory_legend(ax, theory):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from atlas.core.verdicts import Verdict
-    from atlas.dynamics.model import no_stable_subclass
-    from atlas.paper import figures
+    ss_codes = set(np.unique(theory["stable_SS"].values).tolist())
+    h1 = drawing.legend_patches(Verdict, ss_codes, {Verdict.NEUTRAL: "SS neutral (q = 0)"})
+    h1 = [Patch(facecolor=p.get_facecolor(), label=p.get_label()) for p in h1]
+    for p in h1:
+        if not p.get_label().startswith("SS"):
+            p.set_label("SS " + p.get_label())
+    h1.append(Patch(color=drawing.NOTHING_COLOR, label="SS unstable, no stable IWC"))
+    h1.append(Line2D([], [], color="k", lw=1.1, ls="--", label="SS boundary (smooth margin)"))
+    return ax.legend(
+        handles=h1, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8
+    )
 
-    kappa, q1, q2 = (float(ds.attrs[k]) for k in ("kappa", "q1", "q2"))
-    alpha = float(ds.attrs["alpha"])
-    if theory is None:
-        theory = figures.stability_map(121, kappa, q1, q2)
-    elif not all(
-        math.isclose(float(theory[k]), v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2))
-    ):
-        raise ValueError("theory: (kappa, q1, q2) differ from the outcome map's")
-    plt = figures._plt()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(13.5, 6.8))
+
+def draw_outcome(ax, ds) -> list:
+    """The simulated outcome per cell of an :func:`atlas.dynamics.outcome_map` dataset on ``ax``
+    (:class:`atlas.dynamics.Outcome` colours, ``pcolormesh`` + ``ListedColormap`` +
+    ``BoundaryNorm``) and the class boundaries.  Returns the artists drawn."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
     codes = [int(m) for m in Outcome]
     cmap = ListedColormap([Outcome(c).color for c in codes])
     norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
     n1, n2 = ds.sizes["beta1"], ds.sizes["beta2"]
-    ax0.pcolormesh(
+    mesh = ax.pcolormesh(
         np.linspace(0, 2 * np.pi, n1 + 1),
         np.linspace(0, 2 * np.pi, n2 + 1),
         ds["outcome"].values.T,
@@ -357,46 +383,102 @@ def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
         norm=norm,
         rasterized=True,
     )
-    figures._class_lines(ax0)
-    ss_codes = _theory_panel(ax1, theory)
-    f = (np.arange(n_outline) + 0.5) * (2 * np.pi / n_outline)
-    F1, F2 = np.meshgrid(f, f, indexing="ij")
-    region = no_stable_subclass(F1, F2, np.full(F1.shape, alpha)).astype(float)
-    for ax in (ax0, ax1):
-        if region.any():
-            ax.contour(f, f, region.T, levels=[0.5], colors="k", linewidths=1.6, zorder=8)
-        figures._pi_axis(ax)
-        ax.set_xlabel(r"$\beta_1$")
-        ax.set_ylabel(r"$\beta_2$")
+    return [mesh] + drawing.class_lines(ax)
+
+
+def _outcome_legend(ax, ds):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     present = sorted(set(np.unique(ds["outcome"].values).tolist()))
     h0 = [Patch(color=Outcome(c).color, label=Outcome(c).label) for c in present]
     h0.append(Line2D([], [], color="k", lw=1.6, label="subclasses 132/133/142/143 + duals"))
-    ax0.legend(handles=h0, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
-    h1 = figures._legend_patches(Verdict, ss_codes, {Verdict.NEUTRAL: "SS neutral (q = 0)"})
-    h1 = [Patch(facecolor=p.get_facecolor(), label=p.get_label()) for p in h1]
-    for p in h1:
-        if not p.get_label().startswith("SS"):
-            p.set_label("SS " + p.get_label())
-    h1.append(Patch(color=figures.NOTHING_COLOR, label="SS unstable, no stable IWC"))
-    h1.append(Line2D([], [], color="k", lw=1.1, ls="--", label="SS boundary (smooth margin)"))
-    ax1.legend(handles=h1, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8)
+    return ax.legend(
+        handles=h0, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8
+    )
+
+
+def draw_no_stable_outline(ax, alpha, n_outline: int = 600) -> list:
+    """Solid black outline of subclasses 132, 133, 142, 143 and their duals at ``alpha`` [rad]
+    (paper Sec. 6.4-6.5; :func:`atlas.dynamics.no_stable_subclass` on an ``n_outline`` grid),
+    with the ``pi`` axes and labels.  Returns the artists drawn."""
+    f = (np.arange(n_outline) + 0.5) * (2 * np.pi / n_outline)
+    F1, F2 = np.meshgrid(f, f, indexing="ij")
+    region = no_stable_subclass(F1, F2, np.full(F1.shape, alpha)).astype(float)
+    art = []
+    if region.any():
+        art.append(ax.contour(f, f, region.T, levels=[0.5], colors="k", linewidths=1.6, zorder=8))
+    drawing.pi_axis(ax)
+    art += [ax.set_xlabel(r"$\beta_1$"), ax.set_ylabel(r"$\beta_2$")]
+    return art
+
+
+def _check_theory(ds, theory):
+    """The theory map of the outcome map's ``(kappa, q1, q2)`` (computed at 121^2 if None)."""
+    kappa, q1, q2 = (float(ds.attrs[k]) for k in ("kappa", "q1", "q2"))
+    if theory is None:
+        return stability_map(121, kappa, q1, q2)
+    if not all(
+        math.isclose(float(theory[k]), v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2))
+    ):
+        raise ValueError("theory: (kappa, q1, q2) differ from the outcome map's")
+    return theory
+
+
+def draw_outcome_map(fig, ds, theory=None, n_outline: int = 600) -> list:
+    """Outcome map beside the Fig. 1 theory map of the same ``(kappa, q)`` on ``fig``.
+
+    Left: :func:`draw_outcome`, one sample per cell of the uniform grid of ``[0, 2 pi)^2``.
+    Right: :func:`draw_theory` of ``theory`` (an :func:`atlas.paper.figures.stability_map`
+    dataset; computed at 121 x 121 if not given).  Both: :func:`draw_no_stable_outline` at the
+    map's ``alpha``.  Returns the artists drawn.
+    """
+    kappa, q1, q2 = (float(ds.attrs[k]) for k in ("kappa", "q1", "q2"))
+    alpha = float(ds.attrs["alpha"])
+    theory = _check_theory(ds, theory)
+    ax0, ax1 = fig.subplots(1, 2)
+    art = draw_outcome(ax0, ds) + draw_theory(ax1, theory)
+    for ax in (ax0, ax1):
+        art += draw_no_stable_outline(ax, alpha, n_outline)
+    art += [_outcome_legend(ax0, ds), _theory_legend(ax1, theory)]
+    n1, n2 = ds.sizes["beta1"], ds.sizes["beta2"]
     und = int((ds["outcome"].values == int(Outcome.UNDETERMINED)).sum())
-    ax0.set_title(
-        f"simulated ({n1}x{n2} cells, {ds.attrs['n_perturb']} run(s) each, t <= "
-        f"{ds.attrs['t_end']:g} x up to {ds.attrs.get('horizon_cap', 1):g}; {und} undetermined)",
-        fontsize=9,
+    art.append(
+        ax0.set_title(
+            f"simulated ({n1}x{n2} cells, {ds.attrs['n_perturb']} run(s) each, t <= "
+            f"{ds.attrs['t_end']:g} x up to {ds.attrs.get('horizon_cap', 1):g}; "
+            f"{und} undetermined)",
+            fontsize=9,
+        )
     )
-    ax1.set_title(
-        f"theory (Fig. 1, certified kernels, {theory.sizes['beta1']}$^2$ cells)", fontsize=9
+    art.append(
+        ax1.set_title(
+            f"theory (Fig. 1, certified kernels, {theory.sizes['beta1']}$^2$ cells)", fontsize=9
+        )
     )
-    fig.suptitle(
-        f"Outcome of a perturbed SS equilibrium vs theory: kappa = {kappa:g}, q = ({q1:g}, "
-        f"{q2:g}), alpha = {alpha / math.pi:.3g} pi",
-        fontsize=10,
+    art.append(
+        fig.suptitle(
+            f"Outcome of a perturbed SS equilibrium vs theory: kappa = {kappa:g}, q = ({q1:g}, "
+            f"{q2:g}), alpha = {alpha / math.pi:.3g} pi",
+            fontsize=10,
+        )
     )
     fig.subplots_adjust(left=0.06, right=0.98, top=0.9, bottom=0.22, wspace=0.2)
+    return art
+
+
+def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
+    """Write the outcome map beside the theory map (:func:`draw_outcome_map`) to ``path``.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig = drawing.new_figure(figsize=(13.5, 6.8))
+    draw_outcome_map(fig, ds, theory, n_outline)
     savefig(fig, path)
-    plt.close(fig)
     return path
 
 
@@ -404,8 +486,6 @@ def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
     """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
     ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
     :func:`plot_outcome_map`).  ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
-    from atlas.dynamics.model import outcome_grid, outcome_map
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     b1, b2 = outcome_grid(n)

@@ -1,13 +1,13 @@
 """The batched JAX stepper (atlas.dynamics.jax_engine) against the NumPy simulator (atlas.dynamics), which
-is itself checked against closed forms and scipy solve_ivp in test_dynamics.py."""
+is itself checked against closed forms and scipy solve_ivp in test_simulator.py and test_reference.py."""
 
 import math
 
 import numpy as np
 import pytest
 
+from atlas import dynamics as D
 from atlas.dynamics import jax_engine as J
-from atlas.dynamics import model as D
 
 CASES = D.fig2_cases()
 
@@ -39,7 +39,7 @@ def test_events_agree_with_numpy(batch, n):
 
 def test_stress_case_many_events(batch):
     _, res = batch
-    assert len(res[5]["kinds"]) > 100  # the no-skip scan of this case is in test_dynamics.py
+    assert len(res[5]["kinds"]) > 100  # the no-skip scan of this case is in test_simulator.py
 
 
 def test_event_cap_status():

@@ -102,8 +102,10 @@ def test_one_claim_computes_only_its_samples():
     ctx = audit.Context(ci=True)
     audit.run_audit(select="Z", context=ctx)  # the Ziegler band needs no shared sample
     assert ctx.computed() == set()
-    audit.run_audit(select=["T1", "S144"], context=ctx)
+    audit.run_audit(select="T1", context=ctx)
     assert ctx.computed() == {"table1_points"}
+    audit.run_audit(select="S144", context=ctx)  # 144 subclasses: Table 1 points + rigid bodies
+    assert ctx.computed() == {"table1_points", "realisations"}
 
 
 def test_select_unknown_claim():

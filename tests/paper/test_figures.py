@@ -50,3 +50,124 @@ def test_damped_map_has_stable_cells():
     assert (d["stable_SS"].values == Verdict.STABLE).any()
     interior = d["class_code"].values != 0  # det B = 0 on beta2 = beta1: double zero root, neutral
     assert not (d["stable_SS"].values[interior] == Verdict.NEUTRAL).any()
+
+
+# --------------------------------------------------------------------------- drawing on a given ax
+
+
+def _check_drawn(art, ax=None, fig=None):
+    """Every returned item is an artist of ``ax`` (or of ``fig``), and the axes holds it."""
+    from matplotlib.artist import Artist
+
+    assert art, "nothing returned"
+    for a in art:
+        assert isinstance(a, Artist), type(a)
+        if ax is not None:
+            assert a.axes is ax or a in (ax.xaxis.label, ax.yaxis.label), a
+        if fig is not None:
+            assert a.figure is fig, a
+
+
+def _axes():
+    from matplotlib.figure import Figure
+
+    return Figure().subplots()
+
+
+def _outcome_dataset(kappa=0.5):
+    import xarray as xr
+
+    from atlas.dynamics import Outcome, outcome_grid
+
+    b1, b2 = outcome_grid(3)
+    codes = np.array([[int(o) for o in list(Outcome)[i : i + 3]] for i in range(3)], np.int8)
+    attrs = dict(kappa=kappa, q1=0.0, q2=0.0, alpha=0.35 * np.pi, n_perturb=1, t_end=10.0)
+    return xr.Dataset(
+        {"outcome": (("beta1", "beta2"), codes)}, coords={"beta1": b1, "beta2": b2}, attrs=attrs
+    )
+
+
+def test_fig1_draw_functions_draw_on_the_given_ax(ds):
+    import matplotlib
+
+    from atlas.paper import drawing, figures
+
+    before = {k: matplotlib.rcParams[k] for k in drawing.HATCH_STYLE}
+    pos = drawing.label_positions(ds)
+    for layer in figures.FIG1_LAYERS:
+        ax = _axes()
+        art = figures.draw_fig1_layer(ax, ds, layer, pos)
+        _check_drawn(art, ax=ax)
+        assert ax.get_title() and set(art) <= set(ax.get_children())
+    ax = _axes()
+    _check_drawn(figures.draw_fig1_variant(ax, ds, ds, pos), ax=ax)
+    ax = _axes()
+    rep = {"beta1": 0.3, "beta2": 2.0, "alpha": {1: 1.0, 2: 4.0}}
+    art = figures.draw_class_diagram(ax, 13, rep)
+    _check_drawn(art, ax=ax)
+    assert sum(t.get_text() in ("1", "2") for t in ax.texts) == 2  # one label per subclass
+    # the hatching style is scoped to the drawing: the global rcParams are untouched
+    assert {k: matplotlib.rcParams[k] for k in drawing.HATCH_STYLE} == before
+    with pytest.raises(ValueError, match="layer"):
+        figures.draw_fig1_layer(_axes(), ds, "XY")
+
+
+def test_fig1_multi_panel_draw_functions_fill_the_given_figure(ds):
+    from matplotlib.figure import Figure
+
+    from atlas.paper import figures
+
+    fig = Figure()
+    _check_drawn(figures.draw_fig1_stability(fig, ds), fig=fig)
+    assert len(fig.axes) == len(figures.FIG1_LAYERS) and fig.legends
+    fig = Figure()
+    _check_drawn(figures.draw_fig1_variants(fig, [ds, ds]), fig=fig)
+    assert sum(ax.get_visible() and ax.axison for ax in fig.axes) == 2  # 3rd panel switched off
+
+
+def test_table2_draw_and_plot(tmp_path):
+    from types import SimpleNamespace
+
+    from atlas.paper import figures
+
+    row = SimpleNamespace(
+        cls=11, dual=11, IF="x", FI="-", II="(x)", CC="?", II_stability="model-dependent",
+        subclasses={"FF": [1, 2], "SS": [3], "SF": [], "FS": [4]},
+        stability={"FF": "stable", "SS": "unstable", "SF": "stable", "FS": "model-dependent"},
+    )  # fmt: skip
+    ax = _axes()
+    tab, title = figures.draw_table2(ax, [row])
+    _check_drawn([tab, title], ax=ax)
+    assert tab[1, 0].get_text().get_text() == "11 (same)"
+    assert tab[1, 2].get_facecolor()[:3] == pytest.approx((0x4D / 255,) * 3)  # SS unstable: dark
+    path = figures.plot_table2(tmp_path / "t.png", [row])
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_dynamics_draw_functions_draw_on_the_given_ax(ds):
+    from matplotlib.figure import Figure
+
+    from atlas.dynamics import fig2_cases, simulate
+    from atlas.paper import figures_dynamics as fd
+
+    p = dict(fig2_cases()["d"], t_end=2.0)
+    res = simulate(**p)
+    ax = _axes()
+    art = fd.draw_trajectory(ax, res, p, "d", "note", n_samples=50)
+    _check_drawn(art, ax=ax)
+    assert [line.get_label() for line in ax.get_lines()[:2]] == ["$d_1$", "$d_2$"]
+    out = _outcome_dataset()
+    ax = _axes()
+    _check_drawn(fd.draw_outcome(ax, out), ax=ax)
+    ax = _axes()
+    _check_drawn(fd.draw_theory(ax, ds), ax=ax)
+    ax = _axes()
+    _check_drawn(fd.draw_no_stable_outline(ax, 0.35 * np.pi, n_outline=60), ax=ax)
+    fig = Figure()
+    _check_drawn(fd.draw_outcome_map(fig, out, theory=ds, n_outline=60), fig=fig)
+    assert len(fig.axes) == 2
+    with pytest.raises(ValueError, match="theory"):
+        fd.draw_outcome_map(Figure(), _outcome_dataset(kappa=2.0), theory=ds)
+    fig = Figure()
+    runs = {"d": (p, res, fd.classify(res))}
+    _check_drawn(fd.draw_fig2(fig, runs, n_samples=50), fig=fig)

@@ -1,0 +1,500 @@
+"""Exact event-driven simulator of the compliant two-contact dynamics, NumPy engine (paper
+Sec. 4.1, 6.4-6.5; the system itself: :mod:`atlas.dynamics.system`).
+
+Between switching events the state ``z = (d1, d2, d1', d2', 1)`` of the active mode ``S`` obeys
+``z' = E_S z`` and is advanced exactly with ``expm(E_S h)``.
+
+Event detection (no crossing skipped)
+-------------------------------------
+The monitored event functions are linear functionals of the state: the gaps ``d_i`` (always) and
+the forces ``phi_i`` (while ``d_i <= 0``).  Time is cut into sub-steps ``h_S = theta / rho_S``
+where ``rho_S`` is the largest eigenvalue modulus of ``A_S`` (``theta = 0.5`` by default, i.e.
+about 1/12 of the fastest period), and advanced with ``expm(E_S h_S)``.  On each sub-step a
+crossing is detected when the function's value at the end has the opposite sign to the recorded
+one *or* when its derivative changes sign and the value at the extremum (found by Brent's method)
+has the opposite sign (this catches a double crossing inside one sub-step).  The crossing is
+then located by Brent's method on the exact Taylor polynomial of ``expm(E_S tau) z`` (degree 30,
+truncation error below 1e-30 for ``rho_S tau <= 0.5``) to an absolute time tolerance
+``xtol = 1e-13 h_S``.  A burst of events ends with status ``"event_cap"``, never a hang.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time as _time
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.optimize
+
+from atlas.dynamics.system import (
+    FORCE_OFF,
+    FORCE_ON,
+    IMPACT,
+    LIFTOFF,
+    Mode,
+    Status,
+    System,
+    build_system,
+    check_finite,
+    expm,
+    iwc_aligned,
+    mask_from_signs,
+    mode_name,
+    run_scale,
+)
+
+__all__ = ["SimulationResult", "simulate"]
+
+
+@dataclasses.dataclass
+class SimulationResult:
+    """Output of :func:`simulate`.
+
+    Attributes
+    ----------
+    t_events : ndarray (n_events,)
+        Event times [time].
+    kinds : list of str
+        ``"impact"`` (gap d_i becomes <= 0), ``"liftoff"`` (d_i becomes > 0), ``"force_on"``,
+        ``"force_off"`` (``-k_i d_i - q_i d_i'`` changes sign while ``d_i <= 0``).
+    contacts : ndarray of int (n_events,)
+        Contact index (1 or 2) of each event.
+    states : ndarray (n_events, 4)
+        State ``g = (d1, d2, d1', d2')`` at each event.
+    modes : list of str
+        Contact configuration (``"SS"``, ``"SF"``, ``"FS"``, ``"FF"``; S = active) after each event.
+    t_final, g_final, mode_final
+        Time, state and configuration where the run stopped.
+    status : Status
+    message : str
+    n_steps : int
+        Sub-steps taken.
+    wall_time : float
+        [s].
+    scale : float
+        Length scale of the run, ``max(|d(0)|, |a| / min_i(k_i |b_i|))`` (the resting
+        penetration scale) [1]; the amplitude tests of :func:`classify` are relative to it.
+    """
+
+    t_events: np.ndarray
+    kinds: list
+    contacts: np.ndarray
+    states: np.ndarray
+    modes: list
+    t_final: float
+    g_final: np.ndarray
+    mode_final: str
+    status: Status
+    message: str
+    n_steps: int
+    wall_time: float
+    scale: float
+    _system: System = dataclasses.field(repr=False)
+    _seg_t: np.ndarray = dataclasses.field(repr=False)
+    _seg_z: np.ndarray = dataclasses.field(repr=False)
+    _seg_mask: np.ndarray = dataclasses.field(repr=False)
+    _env_t: np.ndarray = dataclasses.field(repr=False, default=None)
+    _env_d: np.ndarray = dataclasses.field(repr=False, default=None)
+
+    @property
+    def n_events(self) -> int:
+        return len(self.t_events)
+
+    def sample(self, times) -> np.ndarray:
+        """Exact state at the requested times (dense output).
+
+        Parameters
+        ----------
+        times : array_like
+            Times in ``[0, t_final]`` [time].
+
+        Returns
+        -------
+        ndarray (..., 4)
+            ``g(t) = expm(E_S (t - t_s)) g(t_s)`` from the segment start ``t_s`` preceding ``t``
+            (evaluated as whole sub-steps ``expm(E_S h_S)`` plus the degree-30 Taylor polynomial
+            of the remainder, like the simulator itself).
+        """
+        times = np.asarray(times, dtype=float)
+        if np.any(~np.isfinite(times)) or np.any(times < 0) or np.any(times > self.t_final):
+            raise ValueError("times must lie in [0, t_final]")
+        flat = times.ravel()
+        seg = np.searchsorted(self._seg_t, flat, side="right") - 1
+        seg = np.clip(seg, 0, len(self._seg_t) - 1)
+        out = np.empty((flat.size, 4))
+        for s in np.unique(seg):
+            sel = seg == s
+            mode = self._system.modes[self._seg_mask[s]]
+            tau = flat[sel] - self._seg_t[s]
+            # the simulator's own arithmetic: sub-steps expm(E h), then the Taylor polynomial
+            n = np.floor(tau / mode.h).astype(int)
+            grid = np.empty((n.max() + 1, 5))
+            grid[0] = self._seg_z[s]
+            for m in range(1, n.max() + 1):
+                grid[m] = mode.Phi @ grid[m - 1]
+            off = tau - n * mode.h
+            W = np.einsum("kij,sj->ksi", mode.P, grid[n])
+            acc = np.zeros((tau.size, 5))
+            for kk in range(W.shape[0] - 1, -1, -1):
+                acc = acc * off[:, None] + W[kk]
+            out[sel] = acc[:, :4]
+        return out.reshape(times.shape + (4,))
+
+
+# ----------------------------------------------------------------------------- core
+
+
+def _horner(c, tau):
+    acc = 0.0
+    for cn in reversed(c):
+        acc = acc * tau + cn
+    return acc
+
+
+def _root(coef, s, hi, xtol):
+    """First root in (0, hi] of the polynomial ``coef`` (ascending), whose sign at 0 is ``s``."""
+    c = coef.tolist()
+
+    def F(tau):
+        if tau == 0.0:
+            return s * 1e-300
+        return _horner(c, tau)
+
+    if s * F(hi) >= 0:
+        # the bracket came from expm(E h) z, whose sign at hi differs only by rounding from the
+        # Taylor polynomial's: the sign change is at the end of the sub-step
+        return hi
+    return scipy.optimize.brentq(F, 0.0, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
+
+
+def simulate(
+    beta1: float,
+    beta2: float,
+    alpha: float,
+    k: Sequence[float] = (1.0, 1.0),
+    q: Sequence[float] = (0.0, 0.0),
+    b_norm: Sequence[float] = (1.0, 1.0),
+    a_norm: float = 1.0,
+    g0: Sequence[float] = (0.0, 0.0, 0.0, 0.0),
+    t_end: float = 10.0,
+    max_events: int = 10_000,
+    max_steps: int = 10_000_000,
+    amplitude_limit: float | None = None,
+    penetration_limit: float | None = None,
+    stop_when_settled: bool = True,
+    settle_rtol: float = 1e-6,
+    theta: float = 0.5,
+) -> SimulationResult:
+    """Simulate the compliant-contact gap dynamics exactly between events (paper eqs. 1, 6-8).
+
+    Parameters
+    ----------
+    beta1, beta2 : float
+        Directions of the columns ``b_j = |b_j| (cos beta_j, sin beta_j)`` of ``B`` [rad].
+    alpha : float
+        Direction of ``a = |a| (cos alpha, sin alpha)`` [rad].
+    k : (float, float)
+        Contact stiffnesses ``k_i > 0`` (paper eq. 6) [1].
+    q : (float, float)
+        Contact damping ``q_i >= 0`` (paper eq. 6) [1].
+    b_norm : (float, float)
+        ``|b_1|, |b_2| > 0`` [1].
+    a_norm : float
+        ``|a| >= 0`` [1].
+    g0 : (float, float, float, float)
+        Initial state ``(d1, d2, d1', d2')`` [1].
+    t_end : float
+        Final time [time].
+    max_events : int
+        Stop with status ``"event_cap"`` after this many events.
+    max_steps : int
+        Stop with status ``"step_cap"`` after this many sub-steps.
+    amplitude_limit, penetration_limit : float, optional
+        Stop with status ``"diverged"`` when a gap ``d_i > amplitude_limit``, when an active
+        contact has ``d_i < -penetration_limit`` while the state is aligned with an IWC
+        eigenvector (impact without collision, paper Sec. 4.3; see :func:`classify`), or when any
+        ``d_i < -1e3 penetration_limit``.
+        Defaults: ``1e4`` and ``1e3`` times the scale
+        ``s = max(|d(0)|, |a| / min_i(k_i |b_i|))``.
+    stop_when_settled : bool
+        Stop with status ``"settled"`` once a mode is reached from which no event can follow:
+        the active subsystem is asymptotically stable, the state is within
+        ``settle_rtol * |d_eq|`` of its equilibrium with all equilibrium forces > 0, and every
+        free gap is positive, non-decreasing and accelerating away (``d_i'' > 0``).
+    settle_rtol : float
+        Relative tolerance of the settling test [1].
+    theta : float
+        Sub-step as a fraction of ``1 / rho_S`` (fastest eigenvalue modulus), ``0 < theta <= 1``.
+
+    Returns
+    -------
+    SimulationResult
+    """
+    t_wall = _time.perf_counter()
+    sysm = build_system(beta1, beta2, alpha, k, q, b_norm, a_norm, theta)
+    g0, t_end, scale, amp_lim, pen_lim = _run_limits(
+        sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit
+    )
+    L = sysm.L
+    z = np.append(g0, 1.0)
+    # recorded signs of the four event functions (d1, d2, phi1, phi2); -1 means "<= 0"
+    s = np.where(L @ z > 0, 1.0, -1.0)
+    mask = mask_from_signs(s)
+    t = 0.0
+    log = _Log.start(z, mask)
+    n_steps = 0
+    while True:
+        mode = sysm.modes[mask]
+        if t >= t_end:
+            status, message = Status.T_END, "reached t_end"
+            break
+        if n_steps >= max_steps:
+            status, message = Status.STEP_CAP, f"{max_steps} sub-steps"
+            break
+        h = min(mode.h, t_end - t)
+        z1 = (mode.Phi if h == mode.h else expm(mode.E * h)) @ z
+        brackets, W = _brackets(L, mode, s, z, z1, h)
+        n_steps += 1
+        if not brackets:
+            t, z = t + h, z1
+            log.step(t, z)
+            stop = _stop_after_step(sysm, mode, z, amp_lim, pen_lim, stop_when_settled, settle_rtol)
+        else:
+            r, crossing, z = _first_crossing(L, mode, s, z, brackets, W)
+            t += r
+            for kind, contact in _switch(sysm, mode, s, z, crossing, scale):
+                log.event(t, kind, contact, z)
+            mask = mask_from_signs(s)
+            log.segment(t, z, mask)
+            stop = _stop_after_event(sysm, z, mask, t, len(log.ev_t), max_events, amp_lim, pen_lim)
+        if stop is not None:
+            status, message = stop
+            break
+    return log.result(sysm, t, z, mask, status, message, n_steps, scale, t_wall)
+
+
+def _run_limits(sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit):
+    """Checked ``g0``, ``t_end``; the run's length scale and divergence limits (see simulate)."""
+    g0 = check_finite("g0", g0)
+    if g0.shape != (4,):
+        raise ValueError(f"g0 must have 4 components (d1, d2, d1', d2'), got shape {g0.shape}")
+    t_end = float(check_finite("t_end", t_end, positive=True))
+    if int(max_events) < 1:
+        raise ValueError(f"max_events must be >= 1, got {max_events!r}")
+    if int(max_steps) < 1:
+        raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
+    scale = run_scale(sysm, g0)
+    amp_lim = 1e4 * scale if amplitude_limit is None else float(amplitude_limit)
+    pen_lim = 1e3 * scale if penetration_limit is None else float(penetration_limit)
+    check_finite("amplitude_limit", amp_lim, positive=True)
+    check_finite("penetration_limit", pen_lim, positive=True)
+    return g0, t_end, scale, amp_lim, pen_lim
+
+
+@dataclasses.dataclass
+class _Log:
+    """What a run records: the events, the segment starts (dense output) and the gaps at every
+    sub-step end and event (for :func:`atlas.dynamics.classify`)."""
+
+    ev_t: list
+    ev_kind: list
+    ev_c: list
+    ev_z: list
+    ev_mode: list
+    seg_t: list
+    seg_z: list
+    seg_mask: list
+    env_t: list
+    env_d: list
+
+    @classmethod
+    def start(cls, z, mask) -> _Log:
+        return cls([], [], [], [], [], [0.0], [z.copy()], [mask], [0.0], [z[:2].copy()])
+
+    def step(self, t, z):
+        self.env_t.append(t)
+        self.env_d.append(z[:2].copy())
+
+    def event(self, t, kind, contact, z):
+        self.ev_t.append(t)
+        self.ev_kind.append(kind)
+        self.ev_c.append(contact)
+        self.ev_z.append(z[:4].copy())
+
+    def segment(self, t, z, mask):
+        """A new linear segment from ``(t, z)`` in mode ``mask`` (after the events at ``t``)."""
+        self.step(t, z)
+        self.ev_mode.extend([mode_name(mask)] * (len(self.ev_t) - len(self.ev_mode)))
+        self.seg_t.append(t)
+        self.seg_z.append(z.copy())
+        self.seg_mask.append(mask)
+
+    def result(self, sysm, t, z, mask, status, message, n_steps, scale, t_wall):
+        return SimulationResult(
+            t_events=np.array(self.ev_t),
+            kinds=self.ev_kind,
+            contacts=np.array(self.ev_c, dtype=int),
+            states=np.array(self.ev_z).reshape(-1, 4),
+            modes=self.ev_mode,
+            t_final=t,
+            g_final=z[:4].copy(),
+            mode_final=mode_name(mask),
+            status=status,
+            message=message,
+            n_steps=n_steps,
+            wall_time=_time.perf_counter() - t_wall,
+            scale=scale,
+            _system=sysm,
+            _seg_t=np.array(self.seg_t),
+            _seg_z=np.array(self.seg_z),
+            _seg_mask=np.array(self.seg_mask, dtype=int),
+            _env_t=np.array(self.env_t),
+            _env_d=np.array(self.env_d).reshape(-1, 2),
+        )
+
+
+def _brackets(L, mode: Mode, s, z, z1, h):
+    """Crossings of the monitored event functions in the sub-step ``(0, h]`` from ``z`` to ``z1``.
+
+    Returns ``({function index: upper end of its bracket}, W)`` with ``W`` the Taylor
+    coefficients ``E^n / n! z`` of ``z(tau)`` if they were needed (else None).
+    """
+    f1 = L @ z1
+    fp0 = mode.LE @ z
+    fp1 = mode.LE @ z1
+    xtol = 1e-13 * mode.h
+    brackets, W = {}, None
+    for j in (0, 1) + tuple(2 + i for i in range(2) if s[i] < 0):
+        if s[j] * f1[j] < 0:
+            brackets[j] = h
+        elif s[j] * fp0[j] < 0 and s[j] * fp1[j] > 0:
+            # s*f has an interior minimum: does it dip across zero?
+            if W is None:
+                W = mode.P @ z
+            cj = W @ L[j]
+            dcj = cj[1:] * np.arange(1, len(cj))
+            tau_e = _root(dcj, np.sign(fp0[j]), h, xtol)
+            if s[j] * _horner(cj.tolist(), tau_e) < 0:
+                brackets[j] = tau_e
+    return brackets, W
+
+
+def _first_crossing(L, mode: Mode, s, z, brackets, W):
+    """Time ``r`` after the sub-step start of the first crossing, the event functions crossing
+    there (within ``1e3 xtol``) and the state at ``r``."""
+    if W is None:
+        W = mode.P @ z
+    xtol = 1e-13 * mode.h
+    roots = {j: _root(W @ L[j], s[j], hi, xtol) for j, hi in brackets.items()}
+    r = min(roots.values())
+    crossing = sorted(j for j, rj in roots.items() if rj <= r + 1e3 * xtol)
+    z_new = _horner_vec(W, r)
+    z_new[4] = 1.0
+    return r, crossing, z_new
+
+
+def _switch(sysm: System, mode: Mode, s, z, crossing, scale) -> list:
+    """Flip the recorded signs ``s`` (in place) of the event functions ``crossing`` at the event
+    state ``z``; returns the events ``[(kind, contact)]``.
+
+    A gap closing makes its force's sign count (its value, or its derivative in the pre-event
+    mode when the value is at rounding level); a force sign change while its gap is open and not
+    closing at the same time is no event.
+    """
+    dphi = mode.LE @ z  # derivatives at the event (pre-event mode)
+    vals = sysm.L @ z
+    for j in crossing:
+        s[j] = -s[j]
+    closing = [c % 2 for c in crossing if c < 2]
+    events = []
+    for j in crossing:
+        i = j % 2
+        if j < 2:
+            kind = IMPACT if s[j] < 0 else LIFTOFF
+            if s[j] < 0:  # gap closed: force sign now matters
+                if abs(vals[2 + i]) > 1e-9 * abs(sysm.k[i] * scale):
+                    s[2 + i] = 1.0 if vals[2 + i] > 0 else -1.0
+                else:
+                    s[2 + i] = 1.0 if dphi[2 + i] > 0 else -1.0
+            else:
+                s[2 + i] = -1.0
+        else:
+            if s[i] > 0 and i not in closing:
+                continue  # force sign change while the gap is open: no effect
+            kind = FORCE_ON if s[j] > 0 else FORCE_OFF
+        events.append((kind, i + 1))
+    return events
+
+
+def _stop_after_step(sysm, mode, z, amp_lim, pen_lim, stop_when_settled, settle_rtol):
+    """``(status, message)`` if the run stops after an event-free sub-step, else None."""
+    if _diverged(sysm, z, mode.mask, amp_lim, pen_lim):
+        return Status.DIVERGED, _div_message(z, mode.mask, amp_lim, pen_lim)
+    if stop_when_settled and _settled(sysm, mode, z, settle_rtol):
+        return Status.SETTLED, f"settled in mode {mode_name(mode.mask)}"
+    return None
+
+
+def _stop_after_event(sysm, z, mask, t, n_events, max_events, amp_lim, pen_lim):
+    """``(status, message)`` if the run stops after the events at ``t``, else None."""
+    if n_events >= max_events:
+        return Status.EVENT_CAP, f"{n_events} events by t = {t:.6g}"
+    if _diverged(sysm, z, mask, amp_lim, pen_lim):
+        return Status.DIVERGED, _div_message(z, mask, amp_lim, pen_lim)
+    return None
+
+
+def _horner_vec(W, tau):
+    acc = np.zeros(W.shape[1])
+    for n in range(W.shape[0] - 1, -1, -1):
+        acc = acc * tau + W[n]
+    return acc
+
+
+def _diverged(sysm, z, mask, amp_lim, pen_lim) -> bool:
+    """Gap above ``amp_lim``, or an active gap below ``-pen_lim`` along an IWC eigenvector
+    (or any gap below ``-1e3 pen_lim``)."""
+    if not np.all(np.isfinite(z)):
+        return True
+    if np.max(z[:2]) > amp_lim or np.min(z[:2]) < -1e3 * pen_lim:
+        return True
+    for i in range(2):
+        if mask >> i & 1 and z[i] < -pen_lim and iwc_aligned(sysm, mask, z[:4], 1e-3):
+            return True
+    return False
+
+
+def _div_message(z, mask, amp_lim, pen_lim) -> str:
+    return (
+        f"gaps {z[0]:.3g}, {z[1]:.3g} in mode {mode_name(mask)} left "
+        f"[-{pen_lim:.3g} (active), {amp_lim:.3g}]"
+    )
+
+
+def _settled(sysm: System, mode: Mode, z, rtol) -> bool:
+    """No event can follow: stable mode, active gaps at equilibrium (``rtol``), free gaps leaving."""
+    if not mode.stable:
+        return False
+    acc = sysm.modes[mode.mask].E[2:4] @ z
+    for i in range(2):
+        if not mode.mask >> i & 1:
+            if z[i] <= 0 or z[2 + i] < 0 or acc[i] <= 0:
+                return False
+    if mode.mask == 0:
+        return True
+    if mode.z_eq is None:
+        return False
+    idx = [i for i in range(2) if mode.mask >> i & 1]
+    d_eq = mode.z_eq[idx]
+    if np.any(d_eq >= 0):
+        return False
+    dev = np.abs(z[idx] - d_eq).max() + np.abs(z[[i + 2 for i in idx]]).max() / sysm.omega
+    if dev > rtol * np.abs(d_eq).max():
+        return False
+    # the free gap must keep accelerating away once the active gaps sit at equilibrium
+    z_star = z.copy()
+    z_star[idx] = d_eq
+    z_star[[i + 2 for i in idx]] = 0.0
+    acc_star = mode.E[2:4] @ z_star
+    return all(acc_star[i] > 0 for i in range(2) if not mode.mask >> i & 1)
