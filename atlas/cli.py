@@ -65,7 +65,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for add in (_add_generate, _add_mechanism, _add_paper, _add_simulate, _add_table, _add_bench):
+    for add in (
+        _add_generate,
+        _add_mechanism,
+        _add_boundaries,
+        _add_paper,
+        _add_simulate,
+        _add_table,
+        _add_bench,
+    ):
         add(sub)
     return p
 
@@ -177,6 +185,34 @@ def _add_mechanism(sub) -> None:
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+
+
+def _add_boundaries(sub) -> None:
+    from atlas.data.boundaries import CHORD, TOL
+
+    pb = sub.add_parser(
+        "boundaries",
+        help="certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
+        description="Every SS and II boundary of each (kappa, q1, q2) slice as polylines whose "
+        "vertices are certified within --tol of the true boundary (bisection on certified "
+        "verdicts), the closed-form class lines, and the codimension-2 points.  Ranges as for "
+        "generate.  Without an output file, print a summary.",
+    )
+    for name in ("beta1", "beta2", "kappa", "q", "q1", "q2"):
+        pb.add_argument(f"--{name}", metavar="RANGE", help=f"{name} (as for generate)")
+    pb.add_argument("--fields", default="SS,II", help="SS, II or SS,II (default)")
+    pb.add_argument("--tol", type=_number("tol"), default=TOL, help=f"vertex bracket [rad] ({TOL})")
+    pb.add_argument(
+        "--chord", type=_number("chord"), default=CHORD, help=f"chord sagitta [rad] ({CHORD})"
+    )
+    pb.add_argument(
+        "--check", type=int, default=2, help="resample cells N x finer for hidden branches (2)"
+    )
+    pb.add_argument("--out", metavar="FILE.nc", help="CF-1.10 geometry container")
+    pb.add_argument("--csv", metavar="FILE.csv", help="one row per vertex")
+    pb.add_argument("--geojson", metavar="FILE.json", help="GeoJSON FeatureCollection")
+    pb.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    pb.add_argument("--dtype", choices=["float64", "float32"], default="float64")
 
 
 def _add_paper(sub) -> None:
@@ -420,6 +456,7 @@ def _force_progress() -> bool:
 _DISPATCH = {
     "paper": ("atlas.paper", "run"),
     "mechanism": ("atlas.data.mechanisms", "run_cli"),
+    "boundaries": ("atlas.data.boundaries", "run_cli"),
     "simulate": ("atlas.paper.figures_dynamics", "run_cli"),
     "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),

@@ -1,0 +1,746 @@
+"""Boundaries as certified curves: every boundary of a ``(beta1, beta2)`` slice as polylines.
+
+:func:`boundaries` turns a scene (or an atlas) into :class:`Boundaries`, per model slice
+``(kappa, q1, q2)``:
+
+1. **Grid.** The certified codes of the two fields of :mod:`atlas.core.brackets` (``SS``: SS
+   stability; ``II``: II consistency and stability) on the grid's nodes, settled exactly.
+2. **No lost branch (the check).** The grid is resampled ``check`` times finer; a cell whose four
+   corners agree while a finer sample inside it differs hides a branch (a small loop, or a curve
+   entering and leaving through one edge).  If any such cell exists the finer grid replaces the
+   grid and is checked again (at most ``max_levels`` times); cells still hiding a branch are
+   counted in ``attrs["hidden_cells"]``.  This is a check, not a proof: a loop smaller than the
+   finest sampling, or a second branch in a cell that already shows a change, can pass it.
+3. **Tracing.** Marching squares (:mod:`contourpy`) on the indicator of each pair of adjacent codes
+   gives polylines whose vertices lie on grid edges with different codes at the two ends: brackets.
+4. **Certified vertices.** :func:`atlas.core.brackets.bisect` shrinks every bracket to a length
+   ``<= tol`` (default 1e-10 rad); the vertex is its midpoint, so it lies within ``tol / 2`` of the
+   true boundary (the bracket's end codes are certified: floating point with proven error bounds,
+   or exact rational arithmetic).
+5. **Chords.** Between two vertices a new certified vertex is found on the perpendicular bisector
+   of the chord (a bracket across it, then bisection); it is inserted until the chord's measured
+   deviation (sagitta) is ``<= chord`` [rad].  The segments are therefore within about ``chord``
+   of the curve (measured, not proven: a wiggle between two probes can hide).
+6. **Pieces and codimension-2 points.** Runs of vertices lying on a straight class line
+   (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1) are split off as ``on_class_line``
+   pieces; the points where a boundary leaves or crosses a class line, where an open curve ends
+   inside the domain (a third code meets it), and where SS and II boundaries cross are returned
+   as :attr:`Boundaries.points` with their location uncertainty.
+
+The straight class boundaries themselves are returned in closed form (``field = "class"``).
+Stored as CF-1.10 geometry containers (:meth:`Boundaries.to_dataset`), or as CSV / GeoJSON.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import json
+import math
+import time
+from dataclasses import dataclass, field
+
+import contourpy
+import numpy as np
+import xarray as xr
+from numpy.lib.stride_tricks import sliding_window_view
+from scipy.spatial import cKDTree
+
+from atlas.core import brackets
+from atlas.core.config import __version__
+from atlas.data.io import atomic_path, atomic_write_text
+from atlas.data.scene import Scene
+
+__all__ = ["Boundaries", "Curve", "Point", "boundaries", "class_lines", "slice_boundaries"]
+
+TWO_PI = 2 * math.pi
+#: default certified vertex tolerance (bracket length) [rad]
+TOL = 1e-10
+#: default chord tolerance (measured sagitta between vertices) [rad]
+CHORD = 1e-6
+
+
+@dataclass
+class Curve:
+    """One boundary polyline: ``vertices`` ``(m, 2)`` of ``(beta1, beta2)`` [rad].
+
+    ``field``: ``"SS"``, ``"II"`` or ``"class"``; ``kind``: ``SS_stability``, ``II_consistency``,
+    ``II_stability`` or ``class_line``; ``side_a``/``side_b``: the field codes on its two sides
+    (:data:`atlas.core.brackets.FIELD_LABELS`; -1 for class lines); ``bracket``: per vertex, the
+    length of its certified bracket [rad] (0 for the closed-form class lines); ``ends``: per
+    vertex the bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint), ``None`` for
+    class lines.
+    """
+
+    field: str
+    kind: str
+    side_a: int
+    side_b: int
+    vertices: np.ndarray
+    bracket: np.ndarray
+    on_class_line: bool = False
+    kappa: float = math.nan
+    q1: float = math.nan
+    q2: float = math.nan
+    ends: np.ndarray | None = None
+
+
+@dataclass
+class Point:
+    """A codimension-2 point: where boundaries meet, cross a class line, or end."""
+
+    beta1: float
+    beta2: float
+    kind: str
+    uncertainty: float
+    kappa: float = math.nan
+    q1: float = math.nan
+    q2: float = math.nan
+
+
+@dataclass
+class Boundaries:
+    """The curves and codimension-2 points of one or more slices, with run diagnostics."""
+
+    curves: list[Curve] = field(default_factory=list)
+    points: list[Point] = field(default_factory=list)
+    attrs: dict = field(default_factory=dict)
+
+    def select(self, *, field=None, kind=None) -> list[Curve]:
+        """The curves of a field and/or kind."""
+        return [
+            c
+            for c in self.curves
+            if (field is None or c.field == field) and (kind is None or c.kind == kind)
+        ]
+
+    def to_dataset(self) -> xr.Dataset:
+        """CF-1.10 geometry container (``geometry_type = "line"``) of the curves, plus the points."""
+        return _to_dataset(self)
+
+    def to_netcdf(self, path) -> None:
+        """Write :meth:`to_dataset` (atomically)."""
+        with atomic_path(path) as tmp:
+            self.to_dataset().to_netcdf(tmp)
+
+    def to_csv(self, path) -> None:
+        """One row per vertex: ``curve,field,kind,side_a,side_b,kappa,q1,q2,beta1,beta2,bracket``."""
+        rows = ["curve,field,kind,side_a,side_b,on_class_line,kappa,q1,q2,beta1,beta2,bracket"]
+        for i, c in enumerate(self.curves):
+            head = (
+                f"{i},{c.field},{c.kind},{c.side_a},{c.side_b},{int(c.on_class_line)},"
+                f"{c.kappa!r},{c.q1!r},{c.q2!r}"
+            )
+            rows += [f"{head},{x!r},{y!r},{w!r}" for (x, y), w in zip(c.vertices, c.bracket)]
+        atomic_write_text(path, "\n".join(rows) + "\n")
+
+    def to_geojson(self, path) -> None:
+        """A GeoJSON ``FeatureCollection``: ``LineString`` curves and ``Point`` points, coordinates
+        ``[beta1, beta2]`` [rad] (not geographic)."""
+        feats = [_feature("LineString", c.vertices.tolist(), _curve_props(c)) for c in self.curves]
+        feats += [
+            _feature("Point", [p.beta1, p.beta2], {k: _json(v) for k, v in vars(p).items()})
+            for p in self.points
+        ]
+        doc = {"type": "FeatureCollection", "features": feats, "properties": _json(self.attrs)}
+        atomic_write_text(path, json.dumps(doc) + "\n")
+
+
+# --- closed-form class lines ---------------------------------------------------------------------
+
+
+def class_lines(b1_range=(0.0, TWO_PI), b2_range=(0.0, TWO_PI)) -> list[Curve]:
+    """The straight class boundaries (SPEC §1) inside the box ``b1_range x b2_range`` [rad]:
+    ``beta1 = k pi/2``, ``beta2 = k pi/2`` and ``beta2 = beta1 + k pi``, in closed form."""
+    (x0, x1), (y0, y1) = b1_range, b2_range
+    segs = []
+    for k in range(5):
+        v = k * math.pi / 2
+        if x0 <= v <= x1:
+            segs.append([[v, y0], [v, y1]])
+        if y0 <= v <= y1:
+            segs.append([[x0, v], [x1, v]])
+    for k in (-1, 0, 1):
+        lo, hi = max(x0, y0 - k * math.pi), min(x1, y1 - k * math.pi)
+        if lo < hi:
+            segs.append([[lo, lo + k * math.pi], [hi, hi + k * math.pi]])
+    return [
+        Curve("class", "class_line", -1, -1, np.array(s, float), np.zeros(2), on_class_line=True)
+        for s in segs
+    ]
+
+
+def _line_distances(xy) -> np.ndarray:
+    """Distances [rad] of points ``(m, 2)`` to the 13 class lines (columns: ``beta1 = k pi/2``,
+    ``beta2 = k pi/2`` for k = 0..4, then ``beta2 - beta1 = k pi`` for k = -1, 0, 1)."""
+    k = np.arange(5) * (math.pi / 2)
+    d1 = np.abs(xy[:, :1] - k)
+    d2 = np.abs(xy[:, 1:] - k)
+    dd = np.abs(xy[:, 1:] - xy[:, :1] - np.array([-1, 0, 1]) * math.pi) / math.sqrt(2)
+    return np.concatenate([d1, d2, dd], axis=1)
+
+
+def _line_values(xy) -> np.ndarray:
+    """Signed values of the 13 class-line functions at points ``(m, 2)``."""
+    k = np.arange(5) * (math.pi / 2)
+    return np.concatenate(
+        [xy[:, :1] - k, xy[:, 1:] - k, xy[:, 1:] - xy[:, :1] - np.array([-1, 0, 1]) * math.pi],
+        axis=1,
+    )
+
+
+# --- the grid and the lost-branch check ----------------------------------------------------------
+
+
+def _wrapped(values) -> np.ndarray:
+    """The axis values, with ``2 pi`` appended when they sample ``[0, 2 pi)`` uniformly."""
+    v = np.asarray(values, np.float64)
+    n = v.size
+    if n >= 3 and v[0] == 0.0:
+        h = TWO_PI / n
+        if np.allclose(np.diff(v), h, rtol=1e-9, atol=0) and abs(v[-1] + h - TWO_PI) < 1e-9:
+            return np.append(v, TWO_PI)
+    return v
+
+
+#: relative shift of the tracing grid off the class lines, per axis (fractions of a cell)
+NUDGE = (1.3e-7, 2.9e-7)
+
+
+def _nudged(axis, which: int) -> np.ndarray:
+    """``axis`` shifted by ``NUDGE[which]`` of its smallest cell: a grid through the class lines
+    (``beta = k pi/2``, ``beta2 = beta1 + k pi``) would put nodes on those lines, where the verdict
+    is the degenerate one (e.g. SS neutral at ``det B = 0``) and cuts every curve running along
+    them; the shifted nodes carry the verdict of one side (any node is a valid bracket end)."""
+    if axis.size < 2:
+        return axis
+    return axis + NUDGE[which] * float(np.diff(axis).min())
+
+
+def _finer(axis, k: int) -> np.ndarray:
+    """``axis`` with ``k - 1`` points inserted uniformly in every interval (nodes kept)."""
+    t = np.arange(k) / k
+    inner = (axis[:-1, None] + t * np.diff(axis)[:, None]).ravel()
+    return np.append(inner, axis[-1])
+
+
+def _hidden_cells(coarse, fine, k: int) -> np.ndarray:
+    """Cells (``(n1-1, n2-1)`` bool) whose corners agree but whose ``k``-finer samples differ."""
+    win = sliding_window_view(fine, (k + 1, k + 1))[::k, ::k]
+    varies = win.min(axis=(2, 3)) != win.max(axis=(2, 3))
+    c = coarse
+    same = (c[:-1, :-1] == c[1:, :-1]) & (c[:-1, :-1] == c[:-1, 1:]) & (c[:-1, :-1] == c[1:, 1:])
+    return varies & same
+
+
+def _checked_grid(fld, b1, b2, model, check, max_levels, dtype):
+    """Axes and certified codes of the grid, refined until no cell hides a branch (step 2)."""
+    codes = brackets.field_codes(fld, b1[:, None], b2[None, :], *model, dtype=dtype)
+    hidden, levels = 0, 0
+    while check > 1:
+        f1, f2 = _finer(b1, check), _finer(b2, check)
+        fine = brackets.field_codes(fld, f1[:, None], f2[None, :], *model, dtype=dtype)
+        hidden = int(_hidden_cells(codes, fine, check).sum())
+        if not hidden or levels == max_levels:
+            break
+        b1, b2, codes, levels = f1, f2, fine, levels + 1
+    return b1, b2, codes, hidden, levels
+
+
+# --- tracing and certified vertices --------------------------------------------------------------
+
+
+def _pairs(codes) -> list[tuple[int, int]]:
+    """The pairs ``(a, b)``, ``a < b``, of codes that are neighbours on some grid edge."""
+    out = set()
+    for x, y in ((codes[:-1], codes[1:]), (codes[:, :-1], codes[:, 1:])):
+        d = x != y
+        out |= {(int(min(u, v)), int(max(u, v))) for u, v in zip(x[d], y[d])}
+    return sorted(out)
+
+
+def _trace(b1, b2, codes, a, b) -> list[np.ndarray]:
+    """Marching-squares polylines between the ``a`` and ``b`` nodes (other codes masked)."""
+    z = np.where(codes == a, 1.0, 0.0)
+    mask = (codes != a) & (codes != b)
+    if mask.any():
+        z = np.ma.masked_array(z, mask)
+    gen = contourpy.contour_generator(
+        b1, b2, z.T, name="serial", line_type="Separate", corner_mask=False
+    )
+    return [ln for ln in gen.lines(0.5) if len(ln) >= 2]
+
+
+def _edge_brackets(b1, b2, codes, line, a):
+    """For each marching-squares vertex (on a grid edge), the edge's ``a`` end and other end."""
+    fx = np.interp(line[:, 0], b1, np.arange(b1.size))
+    fy = np.interp(line[:, 1], b2, np.arange(b2.size))
+    vertical = np.abs(fx - np.round(fx)) < 1e-6  # on a beta1 grid line: edge along beta2
+    i0 = np.where(vertical, np.round(fx), np.floor(fx)).astype(int)
+    j0 = np.where(vertical, np.floor(fy), np.round(fy)).astype(int)
+    i1 = np.minimum(np.where(vertical, i0, i0 + 1), b1.size - 1)
+    j1 = np.minimum(np.where(vertical, j0 + 1, j0), b2.size - 1)
+    n0 = np.stack([b1[i0], b2[j0]], 1)
+    n1 = np.stack([b1[i1], b2[j1]], 1)
+    c0, c1 = codes[i0, j0], codes[i1, j1]
+    first_a = c0 == a
+    p = np.where(first_a[:, None], n0, n1)
+    q = np.where(first_a[:, None], n1, n0)
+    return p, q, np.where(first_a, c0, c1), np.where(first_a, c1, c0)
+
+
+@dataclass
+class _Polys:
+    """Vertices of all polylines of one field and slice, kept sorted by ``(curve, key)``."""
+
+    xy: np.ndarray  # (N, 2) vertices [rad]
+    ends: np.ndarray  # (N, 2, 2) the certified bracket (p, q) of each vertex
+    width: np.ndarray  # (N,) bracket length [rad]
+    cid: np.ndarray  # (N,) polyline index
+    key: np.ndarray  # (N,) position along the polyline
+    todo: np.ndarray  # (N,) the segment to the next vertex still needs a chord probe
+    pair: list  # per polyline: (a, b)
+
+    def sort(self):
+        order = np.lexsort((self.key, self.cid))
+        for name in ("xy", "ends", "width", "cid", "key", "todo"):
+            setattr(self, name, getattr(self, name)[order])
+
+    def segments(self) -> np.ndarray:
+        """Indices ``k`` of vertices whose segment to ``k + 1`` still needs a probe."""
+        has_next = np.r_[self.cid[1:] == self.cid[:-1], False]
+        return np.flatnonzero(self.todo & has_next)
+
+
+def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
+    """Steps 3-4: traced polylines with every vertex bisected to a bracket ``<= tol``."""
+    lines, pair, ps, qs, vps, vqs = [], [], [], [], [], []
+    for a, b in _pairs(codes):
+        for ln in _trace(b1, b2, codes, a, b):
+            p, q, vp, vq = _edge_brackets(b1, b2, codes, ln, a)
+            lines.append(ln)
+            pair.append((a, b))
+            ps.append(p), qs.append(q), vps.append(vp), vqs.append(vq)
+    if not lines:
+        z = np.zeros((0, 2))
+        e = np.zeros(0)
+        return _Polys(z, np.zeros((0, 2, 2)), e, e.astype(int), e, e.astype(bool), [])
+    p, q, vp, vq = brackets.bisect(
+        fld, *map(np.concatenate, (ps, qs, vps, vqs)), *model, tol=tol, dtype=dtype
+    )
+    sizes = [len(ln) for ln in lines]
+    return _Polys(
+        xy=0.5 * (p + q),
+        ends=np.stack([p, q], 1),
+        width=np.hypot(*(q - p).T),
+        cid=np.repeat(np.arange(len(lines)), sizes),
+        key=np.concatenate([np.arange(m, dtype=float) for m in sizes]),
+        todo=np.ones(sum(sizes), bool),
+        pair=pair,
+    )
+
+
+def _probe(fld, polys, k, model, tol, dtype):
+    """Step 5 for segments ``k -> k + 1``: a certified vertex on each chord's perpendicular
+    bisector; returns ``(ok, vertex, ends, width, sagitta, chord length)``."""
+    A, B = polys.xy[k], polys.xy[k + 1]
+    mid, d = 0.5 * (A + B), B - A
+    length = np.maximum(np.hypot(*d.T), 1e-300)
+    n = np.stack([-d[:, 1], d[:, 0]], 1) / length[:, None]
+    side = polys.ends[:, 0] - polys.ends[:, 1]  # towards the a side
+    n *= np.sign(np.sum(n * (side[k] + side[k + 1]), axis=1))[:, None]
+    a = np.array([polys.pair[c][0] for c in polys.cid[k]], np.int8)
+    b = np.array([polys.pair[c][1] for c in polys.cid[k]], np.int8)
+    w = np.maximum(length, 8 * tol)[:, None]
+    P, Q = mid + w * n, mid - w * n
+    vP = brackets.field_codes(fld, P[:, 0], P[:, 1], *model, dtype=dtype)
+    vQ = brackets.field_codes(fld, Q[:, 0], Q[:, 1], *model, dtype=dtype)
+    ok = (vP == a) & (vQ == b)
+    p, q, _, _ = brackets.bisect(fld, P[ok], Q[ok], a[ok], b[ok], *model, tol=tol, dtype=dtype)
+    C = 0.5 * (p + q)
+    sag = np.abs(np.sum((C - mid[ok]) * n[ok], axis=1))
+    return ok, C, np.stack([p, q], 1), np.hypot(*(q - p).T), sag, length[ok]
+
+
+def _refine_chords(fld, polys, model, tol, chord, dtype, max_rounds=30) -> int:
+    """Step 5: insert certified vertices until every chord's sagitta is ``<= chord``; returns the
+    number of segments whose probe found no bracket (left as they are)."""
+    unrefined = 0
+    for _ in range(max_rounds):
+        k = polys.segments()
+        if not k.size:
+            break
+        ok, C, ends, width, sag, length = _probe(fld, polys, k, model, tol, dtype)
+        unrefined += int((~ok).sum())
+        polys.todo[k[~ok]] = False
+        kk = k[ok]
+        again = (sag > chord) & (length > 8 * tol)
+        polys.todo[kk] = again
+        polys.xy = np.concatenate([polys.xy, C])
+        polys.ends = np.concatenate([polys.ends, ends])
+        polys.width = np.concatenate([polys.width, width])
+        polys.cid = np.concatenate([polys.cid, polys.cid[kk]])
+        polys.key = np.concatenate([polys.key, 0.5 * (polys.key[kk] + polys.key[kk + 1])])
+        polys.todo = np.concatenate([polys.todo, again])
+        polys.sort()
+    return unrefined + int(polys.segments().size)
+
+
+# --- pieces and codimension-2 points -------------------------------------------------------------
+
+
+def _runs(labels) -> list[tuple[int, int, int]]:
+    """``(start, stop, label)`` of maximal runs; on-line runs shorter than 2 count as curved."""
+    lab = labels.copy()
+    out = []
+    for lbl, grp in itertools.groupby(enumerate(lab), key=lambda t: t[1]):
+        idx = [i for i, _ in grp]
+        out.append([idx[0], idx[-1] + 1, lbl if (lbl < 0 or len(idx) >= 2) else -1])
+    merged = []
+    for r in out:  # join neighbouring curved runs
+        if merged and merged[-1][2] == -1 and r[2] == -1:
+            merged[-1][1] = r[1]
+        else:
+            merged.append(r)
+    return [tuple(r) for r in merged]
+
+
+def _pieces(fld, polys, model, tol, box):
+    """Step 6: curves split on the class lines, and the points where a curve leaves, crosses a
+    class line, or ends inside the domain.  A vertex counts as on a class line within ``4 tol``,
+    or within ten nudges of the grid (closer than that the grid cannot tell a curve from the line:
+    the fragments that corner points such as ``(0, 2 pi)`` leave are labelled on the line)."""
+    curves, pts = [], []
+    for c, (a, b) in enumerate(polys.pair):
+        sel = polys.cid == c
+        xy, width, ends = polys.xy[sel], polys.width[sel], polys.ends[sel]
+        dist = _line_distances(xy)
+        near = max(4 * tol, 10 * max(NUDGE) * box[2])  # the grid cannot resolve closer
+        labels = np.where(dist.min(1) <= near, dist.argmin(1), -1)
+        kind = str(brackets.boundary_kind(fld, a, b)[()])
+        runs = _runs(labels)
+        for start, stop, lbl in runs:
+            lo, hi = max(0, start - 1), min(len(xy), stop + 1)  # pieces share their junctions
+            if lbl >= 0:
+                lo, hi = start, stop
+            piece = Curve(fld, kind, a, b, xy[lo:hi], width[lo:hi], lbl >= 0, *model, ends[lo:hi])
+            if len(piece.vertices) >= 2:
+                curves.append(piece)
+        for (_, e0, l0), (_, _, l1) in zip(runs, runs[1:]):
+            if (l0 >= 0) != (l1 >= 0):
+                j = e0 - 1 if l0 >= 0 else e0
+                gap = _spacing(xy, j)
+                pts.append(Point(*xy[j], "leaves_class_line", gap, *model))
+        pts += _crossings(xy, labels, model)
+        pts += _ends(xy, box, model)
+    return curves, pts
+
+
+def _spacing(xy, j) -> float:
+    """Distance from vertex ``j`` to its farthest neighbour [rad]."""
+    nb = [xy[i] for i in (j - 1, j + 1) if 0 <= i < len(xy)]
+    return float(max(np.hypot(*(xy[j] - v)) for v in nb)) if nb else math.nan
+
+
+def _crossings(xy, labels, model) -> list[Point]:
+    """Transversal crossings of a curved stretch with a class line (linear interpolation)."""
+    g = _line_values(xy)
+    off = labels < 0
+    seg = off[:-1] & off[1:]
+    out = []
+    for k, m in zip(*np.nonzero(seg[:, None] & (np.sign(g[:-1]) * np.sign(g[1:]) < 0))):
+        t = g[k, m] / (g[k, m] - g[k + 1, m])
+        p = xy[k] + t * (xy[k + 1] - xy[k])
+        out.append(Point(*p, "crosses_class_line", float(np.hypot(*(xy[k + 1] - xy[k]))), *model))
+    return out
+
+
+def _ends(xy, box, model) -> list[Point]:
+    """Ends of an open curve inside the domain: a third code meets the boundary there (within a
+    grid cell, the ``uncertainty``)."""
+    (x0, x1), (y0, y1), h = box
+    if np.array_equal(xy[0], xy[-1]):
+        return []
+    out = []
+    for p in (xy[0], xy[-1]):
+        edge = min(p[0] - x0, x1 - p[0], p[1] - y0, y1 - p[1]) <= 0.5 * h
+        if not edge:
+            out.append(Point(*p, "end", h * math.sqrt(2), *model))
+    return out
+
+
+def _meetings(ss: list[Curve], ii: list[Curve], model, min_sin=1e-3) -> list[Point]:
+    """Points where an SS boundary crosses an II boundary (segment intersections at an angle with
+    ``|sin| >= min_sin``: boundaries that coincide over a stretch, as SS and II consistency do
+    for ``q = 0``, are not codimension-2 points; pieces on class lines are left out)."""
+    ss = [c for c in ss if not c.on_class_line]
+    ii = [c for c in ii if not c.on_class_line]
+    if not ss or not ii:
+        return []
+    a0 = np.concatenate([c.vertices[:-1] for c in ss])
+    a1 = np.concatenate([c.vertices[1:] for c in ss])
+    b0 = np.concatenate([c.vertices[:-1] for c in ii])
+    b1 = np.concatenate([c.vertices[1:] for c in ii])
+    la, lb = np.hypot(*(a1 - a0).T), np.hypot(*(b1 - b0).T)
+    tree = cKDTree(0.5 * (b0 + b1))
+    pairs = tree.query_ball_point(0.5 * (a0 + a1), 0.5 * (la + lb.max()) + 1e-12)
+    i = np.repeat(np.arange(len(a0)), [len(p) for p in pairs])
+    j = np.fromiter(itertools.chain.from_iterable(pairs), int, count=len(i))
+    if not i.size:
+        return []
+    da, db, w = a1[i] - a0[i], b1[j] - b0[j], b0[j] - a0[i]
+    den = da[:, 0] * db[:, 1] - da[:, 1] * db[:, 0]
+    with np.errstate(all="ignore"):
+        t = (w[:, 0] * db[:, 1] - w[:, 1] * db[:, 0]) / den
+        u = (w[:, 0] * da[:, 1] - w[:, 1] * da[:, 0]) / den
+    sin = np.abs(den) / np.maximum(la[i] * lb[j], 1e-300)
+    hit = (sin >= min_sin) & (t >= 0) & (t < 1) & (u >= 0) & (u < 1)
+    pts = a0[i[hit]] + t[hit, None] * da[hit]
+    unc = np.maximum(la[i[hit]], lb[j[hit]])
+    return [Point(*p, "SS_meets_II", float(e), *model) for p, e in zip(pts, unc)]
+
+
+# --- drivers -------------------------------------------------------------------------------------
+
+
+def slice_boundaries(
+    beta1,
+    beta2,
+    kappa: float,
+    q1: float,
+    q2: float,
+    *,
+    fields=("SS", "II"),
+    tol: float = TOL,
+    chord: float = CHORD,
+    check: int = 2,
+    max_levels: int = 2,
+    dtype="float64",
+) -> Boundaries:
+    """The boundary curves of one slice ``(kappa, q1, q2)`` over the grid ``beta1 x beta2``
+    [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
+    _check_args(tol, chord, check, max_levels, fields)
+    model = (float(kappa), float(q1), float(q2))
+    out = Boundaries()
+    by_field = {}
+    for fld in fields:
+        t0 = time.perf_counter()
+        b1, b2 = _nudged(_wrapped(np.sort(beta1)), 0), _nudged(_wrapped(np.sort(beta2)), 1)
+        h = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
+        b1, b2, codes, hidden, levels = _checked_grid(fld, b1, b2, model, check, max_levels, dtype)
+        polys = _certified_polys(fld, b1, b2, codes, model, tol, dtype)
+        unrefined = _refine_chords(fld, polys, model, tol, chord, dtype)
+        box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
+        curves, pts = _pieces(fld, polys, model, tol, box)
+        by_field[fld] = curves
+        out.curves += curves
+        out.points += pts
+        out.attrs[f"{fld}_grid"] = f"{b1.size}x{b2.size}"
+        out.attrs[f"{fld}_refined_levels"] = levels
+        out.attrs[f"{fld}_hidden_cells"] = hidden
+        out.attrs[f"{fld}_unrefined_segments"] = unrefined
+        out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
+        out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0
+    out.points += _meetings(by_field.get("SS", []), by_field.get("II", []), model)
+    return out
+
+
+def _check_args(tol, chord, check, max_levels, fields):
+    if not (isinstance(tol, (int, float)) and 0 < tol < 0.1):
+        raise ValueError(f"tol: must be in (0, 0.1) rad, got {tol!r}")
+    if not (isinstance(chord, (int, float)) and tol <= chord):
+        raise ValueError(f"chord: must be >= tol ({tol}), got {chord!r}")
+    if not (isinstance(check, int) and check >= 0):
+        raise ValueError(f"check: must be a non-negative integer, got {check!r}")
+    if not (isinstance(max_levels, int) and max_levels >= 0):
+        raise ValueError(f"max_levels: must be a non-negative integer, got {max_levels!r}")
+    bad = [f for f in fields if f not in brackets.FIELDS]
+    if bad or not fields:
+        raise ValueError(f"fields: must be a non-empty subset of {list(brackets.FIELDS)}")
+
+
+def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
+    """``beta1, beta2`` and the model slices ``(kappa, q1, q2)`` of a scene or an atlas."""
+    if isinstance(source, Scene):
+        ax = source.axes
+        get = {k: np.atleast_1d(a.values) for k, a in ax.items()}
+    elif isinstance(source, xr.Dataset):
+        get = {k: np.atleast_1d(source[k].values) for k in source.coords}
+    else:
+        raise TypeError("source: must be an atlas.Scene or an atlas xarray.Dataset")
+    for k in ("beta1", "beta2", "kappa"):
+        if k not in get:
+            raise ValueError(f"source: has no {k}")
+    if "q1" in get and "q2" in get:
+        models = list(itertools.product(get["kappa"], get["q1"], get["q2"]))
+    else:
+        q = get.get("q", np.zeros(1))
+        models = [(k, v, v) for k, v in itertools.product(get["kappa"], q)]
+    return get["beta1"].astype(float), get["beta2"].astype(float), models
+
+
+def boundaries(source, **options) -> Boundaries:
+    """Certified boundary curves of every ``(kappa, q1, q2)`` slice of a scene or an atlas
+    (the atlas's ``beta1 x beta2`` grid; options as :func:`slice_boundaries`), plus the
+    closed-form class lines once."""
+    b1, b2, models = _slices(source)
+    out = Boundaries(curves=class_lines((b1.min(), b1.max()), (b2.min(), b2.max())))
+    t0 = time.perf_counter()
+    for model in models:
+        one = slice_boundaries(b1, b2, *model, **options)
+        out.curves += one.curves
+        out.points += one.points
+        out.attrs.setdefault("slices", []).append(
+            dict(zip(("kappa", "q1", "q2"), model)) | one.attrs
+        )
+    out.attrs.update(
+        tolerance=options.get("tol", TOL),
+        chord_tolerance=options.get("chord", CHORD),
+        seconds=time.perf_counter() - t0,
+    )
+    return out
+
+
+# --- storage -------------------------------------------------------------------------------------
+
+
+def _json(v):
+    if isinstance(v, dict):
+        return {k: _json(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json(x) for x in v]
+    if isinstance(v, (np.generic,)):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def _curve_props(c: Curve) -> dict:
+    labels = brackets.FIELD_LABELS.get(c.field, {})
+    props = {
+        "field": c.field,
+        "kind": c.kind,
+        "side_a": labels.get(c.side_a, ""),
+        "side_b": labels.get(c.side_b, ""),
+        "on_class_line": bool(c.on_class_line),
+        "kappa": c.kappa,
+        "q1": c.q1,
+        "q2": c.q2,
+        "max_bracket": float(np.max(c.bracket)),
+    }
+    return _json(props)
+
+
+def _feature(kind, coords, props) -> dict:
+    return {
+        "type": "Feature",
+        "geometry": {"type": kind, "coordinates": coords},
+        "properties": props,
+    }
+
+
+def _to_dataset(bd: Boundaries) -> xr.Dataset:
+    cs, ps = bd.curves, bd.points
+    geo = {"geometry": "boundary_geometry"}
+    rad = {"units": "rad"}
+    per = lambda attr: np.array([getattr(c, attr) for c in cs])  # noqa: E731
+    pp = lambda attr: np.array([getattr(p, attr) for p in ps])  # noqa: E731
+    nodes = np.concatenate([c.vertices for c in cs]) if cs else np.zeros((0, 2))
+    ds = xr.Dataset(
+        {
+            "boundary_geometry": (
+                (),
+                np.int32(0),
+                {
+                    "geometry_type": "line",
+                    "node_count": "node_count",
+                    "node_coordinates": "node_beta1 node_beta2",
+                },
+            ),
+            "node_count": ("curve", np.array([len(c.vertices) for c in cs], np.int32)),
+            "node_beta1": ("node", nodes[:, 0], rad | {"axis": "X", "long_name": "beta1"}),
+            "node_beta2": ("node", nodes[:, 1], rad | {"axis": "Y", "long_name": "beta2"}),
+            "node_bracket": (
+                "node",
+                np.concatenate([c.bracket for c in cs]) if cs else np.zeros(0),
+                rad | {"long_name": "length of the certified bracket of the vertex"},
+            ),
+            "curve_field": ("curve", per("field").astype(str), geo),
+            "curve_kind": ("curve", per("kind").astype(str), geo),
+            "curve_side_a": ("curve", per("side_a").astype(np.int8), geo),
+            "curve_side_b": ("curve", per("side_b").astype(np.int8), geo),
+            "curve_on_class_line": ("curve", per("on_class_line").astype(np.int8), geo),
+            "curve_kappa": ("curve", per("kappa").astype(float), geo),
+            "curve_q1": ("curve", per("q1").astype(float), geo),
+            "curve_q2": ("curve", per("q2").astype(float), geo),
+            "point_beta1": ("point", pp("beta1").astype(float), rad),
+            "point_beta2": ("point", pp("beta2").astype(float), rad),
+            "point_kind": ("point", pp("kind").astype(str)),
+            "point_uncertainty": ("point", pp("uncertainty").astype(float), rad),
+            "point_kappa": ("point", pp("kappa").astype(float)),
+            "point_q1": ("point", pp("q1").astype(float)),
+            "point_q2": ("point", pp("q2").astype(float)),
+        }
+    )
+    ds.attrs.update(
+        Conventions="CF-1.10",
+        title="painleve-atlas boundary curves",
+        source=f"painleve-atlas {__version__}",
+        tolerance=float(bd.attrs.get("tolerance", TOL)),
+        chord_tolerance=float(bd.attrs.get("chord_tolerance", CHORD)),
+        field_labels=json.dumps({k: v for k, v in brackets.FIELD_LABELS.items()}),
+        slices=json.dumps(_json(bd.attrs.get("slices", []))),
+    )
+    return ds
+
+
+def summary(bd: Boundaries) -> str:
+    """A few lines: curves and points per field and kind, tolerances, time."""
+    lines = [
+        f"boundaries: {len(bd.curves)} curves, {sum(len(c.vertices) for c in bd.curves)} vertices,"
+        f" {len(bd.points)} codimension-2 points; vertex brackets <= {bd.attrs.get('tolerance')}"
+        f" rad, chords <= {bd.attrs.get('chord_tolerance')} rad, {bd.attrs.get('seconds', 0):.1f} s"
+    ]
+    kinds = collections.Counter((c.kind, bool(c.on_class_line)) for c in bd.curves)
+    lines += [
+        f"  {k}{' (on a class line)' if on else ''}: {n}" for (k, on), n in sorted(kinds.items())
+    ]
+    pts = collections.Counter(p.kind for p in bd.points)
+    lines += [f"  point {k}: {n}" for k, n in sorted(pts.items())]
+    for s in bd.attrs.get("slices", []):
+        hidden = sum(v for k, v in s.items() if k.endswith("hidden_cells"))
+        lines.append(
+            f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden}"
+        )
+    return "\n".join(lines)
+
+
+def run_cli(
+    out=None,
+    csv=None,
+    geojson=None,
+    overwrite=False,
+    fields="SS,II",
+    tol=TOL,
+    chord=CHORD,
+    check=2,
+    dtype="float64",
+    **axes,
+) -> int:
+    """``atlas boundaries --beta1 R --beta2 R --kappa V [--q V | --q1 V --q2 V] [--out F.nc]
+    [--csv F.csv] [--geojson F.json]``."""
+    from atlas.data.io import check_output_path
+
+    for path in (out, csv, geojson):
+        if path is not None:
+            check_output_path(path, overwrite)
+    scene = Scene(**{k: v for k, v in axes.items() if v is not None})
+    names = tuple(f.strip() for f in fields.split(",") if f.strip())
+    bd = boundaries(scene, fields=names, tol=tol, chord=chord, check=check, dtype=dtype)
+    print(summary(bd))
+    for path, write in ((out, bd.to_netcdf), (csv, bd.to_csv), (geojson, bd.to_geojson)):
+        if path is not None:
+            write(path)
+            print(f"wrote {path}")
+    return 0

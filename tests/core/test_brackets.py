@@ -1,0 +1,83 @@
+"""Certified brackets: field codes against the exact tier, bisection invariants, bad input."""
+
+import numpy as np
+import pytest
+
+from atlas.core import brackets, exact, mechanics
+
+
+def _exact_code(field, b1, b2, kappa, q1, q2):
+    """The field code from the exact tier alone (FLINT rational arithmetic, no float kernel)."""
+    c1, s1 = (float(v) for v in mechanics.direction(b1))
+    c2, s2 = (float(v) for v in mechanics.direction(b2))
+    v = exact.point_spectral(c1, s1, c2, s2, kappa, q1, q2)
+    if field == "SS":
+        return v["stable_SS"]
+    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+
+
+@pytest.mark.parametrize("field", ["SS", "II"])
+@pytest.mark.parametrize("model", [(0.5, 0.0, 0.0), (2.0, 0.1, 0.1), (0.5, 0.3, 0.0)])
+def test_field_codes_match_the_exact_tier(field, model):
+    rng = np.random.default_rng(7)
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, 40))
+    b1[:4] = [0.0, np.pi / 2, np.pi, 1.0]  # axis lines and det B = 0 (b2 = b1)
+    b2[:4] = [np.pi / 2, 0.3, np.pi, 1.0]
+    got = brackets.field_codes(field, b1, b2, *model)
+    want = [_exact_code(field, x, y, *model) for x, y in zip(b1, b2)]
+    assert got.tolist() == want
+
+
+def test_field_codes_keep_the_broadcast_shape():
+    b = np.linspace(0.1, 6.0, 5)
+    assert brackets.field_codes("SS", b[:, None], b[None, :], 0.5, 0.0, 0.0).shape == (5, 5)
+
+
+def test_bisect_shrinks_to_tol_and_keeps_different_ends():
+    model = (0.5, 0.0, 0.0)
+    # segments across the q = 0 neutral boundary at beta2 = 2.0 (closed form: beta1 ~ 0.2, 1.5)
+    p = np.array([[0.1, 2.0], [1.2, 2.0]])
+    q = np.array([[0.6, 2.0], [1.8, 2.0]])
+    vp = brackets.field_codes("SS", p[:, 0], p[:, 1], *model)
+    vq = brackets.field_codes("SS", q[:, 0], q[:, 1], *model)
+    assert (vp != vq).all()
+    p2, q2, a, b = brackets.bisect("SS", p, q, vp, vq, *model, tol=1e-10)
+    assert np.hypot(*(q2 - p2).T).max() <= 1e-10
+    assert (a != b).all()
+    # the ends still carry their codes (re-checked by the exact tier)
+    for (x, y), v in zip(p2, a):
+        assert _exact_code("SS", x, y, *model) == v
+    for (x, y), v in zip(q2, b):
+        assert _exact_code("SS", x, y, *model) == v
+    # and the boundary there is the closed-form q = 0 neutral boundary (paper Fig. 1): neutral
+    # iff the eigenvalues mu of B diag(kappa, 1) are real and positive (disc, trace, det > 0)
+    k = model[0]
+    m = 0.5 * (p2 + q2)
+    c1, s1, c2, s2 = np.cos(m[:, 0]), np.sin(m[:, 0]), np.cos(m[:, 1]), np.sin(m[:, 1])
+    disc = (k * c1 - s2) ** 2 + 4 * k * s1 * c2
+    trace, det = k * c1 + s2, c1 * s2 - s1 * c2
+    assert np.min(np.abs([disc, trace, det]), axis=0).max() < 1e-9
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(field="XX"), "field: must be one of SS, II"),
+        (dict(tol=0.0), "tol: must be positive"),
+        (dict(vq=np.array([1])), "vp: the two ends"),
+    ],
+)
+def test_bad_input(kwargs, match):
+    args = dict(field="SS", p=[[0.3, 2.0]], q=[[1.2, 2.0]], vp=np.array([1]), vq=np.array([0]))
+    args.update({k: v for k, v in kwargs.items() if k in args})
+    tol = kwargs.get("tol", 1e-10)
+    with pytest.raises(ValueError, match=match):
+        brackets.bisect(args.pop("field"), *args.values(), 0.5, 0.0, 0.0, tol=tol)
+
+
+def test_boundary_kind():
+    assert brackets.boundary_kind("II", [0, 1], [2, 2]).tolist() == [
+        "II_consistency",
+        "II_stability",
+    ]
+    assert brackets.boundary_kind("SS", 0, 2)[()] == "SS_stability"
