@@ -388,27 +388,10 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
     from atlas.data.io import check_output_path
 
     scheduler = _scheduler_arg(args.scheduler or "inprocess")
-    try:
-        import zarr  # noqa: F401
-
-        if scheduler is not None:
-            import distributed  # noqa: F401
-    except ImportError as e:  # pragma: no cover - the dask extra is missing
-        raise ValueError(
-            f"scheduler: needs the dask extra (pip install -e '.[dask]'): {e}"
-        ) from None
+    _require_dask(scheduler)
     from atlas.data.distributed import generate_distributed
 
-    stem = args.out or f"{scene.name}.nc"
-    store = args.store or (os.path.splitext(stem)[0] + ".zarr")
-    if args.resume and args.overwrite:
-        raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
-    if args.resume and not os.path.exists(store):
-        raise FileNotFoundError(f"resume: store {store} does not exist")
-    if os.path.exists(store) and not (args.resume or args.overwrite):
-        raise FileExistsError(
-            f"store: {store} exists (use --resume to continue it or --overwrite to replace it)"
-        )
+    store = _store_arg(args, scene)
     if args.out is not None:
         check_output_path(args.out, args.overwrite)  # fail before any computation
     use_compile_cache()
@@ -437,16 +420,49 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         raise KeyboardInterrupt(
             f"finished tiles are kept in {store}: continue with the same command and --resume"
         ) from None
+    print(_distributed_summary(s), file=sys.stderr)
+    return 0
+
+
+def _require_dask(scheduler) -> None:
+    """``ValueError`` naming ``scheduler`` if zarr (and, for a cluster, distributed) is missing."""
+    try:
+        import zarr  # noqa: F401
+
+        if scheduler is not None:
+            import distributed  # noqa: F401
+    except ImportError as e:  # pragma: no cover - the dask extra is missing
+        raise ValueError(
+            f"scheduler: needs the dask extra (pip install -e '.[dask]'): {e}"
+        ) from None
+
+
+def _store_arg(args, scene) -> str:
+    """The zarr store of ``--store`` (default: the netCDF name with ``.zarr``), checked against
+    ``--resume`` / ``--overwrite``."""
+    stem = args.out or f"{scene.name}.nc"
+    store = args.store or (os.path.splitext(stem)[0] + ".zarr")
+    if args.resume and args.overwrite:
+        raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
+    if args.resume and not os.path.exists(store):
+        raise FileNotFoundError(f"resume: store {store} does not exist")
+    if os.path.exists(store) and not (args.resume or args.overwrite):
+        raise FileExistsError(
+            f"store: {store} exists (use --resume to continue it or --overwrite to replace it)"
+        )
+    return store
+
+
+def _distributed_summary(s: dict) -> str:
+    """The line ``atlas generate`` prints for a :func:`generate_distributed` summary."""
     where = s["store"] if s["netcdf"] is None else f"{s['netcdf']} (store {s['store']})"
-    print(
+    return (
         f"atlas generate: {where}: {s['points']} points in {s['seconds']:.2f} s "
         f"({s['points_per_second']:.3g} points/s) on {s['scheduler']} with {s['workers']} "
         f"worker(s); {s['tiles']} tiles: {len(s['computed'])} computed, {len(s['verified'])} "
         f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
-        f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution",
-        file=sys.stderr,
+        f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
     )
-    return 0
 
 
 def _force_progress() -> bool:

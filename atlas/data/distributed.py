@@ -63,6 +63,7 @@ Example
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import datetime
 import hashlib
 import json
@@ -78,11 +79,13 @@ from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
 from atlas.data.engine import (
     DEFAULT_TILE_POINTS,
     Schema,
+    block_shape,
     check_options,
     generate,
     progress_bar,
     schema,
 )
+from atlas.data.io import NetCDFSink, check_output_path
 from atlas.data.scene import Scene
 
 __all__ = [
@@ -243,8 +246,6 @@ def _owns(dims, split) -> bool:
 
 def _chunks(sch: Schema, name: str, slab: int, block2: int | None = None) -> tuple[int, ...]:
     """Zarr chunks aligned with the tiles: ``slab`` along beta1, ``block2`` along a split beta2."""
-    from atlas.data.engine import block_shape
-
     dims = sch.variables[name][0]
     shape = tuple(sch.shape[d] for d in dims)
     fixed = {"beta1": slab} if "beta1" in dims else {}
@@ -643,29 +644,73 @@ def generate_distributed(
         computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
     """
     t0 = time.perf_counter()
+    job = _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_points, history)
+    if to_netcdf is not None:
+        check_output_path(to_netcdf, overwrite_netcdf)
+    resumed = _prepare_store(job, resume, overwrite)
+    ex = _executor(scheduler)
+    bar = progress_bar(progress, len(job.tiles), "atlas tiles", unit="tile")
+    try:
+        report, recs, computed = _run_tiles(ex, job, resumed, bar)
+        totals = _finalize(job.store, job.sch, job.plan, job.tiles, recs, computed, resumed)
+    finally:
+        if bar is not None:
+            bar.close()
+        ex.close()
+    netcdf = _to_netcdf(job.store, job.sch, job.tiles, totals, to_netcdf, overwrite_netcdf)
+    seconds = time.perf_counter() - t0
+    return _summary(job, ex, netcdf, report, recs, computed, totals, seconds)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Job:
+    """One checked call of :func:`generate_distributed`: the scene, the store (absolute path),
+    the tiles, the schema of the full atlas, the :func:`atlas.generate` options and the plan."""
+
+    scene: Scene
+    store: str
+    tiles: list
+    sch: Schema
+    opts: dict
+    plan: dict
+
+    @property
+    def slab(self) -> int:
+        """``beta1`` values per tile."""
+        return self.tiles[0][1] - self.tiles[0][0]
+
+    @property
+    def block2(self) -> int | None:
+        """``beta2`` values per tile (``None``: ``beta2`` not split)."""
+        first = self.tiles[0]
+        return first[3] - first[2] if len(first) == 4 else None
+
+
+def _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_points, history):
+    """The checked arguments of :func:`generate_distributed` (one-line errors naming the
+    parameter), its tiles, schema and plan."""
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     method, dtype, tile_points = check_options(method, dtype, tile_points)
     _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab, block2)
-    slab_n = tiles[0][1] - tiles[0][0]
-    block2_n = tiles[0][3] - tiles[0][2] if len(tiles[0]) == 4 else None
     sch = schema(
         scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
     )
     opts = dict(method=method, dtype=dtype, resolve=bool(resolve), tile_points=tile_points)
-    plan = _plan(scene, sch, tiles, opts)
-    if to_netcdf is not None:
-        from atlas.data.io import check_output_path
+    return _Job(scene, store, tiles, sch, opts, _plan(scene, sch, tiles, opts))
 
-        check_output_path(to_netcdf, overwrite_netcdf)
 
+def _prepare_store(job: _Job, resume: bool, overwrite: bool) -> bool:
+    """Resume an existing store made for the same plan, or lay out a new one (replacing an
+    existing store only with ``overwrite``); true when resuming."""
+    store = job.store
     exists = os.path.exists(store)
     if exists and resume:
         old = _stored_plan(store)
-        if old.get("hash") != plan["hash"]:
-            diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]]
+        if old.get("hash") != job.plan["hash"]:
+            diff = [k for k in job.plan if k != "hash" and old.get(k) != job.plan[k]]
             raise ValueError(
                 f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
             )
@@ -676,38 +721,40 @@ def generate_distributed(
             raise FileNotFoundError(f"store: directory {os.path.dirname(store)} does not exist")
         if exists:
             shutil.rmtree(store)
-        _create_layout(store, sch, slab_n, plan, block2_n)
+        _create_layout(store, job.sch, job.slab, job.plan, job.block2)
+    return exists and resume
 
-    ex = _executor(scheduler)
-    bar = progress_bar(progress, len(tiles), "atlas tiles", unit="tile")
-    try:
-        report, recs = _verify_all(ex, store, tiles) if exists and resume else (None, {})
-        todo = [i for i in range(len(tiles)) if i not in recs]
-        if bar is not None:
-            bar.update(len(recs))
-        calls = [(i, (store, scene, i, tiles[i], opts)) for i in todo]
-        computed = {}
-        for i, rec in ex.map(_run_tile, calls):
-            recs[i] = computed[i] = rec
-            if bar is not None:
-                bar.update(1)
-        totals = _finalize(store, sch, plan, tiles, recs, computed, resumed=exists and resume)
-    finally:
-        if bar is not None:
-            bar.close()
-        ex.close()
 
-    netcdf = _to_netcdf(store, sch, tiles, totals, to_netcdf, overwrite_netcdf)
-    seconds = time.perf_counter() - t0
-    points = scene.points()
+def _run_tiles(ex, job: _Job, resumed: bool, bar):
+    """Verify the recorded tiles (when resuming), then compute the others on ``ex``.
+
+    Returns ``(report, records, computed)``: the verification report (``None`` unless resuming),
+    the records of every finished tile, and those of the tiles computed here.
+    """
+    report, recs = _verify_all(ex, job.store, job.tiles) if resumed else (None, {})
+    todo = [i for i in range(len(job.tiles)) if i not in recs]
+    if bar is not None:
+        bar.update(len(recs))
+    calls = [(i, (job.store, job.scene, i, job.tiles[i], job.opts)) for i in todo]
+    computed = {}
+    for i, rec in ex.map(_run_tile, calls):
+        recs[i] = computed[i] = rec
+        if bar is not None:
+            bar.update(1)
+    return report, recs, computed
+
+
+def _summary(job: _Job, ex, netcdf, report, recs, computed, totals, seconds) -> dict:
+    """What :func:`generate_distributed` returns (see there)."""
+    points = job.scene.points()
     return {
-        "store": store,
+        "store": job.store,
         "netcdf": netcdf,
         "scheduler": ex.description,
         "workers": ex.workers,
-        "tiles": len(tiles),
-        "slab": slab_n,
-        "block2": block2_n,
+        "tiles": len(job.tiles),
+        "slab": job.slab,
+        "block2": job.block2,
         "points": points,
         "computed": sorted(computed),
         "verified": sorted(set(recs) - set(computed)),
@@ -776,8 +823,6 @@ def _to_netcdf(store, sch, tiles, totals, path, overwrite):
     """Stream the store into a netCDF4 file with the schema's (typed) attributes."""
     if path is None:
         return None
-    from atlas.data.io import NetCDFSink
-
     sink = NetCDFSink(path, overwrite)
     sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
     ds = _open(store)

@@ -401,54 +401,20 @@ def run(
     counts = {"undecided_fast": {}, "undecided": {}}
     md = _ModelDependence(scene, outputs)
     bar = progress_bar(progress, total, f"atlas {scene.name}")
-    pending = None
+    writer = _TileWriter(sink, outputs, dtype, resolve, counts, md, bar)
     sink.begin(sch)
     try:
         for g, need, dims, shape in plan:
-            kern = _jitted(g.name)
-            inputs = _GROUP_INPUTS[g.name]
-            # small groups: pad to the next power of two only (same blocks, few distinct shapes)
-            T = min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
-            pending = None
-            for index in tile_blocks(shape, T):
-                block = tuple(s.stop - s.start for s in index)
-                if g.name == "spectral" and method == "certified":
-                    res, fast = _spectral_tile(
-                        src, dims, index, block, need, dtype, resolve, counts
-                    )
-                    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, counts, md)
-                    if bar is not None:
-                        bar.update(math.prod(block))
-                    continue
-                flat = _gather(src, inputs, dims, index, block, T)
-                out = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
-                if pending is not None:
-                    _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, counts, md, bar)
-                pending = (index, block, flat, {k: out[k] for k in need})
-            if pending is not None:
-                _finish_tile(g, dims, *pending, sink, outputs, dtype, resolve, counts, md, bar)
+            T = _kernel_size(shape, tile_points)
+            if g.name == "spectral" and method == "certified":
+                _certified_group(writer, src, g, need, dims, shape, T)
+            else:
+                _kernel_group(writer, src, g, need, dims, shape, T)
         for name, block in md.results().items():
             sink.write(name, tuple(slice(None) for _ in block.shape), block)
-        fast = sum(counts["undecided_fast"].values())
-        final = sum(counts["undecided"].values())
-        attrs = {"undecided_fast": fast, "undecided_after_resolve": final}
-        failures = counts.get("exact_failures", [])
-        if failures:
-            attrs["exact_failures"] = len(failures)
-            attrs["exact_failure_example"] = repr(failures[0])
-        var_attrs = {
-            k: {"undecided_fast": counts["undecided_fast"].get(k, 0), "undecided": v}
-            for k, v in counts["undecided"].items()
-            if k in sch.variables
-        }
-        result = sink.finish(attrs, var_attrs)
+        result = sink.finish(*_final_attrs(counts, sch))
         seconds = time.perf_counter() - t0
     except BaseException:
-        try:  # let in-flight kernels finish before unwinding (exiting under them can crash XLA)
-            if pending is not None:
-                jax.block_until_ready(pending[3])
-        except BaseException:  # pragma: no cover - best effort
-            pass
         sink.abort()
         raise
     finally:
@@ -457,6 +423,80 @@ def run(
     if stats is not None:
         stats.update(_summary(scene, total, seconds, counts))
     return result
+
+
+@dataclass
+class _TileWriter:
+    """Where the finished tiles of a run go: the sink (the wanted ``outputs``, stored as ``dtype``),
+    the undecided ``counts``, the model dependence and the progress bar."""
+
+    sink: object
+    outputs: tuple
+    dtype: str
+    resolve: bool
+    counts: dict
+    md: _ModelDependence
+    bar: object
+
+
+def _kernel_size(shape, tile_points: int) -> int:
+    """Padded kernel length of a group: ``tile_points``, or for small groups the next power of two
+    (same blocks, few distinct shapes)."""
+    return min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
+
+
+def _certified_group(writer: _TileWriter, src, g, need, dims, shape, T):
+    """The certified spectral verdicts of one group, hyperslab by hyperslab."""
+    for index in tile_blocks(shape, T):
+        block = tuple(s.stop - s.start for s in index)
+        res, fast = _spectral_tile(
+            src, dims, index, block, need, writer.dtype, writer.resolve, writer.counts
+        )
+        _store_tile(writer, g, dims, index, block, res, fast)
+        if writer.bar is not None:
+            writer.bar.update(math.prod(block))
+
+
+def _kernel_group(writer: _TileWriter, src, g, need, dims, shape, T):
+    """One group through its jitted kernel: each tile is dispatched asynchronously and the previous
+    one finished (resolved, stored) while it computes."""
+    kern = _jitted(g.name)
+    inputs = _GROUP_INPUTS[g.name]
+    pending = None
+    try:
+        for index in tile_blocks(shape, T):
+            block = tuple(s.stop - s.start for s in index)
+            flat = _gather(src, inputs, dims, index, block, T)
+            res = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
+            if pending is not None:
+                _finish_tile(writer, g, dims, *pending)
+            pending = (index, block, flat, {k: res[k] for k in need})
+        if pending is not None:
+            _finish_tile(writer, g, dims, *pending)
+    except BaseException:
+        try:  # let in-flight kernels finish before unwinding (exiting under them can crash XLA)
+            if pending is not None:
+                jax.block_until_ready(pending[3])
+        except BaseException:  # pragma: no cover - best effort
+            pass
+        raise
+
+
+def _final_attrs(counts: dict, sch: Schema) -> tuple[dict, dict]:
+    """Global and per-variable undecided counts of a run (``sink.finish`` arguments)."""
+    fast = sum(counts["undecided_fast"].values())
+    final = sum(counts["undecided"].values())
+    attrs = {"undecided_fast": fast, "undecided_after_resolve": final}
+    failures = counts.get("exact_failures", [])
+    if failures:
+        attrs["exact_failures"] = len(failures)
+        attrs["exact_failure_example"] = repr(failures[0])
+    var_attrs = {
+        k: {"undecided_fast": counts["undecided_fast"].get(k, 0), "undecided": v}
+        for k, v in counts["undecided"].items()
+        if k in sch.variables
+    }
+    return attrs, var_attrs
 
 
 def _plan(scene: Scene, outputs) -> list[tuple]:
@@ -486,30 +526,32 @@ def _summary(scene: Scene, values: int, seconds: float, counts: dict) -> dict:
     }
 
 
-def _finish_tile(g, dims, index, block, flat, out, sink, outputs, dtype, resolve, stats, md, bar):
+def _finish_tile(writer: _TileWriter, g, dims, index, block, flat, out):
+    """Finish one kernel tile: unpad, count, resolve undecided values exactly, store."""
     n = math.prod(block)
     size = max(a.size for a in flat)  # outputs may not depend on every input (FF: alpha only)
     res = {
         k: np.array(np.broadcast_to(np.asarray(v).reshape(-1), (size,))[:n]) for k, v in out.items()
     }
     fast = {k: int(undecided(k, v).sum()) for k, v in res.items()}
-    if resolve:
-        _resolve(g.name, res, flat, n, stats)
-    _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md)
-    if bar is not None:
-        bar.update(n)
+    if writer.resolve:
+        _resolve(g.name, res, flat, n, writer.counts)
+    _store_tile(writer, g, dims, index, block, res, fast)
+    if writer.bar is not None:
+        writer.bar.update(n)
 
 
-def _store_tile(g, dims, index, block, res, fast, sink, outputs, dtype, stats, md):
+def _store_tile(writer: _TileWriter, g, dims, index, block, res, fast):
     """Count, record model dependence and write the finished (flat) results of one tile."""
+    stats = writer.counts
     for k, v in res.items():
         stats["undecided_fast"][k] = stats["undecided_fast"].get(k, 0) + fast.get(k, 0)
         stats["undecided"][k] = stats["undecided"].get(k, 0) + int(undecided(k, v).sum())
     if g.name == "spectral":
-        md.update(dims, index, block, res)
+        writer.md.update(dims, index, block, res)
     for k, v in res.items():
-        if k in outputs:
-            sink.write(k, index, to_storage(k, v.reshape(block), dtype))
+        if k in writer.outputs:
+            writer.sink.write(k, index, to_storage(k, v.reshape(block), writer.dtype))
 
 
 class _ModelDependence:

@@ -5,6 +5,7 @@ engine (:mod:`atlas.dynamics.simulator` run by run, or the batched :mod:`atlas.d
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time as _time
 
@@ -210,47 +211,58 @@ def outcome_map(
         Attributes record the parameters, ``trajectories``, ``seconds`` and
         ``trajectories_per_second``.
     """
-    b1, b2, kappa, qq, alpha, perturbation, t_end, horizon_cap = _map_args(
-        beta1_values, beta2_values, kappa, q, alpha, n_perturb, perturbation, t_end, horizon_cap
-    )
-    if engine not in ("numpy", "jax"):
-        raise ValueError(f"engine must be 'numpy' or 'jax', got {engine!r}")
-    g0 = perturbed_initial_states(b1, b2, alpha, kappa, n_perturb, seed, perturbation)
-    k = (kappa, 1.0)
+    b1, b2, p = _map_args(
+        beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, perturbation, t_end,
+        horizon_cap, max_events, engine,
+    )  # fmt: skip
+    g0 = perturbed_initial_states(b1, b2, p.alpha, p.kappa, n_perturb, seed, p.perturbation)
     t0 = _time.perf_counter()
-    if engine == "jax":
-        codes = jax_engine.outcomes(
-            b1, b2, alpha, k, qq, g0, t_end=t_end, horizon_cap=horizon_cap, max_events=max_events
-        )
-    else:
-        codes = _numpy_outcomes(b1, b2, alpha, k, qq, g0, t_end, horizon_cap, max_events, progress)
+    codes = _outcome_codes(b1, b2, g0, p, progress)
     wall = _time.perf_counter() - t0
-    out, agree = _most_frequent(codes)
-    B1, B2 = np.meshgrid(b1, b2, indexing="ij")
-    region = no_stable_subclass(B1, B2, np.full(B1.shape, alpha))
-    attrs = {
-        "kappa": kappa,
-        "q1": float(qq[0]),
-        "q2": float(qq[1]),
-        "alpha": alpha,
-        "alpha_units": "rad",
-        "n_perturb": int(n_perturb),
-        "seed": int(seed),
-        "perturbation": perturbation,
-        "t_end": t_end,
-        "horizon_cap": horizon_cap,
-        "max_events": int(max_events),
-        "engine": engine,
-        "trajectories": int(codes.size),
-        "seconds": wall,
-        "trajectories_per_second": codes.size / wall if wall > 0 else float("nan"),
-    }
-    return _map_dataset(b1, b2, out, agree, region, engine, attrs)
+    return _map_dataset(b1, b2, codes, p, wall)
 
 
-def _map_args(beta1_values, beta2_values, kappa, q, alpha, n_perturb, perturbation, t_end,
-              horizon_cap):  # fmt: skip
-    """Checked arguments of :func:`outcome_map` (one-line errors naming the parameter)."""
+@dataclasses.dataclass(frozen=True)
+class _MapParams:
+    """The checked scalar parameters of :func:`outcome_map` (``n_perturb``, ``seed`` and
+    ``max_events`` as given)."""
+
+    kappa: float
+    q: np.ndarray
+    alpha: float
+    n_perturb: int
+    seed: int
+    perturbation: float
+    t_end: float
+    horizon_cap: float
+    max_events: int
+    engine: str
+
+    def attrs(self, trajectories: int, seconds: float) -> dict:
+        """The map's attributes: the parameters, ``trajectories`` run and ``seconds`` taken."""
+        return {
+            "kappa": self.kappa,
+            "q1": float(self.q[0]),
+            "q2": float(self.q[1]),
+            "alpha": self.alpha,
+            "alpha_units": "rad",
+            "n_perturb": int(self.n_perturb),
+            "seed": int(self.seed),
+            "perturbation": self.perturbation,
+            "t_end": self.t_end,
+            "horizon_cap": self.horizon_cap,
+            "max_events": int(self.max_events),
+            "engine": self.engine,
+            "trajectories": int(trajectories),
+            "seconds": seconds,
+            "trajectories_per_second": trajectories / seconds if seconds > 0 else float("nan"),
+        }
+
+
+def _map_args(beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, perturbation, t_end,
+              horizon_cap, max_events, engine):  # fmt: skip
+    """Checked grid and :class:`_MapParams` of :func:`outcome_map` (one-line errors naming the
+    parameter)."""
     b1 = np.atleast_1d(check_finite("beta1_values", beta1_values)).astype(float)
     b2 = np.atleast_1d(check_finite("beta2_values", beta2_values)).astype(float)
     if b1.ndim != 1 or b2.ndim != 1 or b1.size == 0 or b2.size == 0:
@@ -265,7 +277,24 @@ def _map_args(beta1_values, beta2_values, kappa, q, alpha, n_perturb, perturbati
     horizon_cap = float(check_finite("horizon_cap", horizon_cap, positive=True))
     if horizon_cap < 1:
         raise ValueError(f"horizon_cap must be >= 1, got {horizon_cap!r}")
-    return b1, b2, kappa, qq, alpha, perturbation, t_end, horizon_cap
+    if engine not in ("numpy", "jax"):
+        raise ValueError(f"engine must be 'numpy' or 'jax', got {engine!r}")
+    params = _MapParams(kappa, qq, alpha, n_perturb, seed, perturbation, t_end, horizon_cap,
+                        max_events, engine)  # fmt: skip
+    return b1, b2, params
+
+
+def _outcome_codes(b1, b2, g0, p: _MapParams, progress):
+    """Outcome codes ``(n1, n2, n_perturb)`` from the chosen engine."""
+    k = (p.kappa, 1.0)
+    if p.engine == "jax":
+        return jax_engine.outcomes(
+            b1, b2, p.alpha, k, p.q, g0, t_end=p.t_end, horizon_cap=p.horizon_cap,
+            max_events=p.max_events,
+        )  # fmt: skip
+    return _numpy_outcomes(
+        b1, b2, p.alpha, k, p.q, g0, p.t_end, p.horizon_cap, p.max_events, progress
+    )
 
 
 def _numpy_outcomes(b1, b2, alpha, k, q, g0, t_end, horizon_cap, max_events, progress):
@@ -301,8 +330,12 @@ def _most_frequent(codes):
     return out, agree
 
 
-def _map_dataset(b1, b2, out, agree, region, engine, attrs) -> xr.Dataset:
-    """The outcome map as a CF dataset over ``(beta1, beta2)`` (flags from :class:`Outcome`)."""
+def _map_dataset(b1, b2, codes, p: _MapParams, seconds: float) -> xr.Dataset:
+    """The outcome map of the codes ``(n1, n2, n_perturb)`` as a CF dataset over
+    ``(beta1, beta2)`` (flags from :class:`Outcome`)."""
+    out, agree = _most_frequent(codes)
+    B1, B2 = np.meshgrid(b1, b2, indexing="ij")
+    region = no_stable_subclass(B1, B2, np.full(B1.shape, p.alpha))
     flags = {
         "long_name": "simulated outcome of perturbed SS equilibrium",
         "flag_values": np.array([int(m) for m in Outcome], dtype=np.int8),
@@ -331,7 +364,7 @@ def _map_dataset(b1, b2, out, agree, region, engine, attrs) -> xr.Dataset:
             "title": "Outcome map of the compliant two-contact dynamics",
             "references": "Varkonyi, P. L.: Dynamics of mechanical systems with multiple sliding "
             "contacts: new faces of Painleve's paradox (Sec. 4.1, 6.4-6.5, Fig. 2)",
-            "method": f"exact event-driven simulation ({engine} engine), atlas.dynamics.classify",
-            **attrs,
+            "method": f"exact event-driven simulation ({p.engine} engine), atlas.dynamics.classify",
+            **p.attrs(codes.size, seconds),
         },
     )

@@ -233,49 +233,32 @@ def simulate(
     """
     t_wall = _time.perf_counter()
     sysm = build_system(beta1, beta2, alpha, k, q, b_norm, a_norm, theta)
-    g0, t_end, scale, amp_lim, pen_lim = _run_limits(
-        sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit
-    )
-    L = sysm.L
-    z = np.append(g0, 1.0)
-    # recorded signs of the four event functions (d1, d2, phi1, phi2); -1 means "<= 0"
-    s = np.where(L @ z > 0, 1.0, -1.0)
-    mask = mask_from_signs(s)
-    t = 0.0
-    log = _Log.start(z, mask)
-    n_steps = 0
-    while True:
-        mode = sysm.modes[mask]
-        if t >= t_end:
-            status, message = Status.T_END, "reached t_end"
-            break
-        if n_steps >= max_steps:
-            status, message = Status.STEP_CAP, f"{max_steps} sub-steps"
-            break
-        h = min(mode.h, t_end - t)
-        z1 = (mode.Phi if h == mode.h else expm(mode.E * h)) @ z
-        brackets, W = _brackets(L, mode, s, z, z1, h)
-        n_steps += 1
-        if not brackets:
-            t, z = t + h, z1
-            log.step(t, z)
-            stop = _stop_after_step(sysm, mode, z, amp_lim, pen_lim, stop_when_settled, settle_rtol)
-        else:
-            r, crossing, z = _first_crossing(L, mode, s, z, brackets, W)
-            t += r
-            for kind, contact in _switch(sysm, mode, s, z, crossing, scale):
-                log.event(t, kind, contact, z)
-            mask = mask_from_signs(s)
-            log.segment(t, z, mask)
-            stop = _stop_after_event(sysm, z, mask, t, len(log.ev_t), max_events, amp_lim, pen_lim)
-        if stop is not None:
-            status, message = stop
-            break
-    return log.result(sysm, t, z, mask, status, message, n_steps, scale, t_wall)
+    g0, lim = _run_limits(
+        sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit,
+        stop_when_settled, settle_rtol,
+    )  # fmt: skip
+    log, t, z, mask, n_steps, (status, message) = _integrate(sysm, g0, lim)
+    return log.result(sysm, t, z, mask, status, message, n_steps, lim.scale, t_wall)
 
 
-def _run_limits(sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit):
-    """Checked ``g0``, ``t_end``; the run's length scale and divergence limits (see simulate)."""
+@dataclasses.dataclass(frozen=True)
+class _Limits:
+    """When a run stops (see :func:`simulate`): its horizon, caps, divergence limits
+    (``amp_lim``, ``pen_lim``) relative to its length ``scale``, and the settling test."""
+
+    t_end: float
+    max_events: int
+    max_steps: int
+    scale: float
+    amp_lim: float
+    pen_lim: float
+    stop_when_settled: bool
+    settle_rtol: float
+
+
+def _run_limits(sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetration_limit,
+                stop_when_settled, settle_rtol):  # fmt: skip
+    """Checked ``g0`` and the run's :class:`_Limits` (length scale, divergence limits)."""
     g0 = check_finite("g0", g0)
     if g0.shape != (4,):
         raise ValueError(f"g0 must have 4 components (d1, d2, d1', d2'), got shape {g0.shape}")
@@ -289,7 +272,54 @@ def _run_limits(sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetra
     pen_lim = 1e3 * scale if penetration_limit is None else float(penetration_limit)
     check_finite("amplitude_limit", amp_lim, positive=True)
     check_finite("penetration_limit", pen_lim, positive=True)
-    return g0, t_end, scale, amp_lim, pen_lim
+    lim = _Limits(t_end, max_events, max_steps, scale, amp_lim, pen_lim, stop_when_settled,
+                  settle_rtol)  # fmt: skip
+    return g0, lim
+
+
+def _integrate(sysm: System, g0, lim: _Limits):
+    """Sub-step and switch from ``g0`` until a stop; returns ``(log, t, z, mask, n_steps,
+    (status, message))`` at the stop."""
+    L = sysm.L
+    z = np.append(g0, 1.0)
+    # recorded signs of the four event functions (d1, d2, phi1, phi2); -1 means "<= 0"
+    s = np.where(L @ z > 0, 1.0, -1.0)
+    mask = mask_from_signs(s)
+    t = 0.0
+    log = _Log.start(z, mask)
+    n_steps = 0
+    while True:
+        mode = sysm.modes[mask]
+        if t >= lim.t_end:
+            return log, t, z, mask, n_steps, (Status.T_END, "reached t_end")
+        if n_steps >= lim.max_steps:
+            return log, t, z, mask, n_steps, (Status.STEP_CAP, f"{lim.max_steps} sub-steps")
+        t, z, mask, stop = _sub_step(sysm, mode, s, t, z, mask, lim, log)
+        n_steps += 1
+        if stop is not None:
+            return log, t, z, mask, n_steps, stop
+
+
+def _sub_step(sysm: System, mode: Mode, s, t, z, mask, lim: _Limits, log: _Log):
+    """Advance one sub-step of ``mode`` from ``(t, z)``, or to the first crossing in it (then
+    switch the recorded signs ``s`` in place and log the events).
+
+    Returns ``(t, z, mask, stop)`` with ``stop = (status, message)`` if the run stops there.
+    """
+    h = min(mode.h, lim.t_end - t)
+    z1 = (mode.Phi if h == mode.h else expm(mode.E * h)) @ z
+    brackets, W = _brackets(sysm.L, mode, s, z, z1, h)
+    if not brackets:
+        t, z = t + h, z1
+        log.step(t, z)
+        return t, z, mask, _stop_after_step(sysm, mode, z, lim)
+    r, crossing, z = _first_crossing(sysm.L, mode, s, z, brackets, W)
+    t += r
+    for kind, contact in _switch(sysm, mode, s, z, crossing, lim.scale):
+        log.event(t, kind, contact, z)
+    mask = mask_from_signs(s)
+    log.segment(t, z, mask)
+    return t, z, mask, _stop_after_event(sysm, z, mask, t, len(log.ev_t), lim)
 
 
 @dataclasses.dataclass
@@ -427,21 +457,21 @@ def _switch(sysm: System, mode: Mode, s, z, crossing, scale) -> list:
     return events
 
 
-def _stop_after_step(sysm, mode, z, amp_lim, pen_lim, stop_when_settled, settle_rtol):
+def _stop_after_step(sysm, mode, z, lim: _Limits):
     """``(status, message)`` if the run stops after an event-free sub-step, else None."""
-    if _diverged(sysm, z, mode.mask, amp_lim, pen_lim):
-        return Status.DIVERGED, _div_message(z, mode.mask, amp_lim, pen_lim)
-    if stop_when_settled and _settled(sysm, mode, z, settle_rtol):
+    if _diverged(sysm, z, mode.mask, lim.amp_lim, lim.pen_lim):
+        return Status.DIVERGED, _div_message(z, mode.mask, lim.amp_lim, lim.pen_lim)
+    if lim.stop_when_settled and _settled(sysm, mode, z, lim.settle_rtol):
         return Status.SETTLED, f"settled in mode {mode_name(mode.mask)}"
     return None
 
 
-def _stop_after_event(sysm, z, mask, t, n_events, max_events, amp_lim, pen_lim):
+def _stop_after_event(sysm, z, mask, t, n_events, lim: _Limits):
     """``(status, message)`` if the run stops after the events at ``t``, else None."""
-    if n_events >= max_events:
+    if n_events >= lim.max_events:
         return Status.EVENT_CAP, f"{n_events} events by t = {t:.6g}"
-    if _diverged(sysm, z, mask, amp_lim, pen_lim):
-        return Status.DIVERGED, _div_message(z, mask, amp_lim, pen_lim)
+    if _diverged(sysm, z, mask, lim.amp_lim, lim.pen_lim):
+        return Status.DIVERGED, _div_message(z, mask, lim.amp_lim, lim.pen_lim)
     return None
 
 

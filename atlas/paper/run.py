@@ -80,17 +80,8 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     out.mkdir(parents=True, exist_ok=True)
     quick = quick or ci  # ci: the CI test's size (smallest grids, audit.run_audit(ci=True))
     n_map, n_var = (41, 41) if ci else (121, 61) if quick else (361, 201)  # odd: no beta1* cells
-    timings: dict[str, float] = {}
-    notes: list[str] = []
+    step = _Steps(say)
     t_all = time.perf_counter()
-
-    def step(name, fn):
-        say(f"{name} ...")
-        t = time.perf_counter()
-        res = fn()
-        timings[name] = time.perf_counter() - t
-        say(f"{name} done in {timings[name]:.1f} s")
-        return res
 
     rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
     step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
@@ -121,42 +112,58 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     step(
         "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
     )
+    notes = _dynamics_steps(step, out, quick, ds)
+    total = time.perf_counter() - t_all
+    counts = _audit_counts(claims)
+    _write_readme(out, step.timings, total, quick, n_map, n_var, counts, notes, ds)
+    say(f"all done in {total:.1f} s -> {out}")
+    return dict(step.timings, total=total)
+
+
+class _Steps:
+    """The steps of :func:`run`: ``step(name, fn)`` announces ``name``, calls ``fn`` and records its
+    wall time [s] in ``timings``."""
+
+    def __init__(self, say):
+        self.say = say
+        self.timings: dict[str, float] = {}
+
+    def __call__(self, name, fn):
+        self.say(f"{name} ...")
+        t = time.perf_counter()
+        res = fn()
+        self.timings[name] = time.perf_counter() - t
+        self.say(f"{name} done in {self.timings[name]:.1f} s")
+        return res
+
+
+def _dynamics_steps(step: _Steps, out: Path, quick: bool, ds) -> list[str]:
+    """Fig. 2 (not in quick mode) and the outcome map beside the Fig. 1 map ``ds``, if
+    :mod:`atlas.paper.figures_dynamics` imports; returns notes for the README."""
+    notes: list[str] = []
     try:
-        from atlas.paper.figures_dynamics import plot_fig2
+        from atlas.paper.figures_dynamics import PAPER_MAP_N, outcome_map_files, plot_fig2
     except ImportError as e:  # another module of the package; optional here
         notes.append(f"fig2.png not made: atlas.paper.figures_dynamics not importable ({e}).")
+        return notes
+    if quick:
+        notes.append("fig2.png skipped in quick mode (simulation).")
     else:
-        if quick:
-            notes.append("fig2.png skipped in quick mode (simulation).")
-        else:
-            step("fig2.png", lambda: plot_fig2(out))
-        from atlas.paper.figures_dynamics import (  # outcome map beside Fig. 1
-            PAPER_MAP_N,
-            outcome_map_files,
-        )
+        step("fig2.png", lambda: plot_fig2(out))
+    step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
+    return notes
 
-        step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
-    total = time.perf_counter() - t_all
-    counts = {
+
+def _audit_counts(claims) -> dict:
+    """Claims per audit status (the ``META`` claim not counted)."""
+    return {
         s: sum(1 for c in claims if c.status == s and c.id != "META")
         for s in ("confirmed", "refuted", "imprecise")
     }
-    _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds)
-    say(f"all done in {total:.1f} s -> {out}")
-    return dict(timings, total=total)
 
 
 def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
-    from atlas.paper import figures
-
-    files = sorted(
-        p.name
-        for p in out.iterdir()
-        if p.is_file()
-        and not p.name.startswith("bench")
-        and p.name != "README.md"
-        and ".tmp" not in p.name
-    )
+    """``out/README.md``: how the files were made, their sizes and times, the figures inline."""
     lines = [
         "# Regenerated figures and tables (`atlas paper`)",
         "",
@@ -170,7 +177,26 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
         "",
         "| file | size | seconds |",
         "|---|---|---|",
+        *_file_rows(out, timings),
+        "",
+        *(f"* {n}" for n in notes),
+        "",
+        *_figure_sections(out),
     ]
+    atomic_write_text(out / "README.md", "\n".join(lines))
+
+
+def _file_rows(out: Path, timings: dict) -> list[str]:
+    """README table rows ``| file | size | seconds |`` of the files in ``out`` (compute steps
+    counted with the file they make)."""
+    files = sorted(
+        p.name
+        for p in out.iterdir()
+        if p.is_file()
+        and not p.name.startswith("bench")
+        and p.name != "README.md"
+        and ".tmp" not in p.name
+    )
     tmap = {
         "fig1 map (compute)": "fig1_stability.png",
         "fig1 variants (compute)": "fig1_stability_variants.png",
@@ -179,16 +205,21 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
     per_file = {}
     for k, v in timings.items():
         per_file[tmap.get(k, k)] = per_file.get(tmap.get(k, k), 0.0) + v
+    rows = []
     for f in files:
         size = (out / f).stat().st_size
         sec = per_file.get(f)
-        lines.append(
+        rows.append(
             f"| [{f}]({f}) | {size / 1024:.0f} kB | {'' if sec is None else f'{sec:.1f}'} |"
         )
-    lines += [
-        "",
-        *(f"* {n}" for n in notes),
-        "",
+    return rows
+
+
+def _figure_sections(out: Path) -> list[str]:
+    """README sections showing the figures (Fig. 2 and the outcome map when they were made)."""
+    from atlas.paper import figures
+
+    lines = [
         "## Fig. 1: classes",
         "",
         "![fig1 classes](fig1_classes.png)",
@@ -225,4 +256,4 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
             "![outcome map](outcome_map.png)",
             "",
         ]
-    atomic_write_text(out / "README.md", "\n".join(lines))
+    return lines
