@@ -1,0 +1,192 @@
+"""Certified boundary curves: closed forms, exact re-check of vertices, no lost branch, storage."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from atlas.bench.boundaries import hausdorff
+from atlas.cli import main
+from atlas.core import exact, mechanics, verdicts
+from atlas.data import boundaries as bd
+from atlas.data.scene import Scene
+
+PI = np.pi
+GRID = np.arange(32) * 2 * PI / 32
+
+
+def _closed_forms(v, kappa):
+    """|f| at vertices ``v`` of the closed forms of the SS boundary (SPEC §1, audit claim Z):
+    the q = 0 neutral boundary ``disc = (kappa C1 - S2)^2 + 4 kappa S1 C2``, its small-damping
+    limit ``glim = S1 C2 (1 + kappa)^2 + (kappa C1 - S2)^2`` and the trace ``kappa C1 + S2``."""
+    c1, s1, c2, s2 = np.cos(v[:, 0]), np.sin(v[:, 0]), np.cos(v[:, 1]), np.sin(v[:, 1])
+    k = np.arange(5) * PI / 2  # and the distance to the class lines (where pieces join them)
+    lines = np.concatenate(
+        [np.abs(v[:, :1] - k), np.abs(v[:, 1:] - k)]
+        + [np.abs(v[:, 1:] - v[:, :1] - j * PI) / np.sqrt(2) for j in (-1, 0, 1)],
+        axis=1,
+    )
+    return {
+        "disc": np.abs((kappa * c1 - s2) ** 2 + 4 * kappa * s1 * c2),
+        "glim": np.abs(s1 * c2 * (1 + kappa) ** 2 + (kappa * c1 - s2) ** 2),
+        "trace": np.abs(kappa * c1 + s2),
+        "line": lines.min(1),
+    }
+
+
+def _curved(b):
+    return np.concatenate([c.vertices for c in b.curves if not c.on_class_line])
+
+
+@pytest.mark.parametrize("kappa", [0.5, 2.0])
+def test_q0_boundary_is_the_discriminant_curve(kappa):
+    b = bd.slice_boundaries(GRID, GRID, kappa, 0.0, 0.0, fields=("SS",), check=0, chord=1e-3)
+    v = _curved(b)
+    f = _closed_forms(v, kappa)
+    # every certified vertex lies within 1e-10 rad of the zero set: |f| <= |grad f| 1e-10 < 1e-9
+    assert len(v) > 50
+    assert np.min([f["disc"], f["trace"], f["line"]], axis=0).max() < 1e-9
+    assert np.median(f["disc"]) < 1e-10  # the curved boundary is the discriminant curve
+
+
+def test_small_damping_boundary_is_claim_Z_limit():
+    """With q1 = q2 = q -> 0+, the SS boundary tends to glim = 0, not to Fig. 1's disc = 0."""
+    kappa = 0.5
+    b = bd.slice_boundaries(GRID, GRID, kappa, 1e-7, 1e-7, fields=("SS",), check=0, chord=1e-3)
+    f = _closed_forms(_curved(b), kappa)
+    assert np.min([f["glim"], f["trace"], f["line"]], axis=0).max() < 1e-9
+    assert np.median(f["disc"]) > 1e-3  # and away from the undamped curve
+
+
+def test_class_lines_are_the_class_code_ties():
+    """Each closed-form class line separates two class codes and is degenerate (code 0) on it."""
+    rng = np.random.default_rng(3)
+    for c in bd.class_lines():
+        (x0, y0), (x1, y1) = c.vertices
+        t = rng.uniform(0.05, 0.95, 5)
+        p = np.stack([x0 + t * (x1 - x0), y0 + t * (y1 - y0)], 1)
+        n = np.array([-(y1 - y0), x1 - x0]) / np.hypot(x1 - x0, y1 - y0)
+        codes = []
+        for off in (0.0, 1e-7, -1e-7):
+            q = p + off * n
+            c1, s1 = mechanics.direction(q[:, 0])
+            c2, s2 = mechanics.direction(q[:, 1])
+            codes.append(np.asarray(mechanics.class_code(c1, s1, c2, s2)))
+        on, plus, minus = codes
+        assert (plus != minus).all() and (plus > 0).all() and (minus > 0).all()
+        # on the line: a tie (0) wherever the rounded direction lands exactly on it
+        assert set(on.tolist()) <= {0} | set(plus.tolist()) | set(minus.tolist())
+    assert len(bd.class_lines()) == 13  # 5 + 5 axis lines, 3 diagonals of the torus box
+
+
+@pytest.fixture(scope="module")
+def damped():
+    return bd.slice_boundaries(GRID, GRID, 2.0, 0.1, 0.1, check=2, chord=1e-4)
+
+
+def _code(field, point, model):
+    c1, s1 = (float(x) for x in mechanics.direction(point[0]))
+    c2, s2 = (float(x) for x in mechanics.direction(point[1]))
+    v = exact.point_spectral(c1, s1, c2, s2, *model)
+    if field == "SS":
+        return v["stable_SS"]
+    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+
+
+def test_vertices_rechecked_by_the_exact_tier(damped):
+    """A sample of vertices: the bracket ends carry different codes in exact arithmetic alone,
+    and the bracket is at most the tolerance long."""
+    model = (2.0, 0.1, 0.1)
+    rng = np.random.default_rng(1)
+    curves = [c for c in damped.curves if c.ends is not None]
+    assert {c.field for c in curves} == {"SS", "II"}
+    for c in (curves[i] for i in rng.choice(len(curves), 8, replace=False)):
+        for k in rng.choice(len(c.vertices), 3):
+            p, q = c.ends[k]
+            assert np.hypot(*(q - p)) <= bd.TOL
+            assert np.allclose(0.5 * (p + q), c.vertices[k], rtol=0, atol=1e-15)
+            assert _code(c.field, p, model) != _code(c.field, q, model)
+
+
+def test_curves_carry_their_kinds(damped):
+    kinds = {c.kind for c in damped.curves}
+    assert {"SS_stability", "II_consistency"} <= kinds
+    assert damped.attrs["SS_max_bracket"] <= bd.TOL
+    assert all(c.side_a != c.side_b for c in damped.curves)
+
+
+def test_coarse_grid_finds_every_branch_of_a_4x_finer_grid():
+    """The 16 x 16 grid (with its check) and the 64 x 64 grid give the same curves: every
+    fine vertex is near a coarse curve and vice versa (Hausdorff <= chord tolerance scale)."""
+    opts = dict(fields=("SS", "II"), check=2, chord=1e-4)
+    g16, g64 = (np.arange(n) * 2 * PI / n for n in (16, 64))
+    model = (0.5, 0.35, 0.0)
+    coarse = bd.slice_boundaries(g16, g16, *model, **opts)
+    fine = bd.slice_boundaries(g64, g64, *model, **opts)
+    for field in ("SS", "II"):
+        a = [c.vertices for c in coarse.curves if c.field == field]
+        b = [c.vertices for c in fine.curves if c.field == field]
+        assert a and b
+        assert hausdorff(a, b, step=1e-3) < 1e-2  # a lost branch would be >= a cell (0.39 rad)
+
+
+def test_hidden_cells_are_found():
+    """A cell whose corners agree but whose finer samples differ is flagged."""
+    coarse = np.zeros((3, 3), np.int8)
+    fine = np.zeros((5, 5), np.int8)
+    fine[1, 1] = 1  # inside cell (0, 0) only
+    hidden = bd._hidden_cells(coarse, fine, 2)
+    assert hidden.tolist() == [[True, False], [False, False]]
+
+
+def test_scene_and_dataset_give_the_same_curves(tmp_path):
+    from atlas.data.engine import generate
+
+    scene = Scene(beta1="0:2pi:16", beta2="0:2pi:16", kappa=0.5, q=0.2, outputs=["stable_SS"])
+    a = bd.boundaries(scene, fields=("SS",), check=0, chord=1e-3)
+    b = bd.boundaries(generate(scene), fields=("SS",), check=0, chord=1e-3)
+    assert len(a.curves) == len(b.curves)
+    for x, y in zip(a.curves, b.curves):
+        np.testing.assert_array_equal(x.vertices, y.vertices)
+
+
+def test_cf_geometry_and_exports(tmp_path):
+    b = bd.boundaries(
+        Scene(beta1="0:2pi:16", beta2="0:2pi:16", kappa=2.0, q=0.1), check=0, chord=1e-3
+    )
+    b.to_netcdf(tmp_path / "b.nc")
+    ds = xr.open_dataset(tmp_path / "b.nc")
+    assert ds.attrs["Conventions"] == "CF-1.10"
+    geo = ds["boundary_geometry"].attrs
+    assert geo["geometry_type"] == "line" and geo["node_count"] == "node_count"
+    assert int(ds["node_count"].sum()) == ds.sizes["node"] == sum(len(c.vertices) for c in b.curves)
+    assert ds["curve_kind"].attrs["geometry"] == "boundary_geometry"
+    assert float(ds["node_bracket"].max()) <= bd.TOL
+    b.to_csv(tmp_path / "b.csv")
+    rows = (tmp_path / "b.csv").read_text().splitlines()
+    assert len(rows) == 1 + ds.sizes["node"]
+    b.to_geojson(tmp_path / "b.json")
+    doc = json.loads((tmp_path / "b.json").read_text())
+    lines = [f for f in doc["features"] if f["geometry"]["type"] == "LineString"]
+    assert len(lines) == ds.sizes["curve"]
+
+
+def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
+    out = tmp_path / "b.nc"
+    args = ["boundaries", "--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5"]
+    assert main(args + ["--q", "0", "--check", "0", "--out", str(out)]) == 0
+    assert out.exists() and "boundaries:" in capsys.readouterr().out
+    assert main(args + ["--tol", "-1"]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith("atlas: error: tol:")
+    assert main(args + ["--fields", "SS,XX"]) == 2
+    assert "fields:" in capsys.readouterr().err
+    assert main(args + ["--out", str(out)]) == 2  # exists, no --overwrite: untouched
+    assert "exists" in capsys.readouterr().err
+
+
+def test_undecided_code_is_never_a_field_code(damped):
+    codes = {c.side_a for c in damped.curves} | {c.side_b for c in damped.curves}
+    assert verdicts.UNDECIDED_FLAG not in codes or all(
+        c.field == "II" for c in damped.curves if verdicts.UNDECIDED_FLAG in (c.side_a, c.side_b)
+    )
