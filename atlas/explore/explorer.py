@@ -222,7 +222,7 @@ def compute_map(
         full = (b.size, b.size)
         res = {k: np.broadcast_to(v, full).copy() for k, v in res.items()}
         if resolve:
-            masks = {k: undecided(k, v) for k, v in res.items()}
+            masks = {k: undecided(k, v) for k, v in res.items() if OUTPUTS[k].undecided is not None}
             evaluate.settle_codes(res, masks, C1, S1, C2, S2, ca, sa)
         for k in names:
             out[k] = (("beta1", "beta2"), to_storage(k, res[k], dt))

@@ -327,19 +327,6 @@ def test_overlays_and_measure_redraw():
     assert "stable_SS" in explore.format_redraw(rows)
 
 
-def test_compute_map_rejects_bad_input():
-    from atlas.explore import explorer as explore
-
-    for kw, msg in (
-        (dict(kappa=-1.0), "kappa"),
-        (dict(q1=float("nan")), "q1"),
-        (dict(layers=("nope",)), "layers"),
-        (dict(layers=("subclass_code",)), "alpha"),
-    ):
-        with pytest.raises(ValueError, match=msg):
-            explore.compute_map(**{"n": 9, **kw})
-
-
 # --- the notebooks (started in the background by ``notebook_runs``) ----------------------------
 
 
