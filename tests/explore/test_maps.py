@@ -8,7 +8,7 @@ import pytest
 from atlas.data.engine import generate
 from atlas.data.outputs import OUTPUTS
 from atlas.data.scene import Scene
-from atlas.explore import explorer as maps
+from atlas.explore import maps
 
 
 def test_even_grid_class_codes_settle_like_generate():
