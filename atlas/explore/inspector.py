@@ -1,0 +1,234 @@
+"""The point inspector: everything the theory says about one point ``(beta1, beta2, alpha)``.
+
+:func:`inspect_point` gives the class and subclass codes, Table 1 consistency, SF/FS stability,
+IF/FI, CC, the SS and II verdicts of the certified path *and* of the exact reference, the
+eigenvalues of ``M`` and the margins; :func:`format_inspection` is the widget's text for it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from atlas.core import exact, spectral
+from atlas.core import mechanics as mech
+from atlas.core import points as evaluate
+from atlas.core.verdicts import Consistency, Verdict
+from atlas.explore.maps import checked_model
+
+__all__ = ["inspect_point", "format_inspection"]
+
+_FLAGS = ("stable_SS", "consistent_II", "stable_II")
+_SOURCES = (
+    ("spectral_fast", "certified fast path"),
+    ("spectral", "certified + exact"),
+    ("spectral_exact", "exact reference"),
+)
+
+
+def _label(enum, code) -> str:
+    try:
+        return enum(int(code)).label
+    except ValueError:
+        return f"code {int(code)}"
+
+
+def _direction(angle, dt) -> tuple[np.ndarray, np.ndarray]:
+    c, s = (np.asarray(x, dt) for x in mech.direction(float(angle), dt))
+    return c, s
+
+
+def _angle_verdicts(j: list) -> dict:
+    """Class code, SF/FS stability, IF/FI consistency and CC of ``b1 = (c1, s1)``, ``b2``."""
+    c1, s1, c2, s2 = j
+    return {
+        "class_code": int(mech.class_code(*j)),
+        "stable_SF": int(mech.stable_SF(c1)),
+        "stable_FS": int(mech.stable_FS(s2)),
+        "consistent_IF": bool(mech.consistent_IF(c1, s1)),
+        "consistent_FI": bool(mech.consistent_FI(c2, s2)),
+        "cc_possible": bool(mech.cc_possible(c1, s2)),
+    }
+
+
+def _alpha_verdicts(alpha, dirs: tuple, j: list, dt) -> dict:
+    """Subclass code and Table 1 consistency (fast and exact); without ``alpha`` the class only."""
+    if alpha is None:
+        return {
+            "subclass_code": None,
+            "consistency": None,
+            "exact_codes": exact.point_codes(*dirs),
+        }
+    ca, sa = _direction(alpha, dt)
+    ja = [jnp.asarray(ca), jnp.asarray(sa)]
+    return {
+        "a": (float(ca), float(sa)),
+        "subclass_code": int(mech.subclass_code(*j, *ja)),
+        "consistency": {k: int(v) for k, v in mech.consistent_modes(*j, *ja).items()},
+        "exact_codes": exact.point_codes(*dirs, ca, sa),
+    }
+
+
+def _sorted_by_real_part(w) -> np.ndarray:
+    w = np.asarray(w)
+    return w[np.argsort(-w.real, kind="stable")]
+
+
+def _margins(j, model, dirs, fast, ref) -> dict:
+    """The smooth SS margin, ``det B``, the quartic's coefficients and the spectral abscissa."""
+    c1, s1, c2, s2 = (float(v) for v in dirs)
+    a3, a2, a1, a0 = (float(x) for x in spectral.coefficients(*j, *model))
+    return {
+        "ss_margin": float(spectral.ss_margin(*j, *model)),
+        "det_B": c1 * s2 - s1 * c2,
+        "a3": a3,
+        "a2": a2,
+        "a1": a1,
+        "a0": a0,
+        "spectral_abscissa": float(fast["spectral_abscissa"]),
+        "spectral_abscissa_exact": float(ref["spectral_abscissa"]),
+    }
+
+
+def _spectrum(dirs: tuple, model: tuple, dt) -> dict:
+    """SS and II verdicts of the fast path, the settled path and the exact reference; ``M``, its
+    eigenvalues (``numpy`` and exact) and the margins."""
+    j = [jnp.asarray(v) for v in dirs]
+    jm = [jnp.asarray(dt.type(v)) for v in model]
+    pt = [np.asarray(v, dt) for v in dirs] + [dt.type(v) for v in model]
+    fast = evaluate.spectral_points(*pt, names=evaluate.SPECTRAL_NAMES, dtype=dt, resolve=False)
+    settled = evaluate.spectral_points(*pt, names=evaluate.SPECTRAL_NAMES, dtype=dt, resolve=True)
+    ref = exact.point_spectral(*(float(v) for v in pt))
+    M = np.asarray(spectral.build_M(*j, *jm))
+    return {
+        "spectral_fast": {k: int(fast[k]) for k in _FLAGS},
+        "spectral": {k: int(settled[k]) for k in _FLAGS},
+        "spectral_exact": {k: int(ref[k]) for k in _FLAGS},
+        "M": M,
+        "eigenvalues": _sorted_by_real_part(np.linalg.eigvals(M.astype(np.float64))),
+        "eigenvalues_exact": _sorted_by_real_part(np.asarray(ref["roots"], complex)),
+        "margins": _margins(j, jm, dirs, fast, ref),
+    }
+
+
+def _labels(out: dict) -> dict:
+    """The verdicts of an inspection in words."""
+    lab = {
+        "stable_SF": _label(Verdict, out["stable_SF"]),
+        "stable_FS": _label(Verdict, out["stable_FS"]),
+    }
+    for src, _ in _SOURCES:
+        d = out[src]
+        lab[src] = {
+            "stable_SS": _label(Verdict, d["stable_SS"]),
+            "consistent_II": _label(Consistency, d["consistent_II"]),
+            "stable_II": _label(Verdict, d["stable_II"]),
+        }
+    if out["consistency"] is not None:
+        lab["consistency"] = {k: _label(Consistency, v) for k, v in out["consistency"].items()}
+    return lab
+
+
+def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="float64") -> dict:
+    """Everything the theory says about one point ``(beta1, beta2, alpha)`` [rad] at ``(kappa, q)``.
+
+    Returns a dict with
+
+    * ``class_code``, ``subclass_code`` (certified fast path) and ``exact_codes`` (exact reference:
+      class, subclass and Table 1 consistency),
+    * ``consistency``: Table 1 verdicts of FF, SF, FS, SS (``Consistency`` codes; needs ``alpha``),
+    * ``stable_SF``, ``stable_FS`` (``Verdict`` codes), ``consistent_IF``, ``consistent_FI``,
+      ``cc_possible`` (bool),
+    * ``spectral_fast`` (certified kernels, not settled: may hold ``undecided``),
+      ``spectral`` (certified + exact settlement) and ``spectral_exact`` (the exact reference alone),
+      each with ``stable_SS``, ``consistent_II``, ``stable_II``,
+    * ``eigenvalues`` of ``M`` (``numpy.linalg.eigvals``, sorted by real part) and
+      ``eigenvalues_exact`` (>= 60-digit roots of the characteristic polynomial),
+    * ``margins``: ``ss_margin`` (smooth SS margin), ``det_B``, the quartic's coefficients
+      ``a3 a2 a1 a0``, ``spectral_abscissa``,
+    * ``labels``: the verdicts in words.
+    """
+    dt = np.dtype(dtype)
+    kappa, q1, q2 = model = checked_model(kappa, q1, q2)
+    dirs = _direction(beta1, dt) + _direction(beta2, dt)  # c1, s1, c2, s2
+    c1, s1, c2, s2 = dirs
+    out = {
+        "beta1": float(beta1),
+        "beta2": float(beta2),
+        "alpha": None if alpha is None else float(alpha),
+        "kappa": kappa,
+        "q1": q1,
+        "q2": q2,
+        "b1": (float(c1), float(s1)),
+        "b2": (float(c2), float(s2)),
+        **_angle_verdicts([jnp.asarray(v) for v in dirs]),
+        **_alpha_verdicts(alpha, dirs, [jnp.asarray(v) for v in dirs], dt),
+        **_spectrum(dirs, model, dt),
+    }
+    out["labels"] = _labels(out)
+    return out
+
+
+def _fmt_z(z) -> str:
+    return f"{z.real:+.6g}{z.imag:+.6g}i"
+
+
+def _codes_lines(info: dict) -> list[str]:
+    """Point, model, class and subclass codes, Table 1 consistency."""
+    pi = math.pi
+    lines = [
+        f"beta1 = {info['beta1']:.6g} ({info['beta1'] / pi:.4f} pi), "
+        f"beta2 = {info['beta2']:.6g} ({info['beta2'] / pi:.4f} pi)"
+        + ("" if info["alpha"] is None else f", alpha = {info['alpha'] / pi:.4f} pi"),
+        f"kappa = {info['kappa']:.6g}, q1 = {info['q1']:.6g}, q2 = {info['q2']:.6g}",
+        f"class {info['class_code']} (exact {info['exact_codes']['class_code']})"
+        + (
+            ""
+            if info["subclass_code"] is None
+            else f", subclass {info['subclass_code']} (exact {info['exact_codes']['subclass_code']})"
+        ),
+    ]
+    if info["consistency"] is not None:
+        ex, lab = info["exact_codes"], info["labels"]
+        cons = ", ".join(
+            f"{m}: {lab['consistency'][m]} (exact {bool(ex['consistent_' + m])})"
+            for m in ("FF", "SF", "FS", "SS")
+        )
+        lines.append(f"Table 1 consistency -- {cons}")
+    return lines
+
+
+def _stability_lines(info: dict) -> list[str]:
+    """One-contact modes, IF/FI/CC, and the SS and II verdicts of the three sources."""
+    lab = info["labels"]
+    lines = [
+        f"SF: {lab['stable_SF']} (b11 = {info['b1'][0]:+.4g}); "
+        f"FS: {lab['stable_FS']} (b22 = {info['b2'][1]:+.4g}); FF: stable when consistent",
+        f"IF consistent (and stable): {info['consistent_IF']}; FI: {info['consistent_FI']}; "
+        f"CC possible: {info['cc_possible']}",
+    ]
+    for src, name in _SOURCES:
+        d = lab[src]
+        lines.append(
+            f"{name:>20}: SS {d['stable_SS']}, II {d['consistent_II']}, "
+            f"II stability {d['stable_II']}"
+        )
+    return lines
+
+
+def _spectrum_lines(info: dict) -> list[str]:
+    m = info["margins"]
+    return [
+        "eigenvalues of M (eig): " + ", ".join(_fmt_z(z) for z in info["eigenvalues"]),
+        "eigenvalues (exact ref): " + ", ".join(_fmt_z(z) for z in info["eigenvalues_exact"]),
+        f"margins: ss_margin = {m['ss_margin']:+.4g}, det B = {m['det_B']:+.4g}, "
+        f"a3 = {m['a3']:+.4g}, a2 = {m['a2']:+.4g}, a1 = {m['a1']:+.4g}, a0 = {m['a0']:+.4g}, "
+        f"spectral abscissa = {m['spectral_abscissa_exact']:+.6g}",
+    ]
+
+
+def format_inspection(info: dict) -> str:
+    """The inspector's text for a result of :func:`inspect_point`."""
+    return "\n".join(_codes_lines(info) + _stability_lines(info) + _spectrum_lines(info))

@@ -1,0 +1,34 @@
+"""The point inspector (:func:`atlas.explore.inspect_point`) against the exact reference and the map."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from atlas.explore import inspector, maps
+
+ALPHA = 0.35 * math.pi
+
+
+def test_inspector_agrees_with_exact_and_map():
+    ds = maps.compute_map(
+        0.5, 2**0.5, n=33, layers=("class_code", "stable_SS", "consistent_II", "stable_II")
+    )
+    for i, j in ((3, 20), (10, 5), (25, 30)):
+        b1, b2 = float(ds.beta1[i]), float(ds.beta2[j])
+        info = inspector.inspect_point(b1, b2, ALPHA, kappa=0.5, q1=2**0.5)
+        assert (
+            info["class_code"] == int(ds["class_code"][i, j]) == info["exact_codes"]["class_code"]
+        )
+        assert info["spectral"] == info["spectral_exact"]
+        for k in ("stable_SS", "consistent_II", "stable_II"):
+            assert info["spectral"][k] == int(ds[k][i, j])
+            assert info["spectral_fast"][k] in (info["spectral"][k], 3)
+        assert len(info["eigenvalues"]) == 4
+        np.testing.assert_allclose(
+            np.sort_complex(info["eigenvalues"]),
+            np.sort_complex(info["eigenvalues_exact"]),
+            atol=1e-9,
+        )
+        assert "class" in inspector.format_inspection(info)

@@ -1,0 +1,50 @@
+"""The widget's state without ipywidgets (:class:`atlas.explore.Explorer`): what a control change
+recomputes, the capped settlement and the one-line errors."""
+
+from __future__ import annotations
+
+import pytest
+
+from atlas.explore import maps, state
+
+
+def test_layers_of_a_group_share_one_computation():
+    ex = state.Explorer(n=9, layer="consistent_II", kappa=0.5, q1=0.3, overlays=())
+    ds = ex.update()
+    assert set(ds.data_vars) == {"consistent_II", "stable_II"}
+    assert ex.update(layer="stable_II") is ds and ex.timings["compute_ms"] == 0.0
+    assert ex.update(alpha=1.0) is ds  # the II verdicts do not depend on alpha
+    assert ex.update(kappa=0.6) is not ds and ex.timings["compute_ms"] > 0  # the model moved
+    cls = ex.update(layer="class_code")
+    assert set(cls.data_vars) == {"class_code", "cc_possible"}
+    assert ex.update(kappa=0.7, q1=0.1) is cls  # class codes do not depend on the model
+
+
+def test_capped_redraw_then_settle_equals_the_settled_map():
+    n, cap = 16, 2  # even: cells on det B = 0 are undecided for the fast path
+    ex = state.Explorer(n=n, layer="stable_SS", kappa=0.5, q1=0.3, max_resolve=cap, overlays=())
+    fast = ex.update().attrs["n_undecided_fast"]
+    assert fast > cap and ex.ds.attrs["n_undecided"] == fast - cap
+    settled = ex.settle()
+    assert settled.attrs["n_undecided"] == 0 and settled.attrs["n_undecided_fast"] == fast
+    want = maps.compute_map(0.5, 0.3, n=n, layers=("stable_SS",))
+    assert (settled["stable_SS"].values == want["stable_SS"].values).all()
+
+
+@pytest.mark.parametrize(
+    "changes, name",
+    [
+        (dict(layer="nope"), "layer"),
+        (dict(overlays=("nope",)), "overlays"),
+        (dict(max_resolve=-1), "max_resolve"),
+        (dict(kappa=0.0), "kappa"),
+        (dict(q2=-0.1), "q2"),
+        (dict(speed=1), "speed"),
+    ],
+)
+def test_bad_changes_name_the_parameter(changes, name):
+    ex = state.Explorer(n=9, overlays=())
+    with pytest.raises(ValueError, match=name):
+        ex.update(**changes)
+    assert ex.ds is None  # nothing computed, parameters unchanged
+    assert ex.params["layer"] == "stable_SS"

@@ -1,0 +1,184 @@
+"""The notebook widget (:func:`atlas.explore.make_widget`): its redraw callback computes exactly the
+arrays :func:`atlas.data.engine.generate` stores for the same parameters; clicks inspect points;
+redraws are capped and "settle undecided" settles; overlays draw the SS boundary."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.backend_bases import MouseEvent
+from matplotlib.colors import to_rgba
+from scipy.interpolate import RegularGridInterpolator
+
+from atlas.core import exact
+from atlas.core.verdicts import Verdict
+from atlas.data.engine import generate
+from atlas.data.scene import Scene
+from atlas.explore import inspector, maps, widget
+
+ROOT = Path(__file__).resolve().parents[2]
+N = 65
+ALPHA = 0.35 * math.pi
+
+
+def test_explore_imports_without_ipywidgets():
+    code = "import sys, atlas.explore; assert 'ipywidgets' not in sys.modules"
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=ROOT)
+
+
+@pytest.mark.parametrize(
+    "kappa, q1, q2",
+    [(0.5, 0.0, 0.0), (2.0, 0.3, 0.3), (0.5, 1.0, 0.01)],
+    ids=["fig1", "damped", "q1-neq-q2"],
+)
+def test_widget_map_equals_generate(kappa, q1, q2, need):
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="class_code", alpha=ALPHA)
+    c, ex = box.controls, box.explorer
+    c["kappa"].value = kappa
+    if q1 == q2:
+        c["q"].value = q1
+    else:
+        c["separate"].value = True
+        c["q1"].value, c["q2"].value = q1, q2
+    c["alpha"].value = ALPHA / math.pi
+    assert (ex.params["kappa"], ex.params["q1"], ex.params["q2"]) == (kappa, q1, q2)
+
+    beta = maps.beta_grid(N)
+    model = dict(q=q1) if q1 == q2 else dict(q1=q1, q2=q2)
+    layers = [k for k in maps.LAYERS if k != "margin_SS"]
+    ref = generate(
+        Scene(
+            beta1=beta, beta2=beta, alpha=ex.params["alpha"], kappa=kappa, outputs=layers, **model
+        )
+    )
+    for layer in layers:
+        c["layer"].value = layer  # the redraw callback
+        got = ex.ds[layer]
+        want = ref[layer]
+        assert got.dims == want.dims, layer
+        assert got.dtype == want.dtype, layer
+        np.testing.assert_array_equal(got["beta1" if "beta1" in got.dims else "beta2"].values, beta)
+        if layer == "spectral_abscissa":  # float, not certified: different root finders agree
+            np.testing.assert_allclose(got.values, want.values, rtol=1e-9, atol=1e-12)
+        else:
+            np.testing.assert_array_equal(got.values, want.values, err_msg=layer)
+    assert ex.ds.attrs["n_undecided"] == 0
+
+
+def _click(box, beta1, beta2, button=1):
+    """Deliver a synthetic left click at data point ``(beta1, beta2)`` through the canvas's
+    ``button_press_event`` callbacks (what ipympl does for a click in the browser)."""
+
+    fig = box.figure
+    ax = fig.axes[0]
+    x, y = ax.transData.transform((beta1, beta2))
+    event = MouseEvent("button_press_event", fig.canvas, x, y, button=button)
+    fig.canvas.callbacks.process("button_press_event", event)
+    return event
+
+
+def test_click_on_map_inspects_that_point(need):
+    need("ipywidgets")
+    kappa, q = 0.5, 2**0.5
+    box = widget.make_widget(n=N, layer="stable_II", kappa=kappa, q1=q, alpha=ALPHA)
+    ex, c = box.explorer, box.controls
+    assert ex.point is None
+    # a click outside the axes (in the figure margin) does nothing
+    _click(box, -0.5, 1.0)
+    assert ex.point is None and ex.last_inspection is None
+
+    seen = set()
+    for b1, b2 in ((0.15 * math.pi, 1.07 * math.pi), (0.6, 4.0), (5.5, 2.2), (3.0, 0.4)):
+        event = _click(box, b1, b2)
+        assert event.inaxes is box.figure.axes[0]
+        info = ex.last_inspection
+        assert info is not None
+        np.testing.assert_allclose(ex.point, (b1, b2), atol=1e-9)
+        assert (info["beta1"], info["beta2"]) == ex.point
+        np.testing.assert_allclose(
+            (c["beta1"].value, c["beta2"].value), (b1 / math.pi, b2 / math.pi), atol=1e-6
+        )
+        assert inspector.format_inspection(info) in box.inspector.value
+        # truth: the exact reference at the clicked point, directions from numpy
+        d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
+        ref = exact.point_spectral(*d, kappa, q, q)
+        codes = exact.point_codes(*d, np.cos(ALPHA), np.sin(ALPHA))
+        for k in ("stable_SS", "consistent_II", "stable_II"):
+            assert info["spectral"][k] == int(ref[k]), (b1, b2, k)
+        assert info["class_code"] == codes["class_code"]
+        assert info["subclass_code"] == codes["subclass_code"]
+        np.testing.assert_allclose(
+            np.sort_complex(info["eigenvalues"]),
+            np.sort_complex(np.asarray(ref["roots"], complex)),
+            atol=1e-9,
+        )
+        seen.add(codes["class_code"])
+        # the marker sits on the clicked point
+        np.testing.assert_allclose(np.ravel(box.figure.axes[0].lines[-1].get_data()), ex.point)
+    assert len(seen) >= 3  # the clicks landed in different classes
+
+
+def test_redraw_capped_then_settle_undecided(need):
+    """An even grid puts cells on det B = 0 (undecided for the fast path): a redraw settles at most
+    ``max_resolve`` of them and draws the rest in the undecided colour; the "settle undecided"
+    button settles all, giving the atlas's map."""
+    need("ipywidgets")
+    n, cap, kappa, q = 64, 5, 0.5, 0.3
+    box = widget.make_widget(n=n, layer="stable_SS", kappa=kappa, q1=q, max_resolve=cap)
+    ex = box.explorer
+    fast = ex.ds.attrs["n_undecided_fast"]
+    assert fast > cap
+    assert ex.ds.attrs["n_undecided"] == fast - cap
+    undecided = ex.ds["stable_SS"].values == int(Verdict.UNDECIDED)
+    assert undecided.sum() == fast - cap
+    img = ex.image()
+    red = np.all(np.isclose(img, to_rgba(Verdict.UNDECIDED.color)), axis=-1)
+    np.testing.assert_array_equal(red, undecided.T)  # image is (beta2, beta1)
+    labels = [t.get_text() for t in box.figure.axes[0].get_legend().get_texts()]
+    assert Verdict.UNDECIDED.label in labels
+    assert "settle undecided" in ex.status()
+
+    box.callbacks["settle"]()
+    assert ex.ds.attrs["n_undecided"] == 0
+    assert ex.ds.attrs["n_undecided_fast"] == fast
+    beta = maps.beta_grid(n)
+    ref = generate(Scene(beta1=beta, beta2=beta, kappa=kappa, q=q, outputs=["stable_SS"]))
+    np.testing.assert_array_equal(ex.ds["stable_SS"].values, ref["stable_SS"].values)
+    labels = [t.get_text() for t in box.figure.axes[0].get_legend().get_texts()]
+    assert Verdict.UNDECIDED.label not in labels
+    # the next slider move is capped again
+    box.controls["kappa"].value = 0.6
+    assert ex.ds.attrs["n_undecided"] == max(0, ex.ds.attrs["n_undecided_fast"] - cap)
+
+
+def test_overlays(need):
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="consistent_II", kappa=0.5, q1=0.3)
+    c, ax = box.controls, box.figure.axes[0]
+    c["overlays"].value = ("SS boundary",)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "SS boundary" in labels
+    assert not any(a.get_visible() for a in ax.lines[:-1])  # class boundaries hidden
+    # the dashed contour is the zero set of the smooth margin (values at its vertices ~ 0)
+    m = maps.compute_map(0.5, 0.3, n=N, layers=("margin_SS",))["margin_SS"]
+    f = RegularGridInterpolator((m.beta1.values, m.beta2.values), m.values)
+    paths = [p for p in ax.collections[-1].get_paths() if len(p.vertices)]
+    assert paths
+    v = np.concatenate([p.vertices for p in paths])
+    inside = np.all((v > m.beta1.values[0]) & (v < m.beta1.values[-1]), axis=1)
+    assert np.abs(f(v[inside])).max() < 1e-9 + 0.05 * np.abs(m.values).max()
+    c["overlays"].value = ("class boundaries",)
+    assert all(a.get_visible() for a in ax.lines[:-1])
+    assert "SS boundary" not in [t.get_text() for t in ax.get_legend().get_texts()]
+    with pytest.raises(ValueError, match="overlays"):
+        box.explorer.update(overlays=("nope",))
