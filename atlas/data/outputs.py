@@ -1,7 +1,7 @@
 """The outputs of an atlas and the coordinates they span: the one registry (SPEC §2).
 
 An *output* is a data variable of the Datasets the package builds: the atlas of
-:func:`atlas.data.engine.generate`, the explorer's map (:func:`atlas.explore.explorer.compute_map`)
+:func:`atlas.data.engine.generate`, the explorer's map (:func:`atlas.explore.maps.compute_map`)
 and the Fig. 1 map (:func:`atlas.paper.figures.stability_map`).  Each is defined here once: the
 parameters it depends on, the kernel group that computes it, its stored type, its CF attributes
 and the raw code that means *undecided*.  :data:`COORDS` holds the attributes of the coordinates.
