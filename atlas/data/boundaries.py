@@ -11,8 +11,9 @@
    grid and is checked again (at most ``max_levels`` times); cells still hiding a branch are
    counted in ``attrs["hidden_cells"]``.  This is a check, not a proof: a loop smaller than the
    finest sampling, or a second branch in a cell that already shows a change, can pass it.
-3. **Tracing.** Marching squares (:mod:`contourpy`) on the indicator of each pair of adjacent codes
-   gives polylines whose vertices lie on grid edges with different codes at the two ends: brackets.
+3. **Tracing.** Marching squares (:mod:`contourpy`) on the indicator of each code's region gives
+   polylines whose vertices lie on grid edges with different codes at the two ends: brackets.  The
+   grid is shifted by ~1e-7 of a cell (:data:`NUDGE`) so that no node sits on a class line.
 4. **Certified vertices.** :func:`atlas.core.brackets.bisect` shrinks every bracket to a length
    ``<= tol`` (default 1e-10 rad); the vertex is its midpoint, so it lies within ``tol / 2`` of the
    true boundary (the bracket's end codes are certified: floating point with proven error bounds,
@@ -21,11 +22,12 @@
    of the chord (a bracket across it, then bisection); it is inserted until the chord's measured
    deviation (sagitta) is ``<= chord`` [rad].  The segments are therefore within about ``chord``
    of the curve (measured, not proven: a wiggle between two probes can hide).
-6. **Pieces and codimension-2 points.** Runs of vertices lying on a straight class line
-   (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1) are split off as ``on_class_line``
-   pieces; the points where a boundary leaves or crosses a class line, where an open curve ends
-   inside the domain (a third code meets it), and where SS and II boundaries cross are returned
-   as :attr:`Boundaries.points` with their location uncertainty.
+6. **Pieces and codimension-2 points.** A region boundary is cut where the code on its other
+   side changes (a ``junction`` of three codes, located between two certified vertices), and runs
+   of vertices on a straight class line (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1)
+   are split off as ``on_class_line`` pieces; the junctions, the points where a boundary leaves
+   or crosses a class line, and where SS and II boundaries cross are returned as
+   :attr:`Boundaries.points` with their location uncertainty.
 
 The straight class boundaries themselves are returned in closed form (``field = "class"``).
 Stored as CF-1.10 geometry containers (:meth:`Boundaries.to_dataset`), or as CSV / GeoJSON.
@@ -250,24 +252,17 @@ def _checked_grid(fld, b1, b2, model, check, max_levels, dtype):
 # --- tracing and certified vertices --------------------------------------------------------------
 
 
-def _pairs(codes) -> list[tuple[int, int]]:
-    """The pairs ``(a, b)``, ``a < b``, of codes that are neighbours on some grid edge."""
-    out = set()
-    for x, y in ((codes[:-1], codes[1:]), (codes[:, :-1], codes[:, 1:])):
-        d = x != y
-        out |= {(int(min(u, v)), int(max(u, v))) for u, v in zip(x[d], y[d])}
-    return sorted(out)
+def _traced_codes(codes) -> list[int]:
+    """The codes whose region boundaries are traced: all present but the largest (the boundary
+    between two codes is traced once, from the smaller one's region)."""
+    return sorted(int(v) for v in np.unique(codes))[:-1]
 
 
-def _trace(b1, b2, codes, a, b) -> list[np.ndarray]:
-    """Marching-squares polylines between the ``a`` and ``b`` nodes (other codes masked)."""
+def _trace(b1, b2, codes, a) -> list[np.ndarray]:
+    """Marching-squares polylines of the boundary of the region ``codes == a`` (no masking: the
+    curves run on through the points where a third code meets them)."""
     z = np.where(codes == a, 1.0, 0.0)
-    mask = (codes != a) & (codes != b)
-    if mask.any():
-        z = np.ma.masked_array(z, mask)
-    gen = contourpy.contour_generator(
-        b1, b2, z.T, name="serial", line_type="Separate", corner_mask=False
-    )
+    gen = contourpy.contour_generator(b1, b2, z.T, name="serial", line_type="Separate")
     return [ln for ln in gen.lines(0.5) if len(ln) >= 2]
 
 
@@ -291,20 +286,28 @@ def _edge_brackets(b1, b2, codes, line, a):
 
 @dataclass
 class _Polys:
-    """Vertices of all polylines of one field and slice, kept sorted by ``(curve, key)``."""
+    """Vertices of the region boundaries of one field and slice, sorted by ``(curve, key)``."""
 
     xy: np.ndarray  # (N, 2) vertices [rad]
     ends: np.ndarray  # (N, 2, 2) the certified bracket (p, q) of each vertex
+    other: np.ndarray  # (N,) the code at q (the region's code a is at p)
     width: np.ndarray  # (N,) bracket length [rad]
     cid: np.ndarray  # (N,) polyline index
     key: np.ndarray  # (N,) position along the polyline
     todo: np.ndarray  # (N,) the segment to the next vertex still needs a chord probe
-    pair: list  # per polyline: (a, b)
+    region: list  # per polyline: the code a of the region it bounds
+
+    _PER_VERTEX = ("xy", "ends", "other", "width", "cid", "key", "todo")
 
     def sort(self):
         order = np.lexsort((self.key, self.cid))
-        for name in ("xy", "ends", "width", "cid", "key", "todo"):
+        for name in self._PER_VERTEX:
             setattr(self, name, getattr(self, name)[order])
+
+    def append(self, **cols):
+        for name in self._PER_VERTEX:
+            setattr(self, name, np.concatenate([getattr(self, name), cols[name]]))
+        self.sort()
 
     def segments(self) -> np.ndarray:
         """Indices ``k`` of vertices whose segment to ``k + 1`` still needs a probe."""
@@ -314,75 +317,75 @@ class _Polys:
 
 def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
     """Steps 3-4: traced polylines with every vertex bisected to a bracket ``<= tol``."""
-    lines, pair, ps, qs, vps, vqs = [], [], [], [], [], []
-    for a, b in _pairs(codes):
-        for ln in _trace(b1, b2, codes, a, b):
+    lines, region, ps, qs, vps, vqs = [], [], [], [], [], []
+    for a in _traced_codes(codes):
+        for ln in _trace(b1, b2, codes, a):
             p, q, vp, vq = _edge_brackets(b1, b2, codes, ln, a)
             lines.append(ln)
-            pair.append((a, b))
+            region.append(a)
             ps.append(p), qs.append(q), vps.append(vp), vqs.append(vq)
     if not lines:
-        z = np.zeros((0, 2))
         e = np.zeros(0)
-        return _Polys(z, np.zeros((0, 2, 2)), e, e.astype(int), e, e.astype(bool), [])
-    p, q, vp, vq = brackets.bisect(
+        z = np.zeros((0, 2))
+        return _Polys(z, np.zeros((0, 2, 2)), e.astype(np.int8), e, e.astype(int), e, e > 0, [])
+    p, q, _, vq = brackets.bisect(
         fld, *map(np.concatenate, (ps, qs, vps, vqs)), *model, tol=tol, dtype=dtype
     )
     sizes = [len(ln) for ln in lines]
     return _Polys(
         xy=0.5 * (p + q),
         ends=np.stack([p, q], 1),
+        other=vq,
         width=np.hypot(*(q - p).T),
         cid=np.repeat(np.arange(len(lines)), sizes),
         key=np.concatenate([np.arange(m, dtype=float) for m in sizes]),
         todo=np.ones(sum(sizes), bool),
-        pair=pair,
+        region=region,
     )
 
 
 def _probe(fld, polys, k, model, tol, dtype):
     """Step 5 for segments ``k -> k + 1``: a certified vertex on each chord's perpendicular
-    bisector; returns ``(ok, vertex, ends, width, sagitta, chord length)``."""
+    bisector (a bracket from the region's side to any other code)."""
     A, B = polys.xy[k], polys.xy[k + 1]
     mid, d = 0.5 * (A + B), B - A
     length = np.maximum(np.hypot(*d.T), 1e-300)
     n = np.stack([-d[:, 1], d[:, 0]], 1) / length[:, None]
-    side = polys.ends[:, 0] - polys.ends[:, 1]  # towards the a side
+    side = polys.ends[:, 0] - polys.ends[:, 1]  # towards the region
     n *= np.sign(np.sum(n * (side[k] + side[k + 1]), axis=1))[:, None]
-    a = np.array([polys.pair[c][0] for c in polys.cid[k]], np.int8)
-    b = np.array([polys.pair[c][1] for c in polys.cid[k]], np.int8)
+    a = np.array([polys.region[c] for c in polys.cid[k]], np.int8)
     w = np.maximum(length, 8 * tol)[:, None]
     P, Q = mid + w * n, mid - w * n
     vP = brackets.field_codes(fld, P[:, 0], P[:, 1], *model, dtype=dtype)
     vQ = brackets.field_codes(fld, Q[:, 0], Q[:, 1], *model, dtype=dtype)
-    ok = (vP == a) & (vQ == b)
-    p, q, _, _ = brackets.bisect(fld, P[ok], Q[ok], a[ok], b[ok], *model, tol=tol, dtype=dtype)
+    ok = (vP == a) & (vQ != a)
+    p, q, _, vq = brackets.bisect(fld, P[ok], Q[ok], a[ok], vQ[ok], *model, tol=tol, dtype=dtype)
     C = 0.5 * (p + q)
     sag = np.abs(np.sum((C - mid[ok]) * n[ok], axis=1))
-    return ok, C, np.stack([p, q], 1), np.hypot(*(q - p).T), sag, length[ok]
+    new = dict(xy=C, ends=np.stack([p, q], 1), other=vq, width=np.hypot(*(q - p).T))
+    return ok, new, sag, length[ok]
 
 
-def _refine_chords(fld, polys, model, tol, chord, dtype, max_rounds=30) -> int:
-    """Step 5: insert certified vertices until every chord's sagitta is ``<= chord``; returns the
-    number of segments whose probe found no bracket (left as they are)."""
+def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) -> int:
+    """Step 5: insert certified vertices until every chord's sagitta is ``<= chord``, and until
+    the chords where the curve meets a class line or a third code are ``<= chord`` long (so the
+    codimension-2 points are located to ``chord``); returns the number of segments whose probe
+    found no bracket (left as they are)."""
     unrefined = 0
     for _ in range(max_rounds):
         k = polys.segments()
         if not k.size:
             break
-        ok, C, ends, width, sag, length = _probe(fld, polys, k, model, tol, dtype)
+        labels = _labels(polys.xy, near)
+        mixed = (labels[k] != labels[k + 1]) | (polys.other[k] != polys.other[k + 1])
+        ok, new, sag, length = _probe(fld, polys, k, model, tol, dtype)
         unrefined += int((~ok).sum())
         polys.todo[k[~ok]] = False
         kk = k[ok]
-        again = (sag > chord) & (length > 8 * tol)
+        again = ((sag > chord) | (mixed[ok] & (length > 2 * chord))) & (length > 8 * tol)
         polys.todo[kk] = again
-        polys.xy = np.concatenate([polys.xy, C])
-        polys.ends = np.concatenate([polys.ends, ends])
-        polys.width = np.concatenate([polys.width, width])
-        polys.cid = np.concatenate([polys.cid, polys.cid[kk]])
-        polys.key = np.concatenate([polys.key, 0.5 * (polys.key[kk] + polys.key[kk + 1])])
-        polys.todo = np.concatenate([polys.todo, again])
-        polys.sort()
+        key = 0.5 * (polys.key[kk] + polys.key[kk + 1])
+        polys.append(**new, cid=polys.cid[kk], key=key, todo=again)
     return unrefined + int(polys.segments().size)
 
 
@@ -406,34 +409,81 @@ def _runs(labels) -> list[tuple[int, int, int]]:
 
 
 def _pieces(fld, polys, model, tol, box):
-    """Step 6: curves split on the class lines, and the points where a curve leaves, crosses a
-    class line, or ends inside the domain.  A vertex counts as on a class line within ``4 tol``,
-    or within ten nudges of the grid (closer than that the grid cannot tell a curve from the line:
-    the fragments that corner points such as ``(0, 2 pi)`` leave are labelled on the line)."""
+    """Step 6: each region boundary cut where the code on its other side changes (a junction of
+    three codes, located between two certified vertices) and on the class lines; returns the
+    curves and the codimension-2 points.  Each boundary between codes ``a < b`` is kept from the
+    region of ``a`` only.  A vertex counts as on a class line within ``4 tol``, or within ten
+    nudges of the grid (closer than that the grid cannot tell a curve from the line: the fragments
+    that corner points such as ``(0, 2 pi)`` leave are labelled on the line)."""
+    near = _near(tol, box[2])
     curves, pts = [], []
-    for c, (a, b) in enumerate(polys.pair):
+    for c, a in enumerate(polys.region):
         sel = polys.cid == c
-        xy, width, ends = polys.xy[sel], polys.width[sel], polys.ends[sel]
-        dist = _line_distances(xy)
-        near = max(4 * tol, 10 * max(NUDGE) * box[2])  # the grid cannot resolve closer
-        labels = np.where(dist.min(1) <= near, dist.argmin(1), -1)
-        kind = str(brackets.boundary_kind(fld, a, b)[()])
-        runs = _runs(labels)
-        for start, stop, lbl in runs:
-            lo, hi = max(0, start - 1), min(len(xy), stop + 1)  # pieces share their junctions
-            if lbl >= 0:
-                lo, hi = start, stop
-            piece = Curve(fld, kind, a, b, xy[lo:hi], width[lo:hi], lbl >= 0, *model, ends[lo:hi])
-            if len(piece.vertices) >= 2:
-                curves.append(piece)
-        for (_, e0, l0), (_, _, l1) in zip(runs, runs[1:]):
-            if (l0 >= 0) != (l1 >= 0):
-                j = e0 - 1 if l0 >= 0 else e0
-                gap = _spacing(xy, j)
-                pts.append(Point(*xy[j], "leaves_class_line", gap, *model))
-        pts += _crossings(xy, labels, model)
-        pts += _ends(xy, box, model)
+        xy = polys.xy[sel]
+        other = _line_runs_other(polys.other[sel], _labels(xy, near))
+        cols = (xy, polys.width[sel], polys.ends[sel])
+        runs = [(b, list(g)) for b, g in itertools.groupby(range(len(xy)), key=lambda i: other[i])]
+        for (b0, g0), (b1, g1) in zip(runs, runs[1:]):
+            if b0 > a and b1 > a:  # a | b0 turns into a | b1: three codes meet in between
+                m, n = xy[g0[-1]], xy[g1[0]]
+                pts.append(
+                    Point(*(0.5 * (m + n)), "junction", 0.5 * float(np.hypot(*(n - m))), *model)
+                )
+        for b, g in runs:
+            if b > a:
+                sl = slice(g[0], g[-1] + 1)
+                piece_curves, piece_pts = _line_pieces(
+                    fld, a, b, [x[sl] for x in cols], model, near
+                )
+                curves += piece_curves
+                pts += piece_pts
+        if len(xy) and not np.array_equal(xy[0], xy[-1]):
+            pts += _ends(xy, box, model)
     return curves, pts
+
+
+def _near(tol, h) -> float:
+    """Distance [rad] within which a vertex counts as on a class line: ``4 tol``, or ten nudges
+    of a grid of cell ``h`` (closer than that the grid cannot tell a curve from the line)."""
+    return max(4 * tol, 10 * max(NUDGE) * h)
+
+
+def _labels(xy, near) -> np.ndarray:
+    """Per vertex, the class line it lies on (within ``near`` [rad]; index of
+    :func:`_line_distances`), or -1."""
+    dist = _line_distances(xy)
+    return np.where(dist.min(1) <= near, dist.argmin(1), -1)
+
+
+def _line_runs_other(other, labels) -> np.ndarray:
+    """``other`` with each run of vertices on one class line given the run's largest code: a band
+    thinner than the grid's nudge along a class line (e.g. along ``det B = 0``) would otherwise cut
+    the line piece at every node into junctions."""
+    out = other.copy()
+    for lbl, grp in itertools.groupby(range(len(other)), key=lambda i: labels[i]):
+        idx = list(grp)
+        if lbl >= 0:
+            out[idx] = other[idx].max()
+    return out
+
+
+def _line_pieces(fld, a, b, cols, model, near):
+    """One stretch of the boundary between codes ``a`` and ``b`` split on the class lines."""
+    xy, width, ends = cols
+    labels = _labels(xy, near)
+    kind = str(brackets.boundary_kind(fld, a, b)[()])
+    runs = _runs(labels)
+    curves, pts = [], []
+    for start, stop, lbl in runs:
+        lo, hi = (start, stop) if lbl >= 0 else (max(0, start - 1), min(len(xy), stop + 1))
+        if hi - lo >= 2:  # curved pieces share their junction vertices with the line pieces
+            sl = slice(lo, hi)
+            curves.append(Curve(fld, kind, a, b, xy[sl], width[sl], lbl >= 0, *model, ends[sl]))
+    for (_, e0, l0), (_, _, l1) in zip(runs, runs[1:]):
+        if (l0 >= 0) != (l1 >= 0):
+            j = e0 - 1 if l0 >= 0 else e0
+            pts.append(Point(*xy[j], "leaves_class_line", _spacing(xy, j), *model))
+    return curves, pts + _crossings(xy, labels, model)
 
 
 def _spacing(xy, j) -> float:
@@ -456,11 +506,9 @@ def _crossings(xy, labels, model) -> list[Point]:
 
 
 def _ends(xy, box, model) -> list[Point]:
-    """Ends of an open curve inside the domain: a third code meets the boundary there (within a
-    grid cell, the ``uncertainty``)."""
+    """Ends of an open region boundary inside the domain (none is expected: region boundaries
+    close or reach the domain's edge; located within a grid cell, the ``uncertainty``)."""
     (x0, x1), (y0, y1), h = box
-    if np.array_equal(xy[0], xy[-1]):
-        return []
     out = []
     for p in (xy[0], xy[-1]):
         edge = min(p[0] - x0, x1 - p[0], p[1] - y0, y1 - p[1]) <= 0.5 * h
@@ -529,7 +577,8 @@ def slice_boundaries(
         h = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
         b1, b2, codes, hidden, levels = _checked_grid(fld, b1, b2, model, check, max_levels, dtype)
         polys = _certified_polys(fld, b1, b2, codes, model, tol, dtype)
-        unrefined = _refine_chords(fld, polys, model, tol, chord, dtype)
+        near = _near(tol, h)
+        unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
         curves, pts = _pieces(fld, polys, model, tol, box)
         by_field[fld] = curves
