@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from atlas.core import spectral
 
-__all__ = ["contour_lines", "hausdorff", "masks", "ss_margin"]
+__all__ = ["contour_lines", "hausdorff", "masks", "ss_margin", "torus_hausdorff"]
 
 
 def contour_lines(beta, field, level):
@@ -54,9 +54,9 @@ def _neighbours(b_lines):
     return verts, nxt, prev
 
 
-def _directed(a_pts, b_lines):
+def _directed(a_pts, b_lines, reduce=True):
     """max over points ``a`` of the distance to the polylines ``b`` (segments at the 8 nearest
-    vertices)."""
+    vertices); ``reduce=False``: the distance of each point."""
     verts, nxt, prev = _neighbours(b_lines)
     k = min(8, len(verts))
     _, idx = cKDTree(verts).query(a_pts, k=k)
@@ -73,6 +73,8 @@ def _directed(a_pts, b_lines):
             t = np.clip(((a_pts[ok] - p) * d).sum(1) / den, 0, 1)
             proj = p + t[:, None] * d
             best[ok] = np.minimum(best[ok], np.hypot(*(a_pts[ok] - proj).T))
+    if not reduce:
+        return best
     return float(best.max()) if len(best) else math.nan
 
 
@@ -84,6 +86,33 @@ def hausdorff(lines_a, lines_b, step):
     a = np.concatenate(_densify(lines_a, step))
     b = np.concatenate(_densify(lines_b, step))
     return max(_directed(a, lines_b), _directed(b, lines_a))
+
+
+def _torus_copies(lines):
+    """The polylines and their copies shifted by ``+-2 pi`` in each angle."""
+    shifts = [
+        np.array([x, y])
+        for x in (-2 * math.pi, 0, 2 * math.pi)
+        for y in (-2 * math.pi, 0, 2 * math.pi)
+    ]
+    return [ln + s for s in shifts for ln in lines]
+
+
+def torus_hausdorff(lines_a, lines_b, step, quantile=1.0):
+    """:func:`hausdorff` on the torus of angles (a curve traced on the seam ``beta = 0`` by one
+    grid and on ``beta = 2 pi`` by another is the same curve); ``quantile < 1``: that quantile of
+    the point-to-curve distances of both directions instead of their maximum."""
+    if not lines_a or not lines_b:
+        return math.nan if (lines_a or lines_b) else 0.0
+    a = np.concatenate(_densify(lines_a, step))
+    b = np.concatenate(_densify(lines_b, step))
+    d = np.concatenate(
+        [
+            _directed(a, _torus_copies(lines_b), reduce=False),
+            _directed(b, _torus_copies(lines_a), reduce=False),
+        ]
+    )
+    return float(np.quantile(d, quantile))
 
 
 def masks(res: dict, damped: bool) -> dict:

@@ -90,6 +90,7 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-3, 1e-6, 1e-9, 1e-12)), ("Radau", (1e-3, 1e-6, 1e-9))),
         sim_repeats=3,
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
+        curve_res=(64, 128, 256),
         large_check=100,
         atlases=(
             *_ISSUE12,
@@ -120,6 +121,8 @@ CONFIG = {
         sim_repeats=1,
         large_n=0,
         large_check=10,
+        curve_res=(16,),
+        curve_cases=1,
         atlases=(
             (
                 "tiny 4-D",
@@ -142,6 +145,7 @@ CONFIG["tiny"] = dict(
     budget=0.02,
     suites=("near_discriminant",),  # q = 0: verdicts_jit compiles its cheap undamped path
     suite_points=2,
+    curve_res=(8,),
     scale_undamped=(1 << 18,),
     sim_methods=(("DOP853", (1e-4,)), ("Radau", (1e-4,))),
     atlases=(

@@ -29,6 +29,7 @@ import numpy as np
 
 from atlas.bench import plots, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
+from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
 from atlas.bench.report import Results, build_report, write_csv
 from atlas.bench.simulation import simulation
@@ -62,6 +63,7 @@ def _measure(cfg, meta) -> Results:
         scaling = suites.scaling(cfg)
         atlases = suites.atlases(cfg)
         sim = simulation(cfg)
+        curve_rows = curves(cfg)
     exact = dict(points=len(cache.store), seconds=cache.seconds, failures=cache.failures)
     return Results(
         meta=meta,
@@ -74,6 +76,7 @@ def _measure(cfg, meta) -> Results:
         sim=sim,
         large=large,
         atlases=atlases,
+        curves=curve_rows,
         exact=exact,
     )
 
@@ -87,6 +90,7 @@ def _write(out: Path, r: Results, t_start: float):
         ("scaling", r.scaling),
         ("atlases", r.atlases),
         ("simulation", r.sim),
+        ("curves", r.curves),
     ):
         write_csv(out / f"bench_{name}.csv", rows)
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
