@@ -91,6 +91,7 @@ CONFIG = {
         sim_repeats=3,
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
+        distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
         atlases=(
             *_ISSUE12,

@@ -13,8 +13,17 @@ from matplotlib.figure import Figure
 from atlas.bench.config import METHODS
 from atlas.data.io import savefig
 
-__all__ = ["plot_all", "plot_convergence", "plot_scaling", "plot_simulation", "plot_work_precision"]
+__all__ = [
+    "NAMES",
+    "plot_all",
+    "plot_convergence",
+    "plot_scaling",
+    "plot_simulation",
+    "plot_work_precision",
+]
 
+#: the figures of a run (``bench_<name>.png``)
+NAMES = ("work_precision", "convergence", "scaling", "simulation")
 _COLORS = {"certified": "C0", "certified+exact": "C1", "verdicts_jit": "C2", "eig": "C3"}
 _MARKS = {"float32": "s", "float64": "o"}
 _DPI = 110

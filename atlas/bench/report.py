@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from atlas.data.io import atomic_path
+
 __all__ = [
     "Results",
     "build_report",
@@ -78,7 +80,7 @@ def write_csv(path, rows):
     if not rows:
         return
     cols = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as fh:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
         w.writeheader()
         w.writerows(rows)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import plots, suites
+from atlas.bench import distributed, plots, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
@@ -50,6 +50,30 @@ NOTES = (
     "Misclassification counts are exact-verified on the checked points only (not every grid "
     "point); undecided counts cover the whole grid.",
 )
+
+
+#: the CSV sections of a run (``bench_<name>.csv``)
+SECTIONS = ("work_precision", "suites", "large", "scaling", "atlases", "simulation", "curves")
+#: every file a run writes into its output directory (``distributed.md`` only where the
+#: configuration measures distributed generation: the full run); a test compares ``outputs/``
+FILES = (
+    "bench.md",
+    "bench_headline.json",
+    *(f"bench_{name}.csv" for name in SECTIONS),
+    *(f"bench_{name}.png" for name in plots.NAMES),
+    "distributed.md",
+)
+
+
+def files(mode: str) -> tuple[str, ...]:
+    """The files a run of ``mode`` writes (a section its configuration turns off writes none)."""
+    cfg = CONFIG[mode]
+    off = {
+        "distributed.md": not cfg.get("distributed"),
+        "bench_large.csv": not cfg.get("large_n"),
+        "bench_curves.csv": not cfg.get("curve_res"),
+    }
+    return tuple(f for f in FILES if not off.get(f, False))
 
 
 def _measure(cfg, meta) -> Results:
@@ -83,16 +107,9 @@ def _measure(cfg, meta) -> Results:
 
 def _write(out: Path, r: Results, t_start: float):
     """``bench_*.csv``, the figures, ``bench_headline.json`` and ``bench.md`` into ``out``."""
-    for name, rows in (
-        ("work_precision", r.wp),
-        ("suites", r.suites),
-        ("large", r.large),
-        ("scaling", r.scaling),
-        ("atlases", r.atlases),
-        ("simulation", r.sim),
-        ("curves", r.curves),
-    ):
-        write_csv(out / f"bench_{name}.csv", rows)
+    rows = (r.wp, r.suites, r.large, r.scaling, r.atlases, r.sim, r.curves)
+    for name, section in zip(SECTIONS, rows):
+        write_csv(out / f"bench_{name}.csv", section)
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
     r.meta["duration"] = time.perf_counter() - t_start
     js = dict(meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases)
@@ -101,8 +118,8 @@ def _write(out: Path, r: Results, t_start: float):
 
 
 def run(quick: bool = False, out: str | None = None, config: str | None = None, **_) -> int:
-    """Run the benchmark and write ``bench.md``, ``bench_*.png``, ``bench_*.csv`` and
-    ``bench_headline.json`` into ``out``; returns 0.
+    """Run the benchmark and write :func:`files` (``bench.md``, ``bench_*.png``, ``bench_*.csv``,
+    ``bench_headline.json``, and in the full run ``distributed.md``) into ``out``; returns 0.
 
     Parameters
     ----------
@@ -130,6 +147,9 @@ def run(quick: bool = False, out: str | None = None, config: str | None = None, 
     # timings exclude compilation (a warm-up call first); the cache spares recompiling next time
     use_compile_cache()
     results = _measure(CONFIG[mode], meta)
+    if CONFIG[mode].get("distributed"):
+        log("distributed generation (in process, LocalCluster 1 and 2 workers)")
+        distributed.measure_throughput(out=str(out))
     _write(out, results, t_start)
     log(f"done in {meta['duration']:.0f} s")
     print(f"atlas bench: {mode} report in {out / 'bench.md'}")

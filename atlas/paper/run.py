@@ -18,7 +18,35 @@ from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
 from atlas.paper import figure_boundaries, figure_ladder, realisability
 
-__all__ = ["run", "atomic_write_text", "write_netcdf"]
+__all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
+
+#: the files Fig. 2's simulations add (not in quick mode)
+FIG2_FILES = ("fig2.md", "fig2.png")
+#: every file ``atlas paper`` writes into its output directory (a test compares ``outputs/``)
+FILES = (
+    "README.md",
+    "audit.md",
+    "fig1_boundaries.nc",
+    "fig1_boundaries.png",
+    "fig1_classes.png",
+    "fig1_map.nc",
+    "fig1_stability.png",
+    "fig1_stability_variants.png",
+    "ladder.png",
+    "outcome_map.nc",
+    "outcome_map.png",
+    "realisability.md",
+    "table2.csv",
+    "table2.md",
+    "table2.png",
+    *FIG2_FILES,
+)
+
+
+def files(quick: bool = False) -> tuple[str, ...]:
+    """The files a run writes (quick and CI runs leave out :data:`FIG2_FILES`)."""
+    return tuple(f for f in FILES if not (quick and f in FIG2_FILES))
+
 
 REFERENCE = (
     "P. L. Varkonyi, Dynamics of mechanical systems with multiple sliding contacts: new "

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import run
+from atlas.bench import run, runner
 from atlas.bench.config import CONFIG, METHODS
 
 HEAD_COLUMNS = (
@@ -50,8 +50,12 @@ def test_tiny_run_end_to_end(tmp_path, monkeypatch, capsys):
     assert [r["method"] for r in sim] == ["simulate (exact)", "solve_ivp DOP853", "solve_ivp Radau"]
     assert float(sim[0]["error"]) < 1e-9  # simulate against solve_ivp at rtol 1e-13
     for name in ("work_precision.png", "convergence.png", "scaling.png", "simulation.png",
-                 "work_precision.csv", "suites.csv", "atlases.csv"):  # fmt: skip
+                 "work_precision.csv", "suites.csv", "atlases.csv", "curves.csv"):  # fmt: skip
         assert (out / f"bench_{name}").stat().st_size > 0
+    # exactly the declared files (outputs/ is compared with the same list)
+    assert sorted(f.name for f in out.iterdir()) == sorted(runner.files("tiny"))
+    (curve_ss, curve_ii) = _csv(out / "bench_curves.csv")
+    assert float(curve_ss["max_bracket"]) <= 1e-10 and int(curve_ss["curves"]) > 0
     rows = [ln for ln in md.split("## Headline")[1].split("##")[0].splitlines() if ln[:3] == "| ("]
     assert rows and all("|  |" not in ln for ln in rows)
 

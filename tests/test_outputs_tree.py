@@ -1,0 +1,29 @@
+"""``outputs/`` is exactly what ``atlas paper`` and ``atlas bench`` write (issue 13)."""
+
+from pathlib import Path
+
+from atlas import paper
+from atlas.bench import runner
+
+OUTPUTS = Path(__file__).resolve().parents[1] / "outputs"
+
+
+def test_outputs_holds_exactly_what_paper_and_bench_write():
+    committed = {p.name for p in OUTPUTS.iterdir() if p.is_file()}
+    declared = set(paper.FILES) | set(runner.files("full"))
+    assert committed == declared, (
+        f"not written by atlas paper/bench: {sorted(committed - declared)}; "
+        f"missing: {sorted(declared - committed)}"
+    )
+
+
+def test_readme_of_outputs_links_every_paper_file():
+    readme = (OUTPUTS / "README.md").read_text()
+    for name in paper.FILES:
+        if name != "README.md":
+            assert f"]({name})" in readme, name
+
+
+def test_quick_and_tiny_runs_write_elsewhere():
+    assert runner.files("tiny") and "distributed.md" not in runner.files("tiny")
+    assert set(paper.files(quick=True)) < set(paper.FILES)
