@@ -11,6 +11,7 @@ enable_x64()  # float64 kernels are first-class (SPEC §4)
 
 from atlas import _compat  # noqa: E402
 from atlas.core.mechanism import Mechanism as Mechanism  # noqa: E402
+from atlas.data.boundaries import boundaries as boundaries  # noqa: E402
 from atlas.data.engine import generate as generate  # noqa: E402
 from atlas.data.mechanisms import mechanism_atlas as mechanism_atlas  # noqa: E402
 from atlas.data.scene import Scene as Scene  # noqa: E402
@@ -24,4 +25,4 @@ def __getattr__(name):  # old flat modules as attributes: ``from atlas import ti
     return _compat.moved_attribute(name)
 
 
-__all__ = ["Mechanism", "Scene", "generate", "mechanism_atlas", "simulate", "table2", "__version__"]
+__all__ = ["Mechanism", "Scene", "boundaries", "generate", "mechanism_atlas", "simulate", "table2", "__version__"]
