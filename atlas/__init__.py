@@ -25,4 +25,13 @@ def __getattr__(name):  # old flat modules as attributes: ``from atlas import ti
     return _compat.moved_attribute(name)
 
 
-__all__ = ["Mechanism", "Scene", "boundaries", "generate", "mechanism_atlas", "simulate", "table2", "__version__"]
+__all__ = [
+    "Mechanism",
+    "Scene",
+    "boundaries",
+    "generate",
+    "mechanism_atlas",
+    "simulate",
+    "table2",
+    "__version__",
+]

@@ -68,6 +68,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from atlas.core import spectral
 from atlas.core.signs import UNKNOWN, det2_sign, evaluate_certified
@@ -545,7 +546,6 @@ def pack(ss, cons, stab, tier2_flag):
 
 def unpack(code):
     """Inverse of :func:`pack` on numpy arrays: ``(ss, cons, stab, tier2)``."""
-    import numpy as np
 
     code = np.asarray(code)
     return (

@@ -50,7 +50,7 @@ from scipy.spatial import cKDTree
 
 from atlas.core import brackets
 from atlas.core.config import __version__
-from atlas.data.io import atomic_path, atomic_write_text
+from atlas.data.io import atomic_path, atomic_write_text, check_output_path
 from atlas.data.scene import Scene
 
 __all__ = ["Boundaries", "Curve", "Point", "boundaries", "class_lines", "slice_boundaries"]
@@ -779,8 +779,6 @@ def run_cli(
 ) -> int:
     """``atlas boundaries --beta1 R --beta2 R --kappa V [--q V | --q1 V --q2 V] [--out F.nc]
     [--csv F.csv] [--geojson F.json]``."""
-    from atlas.data.io import check_output_path
-
     for path in (out, csv, geojson):
         if path is not None:
             check_output_path(path, overwrite)

@@ -18,6 +18,7 @@ import xarray as xr
 
 from atlas.core import config
 from atlas.core.mechanism import BODIES, VERDICT_NAMES, body_invariants, verdicts_at
+from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, to_storage, variable_attrs
 from atlas.data.scene import parse_values
 
@@ -158,7 +159,6 @@ def summary(ds: xr.Dataset) -> str:
 
 def run_cli(name, out=None, overwrite=False, dtype="float64", **axes) -> int:
     """``atlas mechanism NAME [--AXIS RANGE ...] [--out FILE.nc]``."""
-    from atlas.data.io import check_output_path, write_netcdf
 
     if out is not None:
         check_output_path(out, overwrite)
