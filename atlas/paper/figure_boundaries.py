@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from matplotlib.figure import Figure
 
-from atlas.data.boundaries import boundaries
+from atlas.data.boundaries import Boundaries, boundaries
 from atlas.data.io import savefig
 from atlas.data.scene import Scene
 from atlas.paper.drawing import pi_axis
 
-__all__ = ["SLICES", "STYLE", "draw_boundaries", "write_boundaries"]
+__all__ = ["SLICES", "STYLE", "draw_boundaries", "slice_of", "write_boundaries"]
 
 #: the (kappa, q) slices drawn
 SLICES = ((0.5, 0.0), (0.5, 1e-6))
@@ -33,6 +33,14 @@ _MARKERS = {
     "SS_meets_II": "m*",
     "end": "kx",
 }
+
+
+def slice_of(bd: Boundaries, kappa: float, q: float) -> Boundaries:
+    """The curves and points of one slice ``(kappa, q1 = q2 = q)`` of ``bd``."""
+    keep = lambda x: (x.kappa, x.q1) == (kappa, q)  # noqa: E731
+    return Boundaries(
+        [c for c in bd.curves if keep(c)], [p for p in bd.points if keep(p)], bd.attrs
+    )
 
 
 def draw_boundaries(bd, ax, kappa: float, q: float) -> list:

@@ -4,8 +4,9 @@ Data flows one way: the certified kernels (:mod:`atlas.core.mechanics`, :mod:`at
 verdicts, :mod:`atlas.core.exact` settles the few points the fast path leaves undecided, and this module
 only arranges and draws them.  Colours and legends come from :class:`atlas.core.verdicts.Verdict` and
 :class:`atlas.core.verdicts.Consistency`; categorical layers are ``pcolormesh`` with ``ListedColormap`` +
-``BoundaryNorm``.  Model-dependent boundaries are dashed zero contours of *smooth margins*, never of
-0/1 masks:
+``BoundaryNorm``.  Model-dependent boundaries are drawn dashed: on Fig. 1 of ``atlas paper`` from the
+certified curves of :func:`atlas.boundaries` (``curves=``), else as zero contours of *smooth margins*
+(never of 0/1 masks):
 
 * SS stability: :func:`atlas.core.spectral.ss_margin` (``G/|G|`` when damped, the discriminant of the
   ``mu``-quadratic when ``Q = 0``).
@@ -448,13 +449,34 @@ def _layer_boundaries(ds, layer) -> list:
     return []
 
 
+#: the boundary kinds (:mod:`atlas.data.boundaries`) drawn dashed on each Fig. 1 layer
+LAYER_CURVES = {
+    "SS": ("SS_stability",),
+    "nothing_stable": ("SS_stability",),
+    "II_consistency": ("II_consistency",),
+    "II_stability": ("II_stability", "II_consistency"),
+}
+
+
+def _dashed_curves(ax, curves, layer) -> list:
+    """The certified model-dependent boundaries of ``layer`` (pieces off the class lines) dashed."""
+    kinds = LAYER_CURVES.get(layer, ())
+    arts = []
+    for c in curves.curves:
+        if c.kind in kinds and not c.on_class_line:
+            arts += ax.plot(*c.vertices.T, color="k", lw=1.1, ls="--", zorder=7)
+    return arts
+
+
 @drawing.hatch_style
-def draw_fig1_layer(ax, ds, layer: str, pos: dict | None = None) -> list:
+def draw_fig1_layer(ax, ds, layer: str, pos: dict | None = None, curves=None) -> list:
     """One panel of Fig. 1 (stability map) on ``ax``: the layer (one of :data:`FIG1_LAYERS`) of a
     :func:`stability_map` dataset, its dashed model-dependent boundaries, the class boundaries and
     (if ``pos``, from :func:`atlas.paper.drawing.label_positions`) the class labels.
 
-    Returns the artists drawn.
+    The dashed boundaries are the certified curves ``curves`` (:func:`atlas.boundaries` of the
+    same slice) if given, else the zero contours of the dataset's smooth margins.  Returns the
+    artists drawn.
     """
     if layer not in FIG1_LAYERS:
         raise ValueError(f"layer: expected one of {FIG1_LAYERS}, got {layer!r}")
@@ -473,9 +495,12 @@ def draw_fig1_layer(ax, ds, layer: str, pos: dict | None = None) -> list:
     else:
         art = [drawing.boolean(ax, ds, field, drawing.NOTHING_COLOR)]
     n = ds.sizes["beta1"]
-    for m, cells in _layer_boundaries(ds, layer):
-        if m in ds:
-            art.append(drawing.dashed(ax, ds, m, where=cells & np.ones((n, n), bool)))
+    if curves is not None:
+        art += _dashed_curves(ax, curves, layer)
+    else:
+        for m, cells in _layer_boundaries(ds, layer):
+            if m in ds:
+                art.append(drawing.dashed(ax, ds, m, where=cells & np.ones((n, n), bool)))
     art += drawing.class_lines(ax)
     if pos is not None:
         art += drawing.class_labels(ax, pos)
@@ -490,7 +515,7 @@ def _param_text(kappa, q1, q2):
     return rf"$\kappa$ = {kappa:g}, {q}"
 
 
-def _fig1_legend(fig, ds):
+def _fig1_legend(fig, ds, certified: bool = False):
     from matplotlib.lines import Line2D
 
     present_v = (
@@ -510,26 +535,33 @@ def _fig1_legend(fig, ds):
             color="k",
             lw=1.1,
             ls="--",
-            label="model-dependent boundary (zero of smooth margin)",
+            label="model-dependent boundary ("
+            + (
+                "certified curve, vertices within 1e-10 rad"
+                if certified
+                else "zero of smooth margin"
+            )
+            + ")",
         ),
     ]
     return fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8.5, frameon=False)
 
 
-def draw_fig1_stability(fig, ds) -> list:
-    """Fig. 1 (stability map) on ``fig``: the 8 layers of :func:`draw_fig1_layer` in a 2 x 4 grid,
-    legend from the verdict enumerations, title with the parameters and decision counts."""
+def draw_fig1_stability(fig, ds, curves=None) -> list:
+    """Fig. 1 (stability map) on ``fig``: the 8 layers of :func:`draw_fig1_layer` in a 2 x 4 grid
+    (dashed boundaries from the certified ``curves`` if given), legend from the verdict
+    enumerations, title with the parameters and decision counts."""
     axes = fig.subplots(2, 4).ravel()
     pos = drawing.label_positions(ds)
     art = []
     for ax, layer in zip(axes, FIG1_LAYERS, strict=True):
-        art += draw_fig1_layer(ax, ds, layer, pos)
+        art += draw_fig1_layer(ax, ds, layer, pos, curves)
     for ax in axes[-4:]:
         ax.set_xlabel(r"$\beta_1$", fontsize=9)
     for ax in axes[::4]:
         ax.set_ylabel(r"$\beta_2$", fontsize=9)
     kappa, q1, q2 = (float(ds[k]) for k in ("kappa", "q1", "q2"))
-    art.append(_fig1_legend(fig, ds))
+    art.append(_fig1_legend(fig, ds, certified=curves is not None))
     und = int(ds.attrs.get("n_undecided", 0))
     art.append(
         fig.suptitle(
@@ -545,10 +577,10 @@ def draw_fig1_stability(fig, ds) -> list:
     return art
 
 
-def plot_fig1_stability(path, ds):
+def plot_fig1_stability(path, ds, curves=None):
     """Write Fig. 1 (stability map, :func:`draw_fig1_stability`) to ``path``."""
     fig = drawing.new_figure(figsize=(15.5, 9.4))
-    draw_fig1_stability(fig, ds)
+    draw_fig1_stability(fig, ds, curves)
     return _save(fig, path)
 
 

@@ -116,7 +116,15 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
     step("table2.png", lambda: figures.plot_table2(out / "table2.png", rows))
     ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
-    step("fig1_stability.png", lambda: figures.plot_fig1_stability(out / "fig1_stability.png", ds))
+    curves = step(
+        "fig1_boundaries.png",
+        lambda: figure_boundaries.write_boundaries(out, n=32 if quick else 64),
+    )
+    fig1_curves = figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])
+    step(
+        "fig1_stability.png",
+        lambda: figures.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
+    )
     step(
         "fig1_map.nc",
         lambda: write_netcdf(
@@ -139,10 +147,6 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
     step(
         "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
-    )
-    step(
-        "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=32 if quick else 64),
     )
     notes = _dynamics_steps(step, out, quick, ds)
     total = time.perf_counter() - t_all
@@ -258,7 +262,8 @@ def _figure_sections(out: Path) -> list[str]:
         "",
         "## Fig. 1: stability map (kappa = 0.5, q = 0)",
         "",
-        "Dashed: zero sets of smooth margins (model-dependent boundaries); solid: class "
+        "Dashed: the certified boundary curves (model-dependent boundaries, vertices within "
+        "1e-10 rad, from fig1_boundaries.nc); solid: class "
         "boundaries. Neutral (q = 0) is drawn in its own shade; the paper draws it as stable.",
         "",
         "![fig1 stability](fig1_stability.png)",
