@@ -487,8 +487,24 @@ def _cmd_dispatch(args) -> int:
     return rc if isinstance(rc, int) else 0
 
 
+#: seconds after which an unacknowledged SIGTERM is delivered again
+SIGTERM_REPEAT = 5.0
+
+
 def _sigterm(signum, frame):
+    """SIGTERM (and its repeats) -> KeyboardInterrupt, so temporary files are cleaned up as on
+    Ctrl-C.  A KeyboardInterrupt raised while Python runs a gc or ``__del__`` callback is swallowed
+    ("Exception ignored in ..."); an alarm re-delivers it every ``SIGTERM_REPEAT`` s until
+    :func:`main` has caught it."""
+    if hasattr(signal, "setitimer"):
+        signal.signal(signal.SIGALRM, _sigterm)
+        signal.setitimer(signal.ITIMER_REAL, SIGTERM_REPEAT)
     raise KeyboardInterrupt
+
+
+def _acknowledge_sigterm():
+    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
+        signal.setitimer(signal.ITIMER_REAL, 0)
 
 
 def main(argv=None) -> int:
@@ -511,6 +527,7 @@ def main(argv=None) -> int:
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
     except KeyboardInterrupt as e:
+        _acknowledge_sigterm()
         why = _one_line(e) or "no partial output file left"
         print(f"atlas: interrupted ({why})", file=sys.stderr)
         if console:  # skip interpreter teardown under running XLA threads (it can segfault)
@@ -527,6 +544,7 @@ def main(argv=None) -> int:
 
 
 def _exit(code):  # pragma: no cover - trivial
+    _acknowledge_sigterm()  # a run that finished despite a swallowed SIGTERM: no late alarm
     sys.exit(code)
 
 

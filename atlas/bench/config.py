@@ -91,6 +91,7 @@ CONFIG = {
         sim_repeats=3,
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
+        curve_cases=3,
         distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
         atlases=(
@@ -124,6 +125,7 @@ CONFIG = {
         large_check=10,
         curve_res=(16,),
         curve_cases=1,
+        distributed=False,
         atlases=(
             (
                 "tiny 4-D",

@@ -68,6 +68,12 @@ def fake_results(mode="full") -> Results:
         dict(case="d", method="solve_ivp DOP853", rtol=1e-3, seconds=0.05, events=20,
              error=math.inf, reference="simulate", nfev=1500),
     ]  # fmt: skip
+    curves = [
+        dict(case="Fig. 1", n=n, field=f, curves=12, vertices=8000, points=14, seconds=3.0,
+             hausdorff_curves=0.1, hausdorff_grid=0.2, p99_curves=1e-7, p99_grid=0.05,
+             hidden_cells=0, unrefined=4, max_bracket=9e-11)
+        for n in cfg["curve_res"] for f in ("SS", "II")
+    ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
     meta = dict(
         mode=mode, quick=mode != "full", start="2024-06-01T12:00:00+0000",
@@ -77,7 +83,7 @@ def fake_results(mode="full") -> Results:
     )  # fmt: skip
     return Results(
         meta=meta, cfg=cfg, head=headline(wp, cfg), wp=wp, refs=refs, suites=suites,
-        scaling=scaling, sim=sim, large=large, atlases=atlases,
+        scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves,
         exact=dict(points=42, seconds=3.0, failures=0),
     )  # fmt: skip
 

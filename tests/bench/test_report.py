@@ -43,6 +43,7 @@ def test_sections_in_order(results):
         "## Scaling",
         "### End to end: `atlas generate` (issue 3)",
         "### Issue 12: exact at kernel speed",
+        "## Boundary curves (`atlas boundaries`)",
         "## Simulation",
         "## Notes, omissions",
     ]
