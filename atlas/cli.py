@@ -502,6 +502,14 @@ def _sigterm(signum, frame):
     raise KeyboardInterrupt
 
 
+def _unraisable(info):
+    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is not reported (the
+    alarm of :func:`_sigterm` delivers it again); anything else is, as by default."""
+    if isinstance(info.exc_value, KeyboardInterrupt):
+        return
+    sys.__unraisablehook__(info)
+
+
 def _acknowledge_sigterm():
     if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
         signal.setitimer(signal.ITIMER_REAL, 0)
@@ -513,6 +521,7 @@ def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _sigterm)  # clean up temporary files like Ctrl-C does
+        sys.unraisablehook = _unraisable
     try:
         args = build_parser().parse_args(argv)
         if args.command == "generate":

@@ -316,3 +316,20 @@ def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
         assert "error: " in lines[0] and name in lines[0], (extra, lines[0])
     assert sorted(str(p) for p in store.rglob("*")) == before
     assert os.listdir(tmp_path) == []
+
+
+def test_swallowed_interrupt_is_not_reported_but_other_errors_are(capsys):
+    """A KeyboardInterrupt lost in a gc callback is re-delivered, not printed; others print."""
+    import types
+
+    from atlas import cli
+
+    def info(exc):
+        return types.SimpleNamespace(
+            exc_type=type(exc), exc_value=exc, exc_traceback=None, err_msg=None, object=None
+        )
+
+    cli._unraisable(info(KeyboardInterrupt()))
+    assert capsys.readouterr().err == ""
+    cli._unraisable(info(RuntimeError("boom")))
+    assert "boom" in capsys.readouterr().err
