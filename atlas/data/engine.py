@@ -314,17 +314,12 @@ def _gather(src, inputs, dims, index, block, T):
     """
     n = math.prod(block)
     out = []
-    for key in inputs:
-        param, vals = src[key]
-        if vals.ndim == 0:
-            out.append(vals)
+    for arr in _block_inputs(src, inputs, dims, index, block):
+        if arr.ndim == 0:
+            out.append(arr)
             continue
-        ax = dims.index(param)
-        shp = [1] * len(dims)
-        shp[ax] = block[ax]
-        arr = np.broadcast_to(vals[index[ax]].reshape(shp), block)
-        buf = np.empty(T, vals.dtype)
-        buf[:n] = arr.reshape(-1)
+        buf = np.empty(T, arr.dtype)
+        buf[:n] = np.broadcast_to(arr, block).reshape(-1)
         buf[n:] = buf[0]
         out.append(buf)
     return out
