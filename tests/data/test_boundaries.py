@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from atlas.cli import main
-from atlas.core import exact, mechanics, verdicts
+from atlas.core import exact, mechanics
 from atlas.data import boundaries as bd
 from atlas.data.scene import Scene
 
@@ -202,9 +202,3 @@ def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
     assert main(args + ["--out", str(out)]) == 2  # exists, no --overwrite: untouched
     assert "exists" in capsys.readouterr().err
 
-
-def test_undecided_code_is_never_a_field_code(damped):
-    codes = {c.side_a for c in damped.curves} | {c.side_b for c in damped.curves}
-    assert verdicts.UNDECIDED_FLAG not in codes or all(
-        c.field == "II" for c in damped.curves if verdicts.UNDECIDED_FLAG in (c.side_a, c.side_b)
-    )
