@@ -201,4 +201,3 @@ def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
     assert "fields:" in capsys.readouterr().err
     assert main(args + ["--out", str(out)]) == 2  # exists, no --overwrite: untouched
     assert "exists" in capsys.readouterr().err
-
