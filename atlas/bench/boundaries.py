@@ -40,39 +40,32 @@ def _densify(lines, step):
     return out
 
 
-def _neighbours(b_lines):
-    """Vertices of the polylines ``b`` and, per vertex, the index of the next and previous vertex
-    on the same polyline (-1 at the ends)."""
-    verts = np.concatenate(b_lines)
-    lengths = [len(ln) for ln in b_lines]
-    nxt = np.concatenate([np.r_[np.arange(1, n), -1] for n in lengths])
-    off = np.cumsum([0] + lengths[:-1])
-    nxt = np.where(nxt >= 0, nxt + np.repeat(off, lengths), -1)
-    prev = np.full(len(verts), -1)
-    has_next = nxt >= 0
-    prev[nxt[has_next]] = np.flatnonzero(has_next)
-    return verts, nxt, prev
+def _segments(b_lines, step):
+    """The segments ``(p, q)`` of the polylines, and sample points every ``<= step`` along them
+    with the index of their segment."""
+    p = np.concatenate([ln[:-1] for ln in b_lines if len(ln) >= 2])
+    q = np.concatenate([ln[1:] for ln in b_lines if len(ln) >= 2])
+    k = np.maximum(1, np.ceil(np.hypot(*(q - p).T) / step).astype(int))
+    seg = np.repeat(np.arange(len(p)), k + 1)
+    t = np.concatenate([np.arange(m + 1) / m for m in k])[:, None]
+    return p, q, p[seg] + t * (q[seg] - p[seg]), seg
 
 
-def _directed(a_pts, b_lines, reduce=True):
-    """max over points ``a`` of the distance to the polylines ``b`` (segments at the 8 nearest
-    vertices); ``reduce=False``: the distance of each point."""
-    verts, nxt, prev = _neighbours(b_lines)
-    k = min(8, len(verts))
-    _, idx = cKDTree(verts).query(a_pts, k=k)
+def _directed(a_pts, b_lines, step, reduce=True):
+    """max over points ``a`` of the distance to the polylines ``b``: exact point-to-segment
+    distances to the segments of the 8 nearest samples (every ``<= step``) of ``b``, so a long
+    segment next to a dense polyline is not missed; ``reduce=False``: the distance of each point."""
+    p, q, samples, seg = _segments(b_lines, step)
+    k = min(8, len(samples))
+    _, idx = cKDTree(samples).query(a_pts, k=k)
     idx = idx.reshape(len(a_pts), k)
     best = np.full(len(a_pts), np.inf)
     for j in range(k):
-        i0 = idx[:, j]
-        best = np.minimum(best, np.hypot(*(a_pts - verts[i0]).T))
-        for other in (nxt[i0], prev[i0]):
-            ok = other >= 0
-            p, q = verts[i0[ok]], verts[other[ok]]
-            d = q - p
-            den = np.maximum((d * d).sum(1), 1e-300)
-            t = np.clip(((a_pts[ok] - p) * d).sum(1) / den, 0, 1)
-            proj = p + t[:, None] * d
-            best[ok] = np.minimum(best[ok], np.hypot(*(a_pts[ok] - proj).T))
+        s = seg[idx[:, j]]
+        d = q[s] - p[s]
+        den = np.maximum((d * d).sum(1), 1e-300)
+        t = np.clip(((a_pts - p[s]) * d).sum(1) / den, 0, 1)
+        best = np.minimum(best, np.hypot(*(a_pts - p[s] - t[:, None] * d).T))
     if not reduce:
         return best
     return float(best.max()) if len(best) else math.nan
@@ -85,7 +78,7 @@ def hausdorff(lines_a, lines_b, step):
         return math.nan if (lines_a or lines_b) else 0.0
     a = np.concatenate(_densify(lines_a, step))
     b = np.concatenate(_densify(lines_b, step))
-    return max(_directed(a, lines_b), _directed(b, lines_a))
+    return max(_directed(a, lines_b, step), _directed(b, lines_a, step))
 
 
 def _torus_copies(lines):
@@ -108,8 +101,8 @@ def torus_hausdorff(lines_a, lines_b, step, quantile=1.0):
     b = np.concatenate(_densify(lines_b, step))
     d = np.concatenate(
         [
-            _directed(a, _torus_copies(lines_b), reduce=False),
-            _directed(b, _torus_copies(lines_a), reduce=False),
+            _directed(a, _torus_copies(lines_b), step, reduce=False),
+            _directed(b, _torus_copies(lines_a), step, reduce=False),
         ]
     )
     return float(np.quantile(d, quantile))

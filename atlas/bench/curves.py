@@ -48,7 +48,8 @@ def _slice(n, model, chord):
 
 def curves(cfg) -> list[dict]:
     """Rows: case, n, field, curves, vertices, points, seconds (both fields), Hausdorff of the
-    curves and of the grid contours to the 4n reference curves, hidden cells, unrefined."""
+    curves and of the grid contours to the 4n reference curves, hidden cells, unrefined, tips
+    attached and unreached (of the n grid and of the reference)."""
     rows = []
     chord = cfg.get("curve_chord", bd.CHORD)
     for name, *model in CURVE_CASES[: cfg.get("curve_cases", len(CURVE_CASES))]:
@@ -76,6 +77,9 @@ def curves(cfg) -> list[dict]:
                         p99_curves=torus_hausdorff(mine, theirs, step, quantile=0.99),
                         p99_grid=torus_hausdorff(grid, theirs, step, quantile=0.99),
                         hidden_cells=got.attrs[f"{fld}_hidden_cells"],
+                        tips_attached=got.attrs[f"{fld}_tips_attached"],
+                        tips_unreached=got.attrs[f"{fld}_tips_unreached"],
+                        reference_tips_unreached=ref.attrs[f"{fld}_tips_unreached"],
                         unrefined=got.attrs[f"{fld}_unrefined_segments"],
                         max_bracket=got.attrs[f"{fld}_max_bracket"],
                     )

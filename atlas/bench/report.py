@@ -458,7 +458,7 @@ def curves_section(rows) -> list[str]:
     cols = [
         "case", "n", "field", "curves", "vertices", "points", "seconds",
         "hausdorff_curves", "hausdorff_grid", "p99_curves", "p99_grid", "hidden_cells",
-        "unrefined", "max_bracket",
+        "unrefined", "tips_attached", "tips_unreached", "reference_tips_unreached", "max_bracket",
     ]  # fmt: skip
     return [
         "## Boundary curves (`atlas boundaries`)",
@@ -467,9 +467,12 @@ def curves_section(rows) -> list[str]:
         "bracket <= 1e-10 rad, chords refined to a 1e-6 rad sagitta) against the curves of the "
         "4n x 4n grid: torus Hausdorff distance [rad] of the curves (`hausdorff_curves`) and of "
         "the grid's marching-squares contours (`hausdorff_grid`, what a plot of the atlas draws), "
-        "and the 99th percentile of the point-to-curve distances (`p99_*`): the maximum sits "
-        "where a boundary meets a class line tangentially (a cusp thinner than the grid, counted "
-        "in `hidden_cells`), the bulk of a curve at the chord tolerance. "
+        "and the 99th percentile of the point-to-curve distances (`p99_*`). Where a boundary "
+        "meets a class line at a shallow angle, the tip of the wedge it leaves is found by a "
+        "scan just off the line and attached to the curve (`tips_attached`); a tip no curve "
+        "comes near marks a band or wedge along the line thinner than the grid, lost by the "
+        "tracing (`tips_unreached`, of the n grid and of the reference): the maximum distance "
+        "sits there, in either grid, the bulk of a curve at the chord tolerance. "
         "`seconds`: both fields, the lost-branch check and the codimension-2 points included.",
         "",
         table(rows, cols),

@@ -21,7 +21,18 @@
 5. **Chords.** Between two vertices a new certified vertex is found on the perpendicular bisector
    of the chord (a bracket across it, then bisection); it is inserted until the chord's measured
    deviation (sagitta) is ``<= chord`` [rad].  The segments are therefore within about ``chord``
-   of the curve (measured, not proven: a wiggle between two probes can hide).
+   of the curve (measured, not proven: a wiggle between two probes can hide).  Where the
+   perpendicular through the middle finds no bracket (it runs through the crossing of two class
+   lines from the region into the region), the quarter points are probed; a probe between two
+   vertices of one kind (on one class line, or off the lines) that lands on the other kind has
+   jumped across a wedge and is not used.
+5b. **Tips.** A boundary that meets a class line at a shallow angle leaves a wedge thinner than
+   a cell, which tracing cuts across.  Each class line is scanned ``4 tol`` off it on both sides
+   (samples every quarter cell, then bisection): a code change there is where a boundary meets
+   the line.  A segment still running from the line to a vertex off it gets the nearest such tip
+   (same line and side, the region's code at one end) as a vertex, and is refined again.  Tips
+   no curve comes near are counted (``attrs["<field>_tips_unreached"]``): a band along a line
+   thinner than the grid, lost by the tracing.
 6. **Pieces and codimension-2 points.** A region boundary is cut where the code on its other
    side changes (a ``junction`` of three codes, located between two certified vertices), and runs
    of vertices on a straight class line (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1)
@@ -295,9 +306,10 @@ class _Polys:
     cid: np.ndarray  # (N,) polyline index
     key: np.ndarray  # (N,) position along the polyline
     todo: np.ndarray  # (N,) the segment to the next vertex still needs a chord probe
+    tip: np.ndarray  # (N,) the vertex is a tip attached by _attach_tips
     region: list  # per polyline: the code a of the region it bounds
 
-    _PER_VERTEX = ("xy", "ends", "other", "width", "cid", "key", "todo")
+    _PER_VERTEX = ("xy", "ends", "other", "width", "cid", "key", "todo", "tip")
 
     def sort(self):
         order = np.lexsort((self.key, self.cid))
@@ -327,7 +339,8 @@ def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
     if not lines:
         e = np.zeros(0)
         z = np.zeros((0, 2))
-        return _Polys(z, np.zeros((0, 2, 2)), e.astype(np.int8), e, e.astype(int), e, e > 0, [])
+        b = e > 0
+        return _Polys(z, np.zeros((0, 2, 2)), e.astype(np.int8), e, e.astype(int), e, b, b, [])
     p, q, _, vq = brackets.bisect(
         fld, *map(np.concatenate, (ps, qs, vps, vqs)), *model, tol=tol, dtype=dtype
     )
@@ -340,30 +353,75 @@ def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
         cid=np.repeat(np.arange(len(lines)), sizes),
         key=np.concatenate([np.arange(m, dtype=float) for m in sizes]),
         todo=np.ones(sum(sizes), bool),
+        tip=np.zeros(sum(sizes), bool),
         region=region,
     )
 
 
-def _probe(fld, polys, k, model, tol, dtype):
-    """Step 5 for segments ``k -> k + 1``: a certified vertex on each chord's perpendicular
-    bisector (a bracket from the region's side to any other code)."""
+#: offsets along a chord's perpendicular probed for a bracket, in chord lengths
+PROBE_OFFSETS = np.array([-1, -1 / 4, -1 / 16, -1 / 64, 0, 1 / 64, 1 / 16, 1 / 4, 1])
+#: where along the chord the perpendicular is probed: the middle, then (if no bracket was
+#: found there) the quarter points
+PROBE_FRACTIONS = (0.5, 0.25, 0.75)
+
+
+def _probe(fld, polys, k, frac, model, tol, dtype) -> dict:
+    """Step 5 for segments ``k -> k + 1``: a certified vertex on the chord's perpendicular at
+    ``frac`` of its length, bisected from the pair of neighbouring :data:`PROBE_OFFSETS` closest
+    to the chord whose ends are in the region and out of it.  Returns per segment ``ok`` (a
+    bracket was found) and, where ok, the new vertex's columns, its sagitta (distance to the
+    chord) and the chord's length."""
     A, B = polys.xy[k], polys.xy[k + 1]
-    mid, d = 0.5 * (A + B), B - A
+    base, d = A + frac * (B - A), B - A
     length = np.maximum(np.hypot(*d.T), 1e-300)
     n = np.stack([-d[:, 1], d[:, 0]], 1) / length[:, None]
     side = polys.ends[:, 0] - polys.ends[:, 1]  # towards the region
     n *= np.sign(np.sum(n * (side[k] + side[k + 1]), axis=1))[:, None]
     a = np.array([polys.region[c] for c in polys.cid[k]], np.int8)
-    w = np.maximum(length, 8 * tol)[:, None]
-    P, Q = mid + w * n, mid - w * n
-    vP = brackets.field_codes(fld, P[:, 0], P[:, 1], *model, dtype=dtype)
-    vQ = brackets.field_codes(fld, Q[:, 0], Q[:, 1], *model, dtype=dtype)
-    ok = (vP == a) & (vQ != a)
-    p, q, _, vq = brackets.bisect(fld, P[ok], Q[ok], a[ok], vQ[ok], *model, tol=tol, dtype=dtype)
+    w = np.maximum(length, 8 * tol)
+    pts = base[:, None, :] + (w[:, None] * PROBE_OFFSETS)[:, :, None] * n[:, None, :]
+    codes = brackets.field_codes(fld, pts[..., 0], pts[..., 1], *model, dtype=dtype)
+    inside = codes == a[:, None]
+    score = np.abs(PROBE_OFFSETS[:-1]) + np.abs(PROBE_OFFSETS[1:])
+    score = np.where(inside[:, :-1] != inside[:, 1:], score, np.inf)
+    r, j = np.arange(k.size), score.argmin(1)
+    ok = np.isfinite(score[r, j])
+    jp = np.where(inside[r, j], j, j + 1)  # the end in the region
+    jq = 2 * j + 1 - jp
+    p, q, _, vq = brackets.bisect(
+        fld, pts[r, jp][ok], pts[r, jq][ok], a[ok], codes[r, jq][ok], *model, tol=tol, dtype=dtype
+    )
     C = 0.5 * (p + q)
-    sag = np.abs(np.sum((C - mid[ok]) * n[ok], axis=1))
-    new = dict(xy=C, ends=np.stack([p, q], 1), other=vq, width=np.hypot(*(q - p).T))
-    return ok, new, sag, length[ok]
+    return dict(
+        ok=ok,
+        xy=C,
+        ends=np.stack([p, q], 1),
+        other=vq,
+        width=np.hypot(*(q - p).T),
+        key=(1 - frac) * polys.key[k[ok]] + frac * polys.key[k[ok] + 1],
+        sag=np.abs(np.sum((C - base[ok]) * n[ok], axis=1)),
+        length=length[ok],
+    )
+
+
+def _probe_all(fld, polys, k, model, tol, dtype) -> dict:
+    """:func:`_probe` at the middle of every chord, then at its quarter points where the middle
+    found no bracket: at the corner where two class lines cross with the region in opposite
+    quadrants, the perpendicular through the middle of a symmetric chord passes through the
+    crossing from the region into the region."""
+    out = None
+    todo = np.arange(k.size)
+    for frac in PROBE_FRACTIONS:
+        got = _probe(fld, polys, k[todo], frac, model, tol, dtype)
+        got["row"] = todo[got["ok"]]
+        out = got if out is None else {c: np.concatenate([out[c], got[c]]) for c in got}
+        todo = todo[~got["ok"]]
+        if not todo.size:
+            break
+    order = np.argsort(out["row"])
+    out = {c: v[order] for c, v in out.items() if c != "ok"}
+    out["ok"] = np.isin(np.arange(k.size), out["row"])
+    return out
 
 
 def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) -> int:
@@ -377,16 +435,128 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         if not k.size:
             break
         labels = _labels(polys.xy, near)
-        mixed = (labels[k] != labels[k + 1]) | (polys.other[k] != polys.other[k + 1])
-        ok, new, sag, length = _probe(fld, polys, k, model, tol, dtype)
+        tip = polys.tip[k] | polys.tip[k + 1]
+        mixed = ((labels[k] != labels[k + 1]) | (polys.other[k] != polys.other[k + 1])) & ~tip
+        new = _probe_all(fld, polys, k, model, tol, dtype)
+        ok = new.pop("ok")
+        # a probe between two vertices of one kind (both on one class line, or both off the
+        # lines; a tip counts as the kind of the other end) that lands on another kind jumped
+        # across a wedge thinner than the chord: the zigzag it starts would not converge; the
+        # segment is left as it is
+        lab = np.full(k.size, -2)
+        lab[ok] = _labels(new["xy"], near)
+        kind = np.where(polys.tip[k], labels[k + 1], labels[k])
+        jumped = ok & ((labels[k] == labels[k + 1]) | tip) & (lab != kind)
+        keep = ~jumped[ok]
+        new = {c: v[keep] for c, v in new.items()}
+        ok &= ~jumped
         unrefined += int((~ok).sum())
         polys.todo[k[~ok]] = False
         kk = k[ok]
+        sag, length, key = new.pop("sag"), new.pop("length"), new.pop("key")
+        new.pop("row")
         again = ((sag > chord) | (mixed[ok] & (length > 2 * chord))) & (length > 8 * tol)
         polys.todo[kk] = again
-        key = 0.5 * (polys.key[kk] + polys.key[kk + 1])
-        polys.append(**new, cid=polys.cid[kk], key=key, todo=again)
+        polys.append(**new, cid=polys.cid[kk], key=key, todo=again, tip=np.zeros(kk.size, bool))
     return unrefined + int(polys.segments().size)
+
+
+# --- tips: where a boundary meets a class line at a shallow angle ---------------------------------
+
+
+def _line_frames(box):
+    """Per class line (the columns of :func:`_line_distances`) inside the box: ``(m, base,
+    direction, unit normal, t0, t1)``, points ``base + t direction`` for ``t0 <= t <= t1``; the
+    normal points to where :func:`_line_values` grows."""
+    (x0, x1), (y0, y1), _ = box
+    frames = []
+    for k in range(5):
+        v = k * math.pi / 2
+        if x0 <= v <= x1:
+            frames.append((k, (v, 0.0), (0.0, 1.0), (1.0, 0.0), y0, y1))
+        if y0 <= v <= y1:
+            frames.append((5 + k, (0.0, v), (1.0, 0.0), (0.0, 1.0), x0, x1))
+    r = 1 / math.sqrt(2)
+    for m, k in zip((10, 11, 12), (-1, 0, 1)):
+        t0, t1 = max(x0, y0 - k * math.pi), min(x1, y1 - k * math.pi)
+        if t0 < t1:
+            frames.append((m, (0.0, k * math.pi), (1.0, 1.0), (-r, r), t0, t1))
+    return frames
+
+
+def _line_tips(fld, box, step, model, tol, dtype) -> dict:
+    """Per class line ``m`` and side ``s`` (+1 / -1), certified brackets ``(p, q, vp, vq)`` where
+    the code ``4 tol`` off the line on side ``s`` changes along it (samples every ``<= step``
+    [rad], then bisection to ``tol``): where a boundary meets the line from that side.  A boundary
+    that meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing
+    cuts across; these are its tips, within ``4 tol / sin(angle)`` of the true meeting point."""
+    tips = {}
+    for m, base, direction, normal, t0, t1 in _line_frames(box):
+        t = np.linspace(t0, t1, max(2, math.ceil((t1 - t0) / step) + 1))
+        line = np.asarray(base) + t[:, None] * np.asarray(direction)
+        for side in (-1, 1):
+            pts = line + side * 4 * tol * np.asarray(normal)
+            c = brackets.field_codes(fld, pts[:, 0], pts[:, 1], *model, dtype=dtype)
+            i = np.flatnonzero(c[:-1] != c[1:])
+            if i.size:
+                tips[m, side] = brackets.bisect(
+                    fld, pts[i], pts[i + 1], c[i], c[i + 1], *model, tol=tol, dtype=dtype
+                )
+    return tips
+
+
+def _attach_tips(polys, tips, near, chord, reach) -> int:
+    """Insert the tips of :func:`_line_tips` into the polylines: a segment that still runs from
+    a class line to a vertex off it and is longer than ``2 chord`` after refinement crosses a
+    wedge; the nearest tip (within ``reach`` [rad] of its on-line end, on the line and side of
+    the segment, with the region's code at one end of its bracket) becomes a vertex between
+    the two, to be refined again.  Returns the number of tips attached."""
+    labels = _labels(polys.xy, near)
+    k = np.flatnonzero(np.r_[polys.cid[1:] == polys.cid[:-1], False])
+    length = np.hypot(*(polys.xy[k + 1] - polys.xy[k]).T)
+    across = ((labels[k] < 0) != (labels[k + 1] < 0)) & (length > 2 * chord)
+    rows = []
+    for i in k[across]:
+        on, off = (i, i + 1) if labels[i] >= 0 else (i + 1, i)
+        m = labels[on]
+        side = int(np.sign(_line_values(polys.xy[off : off + 1])[0, m]))
+        if (m, side) not in tips:
+            continue
+        p, q, vp, vq = tips[m, side]
+        a = polys.region[polys.cid[i]]
+        fit = ((vp == a) | (vq == a)) & (vp != vq)
+        dist = np.where(fit, np.hypot(*(0.5 * (p + q) - polys.xy[on]).T), np.inf)
+        j = int(dist.argmin())
+        if dist[j] <= reach:
+            pa, qa, other = (p[j], q[j], vq[j]) if vp[j] == a else (q[j], p[j], vp[j])
+            rows.append((i, pa, qa, other))
+    if not rows:
+        return 0
+    i = np.array([r[0] for r in rows])
+    pa, qa = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
+    polys.todo[i] = True
+    polys.append(
+        xy=0.5 * (pa + qa),
+        ends=np.stack([pa, qa], 1),
+        other=np.array([r[3] for r in rows], np.int8),
+        width=np.hypot(*(qa - pa).T),
+        cid=polys.cid[i],
+        key=0.5 * (polys.key[i] + polys.key[i + 1]),
+        todo=np.ones(len(rows), bool),
+        tip=np.ones(len(rows), bool),
+    )
+    return len(rows)
+
+
+def _unreached(tips, xy, cell) -> int:
+    """Tips of :func:`_line_tips` with no vertex within a grid ``cell`` [rad]: a boundary meets
+    the class line there but no traced curve comes near (a band or wedge along the line thinner
+    than the grid, seen by the line scan only): a branch the tracing lost, counted."""
+    if not tips or not len(xy):
+        return sum(len(v[0]) for v in tips.values())
+    pts = np.concatenate([0.5 * (p + q) for p, q, _, _ in tips.values()])
+    dist, _ = cKDTree(xy).query(pts)
+    return int((dist > cell).sum())
 
 
 # --- pieces and codimension-2 points -------------------------------------------------------------
@@ -580,6 +750,11 @@ def slice_boundaries(
         near = _near(tol, h)
         unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
+        cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
+        tips = _line_tips(fld, box, cell / 4, model, tol, dtype)
+        attached = _attach_tips(polys, tips, near, chord, reach=8 * cell)
+        if attached:
+            unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
         by_field[fld] = curves
         out.curves += curves
@@ -588,6 +763,8 @@ def slice_boundaries(
         out.attrs[f"{fld}_refined_levels"] = levels
         out.attrs[f"{fld}_hidden_cells"] = hidden
         out.attrs[f"{fld}_unrefined_segments"] = unrefined
+        out.attrs[f"{fld}_tips_attached"] = attached
+        out.attrs[f"{fld}_tips_unreached"] = _unreached(tips, polys.xy, cell)
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0
     out.points += _meetings(by_field.get("SS", []), by_field.get("II", []), model)

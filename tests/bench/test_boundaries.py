@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from atlas.bench.boundaries import contour_lines, hausdorff, masks
+from atlas.bench.boundaries import contour_lines, hausdorff, masks, torus_hausdorff
 
 BETA = np.linspace(0, 2 * np.pi, 129)
 X, Y = np.meshgrid(BETA, BETA, indexing="ij")  # field[i, j] at (beta1 = BETA[i], beta2 = BETA[j])
@@ -48,3 +48,12 @@ def test_masks_undamped_draws_neutral_as_stable():
     np.testing.assert_array_equal(masks(res, damped=False)["SS"], [0, 1, 1, 0])
     np.testing.assert_array_equal(masks(res, damped=True)["SS"], [0, 1, 0, 0])
     np.testing.assert_array_equal(masks(res, damped=True)["II"], [1, 0, 0, 1])
+
+
+def test_hausdorff_sees_a_long_segment_beside_a_dense_polyline():
+    """The same set drawn twice is at distance 0, even where the nearest vertices of one drawing
+    all belong to a dense polyline 0.02 away from a long two-vertex segment."""
+    dense = np.stack([np.full(500, 0.02), np.linspace(0.0, 1.0, 500)], 1)
+    lines = [np.array([[0.0, 0.0], [0.0, 1.0]]), dense]
+    assert hausdorff(lines, lines, 0.01) == pytest.approx(0.0, abs=1e-12)
+    assert torus_hausdorff(lines, lines, 0.01) == pytest.approx(0.0, abs=1e-12)

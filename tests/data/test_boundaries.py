@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from atlas.cli import main
-from atlas.core import exact, mechanics
+from atlas.core import brackets, exact, mechanics
 from atlas.data import boundaries as bd
 from atlas.data.scene import Scene
 
@@ -147,6 +147,35 @@ def test_coarse_grid_finds_every_branch_of_a_4x_finer_grid():
             assert _torus_distance(curve, a).min() < 1e-4
         d = _torus_distance(np.concatenate(b), a)
         assert np.median(d) < 1e-6
+
+
+def test_corner_of_a_checkerboard_is_reached():
+    """Where two class lines cross with one SS code in opposite quadrants (one q = 0 slice at
+    (2 pi, pi / 2), i.e. (0, pi / 2) on the torus), the curves reach the crossing itself: the
+    chord through the middle of a corner-cutting segment runs through the saddle from the region
+    into the region, so the quarter-point probes must find it (the curves stopped a grid cell
+    short before)."""
+    g = np.arange(64) * 2 * PI / 64
+    b = bd.slice_boundaries(g, g, 0.5, 0.35, 0.0, fields=("SS",))
+    corners = np.array([[2 * PI, PI / 2], [0.0, PI / 2], [PI / 2, PI / 2]])
+    assert _torus_distance(corners, [c.vertices for c in b.curves]).max() < 1e-5
+
+
+def test_wedge_tips_on_a_class_line_are_reached():
+    """A damped SS boundary meets the diagonal beta2 = beta1 - pi at a shallow angle, leaving a
+    wedge thinner than a cell; the curves reach its tip, found here independently by a dense
+    scan just off the line (the grid's tracing alone stopped 0.065 rad short)."""
+    model = (2.0, 0.1, 0.1)
+    g = np.arange(64) * 2 * PI / 64
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",))
+    t = np.linspace(4.3, 4.6, 30001)  # along the line, 1e-9 rad on its beta1 > beta2 + pi side
+    off = 1e-9 / np.sqrt(2)
+    codes = brackets.field_codes("SS", t + off, t - PI - off, *model)
+    (i,) = np.flatnonzero(np.diff(codes))
+    tip = np.array([[t[i] + off, t[i] - PI - off]])
+    assert 4.4 < t[i] < 4.55
+    assert _torus_distance(tip, [c.vertices for c in b.curves]).max() < 2e-5
+    assert b.attrs["SS_tips_attached"] >= 1
 
 
 def test_hidden_cells_are_found():
