@@ -752,7 +752,7 @@ def slice_boundaries(
         box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
         cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
         tips = _line_tips(fld, box, cell / 4, model, tol, dtype)
-        attached = _attach_tips(polys, tips, near, chord, reach=8 * cell)
+        attached = _attach_tips(polys, tips, near, chord, reach=32 * cell)
         if attached:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
