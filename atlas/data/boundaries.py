@@ -752,7 +752,10 @@ def slice_boundaries(
         box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
         cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
         tips = _line_tips(fld, box, cell / 4, model, tol, dtype)
-        attached = _attach_tips(polys, tips, near, chord, reach=32 * cell)
+        # a wedge of a boundary tangent to the line is as wide as the square of the distance
+        # to its tip: the grid first sees it ~sqrt(cell) away
+        reach = max(32 * cell, 4 * math.sqrt(cell))
+        attached = _attach_tips(polys, tips, near, chord, reach=reach)
         if attached:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
