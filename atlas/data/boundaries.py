@@ -486,8 +486,9 @@ def _line_frames(box):
 
 def _line_tips(fld, box, step, model, tol, dtype) -> dict:
     """Per class line ``m`` and side ``s`` (+1 / -1), certified brackets ``(p, q, vp, vq)`` where
-    the code ``4 tol`` off the line on side ``s`` changes along it (samples every ``<= step``
-    [rad], then bisection to ``tol``): where a boundary meets the line from that side.  A boundary
+    the code ``4 tol`` off the line on side ``s`` changes along it (samples every ``step`` [rad]
+    of the line's parameter: ``beta2``, ``beta1``, or ``beta1`` on a diagonal; then bisection to
+    ``tol``): where a boundary meets the line from that side.  A boundary
     that meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing
     cuts across; these are its tips, within ``4 tol / sin(angle)`` of the true meeting point."""
     tips = {}
