@@ -1,10 +1,7 @@
-"""Certified boundary curves: closed forms, exact re-check of vertices, no lost branch, storage."""
-
-import json
+"""Certified boundary curves: closed forms, exact re-check of vertices, no lost branch, CLI."""
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from atlas.cli import main
 from atlas.core import brackets, exact, mechanics
@@ -196,27 +193,6 @@ def test_scene_and_dataset_give_the_same_curves(tmp_path):
     assert len(a.curves) == len(b.curves)
     for x, y in zip(a.curves, b.curves):
         np.testing.assert_array_equal(x.vertices, y.vertices)
-
-
-def test_cf_geometry_and_exports(tmp_path):
-    b = bd.boundaries(
-        Scene(beta1="0:2pi:16", beta2="0:2pi:16", kappa=2.0, q=0.1), check=0, chord=1e-3
-    )
-    b.to_netcdf(tmp_path / "b.nc")
-    ds = xr.open_dataset(tmp_path / "b.nc")
-    assert ds.attrs["Conventions"] == "CF-1.10"
-    geo = ds["boundary_geometry"].attrs
-    assert geo["geometry_type"] == "line" and geo["node_count"] == "node_count"
-    assert int(ds["node_count"].sum()) == ds.sizes["node"] == sum(len(c.vertices) for c in b.curves)
-    assert ds["curve_kind"].attrs["geometry"] == "boundary_geometry"
-    assert float(ds["node_bracket"].max()) <= bd.TOL
-    b.to_csv(tmp_path / "b.csv")
-    rows = (tmp_path / "b.csv").read_text().splitlines()
-    assert len(rows) == 1 + ds.sizes["node"]
-    b.to_geojson(tmp_path / "b.json")
-    doc = json.loads((tmp_path / "b.json").read_text())
-    lines = [f for f in doc["features"] if f["geometry"]["type"] == "LineString"]
-    assert len(lines) == ds.sizes["curve"]
 
 
 def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):

@@ -1,0 +1,73 @@
+"""Storage of boundary curves: CF-1.10 geometry container, CSV, GeoJSON, summary."""
+
+import json
+
+import numpy as np
+import xarray as xr
+
+from atlas.data.boundary_curves import Boundaries, Curve, Point, summary
+
+
+def _boundaries() -> Boundaries:
+    """Two hand-made curves (a 3-vertex SS curve, a 2-vertex II piece on a class line), one point."""
+    ss = Curve(
+        "SS", "SS_stability", 1, 0, np.array([[0.1, 0.2], [0.3, 0.4], [0.5, 0.7]]),
+        np.array([1e-11, 2e-11, 5e-11]), kappa=2.0, q1=0.1, q2=0.1,
+    )  # fmt: skip
+    ii = Curve(
+        "II", "II_consistency", 2, 0, np.array([[np.pi, 1.0], [np.pi, 2.0]]),
+        np.array([0.0, 3e-11]), on_class_line=True, kappa=2.0, q1=0.1, q2=0.1,
+    )  # fmt: skip
+    pt = Point(np.pi, 1.0, "leaves_class_line", 3e-11, kappa=2.0, q1=0.1, q2=0.1)
+    slices = [{"kappa": 2.0, "q1": 0.1, "q2": 0.1, "SS_hidden_cells": 0, "x": float("nan")}]
+    return Boundaries([ss, ii], [pt], {"tolerance": 1e-10, "chord_tolerance": 1e-6,
+                                         "seconds": 0.5, "slices": slices})  # fmt: skip
+
+
+def test_netcdf_is_a_cf_geometry_container_that_round_trips(tmp_path):
+    b = _boundaries()
+    b.to_netcdf(tmp_path / "b.nc")
+    with xr.open_dataset(tmp_path / "b.nc") as ds:
+        assert ds.attrs["Conventions"] == "CF-1.10"
+        geo = ds["boundary_geometry"].attrs
+        assert geo["geometry_type"] == "line" and geo["node_count"] == "node_count"
+        assert geo["node_coordinates"] == "node_beta1 node_beta2"
+        assert ds["curve_kind"].attrs["geometry"] == "boundary_geometry"
+        assert ds["node_count"].values.tolist() == [3, 2]
+        nodes = np.stack([ds["node_beta1"].values, ds["node_beta2"].values], axis=1)
+        np.testing.assert_array_equal(nodes, np.concatenate([c.vertices for c in b.curves]))
+        assert ds["curve_kind"].values.tolist() == ["SS_stability", "II_consistency"]
+        assert ds["curve_on_class_line"].values.tolist() == [0, 1]
+        assert ds["point_kind"].values.tolist() == ["leaves_class_line"]
+        assert ds["node_beta1"].attrs["units"] == "rad"
+        assert json.loads(ds.attrs["slices"])[0]["x"] is None  # NaN is not JSON
+
+
+def test_csv_has_one_row_per_vertex(tmp_path):
+    b = _boundaries()
+    b.to_csv(tmp_path / "b.csv")
+    rows = (tmp_path / "b.csv").read_text().splitlines()
+    assert rows[0].split(",")[:3] == ["curve", "field", "kind"]
+    assert len(rows) == 1 + 5
+    last = rows[-1].split(",")
+    assert last[0] == "1" and float(last[-3]) == np.pi and float(last[-1]) == 3e-11
+
+
+def test_geojson_lines_and_points(tmp_path):
+    b = _boundaries()
+    b.to_geojson(tmp_path / "b.json")
+    doc = json.loads((tmp_path / "b.json").read_text())
+    kinds = [f["geometry"]["type"] for f in doc["features"]]
+    assert kinds == ["LineString", "LineString", "Point"]
+    assert doc["features"][0]["geometry"]["coordinates"][2] == [0.5, 0.7]
+    assert doc["features"][1]["properties"]["max_bracket"] == 3e-11
+    assert doc["features"][0]["properties"]["side_a"] != ""  # the field's code label
+
+
+def test_select_and_summary():
+    b = _boundaries()
+    assert [c.field for c in b.select(field="II")] == ["II"]
+    assert b.select(kind="SS_stability")[0].vertices.shape == (3, 2)
+    text = summary(b)
+    assert text.startswith("boundaries: 2 curves, 5 vertices, 1 codimension-2 points")
+    assert "II_consistency (on a class line): 1" in text and "point leaves_class_line: 1" in text
