@@ -15,8 +15,7 @@ TINY = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8"]
 
 
 def _env(tmp_path_factory):
-    env = dict(os.environ)
-    env["ATLAS_JAX_CACHE"] = str(tmp_path_factory.getbasetemp() / "jaxcache")
+    env = dict(os.environ)  # ATLAS_JAX_CACHE: the run's shared compilation cache (conftest.py)
     env.pop("ATLAS_PROGRESS", None)
     return env
 
@@ -272,8 +271,7 @@ def test_generate_scheduler_inprocess_then_resume(distributed_run):
 
 
 def _env_of(d):
-    env = dict(os.environ)
-    env["ATLAS_JAX_CACHE"] = str(d.parent / "jaxcache")
+    env = dict(os.environ)  # ATLAS_JAX_CACHE: the run's shared compilation cache (conftest.py)
     env.pop("ATLAS_PROGRESS", None)
     return env
 

@@ -25,37 +25,31 @@ def contour_lines(beta, field, level):
     return [ln for ln in gen.lines(level) if len(ln) >= 2]
 
 
-def _densify(lines, step):
-    """The polylines with points inserted so that no segment is longer than ``step``."""
-    out = []
-    for ln in lines:
-        seg = np.diff(ln, axis=0)
-        length = np.hypot(seg[:, 0], seg[:, 1])
-        k = np.maximum(1, np.ceil(length / step).astype(int))
-        pts = [ln[:1]]
-        for i in range(len(seg)):
-            t = (np.arange(1, k[i] + 1) / k[i])[:, None]
-            pts.append(ln[i] + t * seg[i])
-        out.append(np.concatenate(pts))
-    return out
+def _samples(lines, step, *, per_segment=False):
+    """Points every ``<= step`` along the polylines, vertices included.
 
-
-def _segments(b_lines, step):
-    """The segments ``(p, q)`` of the polylines, and sample points every ``<= step`` along them
-    with the index of their segment."""
-    p = np.concatenate([ln[:-1] for ln in b_lines if len(ln) >= 2])
-    q = np.concatenate([ln[1:] for ln in b_lines if len(ln) >= 2])
+    ``per_segment=False``: each vertex once, ``(m, 2)``.  ``per_segment=True``: both ends of every
+    segment, returned as ``(p, q, samples, seg)`` with the segments ``(p, q)`` and the index of
+    each sample's segment."""
+    lines = [ln for ln in lines if len(ln) >= 2]
+    p = np.concatenate([ln[:-1] for ln in lines])
+    q = np.concatenate([ln[1:] for ln in lines])
     k = np.maximum(1, np.ceil(np.hypot(*(q - p).T) / step).astype(int))
-    seg = np.repeat(np.arange(len(p)), k + 1)
-    t = np.concatenate([np.arange(m + 1) / m for m in k])[:, None]
-    return p, q, p[seg] + t * (q[seg] - p[seg]), seg
+    lo = 0 if per_segment else 1  # t = lo/k .. k/k on each segment
+    m = k + 1 - lo
+    seg = np.repeat(np.arange(len(p)), m)
+    j = np.arange(int(m.sum())) - np.repeat(np.cumsum(m) - m, m) + lo
+    pts = p[seg] + (j / k[seg])[:, None] * (q[seg] - p[seg])
+    if per_segment:
+        return p, q, pts, seg
+    return np.concatenate([np.stack([ln[0] for ln in lines]), pts])
 
 
 def _directed(a_pts, b_lines, step, reduce=True):
     """max over points ``a`` of the distance to the polylines ``b``: exact point-to-segment
     distances to the segments of the 8 nearest samples (every ``<= step``) of ``b``, so a long
     segment next to a dense polyline is not missed; ``reduce=False``: the distance of each point."""
-    p, q, samples, seg = _segments(b_lines, step)
+    p, q, samples, seg = _samples(b_lines, step, per_segment=True)
     k = min(8, len(samples))
     _, idx = cKDTree(samples).query(a_pts, k=k)
     idx = idx.reshape(len(a_pts), k)
@@ -76,8 +70,7 @@ def hausdorff(lines_a, lines_b, step):
     measured point-to-segment against the other); 0 if both are empty, NaN if one is."""
     if not lines_a or not lines_b:
         return math.nan if (lines_a or lines_b) else 0.0
-    a = np.concatenate(_densify(lines_a, step))
-    b = np.concatenate(_densify(lines_b, step))
+    a, b = _samples(lines_a, step), _samples(lines_b, step)
     return max(_directed(a, lines_b, step), _directed(b, lines_a, step))
 
 
@@ -97,8 +90,7 @@ def torus_hausdorff(lines_a, lines_b, step, quantile=1.0):
     the point-to-curve distances of both directions instead of their maximum."""
     if not lines_a or not lines_b:
         return math.nan if (lines_a or lines_b) else 0.0
-    a = np.concatenate(_densify(lines_a, step))
-    b = np.concatenate(_densify(lines_b, step))
+    a, b = _samples(lines_a, step), _samples(lines_b, step)
     d = np.concatenate(
         [
             _directed(a, _torus_copies(lines_b), step, reduce=False),

@@ -32,8 +32,13 @@ from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = ["FIELDS", "FIELD_LABELS", "field_codes", "bisect", "boundary_kind"]
 
-#: smallest batch of points a kernel call sees (batches are padded to powers of two)
+#: the two batch sizes a kernel call sees: small batches are padded to ``MIN_BATCH`` points,
+#: larger ones cut into padded batches of ``MAX_BATCH`` (two compilations per kernel)
 MIN_BATCH = 4096
+MAX_BATCH = 1 << 16
+#: the padding point ``(beta1, beta2)`` [rad]: ``B = I``, decided in closed form by the first
+#: pass for every model (the diagonal branch), so padding never reaches the later tiers
+PAD_POINT = (0.0, math.pi / 2)
 #: the verdicts each field is made of
 FIELDS = {"SS": ("stable_SS",), "II": ("consistent_II", "stable_II")}
 #: the meaning of each code of a field
@@ -58,17 +63,25 @@ def field_codes(field: str, beta1, beta2, kappa, q1, q2, *, dtype="float64") -> 
     ``beta1, beta2`` [rad] for scalar ``kappa, q1, q2`` [1]; every point settled exactly."""
     _check_field(field)
     b1, b2 = np.broadcast_arrays(np.asarray(beta1, np.float64), np.asarray(beta2, np.float64))
-    shape, n = b1.shape, b1.size
-    if n == 0:
-        return np.zeros(shape, np.int8)
-    pad = max(MIN_BATCH, 1 << (n - 1).bit_length()) - n  # few batch sizes: few compilations
-    b1, b2 = (np.pad(b.ravel(), (0, pad), mode="edge") for b in (b1, b2))
+    b1, b2, out = b1.ravel(), b2.ravel(), np.empty(b1.size, np.int8)
+    for start in range(0, b1.size, MAX_BATCH):
+        part = slice(start, min(start + MAX_BATCH, b1.size))
+        out[part] = _batch_codes(field, b1[part], b2[part], kappa, q1, q2, dtype)
+    return out.reshape(np.broadcast_shapes(np.shape(beta1), np.shape(beta2)))
+
+
+def _batch_codes(field, b1, b2, kappa, q1, q2, dtype) -> np.ndarray:
+    """:func:`field_codes` of at most ``MAX_BATCH`` points, padded with :data:`PAD_POINT` to
+    ``MIN_BATCH`` or ``MAX_BATCH`` points (two batch sizes: two compilations per kernel)."""
+    n = b1.size
+    pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
+    b1, b2 = (np.pad(b, (0, pad), constant_values=v) for b, v in zip((b1, b2), PAD_POINT))
     c1, s1 = mechanics.direction(b1, dtype)
     c2, s2 = mechanics.direction(b2, dtype)
     res = evaluate.spectral_points(
         c1, s1, c2, s2, kappa, q1, q2, names=FIELDS[field], dtype=dtype, resolve=True
     )
-    res = {k: v[:n].reshape(shape) for k, v in res.items()}
+    res = {k: v[:n] for k, v in res.items()}
     if any((v == UNDECIDED_FLAG).any() for v in res.values()):  # the exact tier never leaves one
         raise RuntimeError("field_codes: a point stayed undecided after exact settlement")
     if field == "SS":

@@ -39,8 +39,11 @@ def compile_cache_dir() -> str | None:
     return where
 
 
-def use_compile_cache(where: str | None = None) -> None:
-    """Turn the persistent compilation cache on for this process (no-op if already on or off)."""
+def use_compile_cache(
+    where: str | None = None, min_compile_seconds: float = CACHE_MIN_COMPILE_SECONDS
+) -> None:
+    """Turn the persistent compilation cache on for this process (no-op if already on or off);
+    compilations shorter than ``min_compile_seconds`` are not stored."""
     if jax.config.jax_compilation_cache_dir:
         return
     where = where or compile_cache_dir()
@@ -48,7 +51,7 @@ def use_compile_cache(where: str | None = None) -> None:
         return
     try:
         jax.config.update("jax_compilation_cache_dir", where)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", CACHE_MIN_COMPILE_SECONDS)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", min_compile_seconds)
     except AttributeError:  # pragma: no cover - an old JAX: just compile
         pass
 

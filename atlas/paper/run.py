@@ -118,7 +118,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
     curves = step(
         "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=32 if quick else 64),
+        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
     )
     fig1_curves = figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])
     step(

@@ -28,6 +28,24 @@ def test_field_codes_match_the_exact_tier(field, model):
     assert got.tolist() == want
 
 
+@pytest.mark.parametrize(
+    "model", [(0.5, 0, 0), (0.5, 0.35, 0), (0.5, 0, 0.35), (2, 0.1, 0.1), (1e-6, 1e-3, 10),
+              (1e6, 10, 0), (1, 1e-12, 0), (0.5, 0.05, 0.2)],
+)  # fmt: skip
+def test_padding_point_is_decided_by_the_first_pass(model):
+    """Batches are padded to MIN_BATCH with PAD_POINT: were it undecided, every copy would go
+    through tier 2, root enclosures or the exact tier (a 4096-fold cost on a 1-point bisection)."""
+    c1, s1 = mechanics.direction(np.full(4, brackets.PAD_POINT[0]))
+    c2, s2 = mechanics.direction(np.full(4, brackets.PAD_POINT[1]))
+    np.testing.assert_array_equal(
+        np.stack([c1, s1, c2, s2]), np.array([[1], [0], [0], [1]]) * np.ones(4)
+    )
+    stats = {}
+    names = ("stable_SS", "consistent_II", "stable_II")
+    brackets.evaluate.spectral_points(c1, s1, c2, s2, *model, names=names, stats=stats)
+    assert stats["tier2_points"] == stats["roots_points"] == stats["undecided_before"] == 0
+
+
 def test_field_codes_keep_the_broadcast_shape():
     b = np.linspace(0.1, 6.0, 5)
     assert brackets.field_codes("SS", b[:, None], b[None, :], 0.5, 0.0, 0.0).shape == (5, 5)

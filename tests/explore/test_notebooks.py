@@ -2,7 +2,9 @@
 
 * ``notebooks/explore.ipynb`` and ``notebooks/paper.ipynb`` run top to bottom in a fresh kernel
   (nbclient, kernel ``python3`` of the current interpreter) with a temporary working directory, so
-  every file they write lands there.  Their ``QUICK = True`` first cell keeps them short.  They are
+  every file they write lands there.  Their ``QUICK = True`` first cell keeps them short; the
+  runner turns its ``CI = False`` into ``CI = True`` (the smallest sizes that run every cell)
+  and shares the run's compilation cache with the kernel.  They are
   started in the background by ``notebook_runs`` (conftest.py) and waited for by the last tests.
 """
 
@@ -24,7 +26,7 @@ def test_notebooks_committed_without_outputs(need):
             if cell.cell_type == "code":
                 assert cell.outputs == [] and cell.execution_count is None, name
         first = next(c for c in nb.cells if c.cell_type == "code")
-        assert "QUICK = True" in first.source, name
+        assert "QUICK = True" in first.source and "CI = False" in first.source, name
 
 
 # --- the notebooks (started in the background by ``notebook_runs``) ----------------------------
