@@ -30,8 +30,9 @@ def _samples(lines, step, *, per_segment=False):
 
     ``per_segment=False``: each vertex once, ``(m, 2)``.  ``per_segment=True``: both ends of every
     segment, returned as ``(p, q, samples, seg)`` with the segments ``(p, q)`` and the index of
-    each sample's segment."""
-    lines = [ln for ln in lines if len(ln) >= 2]
+    each sample's segment.  A one-vertex line is a segment of length 0."""
+    lines = [np.concatenate([ln, ln]) if len(ln) == 1 else ln for ln in lines if len(ln)]
+    firsts = np.array([ln[0] for ln in lines]).reshape(-1, 2)
     p = np.concatenate([ln[:-1] for ln in lines])
     q = np.concatenate([ln[1:] for ln in lines])
     k = np.maximum(1, np.ceil(np.hypot(*(q - p).T) / step).astype(int))
@@ -42,7 +43,7 @@ def _samples(lines, step, *, per_segment=False):
     pts = p[seg] + (j / k[seg])[:, None] * (q[seg] - p[seg])
     if per_segment:
         return p, q, pts, seg
-    return np.concatenate([np.stack([ln[0] for ln in lines]), pts])
+    return np.concatenate([firsts, pts])
 
 
 def _directed(a_pts, b_lines, step, reduce=True):

@@ -36,8 +36,9 @@ __all__ = ["FIELDS", "FIELD_LABELS", "field_codes", "bisect", "boundary_kind"]
 #: larger ones cut into padded batches of ``MAX_BATCH`` (two compilations per kernel)
 MIN_BATCH = 4096
 MAX_BATCH = 1 << 16
-#: the padding point ``(beta1, beta2)`` [rad]: ``B = I``, decided in closed form by the first
-#: pass for every model (the diagonal branch), so padding never reaches the later tiers
+#: the padding point ``(beta1, beta2)`` [rad]: ``B = I`` (two uncoupled contacts).  The first
+#: pass decides it (II by the closed form of diagonal ``B``; SS checked over damped, undamped,
+#: one-q = 0 and extreme-ratio models in the tests), so padding never reaches the later tiers
 PAD_POINT = (0.0, math.pi / 2)
 #: the verdicts each field is made of
 FIELDS = {"SS": ("stable_SS",), "II": ("consistent_II", "stable_II")}

@@ -168,8 +168,9 @@ def _model_dependent(mode: str, long_name: str, comment: str, needs) -> Output:
     )
 
 
-def _registry() -> dict[str, Output]:
-    outs = [
+def _geometry_outputs() -> list[Output]:
+    """Class codes and the Table 1 / Sec. 4-5 flags: functions of the geometry alone."""
+    return [
         Output(
             "class_code",
             ("beta1", "beta2"),
@@ -211,6 +212,12 @@ def _registry() -> dict[str, Output]:
             ),
             true_code=1,
         ),
+    ]
+
+
+def _spectral_outputs() -> list[Output]:
+    """The certified verdicts on the eigen-structure of ``M`` and their model dependence."""
+    return [
         Output(
             "stable_SS",
             _SPECTRAL,
@@ -266,7 +273,12 @@ def _registry() -> dict[str, Output]:
             "consistent-stable over the samples",
             ("consistent_II", "stable_II"),
         ),
-        # display layers: smooth margins whose zero contours are drawn as boundaries
+    ]
+
+
+def _margin_outputs() -> list[Output]:
+    """Display layers: smooth margins whose zero contours are drawn as boundaries."""
+    return [
         Output(
             "margin_SS",
             _SPECTRAL,
@@ -295,6 +307,10 @@ def _registry() -> dict[str, Output]:
             in_atlas=False,
         ),
     ]
+
+
+def _registry() -> dict[str, Output]:
+    outs = _geometry_outputs() + _spectral_outputs() + _margin_outputs()
     return {o.name: dataclasses.replace(o, attrs=MappingProxyType(o.attrs)) for o in outs}
 
 

@@ -57,3 +57,11 @@ def test_hausdorff_sees_a_long_segment_beside_a_dense_polyline():
     lines = [np.array([[0.0, 0.0], [0.0, 1.0]]), dense]
     assert hausdorff(lines, lines, 0.01) == pytest.approx(0.0, abs=1e-12)
     assert torus_hausdorff(lines, lines, 0.01) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_one_vertex_line_is_measured():
+    """A polyline of one vertex (a curve cut to a point) still counts as a point of its set."""
+    line = [np.array([[0.0, 0.0], [1.0, 0.0]])]
+    dot = [np.array([[0.5, 0.25]])]
+    assert hausdorff(dot, line, 0.01) == pytest.approx(np.hypot(0.5, 0.25))  # an end to the dot
+    assert hausdorff(dot + line, line, 0.01) == pytest.approx(0.25, abs=1e-12)
