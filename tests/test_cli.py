@@ -14,7 +14,7 @@ from atlas import cli
 TINY = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8"]
 
 
-def _env(tmp_path_factory):
+def _env():
     env = dict(os.environ)  # ATLAS_JAX_CACHE: the run's shared compilation cache (conftest.py)
     env.pop("ATLAS_PROGRESS", None)
     return env
@@ -68,10 +68,10 @@ def _check_one_line(err, name, extra):
     assert name in lines[0], (extra, lines[0])
 
 
-def test_bad_inputs_exit_2_one_line(tmp_path, tmp_path_factory):
+def test_bad_inputs_exit_2_one_line(tmp_path):
     existing = tmp_path / "existing.nc"
     existing.write_bytes(b"keep me")
-    env = _env(tmp_path_factory)
+    env = _env()
     procs = []
     for extra, name in BAD:
         extra = [a.format(existing=existing) for a in extra]
@@ -97,12 +97,12 @@ def test_more_bad_inputs_in_process(extra, name, tmp_path, capsys):
     assert sorted(os.listdir(tmp_path)) == ["existing.nc"]
 
 
-def test_generate_end_to_end(tmp_path, tmp_path_factory):
+def test_generate_end_to_end(tmp_path):
     out = tmp_path / "tiny.nc"
     args = ["generate", *TINY, "--kappa", "0.5,2", "--q", "0,0.5", "--alpha", "0:2pi:4"]
     args += ["--outputs", "class_code,subclass_code,stable_SS,model_dependent_SS,stable_SF"]
     args += ["--out", str(out), "--tile-points", "256"]
-    p = _spawn(args, _env(tmp_path_factory))
+    p = _spawn(args, _env())
     _, err = p.communicate(timeout=300)
     assert p.returncode == 0, err
     summary = err.strip().splitlines()[-1]
@@ -116,24 +116,22 @@ def test_generate_end_to_end(tmp_path, tmp_path_factory):
         assert ds.attrs["undecided_after_resolve"] == 0
     # an existing output is replaced only with --overwrite
     before = out.read_bytes()
-    p = _spawn(args, _env(tmp_path_factory))
+    p = _spawn(args, _env())
     _, err = p.communicate(timeout=300)
     assert p.returncode == 2 and "out:" in err and out.read_bytes() == before
     args2 = [a for a in args if a not in ("--kappa", "0.5,2", "--q", "0,0.5")]
     args2 = [a if a != "model_dependent_SS" else "cc_possible" for a in args2]
     args2 = [a.replace(",model_dependent_SS", "") for a in args2]
-    p = _spawn(
-        [*args2, "--overwrite", "--physical", "k1=100,k2=200,q1=20,q2=20"], _env(tmp_path_factory)
-    )
+    p = _spawn([*args2, "--overwrite", "--physical", "k1=100,k2=200,q1=20,q2=20"], _env())
     _, err = p.communicate(timeout=300)
     assert p.returncode == 0, err
     with xr.open_dataset(out) as ds:
         assert float(ds.kappa) == pytest.approx(0.5) and float(ds.q) == pytest.approx(2**0.5)
 
 
-def test_progress_bar_on(tmp_path, tmp_path_factory):
+def test_progress_bar_on(tmp_path):
     """ATLAS_PROGRESS=1 forces the bar (as on a terminal): the run completes and shows it."""
-    env = _env(tmp_path_factory)
+    env = _env()
     env["ATLAS_PROGRESS"] = "1"
     out = tmp_path / "p.nc"
     p = _spawn(["generate", *TINY, "--outputs", "class_code,stable_SS", "--out", str(out)], env)
@@ -149,9 +147,9 @@ def test_help(sub, capsys):
     assert "usage: atlas " + sub in capsys.readouterr().out
 
 
-def test_simulate_and_table_run_in_subprocesses(tmp_path, tmp_path_factory):
+def test_simulate_and_table_run_in_subprocesses(tmp_path):
     """The dispatched subcommands resolve to real functions (no placeholder path)."""
-    env = _env(tmp_path_factory)
+    env = _env()
     csv = tmp_path / "d.csv"
     p = _spawn(["simulate", "--case", "fig2b", "--t-end", "5", "--out", str(csv)], env)
     out, err = p.communicate(timeout=600)
@@ -180,7 +178,7 @@ def test_no_subcommand_is_usage_error(capsys):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
-def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
+def test_sigterm_leaves_no_partial_file(tmp_path):
     import signal
     import time
 
@@ -188,7 +186,7 @@ def test_sigterm_leaves_no_partial_file(tmp_path, tmp_path_factory):
     # ~1e9 points: minutes of work at 1e7 points/s, so the signal arrives mid-run
     args = ["generate", "--beta1", "0:2pi:4096", "--beta2", "0:2pi:4096", "--kappa", "log:1:4:8"]
     args += ["--q", "log:0.1:0.4:8", "--outputs", "stable_SS", "--out", str(out)]
-    p = _spawn(args, _env(tmp_path_factory))
+    p = _spawn(args, _env())
     deadline = time.time() + 60
     while time.time() < deadline and not any(f.endswith(".tmp") for f in os.listdir(tmp_path)):
         time.sleep(0.1)  # wait until the temporary file is being written
@@ -235,7 +233,7 @@ def distributed_run(tmp_path_factory):
     """The in-process ``atlas generate`` file and ``--scheduler inprocess --slab 2`` (4 tiles)."""
     pytest.importorskip("zarr")
     d = tmp_path_factory.mktemp("dist")
-    env = _env(tmp_path_factory)
+    env = _env()
     # one after the other: the second run loads the first one's compilations from the disk cache
     ((rc, err),) = _run([_spawn(["generate", *SCENE5, "--out", str(d / "ref.nc")], env)])
     assert rc == 0, err
@@ -261,19 +259,13 @@ def test_generate_scheduler_inprocess_then_resume(distributed_run):
     g["class_code"][6:8] = 0
     args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
     args += ["--store", str(d / "a.zarr"), "--out", str(d / "b.nc"), "--resume"]
-    ((rc, err),) = _run([_spawn(args, _env_of(d))])
+    ((rc, err),) = _run([_spawn(args, _env())])
     assert rc == 0, err
     summary = err.strip().splitlines()[-1]
     assert "4 tiles: 2 computed, 2 verified, 1 missing and 1 corrupt before" in summary, summary
     _same_netcdf(d / "b.nc", d / "ref.nc")
     with xr.open_dataset(d / "b.nc") as ds:
         assert "resumed, 2 of 4 tiles recomputed" in ds.attrs["history"]
-
-
-def _env_of(d):
-    env = dict(os.environ)  # ATLAS_JAX_CACHE: the run's shared compilation cache (conftest.py)
-    env.pop("ATLAS_PROGRESS", None)
-    return env
 
 
 def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
@@ -288,7 +280,7 @@ def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
     ]
     # the first ones through the real CLI (in subprocesses), the rest through cli.main meanwhile
     base = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
-    procs = [_spawn([*base, *extra], _env_of(d)) for extra, _ in bad]
+    procs = [_spawn([*base, *extra], _env()) for extra, _ in bad]
     more = [
         (["--scheduler", "local:0"], "scheduler:"),
         (["--scheduler", "tcp://"], "scheduler:"),

@@ -410,19 +410,26 @@ def _line_tips(fld, box, step, model, tol, dtype) -> dict:
     ``tol``): where a boundary meets the line from that side.  A boundary
     that meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing
     cuts across; these are its tips, within ``4 tol / sin(angle)`` of the true meeting point."""
-    tips = {}
+    pts, keys = [], []  # every line and side in one batch: one kernel call per bisection step
     for m, base, direction, normal, t0, t1 in _line_frames(box):
         t = np.linspace(t0, t1, max(2, math.ceil((t1 - t0) / step) + 1))
         line = np.asarray(base) + t[:, None] * np.asarray(direction)
         for side in (-1, 1):
-            pts = line + side * 4 * tol * np.asarray(normal)
-            c = brackets.field_codes(fld, pts[:, 0], pts[:, 1], *model, dtype=dtype)
-            i = np.flatnonzero(c[:-1] != c[1:])
-            if i.size:
-                tips[m, side] = brackets.bisect(
-                    fld, pts[i], pts[i + 1], c[i], c[i + 1], *model, tol=tol, dtype=dtype
-                )
-    return tips
+            pts.append(line + side * 4 * tol * np.asarray(normal))
+            keys.append((m, side))
+    if not pts:
+        return {}
+    run = np.repeat(np.arange(len(pts)), [len(x) for x in pts])
+    xy = np.concatenate(pts)
+    c = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
+    i = np.flatnonzero((c[:-1] != c[1:]) & (run[:-1] == run[1:]))
+    p, q, vp, vq = brackets.bisect(
+        fld, xy[i], xy[i + 1], c[i], c[i + 1], *model, tol=tol, dtype=dtype
+    )
+    return {
+        keys[r]: (p[run[i] == r], q[run[i] == r], vp[run[i] == r], vq[run[i] == r])
+        for r in np.unique(run[i])
+    }
 
 
 def _attach_tips(polys, tips, near, chord, reach) -> int:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from atlas.core import brackets, exact, mechanics
+from atlas.core import brackets, exact, mechanics, points
 
 
 def _exact_code(field, b1, b2, kappa, q1, q2):
@@ -42,7 +42,7 @@ def test_padding_point_is_decided_by_the_first_pass(model):
     )
     stats = {}
     names = ("stable_SS", "consistent_II", "stable_II")
-    brackets.evaluate.spectral_points(c1, s1, c2, s2, *model, names=names, stats=stats)
+    points.spectral_points(c1, s1, c2, s2, *model, names=names, stats=stats)
     assert stats["tier2_points"] == stats["roots_points"] == stats["undecided_before"] == 0
 
 
