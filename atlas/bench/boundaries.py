@@ -46,21 +46,36 @@ def _samples(lines, step, *, per_segment=False):
     return np.concatenate([firsts, pts])
 
 
+def _segment_distances(a_pts, p, q):
+    """Distances from points ``a_pts`` to the segments ``(p, q)`` (row by row)."""
+    d = q - p
+    den = np.maximum((d * d).sum(1), 1e-300)
+    t = np.clip(((a_pts - p) * d).sum(1) / den, 0, 1)
+    return np.hypot(*(a_pts - p - t[:, None] * d).T)
+
+
 def _directed(a_pts, b_lines, step, reduce=True):
-    """max over points ``a`` of the distance to the polylines ``b``: exact point-to-segment
-    distances to the segments of the 8 nearest samples (every ``<= step``) of ``b``, so a long
-    segment next to a dense polyline is not missed; ``reduce=False``: the distance of each point."""
+    """max over points ``a`` of the distance to the polylines ``b``, exact: every point of a
+    segment of ``b`` lies within ``step / 2`` of one of its samples (every ``<= step``), so a
+    segment closer than ``d`` has a sample within ``d + step / 2``.  The segments of the 8
+    nearest samples give ``d``; where a 9th sample lies within ``d + step / 2`` (a dense cluster
+    of vertices next to a long segment), every sample in that ball is checked.
+    ``reduce=False``: the distance of each point."""
     p, q, samples, seg = _samples(b_lines, step, per_segment=True)
+    tree = cKDTree(samples)
     k = min(8, len(samples))
-    _, idx = cKDTree(samples).query(a_pts, k=k)
-    idx = idx.reshape(len(a_pts), k)
+    dist, idx = tree.query(a_pts, k=k)
+    dist, idx = dist.reshape(len(a_pts), k), idx.reshape(len(a_pts), k)
     best = np.full(len(a_pts), np.inf)
     for j in range(k):
         s = seg[idx[:, j]]
-        d = q[s] - p[s]
-        den = np.maximum((d * d).sum(1), 1e-300)
-        t = np.clip(((a_pts - p[s]) * d).sum(1) / den, 0, 1)
-        best = np.minimum(best, np.hypot(*(a_pts - p[s] - t[:, None] * d).T))
+        best = np.minimum(best, _segment_distances(a_pts, p[s], q[s]))
+    more = np.flatnonzero(dist[:, -1] <= best + 0.5 * step) if k < len(samples) else []
+    if len(more):
+        balls = tree.query_ball_point(a_pts[more], best[more] + 0.5 * step)
+        i = np.repeat(more, [len(b) for b in balls])
+        s = seg[np.concatenate(balls).astype(int)]
+        np.minimum.at(best, i, _segment_distances(a_pts[i], p[s], q[s]))
     if not reduce:
         return best
     return float(best.max()) if len(best) else math.nan

@@ -11,9 +11,11 @@
    grid and is checked again (at most ``max_levels`` times); cells still hiding a branch are
    counted in ``attrs["hidden_cells"]``.  This is a check, not a proof: a loop smaller than the
    finest sampling, or a second branch in a cell that already shows a change, can pass it.
-3. **Tracing.** Marching squares (:mod:`contourpy`) on the indicator of each code's region gives
-   polylines whose vertices lie on grid edges with different codes at the two ends: brackets.  The
-   grid is shifted by ~1e-7 of a cell (:data:`NUDGE`) so that no node sits on a class line.
+3. **Tracing.** Marching triangles (:mod:`atlas.data.marching`: every cell split along its
+   ``beta2 = beta1 + c`` diagonal, so that the class lines through the nodes are edges) on the
+   indicator of each code's region gives polylines whose vertices lie on grid edges with different
+   codes at the two ends: brackets.  The grid is shifted by ~1e-7 of a cell (:data:`NUDGE`) so
+   that no node sits on a class line.
 4. **Certified vertices.** :func:`atlas.core.brackets.bisect` shrinks every bracket to a length
    ``<= tol`` (default 1e-10 rad); the vertex is its midpoint, so it lies within ``tol / 2`` of the
    true boundary (the bracket's end codes are certified: floating point with proven error bounds,
@@ -52,13 +54,13 @@ import math
 import time
 from dataclasses import dataclass
 
-import contourpy
 import numpy as np
 import xarray as xr
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
 from atlas.core import brackets
+from atlas.data import marching
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
 from atlas.data.io import check_output_path
 from atlas.data.scene import Scene
@@ -188,30 +190,26 @@ def _traced_codes(codes) -> list[int]:
     return sorted(int(v) for v in np.unique(codes))[:-1]
 
 
-def _trace(b1, b2, codes, a) -> list[np.ndarray]:
-    """Marching-squares polylines of the boundary of the region ``codes == a`` (no masking: the
-    curves run on through the points where a third code meets them)."""
-    z = np.where(codes == a, 1.0, 0.0)
-    gen = contourpy.contour_generator(b1, b2, z.T, name="serial", line_type="Separate")
-    return [ln for ln in gen.lines(0.5) if len(ln) >= 2]
+def _flips(b1, b2) -> np.ndarray:
+    """Cells (``(n1-1, n2-1)`` bool) to split along ``(i+1, j)-(i, j+1)``: those whose other
+    diagonal ends at a node where a ``beta1 = k pi/2`` and a ``beta2 = k pi/2`` line cross and
+    no ``beta2 = beta1 + k pi`` line passes (within a thousandth of a cell).  That diagonal would
+    join opposite quadrants of the crossing, whose codes differ, through the node's own code."""
+    nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
+    cell = min(np.diff(b1).min(initial=np.inf), np.diff(b2).min(initial=np.inf))
+    on = _line_distances(nodes) <= 1e-3 * cell
+    corner = (on[:, :5].any(1) & on[:, 5:10].any(1) & ~on[:, 10:].any(1)).reshape(b1.size, -1)
+    return corner[:-1, :-1] | corner[1:, 1:]
 
 
-def _edge_brackets(b1, b2, codes, line, a):
-    """For each marching-squares vertex (on a grid edge), the edge's ``a`` end and other end."""
-    fx = np.interp(line[:, 0], b1, np.arange(b1.size))
-    fy = np.interp(line[:, 1], b2, np.arange(b2.size))
-    vertical = np.abs(fx - np.round(fx)) < 1e-6  # on a beta1 grid line: edge along beta2
-    i0 = np.where(vertical, np.round(fx), np.floor(fx)).astype(int)
-    j0 = np.where(vertical, np.floor(fy), np.round(fy)).astype(int)
-    i1 = np.minimum(np.where(vertical, i0, i0 + 1), b1.size - 1)
-    j1 = np.minimum(np.where(vertical, j0 + 1, j0), b2.size - 1)
-    n0 = np.stack([b1[i0], b2[j0]], 1)
-    n1 = np.stack([b1[i1], b2[j1]], 1)
-    c0, c1 = codes[i0, j0], codes[i1, j1]
-    first_a = c0 == a
-    p = np.where(first_a[:, None], n0, n1)
-    q = np.where(first_a[:, None], n1, n0)
-    return p, q, np.where(first_a, c0, c1), np.where(first_a, c1, c0)
+def _trace(b1, b2, codes, a, flip):
+    """Polylines of the boundary of the region ``codes == a`` (marching triangles,
+    :mod:`atlas.data.marching`, cells split as :func:`_flips` says; no masking: the curves run on
+    through the points where a third code meets them): per polyline, each vertex's bracket
+    ``(p, q)`` on a grid edge, ``p`` in the region, and the code at ``q``."""
+    nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
+    flat = codes.ravel()
+    return [(nodes[i], nodes[o], flat[o]) for i, o in marching.region_boundaries(codes == a, flip)]
 
 
 @dataclass
@@ -248,22 +246,21 @@ class _Polys:
 
 def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
     """Steps 3-4: traced polylines with every vertex bisected to a bracket ``<= tol``."""
-    lines, region, ps, qs, vps, vqs = [], [], [], [], [], []
+    lines, region = [], []
+    flip = _flips(b1, b2)
     for a in _traced_codes(codes):
-        for ln in _trace(b1, b2, codes, a):
-            p, q, vp, vq = _edge_brackets(b1, b2, codes, ln, a)
-            lines.append(ln)
+        for line in _trace(b1, b2, codes, a, flip):
+            lines.append(line)
             region.append(a)
-            ps.append(p), qs.append(q), vps.append(vp), vqs.append(vq)
     if not lines:
         e = np.zeros(0)
         z = np.zeros((0, 2))
         b = e > 0
         return _Polys(z, np.zeros((0, 2, 2)), e.astype(np.int8), e, e.astype(int), e, b, b, [])
-    p, q, _, vq = brackets.bisect(
-        fld, *map(np.concatenate, (ps, qs, vps, vqs)), *model, tol=tol, dtype=dtype
-    )
-    sizes = [len(ln) for ln in lines]
+    sizes = [len(ln[0]) for ln in lines]
+    ps, qs, vqs = (np.concatenate(c) for c in zip(*lines))
+    vps = np.repeat(np.array(region, codes.dtype), sizes)
+    p, q, _, vq = brackets.bisect(fld, ps, qs, vps, vqs, *model, tol=tol, dtype=dtype)
     return _Polys(
         xy=0.5 * (p + q),
         ends=np.stack([p, q], 1),
@@ -282,13 +279,35 @@ PROBE_OFFSETS = np.array([-1, -1 / 4, -1 / 16, -1 / 64, 0, 1 / 64, 1 / 16, 1 / 4
 #: where along the chord the perpendicular is probed: the middle, then (if no bracket was
 #: found there) the quarter points
 PROBE_FRACTIONS = (0.5, 0.25, 0.75)
+#: the perpendicular is also probed at these fractions of the way to the nearest class line it
+#: crosses within a chord length: a boundary that meets a line tangentially, as ``c x^p``,
+#: leaves a band between the line and the chord ``2^(1-p)`` of the chord's distance wide,
+#: thinner than any fixed offset for small ``c``
+LINE_APPROACH = 1 - 2.0 ** -np.arange(1, 9)
+#: gradients of the 13 class-line functions of :func:`_line_values`
+_LINE_GRADS = np.array([[1.0, 0.0]] * 5 + [[0.0, 1.0]] * 5 + [[-1.0, 1.0]] * 3)
+
+
+def _offsets(base, n, w) -> np.ndarray:
+    """Per segment, the sorted offsets [rad] probed along the unit normal ``n`` from ``base``:
+    :data:`PROBE_OFFSETS` times ``w``, and the :data:`LINE_APPROACH` fractions of the way to the
+    nearest class line crossed within ``w`` (a chord on a line does not count that line)."""
+    rate = n @ _LINE_GRADS.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        to_line = -_line_values(base) / rate  # signed offset of each line along n
+    dist = np.abs(to_line)
+    dist = np.where((dist > 1e-6 * w[:, None]) & (dist <= w[:, None]), dist, np.inf)
+    r, m = np.arange(len(base)), dist.argmin(1)
+    nearest = np.where(np.isfinite(dist[r, m]), to_line[r, m], 0.0)
+    extra = nearest[:, None] * LINE_APPROACH
+    return np.sort(np.concatenate([w[:, None] * PROBE_OFFSETS, extra], axis=1), axis=1)
 
 
 def _probe(fld, polys, k, frac, model, tol, dtype) -> dict:
     """Step 5 for segments ``k -> k + 1``: a certified vertex on the chord's perpendicular at
-    ``frac`` of its length, bisected from the pair of neighbouring :data:`PROBE_OFFSETS` closest
-    to the chord whose ends are in the region and out of it.  Returns per segment ``ok`` (a
-    bracket was found) and, where ok, the new vertex's columns, its sagitta (distance to the
+    ``frac`` of its length, bisected from the pair of neighbouring offsets (:func:`_offsets`)
+    closest to the chord whose ends are in the region and out of it.  Returns per segment ``ok``
+    (a bracket was found) and, where ok, the new vertex's columns, its sagitta (distance to the
     chord) and the chord's length."""
     A, B = polys.xy[k], polys.xy[k + 1]
     base, d = A + frac * (B - A), B - A
@@ -297,11 +316,11 @@ def _probe(fld, polys, k, frac, model, tol, dtype) -> dict:
     side = polys.ends[:, 0] - polys.ends[:, 1]  # towards the region
     n *= np.sign(np.sum(n * (side[k] + side[k + 1]), axis=1))[:, None]
     a = np.array([polys.region[c] for c in polys.cid[k]], np.int8)
-    w = np.maximum(length, 8 * tol)
-    pts = base[:, None, :] + (w[:, None] * PROBE_OFFSETS)[:, :, None] * n[:, None, :]
+    off = _offsets(base, n, np.maximum(length, 8 * tol))
+    pts = base[:, None, :] + off[:, :, None] * n[:, None, :]
     codes = brackets.field_codes(fld, pts[..., 0], pts[..., 1], *model, dtype=dtype)
     inside = codes == a[:, None]
-    score = np.abs(PROBE_OFFSETS[:-1]) + np.abs(PROBE_OFFSETS[1:])
+    score = np.abs(off[:, :-1]) + np.abs(off[:, 1:])
     score = np.where(inside[:, :-1] != inside[:, 1:], score, np.inf)
     r, j = np.arange(k.size), score.argmin(1)
     ok = np.isfinite(score[r, j])

@@ -65,3 +65,15 @@ def test_a_one_vertex_line_is_measured():
     dot = [np.array([[0.5, 0.25]])]
     assert hausdorff(dot, line, 0.01) == pytest.approx(np.hypot(0.5, 0.25))  # an end to the dot
     assert hausdorff(dot + line, line, 0.01) == pytest.approx(0.25, abs=1e-12)
+
+
+def test_hausdorff_is_exact_next_to_a_dense_cluster():
+    """A point on a long segment, halfway between two of its samples, with a cluster of 50
+    vertices 1e-3 away: the 8 nearest samples are all in the cluster, yet the distance is the
+    point's distance to the segment, 0 (it measured 1e-3 when only the 8 nearest were used)."""
+    t = np.linspace(0.0, 2 * np.pi, 50)
+    cluster = np.stack([1e-3 + 1e-6 * np.cos(t), 0.005 + 1e-6 * np.sin(t)], 1)
+    a = [np.array([[0.0, 0.0], [0.0, 0.005], [0.0, 1.0]]), cluster]
+    b = [np.array([[0.0, 0.0], [0.0, 1.0]]), cluster]
+    assert hausdorff(a, b, 0.01) == pytest.approx(0.0, abs=1e-12)
+    assert torus_hausdorff(a, b, 0.01) == pytest.approx(0.0, abs=1e-12)

@@ -175,6 +175,27 @@ def test_wedge_tips_on_a_class_line_are_reached():
     assert b.attrs["SS_tips_attached"] >= 1
 
 
+def test_a_band_along_a_diagonal_class_line_is_traced_whole():
+    """One q = 0, II: a band of code 1 at most 0.0066 rad wide runs along beta2 = beta1 - pi
+    (beta1 from ~3.75 to 3 pi / 2), seen by a 32 x 32 grid (cell 0.2 rad) only at its nodes on
+    the line.  Its far edge, located here independently by a dense scan across the line, lies on
+    the curves: the grid's diagonals join the nodes on the line into one strip (marching squares
+    left separate diamonds, and the curves missed the edge by 6e-3 rad), and the chord probes
+    reach a band thinner than their fixed offsets by stepping towards the line."""
+    model = (0.5, 0.35, 0.0)
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("II",), check=0)
+    d = np.linspace(0.0, 0.01, 100001)  # across the line, towards beta2 > beta1 - pi
+    edges = []
+    for t in (3.9, 4.2, 4.5):
+        codes = brackets.field_codes("II", t - d / np.sqrt(2), t - PI + d / np.sqrt(2), *model)
+        (i,) = np.flatnonzero(np.diff(codes[1:])) + 1  # 1 -> 2: the band's far edge
+        assert (codes[1], codes[i], codes[i + 1]) == (1, 1, 2) and d[i] > 5e-4
+        edges.append([t - d[i] / np.sqrt(2), t - PI + d[i] / np.sqrt(2)])
+    curves = [c.vertices for c in b.curves if (c.side_a, c.side_b) == (1, 2)]
+    assert _torus_distance(np.array(edges), curves).max() < 2e-6
+
+
 def test_hidden_cells_are_found():
     """A cell whose corners agree but whose finer samples differ is flagged."""
     coarse = np.zeros((3, 3), np.int8)
