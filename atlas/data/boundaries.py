@@ -29,7 +29,8 @@
    vertices of one kind (on one class line, or off the lines) that lands on the other kind has
    jumped across a wedge and is not used.
 5b. **Tips.** A boundary that meets a class line at a shallow angle leaves a wedge thinner than
-   a cell, which tracing cuts across.  Each class line is scanned ``4 tol`` off it on both sides
+   a cell, which tracing cuts across.  Each class line is scanned :data:`TIP_OFFSET` off it on
+   both sides
    (samples every quarter cell, then bisection): a code change there is where a boundary meets
    the line.  A segment still running from the line to a vertex off it gets the nearest such tip
    (same line and side, the region's code at one end) as a vertex, and is refined again.  Tips
@@ -402,6 +403,11 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
 # --- tips: where a boundary meets a class line at a shallow angle ---------------------------------
 
 
+#: distance [rad] off a class line at which it is scanned for tips: 128 units in the last place
+#: of ``2 pi`` (the points lie strictly on their side; ``beta2 - beta1`` is exact there)
+TIP_OFFSET = 2.0**-43
+
+
 def _line_frames(box):
     """Per class line (the columns of :func:`_line_distances`) inside the box: ``(m, base,
     direction, unit normal, t0, t1)``, points ``base + t direction`` for ``t0 <= t <= t1``; the
@@ -424,17 +430,19 @@ def _line_frames(box):
 
 def _line_tips(fld, box, step, model, tol, dtype) -> dict:
     """Per class line ``m`` and side ``s`` (+1 / -1), certified brackets ``(p, q, vp, vq)`` where
-    the code ``4 tol`` off the line on side ``s`` changes along it (samples every ``step`` [rad]
+    the code :data:`TIP_OFFSET` off the line on side ``s`` changes along it (samples every ``step`` [rad]
     of the line's parameter: ``beta2``, ``beta1``, or ``beta1`` on a diagonal; then bisection to
     ``tol``): where a boundary meets the line from that side.  A boundary
     that meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing
-    cuts across; these are its tips, within ``4 tol / sin(angle)`` of the true meeting point."""
+    cuts across; these are its tips, within ``TIP_OFFSET / sin(angle)`` of the true meeting
+    point, and for a boundary tangent to the line as ``c x^2`` within ``(TIP_OFFSET / c)^(1/2)``
+    (3e-7 rad for ``c = 1``)."""
     pts, keys = [], []  # every line and side in one batch: one kernel call per bisection step
     for m, base, direction, normal, t0, t1 in _line_frames(box):
         t = np.linspace(t0, t1, max(2, math.ceil((t1 - t0) / step) + 1))
         line = np.asarray(base) + t[:, None] * np.asarray(direction)
         for side in (-1, 1):
-            pts.append(line + side * 4 * tol * np.asarray(normal))
+            pts.append(line + side * TIP_OFFSET * np.asarray(normal))
             keys.append((m, side))
     if not pts:
         return {}
@@ -494,6 +502,54 @@ def _attach_tips(polys, tips, near, chord, reach) -> int:
     return len(rows)
 
 
+def _spike_tips(polys, tips, chord, reach) -> int:
+    """Insert the tips of :func:`_line_tips` still farther than ``chord`` from the boundary they
+    end: a boundary tangent to a class line leaves a needle along the line, thinner than the
+    ``near`` labels resolve, where the polyline turns back short of the tip.  The vertex nearest
+    to the tip (within ``reach``, with the tip's two codes) gets the tip as a new neighbour, on
+    the side of its neighbour nearer to the tip; the path to the tip and back runs inside the
+    needle.  Returns the number of tips inserted."""
+    if not tips or not len(polys.xy):
+        return 0
+    a_v = np.array(polys.region, np.int16)[polys.cid]
+    rows = []
+    for p, q, vp, vq in tips.values():
+        for t in range(len(p)):
+            tip = 0.5 * (p[t] + q[t])
+            dist = np.hypot(*(polys.xy - tip).T)
+            match = (
+                ((a_v == vp[t]) & (polys.other == vq[t]))
+                | ((a_v == vq[t]) & (polys.other == vp[t]))
+            ) & (dist <= reach)
+            if not match.any() or dist[match].min() <= chord:
+                continue
+            i = int(np.flatnonzero(match)[dist[match].argmin()])
+            nb = [
+                j for j in (i - 1, i + 1) if 0 <= j < len(polys.xy) and polys.cid[j] == polys.cid[i]
+            ]
+            if not nb:
+                continue
+            j = min(nb, key=lambda j: dist[j])
+            pa, qa = (p[t], q[t]) if vp[t] == a_v[i] else (q[t], p[t])
+            rows.append((min(i, j), pa, qa, polys.other[i]))
+    if not rows:
+        return 0
+    k = np.array([r[0] for r in rows])
+    pa, qa = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
+    polys.todo[k] = True
+    polys.append(
+        xy=0.5 * (pa + qa),
+        ends=np.stack([pa, qa], 1),
+        other=np.array([r[3] for r in rows], np.int8),
+        width=np.hypot(*(qa - pa).T),
+        cid=polys.cid[k],
+        key=0.5 * (polys.key[k] + polys.key[k + 1]),
+        todo=np.ones(len(rows), bool),
+        tip=np.ones(len(rows), bool),
+    )
+    return len(rows)
+
+
 def _unreached(tips, xy, cell) -> int:
     """Tips of :func:`_line_tips` with no vertex within a grid ``cell`` [rad]: a boundary meets
     the class line there but no traced curve comes near (a band or wedge along the line thinner
@@ -536,7 +592,8 @@ def _pieces(fld, polys, model, tol, box):
     for c, a in enumerate(polys.region):
         sel = polys.cid == c
         xy = polys.xy[sel]
-        other = _line_runs_other(polys.other[sel], _labels(xy, near))
+        labels = _labels(xy, near)
+        other = _line_runs_other(polys.other[sel], labels)
         cols = (xy, polys.width[sel], polys.ends[sel])
         runs = [(b, list(g)) for b, g in itertools.groupby(range(len(xy)), key=lambda i: other[i])]
         for (b0, g0), (b1, g1) in zip(runs, runs[1:]):
@@ -547,7 +604,7 @@ def _pieces(fld, polys, model, tol, box):
                 )
         for b, g in runs:
             if b > a:
-                sl = slice(g[0], g[-1] + 1)
+                sl = slice(*_reaching(g[0], g[-1] + 1, labels))
                 piece_curves, piece_pts = _line_pieces(
                     fld, a, b, [x[sl] for x in cols], model, near
                 )
@@ -556,6 +613,17 @@ def _pieces(fld, polys, model, tol, box):
         if len(xy) and not np.array_equal(xy[0], xy[-1]):
             pts += _ends(xy, box, model)
     return curves, pts
+
+
+def _reaching(start, stop, labels) -> tuple[int, int]:
+    """The vertex range ``[start, stop)`` of a run, extended by the neighbouring vertex where the
+    run ends off the class lines and that neighbour lies on one: a curve that reaches a line
+    whose run carries another code (:func:`_line_runs_other`) keeps its last segment."""
+    if start > 0 and labels[start] < 0 and labels[start - 1] >= 0:
+        start -= 1
+    if stop < len(labels) and labels[stop - 1] < 0 and labels[stop] >= 0:
+        stop += 1
+    return start, stop
 
 
 def _near(tol, h) -> float:
@@ -704,6 +772,9 @@ def slice_boundaries(
         attached = _attach_tips(polys, tips, near, chord, reach=reach)
         if attached:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
+        spiked = _spike_tips(polys, tips, chord, reach)
+        if spiked:
+            unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
         by_field[fld] = curves
         out.curves += curves
@@ -712,7 +783,7 @@ def slice_boundaries(
         out.attrs[f"{fld}_refined_levels"] = levels
         out.attrs[f"{fld}_hidden_cells"] = hidden
         out.attrs[f"{fld}_unrefined_segments"] = unrefined
-        out.attrs[f"{fld}_tips_attached"] = attached
+        out.attrs[f"{fld}_tips_attached"] = attached + spiked
         out.attrs[f"{fld}_tips_unreached"] = _unreached(tips, polys.xy, cell)
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0

@@ -171,7 +171,7 @@ def test_wedge_tips_on_a_class_line_are_reached():
     (i,) = np.flatnonzero(np.diff(codes))
     tip = np.array([[t[i] + off, t[i] - PI - off]])
     assert 4.4 < t[i] < 4.55
-    assert _torus_distance(tip, [c.vertices for c in b.curves]).max() < 2e-5
+    assert _torus_distance(tip, [c.vertices for c in b.curves]).max() < 1e-6
     assert b.attrs["SS_tips_attached"] >= 1
 
 
@@ -194,6 +194,24 @@ def test_a_band_along_a_diagonal_class_line_is_traced_whole():
         edges.append([t - d[i] / np.sqrt(2), t - PI + d[i] / np.sqrt(2)])
     curves = [c.vertices for c in b.curves if (c.side_a, c.side_b) == (1, 2)]
     assert _torus_distance(np.array(edges), curves).max() < 2e-6
+
+
+def test_a_boundary_tangent_to_a_class_line_is_followed_to_its_tip():
+    """Fig. 1 slice, SS: the boundary of code 2 touches the diagonal beta2 = beta1 tangentially
+    near beta1 = 2.678 and leaves a needle along it, 1e-8 rad wide 1.6e-4 rad before its tip.
+    The tip, found here by a dense scan 1e-12 rad off the line, lies on the curves of a 32 x 32
+    grid to the chord tolerance: the polyline used to turn back 2e-5 to 1.6e-4 rad short of it
+    (the tips were scanned 4 tol off the line, and none was inserted into the needle)."""
+    model = (0.5, 0.0, 0.0)
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0)
+    t = np.linspace(2.677, 2.679, 200001)
+    off = 1e-12 / np.sqrt(2)
+    codes = brackets.field_codes("SS", t - off, t + off, *model)
+    (i,) = np.flatnonzero(np.diff(codes))
+    assert (codes[i], codes[i + 1]) == (2, 0)
+    tip = np.array([[t[i] - off, t[i] + off]])
+    assert _torus_distance(tip, [c.vertices for c in b.curves]).max() < 1e-6
 
 
 def test_hidden_cells_are_found():
