@@ -224,6 +224,16 @@ def _csign(fn, args, majorants=None):
     return evaluate_certified(fn, *args, bounds=_BOUNDS8, majorants=majorants)[2]
 
 
+def _exact_sign(x, y, sign):
+    """``sign(x + sign * y)`` from one rounded sum: exact where both ``|x|, |y|`` are at least
+    ``2^(nmant + 1)`` times the smallest normal number (a nonzero result is then normal, so a
+    flush of subnormals to zero cannot hide it); ``UNKNOWN`` elsewhere."""
+    info = jnp.finfo(x.dtype)
+    floor = info.tiny * 2.0 ** (info.nmant + 1)
+    ok = (jnp.abs(x) >= floor) & (jnp.abs(y) >= floor)
+    return jnp.where(ok, jnp.sign(x + sign * y), UNKNOWN).astype(jnp.int8)
+
+
 def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     """Certified sign codes of the expressions ``names`` (plus the input signs and ``det B``).
 
@@ -246,8 +256,16 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
         sg[name] = (
             _csign(fn, args, majorants) if name in names else jnp.full(shape, UNKNOWN, jnp.int8)
         )
-    if "a3" in names:  # equal damping: sign(a3) = sign(c1 + s2), one rounding of a sum: exact
-        sg["a3"] = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(jnp.int8), sg["a3"])
+    # equal damping or stiffness: a3 = (c1 + s2) q, A = (c1 - s2) q, B = (c1 - s2) k, and the
+    # sign of one rounded sum or difference is exact; on the class line beta2 = beta1 + pi/2
+    # (c1 = s2 up to rounding) A and B are below every error bound otherwise
+    plus, minus = _exact_sign(c1, s2, 1), _exact_sign(c1, s2, -1)
+    sq = jnp.sign(q1s).astype(jnp.int8)
+    for name, same, exact in (("a3", q1s == q2s, plus * sq), ("A", q1s == q2s, minus * sq)):
+        if name in names:
+            sg[name] = jnp.where(same & (exact != UNKNOWN), exact, sg[name])
+    if "B" in names:
+        sg["B"] = jnp.where((k1 == k2) & (minus != UNKNOWN), minus, sg["B"])
     lost = spectral.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
     for name in sorted(names):  # sorted: the same program (and compilation-cache key) every run
         sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(jnp.int8)
