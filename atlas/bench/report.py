@@ -471,8 +471,8 @@ def curves_section(rows) -> list[str]:
         "meets a class line at a shallow angle, the tip of the wedge it leaves is found by a "
         "scan just off the line and attached to the curve (`tips_attached`); a tip no curve "
         "comes near marks a band or wedge along the line thinner than the grid, lost by the "
-        "tracing (`tips_unreached`, of the n grid and of the reference): the maximum distance "
-        "sits there, in either grid, the bulk of a curve at the chord tolerance. "
+        "tracing (`tips_unreached`, of the n grid and of the reference). Two certified sets "
+        "each within the chord tolerance of the boundary are within twice that of each other. "
         "`seconds`: both fields, the lost-branch check and the codimension-2 points included.",
         "",
         table(rows, cols),

@@ -27,15 +27,20 @@
    perpendicular through the middle finds no bracket (it runs through the crossing of two class
    lines from the region into the region), the quarter points are probed; a probe between two
    vertices of one kind (on one class line, or off the lines) that lands on the other kind has
-   jumped across a wedge and is not used.
+   jumped across a wedge and is not used.  Besides fixed offsets (:data:`PROBE_OFFSETS`) the
+   perpendicular is probed 1/2, 3/4, ... of the way to the nearest class line it crosses
+   (:data:`LINE_APPROACH`): a band between a tangent boundary and the line is thinner there than
+   any fixed fraction of the chord.
 5b. **Tips.** A boundary that meets a class line at a shallow angle leaves a wedge thinner than
    a cell, which tracing cuts across.  Each class line is scanned :data:`TIP_OFFSET` off it on
-   both sides
-   (samples every quarter cell, then bisection): a code change there is where a boundary meets
-   the line.  A segment still running from the line to a vertex off it gets the nearest such tip
-   (same line and side, the region's code at one end) as a vertex, and is refined again.  Tips
-   no curve comes near are counted (``attrs["<field>_tips_unreached"]``): a band along a line
-   thinner than the grid, lost by the tracing.
+   both sides (samples every quarter cell, then bisection): a code change there is where a
+   boundary meets the line.  A segment still running from the line to a vertex off it gets the
+   nearest such tip (same line and side, the region's code at one end) as a vertex, and is
+   refined again; a tip still farther than ``chord`` from its boundary (the polyline turned back
+   inside the needle a tangent boundary leaves along the line) is inserted next to the nearest
+   vertex with its codes.  Tips no curve comes near are counted
+   (``attrs["<field>_tips_unreached"]``): a band along a line thinner than the grid, lost by the
+   tracing.
 6. **Pieces and codimension-2 points.** A region boundary is cut where the code on its other
    side changes (a ``junction`` of three codes, located between two certified vertices), and runs
    of vertices on a straight class line (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1)
