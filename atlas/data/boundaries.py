@@ -435,11 +435,11 @@ def _line_frames(box):
 
 def _line_tips(fld, box, step, model, tol, dtype) -> dict:
     """Per class line ``m`` and side ``s`` (+1 / -1), certified brackets ``(p, q, vp, vq)`` where
-    the code :data:`TIP_OFFSET` off the line on side ``s`` changes along it (samples every ``step`` [rad]
-    of the line's parameter: ``beta2``, ``beta1``, or ``beta1`` on a diagonal; then bisection to
-    ``tol``): where a boundary meets the line from that side.  A boundary
-    that meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing
-    cuts across; these are its tips, within ``TIP_OFFSET / sin(angle)`` of the true meeting
+    the code :data:`TIP_OFFSET` off the line on side ``s`` changes along it (samples every
+    ``step`` [rad] of the line's parameter: ``beta2``, ``beta1``, or ``beta1`` on a diagonal;
+    then bisection to ``tol``): where a boundary meets the line from that side.  A boundary that
+    meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing cuts
+    across; these are its tips, within ``TIP_OFFSET / sin(angle)`` of the true meeting
     point, and for a boundary tangent to the line as ``c x^2`` within ``(TIP_OFFSET / c)^(1/2)``
     (3e-7 rad for ``c = 1``)."""
     pts, keys = [], []  # every line and side in one batch: one kernel call per bisection step
