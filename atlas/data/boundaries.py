@@ -32,7 +32,7 @@
    (:data:`LINE_APPROACH`): a band between a tangent boundary and the line is thinner there than
    any fixed fraction of the chord.
 5b. **Tips.** A boundary that meets a class line at a shallow angle leaves a wedge thinner than
-   a cell, which tracing cuts across.  Each class line is scanned :data:`TIP_OFFSET` off it on
+   a cell, which tracing cuts across.  Each class line is scanned :data:`atlas.data.boundary_tips.TIP_OFFSET` off it on
    both sides (samples every quarter cell, then bisection): a code change there is where a
    boundary meets the line.  A segment still running from the line to a vertex off it gets the
    nearest such tip (same line and side, the region's code at one end) as a vertex, and is
@@ -48,9 +48,10 @@
    or crosses a class line, and where SS and II boundaries cross are returned as
    :attr:`Boundaries.points` with their location uncertainty.
 
-The straight class boundaries themselves are returned in closed form (``field = "class"``).
-The result objects and their storage (CF-1.10 geometry containers, CSV, GeoJSON) live in
-:mod:`atlas.data.boundary_curves`.
+The straight class boundaries themselves are returned in closed form (``field = "class"``,
+:mod:`atlas.data.class_lines`, with the lines' geometry).  The tips of step 5b live in
+:mod:`atlas.data.boundary_tips`; the result objects and their storage (CF-1.10 geometry
+containers, CSV, GeoJSON) in :mod:`atlas.data.boundary_curves`.
 """
 
 from __future__ import annotations
@@ -66,8 +67,15 @@ from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
 from atlas.core import brackets
-from atlas.data import marching
+from atlas.data import boundary_tips, marching
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
+from atlas.data.class_lines import (
+    LINE_GRADS,
+    class_lines,
+    line_distances,
+    line_labels,
+    line_values,
+)
 from atlas.data.io import check_output_path
 from atlas.data.scene import Scene
 
@@ -84,49 +92,6 @@ __all__ = [
 ]
 
 TWO_PI = 2 * math.pi
-
-
-# --- closed-form class lines ---------------------------------------------------------------------
-
-
-def class_lines(b1_range=(0.0, TWO_PI), b2_range=(0.0, TWO_PI)) -> list[Curve]:
-    """The straight class boundaries (SPEC §1) inside the box ``b1_range x b2_range`` [rad]:
-    ``beta1 = k pi/2``, ``beta2 = k pi/2`` and ``beta2 = beta1 + k pi``, in closed form."""
-    (x0, x1), (y0, y1) = b1_range, b2_range
-    segs = []
-    for k in range(5):
-        v = k * math.pi / 2
-        if x0 <= v <= x1:
-            segs.append([[v, y0], [v, y1]])
-        if y0 <= v <= y1:
-            segs.append([[x0, v], [x1, v]])
-    for k in (-1, 0, 1):
-        lo, hi = max(x0, y0 - k * math.pi), min(x1, y1 - k * math.pi)
-        if lo < hi:
-            segs.append([[lo, lo + k * math.pi], [hi, hi + k * math.pi]])
-    return [
-        Curve("class", "class_line", -1, -1, np.array(s, float), np.zeros(2), on_class_line=True)
-        for s in segs
-    ]
-
-
-def _line_distances(xy) -> np.ndarray:
-    """Distances [rad] of points ``(m, 2)`` to the 13 class lines (columns: ``beta1 = k pi/2``,
-    ``beta2 = k pi/2`` for k = 0..4, then ``beta2 - beta1 = k pi`` for k = -1, 0, 1)."""
-    k = np.arange(5) * (math.pi / 2)
-    d1 = np.abs(xy[:, :1] - k)
-    d2 = np.abs(xy[:, 1:] - k)
-    dd = np.abs(xy[:, 1:] - xy[:, :1] - np.array([-1, 0, 1]) * math.pi) / math.sqrt(2)
-    return np.concatenate([d1, d2, dd], axis=1)
-
-
-def _line_values(xy) -> np.ndarray:
-    """Signed values of the 13 class-line functions at points ``(m, 2)``."""
-    k = np.arange(5) * (math.pi / 2)
-    return np.concatenate(
-        [xy[:, :1] - k, xy[:, 1:] - k, xy[:, 1:] - xy[:, :1] - np.array([-1, 0, 1]) * math.pi],
-        axis=1,
-    )
 
 
 # --- the grid and the lost-branch check ----------------------------------------------------------
@@ -203,7 +168,7 @@ def _flips(b1, b2) -> np.ndarray:
     join opposite quadrants of the crossing, whose codes differ, through the node's own code."""
     nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
     cell = min(np.diff(b1).min(initial=np.inf), np.diff(b2).min(initial=np.inf))
-    on = _line_distances(nodes) <= 1e-3 * cell
+    on = line_distances(nodes) <= 1e-3 * cell
     corner = (on[:, :5].any(1) & on[:, 5:10].any(1) & ~on[:, 10:].any(1)).reshape(b1.size, -1)
     return corner[:-1, :-1] | corner[1:, 1:]
 
@@ -290,17 +255,15 @@ PROBE_FRACTIONS = (0.5, 0.25, 0.75)
 #: leaves a band between the line and the chord ``2^(1-p)`` of the chord's distance wide,
 #: thinner than any fixed offset for small ``c``
 LINE_APPROACH = 1 - 2.0 ** -np.arange(1, 9)
-#: gradients of the 13 class-line functions of :func:`_line_values`
-_LINE_GRADS = np.array([[1.0, 0.0]] * 5 + [[0.0, 1.0]] * 5 + [[-1.0, 1.0]] * 3)
 
 
 def _offsets(base, n, w) -> np.ndarray:
     """Per segment, the sorted offsets [rad] probed along the unit normal ``n`` from ``base``:
     :data:`PROBE_OFFSETS` times ``w``, and the :data:`LINE_APPROACH` fractions of the way to the
     nearest class line crossed within ``w`` (a chord on a line does not count that line)."""
-    rate = n @ _LINE_GRADS.T
+    rate = n @ LINE_GRADS.T
     with np.errstate(divide="ignore", invalid="ignore"):
-        to_line = -_line_values(base) / rate  # signed offset of each line along n
+        to_line = -line_values(base) / rate  # signed offset of each line along n
     dist = np.abs(to_line)
     dist = np.where((dist > 1e-6 * w[:, None]) & (dist <= w[:, None]), dist, np.inf)
     r, m = np.arange(len(base)), dist.argmin(1)
@@ -378,7 +341,7 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         k = polys.segments()
         if not k.size:
             break
-        labels = _labels(polys.xy, near)
+        labels = line_labels(polys.xy, near)
         tip = polys.tip[k] | polys.tip[k + 1]
         mixed = ((labels[k] != labels[k + 1]) | (polys.other[k] != polys.other[k + 1])) & ~tip
         new = _probe_all(fld, polys, k, model, tol, dtype)
@@ -388,7 +351,7 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         # across a wedge thinner than the chord: the zigzag it starts would not converge; the
         # segment is left as it is
         lab = np.full(k.size, -2)
-        lab[ok] = _labels(new["xy"], near)
+        lab[ok] = line_labels(new["xy"], near)
         kind = np.where(polys.tip[k], labels[k + 1], labels[k])
         jumped = ok & ((labels[k] == labels[k + 1]) | tip) & (lab != kind)
         keep = ~jumped[ok]
@@ -403,167 +366,6 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         polys.todo[kk] = again
         polys.append(**new, cid=polys.cid[kk], key=key, todo=again, tip=np.zeros(kk.size, bool))
     return unrefined + int(polys.segments().size)
-
-
-# --- tips: where a boundary meets a class line at a shallow angle ---------------------------------
-
-
-#: distance [rad] off a class line at which it is scanned for tips: 128 units in the last place
-#: of ``2 pi`` (the points lie strictly on their side; ``beta2 - beta1`` is exact there)
-TIP_OFFSET = 2.0**-43
-
-
-def _line_frames(box):
-    """Per class line (the columns of :func:`_line_distances`) inside the box: ``(m, base,
-    direction, unit normal, t0, t1)``, points ``base + t direction`` for ``t0 <= t <= t1``; the
-    normal points to where :func:`_line_values` grows."""
-    (x0, x1), (y0, y1), _ = box
-    frames = []
-    for k in range(5):
-        v = k * math.pi / 2
-        if x0 <= v <= x1:
-            frames.append((k, (v, 0.0), (0.0, 1.0), (1.0, 0.0), y0, y1))
-        if y0 <= v <= y1:
-            frames.append((5 + k, (0.0, v), (1.0, 0.0), (0.0, 1.0), x0, x1))
-    r = 1 / math.sqrt(2)
-    for m, k in zip((10, 11, 12), (-1, 0, 1)):
-        t0, t1 = max(x0, y0 - k * math.pi), min(x1, y1 - k * math.pi)
-        if t0 < t1:
-            frames.append((m, (0.0, k * math.pi), (1.0, 1.0), (-r, r), t0, t1))
-    return frames
-
-
-def _line_tips(fld, box, step, model, tol, dtype) -> dict:
-    """Per class line ``m`` and side ``s`` (+1 / -1), certified brackets ``(p, q, vp, vq)`` where
-    the code :data:`TIP_OFFSET` off the line on side ``s`` changes along it (samples every
-    ``step`` [rad] of the line's parameter: ``beta2``, ``beta1``, or ``beta1`` on a diagonal;
-    then bisection to ``tol``): where a boundary meets the line from that side.  A boundary that
-    meets a line at a shallow angle leaves a wedge thinner than a grid cell that tracing cuts
-    across; these are its tips, within ``TIP_OFFSET / sin(angle)`` of the true meeting
-    point, and for a boundary tangent to the line as ``c x^2`` within ``(TIP_OFFSET / c)^(1/2)``
-    (3e-7 rad for ``c = 1``)."""
-    pts, keys = [], []  # every line and side in one batch: one kernel call per bisection step
-    for m, base, direction, normal, t0, t1 in _line_frames(box):
-        t = np.linspace(t0, t1, max(2, math.ceil((t1 - t0) / step) + 1))
-        line = np.asarray(base) + t[:, None] * np.asarray(direction)
-        for side in (-1, 1):
-            pts.append(line + side * TIP_OFFSET * np.asarray(normal))
-            keys.append((m, side))
-    if not pts:
-        return {}
-    run = np.repeat(np.arange(len(pts)), [len(x) for x in pts])
-    xy = np.concatenate(pts)
-    c = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
-    i = np.flatnonzero((c[:-1] != c[1:]) & (run[:-1] == run[1:]))
-    p, q, vp, vq = brackets.bisect(
-        fld, xy[i], xy[i + 1], c[i], c[i + 1], *model, tol=tol, dtype=dtype
-    )
-    return {
-        keys[r]: (p[run[i] == r], q[run[i] == r], vp[run[i] == r], vq[run[i] == r])
-        for r in np.unique(run[i])
-    }
-
-
-def _attach_tips(polys, tips, near, chord, reach) -> int:
-    """Insert the tips of :func:`_line_tips` into the polylines: a segment that still runs from
-    a class line to a vertex off it and is longer than ``2 chord`` after refinement crosses a
-    wedge; the nearest tip (within ``reach`` [rad] of its on-line end, on the line and side of
-    the segment, with the region's code at one end of its bracket) becomes a vertex between
-    the two, to be refined again.  Returns the number of tips attached."""
-    labels = _labels(polys.xy, near)
-    k = np.flatnonzero(np.r_[polys.cid[1:] == polys.cid[:-1], False])
-    length = np.hypot(*(polys.xy[k + 1] - polys.xy[k]).T)
-    across = ((labels[k] < 0) != (labels[k + 1] < 0)) & (length > 2 * chord)
-    rows = []
-    for i in k[across]:
-        on, off = (i, i + 1) if labels[i] >= 0 else (i + 1, i)
-        m = labels[on]
-        side = int(np.sign(_line_values(polys.xy[off : off + 1])[0, m]))
-        if (m, side) not in tips:
-            continue
-        p, q, vp, vq = tips[m, side]
-        a = polys.region[polys.cid[i]]
-        fit = ((vp == a) | (vq == a)) & (vp != vq)
-        dist = np.where(fit, np.hypot(*(0.5 * (p + q) - polys.xy[on]).T), np.inf)
-        j = int(dist.argmin())
-        if dist[j] <= reach:
-            pa, qa, other = (p[j], q[j], vq[j]) if vp[j] == a else (q[j], p[j], vp[j])
-            rows.append((i, pa, qa, other))
-    if not rows:
-        return 0
-    i = np.array([r[0] for r in rows])
-    pa, qa = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
-    polys.todo[i] = True
-    polys.append(
-        xy=0.5 * (pa + qa),
-        ends=np.stack([pa, qa], 1),
-        other=np.array([r[3] for r in rows], np.int8),
-        width=np.hypot(*(qa - pa).T),
-        cid=polys.cid[i],
-        key=0.5 * (polys.key[i] + polys.key[i + 1]),
-        todo=np.ones(len(rows), bool),
-        tip=np.ones(len(rows), bool),
-    )
-    return len(rows)
-
-
-def _spike_tips(polys, tips, chord, reach) -> int:
-    """Insert the tips of :func:`_line_tips` still farther than ``chord`` from the boundary they
-    end: a boundary tangent to a class line leaves a needle along the line, thinner than the
-    ``near`` labels resolve, where the polyline turns back short of the tip.  The vertex nearest
-    to the tip (within ``reach``, with the tip's two codes) gets the tip as a new neighbour, on
-    the side of its neighbour nearer to the tip; the path to the tip and back runs inside the
-    needle.  Returns the number of tips inserted."""
-    if not tips or not len(polys.xy):
-        return 0
-    a_v = np.array(polys.region, np.int16)[polys.cid]
-    rows = []
-    for p, q, vp, vq in tips.values():
-        for t in range(len(p)):
-            tip = 0.5 * (p[t] + q[t])
-            dist = np.hypot(*(polys.xy - tip).T)
-            match = (
-                ((a_v == vp[t]) & (polys.other == vq[t]))
-                | ((a_v == vq[t]) & (polys.other == vp[t]))
-            ) & (dist <= reach)
-            if not match.any() or dist[match].min() <= chord:
-                continue
-            i = int(np.flatnonzero(match)[dist[match].argmin()])
-            nb = [
-                j for j in (i - 1, i + 1) if 0 <= j < len(polys.xy) and polys.cid[j] == polys.cid[i]
-            ]
-            if not nb:
-                continue
-            j = min(nb, key=lambda j: dist[j])
-            pa, qa = (p[t], q[t]) if vp[t] == a_v[i] else (q[t], p[t])
-            rows.append((min(i, j), pa, qa, polys.other[i]))
-    if not rows:
-        return 0
-    k = np.array([r[0] for r in rows])
-    pa, qa = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
-    polys.todo[k] = True
-    polys.append(
-        xy=0.5 * (pa + qa),
-        ends=np.stack([pa, qa], 1),
-        other=np.array([r[3] for r in rows], np.int8),
-        width=np.hypot(*(qa - pa).T),
-        cid=polys.cid[k],
-        key=0.5 * (polys.key[k] + polys.key[k + 1]),
-        todo=np.ones(len(rows), bool),
-        tip=np.ones(len(rows), bool),
-    )
-    return len(rows)
-
-
-def _unreached(tips, xy, cell) -> int:
-    """Tips of :func:`_line_tips` with no vertex within a grid ``cell`` [rad]: a boundary meets
-    the class line there but no traced curve comes near (a band or wedge along the line thinner
-    than the grid, seen by the line scan only): a branch the tracing lost, counted."""
-    if not tips or not len(xy):
-        return sum(len(v[0]) for v in tips.values())
-    pts = np.concatenate([0.5 * (p + q) for p, q, _, _ in tips.values()])
-    dist, _ = cKDTree(xy).query(pts)
-    return int((dist > cell).sum())
 
 
 # --- pieces and codimension-2 points -------------------------------------------------------------
@@ -597,7 +399,7 @@ def _pieces(fld, polys, model, tol, box):
     for c, a in enumerate(polys.region):
         sel = polys.cid == c
         xy = polys.xy[sel]
-        labels = _labels(xy, near)
+        labels = line_labels(xy, near)
         other = _line_runs_other(polys.other[sel], labels)
         cols = (xy, polys.width[sel], polys.ends[sel])
         runs = [(b, list(g)) for b, g in itertools.groupby(range(len(xy)), key=lambda i: other[i])]
@@ -637,13 +439,6 @@ def _near(tol, h) -> float:
     return max(4 * tol, 10 * max(NUDGE) * h)
 
 
-def _labels(xy, near) -> np.ndarray:
-    """Per vertex, the class line it lies on (within ``near`` [rad]; index of
-    :func:`_line_distances`), or -1."""
-    dist = _line_distances(xy)
-    return np.where(dist.min(1) <= near, dist.argmin(1), -1)
-
-
 def _line_runs_other(other, labels) -> np.ndarray:
     """``other`` with each run of vertices on one class line given the run's largest code: a band
     thinner than the grid's nudge along a class line (e.g. along ``det B = 0``) would otherwise cut
@@ -659,7 +454,7 @@ def _line_runs_other(other, labels) -> np.ndarray:
 def _line_pieces(fld, a, b, cols, model, near):
     """One stretch of the boundary between codes ``a`` and ``b`` split on the class lines."""
     xy, width, ends = cols
-    labels = _labels(xy, near)
+    labels = line_labels(xy, near)
     kind = str(brackets.boundary_kind(fld, a, b)[()])
     runs = _runs(labels)
     curves, pts = [], []
@@ -683,7 +478,7 @@ def _spacing(xy, j) -> float:
 
 def _crossings(xy, labels, model) -> list[Point]:
     """Transversal crossings of a curved stretch with a class line (linear interpolation)."""
-    g = _line_values(xy)
+    g = line_values(xy)
     off = labels < 0
     seg = off[:-1] & off[1:]
     out = []
@@ -770,14 +565,14 @@ def slice_boundaries(
         unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
         cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
-        tips = _line_tips(fld, box, cell / 4, model, tol, dtype)
+        tips = boundary_tips.line_tips(fld, box, cell / 4, model, tol, dtype)
         # a wedge of a boundary tangent to the line is as wide as the square of the distance
         # to its tip: the grid first sees it ~sqrt(cell) away
         reach = max(32 * cell, 4 * math.sqrt(cell))
-        attached = _attach_tips(polys, tips, near, chord, reach=reach)
+        attached = boundary_tips.attach_tips(polys, tips, near, chord, reach=reach)
         if attached:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
-        spiked = _spike_tips(polys, tips, chord, reach)
+        spiked = boundary_tips.spike_tips(polys, tips, near, chord, cell)
         if spiked:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
@@ -789,7 +584,7 @@ def slice_boundaries(
         out.attrs[f"{fld}_hidden_cells"] = hidden
         out.attrs[f"{fld}_unrefined_segments"] = unrefined
         out.attrs[f"{fld}_tips_attached"] = attached + spiked
-        out.attrs[f"{fld}_tips_unreached"] = _unreached(tips, polys.xy, cell)
+        out.attrs[f"{fld}_tips_unreached"] = boundary_tips.unreached(tips, polys.xy, cell)
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0
     out.points += _meetings(by_field.get("SS", []), by_field.get("II", []), model)
