@@ -194,7 +194,7 @@ class _Polys:
     cid: np.ndarray  # (N,) polyline index
     key: np.ndarray  # (N,) position along the polyline
     todo: np.ndarray  # (N,) the segment to the next vertex still needs a chord probe
-    tip: np.ndarray  # (N,) the vertex is a tip attached by _attach_tips
+    tip: np.ndarray  # (N,) the vertex is a tip (atlas.data.boundary_tips)
     region: list  # per polyline: the code a of the region it bounds
 
     _PER_VERTEX = ("xy", "ends", "other", "width", "cid", "key", "todo", "tip")
