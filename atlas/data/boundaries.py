@@ -161,24 +161,24 @@ def _traced_codes(codes) -> list[int]:
     return sorted(int(v) for v in np.unique(codes))[:-1]
 
 
-def _flips(b1, b2) -> np.ndarray:
+def _flips(b1, b2, nodes) -> np.ndarray:
     """Cells (``(n1-1, n2-1)`` bool) to split along ``(i+1, j)-(i, j+1)``: those whose other
     diagonal ends at a node where a ``beta1 = k pi/2`` and a ``beta2 = k pi/2`` line cross and
     no ``beta2 = beta1 + k pi`` line passes (within a thousandth of a cell).  That diagonal would
-    join opposite quadrants of the crossing, whose codes differ, through the node's own code."""
-    nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
+    join opposite quadrants of the crossing, whose codes differ, through the node's own code
+    (``nodes``: the grid's nodes, flat)."""
     cell = min(np.diff(b1).min(initial=np.inf), np.diff(b2).min(initial=np.inf))
     on = line_distances(nodes) <= 1e-3 * cell
     corner = (on[:, :5].any(1) & on[:, 5:10].any(1) & ~on[:, 10:].any(1)).reshape(b1.size, -1)
     return corner[:-1, :-1] | corner[1:, 1:]
 
 
-def _trace(b1, b2, codes, a, flip):
+def _trace(nodes, codes, a, flip):
     """Polylines of the boundary of the region ``codes == a`` (marching triangles,
     :mod:`atlas.data.marching`, cells split as :func:`_flips` says; no masking: the curves run on
     through the points where a third code meets them): per polyline, each vertex's bracket
-    ``(p, q)`` on a grid edge, ``p`` in the region, and the code at ``q``."""
-    nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
+    ``(p, q)`` on a grid edge, ``p`` in the region, and the code at ``q`` (``nodes``: the grid's
+    nodes, flat, ``(n1 n2, 2)``)."""
     flat = codes.ravel()
     return [(nodes[i], nodes[o], flat[o]) for i, o in marching.region_boundaries(codes == a, flip)]
 
@@ -218,9 +218,10 @@ class _Polys:
 def _certified_polys(fld, b1, b2, codes, model, tol, dtype) -> _Polys:
     """Steps 3-4: traced polylines with every vertex bisected to a bracket ``<= tol``."""
     lines, region = [], []
-    flip = _flips(b1, b2)
+    nodes = np.stack(np.meshgrid(b1, b2, indexing="ij"), -1).reshape(-1, 2)
+    flip = _flips(b1, b2, nodes)
     for a in _traced_codes(codes):
-        for line in _trace(b1, b2, codes, a, flip):
+        for line in _trace(nodes, codes, a, flip):
             lines.append(line)
             region.append(a)
     if not lines:

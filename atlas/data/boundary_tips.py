@@ -77,22 +77,7 @@ def attach_tips(polys, tips, near, chord, reach) -> int:
         if dist[j] <= reach:
             pa, qa, other = (p[j], q[j], vq[j]) if vp[j] == a else (q[j], p[j], vp[j])
             rows.append((i, pa, qa, other))
-    if not rows:
-        return 0
-    i = np.array([r[0] for r in rows])
-    pa, qa = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
-    polys.todo[i] = True
-    polys.append(
-        xy=0.5 * (pa + qa),
-        ends=np.stack([pa, qa], 1),
-        other=np.array([r[3] for r in rows], np.int8),
-        width=np.hypot(*(qa - pa).T),
-        cid=polys.cid[i],
-        key=0.5 * (polys.key[i] + polys.key[i + 1]),
-        todo=np.ones(len(rows), bool),
-        tip=np.ones(len(rows), bool),
-    )
-    return len(rows)
+    return _insert(polys, rows)
 
 
 def spike_tips(polys, tips, near, chord, cell) -> int:
@@ -129,6 +114,13 @@ def spike_tips(polys, tips, near, chord, cell) -> int:
             j = min(nb, key=lambda j: dist[j])
             pa, qa = (p[t], q[t]) if vp[t] == a_v[i] else (q[t], p[t])
             rows.append((min(i, j), pa, qa, polys.other[i]))
+    return _insert(polys, rows)
+
+
+def _insert(polys, rows) -> int:
+    """Insert tips as vertices: ``rows`` of ``(k, p, q, other)``, the tip's bracket ``(p, q)``
+    (``p`` in the region) going between vertices ``k`` and ``k + 1``; both new segments are
+    refined again.  Returns the number inserted."""
     if not rows:
         return 0
     k = np.array([r[0] for r in rows])
