@@ -827,8 +827,8 @@ def _to_netcdf(store, sch, tiles, totals, path, overwrite):
     sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
     ds = _open(store)
     has_b1 = "beta1" in sch.shape
-    sink.begin(sch)
     try:
+        sink.begin(sch)  # inside: an interrupt while the header is written still aborts
         for tile in tiles:  # every region once, from the tile that owns it
             split = _split(has_b1, tile)
             for k, (dims, *_) in sch.variables.items():

@@ -397,8 +397,8 @@ def run(
     md = _ModelDependence(scene, outputs)
     bar = progress_bar(progress, total, f"atlas {scene.name}")
     writer = _TileWriter(sink, outputs, dtype, resolve, counts, md, bar)
-    sink.begin(sch)
     try:
+        sink.begin(sch)  # inside: an interrupt while the header is written still aborts
         for g, need, dims, shape in plan:
             T = _kernel_size(shape, tile_points)
             if g.name == "spectral" and method == "certified":

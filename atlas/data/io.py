@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import secrets
 import tempfile
 
 import numpy as np
@@ -60,8 +61,10 @@ def check_output_path(path, overwrite: bool = False) -> str:
         raise FileNotFoundError(f"out: directory {directory} does not exist")
     try:  # a real probe: os.access says yes to root even on a read-only file system
         fd, probe = tempfile.mkstemp(prefix=".atlas-probe-", dir=directory)
-        os.close(fd)
-        os.unlink(probe)
+        try:
+            os.close(fd)
+        finally:
+            os.unlink(probe)
     except OSError as e:
         raise PermissionError(
             f"out: directory {directory} is not writable ({e.strerror})"
@@ -75,7 +78,11 @@ class AtomicFile:
     """The one atomic write of the package: a temporary file in the target directory, renamed onto
     ``path`` (``os.replace``) by :meth:`commit` or removed by :meth:`discard`.  An existing ``path``
     is never left half-written, and is replaced only with ``overwrite=True``.  As a context manager
-    it yields the temporary path and commits when the block ends without error."""
+    it yields the temporary path and commits when the block ends without error.
+
+    The temporary file is only *named* here (``.<name>.<random>.tmp``, 96 random bits); the writer
+    creates it.  So an interrupt can never leave a file that the owner of this object does not know
+    about: once the object exists, :meth:`discard` removes whatever was written."""
 
     def __init__(self, path, overwrite: bool = True, suffix: str = ".tmp"):
         self.path = os.fspath(path)
@@ -83,8 +90,7 @@ class AtomicFile:
         directory = os.path.dirname(os.path.abspath(self.path))
         os.makedirs(directory, exist_ok=True)
         name = os.path.basename(self.path)
-        fd, self.tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=suffix, dir=directory)
-        os.close(fd)
+        self.tmp = os.path.join(directory, f".{name}.{secrets.token_hex(12)}{suffix}")
 
     def commit(self) -> str:
         if not self.overwrite and os.path.exists(self.path):

@@ -129,6 +129,21 @@ def test_interrupted_streaming_write_leaves_nothing(tmp_path, monkeypatch, exc):
     assert path.read_bytes() == b"old" and os.listdir(tmp_path) == ["x.nc"]
 
 
+@pytest.mark.parametrize("where", ["create", "header"])
+def test_interrupt_while_the_header_is_written_leaves_nothing(tmp_path, monkeypatch, where):
+    """A SIGTERM arriving right after the temporary file appears (the CLI's signal test) lands in
+    ``NetCDFSink.begin``: the run still aborts and removes it."""
+
+    def interrupted(self, *a, **k):
+        raise KeyboardInterrupt
+
+    name = "createVariable" if where == "header" else "set_auto_mask"
+    monkeypatch.setattr(netCDF4.Dataset, name, interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        generate_to_file(small_scene(), tmp_path / "x.nc", tile_points=64, resolve=False)
+    assert os.listdir(tmp_path) == []
+
+
 def test_interrupted_in_memory_write_leaves_nothing(ds, tmp_path, monkeypatch):
     def boom(self, *a, **k):
         with open(a[0], "wb") as fh:  # a half-written temporary file
