@@ -36,6 +36,11 @@ SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa"
 CHUNK = 1 << 16
 #: largest number of points the first-pass kernel sees at once (bounds its temporaries)
 BLOCK = 1 << 22
+#: the padded lengths of small point sets (:func:`_flat_columns`, :func:`_run_chunked`): one
+#: compilation per length, kind and dtype
+FLAT_SIZES = (1 << 12, CHUNK)
+#: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
+FLAT_LIMIT = CHUNK
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 _PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # B = I, kappa = 1, undamped: a regular point
 _UND = UNDECIDED_FLAG
@@ -68,8 +73,8 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
 def _run_chunked(kernel, cols, dtype, chunk):
     """``kernel`` on 1-D columns in padded chunks; returns a dict (or tuple) of 1-D numpy arrays."""
     n = cols[0].size
-    # small batches: the next power of two (>= 1024) instead of a full chunk of padding
-    chunk = min(chunk, max(1024, 1 << max(0, n - 1).bit_length()))
+    # small batches: 4096 points instead of a full chunk of padding
+    chunk = min(chunk, FLAT_SIZES[0]) if n <= FLAT_SIZES[0] else chunk
     out = None
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
@@ -128,12 +133,39 @@ def _bucket(n: int) -> int:
     return -(-n // granule) * granule
 
 
+def _flat_columns(inputs, shape):
+    """The inputs of a small broadcast ``shape`` as flat columns of one of :data:`FLAT_SIZES`
+    points each (padded with the last point)."""
+    n = math.prod(shape)
+    size = next(m for m in FLAT_SIZES if m >= n)
+    cols = []
+    for a in inputs:
+        flat = np.broadcast_to(a.reshape((1,) * (len(shape) - a.ndim) + a.shape), shape).ravel()
+        col = np.empty(size, a.dtype)
+        col[:n], col[n:] = flat, flat[-1]
+        cols.append(col)
+    return cols
+
+
+def _on_flat(kernel, inputs, shape):
+    """``kernel`` (elementwise, one array out) on a grid of at most ``CHUNK`` points through
+    :func:`_flat_columns`; returns the result in ``shape``."""
+    return np.asarray(kernel(*_flat_columns(inputs, shape)))[: math.prod(shape)].reshape(shape)
+
+
 def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
     """Packed codes of :func:`atlas.core.rootfree.codes` over the broadcast grid, in slabs.
 
-    Every axis of a slab is padded (edge values) to a size of :func:`_bucket`, so grids of many
-    sizes share a few compilations (and the persistent compilation cache of the CLI).
+    A grid of at most :data:`FLAT_LIMIT` points is evaluated as flat columns (:func:`_on_flat`)
+    by the general kernel (both verdicts, any damping): two compilations per dtype serve every
+    small grid and output choice, and the kernel time (< 15 ms) is far below one compilation
+    (~1 s).  Beyond, every axis of a slab is padded (edge values) to a size of
+    :func:`_bucket` and the kernel shares the row and column factors of the grid; grids of many
+    sizes still share a few compilations (and the persistent compilation cache of the CLI).
     """
+    if math.prod(shape) <= FLAT_LIMIT:
+        kern = _kernel("codes", ss=True, ii=True, damped=None)
+        return _on_flat(kern, inputs, shape).astype(np.uint8)
     kern = _kernel("codes", ss=ss, ii=ii, damped=damped)
     nd = len(shape)
     full = [a.reshape((1,) * (nd - a.ndim) + a.shape) for a in inputs]
@@ -249,7 +281,8 @@ def _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, *, ss, ii)
     idx = np.flatnonzero(later)
     counts["tier2_points"] = int(idx.size)
     if idx.size:
-        kern = _kernel("tier2", ss=ss, ii=ii)
+        small = idx.size <= FLAT_SIZES[0]  # one compilation for every output choice
+        kern = _kernel("tier2", ss=ss or small, ii=ii or small)
         res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
         for i, k in enumerate(("stable_SS", "consistent_II", "stable_II")):
             _fill(verdict[k], idx, res[i])
@@ -271,8 +304,11 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
     absc = np.empty(shape, np.float64)
     und = np.broadcast_to(undamped_q, shape)
     if und.any():
-        res = _kernel("undamped_abscissa", ("spectral_abscissa",))(*inputs)
-        absc[...] = np.broadcast_to(np.asarray(res["spectral_abscissa"]), shape)
+        kern = _kernel("undamped_abscissa", ("spectral_abscissa",))
+        if math.prod(shape) <= FLAT_LIMIT:
+            absc[...] = _on_flat(lambda *a: kern(*a)["spectral_abscissa"], inputs, shape)
+        else:
+            absc[...] = np.broadcast_to(np.asarray(kern(*inputs)["spectral_abscissa"]), shape)
     idx = np.flatnonzero(~und)
     if idx.size:
         res = _run_chunked(spectral.abscissa, _gather(inputs, shape, idx), dtype, chunk)

@@ -25,8 +25,11 @@ def grid(n=12, dtype=np.float64):
     )
 
 
-def test_broadcast_equals_flat_points():
-    """The grid path (per-axis inputs, gathers by index) equals the same points given flat."""
+@pytest.mark.parametrize("flat_limit", [0, evaluate.FLAT_LIMIT])
+def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
+    """The grid path (per-axis inputs, gathers by index; small grids as flat columns, or always
+    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat."""
+    monkeypatch.setattr(evaluate, "FLAT_LIMIT", flat_limit)
     args = grid()
     st = {}
     res = evaluate.spectral_points(*args, names=FLAGS + ("spectral_abscissa",), stats=st)
@@ -58,10 +61,12 @@ def test_settled_points_match_exact():
 
 
 def test_slabs_and_padding(monkeypatch):
-    """Splitting a large grid into slabs (small BLOCK) and padding axes gives the same verdicts."""
+    """Splitting a large grid into slabs (small BLOCK) and padding axes gives the same verdicts
+    as the flat columns of a small grid."""
     args = grid(10)
     ref = evaluate.spectral_points(*args, names=FLAGS, resolve=False)
     monkeypatch.setattr(evaluate, "BLOCK", 50)
+    monkeypatch.setattr(evaluate, "FLAT_LIMIT", 0)
     got = evaluate.spectral_points(*args, names=FLAGS, resolve=False)
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
@@ -164,3 +169,21 @@ def test_settle_codes_records_failures_and_keeps_them_undecided():
     assert n == 1 and len(st["exact_failures"]) == 1
     assert codes["class_code"][1] == UNDECIDED_CODE and codes["class_code"][0] > 0
     assert not hasattr(evaluate, "last_counts")  # diagnostics go to stats=, never a global
+
+
+def test_small_grids_share_one_compilation():
+    """Grids of up to FLAT_LIMIT points run as flat columns of 4096 points: one compiled shape
+    for every grid size and output choice (each compilation costs ~1 s, each grid here < 1 ms)."""
+    kern = evaluate._kernel("codes", ss=True, ii=True, damped=None)
+    before = kern._cache_size()
+    for n, names in ((3, FLAGS), (5, FLAGS[:1]), (7, FLAGS[1:]), (11, FLAGS)):
+        evaluate.spectral_points(*grid(n), names=names, resolve=False)
+    assert kern._cache_size() - before <= 1
+
+
+def test_flat_columns_pad_with_the_last_point():
+    a, b = np.arange(3.0)[:, None], np.array([10.0, 20.0])
+    cols = evaluate._flat_columns([a, b, np.array(5.0)], (3, 2))
+    assert [c.shape for c in cols] == [(4096,)] * 3 and (cols[2] == 5).all()
+    assert cols[0][:7].tolist() == [0, 0, 1, 1, 2, 2, 2]
+    assert cols[1][:7].tolist() == [10, 20, 10, 20, 10, 20, 20]
