@@ -29,7 +29,7 @@ import numpy as np
 from atlas.core import exact, rootfree, spectral
 from atlas.core.verdicts import UNDECIDED_FLAG
 
-__all__ = ["spectral_points", "settle_codes", "SPECTRAL_NAMES", "CHUNK", "BLOCK"]
+__all__ = ["spectral_points", "settle_codes", "SPECTRAL_NAMES", "CHUNK", "BLOCK", "PAD"]
 
 SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa")
 #: length of the padded chunks of the later tiers
@@ -42,7 +42,9 @@ FLAT_SIZES = (1 << 12, CHUNK)
 #: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
 FLAT_LIMIT = CHUNK
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
-_PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # B = I, kappa = 1, undamped: a regular point
+#: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
+#: undamped, a regular point every tier decides at once
+PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
 _UND = UNDECIDED_FLAG
 
 
@@ -79,7 +81,7 @@ def _run_chunked(kernel, cols, dtype, chunk):
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
         args = []
-        for a, pad in zip(cols, _PAD):
+        for a, pad in zip(cols, PAD):
             c = np.full(chunk, pad, dtype)
             c[: stop - start] = a[start:stop]
             args.append(c)

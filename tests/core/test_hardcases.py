@@ -8,24 +8,24 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, hardcases, spectral
+from atlas.core import exact, hardcases, points, spectral
 
 KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 _EIG_MISSES = {}
 
 
-#: every suite padded to this many points (with a regular point: B = I, kappa = 1, q = 0), so
+#: every suite padded to this many points (with the driver's regular point ``points.PAD``), so
 #: that the jitted kernels compile once per dtype, not once per suite (~4 s each)
 PADDED = 256
 
 
 def _padded_args(P):
-    pad = dict(c1=1.0, s1=0.0, c2=0.0, s2=1.0, kappa=1.0, q1=0.0, q2=0.0)
     n = P["c1"].size
     assert n <= PADDED
     return [
-        jnp.asarray(np.concatenate([P[k], np.full(PADDED - n, pad[k], P[k].dtype)])) for k in KEYS
+        jnp.asarray(np.concatenate([P[k], np.full(PADDED - n, pad, P[k].dtype)]))
+        for k, pad in zip(KEYS, points.PAD)
     ]
 
 
