@@ -41,6 +41,8 @@ BLOCK = 1 << 22
 FLAT_SIZES = (1 << 12, CHUNK)
 #: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
 FLAT_LIMIT = CHUNK
+#: smallest padded length of a later-tier batch (below it the call overhead dominates)
+CHUNK_MIN = 1 << 8
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 #: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
 #: undamped, a regular point every tier decides at once
@@ -75,8 +77,8 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
 def _run_chunked(kernel, cols, dtype, chunk):
     """``kernel`` on 1-D columns in padded chunks; returns a dict (or tuple) of 1-D numpy arrays."""
     n = cols[0].size
-    # small batches: 4096 points instead of a full chunk of padding
-    chunk = min(chunk, FLAT_SIZES[0]) if n <= FLAT_SIZES[0] else chunk
+    # small batches: the next power of two (at least CHUNK_MIN) instead of a full chunk
+    chunk = min(chunk, max(CHUNK_MIN, 1 << (n - 1).bit_length()))
     out = None
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
@@ -245,29 +247,37 @@ def spectral_points(
     undamped_q = (inputs[5] == 0) & (inputs[6] == 0)
     damped = True if not undamped_q.any() else (False if undamped_q.all() else None)
     out = {}
+    open_idx = np.zeros(0, np.intp)  # flat indices with an output undecided by the first pass
     if flags:
         code = _first_pass(inputs, shape, dtype, ss=want_ss, ii=want_ii, damped=damped)
         ss, cons, stab, later = rootfree.unpack(code)
         verdict = {"stable_SS": ss, "consistent_II": cons, "stable_II": stab}
         out = {k: verdict[k] for k in flags}
-        _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, ss=want_ss, ii=want_ii)
+        open_idx = np.flatnonzero(np.logical_or.reduce([out[k] == _UND for k in flags]))
+        # every later tier works inside open_idx (small): no more passes over the whole grid
+        _second_pass(
+            inputs,
+            shape,
+            dtype,
+            chunk,
+            verdict,
+            open_idx[later.reshape(-1)[open_idx]],
+            counts,
+            ss=want_ss,
+            ii=want_ii,
+        )
         if want_ii:
-            _roots_pass(inputs, shape, dtype, chunk, cons, stab, counts)
+            _roots_pass(inputs, shape, dtype, chunk, cons, stab, open_idx, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
-    und = np.zeros(shape, bool)
-    counts["undecided_by_name"] = {}
-    for k in flags:
-        u = out[k] == _UND
-        counts["undecided_by_name"][k] = int(u.sum())
-        und |= u
+    open_ = {k: out[k].reshape(-1)[open_idx] == _UND for k in flags}
+    counts["undecided_by_name"] = {k: int(u.sum()) for k, u in open_.items()}
+    und = np.logical_or.reduce(list(open_.values())) if flags else open_idx.astype(bool)
     counts["undecided_before"] = int(und.sum())
     if resolve and und.any():
-        _settle_exact(inputs, shape, out, flags, und, max_resolve, counts)
-    after = np.zeros(shape, bool)
-    for k in flags:
-        after |= out[k] == _UND
-    counts["undecided_after"] = int(after.sum())
+        _settle_exact(inputs, shape, out, flags, open_idx[und], max_resolve, counts)
+    after = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
+    counts["undecided_after"] = int(np.logical_or.reduce(after).sum()) if flags else 0
     _report(counts, stats)
     return out
 
@@ -278,9 +288,9 @@ def _fill(arr, idx, new):
     flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
 
 
-def _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, *, ss, ii):
-    """Tier 2 (:func:`atlas.core.rootfree.tier2`) on the points flagged by the first pass, in place."""
-    idx = np.flatnonzero(later)
+def _second_pass(inputs, shape, dtype, chunk, verdict, idx, counts, *, ss, ii):
+    """Tier 2 (:func:`atlas.core.rootfree.tier2`) on the flat indices ``idx`` flagged by the first
+    pass, in place."""
     counts["tier2_points"] = int(idx.size)
     if idx.size:
         small = idx.size <= FLAT_SIZES[0]  # one compilation for every output choice
@@ -290,9 +300,11 @@ def _second_pass(inputs, shape, dtype, chunk, verdict, later, counts, *, ss, ii)
             _fill(verdict[k], idx, res[i])
 
 
-def _roots_pass(inputs, shape, dtype, chunk, cons, stab, counts):
-    """Tier 3: root enclosures where an II verdict is still undecided, in place."""
-    idx = np.flatnonzero((cons == _UND) | (stab == _UND))
+def _roots_pass(inputs, shape, dtype, chunk, cons, stab, open_idx, counts):
+    """Tier 3: root enclosures where an II verdict is still undecided (inside the flat indices
+    ``open_idx``), in place."""
+    still = (cons.reshape(-1)[open_idx] == _UND) | (stab.reshape(-1)[open_idx] == _UND)
+    idx = open_idx[still]
     counts["roots_points"] = int(idx.size)
     if idx.size:
         kern = _kernel("roots", ("consistent_II", "stable_II"))
@@ -318,28 +330,28 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
     return absc
 
 
-def _settle_exact(inputs, shape, out, flags, und, max_resolve, counts):
-    """Tier 4: exact verdicts (:func:`atlas.core.exact.resolve`) where a flag is still undecided."""
+def _settle_exact(inputs, shape, out, flags, idx, max_resolve, counts):
+    """Tier 4: exact verdicts (:func:`atlas.core.exact.resolve`) at the flat indices ``idx``
+    where a flag is still undecided."""
     # points undecided only in stable_SS need only the rational Hurwitz test (microseconds)
-    und_ii = np.zeros(shape, bool)
+    und_ii = np.zeros(idx.size, bool)
     for k in flags:
         if k != "stable_SS":
-            und_ii |= out[k] == _UND
+            und_ii |= out[k].reshape(-1)[idx] == _UND
     budget = max_resolve
-    for sel_mask, sel_names in ((und & ~und_ii, ("stable_SS",)), (und_ii, tuple(flags))):
-        idx = np.flatnonzero(sel_mask)
+    for sel, sel_names in ((idx[~und_ii], ("stable_SS",)), (idx[und_ii], tuple(flags))):
         if budget is not None:
-            idx, budget = idx[:budget], max(0, budget - idx.size)
-        if not idx.size:
+            sel, budget = sel[:budget], max(0, budget - sel.size)
+        if not sel.size:
             continue
-        cols = _gather(inputs, shape, idx)
+        cols = _gather(inputs, shape, sel)
         pts = {key: c.astype(np.float64) for key, c in zip(_KEYS, cols)}
         try:
             ref = exact.resolve(pts, names=sel_names)
         except Exception:  # the exact tier must not raise; if it does, keep those points undecided
             ref = _resolve_each(exact, pts, sel_names, counts)
         for k in sel_names:
-            _fill(out[k], idx, ref[k])
+            _fill(out[k], sel, ref[k])
 
 
 def _resolve_each(exact, pts, names, counts):

@@ -71,7 +71,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import spectral
-from atlas.core.signs import UNKNOWN, det2_sign, evaluate_certified
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified
 from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
 __all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT"]
@@ -203,7 +203,7 @@ _BOUNDS8 = (1.0,) * 8
 _CHEAP = dict(
     A=_arcA, B=_arcB, W=_arcW, a3=_a3, a2=_a2, H2=_H2, G=_G, a2_d0=_a2_d0, disc_d0=_disc_d0
 )
-#: signs of the Sturm count and of the discriminant (20-30 ns a point together): tier 2 only
+#: signs of the Sturm count and of the discriminant (float64 also for float32 inputs)
 _STURM = dict(P2=_P2, C2=_C2, T1=_T1, T0=_T0, disc=_disc)
 #: the signs stable_SS needs (SPEC §1 conventions; decision logic of :mod:`atlas.core.spectral`)
 _SS_NAMES = ("a3", "G", "a2_d0")
@@ -231,7 +231,7 @@ def _exact_sign(x, y, sign):
     info = jnp.finfo(x.dtype)
     floor = info.tiny * 2.0 ** (info.nmant + 1)
     ok = (jnp.abs(x) >= floor) & (jnp.abs(y) >= floor)
-    return jnp.where(ok, jnp.sign(x + sign * y), UNKNOWN).astype(jnp.int8)
+    return jnp.where(ok, jnp.sign(x + sign * y), UNKNOWN).astype(CODE)
 
 
 def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
@@ -250,17 +250,25 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     if not sharp:
         km, qm = jnp.maximum(k1, k2), jnp.maximum(q1s, q2s)
         majorants = (1.0, 1.0, 1.0, 1.0, km, km, qm, qm)
-    sg = {n: jnp.sign(v).astype(jnp.int8) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
+    # float32 inputs: the Sturm and discriminant signs in float64 (the conversion is exact; in
+    # float32 their bounds leave a band of points along every double-root curve to tier 2)
+    wide = None
+    if args[0].dtype == jnp.float32 and jnp.zeros((), jnp.float64).dtype == jnp.float64:
+        wide = [jnp.asarray(a, jnp.float64) for a in args]
+    sg = {n: jnp.sign(v).astype(CODE) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
     sg["D"] = det2_sign(c1, s1, c2, s2)
     for name, fn in {**_CHEAP, **_STURM, "disc_u": _disc_u}.items():
-        sg[name] = (
-            _csign(fn, args, majorants) if name in names else jnp.full(shape, UNKNOWN, jnp.int8)
-        )
+        if name not in names:
+            sg[name] = jnp.full(shape, UNKNOWN, CODE)
+        elif name in _STURM and wide is not None:
+            sg[name] = _csign(fn, wide, majorants)
+        else:
+            sg[name] = _csign(fn, args, majorants)
     # equal damping or stiffness: a3 = (c1 + s2) q, A = (c1 - s2) q, B = (c1 - s2) k, and the
     # sign of one rounded sum or difference is exact; on the class line beta2 = beta1 + pi/2
     # (c1 = s2 up to rounding) A and B are below every error bound otherwise
     plus, minus = _exact_sign(c1, s2, 1), _exact_sign(c1, s2, -1)
-    sq = jnp.sign(q1s).astype(jnp.int8)
+    sq = jnp.sign(q1s).astype(CODE)
     for name, same, exact in (("a3", q1s == q2s, plus * sq), ("A", q1s == q2s, minus * sq)):
         if name in names:
             sg[name] = jnp.where(same & (exact != UNKNOWN), exact, sg[name])
@@ -268,7 +276,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
         sg["B"] = jnp.where((k1 == k2) & (minus != UNKNOWN), minus, sg["B"])
     lost = spectral.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
     for name in sorted(names):  # sorted: the same program (and compilation-cache key) every run
-        sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(jnp.int8)
+        sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(CODE)
     # A = B = 0 exactly (h1 == h2): c1 == s2 and q1 == q2, k1 == k2 as floats
     sg["h1_eq_h2"] = (c1 == s2) & (q1s == q2s) & (k1 == k2) & ~lost
     # one copy of every sign (see "Soundness" in the module docstring)
@@ -332,7 +340,7 @@ def _h1_at_r2(g):
 def _hard_count(g):
     """The hard arcs (0 or 2 crossings): Descartes, then the Sturm count of positive roots.
     Returns the consistency code and "exactly two positive roots" (certified)."""
-    one = jnp.ones(g["D"].shape, jnp.int8)
+    one = jnp.ones(g["D"].shape, CODE)
     descartes_none = _nonneg(g["a3"]) & _nonneg(g["a2"])
     sP2, sC2, sT1, sT0, sDl = g["P2"], g["C2"], g["T1"], g["T0"], g["disc"]
     sturm_ok = _K(sP2) & _K(sC2) & _K(sT1) & _K(sT0) & _K(sDl)
@@ -347,7 +355,7 @@ def _routh(g):
     """Certified count of roots of ``p`` with ``Re > 0`` (Routh: ``a3, H2, H3 = D G, a0``), and
     whether it is certified; ``a3 = 0`` exactly by the epsilon method (``a1 = D m != 0``)."""
     s_a3, s_H2, s_G, sd = g["a3"], g["H2"], g["G"], g["D"]
-    one = jnp.ones(sd.shape, jnp.int8)
+    one = jnp.ones(sd.shape, CODE)
     ok = _K(s_a3) & _K(s_H2) & _K(s_G) & _K(sd)
     nrhp = _variations(one, s_a3, s_a3 * s_H2, s_H2 * sd * s_G, sd)
     a3_zero = (s_a3 == 0) & _K(sd)
@@ -365,7 +373,7 @@ def _main_branch(g, h1pos, h1neg):
     qII, qIV = ~g0pos & (sc2 > 0), ~g0pos & (sc2 < 0)
     hard_cons, hard_two = _hard_count(g)
     startI, startIII = (sc1 >= 0) & (ss2 >= 0), c1n & s2n
-    cons = jnp.full(sd.shape, X, jnp.int8)
+    cons = jnp.full(sd.shape, X, CODE)
     cons = jnp.where(qI, jnp.where(startI & Dp, 0, jnp.where(~startI | Dn, 1, X)), cons)
     cons = jnp.where(qIII, jnp.where(startIII & Dp, 1, jnp.where(~startIII | Dn, 0, X)), cons)
     enter2 = c1n & ((s2p & Dp) | (ss2 == 0))  # QII entered at a D > 0 start or from the f1 axis
@@ -396,8 +404,8 @@ def _one_factor_branch(s_own, s_root, s_other, other_pos, other_neg):
     starts negative (from :func:`_h1_at_r2`)."""
     f_pos = (s_other >= 0) | ((s_other < 0) & other_pos)
     f_neg = (s_other < 0) & other_neg
-    decided_neg = jnp.where(f_neg, (s_own > 0).astype(jnp.int8), X)
-    cons = jnp.where(s_root >= 0, 0, jnp.where(f_pos, s_own < 0, decided_neg).astype(jnp.int8))
+    decided_neg = jnp.where(f_neg, (s_own > 0).astype(CODE), X)
+    cons = jnp.where(s_root >= 0, 0, jnp.where(f_pos, s_own < 0, decided_neg).astype(CODE))
     stab = jnp.where(
         s_root >= 0, _U, jnp.where(f_pos, jnp.where(s_own < 0, _S, _U), jnp.where(f_neg, _U, X))
     )
@@ -445,7 +453,7 @@ def _ii_decide(g):
         (singular, _singular_branch(g)),
         ((sc2 == 0) & (ss1 == 0), _diagonal_branch(g, h1pos, h1neg)),
     ]
-    cons = stab = jnp.full(sd.shape, X, jnp.int8)
+    cons = stab = jnp.full(sd.shape, X, CODE)
     for where, (c, st) in branches:
         cons = jnp.where(where, c, cons)
         stab = jnp.where(where, st, stab)
@@ -634,6 +642,10 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     later = is_damped & ((cons == X) | (stab == X))
     if ss:
         later = later | (s == X)
+    # where damped and det B has no certified sign, tier 2 decides nothing (its det B sign is the
+    # same code, and every damped decision of SS and II reads it): those points go straight on to
+    # the root enclosures and the exact tier
+    later = later & ~(is_damped & (g["D"] == UNKNOWN))
     return pack(
         jnp.broadcast_to(s, shape),
         jnp.broadcast_to(cons, shape),

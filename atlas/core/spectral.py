@@ -41,7 +41,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from atlas.core.signs import UNKNOWN, det2_sign, evaluate_certified, gamma
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, gamma
 from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
 
 __all__ = [
@@ -142,10 +142,10 @@ def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
     r1, r2, w2, w4 = _damping_scale(q1s, q2s)
     a3v, a3abs, s_a3 = evaluate_certified(_a3, c1, r1, s2, r2)
     # equal damping: sign(a3) = sign(c1 + s2), one rounding of a sum -> exact sign
-    s_a3 = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(jnp.int8), s_a3)
+    s_a3 = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(CODE), s_a3)
     G, G_abs, s_G = evaluate_certified(_G, s1, c2, k1, c1, k2, s2, r1, r2, w2, w4)
     lost = lost_to_underflow((kappa, kappa, q1, q2, q1, q2), (k1, k2, q1s, q2s, r1, r2))
-    unk = lambda sg: jnp.where(lost, UNKNOWN, sg).astype(jnp.int8)  # noqa: E731
+    unk = lambda sg: jnp.where(lost, UNKNOWN, sg).astype(CODE)  # noqa: E731
     return dict(
         sd=sd,
         s_a2u=unk(s_a2u),
@@ -518,8 +518,8 @@ def ii_possible(c1, s1, c2, s2):
     """
     in3 = lambda c, s: (c < 0) & (s < 0)
     sd = det2_sign(c1, s1, c2, s2)
-    d = jnp.sign(c2 - s2).astype(jnp.int8)  # one rounding: exact sign
-    e = jnp.sign(s1 - c1).astype(jnp.int8)
+    d = jnp.sign(c2 - s2).astype(CODE)  # one rounding: exact sign
+    e = jnp.sign(s1 - c1).astype(CODE)
     through = (sd != 0) & (sd != UNKNOWN) & (d == sd) & (e == sd)
     opposite = (sd == 0) & (c1 == -c2) & (s1 == -s2) & (in3(c1, s1) | in3(-c1, -s1))
     return in3(c1, s1) | in3(c2, s2) | through | opposite | (sd == UNKNOWN)
@@ -549,11 +549,11 @@ def _sgn_plus_sqrt(sy, se, sdisc):
     """sign(Y + sqrt(D)) for D = Y^2 + E, from the signs of Y, E, D (UNKNOWN propagates)."""
     out = jnp.where(sy == 1, 1, jnp.where(sy == -1, se, jnp.where(sdisc == 1, 1, 0)))
     unk = (sy == UNKNOWN) | ((sy == -1) & (se == UNKNOWN)) | ((sy == 0) & (sdisc == UNKNOWN))
-    return jnp.where(unk, UNKNOWN, out).astype(jnp.int8)
+    return jnp.where(unk, UNKNOWN, out).astype(CODE)
 
 
 def _neg(s):
-    return jnp.where(s == UNKNOWN, UNKNOWN, -s).astype(jnp.int8)
+    return jnp.where(s == UNKNOWN, UNKNOWN, -s).astype(CODE)
 
 
 def ii_undamped(c1, s1, c2, s2, kappa):
@@ -572,8 +572,8 @@ def ii_undamped(c1, s1, c2, s2, kappa):
     _, _, s_a2 = evaluate_certified(_a2_undamped, k1, c1, k2, s2)
     _, _, s_disc = evaluate_certified(_disc_undamped, k1, c1, k2, s2, s1, c2)
     _, _, s_x = evaluate_certified(x_undamped, k1, c1, k2, s2)
-    se = (jnp.sign(s1) * jnp.sign(c2)).astype(jnp.int8)
-    sc2, ss1 = jnp.sign(c2).astype(jnp.int8), jnp.sign(s1).astype(jnp.int8)
+    se = (jnp.sign(s1) * jnp.sign(c2)).astype(CODE)
+    sc2, ss1 = jnp.sign(c2).astype(CODE), jnp.sign(s1).astype(CODE)
     # sign of (mu_pm + c1 k1) and (mu_pm + s2 k2)
     h1p = _sgn_plus_sqrt(s_x, se, s_disc)
     h1m = _neg(_sgn_plus_sqrt(_neg(s_x), se, s_disc))
