@@ -58,7 +58,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     elif kind == "codes":
         return jax.jit(functools.partial(rootfree.codes, **static))
     elif kind == "tier2":
-        return jax.jit(functools.partial(rootfree.tier2, **static))
+        return functools.partial(rootfree.tier2, **static)  # two compiled programs inside
     elif kind == "undamped_abscissa":
         fn = lambda *a: spectral.verdicts(*a, damped=False)  # noqa: E731
     elif kind == "roots":

@@ -55,16 +55,28 @@ absolute-value evaluation); :func:`tier2` (the few points left, gathered) uses t
 the absolute values and adds the shifted Routh counts.  Both are certified; the first is cheaper
 and looser.
 
-**Soundness.**  XLA may duplicate a cheap sub-expression into several fusions, compiled with and
-without fused multiply-add; each copy is a valid certified sign, but two copies can disagree on
-*whether* they are certified, and a value that is an *input* of a certified expression (the shift
-``s`` of :func:`tier2`, the roots ``z`` of :mod:`atlas.core.spectral`) must be one rounded number.  All
-sign codes and such inputs are therefore computed once, behind ``jax.lax.optimization_barrier``,
-and every decision reads that one copy; the kernel returns one packed ``uint8`` (:func:`pack`).
-Decisions use certified signs only ("not certified positive" is never read as "<= 0").
+**Soundness.**  XLA on CPU removes optimization barriers before fusion and contracts a product
+and a sum into one fused multiply-add (seen in the compiled code of this machine), so inside one
+program a cheap value may be recomputed in every fusion that reads it, with and without FMA.  That
+is harmless for the inputs (exact power-of-two scalings) and the intermediate values of a certified
+expression (an FMA only removes roundings; any copy of a coefficient is within its bound), but not
+
+* for a point at which expressions are evaluated (the shifts of :func:`tier2`, the roots of
+  :mod:`atlas.core.spectral`): these are computed in one compiled program and certified in
+  another, where each is an input, one rounded number;
+* for a sign code whose certification is checked in one place and whose value is used in another:
+  counts are self-gating (:func:`_variations` gives :data:`NOT_COUNTED` unless every code is
+  certified), the decisions read codes through ``== +1 / -1 / 0`` (facts, true of every copy), and
+  the first pass :func:`codes` compiles to one loop fusion, each code computed once per point
+  (tested on the compiled program).
+
+The kernel returns one packed ``uint8`` (:func:`pack`).  Decisions use certified signs only ("not
+certified positive" is never read as "<= 0").
 """
 
 from __future__ import annotations
+
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -279,20 +291,26 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
         sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(CODE)
     # A = B = 0 exactly (h1 == h2): c1 == s2 and q1 == q2, k1 == k2 as floats
     sg["h1_eq_h2"] = (c1 == s2) & (q1s == q2s) & (k1 == k2) & ~lost
-    # one copy of every sign (see "Soundness" in the module docstring)
-    live = {
-        k: v for k, v in sg.items() if k in names or k in ("c1", "s1", "c2", "s2", "D", "h1_eq_h2")
-    }
-    live = jax.lax.optimization_barrier(live)
-    return {**sg, **live}
+    return sg
 
 
 def _variations(*signs):
-    """Sign variations of a sequence of certified nonzero sign codes."""
+    """Sign variations of a sequence of sign codes, or :data:`NOT_COUNTED` unless every code is a
+    certified nonzero sign.  Self-gating: a count is never formed from an uncertified code, even
+    where a caller's own certification check was computed from another copy of the signs
+    (module docstring, "Soundness")."""
     v = jnp.zeros(jnp.broadcast_shapes(*(jnp.shape(s) for s in signs)), jnp.int32)
+    ok = jnp.ones(v.shape, bool)
+    for a in signs:
+        ok = ok & ((a == 1) | (a == -1))
     for a, b in zip(signs[:-1], signs[1:]):
         v = v + (a * b < 0).astype(jnp.int32)
-    return v
+    return jnp.where(ok, v, NOT_COUNTED)
+
+
+#: the count of :func:`_variations` where a sign is not certified: far below any difference of
+#: two counts (a count is 0-4), so no test on a count or a difference of counts can pass
+NOT_COUNTED = -1000
 
 
 def ii_damped(c1, s1, c2, s2, kappa, q1, q2, *, sturm: bool = True):
@@ -345,10 +363,11 @@ def _hard_count(g):
     sP2, sC2, sT1, sT0, sDl = g["P2"], g["C2"], g["T1"], g["T0"], g["disc"]
     sturm_ok = _K(sP2) & _K(sC2) & _K(sT1) & _K(sT0) & _K(sDl)
     npos = _variations(one, one, sC2, -sT0, sDl) - _variations(one, one, sP2, -sT1, sDl)
+    counted = sturm_ok & (npos >= 0) & (npos <= 4)
     cons = jnp.where(
-        descartes_none | (sturm_ok & (npos == 0)), 0, jnp.where(sturm_ok & (npos > 0), 1, X)
+        descartes_none | (counted & (npos == 0)), 0, jnp.where(counted & (npos > 0), 1, X)
     )
-    return cons, sturm_ok & (npos == 2) & ~descartes_none
+    return cons, counted & (npos == 2) & ~descartes_none
 
 
 def _routh(g):
@@ -520,18 +539,37 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
     estimate ``x`` of ``l*`` (bracketed Newton) gives shifts ``s = x (1 -/+ 4 sqrt(eps))``; one root
     right of ``s_lo`` with ``p(s_lo) < 0`` proves ``l* > s_lo >= Re(pair)`` (stable); two roots right
     of ``s_hi`` (the pair) prove the pair dominates (unstable).  Otherwise ``UNDECIDED``.
+
+    Two compiled programs (module docstring, "Soundness"): :func:`_tier2_decide` (every sign, the
+    decisions and the shifts) and :func:`_tier2_dominance` (the shifted counts), so each shift
+    reaches the certified expressions as one rounded input.  Call it as it is (a ``jax.jit`` around
+    it would merge the two programs again).
     """
+    ss_code, cons, stab, dominance, s_disc, s_lo, s_hi = _tier2_decide(
+        c1, s1, c2, s2, kappa, q1, q2, ss=ss, ii=ii, iters=iters
+    )
+    if not ii:
+        return ss_code, cons, stab
+    return ss_code, *_tier2_dominance(
+        c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_disc, s_lo, s_hi
+    )
+
+
+@functools.partial(jax.jit, static_argnames=("ss", "ii", "iters"))
+def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
+    """Program 1 of :func:`tier2`: ``stable_SS``, the II decisions from the sharp signs, where
+    dominance is left to the shifted counts, the sign of ``Disc``, and the shifts ``s_lo, s_hi``
+    around a bracketed-Newton estimate of ``l*``."""
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     xs = jnp.full(shape, X, jnp.int8)
     ss_code = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
     if not ii:
-        return ss_code, xs, xs
+        zero = jnp.zeros(shape, c1.dtype)
+        return ss_code, xs, xs, jnp.zeros(shape, bool), xs, zero, zero
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(_CHEAP) | frozenset(_STURM), sharp=True)
     cons, stab, dominance = _ii_decide(g)
     k1, k2, q1s, q2s = _balance(kappa, q1, q2)
-    args = (c1, s1, c2, s2, k1, k2, q1s, q2s)
-    s_disc = g["disc"]
-    a3, a2, a1, a0 = _coef(*args, sub=jnp.subtract)
+    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1s, q2s, sub=jnp.subtract)
     hi = 1 + jnp.maximum(
         jnp.maximum(jnp.abs(a3), jnp.abs(a2)), jnp.maximum(jnp.abs(a1), jnp.abs(a0))
     )
@@ -545,12 +583,17 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
         xn = x - f / jnp.where(fp != 0, fp, 1)
         x = jnp.where((xn > lo) & (xn < hi) & (fp != 0), xn, 0.5 * (lo + hi))
     delta = 4 * float(jnp.finfo(c1.dtype).eps) ** 0.5
-    # the shifts are inputs of the certified expressions: one rounded copy each (an FMA could
-    # otherwise use the unrounded product x (1 -/+ delta) in some terms and not in others)
-    s_lo, s_hi = jax.lax.optimization_barrier((x * (1 - delta), x * (1 + delta)))
+    return ss_code, cons, stab, dominance, g["disc"], x * (1 - delta), x * (1 + delta)
+
+
+@jax.jit
+def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_disc, s_lo, s_hi):
+    """Program 2 of :func:`tier2`: certified root counts right of the shifts ``s_lo, s_hi`` (inputs
+    of this program: one rounded number each) decide dominance; returns ``(consistent_II,
+    stable_II)``."""
+    args = (c1, s1, c2, s2, *_balance(kappa, q1, q2))
     n_lo, p_lo = _count_right(args, s_lo)
     n_hi, p_hi = _count_right(args, s_hi)
-    n_lo, p_lo, n_hi, p_hi = jax.lax.optimization_barrier((n_lo, p_lo, n_hi, p_hi))
     stable = (s_disc == 1) | ((s_disc == -1) & (n_lo == 1) & (p_lo == -1))
     unstable = (s_disc == -1) & (n_hi == 2) & (p_hi == 1)
     S, U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
@@ -558,7 +601,7 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
     stab = jnp.where(dominance, dom, stab)
     damped = (q1 != 0) | (q2 != 0)
     cons, stab = jnp.where(damped, cons, X), jnp.where(damped, stab, X)
-    return ss_code, cons.astype(jnp.int8), stab.astype(jnp.int8)
+    return cons.astype(jnp.int8), stab.astype(jnp.int8)
 
 
 # --- the packed kernel ----------------------------------------------------------------------------

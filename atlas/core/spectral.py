@@ -479,31 +479,45 @@ def _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2):
     return coef, coef_abs, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero)
 
 
-def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
+def _roots(c1, s1, c2, s2, kappa, q1, q2):
+    """Approximate roots: ``z`` of ``p`` (scaled) and ``zq`` of ``l^2 + a3 l + a2`` (``det B = 0``)."""
+    (a3, a2, a1, a0), _, extra = _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2)
+    q1s, q2s = extra[6:8]
+    z = quartic_roots(a3, a2, a1, a0, (q1s == 0) & (q2s == 0))
+    q1r, q1i, q2r, q2i = _real_quadratic(a3, a2)
+    return z, jnp.stack([q1r + 1j * q1i, q2r + 1j * q2i], -1)
+
+
+def _radii(z, zq, c1, s1, c2, s2, kappa, q1, q2):
+    """Certified enclosure radii ``R`` around the roots ``z`` (``zq`` and ``0, 0`` where
+    ``det B = 0`` exactly).  The roots are the centres of the enclosures: each must be one rounded
+    number wherever it is read, so they are inputs here (:func:`ii_verdicts_two_stage`)."""
     dtype = c1.dtype
     coef, coef_abs, extra = _scaled_coefficients(c1, s1, c2, s2, kappa, q1, q2)
-    a3, a2, a1, a0 = coef
-    c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero = extra
-    undamped = (q1s == 0) & (q2s == 0)
-    # one copy of the roots: every enclosure radius and every decision reads the same z (XLA could
-    # otherwise recompute z inside several fusions, with and without FMA contraction)
-    z = jax.lax.optimization_barrier(quartic_roots(a3, a2, a1, a0, undamped))
+    dzero = extra[-1]
     cdt = z.dtype
     cc = tuple(a.astype(cdt)[..., None] for a in coef)
     cca = tuple(a[..., None] for a in coef_abs)
     R = _enclosure(cc, cca, z, dtype)
-    # det B = 0: roots 0, 0 exactly, and the two roots of l^2 + a3 l + a2
-    q1r, q1i, q2r, q2i = _real_quadratic(a3, a2)
-    zq = jnp.stack([q1r + 1j * q1i, q2r + 1j * q2i], -1)
-    cq = (a3.astype(cdt)[..., None], a2.astype(cdt)[..., None])
+    cq = (coef[0].astype(cdt)[..., None], coef[1].astype(cdt)[..., None])
     cqa = (coef_abs[0][..., None], coef_abs[1][..., None])
     Rq = _enclosure(cq, cqa, zq, dtype)
     zd = jnp.concatenate([zq, jnp.zeros_like(zq)], -1)
     Rd = jnp.concatenate([Rq, jnp.zeros_like(Rq)], -1)
     z = jnp.where(dzero[..., None], zd, z)
     R = jnp.where(dzero[..., None], Rd, R)
-    z, R, dzero = jax.lax.optimization_barrier((z, R, dzero))
-    return z, R, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero)
+    return z, R, extra
+
+
+def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
+    """:func:`_roots` then :func:`_radii` in one program (:func:`ii_verdicts`, :func:`verdicts`).
+
+    The optimization barriers keep one copy of the roots in the traced program, but XLA on CPU
+    removes them before fusion: a compiled program may recompute the roots inside several
+    fusions, with and without FMA contraction.  The certified driver
+    (:func:`ii_verdicts_two_stage`) therefore compiles the stages separately."""
+    z, zq = jax.lax.optimization_barrier(_roots(c1, s1, c2, s2, kappa, q1, q2))
+    return jax.lax.optimization_barrier(_radii(z, zq, c1, s1, c2, s2, kappa, q1, q2))
 
 
 def ii_possible(c1, s1, c2, s2):
@@ -710,7 +724,8 @@ def _ii_stage2(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero):
     return cons, stab, jnp.ldexp(jnp.max(jnp.real(z), -1), n)
 
 
-_stage1_jit = jax.jit(_roots_and_radii)
+_roots_jit = jax.jit(_roots)
+_radii_jit = jax.jit(_radii)
 _stage2_jit = jax.jit(_ii_stage2)
 
 
@@ -727,10 +742,15 @@ def abscissa(c1, s1, c2, s2, kappa, q1, q2):
 
 
 def ii_verdicts_two_stage(c1, s1, c2, s2, kappa, q1, q2):
-    """Same results as :func:`ii_verdicts`, as two compiled stages (roots, then decisions).
+    """Same results as :func:`ii_verdicts`, as three compiled programs: roots, their enclosure
+    radii, decisions.
 
-    XLA fuses the root finder into each of the many consumers of the roots when both stages are
-    compiled together (measured ~5x slower on CPU); two calls keep the roots materialized once.
+    Each program reads the roots as inputs, so every radius and decision uses one rounded copy
+    (XLA removes optimization barriers before fusion and contracts products into FMAs: a root
+    recomputed inside a consumer fusion could differ in its last bit).  Separate programs are
+    also faster on CPU (XLA fuses the root finder into each of the many consumers of the roots
+    when the stages are compiled together, measured ~5x slower).
     """
-    z, R, extra = _stage1_jit(c1, s1, c2, s2, kappa, q1, q2)
+    z, zq = _roots_jit(c1, s1, c2, s2, kappa, q1, q2)
+    z, R, extra = _radii_jit(z, zq, c1, s1, c2, s2, kappa, q1, q2)
     return _stage2_jit(z, R, *extra)

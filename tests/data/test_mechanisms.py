@@ -33,7 +33,16 @@ def test_every_point_equals_the_single_mechanism(ladder):
         for k, v in body.invariants.items():
             assert float(point[k]) == pytest.approx(v, rel=1e-12, abs=1e-12), k
         for k, v in body.verdicts().items():
-            assert np.asarray(point[k].values) == np.asarray(v).astype(point[k].dtype), (k, th, mu)
+            if (
+                point[k].dtype.kind == "f"
+            ):  # the abscissa: approximate roots (compiled per batch size)
+                assert float(point[k]) == pytest.approx(float(v), rel=1e-12, abs=1e-15), k
+            else:
+                assert np.asarray(point[k].values) == np.asarray(v).astype(point[k].dtype), (
+                    k,
+                    th,
+                    mu,
+                )
 
 
 def test_physical_coordinates_carry_units_and_select(ladder):
