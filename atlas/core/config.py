@@ -18,7 +18,7 @@ except PackageNotFoundError:  # pragma: no cover - a source tree without install
 #: environment variable naming the persistent compilation cache directory (``0`` or empty: off)
 CACHE_ENV = "ATLAS_JAX_CACHE"
 #: compilations shorter than this are not worth a cache entry (seconds)
-CACHE_MIN_COMPILE_SECONDS = 1.0
+CACHE_MIN_COMPILE_SECONDS = 0.1
 
 
 def enable_x64() -> None:

@@ -41,8 +41,10 @@ BLOCK = 1 << 22
 FLAT_SIZES = (1 << 12, CHUNK)
 #: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
 FLAT_LIMIT = CHUNK
-#: smallest padded length of a later-tier batch (below it the call overhead dominates)
-CHUNK_MIN = 1 << 8
+#: the padded lengths of later-tier batches: a batch of n points runs at the first length >= n
+#: (below 256 points the call overhead dominates; each length is one trace and compilation per
+#: kernel and dtype, so few lengths: a run of many tiles traces each kernel once or twice)
+CHUNK_SIZES = (1 << 8, 1 << 12)
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 #: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
 #: undamped, a regular point every tier decides at once
@@ -77,8 +79,8 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
 def _run_chunked(kernel, cols, dtype, chunk):
     """``kernel`` on 1-D columns in padded chunks; returns a dict (or tuple) of 1-D numpy arrays."""
     n = cols[0].size
-    # small batches: the next power of two (at least CHUNK_MIN) instead of a full chunk
-    chunk = min(chunk, max(CHUNK_MIN, 1 << (n - 1).bit_length()))
+    # small batches: a short padded length instead of a full chunk
+    chunk = next((m for m in CHUNK_SIZES if m >= n), chunk) if n < chunk else chunk
     out = None
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
