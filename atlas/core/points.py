@@ -7,15 +7,17 @@ each on the points the previous one left ``UNDECIDED``:
 1. :func:`atlas.core.rootfree.codes` on the broadcast grid (never materialized in the inputs): every
    certified sign once, ``stable_SS`` and the II verdicts in one ``uint8`` a point, no roots
    (closed forms for ``q1 = q2 = 0``, the monotone-curve analysis with damping);
-2. :func:`atlas.core.rootfree.tier2` on the damped points the first pass left (sharper error bounds,
-   Sturm counts, dominance by shifted Routh counts): typically < 1 % of the points;
+2. :func:`atlas.core.rootfree.tier2` on the points the first pass flagged (sharper error bounds,
+   dominance by shifted Routh counts): typically < 0.1 % of the points; damped points whose
+   ``det B`` has no certified sign skip it (it cannot decide them);
 3. the certified root enclosures of :func:`atlas.core.spectral.ii_verdicts_two_stage` on what is left;
 4. the exact tier :func:`atlas.core.exact.resolve` (rational arithmetic) on the rest.
 
 Compacted points are gathered by index into each input's own (broadcast) shape, never through a
 materialized ``broadcast_to``.  ``spectral_abscissa`` (the largest real part, for display) needs the
-roots of every damped point and is computed only when asked.  Chunks of the later tiers have a
-fixed length (padding with a harmless point), so each kernel compiles once per dtype.
+roots of every damped point and is computed only when asked.  Batches of the later tiers have one
+of a few lengths (:data:`CHUNK_SIZES`, :data:`CHUNK`; padding with a harmless point), so each kernel
+is traced and compiled a few times per dtype.
 """
 
 from __future__ import annotations
@@ -29,7 +31,15 @@ import numpy as np
 from atlas.core import exact, rootfree, spectral
 from atlas.core.verdicts import UNDECIDED_FLAG
 
-__all__ = ["spectral_points", "settle_codes", "SPECTRAL_NAMES", "CHUNK", "BLOCK", "PAD"]
+__all__ = [
+    "spectral_points",
+    "settle_codes",
+    "SPECTRAL_NAMES",
+    "CHUNK",
+    "CHUNK_SIZES",
+    "BLOCK",
+    "PAD",
+]
 
 SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa")
 #: length of the padded chunks of the later tiers

@@ -1,5 +1,7 @@
 """The tiered driver (atlas.core.points): broadcasting, gathers, slabs, settlement, diagnostics."""
 
+from fractions import Fraction as F
+
 import numpy as np
 import pytest
 
@@ -187,3 +189,29 @@ def test_flat_columns_pad_with_the_last_point():
     assert [c.shape for c in cols] == [(4096,)] * 3 and (cols[2] == 5).all()
     assert cols[0][:7].tolist() == [0, 0, 1, 1, 2, 2, 2]
     assert cols[1][:7].tolist() == [10, 20, 10, 20, 10, 20, 20]
+
+
+def test_near_singular_B_skips_tier_2_and_is_settled_exactly():
+    """Damped points on ``b2 ~ -b1`` where ``det B`` of the rounded directions is below its
+    certified bound go from the first pass straight to the enclosures: tier 2 could not decide them
+    (every damped decision reads ``sign det B``).  The exact tier settles them."""
+    beta = np.linspace(0.1, 3.0, 1000)
+    c1, s1 = direction(beta)
+    c2, s2 = direction(beta + np.pi)
+    # 0 < |det B| < 0.9 u S (exact, rational; S = |c1 s2| + |s1 c2|): the rounded value is at most
+    # (|det B| + u S)(1 + u) < 2 u S, the certified bound, however the kernel rounds
+    # c1 s2 - s1 c2 (with or without a fused multiply-add); det B = 0 is a closed form
+    u = np.finfo(np.float64).eps / 2
+    exact_det = [F(a) * F(d) - F(b) * F(c) for a, b, c, d in zip(c1, s1, c2, s2)]
+    scale = np.abs(c1 * s2) + np.abs(s1 * c2)
+    keep = np.array([0 < abs(float(d)) < 0.9 * u * m for d, m in zip(exact_det, scale)])
+    assert keep.sum() > 40
+    pts = dict(c1=c1[keep], s1=s1[keep], c2=c2[keep], s2=s2[keep])
+    pts.update(kappa=np.full(keep.sum(), 0.5), q1=0.1, q2=0.1)
+    st = {}
+    got = evaluate.spectral_points(*pts.values(), names=FLAGS, stats=st)
+    assert st["tier2_points"] == 0
+    assert st["roots_points"] == keep.sum()
+    ref = exact.resolve({k: np.broadcast_to(v, (keep.sum(),)) for k, v in pts.items()}, names=FLAGS)
+    for k in FLAGS:
+        assert np.array_equal(got[k], ref[k]), k
