@@ -217,6 +217,8 @@ _CHEAP = dict(
 )
 #: signs of the Sturm count and of the discriminant (float64 also for float32 inputs)
 _STURM = dict(P2=_P2, C2=_C2, T1=_T1, T0=_T0, disc=_disc)
+#: the signs evaluated in float64 for float32 inputs
+_WIDE = frozenset(_STURM)
 #: the signs stable_SS needs (SPEC §1 conventions; decision logic of :mod:`atlas.core.spectral`)
 _SS_NAMES = ("a3", "G", "a2_d0")
 
@@ -272,7 +274,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     for name, fn in {**_CHEAP, **_STURM, "disc_u": _disc_u}.items():
         if name not in names:
             sg[name] = jnp.full(shape, UNKNOWN, CODE)
-        elif name in _STURM and wide is not None:
+        elif name in _WIDE and wide is not None:
             sg[name] = _csign(fn, wide, majorants)
         else:
             sg[name] = _csign(fn, args, majorants)
