@@ -86,17 +86,31 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     return jax.jit(lambda *a: {n: v for n, v in fn(*a).items() if n in names})
 
 
+def _batches(n: int, chunk: int):
+    """``(start, stop, length)`` of the padded batches of ``n`` points: full batches of ``chunk``,
+    the rest in batches of the largest of :data:`CHUNK_SIZES`, the last one of the first length
+    that holds it (at most ``CHUNK_SIZES[-1] - 1`` padded points, never a nearly empty chunk)."""
+    small = [m for m in CHUNK_SIZES if m < chunk]
+    start = 0
+    while start < n:
+        rest = n - start
+        if rest >= chunk or not small:
+            length = chunk
+        else:
+            length = next((m for m in small if m >= rest), small[-1])
+        yield start, min(start + length, n), length
+        start += length
+
+
 def _run_chunked(kernel, cols, dtype, chunk):
-    """``kernel`` on 1-D columns in padded chunks; returns a dict (or tuple) of 1-D numpy arrays."""
+    """``kernel`` on 1-D columns in padded batches (:func:`_batches`); returns a dict (or tuple)
+    of 1-D numpy arrays."""
     n = cols[0].size
-    # small batches: a short padded length instead of a full chunk
-    chunk = next((m for m in CHUNK_SIZES if m >= n), chunk) if n < chunk else chunk
     out = None
-    for start in range(0, n, chunk):
-        stop = min(start + chunk, n)
+    for start, stop, length in _batches(n, chunk):
         args = []
         for a, pad in zip(cols, PAD):
-            c = np.full(chunk, pad, dtype)
+            c = np.full(length, pad, dtype)
             c[: stop - start] = a[start:stop]
             args.append(c)
         res = kernel(*args)

@@ -215,3 +215,20 @@ def test_near_singular_B_skips_tier_2_and_is_settled_exactly():
     ref = exact.resolve({k: np.broadcast_to(v, (keep.sum(),)) for k, v in pts.items()}, names=FLAGS)
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
+
+
+@pytest.mark.parametrize(
+    "n, chunk, lengths",
+    [
+        (1, 1 << 16, [256]),
+        (257, 1 << 16, [4096]),
+        (4696, 1 << 16, [4096, 4096]),  # not one batch of 65,536 (14x padding)
+        (70000, 1 << 16, [1 << 16, 4096, 4096]),
+        (100, 64, [64, 64]),  # never longer than the chunk asked for
+    ],
+)
+def test_batches_pad_little(n, chunk, lengths):
+    got = list(evaluate._batches(n, chunk))
+    assert [b[2] for b in got] == lengths
+    assert got[0][0] == 0 and got[-1][1] == n
+    assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
