@@ -276,10 +276,14 @@ def spectral_points(
     open_idx = np.zeros(0, np.intp)  # flat indices with an output undecided by the first pass
     if flags:
         code = _first_pass(inputs, shape, dtype, ss=want_ss, ii=want_ii, damped=damped)
-        ss, cons, stab, later = rootfree.unpack(code)
+        ss, cons, stab, later, open_ = rootfree.unpack(code)
         verdict = {"stable_SS": ss, "consistent_II": cons, "stable_II": stab}
         out = {k: verdict[k] for k in flags}
-        open_idx = np.flatnonzero(np.logical_or.reduce([out[k] == _UND for k in flags]))
+        # the kernel's "open" bit (a superset where it computed more than was asked), narrowed
+        open_idx = np.flatnonzero(open_)
+        open_idx = open_idx[
+            np.logical_or.reduce([out[k].reshape(-1)[open_idx] == _UND for k in flags])
+        ]
         # every later tier works inside open_idx (small): no more passes over the whole grid
         _second_pass(
             inputs,

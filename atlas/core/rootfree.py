@@ -86,11 +86,13 @@ from atlas.core import spectral
 from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified
 from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
-__all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT"]
+__all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT", "OPEN_BIT"]
 
 X = UNDECIDED_FLAG  # = Verdict.UNDECIDED = Consistency.UNDECIDED
 #: bit of the packed code that marks points for :func:`tier2`
 TIER2_BIT = 6
+#: bit of the packed code that marks points with an output asked for still ``UNDECIDED``
+OPEN_BIT = 7
 
 
 # --- polynomial expressions (inputs c1, s1, c2, s2, k1, k2, q1, q2, all |.| <= 1) ----------------
@@ -609,21 +611,29 @@ def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_dis
 # --- the packed kernel ----------------------------------------------------------------------------
 
 
-def pack(ss, cons, stab, tier2_flag):
-    """One ``uint8``: bits 0-1 ``stable_SS``, 2-3 ``consistent_II``, 4-5 ``stable_II``, 6 tier 2."""
+def pack(ss, cons, stab, tier2_flag, *, ss_asked: bool = True, ii_asked: bool = True):
+    """One ``uint8``: bits 0-1 ``stable_SS``, 2-3 ``consistent_II``, 4-5 ``stable_II``, 6 tier 2,
+    7 "open": an output asked for (``ss_asked``, ``ii_asked``) is ``UNDECIDED``."""
     u8 = lambda a: jnp.asarray(a).astype(jnp.uint8)  # noqa: E731
-    return u8(ss) | (u8(cons) << 2) | (u8(stab) << 4) | (u8(tier2_flag) << TIER2_BIT)
+    open_ = jnp.zeros(jnp.shape(tier2_flag), bool)
+    if ss_asked:
+        open_ = open_ | (ss == X)
+    if ii_asked:
+        open_ = open_ | (cons == X) | (stab == X)
+    code = u8(ss) | (u8(cons) << 2) | (u8(stab) << 4) | (u8(tier2_flag) << TIER2_BIT)
+    return code | (u8(open_) << OPEN_BIT)
 
 
 def unpack(code):
-    """Inverse of :func:`pack` on numpy arrays: ``(ss, cons, stab, tier2)``."""
-
+    """Inverse of :func:`pack` on numpy arrays: ``(ss, cons, stab, tier2, open)`` (views of
+    one-pass results: no conversions)."""
     code = np.asarray(code)
     return (
-        (code & 3).astype(np.int8),
-        ((code >> 2) & 3).astype(np.int8),
-        ((code >> 4) & 3).astype(np.int8),
-        ((code >> TIER2_BIT) & 1).astype(bool),
+        (code & 3).view(np.int8),
+        ((code >> 2) & 3).view(np.int8),
+        ((code >> 4) & 3).view(np.int8),
+        ((code >> TIER2_BIT) & 1).view(bool),
+        (code >> OPEN_BIT).view(bool),
     )
 
 
@@ -660,13 +670,14 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     xs = jnp.full(shape, X, jnp.int8)
     if not ii:  # SS alone: the cheaper signs of atlas.core.spectral (no shared work to amortize)
         s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
-        return pack(jnp.broadcast_to(s, shape), xs, xs, jnp.broadcast_to(s == X, shape))
+        s, later = jnp.broadcast_to(s, shape), jnp.broadcast_to(s == X, shape)
+        return pack(s, xs, xs, later, ss_asked=ss, ii_asked=False)
     if damped is False:  # all undamped: closed forms only
         s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
         cons, stab = _ii_undamped(c1, s1, c2, s2, kappa)
         later = (s == X) if ss else jnp.zeros(shape, bool)
         bc = lambda a: jnp.broadcast_to(a, shape)  # noqa: E731
-        return pack(bc(s), bc(cons), bc(stab), bc(later))
+        return pack(bc(s), bc(cons), bc(stab), bc(later), ss_asked=ss)
     names = set()
     if ss:
         names |= set(_SS_NAMES) | ({"disc_u"} if damped is not True else set())
@@ -696,4 +707,5 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
         jnp.broadcast_to(cons, shape),
         jnp.broadcast_to(stab, shape),
         jnp.broadcast_to(later, shape),
+        ss_asked=ss,
     )

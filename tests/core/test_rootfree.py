@@ -236,5 +236,11 @@ def test_pack_roundtrip():
     ss, cons, stab = np.array([0, 1, 2, 3]), np.array([3, 0, 1, 3]), np.array([1, 3, 0, 2])
     flag = np.array([True, False, True, False])
     got = rootfree.unpack(rootfree.pack(ss, cons, stab, flag))
-    for a, b in zip(got, (ss, cons, stab, flag)):
-        assert np.array_equal(a, b)
+    for i, (a, b) in enumerate(zip(got, (ss, cons, stab, flag, [True, True, False, True]))):
+        assert np.array_equal(a, b), i
+        assert a.dtype == (bool if i >= 3 else np.int8), i
+    # the open bit covers only the outputs asked for
+    only_ss = rootfree.unpack(rootfree.pack(ss, cons, stab, flag, ii_asked=False))[4]
+    assert only_ss.tolist() == [False, False, False, True]
+    only_ii = rootfree.unpack(rootfree.pack(ss, cons, stab, flag, ss_asked=False))[4]
+    assert only_ii.tolist() == [True, True, False, True]
