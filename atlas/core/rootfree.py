@@ -626,14 +626,16 @@ def pack(ss, cons, stab, tier2_flag, *, ss_asked: bool = True, ii_asked: bool = 
 
 def unpack(code):
     """Inverse of :func:`pack` on numpy arrays: ``(ss, cons, stab, tier2, open)`` (views of
-    one-pass results: no conversions)."""
+    one-pass results: no conversions).  Always arrays, 0-d for one point: the driver fills the
+    later tiers' verdicts into them in place."""
     code = np.asarray(code)
+    field = lambda x, t: np.asarray(x).view(t)  # noqa: E731 - arrays, also for one point (0-d)
     return (
-        (code & 3).view(np.int8),
-        ((code >> 2) & 3).view(np.int8),
-        ((code >> 4) & 3).view(np.int8),
-        ((code >> TIER2_BIT) & 1).view(bool),
-        (code >> OPEN_BIT).view(bool),
+        field(code & 3, np.int8),
+        field((code >> 2) & 3, np.int8),
+        field((code >> 4) & 3, np.int8),
+        field((code >> TIER2_BIT) & 1, bool),
+        field(code >> OPEN_BIT, bool),
     )
 
 

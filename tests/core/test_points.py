@@ -115,6 +115,15 @@ def test_scalar_point():
     res = evaluate.spectral_points(-1.0, 0.0, 0.0, -1.0, 1.0, 0.1, 0.1, names=FLAGS)
     assert all(v.shape == () for v in res.values())
     assert res["consistent_II"] == 1 and res["stable_II"] == 0  # double root: closed form
+    # a point the fast tiers leave (b2 ~ -b1, det B below its bound): settled in place
+    c1, s1 = direction(np.array(0.1484 * np.pi))
+    c2, s2 = direction(np.array(1.1484 * np.pi))
+    pt = dict(c1=float(c1), s1=float(s1), c2=float(c2), s2=float(s2), kappa=0.5, q1=0.1, q2=0.1)
+    st = {}
+    res = evaluate.spectral_points(*pt.values(), names=FLAGS, stats=st)
+    assert st["undecided_before"] == 1 and st["undecided_after"] == 0
+    ref = exact.resolve({k: np.array([v]) for k, v in pt.items()}, names=FLAGS)
+    assert all(res[k] == ref[k][0] for k in FLAGS)
 
 
 def _codes_grid(n=9):
