@@ -51,6 +51,9 @@ BLOCK = 1 << 22
 FLAT_SIZES = (1 << 12, CHUNK)
 #: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
 FLAT_LIMIT = CHUNK
+#: the dtype of tiers 2 and 3 whatever the input dtype: float32 inputs convert exactly, the tiers
+#: see few points (their cost is mostly fixed), and float64 bounds decide more of them
+LATER_DTYPE = np.float64
 #: the padded lengths of later-tier batches: a batch of n points runs at the first length >= n
 #: (below 256 points the call overhead dominates; each length is one trace and compilation per
 #: kernel and dtype, so few lengths: a run of many tiles traces each kernel once or twice)
@@ -325,7 +328,7 @@ def _second_pass(inputs, shape, dtype, chunk, verdict, idx, counts, *, ss, ii):
     if idx.size:
         small = idx.size <= FLAT_SIZES[0]  # one compilation for every output choice
         kern = _kernel("tier2", ss=ss or small, ii=ii or small)
-        res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
+        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, chunk)
         for i, k in enumerate(("stable_SS", "consistent_II", "stable_II")):
             _fill(verdict[k], idx, res[i])
 
@@ -338,7 +341,7 @@ def _roots_pass(inputs, shape, dtype, chunk, cons, stab, open_idx, counts):
     counts["roots_points"] = int(idx.size)
     if idx.size:
         kern = _kernel("roots", ("consistent_II", "stable_II"))
-        res = _run_chunked(kern, _gather(inputs, shape, idx), dtype, chunk)
+        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, chunk)
         _fill(cons, idx, res["consistent_II"])
         _fill(stab, idx, res["stable_II"])
 

@@ -241,3 +241,31 @@ def test_batches_pad_little(n, chunk, lengths):
     assert [b[2] for b in got] == lengths
     assert got[0][0] == 0 and got[-1][1] == n
     assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
+
+
+@pytest.mark.parametrize("later", [np.float64, np.float32])
+def test_later_tiers_run_in_float64(monkeypatch, later):
+    """Float32 inputs near ``b2 = -b1`` (directions of the 513-point headline grid): the later
+    tiers in float64 (the inputs convert exactly) decide every point without the exact tier; in
+    float32 some stay undecided."""
+    monkeypatch.setattr(evaluate, "LATER_DTYPE", later)
+    beta = np.linspace(0.0, 2 * np.pi, 513)
+    i = np.arange(0, 256)
+    c1, s1 = direction(beta[i], np.float32)
+    c2, s2 = direction(beta[i + 256], np.float32)
+    pts = dict(c1=c1, s1=s1, c2=c2, s2=s2, kappa=np.full(i.size, 0.5, np.float32))
+    pts.update(q1=np.float32(0.1), q2=np.float32(0.1))
+    st = {}
+    got = evaluate.spectral_points(
+        *pts.values(), names=FLAGS, dtype="float32", resolve=False, stats=st
+    )
+    if later is np.float32:
+        assert st["undecided_before"] > 0  # what float64 later tiers settle
+        return
+    assert st["undecided_before"] == 0
+    ref = exact.resolve(
+        {k: np.broadcast_to(np.asarray(v, np.float64), i.shape) for k, v in pts.items()},
+        names=FLAGS,
+    )
+    for k in FLAGS:
+        assert np.array_equal(got[k], ref[k]), k
