@@ -291,7 +291,6 @@ def spectral_points(
         _second_pass(
             inputs,
             shape,
-            dtype,
             chunk,
             verdict,
             open_idx[later.reshape(-1)[open_idx]],
@@ -300,7 +299,7 @@ def spectral_points(
             ii=want_ii,
         )
         if want_ii:
-            _roots_pass(inputs, shape, dtype, chunk, cons, stab, open_idx, counts)
+            _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
     open_ = {k: out[k].reshape(-1)[open_idx] == _UND for k in flags}
@@ -321,7 +320,7 @@ def _fill(arr, idx, new):
     flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
 
 
-def _second_pass(inputs, shape, dtype, chunk, verdict, idx, counts, *, ss, ii):
+def _second_pass(inputs, shape, chunk, verdict, idx, counts, *, ss, ii):
     """Tier 2 (:func:`atlas.core.rootfree.tier2`) on the flat indices ``idx`` flagged by the first
     pass, in place."""
     counts["tier2_points"] = int(idx.size)
@@ -333,7 +332,7 @@ def _second_pass(inputs, shape, dtype, chunk, verdict, idx, counts, *, ss, ii):
             _fill(verdict[k], idx, res[i])
 
 
-def _roots_pass(inputs, shape, dtype, chunk, cons, stab, open_idx, counts):
+def _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts):
     """Tier 3: root enclosures where an II verdict is still undecided (inside the flat indices
     ``open_idx``), in place."""
     still = (cons.reshape(-1)[open_idx] == _UND) | (stab.reshape(-1)[open_idx] == _UND)

@@ -83,7 +83,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import spectral
-from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, has_float64
 from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
 __all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT", "OPEN_BIT"]
@@ -269,7 +269,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     # float32 inputs: the Sturm and discriminant signs in float64 (the conversion is exact; in
     # float32 their bounds leave a band of points along every double-root curve to tier 2)
     wide = None
-    if args[0].dtype == jnp.float32 and jnp.zeros((), jnp.float64).dtype == jnp.float64:
+    if args[0].dtype == jnp.float32 and has_float64():
         wide = [jnp.asarray(a, jnp.float64) for a in args]
     sg = {n: jnp.sign(v).astype(CODE) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
     sg["D"] = det2_sign(c1, s1, c2, s2)

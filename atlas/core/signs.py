@@ -192,7 +192,7 @@ def det2_sign(ux, uy, vx, vy):
     float64 (24 + 24 bits < 53), so the sign is always certified.  Products of direction components
     never underflow (``|cos|, |sin| >= 1e-17`` off the axes), so ``abs == 0`` is an exact zero.
     """
-    if ux.dtype == jnp.float32 and jnp.zeros((), jnp.float64).dtype == jnp.float64:
+    if ux.dtype == jnp.float32 and has_float64():
         wide = [a.astype(jnp.float64) for a in (ux, uy, vx, vy)]
         d = det2(*wide)
         return jnp.sign(d).astype(CODE)
@@ -201,6 +201,12 @@ def det2_sign(ux, uy, vx, vy):
     abs_value = det2(jnp.abs(ux), jnp.abs(uy), jnp.abs(vx), jnp.abs(vy), sub=jnp.add)
     n, floor = error_model(det2, 4, jnp.dtype(value.dtype).name, (1.0, 1.0, 1.0, 1.0))
     return certified_sign(value, abs_value, exact_zero=same | (abs_value == 0), n=n, floor=floor)
+
+
+def has_float64() -> bool:
+    """Whether JAX computes in float64 here (``jax_enable_x64``): float32 inputs can then be
+    evaluated exactly converted, with the float64 error model."""
+    return jnp.zeros((), jnp.float64).dtype == jnp.float64
 
 
 def sign_of(x):
