@@ -54,10 +54,11 @@ FLAT_LIMIT = CHUNK
 #: the dtype of tiers 2 and 3 whatever the input dtype: float32 inputs convert exactly, the tiers
 #: see few points (their cost is mostly fixed), and float64 bounds decide more of them
 LATER_DTYPE = np.float64
-#: the padded lengths of later-tier batches: a batch of n points runs at the first length >= n
-#: (below 256 points the call overhead dominates; each length is one trace and compilation per
-#: kernel and dtype, so few lengths: a run of many tiles traces each kernel once or twice)
-CHUNK_SIZES = (1 << 8, 1 << 12)
+#: the padded lengths of later-tier batches: a batch of n points runs at the first length >= n.
+#: Tier 2 and the enclosures (five programs) take about 0.15 ms for 16 padded points and 0.6 ms
+#: for 256 (float64, best of 300 calls), so a handful of points must not run padded to 256; each
+#: length is one trace and compilation (~3.5 s for the five programs) per process, so few lengths
+CHUNK_SIZES = (1 << 4, 1 << 8, 1 << 12)
 _KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 #: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
 #: undamped, a regular point every tier decides at once
@@ -91,13 +92,15 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
 
 def _batches(n: int, chunk: int):
     """``(start, stop, length)`` of the padded batches of ``n`` points: full batches of ``chunk``,
-    the rest in batches of the largest of :data:`CHUNK_SIZES`, the last one of the first length
-    that holds it (at most ``CHUNK_SIZES[-1] - 1`` padded points, never a nearly empty chunk)."""
+    the rest in batches of the first of :data:`CHUNK_SIZES` and ``chunk`` that holds it, except
+    that a rest longer than the largest size below ``chunk`` runs in batches of that size if the
+    chunk is more than 4 times longer (at most ``CHUNK_SIZES[-1] - 1`` padded points then, never a
+    nearly empty chunk)."""
     small = [m for m in CHUNK_SIZES if m < chunk]
     start = 0
     while start < n:
         rest = n - start
-        if rest >= chunk or not small:
+        if rest >= chunk or not small or (rest > small[-1] and chunk <= 4 * small[-1]):
             length = chunk
         else:
             length = next((m for m in small if m >= rest), small[-1])

@@ -217,7 +217,9 @@ _BOUNDS8 = (1.0,) * 8
 _CHEAP = dict(
     A=_arcA, B=_arcB, W=_arcW, a3=_a3, a2=_a2, H2=_H2, G=_G, a2_d0=_a2_d0, disc_d0=_disc_d0
 )
-#: signs of the Sturm count and of the discriminant (float64 also for float32 inputs)
+#: signs of the Sturm count and of the discriminant (float64 also for float32 inputs); read only
+#: as certified nonzero signs (:func:`_hard_count`, tier 2's ``Disc``), so they skip the
+#: structural zeros (``zeros=False`` of :func:`atlas.core.signs.evaluate_certified`)
 _STURM = dict(P2=_P2, C2=_C2, T1=_T1, T0=_T0, disc=_disc)
 #: the signs evaluated in float64 for float32 inputs
 _WIDE = frozenset(_STURM)
@@ -236,8 +238,8 @@ def _balance(kappa, q1, q2):
     return k1 * f * f, k2 * f * f, q1s * f, q2s * f
 
 
-def _csign(fn, args, majorants=None):
-    return evaluate_certified(fn, *args, bounds=_BOUNDS8, majorants=majorants)[2]
+def _csign(fn, args, majorants=None, zeros=True):
+    return evaluate_certified(fn, *args, bounds=_BOUNDS8, majorants=majorants, zeros=zeros)[2]
 
 
 def _exact_sign(x, y, sign):
@@ -276,10 +278,9 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     for name, fn in {**_CHEAP, **_STURM, "disc_u": _disc_u}.items():
         if name not in names:
             sg[name] = jnp.full(shape, UNKNOWN, CODE)
-        elif name in _WIDE and wide is not None:
-            sg[name] = _csign(fn, wide, majorants)
         else:
-            sg[name] = _csign(fn, args, majorants)
+            wide_args = wide if name in _WIDE and wide is not None else args
+            sg[name] = _csign(fn, wide_args, majorants, zeros=name not in _STURM)
     # equal damping or stiffness: a3 = (c1 + s2) q, A = (c1 - s2) q, B = (c1 - s2) k, and the
     # sign of one rounded sum or difference is exact; on the class line beta2 = beta1 + pi/2
     # (c1 = s2 up to rounding) A and B are below every error bound otherwise
@@ -522,8 +523,8 @@ def _count_right(args, s):
     """Certified number of roots with ``Re > s`` (``-1`` if not certified) and sign ``p(s)``."""
     a = args + (s,)
     bounds = _BOUNDS8 + (_SHIFT_BOUND,)
-    sb0, sb3, sh2, sh3 = (
-        evaluate_certified(f, *a, bounds=bounds)[2] for f in (_sb0, _sb3, _sH2, _sH3)
+    sb0, sb3, sh2, sh3 = (  # read only as certified nonzero signs: no structural zeros
+        evaluate_certified(f, *a, bounds=bounds, zeros=False)[2] for f in (_sb0, _sb3, _sH2, _sH3)
     )
     ok = (jnp.abs(s) <= _SHIFT_BOUND) & (s > 0)
     for t in (sb0, sb3, sh2, sh3):
@@ -577,15 +578,17 @@ def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     hi = 1 + jnp.maximum(
         jnp.maximum(jnp.abs(a3), jnp.abs(a2)), jnp.maximum(jnp.abs(a1), jnp.abs(a0))
     )
-    lo = jnp.zeros_like(hi)
-    x = hi
-    for _ in range(iters):
+
+    def newton(_, bracket):  # bracketed Newton from the right (bisection where it leaves)
+        x, lo, hi = bracket
         f = (((x + a3) * x + a2) * x + a1) * x + a0
         fp = ((4 * x + 3 * a3) * x + 2 * a2) * x + a1
         hi = jnp.where(f > 0, x, hi)
         lo = jnp.where(f <= 0, x, lo)
         xn = x - f / jnp.where(fp != 0, fp, 1)
-        x = jnp.where((xn > lo) & (xn < hi) & (fp != 0), xn, 0.5 * (lo + hi))
+        return jnp.where((xn > lo) & (xn < hi) & (fp != 0), xn, 0.5 * (lo + hi)), lo, hi
+
+    x, _, _ = jax.lax.fori_loop(0, iters, newton, (hi, jnp.zeros_like(hi), hi))
     delta = 4 * float(jnp.finfo(c1.dtype).eps) ** 0.5
     return ss_code, cons, stab, dominance, g["disc"], x * (1 - delta), x * (1 + delta)
 

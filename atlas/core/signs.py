@@ -147,14 +147,19 @@ def certified_sign(value, abs_value, exact_zero=None, n: int = 0, floor: float =
     return s.astype(CODE)
 
 
-def evaluate_certified(fn, *args, exact_zero=None, bounds: tuple | None = None, majorants=None):
+def evaluate_certified(
+    fn, *args, exact_zero=None, bounds: tuple | None = None, majorants=None, zeros: bool = True
+):
     """Evaluate ``fn(*args, sub)`` with its certified sign; returns ``(value, abs_value, sign)``.
 
     Every input must satisfy ``|x| <= bound`` (``bounds``, default :data:`INPUT_BOUND`): the
     underflow floor is derived from these bounds (:func:`error_model`).  ``majorants`` (one per
     input, ``>= |x|``; scalars allowed) replace ``|x|`` in ``abs_value``: ``P_abs`` is monotone in
     every ``|x|``, so the bound stays valid, is looser, and costs almost nothing where the
-    majorants are constants or per-axis arrays (the compiler folds the ones).
+    majorants are constants or per-axis arrays (the compiler folds the ones).  ``zeros=False``
+    skips the structural zeros (:func:`structural_zero`; an exact zero is then ``UNKNOWN``) for
+    callers that read only certified nonzero signs: it evaluates ``fn`` once per point instead of
+    twice.
     """
     dtype = jnp.result_type(*args)
     n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds)
@@ -162,8 +167,9 @@ def evaluate_certified(fn, *args, exact_zero=None, bounds: tuple | None = None, 
     if majorants is None:
         majorants = [jnp.abs(a) for a in args]
     abs_value = fn(*(jnp.asarray(m, dtype) for m in majorants), sub=jnp.add)
-    zero = structural_zero(fn, *args)
-    exact_zero = zero if exact_zero is None else (exact_zero | zero)
+    if zeros:
+        zero = structural_zero(fn, *args)
+        exact_zero = zero if exact_zero is None else (exact_zero | zero)
     return value, abs_value, certified_sign(value, abs_value, exact_zero, n=n, floor=floor)
 
 

@@ -229,11 +229,13 @@ def test_near_singular_B_skips_tier_2_and_is_settled_exactly():
 @pytest.mark.parametrize(
     "n, chunk, lengths",
     [
-        (1, 1 << 16, [256]),
+        (1, 1 << 16, [16]),  # a handful of points never runs padded to 256
+        (17, 1 << 16, [256]),
         (257, 1 << 16, [4096]),
         (4696, 1 << 16, [4096, 4096]),  # not one batch of 65,536 (14x padding)
         (70000, 1 << 16, [1 << 16, 4096, 4096]),
         (100, 64, [64, 64]),  # never longer than the chunk asked for
+        (70, 64, [64, 16]),
     ],
 )
 def test_batches_pad_little(n, chunk, lengths):

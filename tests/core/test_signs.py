@@ -1,0 +1,59 @@
+"""Certified signs (:mod:`atlas.core.signs`) against exact rational evaluation of the float inputs."""
+
+from fractions import Fraction
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from atlas.core.signs import UNKNOWN, evaluate_certified
+
+
+def _expr(a, b, c, d, *, sub):
+    """A Sturm-like expression with cancellation: ``(a b - c d)^2 - (a d - b c)^2 + a``."""
+    return sub(sub(a * b, c * d) ** 2 + a, sub(a * d, b * c) ** 2)
+
+
+def _exact_sign(*x):
+    f = [Fraction(float(v)) for v in x]
+    v = _expr(*f, sub=lambda p, q: p - q)
+    return (v > 0) - (v < 0)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_certified_sign_is_the_exact_sign(dtype):
+    """Every certified code is the exact sign of the expression at the (rational) float inputs,
+    near cancellation too (``a = 0``: the two squares nearly cancel when ``b ~ c``)."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, (4, 400)).astype(dtype)
+    x[0, :200] = 0
+    x[2, :200] = x[1, :200] * (1 + rng.uniform(-1e-6, 1e-6, 200)).astype(dtype)
+    x[3, :100] = x[1, :100]
+    _, _, code = evaluate_certified(_expr, *(jnp.asarray(v) for v in x))
+    code = np.asarray(code)
+    known = code != UNKNOWN
+    assert known.mean() > 0.5
+    for i in np.flatnonzero(known):
+        assert code[i] == _exact_sign(*x[:, i]), i
+
+
+def test_without_zeros_an_exact_zero_is_unknown():
+    """``zeros=False``: a structural zero (every monomial has a zero input) is ``UNKNOWN`` instead
+    of ``0``; every other code is unchanged, and the expression is evaluated once, not twice."""
+    x = [jnp.asarray([0.0, 0.5, 0.0]), jnp.asarray([0.0, 0.25, 0.3])]
+    x += [jnp.asarray([0.0, 0.75, 0.1]), jnp.asarray([0.0, -0.5, 0.2])]
+    with_zeros = np.asarray(evaluate_certified(_expr, *x)[2])
+    without = np.asarray(evaluate_certified(_expr, *x, zeros=False)[2])
+    assert with_zeros[0] == 0 and without[0] == UNKNOWN
+    assert np.array_equal(with_zeros[1:], without[1:])
+    calls = []
+
+    def counted(*a, sub):
+        calls.append(sub)
+        return _expr(*a, sub=sub)
+
+    evaluate_certified(counted, *x, zeros=False)
+    assert [s for s in calls if s is jnp.add] == [jnp.add]  # the bound (absolute values)
+    calls.clear()
+    evaluate_certified(counted, *x)
+    assert [s for s in calls if s is jnp.add] == [jnp.add] * 2  # + the structural zeros
