@@ -48,16 +48,19 @@ def log(msg):
 
 def timeit(fn, *, budget=2.0, max_repeats=7, min_repeats=2):
     """Call ``fn`` once (compilation / warm-up), then the minimum of repeats [s]; as many repeats
-    as fit in ``budget`` seconds, within ``[min_repeats, max_repeats]``."""
-    t0 = time.perf_counter()
+    as fit in ``budget`` seconds, within ``[min_repeats, max_repeats]``, sized by the first
+    repeat (not by the warm-up call, whose compilation would cut the repeats to the minimum)."""
     fn()
-    first = time.perf_counter() - t0
-    reps = int(max(min_repeats, min(max_repeats, budget / max(first, 1e-6))))
     best = math.inf
-    for _ in range(reps):
+    done, reps = 0, min_repeats
+    while done < reps:
         t0 = time.perf_counter()
         fn()
-        best = min(best, time.perf_counter() - t0)
+        t = time.perf_counter() - t0
+        best = min(best, t)
+        if done == 0:
+            reps = int(max(min_repeats, min(max_repeats, budget / max(t, 1e-6))))
+        done += 1
     return best
 
 

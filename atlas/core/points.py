@@ -9,7 +9,7 @@ each on the points the previous one left ``UNDECIDED``:
    (closed forms for ``q1 = q2 = 0``, the monotone-curve analysis with damping);
 2. :func:`atlas.core.rootfree.tier2` on the points the first pass flagged (sharper error bounds,
    dominance by shifted Routh counts): typically < 0.1 % of the points; damped points whose
-   ``det B`` has no certified sign skip it (it cannot decide them);
+   ``det B`` has no certified sign (an input not a normal number) skip it (it cannot decide them);
 3. the certified root enclosures of :func:`atlas.core.spectral.ii_verdicts_two_stage` on what is left;
 4. the exact tier :func:`atlas.core.exact.resolve` (rational arithmetic) on the rest.
 
@@ -91,11 +91,12 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
 
 
 def _batches(n: int, chunk: int):
-    """``(start, stop, length)`` of the padded batches of ``n`` points: full batches of ``chunk``,
-    the rest in batches of the first of :data:`CHUNK_SIZES` and ``chunk`` that holds it, except
-    that a rest longer than the largest size below ``chunk`` runs in batches of that size if the
-    chunk is more than 4 times longer (at most ``CHUNK_SIZES[-1] - 1`` padded points then, never a
-    nearly empty chunk)."""
+    """``(start, stop, length)`` of the padded batches of ``n`` points.
+
+    Full batches of ``chunk``; the rest runs at the first of :data:`CHUNK_SIZES` (or ``chunk``)
+    that holds it, except that a rest above the largest size below ``chunk`` runs in batches of
+    that size where ``chunk`` is more than 4 times longer (a rest of 4,696 points: two batches of
+    4,096, not one of 65,536)."""
     small = [m for m in CHUNK_SIZES if m < chunk]
     start = 0
     while start < n:

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import functools
 
+import jax
 import jax.numpy as jnp
 
 from atlas.core.verdicts import UNKNOWN_SIGN
@@ -158,8 +159,7 @@ def evaluate_certified(
     every ``|x|``, so the bound stays valid, is looser, and costs almost nothing where the
     majorants are constants or per-axis arrays (the compiler folds the ones).  ``zeros=False``
     skips the structural zeros (:func:`structural_zero`; an exact zero is then ``UNKNOWN``) for
-    callers that read only certified nonzero signs: it evaluates ``fn`` once per point instead of
-    twice.
+    callers that read only certified nonzero signs: one evaluation of ``fn`` per point less.
     """
     dtype = jnp.result_type(*args)
     n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds)
@@ -192,13 +192,17 @@ def det2(ux, uy, vx, vy, *, sub=jnp.subtract):
 
 
 def det2_sign(ux, uy, vx, vy):
-    """Certified sign of ``ux vy - uy vx`` for direction vectors (components of magnitude <= 1).
+    """Sign of ``ux vy - uy vx`` for direction vectors (components of magnitude <= 1), exact.
 
-    Identical or opposite vectors give an exact zero.  In float32 the products are formed exactly in
-    float64 (24 + 24 bits < 53), so the sign is always certified.  Products of direction components
-    never underflow (``|cos|, |sin| >= 1e-17`` off the axes), so ``abs == 0`` is an exact zero.
+    float32: the products are formed exactly in float64 (24 + 24 bits < 53), and the rounded
+    difference of two floats has the exact sign.  float64: integer arithmetic on the mantissas
+    (:func:`_det2_sign_float64`); ``UNKNOWN`` only where an input is subnormal or not finite.
+    float32 without float64 (``jax_enable_x64`` off): certified by the error bound, identical or
+    opposite vectors an exact zero.
     """
-    if ux.dtype == jnp.float32 and has_float64():
+    if ux.dtype == jnp.float64:
+        return _det2_sign_float64(ux, uy, vx, vy)
+    if has_float64():
         wide = [a.astype(jnp.float64) for a in (ux, uy, vx, vy)]
         d = det2(*wide)
         return jnp.sign(d).astype(CODE)
@@ -207,6 +211,51 @@ def det2_sign(ux, uy, vx, vy):
     abs_value = det2(jnp.abs(ux), jnp.abs(uy), jnp.abs(vx), jnp.abs(vy), sub=jnp.add)
     n, floor = error_model(det2, 4, jnp.dtype(value.dtype).name, (1.0, 1.0, 1.0, 1.0))
     return certified_sign(value, abs_value, exact_zero=same | (abs_value == 0), n=n, floor=floor)
+
+
+_LOW52, _LOW26 = (1 << 52) - 1, (1 << 26) - 1
+
+
+def _float64_parts(x):
+    """``(sign, m, e, exact)`` of float64 ``x`` from its bits: ``x = sign m 2^e`` with the 53-bit
+    integer mantissa ``m``, where ``exact`` (zero or a normal number; the bits, not a float
+    comparison, so a flush of subnormals to zero cannot fake a zero)."""
+    bits = jax.lax.bitcast_convert_type(x, jnp.int64)
+    mag = bits & ((1 << 63) - 1)
+    expo = mag >> 52
+    sign = jnp.where(mag == 0, 0, jnp.where(bits < 0, -1, 1)).astype(CODE)
+    exact = (mag == 0) | ((expo > 0) & (expo < 0x7FF))
+    return sign, (mag & _LOW52) | (1 << 52), expo - 1075, exact
+
+
+def _mantissa_product(ma, mb):
+    """The exact product of two 53-bit integers as ``(hi, lo)``: ``hi 2^52 + lo``, ``lo < 2^52``
+    (26/27-bit halves: every partial product fits in int64)."""
+    ha, la, hb, lb = ma >> 26, ma & _LOW26, mb >> 26, mb & _LOW26
+    mid = ha * lb + la * hb
+    lo = la * lb + ((mid & _LOW26) << 26)
+    return ha * hb + (mid >> 26) + (lo >> 52), lo & _LOW52
+
+
+def _doubled(hi, lo, k):
+    """``(hi, lo)`` times ``2^k``, ``k`` in {0, 1}."""
+    return (hi << k) | (lo >> (52 - k)), (lo << k) & _LOW52
+
+
+def _det2_sign_float64(ux, uy, vx, vy):
+    """Exact sign of ``ux vy - uy vx`` in float64, in integer arithmetic (no rounding, so no
+    compiler contraction can change it): ``p = ux vy`` and ``q = uy vx`` differ in sign, or their
+    mantissa products (in ``[2^104, 2^106)``) are compared, exactly where the exponents of ``p``
+    and ``q`` differ by at most one (by more, the larger exponent wins)."""
+    sign, m, e, exact = zip(*(_float64_parts(a) for a in (ux, uy, vx, vy)))  # ux, uy, vx, vy
+    sp, sq = sign[0] * sign[3], sign[1] * sign[2]
+    de = (e[0] + e[3]) - (e[1] + e[2])
+    hp, lp = _doubled(*_mantissa_product(m[0], m[3]), jnp.clip(de, 0, 1))
+    hq, lq = _doubled(*_mantissa_product(m[1], m[2]), jnp.clip(-de, 0, 1))
+    larger = jnp.where(hp != hq, jnp.sign(hp - hq), jnp.sign(lp - lq))
+    larger = jnp.where(de >= 2, 1, jnp.where(de <= -2, -1, larger)).astype(CODE)
+    d = jnp.where(sp != sq, jnp.where(sp != 0, sp, -sq), sp * larger)
+    return jnp.where(exact[0] & exact[1] & exact[2] & exact[3], d, UNKNOWN).astype(CODE)
 
 
 def has_float64() -> bool:

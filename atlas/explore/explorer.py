@@ -17,9 +17,9 @@ The logic behind ``notebooks/explore.ipynb`` as plain, testable functions, one m
 * :mod:`atlas.explore.redraw` -- :func:`measure_redraw` times a slider move.
 
 Grid: cell centres ``beta = (i + 1/2) 2 pi / n`` [rad].  The widget offers odd ``n`` only: for even
-``n`` the centres ``beta`` and ``beta + pi`` are both on the grid, i.e. a whole line of cells lies
-exactly on ``det B = 0`` (``beta2 = beta1 + pi``), where the fast path cannot certify and every cell
-goes to the (slow) exact reference.
+``n`` the centres ``beta`` and ``beta + pi`` are both on the grid, i.e. a whole line of cells lies on
+``det B = 0`` (``beta2 = beta1 + pi``) up to the rounding of the directions (decided, with the
+exact sign of ``det B``, but a line of near-ties nobody asked for).
 """
 
 from atlas.explore.colors import layer_rgba, legend_entries

@@ -6,9 +6,10 @@ by :mod:`atlas.core.exact`.  Variable names, dimensions and stored types follow 
 (SPEC §2), so a map equals the corresponding slice of an atlas from :func:`atlas.data.engine.generate`.
 
 Grid: cell centres ``beta = (i + 1/2) 2 pi / n`` [rad].  For even ``n`` the centres ``beta`` and
-``beta + pi`` are both on the grid, i.e. a whole line of cells lies exactly on ``det B = 0``
-(``beta2 = beta1 + pi``), where the fast path cannot certify and every cell goes to the (slow) exact
-reference.
+``beta + pi`` are both on the grid, i.e. a whole line of cells lies on ``det B = 0``
+(``beta2 = beta1 + pi``) up to the rounding of the directions (``|det B| ~ 1e-17``).  The kernels
+take the sign of ``det B`` exactly (:func:`atlas.core.signs.det2_sign`), so these cells are
+decided; a few damped ones may still leave ``consistent_II`` to the exact reference.
 """
 
 from __future__ import annotations

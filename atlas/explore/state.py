@@ -51,10 +51,9 @@ class Explorer:
     Bounded interactivity (a design decision).  A slider move runs the certified fast path on the
     whole grid (milliseconds to a few hundred milliseconds at 513 x 513, see
     :func:`measure_redraw`) and settles at most ``max_resolve`` (default :data:`LIVE_MAX_RESOLVE`)
-    of the points it leaves undecided with the exact reference, which costs up to ~20-100 ms per
-    point (the II verdicts need the root reference; SS-only points take a rational Hurwitz test).
-    Uncapped settlement could stall a slider move for seconds (an even grid puts a whole line of
-    cells on ``det B = 0``).  Cells that stay undecided are drawn in the ``undecided`` colour of
+    of the points it leaves undecided with the exact reference (:mod:`atlas.core.exact`: tens of
+    microseconds a point on the hard suites, more on degenerate ones).  Uncapped settlement of a
+    scene with many undecided points could stall a slider move.  Cells that stay undecided are drawn in the ``undecided`` colour of
     :mod:`atlas.core.verdicts` (with its legend entry) and counted in :meth:`status`; every verdict
     drawn is certified.  :meth:`settle` settles all of them on request (``max_resolve=None``
     gives the old always-settle behaviour).  The angle-only layers (class and subclass codes,

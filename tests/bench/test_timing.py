@@ -18,6 +18,19 @@ def test_timeit_warms_up_then_takes_the_minimum():
     assert 0.001 <= best < 0.01
 
 
+def test_timeit_repeats_are_not_cut_by_the_compilation():
+    """A slow first call (compilation) does not set the number of repeats: the first repeat does."""
+    calls = []
+    costs = iter([0.3] + [0.001] * 20)
+
+    def fn():
+        calls.append(1)
+        time.sleep(next(costs))
+
+    timing.timeit(fn, budget=0.1, max_repeats=10, min_repeats=2)
+    assert len(calls) == 1 + 10
+
+
 def test_timeit_repeats_within_budget():
     calls = []
     t = timing.timeit(lambda: calls.append(1), budget=1e9, max_repeats=5)

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import signs
 from atlas.core.signs import UNKNOWN, evaluate_certified
 
 
@@ -57,3 +58,38 @@ def test_without_zeros_an_exact_zero_is_unknown():
     calls.clear()
     evaluate_certified(counted, *x)
     assert [s for s in calls if s is jnp.add] == [jnp.add] * 2  # + the structural zeros
+
+
+def _exact_det2(ux, uy, vx, vy):
+    v = Fraction(float(ux)) * Fraction(float(vy)) - Fraction(float(uy)) * Fraction(float(vx))
+    return (v > 0) - (v < 0)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_det2_sign_is_exact(dtype):
+    """``sign(det B)`` equals the rational sign on directions with ``b2 ~ -b1`` and ``b2 ~ b1``
+    (the grid lines where the float difference cancels), exact ties, axis directions, and on
+    near-ties with exponents far apart (float64: integer mantissa products)."""
+    rng = np.random.default_rng(5)
+    beta = np.linspace(0, 2 * np.pi, 513)
+    u = np.stack([np.cos(beta), np.sin(beta)]).astype(dtype)
+    v = np.stack([np.cos(beta + np.pi), np.sin(beta + np.pi)]).astype(dtype)
+    w = np.stack([-u[0], -u[1]])  # exactly opposite: det = 0
+    m = 4000
+    a, b, c = (rng.uniform(-1, 1, m) * 2.0 ** -rng.integers(0, 40, m) for _ in range(3))
+    d = np.clip(b * c / a * (1 + rng.choice([0.0, 1e-16, -1e-16, 1e-7], m)), -1, 1)
+    cases = [(u, v), (u, w), (u, u[::-1]), (u, np.roll(u, 1, axis=1))]
+    cases.append((np.stack([a, b]).astype(dtype), np.stack([c, d]).astype(dtype)))
+    for p, q in cases:
+        got = np.asarray(signs.det2_sign(*(jnp.asarray(x) for x in (p[0], p[1], q[0], q[1]))))
+        ref = [_exact_det2(*x) for x in zip(p[0], p[1], q[0], q[1])]
+        assert np.array_equal(got, ref)
+
+
+def test_det2_sign_float64_unknown_only_off_the_normal_numbers():
+    """Subnormal, infinite and NaN components give ``UNKNOWN`` (a flush of subnormals to zero
+    must not turn a tiny nonzero product into a zero); zeros are exact."""
+    x = jnp.asarray([5e-324, 1e-310, np.inf, np.nan, 0.0, 0.5])
+    half = jnp.full(6, 0.5)
+    got = np.asarray(signs.det2_sign(x, half, half, half))
+    assert got.tolist() == [UNKNOWN] * 4 + [-1, 0]

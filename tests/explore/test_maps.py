@@ -11,9 +11,10 @@ from atlas.data.scene import Scene
 from atlas.explore import maps
 
 
-def test_even_grid_class_codes_settle_like_generate():
-    """An even grid puts cells on beta2 = beta1 + pi (det B = 0), where the class code is undecided
-    for the fast path and settled exactly; ``cc_possible`` (never undecided) computed with it."""
+def test_even_grid_class_codes_settle_like_generate(bounded_det_b):
+    """An even grid puts cells on beta2 = beta1 + pi (det B = 0), where the class code of a kernel
+    with a float-bounded ``sign det B`` is undecided and settled exactly; ``cc_possible`` (never
+    undecided) computed with it."""
     n = 16
     beta = maps.beta_grid(n)
     layers = ("class_code", "cc_possible")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from atlas.explore import maps, redraw
 
 
-def test_measure_redraw():
+def test_measure_redraw(bounded_det_b):
     rows = redraw.measure_redraw(
         n=16, cases=((0.3, 0.3),), layers=("stable_SS",), repeats=2, max_resolve=3
     )

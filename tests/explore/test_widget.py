@@ -128,8 +128,9 @@ def test_click_on_map_inspects_that_point(need):
     assert len(seen) >= 3  # the clicks landed in different classes
 
 
-def test_redraw_capped_then_settle_undecided(need):
-    """An even grid puts cells on det B = 0 (undecided for the fast path): a redraw settles at most
+def test_redraw_capped_then_settle_undecided(need, bounded_det_b):
+    """An even grid puts cells on det B = 0 (undecided with a float-bounded ``sign det B``,
+    :func:`bounded_det_b`): a redraw settles at most
     ``max_resolve`` of them and draws the rest in the undecided colour; the "settle undecided"
     button settles all, giving the atlas's map."""
     need("ipywidgets")
