@@ -275,35 +275,8 @@ def spectral_points(
         return {k: np.broadcast_to(np.asarray(res[k]), shape).copy() for k in names}
 
     flags = [k for k in names if k != "spectral_abscissa"]
-    want_ss = "stable_SS" in flags
-    want_ii = any(k in flags for k in ("consistent_II", "stable_II"))
     undamped_q = (inputs[5] == 0) & (inputs[6] == 0)
-    damped = True if not undamped_q.any() else (False if undamped_q.all() else None)
-    out = {}
-    open_idx = np.zeros(0, np.intp)  # flat indices with an output undecided by the first pass
-    if flags:
-        code = _first_pass(inputs, shape, dtype, ss=want_ss, ii=want_ii, damped=damped)
-        ss, cons, stab, later, open_ = rootfree.unpack(code)
-        verdict = {"stable_SS": ss, "consistent_II": cons, "stable_II": stab}
-        out = {k: verdict[k] for k in flags}
-        # the kernel's "open" bit (a superset where it computed more than was asked), narrowed
-        open_idx = np.flatnonzero(open_)
-        open_idx = open_idx[
-            np.logical_or.reduce([out[k].reshape(-1)[open_idx] == _UND for k in flags])
-        ]
-        # every later tier works inside open_idx (small): no more passes over the whole grid
-        _second_pass(
-            inputs,
-            shape,
-            chunk,
-            verdict,
-            open_idx[later.reshape(-1)[open_idx]],
-            counts,
-            ss=want_ss,
-            ii=want_ii,
-        )
-        if want_ii:
-            _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts)
+    out, open_idx = _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
     open_ = {k: out[k].reshape(-1)[open_idx] == _UND for k in flags}
@@ -316,6 +289,30 @@ def spectral_points(
     counts["undecided_after"] = int(np.logical_or.reduce(after).sum()) if flags else 0
     _report(counts, stats)
     return out
+
+
+def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts):
+    """Tiers 1-3 (first pass, tier 2, enclosures) for the verdicts ``flags``; returns the verdict
+    arrays and the flat indices the first pass left open (where every later tier works, and where
+    any undecided point lies)."""
+    if not flags:
+        return {}, np.zeros(0, np.intp)
+    want_ss = "stable_SS" in flags
+    want_ii = any(k in flags for k in ("consistent_II", "stable_II"))
+    damped = True if not undamped_q.any() else (False if undamped_q.all() else None)
+    code = _first_pass(inputs, shape, dtype, ss=want_ss, ii=want_ii, damped=damped)
+    ss, cons, stab, later, open_ = rootfree.unpack(code)
+    verdict = {"stable_SS": ss, "consistent_II": cons, "stable_II": stab}
+    # the kernel's "open" bit (a superset where it computed more than was asked), narrowed
+    open_idx = np.flatnonzero(open_)
+    undecided = [verdict[k].reshape(-1)[open_idx] == _UND for k in flags]
+    open_idx = open_idx[np.logical_or.reduce(undecided)]
+    # every later tier works inside open_idx (small): no more passes over the whole grid
+    tier2_idx = open_idx[later.reshape(-1)[open_idx]]
+    _second_pass(inputs, shape, chunk, verdict, tier2_idx, counts, ss=want_ss, ii=want_ii)
+    if want_ii:
+        _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts)
+    return {k: verdict[k] for k in flags}, open_idx
 
 
 def _fill(arr, idx, new):

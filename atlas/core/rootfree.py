@@ -53,7 +53,12 @@ error model here (:func:`atlas.core.signs.error_model`).
 error with the majorants ``|c|, |s| <= 1``, ``k_j <= max k``, ``q_j <= max q`` (no per-point
 absolute-value evaluation); :func:`tier2` (the few points left, gathered) uses the sharp bound on
 the absolute values and adds the shifted Routh counts.  Both are certified; the first is cheaper
-and looser.
+and looser.  The first pass computes ``D = c1 s2 - s1 c2`` inside each expression (its bound covers
+the cancellation, relative to ``|c1 s2| + |s1 c2|``); tier 2 (float64) reads ``D`` as an input
+within ``gamma_3`` of ``det B`` (:func:`atlas.core.signs.det2_accurate`, integer mantissa products
+where it cancels), so ``a1 = D m`` and ``a0 = D k1 k2`` keep their relative accuracy at
+``|det B| ~ 1e-17`` (``b2 ~ -b1``), where every float bound on ``D`` fails.  The sign of ``det B``
+itself is exact in both (:func:`atlas.core.signs.det2_sign`).
 
 **Soundness.**  XLA on CPU removes optimization barriers before fusion and contracts a product
 and a sum into one fused multiply-add (seen in the compiled code of this machine), so inside one
@@ -83,7 +88,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import spectral
-from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, has_float64
+from atlas.core.signs import (
+    CODE,
+    DET2_ROUNDINGS,
+    UNKNOWN,
+    det2_accurate,
+    det2_sign,
+    evaluate_certified,
+    has_float64,
+)
 from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
 __all__ = ["ii_damped", "tier2", "codes", "pack", "unpack", "TIER2_BIT", "OPEN_BIT"]
@@ -95,11 +108,11 @@ TIER2_BIT = 6
 OPEN_BIT = 7
 
 
-# --- polynomial expressions (inputs c1, s1, c2, s2, k1, k2, q1, q2, all |.| <= 1) ----------------
+# --- polynomial expressions (inputs c1, s1, c2, s2, k1, k2, q1, q2, all |.| <= 1, and D = det B:
+# computed inside by the first pass (_det_inside), an accurate input in tier 2) -------------------
 
 
-def _coef(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
-    D = sub(c1 * s2, s1 * c2)
+def _coef(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     a3 = c1 * q1 + s2 * q2
     a2 = k1 * c1 + k2 * s2 + D * q1 * q2
     a1 = D * (k1 * q2 + k2 * q1)
@@ -120,9 +133,8 @@ def _H2(*a, sub):
     return sub(a3 * a2, a1)
 
 
-def _G(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _G(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     m = k1 * q2 + k2 * q1
-    D = sub(c1 * s2, s1 * c2)
     a3 = c1 * q1 + s2 * q2
     return s1 * c2 * m * m + q1 * q2 * (sub(k1 * c1, k2 * s2) ** 2 + D * a3 * m)
 
@@ -183,35 +195,61 @@ def _disc(*args, sub):
     return _quartic_disc(*_coef(*args, sub=sub), sub=sub)
 
 
-def _arcA(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _arcA(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     return sub(c1 * q1, s2 * q2)
 
 
-def _arcB(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _arcB(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     return sub(c1 * k1, s2 * k2)
 
 
-def _arcW(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _arcW(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     A = sub(c1 * q1, s2 * q2)
     B = sub(c1 * k1, s2 * k2)
     return sub(B * B + s2 * k2 * A * A, s2 * q2 * A * B)
 
 
-def _a2_d0(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _a2_d0(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     return k1 * c1 + k2 * s2
 
 
-def _disc_d0(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _disc_d0(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     a3 = c1 * q1 + s2 * q2
     return sub(a3 * a3, 4 * (k1 * c1 + k2 * s2))
 
 
-def _disc_u(c1, s1, c2, s2, k1, k2, q1, q2, *, sub):
+def _disc_u(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
     """Discriminant of ``mu^2 + a2 mu + a0`` (``Q = 0``, SS of :mod:`atlas.core.spectral`)."""
     return sub(k1 * c1, k2 * s2) ** 2 + 4 * k1 * k2 * s1 * c2
 
 
 _BOUNDS8 = (1.0,) * 8
+#: bounds and rounding counts of the 9 inputs with an accurate ``D`` (:func:`_csign`)
+_BOUNDS9, _ROUNDED9 = _BOUNDS8 + (2.0,), (0,) * 8 + (DET2_ROUNDINGS,)
+#: magnitude bound of the shift ``s`` of tier 2 (the Cauchy bound of ``p`` is <= 5 for inputs <= 1)
+_SHIFT_BOUND = 8.0
+
+
+@functools.cache
+def _det_inside(fn):
+    """``fn`` of the 8 inputs, ``D = c1 s2 - s1 c2`` computed inside: the first pass's form (its
+    error bound covers the cancellation in ``D``, relative to ``|c1 s2| + |s1 c2|``)."""
+
+    def with_det(c1, s1, c2, s2, k1, k2, q1, q2, *rest, sub):
+        return fn(c1, s1, c2, s2, k1, k2, q1, q2, sub(c1 * s2, s1 * c2), *rest, sub=sub)
+
+    return with_det
+
+
+def _accurate_det(c1, s1, c2, s2):
+    """``(D,)`` within ``gamma_3`` of ``det B`` (:func:`atlas.core.signs.det2_accurate`; NaN where
+    not proven, so no sign that reads it is certified there), or ``()`` for float32 (``D`` then
+    computed inside): tier 2's extra input, so that the signs of ``a1 = D m``, ``a0 = D k1 k2``
+    and the expressions built on them are certified where ``|det B| ~ 1e-17`` (``b2 ~ -b1``)."""
+    if c1.dtype != jnp.float64:
+        return ()
+    return (det2_accurate(c1, s1, c2, s2),)
+
 
 #: certified signs of the first pass (cheap: <= 3 ns a point each)
 _CHEAP = dict(
@@ -238,8 +276,17 @@ def _balance(kappa, q1, q2):
     return k1 * f * f, k2 * f * f, q1s * f, q2s * f
 
 
-def _csign(fn, args, majorants=None, zeros=True):
-    return evaluate_certified(fn, *args, bounds=_BOUNDS8, majorants=majorants, zeros=zeros)[2]
+def _csign(fn, args, majorants=None, zeros=True, shift=None):
+    """Certified sign code of ``fn`` on the 8 inputs (``D`` computed inside, :func:`_det_inside`)
+    or on 9 (an accurate ``D`` last, :func:`_accurate_det`), and the ``shift`` of tier 2."""
+    if len(args) == 8:
+        fn, bounds, rounded = _det_inside(fn), _BOUNDS8, (0,) * 8
+    else:
+        bounds, rounded = _BOUNDS9, _ROUNDED9
+    if shift is not None:
+        args, bounds, rounded = args + (shift,), bounds + (_SHIFT_BOUND,), rounded + (0,)
+    kw = dict(bounds=bounds, rounded=rounded, majorants=majorants, zeros=zeros)
+    return evaluate_certified(fn, *args, **kw)[2]
 
 
 def _exact_sign(x, y, sign):
@@ -259,11 +306,14 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     left undecided (and the compiler drops them).  The first pass (``sharp=False``) bounds the
     rounding error with the majorants ``|c|, |s| <= 1``, ``k_j <= max k``, ``q_j <= max q``
     (:func:`atlas.core.signs.evaluate_certified`): only the values are evaluated per point; tier 2
-    (``sharp=True``) uses the inputs' absolute values.
+    (``sharp=True``) uses the inputs' absolute values and the accurate ``D`` of
+    :func:`_accurate_det` as an input.
     """
     k1, k2, q1s, q2s = _balance(kappa, q1, q2)
     args = (c1, s1, c2, s2, k1, k2, q1s, q2s)
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in args))
+    if sharp:
+        args = args + _accurate_det(c1, s1, c2, s2)
     majorants = None
     if not sharp:
         km, qm = jnp.maximum(k1, k2), jnp.maximum(q1s, q2s)
@@ -487,9 +537,9 @@ def _ii_decide(g):
 # --- tier 2: dominance when three roots lie right of the imaginary axis ---------------------------
 
 
-def _shifted(c1, s1, c2, s2, k1, k2, q1, q2, s, *, sub):
+def _shifted(c1, s1, c2, s2, k1, k2, q1, q2, D, s, *, sub):
     """Coefficients of ``p(l + s)``."""
-    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1, q2, sub=sub)
+    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1, q2, D, sub=sub)
     b3 = a3 + 4 * s
     b2 = a2 + 3 * a3 * s + 6 * s * s
     b1 = a1 + 2 * a2 * s + 3 * a3 * s * s + 4 * s * s * s
@@ -515,17 +565,10 @@ def _sH3(*a, sub):
     return sub(b1 * sub(b3 * b2, b1), b3 * b3 * b0)
 
 
-#: magnitude bound of the shift ``s`` (the Cauchy bound of ``p`` is <= 5 for inputs <= 1)
-_SHIFT_BOUND = 8.0
-
-
 def _count_right(args, s):
     """Certified number of roots with ``Re > s`` (``-1`` if not certified) and sign ``p(s)``."""
-    a = args + (s,)
-    bounds = _BOUNDS8 + (_SHIFT_BOUND,)
-    sb0, sb3, sh2, sh3 = (  # read only as certified nonzero signs: no structural zeros
-        evaluate_certified(f, *a, bounds=bounds, zeros=False)[2] for f in (_sb0, _sb3, _sH2, _sH3)
-    )
+    # read only as certified nonzero signs: no structural zeros
+    sb0, sb3, sh2, sh3 = (_csign(f, args, zeros=False, shift=s) for f in (_sb0, _sb3, _sH2, _sH3))
     ok = (jnp.abs(s) <= _SHIFT_BOUND) & (s > 0)
     for t in (sb0, sb3, sh2, sh3):
         ok = ok & ((t == 1) | (t == -1))
@@ -574,7 +617,10 @@ def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(_CHEAP) | frozenset(_STURM), sharp=True)
     cons, stab, dominance = _ii_decide(g)
     k1, k2, q1s, q2s = _balance(kappa, q1, q2)
-    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1s, q2s, sub=jnp.subtract)
+    D = c1 * s2 - s1 * c2
+    for accurate in _accurate_det(c1, s1, c2, s2):  # an estimate: the shifts are certified later
+        D = jnp.where(jnp.isnan(accurate), D, accurate)
+    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1s, q2s, D, sub=jnp.subtract)
     hi = 1 + jnp.maximum(
         jnp.maximum(jnp.abs(a3), jnp.abs(a2)), jnp.maximum(jnp.abs(a1), jnp.abs(a0))
     )
@@ -598,7 +644,7 @@ def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_dis
     """Program 2 of :func:`tier2`: certified root counts right of the shifts ``s_lo, s_hi`` (inputs
     of this program: one rounded number each) decide dominance; returns ``(consistent_II,
     stable_II)``."""
-    args = (c1, s1, c2, s2, *_balance(kappa, q1, q2))
+    args = (c1, s1, c2, s2, *_balance(kappa, q1, q2), *_accurate_det(c1, s1, c2, s2))
     n_lo, p_lo = _count_right(args, s_lo)
     n_hi, p_hi = _count_right(args, s_hi)
     stable = (s_disc == 1) | ((s_disc == -1) & (n_lo == 1) & (p_lo == -1))

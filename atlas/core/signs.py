@@ -109,13 +109,18 @@ def _add(a, b):
 
 
 @functools.cache
-def error_model(fn, n_args: int, dtype_name: str, bounds: tuple | None = None) -> tuple[int, float]:
+def error_model(
+    fn, n_args: int, dtype_name: str, bounds: tuple | None = None, rounded: tuple | None = None
+) -> tuple[int, float]:
     """``(n, E)`` of expression ``fn`` (see the module docstring): rounding count and underflow
     floor in units of the smallest normal number, for inputs bounded by ``bounds`` (default
-    :data:`INPUT_BOUND` each)."""
+    :data:`INPUT_BOUND` each).  ``rounded`` (one count per input, default 0): an input that
+    stands for an exact quantity ``X`` with ``x = X (1 + theta_k)``, ``|theta_k| <= gamma_k``
+    (``k`` roundings), so that the bound covers ``P`` at the exact ``X``."""
     u = float(jnp.finfo(dtype_name).eps) / 2.0
     bounds = bounds or (INPUT_BOUND,) * n_args
-    t = fn(*(_Tracer(0, float(b), 0.0, u) for b in bounds), sub=_add)
+    rounded = rounded or (0,) * n_args
+    t = fn(*(_Tracer(k, float(b), 0.0, u) for b, k in zip(bounds, rounded)), sub=_add)
     return t.n, t.err
 
 
@@ -149,7 +154,13 @@ def certified_sign(value, abs_value, exact_zero=None, n: int = 0, floor: float =
 
 
 def evaluate_certified(
-    fn, *args, exact_zero=None, bounds: tuple | None = None, majorants=None, zeros: bool = True
+    fn,
+    *args,
+    exact_zero=None,
+    bounds: tuple | None = None,
+    majorants=None,
+    zeros: bool = True,
+    rounded: tuple | None = None,
 ):
     """Evaluate ``fn(*args, sub)`` with its certified sign; returns ``(value, abs_value, sign)``.
 
@@ -160,9 +171,11 @@ def evaluate_certified(
     majorants are constants or per-axis arrays (the compiler folds the ones).  ``zeros=False``
     skips the structural zeros (:func:`structural_zero`; an exact zero is then ``UNKNOWN``) for
     callers that read only certified nonzero signs: one evaluation of ``fn`` per point less.
+    ``rounded``: inputs that are themselves rounded values (:func:`error_model`), e.g.
+    :func:`det2_accurate`.
     """
     dtype = jnp.result_type(*args)
-    n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds)
+    n, floor = error_model(fn, len(args), jnp.dtype(dtype).name, bounds, rounded)
     value = fn(*args, sub=jnp.subtract)
     if majorants is None:
         majorants = [jnp.abs(a) for a in args]
@@ -238,7 +251,7 @@ def _mantissa_product(ma, mb):
 
 
 def _doubled(hi, lo, k):
-    """``(hi, lo)`` times ``2^k``, ``k`` in {0, 1}."""
+    """``(hi, lo)`` times ``2^k``, ``k`` in {0, 1, 2, 3}."""
     return (hi << k) | (lo >> (52 - k)), (lo << k) & _LOW52
 
 
@@ -256,6 +269,47 @@ def _det2_sign_float64(ux, uy, vx, vy):
     larger = jnp.where(de >= 2, 1, jnp.where(de <= -2, -1, larger)).astype(CODE)
     d = jnp.where(sp != sq, jnp.where(sp != 0, sp, -sq), sp * larger)
     return jnp.where(exact[0] & exact[1] & exact[2] & exact[3], d, UNKNOWN).astype(CODE)
+
+
+#: rounding count of :func:`det2_accurate` (relative error at most ``gamma_3``)
+DET2_ROUNDINGS = 3
+
+
+def det2_accurate(ux, uy, vx, vy):
+    """``ux vy - uy vx`` in float64 with a relative error of at most ``gamma_3``
+    (:data:`DET2_ROUNDINGS`), also where the difference cancels; NaN where that is not proven (an
+    input not a normal number or zero, a product or the result below the normal range).
+
+    ``p = ux vy`` and ``q = uy vx`` with exponents at most 3 apart: the integer mantissa products
+    (:func:`_mantissa_product`), aligned and subtracted exactly, ``V = H 2^52 + L`` with
+    ``0 <= L < 2^52``; ``fl(fl(H) 2^52 + L)`` is exact for ``H`` in {-1, 0, 1} and within
+    ``gamma_3`` otherwise (``|V| >= |H| 2^51`` then).  Otherwise (exponents farther apart,
+    ``|q| < |p| / 4`` or the reverse, or a product zero) the float difference, within ``gamma_3``
+    with or without a fused multiply-add.  Any copy of the result is within the bound, so a
+    compiler's recomputation cannot break the certificates that use it.
+    """
+    sign, m, e, exact = zip(*(_float64_parts(a) for a in (ux, uy, vx, vy)))
+    sp = (sign[0] * sign[3]).astype(jnp.int64)
+    sq = (sign[1] * sign[2]).astype(jnp.int64)
+    ep, eq = e[0] + e[3], e[1] + e[2]
+    e0 = jnp.minimum(ep, eq)
+    near = (sp != 0) & (sq != 0) & (jnp.abs(ep - eq) <= 3)
+    hp, lp = _doubled(*_mantissa_product(m[0], m[3]), jnp.clip(ep - e0, 0, 3))
+    hq, lq = _doubled(*_mantissa_product(m[1], m[2]), jnp.clip(eq - e0, 0, 3))
+    low = sp * lp - sq * lq
+    high = (
+        sp * hp - sq * hq + (low >> 52)
+    )  # arithmetic shift: low = (low >> 52) 2^52 + (low & _LOW52)
+    v = high.astype(jnp.float64) * 2.0**52 + (low & _LOW52).astype(jnp.float64)
+    aligned = jnp.ldexp(v, e0.astype(jnp.int32))
+    fp, fq = ux * vy, uy * vx
+    tiny = float(jnp.finfo(jnp.float64).tiny)
+    floor = tiny * 2.0**60  # products far above the normal range: the float path's bound holds
+    far_ok = ((fp == 0) | (jnp.abs(fp) >= floor)) & ((fq == 0) | (jnp.abs(fq) >= floor))
+    d = jnp.where(near, aligned, fp - fq)
+    ok = exact[0] & exact[1] & exact[2] & exact[3] & ((d == 0) | (jnp.abs(d) >= tiny))
+    ok = ok & jnp.isfinite(d) & (near | far_ok)
+    return jnp.where(ok, d, jnp.nan)
 
 
 def has_float64() -> bool:

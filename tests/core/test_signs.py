@@ -40,7 +40,7 @@ def test_certified_sign_is_the_exact_sign(dtype):
 
 def test_without_zeros_an_exact_zero_is_unknown():
     """``zeros=False``: a structural zero (every monomial has a zero input) is ``UNKNOWN`` instead
-    of ``0``; every other code is unchanged, and the expression is evaluated once, not twice."""
+    of ``0``; every other code is unchanged, and the structural-zero evaluation is skipped."""
     x = [jnp.asarray([0.0, 0.5, 0.0]), jnp.asarray([0.0, 0.25, 0.3])]
     x += [jnp.asarray([0.0, 0.75, 0.1]), jnp.asarray([0.0, -0.5, 0.2])]
     with_zeros = np.asarray(evaluate_certified(_expr, *x)[2])
@@ -93,3 +93,34 @@ def test_det2_sign_float64_unknown_only_off_the_normal_numbers():
     half = jnp.full(6, 0.5)
     got = np.asarray(signs.det2_sign(x, half, half, half))
     assert got.tolist() == [UNKNOWN] * 4 + [-1, 0]
+
+
+def test_det2_accurate_within_gamma_3():
+    """``det2_accurate`` is within ``gamma_3`` (relative) of the rational ``ux vy - uy vx`` on
+    cancelling directions (``b2 ~ -b1``, ``b2 ~ b1``, exact ties) and on near-ties with exponents
+    far apart; NaN for subnormal, infinite or NaN components."""
+    rng = np.random.default_rng(8)
+    beta = np.linspace(0, 2 * np.pi, 1025)
+    c, s = np.cos(beta), np.sin(beta)
+    m = 3000
+    a, b, cc = (rng.uniform(-1, 1, m) * 2.0 ** -rng.integers(0, 40, m) for _ in range(3))
+    d = np.clip(b * cc / a * (1 + rng.choice([0.0, 1e-16, -1e-16, 1e-7, 3.0], m)), -1, 1)
+    g3 = signs.gamma(signs.DET2_ROUNDINGS, np.float64)
+    cases = [(c, s, np.cos(beta + np.pi), np.sin(beta + np.pi)), (c, s, -c, -s), (a, b, cc, d)]
+    cases.append((c, s, np.roll(c, 1), np.roll(s, 1)))
+    for ux, uy, vx, vy in cases:
+        got = np.asarray(signs.det2_accurate(*(jnp.asarray(x) for x in (ux, uy, vx, vy))))
+        for i, v in enumerate(got):
+            exact = Fraction(float(ux[i])) * Fraction(float(vy[i]))
+            exact -= Fraction(float(uy[i])) * Fraction(float(vx[i]))
+            assert abs(Fraction(float(v)) - exact) <= g3 * abs(exact), i
+    x = jnp.asarray([5e-324, np.inf, np.nan, 0.5])
+    half = jnp.full(4, 0.5)
+    assert np.isnan(np.asarray(signs.det2_accurate(x, half, half, half))[:3]).all()
+
+
+def test_rounded_inputs_add_to_the_rounding_count():
+    """An input carrying ``k`` roundings counts ``k`` in every product it enters."""
+    square = lambda x, y, *, sub: sub(x * x, y)  # noqa: E731
+    assert signs.error_model(square, 2, "float64", (1.0, 1.0))[0] == 2
+    assert signs.error_model(square, 2, "float64", (1.0, 1.0), (3, 0))[0] == 3 + 3 + 1 + 1
