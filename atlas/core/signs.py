@@ -297,19 +297,22 @@ def det2_accurate(ux, uy, vx, vy):
     hp, lp = _doubled(*_mantissa_product(m[0], m[3]), jnp.clip(ep - e0, 0, 3))
     hq, lq = _doubled(*_mantissa_product(m[1], m[2]), jnp.clip(eq - e0, 0, 3))
     low = sp * lp - sq * lq
-    high = (
-        sp * hp - sq * hq + (low >> 52)
-    )  # arithmetic shift: low = (low >> 52) 2^52 + (low & _LOW52)
+    # arithmetic shift: low = (low >> 52) 2^52 + (low & _LOW52)
+    high = sp * hp - sq * hq + (low >> 52)
     v = high.astype(jnp.float64) * 2.0**52 + (low & _LOW52).astype(jnp.float64)
     aligned = jnp.ldexp(v, e0.astype(jnp.int32))
     fp, fq = ux * vy, uy * vx
     tiny = float(jnp.finfo(jnp.float64).tiny)
-    floor = tiny * 2.0**60  # products far above the normal range: the float path's bound holds
-    far_ok = ((fp == 0) | (jnp.abs(fp) >= floor)) & ((fq == 0) | (jnp.abs(fq) >= floor))
-    d = jnp.where(near, aligned, fp - fq)
-    ok = exact[0] & exact[1] & exact[2] & exact[3] & ((d == 0) | (jnp.abs(d) >= tiny))
-    ok = ok & jnp.isfinite(d) & (near | far_ok)
-    return jnp.where(ok, d, jnp.nan)
+    # the float path's bound needs each product exactly zero (a zero input, not an underflow) or
+    # far above the normal range
+    floor = tiny * 2.0**60
+    far_ok = ((sp == 0) | (jnp.abs(fp) >= floor)) & ((sq == 0) | (jnp.abs(fq) >= floor))
+    far = fp - fq
+    far_ok = far_ok & ((far == 0) | (jnp.abs(far) >= tiny))
+    near_ok = (v == 0) | (jnp.abs(aligned) >= tiny)  # an exact zero, or no underflow in ldexp
+    d = jnp.where(near, aligned, far)
+    ok = exact[0] & exact[1] & exact[2] & exact[3] & jnp.isfinite(d)
+    return jnp.where(ok & jnp.where(near, near_ok, far_ok), d, jnp.nan)
 
 
 def has_float64() -> bool:

@@ -117,6 +117,9 @@ def test_det2_accurate_within_gamma_3():
     x = jnp.asarray([5e-324, np.inf, np.nan, 0.5])
     half = jnp.full(4, 0.5)
     assert np.isnan(np.asarray(signs.det2_accurate(x, half, half, half))[:3]).all()
+    # both products underflow to zero, the exact difference is not zero: not claimed
+    t = jnp.asarray([1e-200])
+    assert np.isnan(np.asarray(signs.det2_accurate(t, t, t, 3 * t))).all()
 
 
 def test_rounded_inputs_add_to_the_rounding_count():
