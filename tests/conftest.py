@@ -20,32 +20,17 @@ os.environ.setdefault(CACHE_ENV, str(Path(__file__).resolve().parents[1] / ".pyt
 use_compile_cache(min_compile_seconds=0.2)
 
 
-def _bounded_det2_sign(ux, uy, vx, vy):
-    """``sign(ux vy - uy vx)`` certified by the float error bound only (no exact integer or
-    widened products): UNKNOWN where ``|det| <= ~2 u (|ux vy| + |uy vx|)``."""
-    import jax.numpy as jnp
-
-    from atlas.core import signs
-
-    value = signs.det2(ux, uy, vx, vy)
-    abs_value = signs.det2(*(jnp.abs(a) for a in (ux, uy, vx, vy)), sub=jnp.add)
-    n, floor = signs.error_model(signs.det2, 4, value.dtype.name, (1.0,) * 4)
-    same = ((ux == vx) & (uy == vy)) | ((ux == -vx) & (uy == -vy))
-    zero = same | (abs_value == 0)
-    return signs.certified_sign(value, abs_value, exact_zero=zero, n=n, floor=floor)
-
-
 @pytest.fixture
 def bounded_det_b():
     """The fast kernels with ``sign det B`` certified by its float error bound only (as before the
     exact integer sign): cells on ``beta2 = beta1 + pi`` of an even grid (``det B`` of the rounded
     directions ~ 1e-17) are then undecided, which exercises the settlement paths.  Every jit cache
     is cleared before (the kernels retrace with it) and after."""
-    from atlas.core import mechanics, rootfree, spectral
+    from atlas.core import mechanics, rootfree, signs, spectral
 
     with pytest.MonkeyPatch.context() as mp:
         for mod in (mechanics, rootfree, spectral):
-            mp.setattr(mod, "det2_sign", _bounded_det2_sign)
+            mp.setattr(mod, "det2_sign", signs.det2_sign_bounded)
         jax.clear_caches()
         yield
     jax.clear_caches()

@@ -219,6 +219,13 @@ def det2_sign(ux, uy, vx, vy):
         wide = [a.astype(jnp.float64) for a in (ux, uy, vx, vy)]
         d = det2(*wide)
         return jnp.sign(d).astype(CODE)
+    return det2_sign_bounded(ux, uy, vx, vy)
+
+
+def det2_sign_bounded(ux, uy, vx, vy):
+    """Sign of ``ux vy - uy vx`` certified by its float error bound only (``UNKNOWN`` where
+    ``|det| <~ 2 u (|ux vy| + |uy vx|)``); identical or opposite vectors an exact zero.  The
+    fallback of :func:`det2_sign` for float32 without float64."""
     same = ((ux == vx) & (uy == vy)) | ((ux == -vx) & (uy == -vy))
     value = det2(ux, uy, vx, vy)
     abs_value = det2(jnp.abs(ux), jnp.abs(uy), jnp.abs(vx), jnp.abs(vy), sub=jnp.add)
@@ -255,38 +262,15 @@ def _doubled(hi, lo, k):
     return (hi << k) | (lo >> (52 - k)), (lo << k) & _LOW52
 
 
-def _det2_sign_float64(ux, uy, vx, vy):
-    """Exact sign of ``ux vy - uy vx`` in float64, in integer arithmetic (no rounding, so no
-    compiler contraction can change it): ``p = ux vy`` and ``q = uy vx`` differ in sign, or their
-    mantissa products (in ``[2^104, 2^106)``) are compared, exactly where the exponents of ``p``
-    and ``q`` differ by at most one (by more, the larger exponent wins)."""
-    sign, m, e, exact = zip(*(_float64_parts(a) for a in (ux, uy, vx, vy)))  # ux, uy, vx, vy
-    sp, sq = sign[0] * sign[3], sign[1] * sign[2]
-    de = (e[0] + e[3]) - (e[1] + e[2])
-    hp, lp = _doubled(*_mantissa_product(m[0], m[3]), jnp.clip(de, 0, 1))
-    hq, lq = _doubled(*_mantissa_product(m[1], m[2]), jnp.clip(-de, 0, 1))
-    larger = jnp.where(hp != hq, jnp.sign(hp - hq), jnp.sign(lp - lq))
-    larger = jnp.where(de >= 2, 1, jnp.where(de <= -2, -1, larger)).astype(CODE)
-    d = jnp.where(sp != sq, jnp.where(sp != 0, sp, -sq), sp * larger)
-    return jnp.where(exact[0] & exact[1] & exact[2] & exact[3], d, UNKNOWN).astype(CODE)
+def _integer_difference(ux, uy, vx, vy):
+    """``p - q`` (``p = ux vy``, ``q = uy vx``) in integers where it can cancel.
 
-
-#: rounding count of :func:`det2_accurate` (relative error at most ``gamma_3``)
-DET2_ROUNDINGS = 3
-
-
-def det2_accurate(ux, uy, vx, vy):
-    """``ux vy - uy vx`` in float64 with a relative error of at most ``gamma_3``
-    (:data:`DET2_ROUNDINGS`), also where the difference cancels; NaN where that is not proven (an
-    input not a normal number or zero, a product or the result below the normal range).
-
-    ``p = ux vy`` and ``q = uy vx`` with exponents at most 3 apart: the integer mantissa products
-    (:func:`_mantissa_product`), aligned and subtracted exactly, ``V = H 2^52 + L`` with
-    ``0 <= L < 2^52``; ``fl(fl(H) 2^52 + L)`` is exact for ``H`` in {-1, 0, 1} and within
-    ``gamma_3`` otherwise (``|V| >= |H| 2^51`` then).  Otherwise (exponents farther apart,
-    ``|q| < |p| / 4`` or the reverse, or a product zero) the float difference, within ``gamma_3``
-    with or without a fused multiply-add.  Any copy of the result is within the bound, so a
-    compiler's recomputation cannot break the certificates that use it.
+    Returns ``(near, high, low, e0, sp, sq, ep, eq, exact)``: the signs and exponents of ``p``
+    and ``q`` (``p = sp m_p 2^ep``, mantissa products in ``[2^104, 2^106)``), ``exact`` where every
+    input is zero or normal, and ``near`` where both are nonzero with exponents at most 3 apart;
+    there ``p - q = (high 2^52 + low) 2^e0`` exactly, ``0 <= low < 2^52`` (no rounding, so no
+    compiler contraction can change it).  Elsewhere one of ``|p|, |q|`` exceeds 4 times the
+    other, or one is zero.
     """
     sign, m, e, exact = zip(*(_float64_parts(a) for a in (ux, uy, vx, vy)))
     sp = (sign[0] * sign[3]).astype(jnp.int64)
@@ -299,7 +283,37 @@ def det2_accurate(ux, uy, vx, vy):
     low = sp * lp - sq * lq
     # arithmetic shift: low = (low >> 52) 2^52 + (low & _LOW52)
     high = sp * hp - sq * hq + (low >> 52)
-    v = high.astype(jnp.float64) * 2.0**52 + (low & _LOW52).astype(jnp.float64)
+    all_exact = exact[0] & exact[1] & exact[2] & exact[3]
+    return near, high, low & _LOW52, e0, sp, sq, ep, eq, all_exact
+
+
+def _det2_sign_float64(ux, uy, vx, vy):
+    """Exact sign of ``ux vy - uy vx`` in float64 (:func:`_integer_difference`): the sign of
+    ``high 2^52 + low`` where the products are near, else of the larger product."""
+    near, high, low, _, sp, sq, ep, eq, exact = _integer_difference(ux, uy, vx, vy)
+    s_near = jnp.where(high != 0, jnp.sign(high), jnp.sign(low))
+    s_far = jnp.where(sq == 0, sp, jnp.where((sp == 0) | (eq > ep), -sq, sp))
+    d = jnp.where(near, s_near, s_far)
+    return jnp.where(exact, d, UNKNOWN).astype(CODE)
+
+
+#: rounding count of :func:`det2_accurate` (relative error at most ``gamma_3``)
+DET2_ROUNDINGS = 3
+
+
+def det2_accurate(ux, uy, vx, vy):
+    """``ux vy - uy vx`` in float64 with a relative error of at most ``gamma_3``
+    (:data:`DET2_ROUNDINGS`), also where the difference cancels; NaN where that is not proven (an
+    input not a normal number or zero, a product or the result below the normal range).
+
+    Near products (:func:`_integer_difference`): ``fl(fl(high) 2^52 + low) 2^e0``, exact for
+    ``high`` in {-1, 0, 1} and within ``gamma_3`` otherwise (``|V| >= |high| 2^51`` then).
+    Otherwise (``|q| < |p| / 4`` or the reverse, or a product zero) the float difference, within
+    ``gamma_3`` with or without a fused multiply-add.  Any copy of the result is within the bound,
+    so a compiler's recomputation cannot break the certificates that use it.
+    """
+    near, high, low, e0, sp, sq, _, _, exact = _integer_difference(ux, uy, vx, vy)
+    v = high.astype(jnp.float64) * 2.0**52 + low.astype(jnp.float64)
     aligned = jnp.ldexp(v, e0.astype(jnp.int32))
     fp, fq = ux * vy, uy * vx
     tiny = float(jnp.finfo(jnp.float64).tiny)
@@ -311,8 +325,8 @@ def det2_accurate(ux, uy, vx, vy):
     far_ok = far_ok & ((far == 0) | (jnp.abs(far) >= tiny))
     near_ok = (v == 0) | (jnp.abs(aligned) >= tiny)  # an exact zero, or no underflow in ldexp
     d = jnp.where(near, aligned, far)
-    ok = exact[0] & exact[1] & exact[2] & exact[3] & jnp.isfinite(d)
-    return jnp.where(ok & jnp.where(near, near_ok, far_ok), d, jnp.nan)
+    ok = exact & jnp.isfinite(d) & jnp.where(near, near_ok, far_ok)
+    return jnp.where(ok, d, jnp.nan)
 
 
 def has_float64() -> bool:
