@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import shlex
 import signal
 import sys
@@ -163,6 +164,10 @@ def _add_distributed(g) -> None:
     )
 
 
+#: argument strings that are negative numbers or ranges, never options (``-1``, ``-0.5pi:1:3``)
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|pi|inf|nan)", re.IGNORECASE)
+
+
 def _add_mechanism(sub) -> None:
     from atlas.data.mechanisms import MECHANISM_SCENES
 
@@ -176,6 +181,9 @@ def _add_mechanism(sub) -> None:
             for n, sc in MECHANISM_SCENES.items()
         ),
     )
+    # a range may start below zero (``--mu -1:2:4``): such values are arguments, not options, so
+    # that the physical validation reports them
+    pm._negative_number_matcher = _NEGATIVE_VALUE
     pm.add_argument("name", choices=sorted(MECHANISM_SCENES), help="built-in mechanism scene")
     axes = sorted({a for sc in MECHANISM_SCENES.values() for a in sc.axes})
     for a in axes:

@@ -101,6 +101,20 @@ def _axis_values(scene: MechanismScene, overrides: dict) -> dict:
     return out
 
 
+def _validated(scene: MechanismScene, build):
+    """``build()``, its one-line ``ValueError`` naming a body parameter that an axis sets renamed to
+    the axis (``mu_floor: must be >= 0`` -> ``mu: ...``): the checks are those of
+    :mod:`atlas.core.mechanism`, one validation for every path."""
+    try:
+        return build()
+    except ValueError as e:
+        name, sep, rest = str(e).partition(": ")
+        for axis, (_d, _u, _l, sets) in scene.axes.items():
+            if sep and name in sets:
+                raise ValueError(f"{axis}: {rest}") from None
+        raise
+
+
 def mechanism_atlas(name: str, *, dtype: str = "float64", **axes) -> xr.Dataset:
     """The atlas of built-in mechanism scene ``name`` (:data:`MECHANISM_SCENES`) over its physical
     axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``)."""
@@ -112,7 +126,7 @@ def mechanism_atlas(name: str, *, dtype: str = "float64", **axes) -> xr.Dataset:
     params = {}
     for (_d, _u, _l, sets), grid in zip(scene.axes.values(), grids):
         params.update({p: grid for p in sets})
-    inv = body_invariants(BODIES[scene.body](**params))
+    inv = _validated(scene, lambda: body_invariants(BODIES[scene.body](**params)))
     verdicts = verdicts_at(
         *(inv[k] for k in ("beta1", "beta2", "alpha", "kappa", "q1", "q2")), dtype=dtype
     )

@@ -95,3 +95,55 @@ def test_cli_writes_the_mechanism_atlas(tmp_path, capsys):
         assert ds.sizes == {"theta": 4, "mu": 2} and ds.mu.attrs["units"] == "1"
     assert main(["mechanism", "ladder", "--h", "1"]) == 2
     assert "h: not an axis of ladder" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv, name",
+    [
+        (["ladder", "--mu", "-1:2:4"], "mu"),
+        (["ladder", "--mu", "-0.5"], "mu"),
+        (["ladder", "--theta", "0:0.4pi:3"], "theta"),
+        (["ladder", "--theta", "0.1:0.6pi:3"], "theta"),
+        (["ladder", "--theta", "-pi:1:3"], "theta"),
+        (["two_legged", "--h", "-1:1:3"], "h"),
+        (["leaning_rod", "--mu", "0,-2"], "mu"),
+    ],
+)
+def test_cli_bad_physical_values(tmp_path, capsys, argv, name):
+    """Out-of-range physical values (negative range starts included): exit 2, one line naming
+    the axis, nothing written."""
+    from atlas.cli import main
+
+    out = tmp_path / "m.nc"
+    assert main(["mechanism", *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"atlas: error: {name}: ") and err.count("\n") == 1, err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "body, kw, name",
+    [
+        ("ladder", dict(L=-1.0), "L"),
+        ("ladder", dict(theta=np.array([0.3, np.pi / 2])), "theta"),
+        ("ladder", dict(mu_wall=-0.1), "mu_wall"),
+        ("two_legged", dict(d=-0.2), "d"),
+        ("two_legged", dict(h=-0.5), "h"),
+        ("two_legged", dict(I=0.0), "I"),
+        ("leaning_rod", dict(e=0.6), "e"),
+        ("leaning_rod", dict(e=-0.5), "e"),
+        ("leaning_rod", dict(theta=0.0), "theta"),
+    ],
+)
+def test_builtin_geometry_is_validated_on_every_path(body, kw, name):
+    """The same one-line error from the geometry function, Mechanism and body_invariants."""
+    from atlas.core.mechanism import BODIES, body_invariants
+
+    for build in (
+        lambda: BODIES[body](**kw),
+        lambda: getattr(Mechanism, body)(**kw),
+        lambda: body_invariants(BODIES[body](**kw)),
+    ):
+        with pytest.raises(ValueError) as err:
+            build()
+        assert str(err.value).startswith(f"{name}: ") and "\n" not in str(err.value)
