@@ -1,4 +1,4 @@
-"""Realisability audit (issue 14 part 3): a single rigid body under its weight in each subclass.
+"""Realisability audit: each of the 144 subclasses by one rigid body under its weight.
 
 The paper (Sec. 3) claims that "a single planar rigid body with two contacts, and its own weight as
 external load can belong to any of the subclasses if the positions and directions of contacts as
@@ -6,21 +6,37 @@ well as the friction coefficients are chosen appropriately".  :func:`search` che
 stated set of bodies with *rational* parameters:
 
 * ``m = 1`` kg, ``I = 1`` kg m^2 (radius of gyration 1 m: only ``r / sqrt(I/m)`` matters),
-  gravity ``g = (0, -981/100)`` m/s^2, no external force or torque, no rotation (``omega = 0``);
+  gravity ``g = (0, -981/100)`` m/s^2, no external force or torque, the zero-speed state (a body
+  starting to slide: no velocity term in ``a``);
 * contact positions ``r_j`` on the grid ``[-3, 3]^2`` m with step 1/4 m;
 * normals ``n_j``: the 4 axis directions and the 56 rational unit vectors ``(+-p/h, +-q/h)``,
   ``(+-q/h, +-p/h)`` of the primitive Pythagorean triples with ``h <= 41`` (60 directions, gaps
   <= 12.7 degrees);
-* friction ``mu_j in {0, 1/10, ..., MU_MAX}`` (``MU_MAX = 2``) and sliding signs ``s_j = +-1``.
+* friction ``mu_j in {0, 1/10, ..., MU_MAX}`` (``MU_MAX = 2``) and ``s1 = +-1``; **``s2`` is the
+  admissible one**: with both contacts closed a rigid body has one line of twists, and the sliding
+  directions are tied (:func:`atlas.core.mechanism.admissible_twist`); bodies where a contact cannot
+  slide are left out.
 
 Random bodies from this set (fixed seed) are classified in float64 by the package's own certified
 kernels (:func:`atlas.core.mechanics.subclass_code`); for each subclass the body farthest from every
 boundary of the subclass is kept (``margin``: sine of the smallest angle between the direction of
 ``b1``, ``b2`` or ``a`` and the axes or another of them).  Every kept example is then re-verified in
-exact rational arithmetic: ``B`` and ``a`` of eq. (1) evaluated on :class:`fractions.Fraction`
-inputs by :func:`atlas.core.mechanism.mobility` / :func:`~atlas.core.mechanism.free_acceleration`,
-and the codes by :func:`atlas.core.exact.point_codes` on integer (hence exactly representable)
-multiples of the columns of ``B`` and of ``a``.
+exact rational arithmetic: the admissible sliding signs from the exact twist (:func:`admissible`),
+``B`` and ``a`` of eq. (1) on :class:`fractions.Fraction` inputs by
+:func:`atlas.core.mechanism.mobility` / :func:`~atlas.core.mechanism.free_acceleration`, and the
+codes by :func:`atlas.core.exact.point_codes` on integer (hence exactly representable) multiples of
+the columns of ``B`` and of ``a``.
+
+**A richer system for the rest** (:data:`WHEEL`): the same body with a *driven wheel* at contact 2
+-- a wheel of radius ``rho > 0`` whose hub is fixed to the body at ``r2 + rho n2`` (on the contact
+normal) and which a motor spins at a constant rate relative to the body.  The wheel's gap is the
+hub's distance to the surface minus ``rho``, a body-fixed point with the same Jacobian row
+``J_2`` (``(r2 + rho n2) x n2 = r2 x n2``), and a contact force at the rim acts on the composite as a
+force at ``r2``; a constant spin adds no torque.  So ``B`` and ``a`` (composite ``m``, ``I``) are
+those of eq. (1) above at zero body speed, while the rim slides at ``u2 = u2_body + rho spin``: the
+motor sets ``s2`` independently of ``s1`` (contact 1 must still slide along the body's twist).  The
+subclasses a rigid body does not reach in the searched set are searched with free ``s2`` and
+verified exactly the same way.
 
 No impossibility argument is needed when every subclass has a verified example; a subclass without
 one is reported as "none found in the searched set" (the search is not a proof of impossibility),
@@ -42,13 +58,16 @@ import numpy as np
 
 from atlas.core import exact
 from atlas.core import mechanics as mech
-from atlas.core.mechanism import Mechanism, free_acceleration, mobility
+from atlas.core.mechanism import Mechanism, admissible_twist, free_acceleration, mobility
 
 __all__ = [
     "ALL_SUBCLASSES",
     "MU_MAX",
     "FRICTIONLESS_CLASSES",
+    "RIGID",
+    "WHEEL",
     "Realisation",
+    "admissible",
     "search",
     "exact_codes",
     "mechanism",
@@ -58,6 +77,9 @@ __all__ = [
 #: the 144 subclass codes ijk (SPEC §1)
 ALL_SUBCLASSES = tuple(10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7))
 MU_MAX = Fraction(2)
+#: the systems searched (module docstring): a rigid body (admissible sliding), and the same body
+#: with a driven wheel at contact 2 (``s2`` free)
+RIGID, WHEEL = "rigid body", "rigid body + driven wheel at contact 2"
 #: the only classes a body without friction can be in (module docstring)
 FRICTIONLESS_CLASSES = (12, 42)
 _MU_STEP = Fraction(1, 10)
@@ -94,7 +116,8 @@ class Realisation:
     """One subclass's outcome: an exactly verified body, or none in the searched set.
 
     ``params``: the :class:`~atlas.core.mechanism.Mechanism` parameters (``m, I, r1, r2, n1, n2,
-    mu1, mu2, s1, s2, g``) as Fractions, or ``None``; ``verified``: the exact subclass code of
+    mu1, mu2, s1, s2, g``) as Fractions, or ``None``; ``system``: :data:`RIGID` or :data:`WHEEL`;
+    ``verified``: ``(s1, s2)`` is admissible for ``system`` and the exact subclass code of
     ``params`` is ``subclass``; ``margin``: sine of the angular distance to the nearest boundary of
     the subclass (float64); ``impossible``: an impossibility argument for the searched set, if one
     applies.
@@ -106,6 +129,7 @@ class Realisation:
     margin: float
     note: str
     impossible: str | None = None
+    system: str | None = None
 
     @property
     def found(self) -> bool:
@@ -122,14 +146,27 @@ def _sample(rng, n: int, mu_max: Fraction) -> dict:
     return ix
 
 
-def _floats(ix: dict):
+def _sliding(ix: dict, system: str):
+    """``(s2, ok)``: the sliding sign of contact 2 (admissible for a rigid body, the sampled one
+    with the wheel) and where the sample is usable: contact 1 slides (and, for a rigid body,
+    contact 2), ``|u_j|`` clear of zero (the kept examples are verified exactly)."""
+    nrm = np.array(NORMALS, dtype=float)
+    r = tuple(tuple(ix[f"r{j}"][:, k] * float(_R_STEP) for k in (0, 1)) for j in (1, 2))
+    n = tuple(tuple(nrm[ix[f"n{j}"], k] for k in (0, 1)) for j in (1, 2))
+    _z, (u1, u2) = admissible_twist(r, n)
+    ok = np.abs(u1) > 1e-9
+    if system == WHEEL:
+        return ix["s2"], ok
+    return ix["s1"] * np.sign(u1).astype(int) * np.sign(u2).astype(int), ok & (np.abs(u2) > 1e-9)
+
+
+def _floats(ix: dict, s2):
     """``(b1, b2, a)`` as float64 ``(x, y)`` arrays of the sampled bodies."""
     nrm = np.array(NORMALS, dtype=float)
     r = tuple(tuple(ix[f"r{j}"][:, k] * float(_R_STEP) for k in (0, 1)) for j in (1, 2))
     n = tuple(tuple(nrm[ix[f"n{j}"], k] for k in (0, 1)) for j in (1, 2))
     mu = tuple(ix[f"mu{j}"] * float(_MU_STEP) for j in (1, 2))
-    s = (ix["s1"], ix["s2"])
-    B = mobility(1.0, 1.0, r, n, mu, s)
+    B = mobility(1.0, 1.0, r, n, mu, (ix["s1"], s2))
     a = free_acceleration(1.0, 1.0, r, n, tuple(float(x) for x in _G))
     return (B[0][0], B[1][0]), (B[0][1], B[1][1]), a
 
@@ -140,27 +177,29 @@ def _unit(v):
         return v[0] / norm, v[1] / norm
 
 
-def _classify(ix: dict):
-    """Certified float64 subclass codes (-1/0 where undecided/degenerate) and margins."""
-    b1, b2, a = (_unit(v) for v in _floats(ix))
-    ok = np.isfinite(b1[0]) & np.isfinite(b2[0]) & np.isfinite(a[0])
+def _classify(ix: dict, system: str):
+    """Certified float64 subclass codes (-1/0 where undecided/degenerate/unusable), margins and
+    the sliding signs ``s2``."""
+    s2, usable = _sliding(ix, system)
+    b1, b2, a = (_unit(v) for v in _floats(ix, s2))
+    ok = usable & np.isfinite(b1[0]) & np.isfinite(b2[0]) & np.isfinite(a[0])
     ok &= np.any(ix["r1"] != ix["r2"], axis=1)  # distinct contacts (a valid Mechanism)
     b1, b2, a = ([np.where(ok, c, 1.0) for c in v] for v in (b1, b2, a))
     code = np.asarray(mech.subclass_code(*b1, *b2, *a)).astype(int)
     code = np.where(ok, code, 0)
     cross = lambda u, v: np.abs(u[0] * v[1] - u[1] * v[0])  # noqa: E731
     parts = [np.abs(c) for c in (*b1, *b2, *a)] + [cross(b1, b2), cross(b1, a), cross(b2, a)]
-    return code, np.min(parts, axis=0)
+    return code, np.min(parts, axis=0), s2
 
 
-def _params(ix: dict, i: int) -> dict:
+def _params(ix: dict, i: int, s2) -> dict:
     """Exact (Fraction) Mechanism parameters of sample ``i``."""
     out = {"m": Fraction(1), "I": Fraction(1), "g": _G}
     for j in (1, 2):
         out[f"r{j}"] = tuple(int(v) * _R_STEP for v in ix[f"r{j}"][i])
         out[f"n{j}"] = NORMALS[int(ix[f"n{j}"][i])]
         out[f"mu{j}"] = int(ix[f"mu{j}"][i]) * _MU_STEP
-        out[f"s{j}"] = int(ix[f"s{j}"][i])
+    out["s1"], out["s2"] = int(ix["s1"][i]), int(s2[i])
     return out
 
 
@@ -173,6 +212,22 @@ def _integer_direction(v) -> tuple[int, int]:
     if max(abs(x), abs(y)) >= 2**53:
         raise ValueError("params: rational components too large for an exact float")
     return x, y
+
+
+def admissible(params: dict, system: str = RIGID) -> bool:
+    """Exactly: can ``system`` (:data:`RIGID`, :data:`WHEEL`) slide with ``(s1, s2)``?
+
+    The sliding speeds along the body's twist line (:func:`atlas.core.mechanism.admissible_twist`,
+    in :class:`~fractions.Fraction` arithmetic): a rigid body needs ``u1, u2 != 0`` and
+    ``s2 = s1 sign(u1 u2)``; with the wheel contact 1 must slide (``u1 != 0``), ``s2`` is free.
+    Contacts on one normal line (a 2-D twist space) admit every pair.
+    """
+    z, (u1, u2) = admissible_twist((params["r1"], params["r2"]), (params["n1"], params["n2"]))
+    if not any(z):
+        return True
+    if system == WHEEL:
+        return u1 != 0
+    return u1 != 0 and u2 != 0 and params["s2"] == params["s1"] * (1 if u1 * u2 > 0 else -1)
 
 
 def exact_codes(params: dict) -> dict:
@@ -203,10 +258,10 @@ def mechanism(params: dict, **kw) -> Mechanism:
 def _as_float(v):
     if isinstance(v, tuple):
         return tuple(float(x) for x in v)
-    return v if isinstance(v, int) else float(v)
+    return v if v is None or isinstance(v, int) else float(v)
 
 
-def _best(code, margin, best: dict, ix: dict) -> None:
+def _best(code, margin, s2, best: dict, ix: dict) -> None:
     """Keep, per subclass, the sample with the largest margin (in place)."""
     order = np.lexsort((-margin, code))
     first = np.ones(order.size, bool)
@@ -214,7 +269,7 @@ def _best(code, margin, best: dict, ix: dict) -> None:
     for i in order[first]:
         c = int(code[i])
         if c > 0 and (c not in best or margin[i] > best[c][0]):
-            best[c] = (float(margin[i]), _params(ix, i))
+            best[c] = (float(margin[i]), _params(ix, i, s2))
 
 
 def search(
@@ -225,7 +280,8 @@ def search(
     chunk: int = 1 << 17,
     stats: dict | None = None,
 ) -> dict:
-    """Per subclass, a verified single-body realisation or "none found in the searched set".
+    """Per subclass, a verified realisation (a rigid body, else the body with a driven wheel) or
+    "none found in the searched set".
 
     Parameters
     ----------
@@ -236,7 +292,8 @@ def search(
     mu_max : Fraction or str
         Largest friction coefficient searched (a multiple of 1/10; default 2).
     stats : dict, optional
-        Filled with ``samples``, ``seconds_search``, ``seconds_verify``, ``found``, ``verified``.
+        Filled with ``samples``, ``mu_max``, ``seconds_search``, ``seconds_verify``, ``found``,
+        ``verified`` and ``rigid`` / ``wheel`` (subclasses verified per system).
 
     Returns
     -------
@@ -248,15 +305,12 @@ def search(
     mu_max = Fraction(mu_max)
     if mu_max < 0 or mu_max % _MU_STEP:
         raise ValueError(f"mu_max: must be a non-negative multiple of 1/10, got {mu_max}")
-    rng = np.random.default_rng(seed)
-    best: dict = {}
     t0 = time.perf_counter()
-    for start in range(0, samples, chunk):
-        ix = _sample(rng, min(chunk, samples - start), mu_max)
-        code, margin = _classify(ix)
-        _best(code, margin, best, ix)
+    best = {RIGID: _search(RIGID, samples, seed, mu_max, chunk), WHEEL: {}}
+    if mu_max > 0 and len(best[RIGID]) < len(ALL_SUBCLASSES):  # without friction s2 is moot
+        best[WHEEL] = _search(WHEEL, samples, seed, mu_max, chunk)
     t1 = time.perf_counter()
-    out = {c: _verify(c, best.get(c), samples, mu_max) for c in ALL_SUBCLASSES}
+    out = {c: _verify(c, best, samples, mu_max) for c in ALL_SUBCLASSES}
     if stats is not None:
         stats.update(
             samples=samples,
@@ -265,22 +319,36 @@ def search(
             seconds_verify=time.perf_counter() - t1,
             found=sum(r.found for r in out.values()),
             verified=sum(r.verified for r in out.values()),
+            **{k: sum(r.verified and r.system == s for r in out.values()) for k, s in _SYSTEMS},
         )
     return out
 
 
-def _verify(code: int, hit, samples: int, mu_max: Fraction) -> Realisation:
-    if hit is None:
+def _search(system: str, samples: int, seed: int, mu_max: Fraction, chunk: int) -> dict:
+    """``{subclass: (margin, params)}``: the best sample of ``system`` per subclass."""
+    rng, best = np.random.default_rng(seed), {}
+    for start in range(0, samples, chunk):
+        ix = _sample(rng, min(chunk, samples - start), mu_max)
+        _best(*_classify(ix, system), best, ix)
+    return best
+
+
+_SYSTEMS = (("rigid", RIGID), ("wheel", WHEEL))
+
+
+def _verify(code: int, best: dict, samples: int, mu_max: Fraction) -> Realisation:
+    hits = [(system, best[system][code]) for _k, system in _SYSTEMS if code in best[system]]
+    if not hits:
         if mu_max == 0 and code // 10 not in FRICTIONLESS_CLASSES:
             why = "impossible without friction: B symmetric positive definite (classes 12, 42 only)"
             return Realisation(code, None, False, 0.0, why, why)
         note = f"none found in the searched set ({samples} bodies); no impossibility argument known"
         return Realisation(code, None, False, 0.0, note)
-    margin, params = hit
+    system, (margin, params) = hits[0]
     got = exact_codes(params)["subclass_code"]
-    if got != code:  # pragma: no cover - the float kernels are certified; kept as a guard
-        return Realisation(code, params, False, margin, f"exact subclass {got} differs")
-    return Realisation(code, params, True, margin, "verified exactly")
+    if got != code or not admissible(params, system):  # pragma: no cover - a guard
+        return Realisation(code, params, False, margin, "exact check failed", system=system)
+    return Realisation(code, params, True, margin, "verified exactly", system=system)
 
 
 def _fmt(v) -> str:
@@ -290,26 +358,34 @@ def _fmt(v) -> str:
 
 
 def markdown(result: dict, stats: dict | None = None) -> str:
-    """A Markdown section: the count and one row per subclass (body parameters, margin)."""
+    """A Markdown section: the counts per system and one row per subclass (body parameters,
+    system, margin)."""
     found = sum(r.verified for r in result.values())
+    per = {s: sum(r.verified and r.system == s for r in result.values()) for _k, s in _SYSTEMS}
     mu_max = (stats or {}).get("mu_max", MU_MAX)
     lines = [
         "## Realisability of the 144 subclasses by one rigid body under its weight",
         "",
-        f"{found} / {len(result)} subclasses realised, each re-verified exactly (rational arithmetic).",
+        f"{per[RIGID]} / {len(result)} subclasses realised by one rigid body whose two contacts"
+        " slide as a rigid body can (s2 follows from s1 and the geometry: both contacts closed"
+        f" leave one line of twists); {per[WHEEL]} more by the body with a driven wheel at"
+        f" contact 2 (s2 set by the motor); {len(result) - found} not found.  Each example is"
+        " re-verified exactly (rational arithmetic: the sliding signs from the exact twist, B, a"
+        " and the subclass code).",
         f"Searched set: m = 1 kg, I = 1 kg m^2, g = (0, -9.81) m/s^2, r_j in [-3, 3]^2 m (step 1/4),"
         f" {len(NORMALS)} rational unit normals, mu_j in [0, {mu_max}] (step 1/10),"
-        " s_j = +-1, no rotation, no other load.",
+        " s1 = +-1, zero-speed state (no velocity term), no other load.",
     ]
     if stats:
         lines.append(
             f"{stats['samples']} bodies searched in {stats['seconds_search']:.1f} s, "
             f"examples verified in {stats['seconds_verify']:.2f} s."
         )
-    lines += ["", "| subclass | r1 | r2 | n1 | n2 | mu1 | mu2 | s1 | s2 | margin | note |"]
-    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    lines += ["", "| subclass | r1 | r2 | n1 | n2 | mu1 | mu2 | s1 | s2 | system | margin | note |"]
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     keys = ("r1", "r2", "n1", "n2", "mu1", "mu2", "s1", "s2")
     for code, r in result.items():
         cells = [_fmt(r.params[k]) for k in keys] if r.found else ["-"] * len(keys)
+        cells.append(r.system or "-")
         lines.append(f"| {code} | " + " | ".join(cells) + f" | {r.margin:.3f} | {r.note} |")
     return "\n".join(lines) + "\n"

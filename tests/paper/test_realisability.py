@@ -45,12 +45,32 @@ def _sympy_subclass(p) -> int:
     return 100 * rank(b1, axes) + 10 * rank(b2, [b1, b1s, *axes]) + rank(al, [b1, b2, *axes])
 
 
-def test_every_subclass_is_realised_and_verified_exactly(found):
+def _sympy_sliding(p):
+    """``(sign u1, sign u2)`` of the contacts' sliding speeds along the rational null space of
+    ``J`` (sympy), or ``None`` where it is 2-D; the sign of the null vector is arbitrary."""
+    q = lambda x: sympy.Rational(x.numerator, x.denominator)  # noqa: E731
+    J, T = [], []
+    for j in (1, 2):
+        (rx, ry), (nx, ny) = [tuple(q(v) for v in p[f"{k}{j}"]) for k in ("r", "n")]
+        J.append([nx, ny, rx * ny - ry * nx])
+        T.append([ny, -nx, -rx * nx - ry * ny])
+    null = sympy.Matrix(J).nullspace()
+    if len(null) != 1:
+        return None
+    return tuple(int(sympy.sign((sympy.Matrix([t]) * null[0])[0])) for t in T)
+
+
+def test_every_subclass_is_realised_by_one_rigid_body_and_verified_exactly(found):
+    """Every example's (s1, s2) is a sliding a rigid body can perform: the exact twist null space
+    (sympy) ties the two speeds with the stored signs, and both contacts slide."""
     result, stats = found
     assert tuple(result) == R.ALL_SUBCLASSES and len(result) == 144
-    assert stats["verified"] == 144
+    assert stats["verified"] == stats["rigid"] == 144 and stats["wheel"] == 0
     for code, r in result.items():
-        assert r.verified and r.impossible is None
+        assert r.verified and r.impossible is None and r.system == R.RIGID
+        u1, u2 = _sympy_sliding(r.params)
+        assert u1 != 0 and u2 != 0 and r.params["s2"] == r.params["s1"] * u1 * u2
+        assert R.admissible(r.params)
         assert R.exact_codes(r.params)["subclass_code"] == code
         assert 0 <= r.params["mu1"] <= 2 and 0 <= r.params["mu2"] <= 2
         assert r.margin > 0.1  # far from every boundary of the subclass
@@ -88,8 +108,14 @@ def test_deterministic_and_markdown(found):
     assert {c: r.params for c, r in one.items()} == {c: r.params for c, r in two.items()}
     assert any(not r.found for r in one.values())  # a small search misses some subclasses...
     assert all(r.note.startswith("none found") for r in one.values() if not r.found)
+    wheel = [r for r in one.values() if r.system == R.WHEEL]
+    assert wheel and all(r.verified for r in wheel)  # ...and the driven wheel realises some
+    for r in wheel:
+        assert R.exact_codes(r.params)["subclass_code"] == r.subclass
+        assert _sympy_sliding(r.params)[0] != 0  # contact 1 slides along the body's twist
+        assert not R.admissible(r.params)  # a pair only the wheel's motor gives
     text = R.markdown(result, stats)
-    assert "144 / 144 subclasses realised" in text
+    assert "144 / 144 subclasses realised by one rigid body" in text
     assert len([ln for ln in text.splitlines() if ln[:2] == "| " and ln[2:5].isdigit()]) == 144
 
 
@@ -106,3 +132,15 @@ def test_exact_codes_rejects_inexact_normals(found):
 def test_bad_input(kw, name):
     with pytest.raises(ValueError, match=rf"^{name}: "):
         R.search(**kw)
+
+
+def test_admissible_pairs(found):
+    """A rigid body's pair flipped at contact 2 is refused for the rigid body and accepted with
+    the driven wheel; the float Mechanism refuses it too."""
+    p = dict(found[0][214].params)
+    flipped = {**p, "s2": -p["s2"]}
+    assert R.admissible(p) and not R.admissible(flipped)
+    assert R.admissible(flipped, R.WHEEL)
+    with pytest.raises(ValueError, match=r"^s2: inadmissible pair"):
+        R.mechanism(flipped)
+    assert R.mechanism({**p, "s2": None}).s2 == p["s2"]
