@@ -190,6 +190,12 @@ def _add_mechanism(sub) -> None:
         pm.add_argument(
             f"--{a}", metavar="RANGE", help="physical axis (START:STOP:N, values, scalar)"
         )
+    pm.add_argument(
+        "--fixed",
+        metavar="K=V,...",
+        help="other parameters in SI units, e.g. L=3,m=10,k1=2e5,c1=20,speed=0.5 (see "
+        "atlas.data.mechanisms.FIXED)",
+    )
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")

@@ -7,22 +7,32 @@ the entries of ``B`` [1/kg] and ``a`` [m/s^2] of eq. (1), and every verdict of t
 so ``ds.sel(mu=0.6, method="nearest")`` reads one body's verdicts.  One friction coefficient
 ``mu`` applies to both contacts.  The verdicts are those of :func:`atlas.core.mechanism.verdicts_at`
 (certified kernels, undecided points settled exactly).
+
+Every parameter that is not an axis is stored with its units (:data:`FIXED`): the body's own (e.g.
+the ladder's ``L`` [m], ``m`` [kg]), the derived ``I`` [kg m2], the contact model ``k1, k2`` [N/m],
+``c1, c2`` [N s/m], gravity ``g`` [m s-2] (along ``-y``) and the state's ``speed`` [m/s] (contact 1's
+sliding speed; default 0, the zero-speed limit), the sliding signs ``s1, s2`` and, as attributes, the
+contact kinds.  ``fixed={"L": 3.0, "c1": 20.0}`` (CLI ``--fixed L=3,c1=20``) changes them; every value
+goes through the validation of :mod:`atlas.core.mechanism`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import inspect
+import shlex
 
 import numpy as np
 import xarray as xr
 
 from atlas.core import config
 from atlas.core.mechanism import BODIES, VERDICT_NAMES, body_invariants, verdicts_at
+from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, to_storage, variable_attrs
 from atlas.data.scene import parse_values
 
-__all__ = ["MECHANISM_SCENES", "MechanismScene", "mechanism_atlas", "run_cli"]
+__all__ = ["FIXED", "MECHANISM_SCENES", "MechanismScene", "mechanism_atlas", "run_cli"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,6 +98,48 @@ _INVARIANTS = {
 }
 
 
+#: units and long names of the parameters a mechanism atlas stores (axes or fixed values)
+FIXED = {
+    "L": ("m", "length of the body"),
+    "m": ("kg", "mass"),
+    "I": ("kg m2", "moment of inertia about the centre of mass"),
+    "d": ("m", "half the distance between the legs"),
+    "h": ("m", "height of the centre of mass above the feet"),
+    "e": ("m", "position of the table edge along the rod, above its centre"),
+    "theta": ("rad", "angle of the body from the floor"),
+    "mu_floor": ("1", "friction coefficient at the floor"),
+    "mu_wall": ("1", "friction coefficient at the wall"),
+    "mu_edge": ("1", "friction coefficient at the table edge"),
+    "mu1": ("1", "friction coefficient at contact 1"),
+    "mu2": ("1", "friction coefficient at contact 2"),
+    "k1": ("N m-1", "stiffness of contact 1"),
+    "k2": ("N m-1", "stiffness of contact 2"),
+    "c1": ("N s m-1", "damping of contact 1"),
+    "c2": ("N s m-1", "damping of contact 2"),
+    "g": ("m s-2", "gravitational acceleration (along -y)"),
+    "speed": ("m s-1", "sliding speed of contact 1 (0: the zero-speed limit)"),
+    "s1": ("1", "sliding direction of contact 1 along its tangent (n turned by -90 degrees)"),
+    "s2": ("1", "sliding direction of contact 2 (admissible: derived from s1 and the geometry)"),
+}
+#: the contact model and state, with their defaults (SI)
+_MODEL = {"k1": 1e5, "k2": 1e5, "c1": 0.0, "c2": 0.0, "g": 9.81, "speed": 0.0}
+
+
+def _fixed_values(scene: MechanismScene, fixed: dict) -> dict:
+    """Every non-axis parameter: the body function's defaults and the model's, ``fixed`` applied."""
+    sets = {p for *_r, ps in scene.axes.values() for p in ps}
+    body = inspect.signature(BODIES[scene.body]).parameters
+    out = {k: p.default for k, p in body.items() if k not in sets}
+    out.update(_MODEL)
+    unknown = sorted(set(fixed) - set(out))
+    if unknown:
+        raise ValueError(
+            f"fixed: {unknown[0]!r} is not a fixed parameter of {scene.body} ({', '.join(out)})"
+        )
+    out.update(fixed)
+    return out
+
+
 def _axis_values(scene: MechanismScene, overrides: dict) -> dict:
     unknown = set(overrides) - set(scene.axes)
     if unknown:
@@ -115,18 +167,38 @@ def _validated(scene: MechanismScene, build):
         raise
 
 
-def mechanism_atlas(name: str, *, dtype: str = "float64", **axes) -> xr.Dataset:
+def mechanism_atlas(
+    name: str,
+    *,
+    dtype: str = "float64",
+    fixed: dict | None = None,
+    history: str | None = None,
+    **axes,
+) -> xr.Dataset:
     """The atlas of built-in mechanism scene ``name`` (:data:`MECHANISM_SCENES`) over its physical
-    axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``)."""
+    axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``).
+
+    ``fixed``: values of the other parameters (module docstring; SI units of :data:`FIXED`);
+    ``history``: the command recorded in the ``history`` attribute (default: this call, with every
+    axis range and fixed value).
+    """
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
     scene = MECHANISM_SCENES[name]
+    consts = _fixed_values(scene, dict(fixed or {}))
     values = _axis_values(scene, axes)
     grids = np.meshgrid(*values.values(), indexing="ij")
-    params = {}
+    params = {k: v for k, v in consts.items() if k not in _MODEL}
     for (_d, _u, _l, sets), grid in zip(scene.axes.values(), grids):
         params.update({p: grid for p in sets})
-    inv = _validated(scene, lambda: body_invariants(BODIES[scene.body](**params)))
+    model = {k: consts[k] for k in ("k1", "k2", "c1", "c2", "speed")}
+
+    def build():
+        body = BODIES[scene.body](**params)
+        g = _real_g(consts["g"])
+        return body, body_invariants(body, **model, g=(0.0, -g))
+
+    body, inv = _validated(scene, build)
     verdicts = verdicts_at(
         *(inv[k] for k in ("beta1", "beta2", "alpha", "kappa", "q1", "q2")), dtype=dtype
     )
@@ -137,21 +209,51 @@ def mechanism_atlas(name: str, *, dtype: str = "float64", **axes) -> xr.Dataset:
         data[k] = (dims, inv[k], attrs)
     for k in VERDICT_NAMES:
         data[k] = (dims, to_storage(k, verdicts[k], dtype), variable_attrs(k))
+    data["omega"] = (dims, inv["omega"], {"units": "rad s-1", "long_name": "angular velocity"})
     coords = {
         axis: (axis, values[axis], {"units": units, "long_name": long_name})
         for axis, (_d, units, long_name, _s) in scene.axes.items()
     }
+    stored = {k: v for k, v in consts.items() if k in FIXED}
+    stored.update(m=body["m"], I=body["I"], s1=body["s1"], s2=inv["s2"])
+    for k, v in stored.items():
+        v = np.asarray(v, np.float64)
+        v = np.broadcast_to(v, inv["beta1"].shape) if v.ndim else v
+        if v.ndim and np.all(v == v.flat[0]):
+            v = v.flat[0]
+        units, long_name = FIXED[k]
+        coords[k] = (dims if np.ndim(v) else (), v, {"units": units, "long_name": long_name})
+    if history is None:
+        args = [f"{a}={values_spec!r}" for a, values_spec in _specs(scene, axes).items()]
+        args += [f"fixed={dict(fixed)!r}"] if fixed else []
+        history = f"atlas.mechanism_atlas({', '.join([repr(name), *args, f'dtype={dtype!r}'])})"
     attrs = {
         "Conventions": "CF-1.10",
         "title": f"painleve-atlas mechanism scene {name!r}: {scene.description}",
         "source": config.source(),
-        "history": config.history(
-            f"atlas.data.mechanisms.mechanism_atlas({name!r}, dtype={dtype!r})"
-        ),
+        "history": config.history(history),
+        "references": REFERENCES,
         "mechanism": scene.body,
         "dtype": dtype,
+        "contact1_kind": body.get("kind1", "body_vertex"),
+        "contact2_kind": body.get("kind2", "body_vertex"),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _real_g(g) -> float:
+    try:
+        g = float(g)
+    except (TypeError, ValueError):
+        raise ValueError(f"g: cannot interpret {g!r} as a number") from None
+    if not (np.isfinite(g) and g > 0):
+        raise ValueError(f"g: must be finite and > 0 (along -y), got {g}")
+    return g
+
+
+def _specs(scene: MechanismScene, axes: dict) -> dict:
+    """Every axis's range as given (default ranges filled in)."""
+    return {a: axes.get(a, default) for a, (default, *_r) in scene.axes.items()}
 
 
 def summary(ds: xr.Dataset) -> str:
@@ -171,13 +273,41 @@ def summary(ds: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
-def run_cli(name, out=None, overwrite=False, dtype="float64", **axes) -> int:
-    """``atlas mechanism NAME [--AXIS RANGE ...] [--out FILE.nc]``."""
+def parse_fixed(text: str | None) -> dict:
+    """``"L=3,c1=20"`` -> ``{"L": 3.0, "c1": 20.0}`` (one-line errors naming ``fixed`` or the key)."""
+    out = {}
+    for item in (text or "").split(","):
+        if not item.strip():
+            continue
+        key, sep, val = (t.strip() for t in item.partition("="))
+        if not sep or not key:
+            raise ValueError(f"fixed: expected KEY=VALUE, got {item.strip()!r}")
+        if key in out:
+            raise ValueError(f"fixed: {key} given twice")
+        values, is_dim = parse_values(val, key)
+        if is_dim:
+            raise ValueError(f"{key}: a fixed parameter takes one number, got {val!r}")
+        out[key] = float(values)
+    return out
+
+
+def run_cli(name, out=None, overwrite=False, dtype="float64", fixed=None, **axes) -> int:
+    """``atlas mechanism NAME [--AXIS RANGE ...] [--fixed K=V,...] [--out FILE.nc]``; the file's
+    ``history`` is this command line with every axis range explicit."""
 
     if out is not None:
         check_output_path(out, overwrite)
     given = {a: v for a, v in axes.items() if v is not None}
-    ds = mechanism_atlas(name, dtype=dtype, **given)
+    scene = MECHANISM_SCENES[name]
+    words = ["atlas", "mechanism", name]
+    for a, spec in _specs(scene, given).items():
+        words += [f"--{a}", str(spec)]
+    words += ["--fixed", fixed] if fixed else []
+    words += ["--dtype", dtype] if dtype != "float64" else []
+    words += ["--out", str(out)] if out is not None else []
+    words += ["--overwrite"] if overwrite else []
+    history = " ".join(shlex.quote(w) for w in words)
+    ds = mechanism_atlas(name, dtype=dtype, fixed=parse_fixed(fixed), history=history, **given)
     print(summary(ds))
     if out is not None:
         write_netcdf(ds, out, overwrite=overwrite)

@@ -147,3 +147,64 @@ def test_builtin_geometry_is_validated_on_every_path(body, kw, name):
         with pytest.raises(ValueError) as err:
             build()
         assert str(err.value).startswith(f"{name}: ") and "\n" not in str(err.value)
+
+
+def test_fixed_parameters_are_stored_with_units(ladder):
+    """Every non-axis parameter of the ladder is in the file with its units (the docstring's
+    defaults: L = 4 m, m = 15 kg, I = m L^2 / 12 = 20 kg m^2, k = 1e5 N/m, c = 0, g = 9.81)."""
+    want = {"L": (4.0, "m"), "m": (15.0, "kg"), "I": (20.0, "kg m2"), "k1": (1e5, "N m-1")}
+    want.update({"k2": (1e5, "N m-1"), "c1": (0.0, "N s m-1"), "c2": (0.0, "N s m-1")})
+    want.update({"g": (9.81, "m s-2"), "speed": (0.0, "m s-1"), "s1": (1, "1"), "s2": (1, "1")})
+    for k, (value, units) in want.items():
+        assert ladder[k].ndim == 0 and float(ladder[k]) == pytest.approx(value, rel=1e-15), k
+        assert ladder[k].attrs["units"] == units, k
+    assert (
+        ladder.attrs["contact2_kind"] == "body_vertex" and "Varkonyi" in ladder.attrs["references"]
+    )
+    assert (
+        "mechanism_atlas('ladder', theta='0.05pi:0.45pi:17', mu='0:2:21'" in ladder.attrs["history"]
+    )
+    legs = mechanism_atlas("two_legged", h="0.1,0.5", mu="0.3")
+    np.testing.assert_allclose(legs.I.values[:, 0], 5.0 * (0.04 + np.array([0.01, 0.25])) / 3)
+
+
+def test_fixed_values_reach_every_point():
+    """``fixed`` (length, damping, a sliding speed: the edge's transport term) gives the
+    Mechanism of the same parameters at every point."""
+    ds = mechanism_atlas(
+        "leaning_rod", theta="0.3,1.1", mu="0.2,1.4", fixed={"L": 2.0, "c1": 20.0, "speed": 0.5}
+    )
+    assert float(ds.L) == 2.0 and float(ds.speed) == 0.5 and float(ds.c1) == 20.0
+    for i, th in enumerate(ds.theta.values):
+        for j, mu in enumerate(ds.mu.values):
+            body = Mechanism.leaning_rod(
+                theta=th, mu_floor=mu, mu_edge=mu, L=2.0, c1=20.0, speed=0.5
+            )
+            point = ds.isel(theta=i, mu=j)
+            assert float(point.omega) == pytest.approx(body.omega, rel=1e-13)
+            for k, v in body.invariants.items():
+                assert float(point[k]) == pytest.approx(v, rel=1e-12, abs=1e-12), k
+            np.testing.assert_allclose([point.a1, point.a2], body.a, rtol=1e-13)
+
+
+def test_cli_history_and_fixed_errors(tmp_path, capsys):
+    """``history`` is the command line with every axis range; a bad fixed value is one line."""
+    import xarray as xr
+
+    from atlas.cli import main
+
+    out = tmp_path / "legs.nc"
+    argv = ["mechanism", "two_legged", "--mu", "0.5", "--fixed", "d=0.3,k1=2e5", "--out", str(out)]
+    assert main(argv) == 0
+    with xr.open_dataset(out) as ds:
+        hist = ds.attrs["history"]
+        assert float(ds.d) == 0.3 and float(ds.k1) == 2e5 and ds.d.attrs["units"] == "m"
+    assert hist.endswith(
+        f"atlas mechanism two_legged --h 0.05:2:196 --mu 0.5 --fixed d=0.3,k1=2e5 --out {out}"
+    )
+    for fixed, name in (("d=-0.1", "d"), ("q=1", "fixed"), ("speed=-1", "speed"), ("g=0", "g")):
+        bad = tmp_path / "bad.nc"
+        assert main(["mechanism", "two_legged", "--fixed", fixed, "--out", str(bad)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"atlas: error: {name}: ") and err.count("\n") == 1, err
+        assert not bad.exists()
