@@ -1,4 +1,4 @@
-"""Atlases of real mechanisms: built-in bodies over physical axes (issue 14).
+"""Atlases of real mechanisms: built-in bodies over physical axes.
 
 A mechanism scene sweeps physical parameters of a built-in body of :mod:`atlas.core.mechanism`
 (e.g. the ladder's angle ``theta`` [rad] and friction coefficient ``mu`` [1]) and stores, on those
