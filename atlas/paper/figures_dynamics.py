@@ -179,7 +179,7 @@ def run_cli(
     n=None,
     kappa=None,
     q=None,
-    engine="numpy",
+    engine="fast",
     **_,
 ) -> int:
     """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
