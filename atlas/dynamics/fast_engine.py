@@ -56,7 +56,12 @@ import math
 
 import numpy as np
 
-from atlas.dynamics.classification import TrajectoryStats, classify_stats, needs_longer_run
+from atlas.dynamics.classification import (
+    TrajectoryStats,
+    classify_stats,
+    impacts,
+    needs_longer_run,
+)
 from atlas.dynamics.system import (
     MODE_NAMES,
     Mode,
@@ -114,7 +119,7 @@ class ModalTable:
     """Modal form of one configuration for ``N`` lanes: eigenvalues ``lam`` (N, 4; unused
     entries 0 with ``valid`` False), right/left eigenvector blocks ``V``, ``W`` (N, na, na) of
     the active subsystem, equilibrium ``d_eq`` (N, 2; NaN for free gaps), ``H`` step cap,
-    ``ok`` (well-conditioned)."""
+    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5)."""
 
     mask: int
     lam: np.ndarray
@@ -124,6 +129,7 @@ class ModalTable:
     d_eq: np.ndarray
     H: np.ndarray
     ok: np.ndarray
+    E: np.ndarray
 
 
 def modal_tables(lanes: Lanes) -> list[ModalTable]:
@@ -140,9 +146,10 @@ def modal_tables(lanes: Lanes) -> list[ModalTable]:
         V = np.zeros((n, na, na), dtype=complex)
         W = np.zeros((n, na, na), dtype=complex)
         ok = np.ones(n, dtype=bool)
+        E = lanes.E(mask)
         if idx:
             sub = idx + [i + 2 for i in idx]
-            A = lanes.E(mask)[:, sub][:, :, sub]
+            A = E[:, sub][:, :, sub]
             w, V = np.linalg.eig(A)
             cond = np.linalg.cond(V)
             ok = np.isfinite(cond) & (cond < _COND_MAX)
@@ -158,22 +165,17 @@ def modal_tables(lanes: Lanes) -> list[ModalTable]:
             ok &= np.all(np.abs(w) > 0, axis=1)
         rho = np.abs(lam).max(axis=1)
         H = 1.0 / np.maximum(rho, 0.25 * omega)
-        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok))
+        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
     return out
 
 
 def light_system(lanes: Lanes, tables, n: int) -> System:
     """The :class:`atlas.dynamics.system.System` of lane ``n`` with what
-    :func:`atlas.dynamics.classify_stats` reads (``E``, ``eig``, ``stable``, ``z_eq``; no
-    sub-step matrices)."""
-    B, a, k, q = lanes.B[n], lanes.a[n], lanes.k[n], lanes.q[n]
-    L = np.zeros((4, 5))
-    L[0, 0] = L[1, 1] = 1.0
-    L[2, 0], L[2, 2] = -k[0], -q[0]
-    L[3, 1], L[3, 3] = -k[1], -q[1]
+    :func:`atlas.dynamics.classify_stats` and :func:`atlas.dynamics.system.iwc_aligned` read
+    (``E``, ``eig``, ``stable``, ``z_eq``; no sub-step matrices)."""
+    k = lanes.k[n]
     modes = []
     for tab in tables:
-        E = _augmented(B, a, k, q, tab.mask)
         na = int(tab.valid[n].sum())
         eig = tab.lam[n, :na]
         z_eq = None
@@ -184,8 +186,9 @@ def light_system(lanes: Lanes, tables, n: int) -> System:
             z_eq[[i + 2 for i in idx]] = 0.0
             z_eq[4] = 1.0
         stable = bool(np.all(eig.real < 0)) if na else True
-        modes.append(Mode(tab.mask, E, float("nan"), None, None, L @ E, eig, stable, z_eq))
-    return System(B=B, a=a, k=k, q=q, L=L, modes=tuple(modes), omega=math.sqrt(k.max()))
+        modes.append(Mode(tab.mask, tab.E[n], math.nan, None, None, None, eig, stable, z_eq))
+    return System(B=lanes.B[n], a=lanes.a[n], k=k, q=lanes.q[n], L=None, modes=tuple(modes),
+                  omega=math.sqrt(k.max()))  # fmt: skip
 
 
 def _augmented(B, a, k, q, mask):
@@ -283,15 +286,32 @@ def _curvature_bound(p, UE, lam, H, k, q):
     return np.concatenate([m2, k * m2 + q * m3], axis=1)
 
 
+def _flat_step(s, p, UE, lam, H, k, q):
+    """``sigma_lo`` (n, 4) of functions with ``f = f' = 0``: ``s f >= C x^2 / 2 - M3 x^3 / 6``
+    with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
+    ``C > 0``)."""
+    lr = np.abs(lam)[:, None, :]
+    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = np.abs(UE) * grow
+    d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
+    d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
+    m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
+    C = s * np.concatenate([d2, -k * d2 - q * d3], axis=1)
+    M3 = np.maximum(np.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
+    return np.where(C > 0, 3 * C / M3, 0.0)
+
+
 def _safe_steps(A, Bd, M):
     """Roots ``sigma_lo`` of ``A + Bd s - M s^2 / 2`` and ``sigma_hi`` of ``A + Bd s + M s^2 / 2``
     (first positive; ``inf`` if none) for ``A >= 0``: no sign change of ``f`` before ``sigma_lo``,
     one by ``sigma_hi``."""
     M = np.maximum(M, 1e-300)
-    root = np.sqrt(Bd * Bd + 2 * M * A)
-    lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
-    disc = Bd * Bd - 2 * M * A
-    hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))), np.inf)
+    with np.errstate(all="ignore"):
+        root = np.sqrt(Bd * Bd + 2 * M * A)
+        lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
+        disc = Bd * Bd - 2 * M * A
+        hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))),
+                      np.inf)  # fmt: skip
     lo = np.where(np.isnan(lo), 0.0, lo)
     hi = np.where(np.isnan(hi), 0.0, hi)
     return lo, hi
@@ -324,6 +344,11 @@ def _keeps_sign(c, w, lam, valid, horizon):
 
     Returns ``(ok, G, bounded, lam_1)`` (...) each: ``bounded`` the bound of the other terms.
     """
+    with np.errstate(all="ignore"):
+        return _keeps_sign_bound(c, w, lam, valid, horizon)
+
+
+def _keeps_sign_bound(c, w, lam, valid, horizon):
     re = lam.real
     scale = np.abs(lam).max(axis=-1, keepdims=True)
     grow = valid & (re > _NEUTRAL * scale)
@@ -429,7 +454,8 @@ def _switch(s, cross, f, fp, k, scale):
     force = np.where(np.abs(f[:, 2:]) > 1e-9 * np.abs(k * scale[:, None]), f[:, 2:], fp[:, 2:])
     sn[:, 2:] = np.where(closing, np.where(force > 0, 1.0, -1.0), sn[:, 2:])
     sn[:, 2:] = np.where(opening, -1.0, sn[:, 2:])
-    force_ev = cross[:, 2:] & ~((sn[:, :2] > 0) & ~closing)
+    # a force crossing while its gap stays open is no event (as in the reference)
+    force_ev = cross[:, 2:] & ~((sn[:, :2] > 0) & ~closing & ~opening)
     n_ev = closing.sum(axis=1) + opening.sum(axis=1) + force_ev.sum(axis=1)
     return sn, closing, n_ev
 
@@ -472,39 +498,43 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
         keep = np.ones(ix.size, dtype=bool)
 
-        def leave(sel, status):
-            st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
-            st.status[ix[sel]] = status
-            keep[sel] = False
-
         # stops of the reference: divergence, horizon
         div = ~np.isfinite(g).all(axis=1)
         div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
-        deep = np.flatnonzero(~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
+        sched = (since & (since - 1)) == 0  # 0, 1, 2, 4, ... steps after an event
+        deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
         for r in deep:
             sysm = st.system(lanes, tables, ix[r])
             div[r] = iwc_aligned(sysm, int(mask[r]), g[r], 1e-3)
-        leave(div, 2)
-        leave(keep & (t >= T), 0)
-        # early decisions (at 0, 1, 2, 4, ... steps after an event): no event can follow
-        r = np.flatnonzero(keep & ((since & (since - 1)) == 0))
+        _leave(st, ix, t, g, s, keep, div, 2)
+        _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
+        # early decisions (on the same schedule): no event can follow
+        r = np.flatnonzero(keep & sched)
         if r.size:
             _decide(st, ix[r], t[r], T[r], t_max, s[r], mask[r], p[r], UE[r], lam[r], valid[r],
                     k[r], q[r], scale[r], act[r])  # fmt: skip
             dec = st.code[ix[r]] >= 0
-            leave(r[dec], _RUNNING)
+            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # next step: certified brackets of the monitored event functions
         f, fp = _event_functions(d, v, acc, k, q)
         M = _curvature_bound(p, UE, lam, H, k, q)
-        lo, hi = _safe_steps(np.maximum(s * f, 0.0), s * fp, M)
+        A, Bd = np.maximum(s * f, 0.0), s * fp
+        lo, hi = _safe_steps(A, Bd, M)
+        flat = (A == 0) & (Bd == 0)
+        if flat.any():  # a double zero (exactly zero state): the second derivative decides
+            lo = np.where(flat, _flat_step(s, p, UE, lam, H, k, q), lo)
         mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
         lo = np.minimum(lo, H[:, None])
         hi = np.where(hi <= H[:, None], hi, np.inf)
         lo = np.where(mon, lo, np.inf)
         hi = np.where(mon, hi, np.inf)
-        first = np.argmin(lo, axis=1)
-        m, h = lo[rows, first], hi[rows, first]
+        # the first crossing: smallest sigma_lo, ties to the tightest bracket
+        m = lo.min(axis=1)
+        tie_hi = np.where(lo <= m[:, None], hi, np.inf)
+        first = np.where(np.isinf(tie_hi.min(axis=1)), np.argmin(lo, axis=1),
+                         np.argmin(tie_hi, axis=1))  # fmt: skip
+        h = hi[rows, first]
         rem = T - t
         xtol = _XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
@@ -523,14 +553,22 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
 
 
+def _leave(st, ix, t, g, s, keep, sel, status):
+    """Lanes ``sel`` leave the batch: their time, state, signs and status into ``st``."""
+    st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
+    st.status[ix[sel]] = status
+    keep[sel] = False
+
+
 def _decide(st, ix, t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act):
     """The early decisions of the module docstring for lanes ``ix`` (written into ``st.code``,
     ``st.decided_by``)."""
     re = lam.real
     lscale = np.abs(lam).max(axis=1, keepdims=True)
     growing = (valid & (re > _NEUTRAL * lscale)).any(axis=1)
-    neutral = (valid & (np.abs(re) <= _NEUTRAL * lscale)).any(axis=1) & ~growing
+    neutral = (valid & (np.abs(re) <= _NEUTRAL * lscale)).any(axis=1)
     horizon = np.where(neutral, t_max - t, np.inf)
+    neutral &= ~growing
     cert, G, Bn, l1 = _no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
     free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
     settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
@@ -595,8 +633,6 @@ def _impact_log(st: _State):
 
 def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
     """:class:`atlas.dynamics.TrajectoryStats` of lane ``n`` (a run that stopped undecided)."""
-    from atlas.dynamics.classification import impacts
-
     T = float(st.t[n])
     g = st.g[n]
     t_ev, v_ev, c_ev = log.get(n, (np.zeros(0), np.zeros(0), np.zeros(0, int)))
@@ -619,11 +655,12 @@ def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
     ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
-    at) and ``n_events``."""
+    at), ``g_final`` (N, 4) the state there and ``n_events``."""
 
     code: np.ndarray
     decided_by: np.ndarray
     t_final: np.ndarray
+    g_final: np.ndarray
     n_events: np.ndarray
 
 
@@ -667,9 +704,11 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         b1, b2, al = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)).ravel()
                                            for x in (beta1, beta2, alpha)))  # fmt: skip
         for n in fb:
-            st.code[n] = int(reference(b1[n], b2[n], al[n], tuple(lanes.k[n]), tuple(lanes.q[n]), g0[n]))
+            st.code[n] = int(
+                reference(b1[n], b2[n], al[n], tuple(lanes.k[n]), tuple(lanes.q[n]), g0[n])
+            )
             st.decided_by[n] = 3
-    return FastResult(st.code, st.decided_by, st.t, st.n_events)
+    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
 
 
 def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,

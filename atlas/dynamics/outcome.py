@@ -17,7 +17,7 @@ from atlas.core import mechanics
 from atlas.dynamics import fast_engine, jax_engine
 from atlas.dynamics.classification import classify, needs_longer_run
 from atlas.dynamics.simulator import simulate
-from atlas.dynamics.system import Outcome, check_finite, ss_equilibrium
+from atlas.dynamics.system import Outcome, check_finite
 
 __all__ = [
     "fig2_cases",
