@@ -669,8 +669,9 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     """Outcomes of ``N`` trajectories (parameters broadcast to ``(N,)``, ``g0`` (N, 4)) with the
     classification and horizon extension of :func:`atlas.dynamics.simulate_outcome`.
 
-    ``reference(beta1, beta2, alpha, k, q, g0)`` gives the outcome of one trajectory by the exact
-    simulator (:func:`atlas.dynamics.simulate_outcome`), for the fallback lanes.
+    ``reference(beta1, beta2, alpha, k=, q=, g0=)`` runs one trajectory with the exact simulator
+    for the fallback lanes: :func:`atlas.dynamics.simulate_outcome` with the same ``t_end``,
+    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).
     """
     g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
     lanes = Lanes.of(beta1, beta2, alpha, k, q)
@@ -704,9 +705,9 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         b1, b2, al = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)).ravel()
                                            for x in (beta1, beta2, alpha)))  # fmt: skip
         for n in fb:
-            st.code[n] = int(
-                reference(b1[n], b2[n], al[n], tuple(lanes.k[n]), tuple(lanes.q[n]), g0[n])
-            )
+            out, _ = reference(b1[n], b2[n], al[n], k=tuple(lanes.k[n]), q=tuple(lanes.q[n]),
+                               g0=g0[n])  # fmt: skip
+            st.code[n] = int(out)
             st.decided_by[n] = 3
     return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
 

@@ -6,6 +6,7 @@ engine (:mod:`atlas.dynamics.simulator` run by run, or the batched :mod:`atlas.d
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time as _time
 
@@ -219,7 +220,8 @@ def outcome_map(
         ``outcome`` (int8, CF flags from :class:`Outcome`) and ``agreement`` (float32) over
         ``(beta1, beta2)``; ``no_stable_subclass`` (bool): subclasses 132, 133, 142, 143 or duals.
         Attributes record the parameters, ``trajectories``, ``seconds`` and
-        ``trajectories_per_second``.
+        ``trajectories_per_second``; with the fast engine ``runs_stepped``, ``runs_early_settle``,
+        ``runs_early_iwc``, ``runs_fallback`` (how each run was decided).
     """
     b1, b2, p = _map_args(
         beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, perturbation, t_end,
@@ -227,9 +229,11 @@ def outcome_map(
     )  # fmt: skip
     g0 = perturbed_initial_states(b1, b2, p.alpha, p.kappa, n_perturb, seed, p.perturbation)
     t0 = _time.perf_counter()
-    codes = _outcome_codes(b1, b2, g0, p, progress)
+    codes, how = _outcome_codes(b1, b2, g0, p, progress)
     wall = _time.perf_counter() - t0
-    return _map_dataset(b1, b2, codes, p, wall)
+    ds = _map_dataset(b1, b2, codes, p, wall)
+    ds.attrs.update(how)
+    return ds
 
 
 @dataclasses.dataclass(frozen=True)
@@ -295,29 +299,29 @@ def _map_args(beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, pert
 
 
 def _outcome_codes(b1, b2, g0, p: _MapParams, progress):
-    """Outcome codes ``(n1, n2, n_perturb)`` from the chosen engine."""
+    """Outcome codes ``(n1, n2, n_perturb)`` from the chosen engine, and attributes of the run
+    (fast engine: how many runs were stepped, decided early, run by the exact simulator)."""
     k = (p.kappa, 1.0)
     if p.engine == "fast":
-
-        def reference(x1, x2, alpha, kk, qq, g):
-            return simulate_outcome(x1, x2, alpha, k=kk, q=qq, g0=g, t_end=p.t_end,
-                                    horizon_cap=p.horizon_cap, max_events=p.max_events)[0]  # fmt: skip
-
-        codes, _ = fast_engine.outcomes(
+        reference = functools.partial(
+            simulate_outcome, t_end=p.t_end, horizon_cap=p.horizon_cap, max_events=p.max_events
+        )
+        codes, res = fast_engine.outcomes(
             b1, b2, p.alpha, k, p.q, g0, reference, t_end=p.t_end, horizon_cap=p.horizon_cap,
             max_events=p.max_events,
         )  # fmt: skip
         if progress is not None:
             progress(b1.size * b2.size, b1.size * b2.size)
-        return codes
+        how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
+        return codes, {f"runs_{name}": int(c) for name, c in zip(fast_engine.DECIDED_BY, how)}
     if p.engine == "jax":
         return jax_engine.outcomes(
             b1, b2, p.alpha, k, p.q, g0, t_end=p.t_end, horizon_cap=p.horizon_cap,
             max_events=p.max_events,
-        )  # fmt: skip
+        ), {}  # fmt: skip
     return _numpy_outcomes(
         b1, b2, p.alpha, k, p.q, g0, p.t_end, p.horizon_cap, p.max_events, progress
-    )
+    ), {}
 
 
 def _numpy_outcomes(b1, b2, alpha, k, q, g0, t_end, horizon_cap, max_events, progress):

@@ -13,8 +13,8 @@ from atlas.dynamics import fast_engine as F
 PI = math.pi
 
 
-def _reference(x1, x2, alpha, k, q, g):
-    return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g, max_events=2000)[0]
+def _reference(x1, x2, alpha, k, q, g0):
+    return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
 
 
 def _map(n, kappa, q, alpha):
@@ -28,7 +28,7 @@ def _map(n, kappa, q, alpha):
                                                         (8, 2.0, 0.5, 0.2 * PI)])  # fmt: skip
 def test_outcomes_match_the_exact_simulator(n, kappa, q, alpha):
     b1, b2, g0, codes, res = _map(n, kappa, q, alpha)
-    ref = np.array([[int(_reference(x1, x2, alpha, (kappa, 1.0), (q, q), g0[i, j, 0]))
+    ref = np.array([[int(_reference(x1, x2, alpha, (kappa, 1.0), (q, q), g0[i, j, 0])[0])
                      for j, x2 in enumerate(b2)] for i, x1 in enumerate(b1)])  # fmt: skip
     assert np.array_equal(codes[:, :, 0], ref)
     assert (res.decided_by > 0).mean() > 0.5  # most runs decided early
