@@ -512,8 +512,8 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         # early decisions (on the same schedule): no event can follow
         r = np.flatnonzero(keep & sched)
         if r.size:
-            _decide(st, ix[r], t[r], T[r], t_max, s[r], mask[r], p[r], UE[r], lam[r], valid[r],
-                    k[r], q[r], scale[r], act[r])  # fmt: skip
+            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
+                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
             dec = st.code[ix[r]] >= 0
             _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # next step: certified brackets of the monitored event functions
@@ -560,7 +560,7 @@ def _leave(st, ix, t, g, s, keep, sel, status):
     keep[sel] = False
 
 
-def _decide(st, ix, t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act):
+def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
     """The early decisions of the module docstring for lanes ``ix`` (written into ``st.code``,
     ``st.decided_by``)."""
     re = lam.real
@@ -572,6 +572,7 @@ def _decide(st, ix, t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act):
     cert, G, Bn, l1 = _no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
     free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
     settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
+    settle &= _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H)
     st.code[ix[settle]] = np.array([_OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
     # time by which -d_i >= G exp(lam_1 s) + (-d_eq_i - bounded) passes 1e3 penetration_limit
@@ -579,8 +580,98 @@ def _decide(st, ix, t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act):
     sig = np.log(np.maximum((X + p[:, :, 0] + Bn[:, :2]) / G[:, :2], 1.0))
     sig = np.where(act & (G[:, :2] > 0), sig / l1[:, None], np.inf).min(axis=1)
     iwc = cert & growing & (mask > 0) & (t + sig <= T)
+    r = np.flatnonzero(iwc)
+    if r.size:
+        c = _modal_coordinates(tables, ix[r], mask[r], g[r])
+        iwc[r] &= _aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
+
+
+def _first_reach(c0, c1, c2, limit):
+    """First ``s >= 0`` with ``c0 + c1 s + c2 s^2 >= limit`` (``c1, c2 >= 0``; inf if never)."""
+    c0 = c0 - limit
+    with np.errstate(all="ignore"):
+        lin = np.where(c1 > 0, -c0 / c1, np.inf)
+        quad = (-c1 + np.sqrt(c1 * c1 - 4 * c2 * c0)) / (2 * c2)
+        out = np.where(c2 > 0, quad, lin)
+    return np.where(c0 >= 0, 0.0, out)
+
+
+def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
+    """The reference settles before any of its other stops: for a decaying configuration its
+    settling test (:func:`atlas.dynamics.simulate`, ``settle_rtol = 1e-6``) provably passes
+    within the horizon ``T`` and before a free gap can pass the amplitude limit ``1e4 scale``;
+    for a neutral one no free gap can pass that limit within ``T``; in FF no gap is falling."""
+    aw = np.abs(UE)
+    amp = 1e4 * scale
+    # upper bound of each free gap: |p0| + |p1| s + |p2| s^2 + sum |u|
+    reach = _first_reach(np.abs(p[:, :, 0]) + aw.sum(axis=2), np.abs(p[:, :, 1]),
+                         np.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
+    t_amp = np.where(act, np.inf, reach).min(axis=1)
+    omega = np.sqrt(k.max(axis=1))
+    decay = np.where(valid, -lam.real, np.inf).min(axis=1)
+    d_eq = np.where(act, np.abs(p[:, :, 0]), 0.0).max(axis=1)
+    size = (aw * (1 + np.abs(lam) / omega[:, None])[:, None, :]).sum(axis=(1, 2))
+    with np.errstate(all="ignore"):
+        t_set = np.maximum(np.log(size / (1e-6 * d_eq)), 0.0) / decay + 2 * H
+    t_set = np.where(act.any(axis=1), t_set, 0.0)
+    ff_falling = (~act & (p[:, :, 1] < 0)).any(axis=1)
+    decaying = ~neutral & (t_set < t_amp) & (t + t_set <= T) & ~ff_falling
+    return np.where(neutral, t_amp > T - t, decaying)
+
+
+def _modal_coordinates(tables, ix, mask, g):
+    """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
+    the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
+    c = np.zeros((ix.size, 4), dtype=complex)
+    for m in (1, 2, 3):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        tab, lx = tables[m], ix[sel]
+        idx = [i for i in range(2) if m >> i & 1]
+        x = np.concatenate([g[sel][:, idx] - tab.d_eq[lx][:, idx],
+                            g[sel][:, [i + 2 for i in idx]]], axis=1)  # fmt: skip
+        c[sel, : 2 * len(idx)] = np.einsum("nij,nj->ni", tab.W[lx], x)
+    return c
+
+
+def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
+    """The reference classifies the divergence as IWC: from the earliest time any gap can reach
+    the reference's divergence limits (``1e4 scale``; bound ``|p0| + |p1| s + |p2| s^2 + sum |u|
+    exp(max(Re lam, 0) s)``), the components off the dominant eigenvector stay below 1e-2 of the
+    deviation (:func:`atlas.dynamics.classify`'s ``align_tol``): ``sum_other |c_m| exp(Re lam_m
+    s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
+    largest real part."""
+    re = np.where(valid, lam.real, -np.inf)
+    j1 = np.argmax(re, axis=1)
+    rows = np.arange(c.shape[0])
+    dom = np.abs(c[rows, j1])
+    others = valid.copy()
+    others[rows, j1] = False
+    strict = np.all(~others | (re < l1[:, None]), axis=1)
+    # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
+    aw = np.abs(UE)
+    grow = np.maximum(lam.real, 0.0)
+
+    def bound(x):
+        e = np.exp(grow * x[:, None])[:, None, :]
+        b = (np.abs(p[:, :, 0]) + np.abs(p[:, :, 1]) * x[:, None] + np.abs(p[:, :, 2])
+             * x[:, None] ** 2 + (aw * e).sum(axis=2))  # fmt: skip
+        return b.max(axis=1)
+
+    lo, hi = np.zeros(c.shape[0]), rest.copy()
+    lim = 1e4 * scale
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        above = bound(mid) >= lim
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    s0 = lo
+    with np.errstate(all="ignore"):
+        off = np.where(others, np.abs(c) * np.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
+    return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
 
 
 def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s, mask,
