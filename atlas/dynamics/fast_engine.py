@@ -42,6 +42,9 @@ positivity).  If all keep their signs, no event can follow, and:
   collision (paper Sec. 4.3), decided only if the reference's divergence limit
   (``1e3 penetration_limit``) is provably passed within the current horizon.
 
+Both are declared only where the reference's finite-horizon stops reach the same verdict
+(:func:`_settles_first`, :func:`_aligned_at_stop`); otherwise the lane keeps stepping.
+
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Lanes the modal form cannot serve (near-defective eigenvectors, condition > ``1e8``) or whose
 root location stalls (a grazing contact) are run by the exact simulator instead (``fallback``).
