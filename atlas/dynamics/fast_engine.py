@@ -505,7 +505,7 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         div = ~np.isfinite(g).all(axis=1)
         div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
-        sched = (since & (since - 1)) == 0  # 0, 1, 2, 4, ... steps after an event
+        sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
         for r in deep:
             sysm = st.system(lanes, tables, ix[r])

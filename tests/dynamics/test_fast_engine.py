@@ -2,6 +2,7 @@
 outcomes on sampled maps, the early decisions checked by continuing the trajectory with the
 reference, the certificates and brackets against dense sampling, the Fig. 2 cases."""
 
+import functools
 import math
 
 import numpy as np
@@ -17,6 +18,7 @@ def _reference(x1, x2, alpha, k, q, g0):
     return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
 
 
+@functools.lru_cache(maxsize=4)
 def _map(n, kappa, q, alpha):
     b1, b2 = S.outcome_grid(n)
     g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)
