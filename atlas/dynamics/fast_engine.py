@@ -541,6 +541,16 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         rem = T - t
         xtol = _XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
+        # a bracket of the first function that every other function's sigma_lo lies beyond: the
+        # first crossing is in it, located by Illinois regula falsi on that function alone
+        other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
+        r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
+        if r.size:
+            fr = first[r]
+            h[r] = _illinois(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+                             s[r, fr], k[r], q[r], xtol[r])  # fmt: skip
+            lo[r, fr] = hi[r, fr] = h[r]
+            ev[r] = True
         step = np.where(ev, h, np.minimum(np.minimum(m, H), rem))
         t = np.where(keep, t + step, t)
         since += 1
@@ -554,6 +564,40 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+
+
+def _illinois(P, U, lam, tau, a, b, j, sj, k, q, xtol):
+    """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): Illinois regula falsi until
+    the bracket is below ``xtol``; returns its upper end ``b`` (relative to ``tau``)."""
+    i = j % 2
+    rows = np.arange(j.size)
+    ki, qi = k[rows, i], q[rows, i]
+
+    def g(x):
+        d, v, _, _, _ = _evaluate(P, U, lam, tau + x)
+        di, vi = d[rows, i], v[rows, i]
+        return sj * np.where(j < 2, di, -ki * di - qi * vi)
+
+    ga, gb = g(a), g(b)
+    side = np.zeros(j.size)
+    for _ in range(100):
+        act = (b - a) > xtol
+        if not act.any():
+            break
+        x = b - gb * (b - a) / np.where(gb != ga, gb - ga, 1.0)
+        x = np.where((x <= a) | (x >= b) | (gb == ga), 0.5 * (a + b), x)
+        gx = g(x)
+        left = gx > 0
+        a2, ga2 = np.where(left, x, a), np.where(left, gx, ga)
+        b2, gb2 = np.where(left, b, x), np.where(left, gb, gx)
+        gb2 = np.where(left & (side > 0), 0.5 * gb2, gb2)  # same end kept twice: halve it
+        ga2 = np.where(~left & (side < 0), 0.5 * ga2, ga2)
+        side = np.where(left, 1.0, -1.0)
+        a, ga, b, gb = (
+            np.where(act, new, old) for new, old in ((a2, a), (ga2, ga), (b2, b), (gb2, gb))
+        )
+    return b
 
 
 def _leave(st, ix, t, g, s, keep, sel, status):
