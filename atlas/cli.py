@@ -254,7 +254,15 @@ def _add_simulate(sub) -> None:
     ps.add_argument("--n", type=int, metavar="N", help="map: cells per axis (default 24)")
     ps.add_argument("--kappa", type=_number("kappa"), metavar="K", help="map: default 0.5")
     ps.add_argument("--q", type=_number("q"), metavar="Q", help="map: q1 = q2, default 0")
-    ps.add_argument("--engine", choices=["numpy", "jax"], default="numpy", help="map engine")
+    ps.add_argument(
+        "--n-perturb", type=int, metavar="M", help="map: initial conditions per cell (default 1)"
+    )
+    ps.add_argument(
+        "--engine",
+        choices=["fast", "numpy", "jax"],
+        default="fast",
+        help="map engine: fast (batched, certified early stops), numpy (exact reference), jax",
+    )
 
 
 def _add_table(sub) -> None:

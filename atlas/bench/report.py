@@ -41,6 +41,8 @@ class Results:
     large: list = field(default_factory=list)
     atlases: list = field(default_factory=list)
     curves: list = field(default_factory=list)
+    #: the fast outcome-map engine against the exact simulator
+    maps: list = field(default_factory=list)
     #: the exact reference: distinct ``points`` evaluated, ``seconds``, ``failures``
     exact: dict = field(default_factory=lambda: dict(points=0, seconds=0.0, failures=0))
 
@@ -170,6 +172,10 @@ ATLAS_COLUMNS = (
 )
 ISSUE12_COLUMNS = ("case", "dtype", "ns_per_point", "eig_over_method", "method_over_floor")
 SIMULATION_COLUMNS = ("case", "method", "rtol", "seconds", "events", "error", "nfev")
+OUTCOME_MAP_COLUMNS = (
+    "map", "trajectories", "fast_seconds", "fast_per_s", "ref_cells", "ref_per_s", "speedup",
+    "early_settle", "early_iwc", "stepped", "fallback", "agreement",
+)  # fmt: skip
 
 # --------------------------------------------------------------------------- sections
 
@@ -495,6 +501,29 @@ def simulation_section(sim) -> list[str]:
     ]
 
 
+def outcome_maps_section(maps) -> list[str]:
+    """The fast outcome-map engine against the exact simulator on the same cells."""
+    if not maps:
+        return []
+    lines = [
+        "## Outcome maps: fast engine against the exact simulator\n",
+        "`atlas simulate --map` with the fast engine (`atlas.dynamics.fast_engine`: event to event "
+        "in the modal form of each contact configuration, certified early decisions) over the whole "
+        "map (`fast_seconds`: wall time including the initial states; `fast_per_s`), and "
+        "`simulate_outcome` (exact event-driven simulator) on a seeded sample of the same cells "
+        "from the same initial states, in the same run (`ref_per_s`; `speedup` = the ratio). "
+        "`early_settle` / `early_iwc`: fraction of runs decided by a certificate that no event can "
+        "follow; `stepped`: run to a stop and classified; `fallback`: run by the exact simulator. "
+        "`agreement`: same outcome on the sampled cells; every disagreement listed below.\n",
+        table(maps, OUTCOME_MAP_COLUMNS),
+        "",
+    ]
+    for row in maps:
+        if row["disagreements"]:
+            lines.append(f"* {row['map']}: {row['disagreements']}")
+    return [*lines, ""]
+
+
 def notes_section(notes, exact) -> list[str]:
     """The run's notes and the cost of the exact reference."""
     return [
@@ -518,6 +547,7 @@ def build_report(r: Results) -> str:
         *issue12_section(r.head, r.suites, r.atlases),
         *curves_section(r.curves),
         *simulation_section(r.sim),
+        *outcome_maps_section(r.maps),
         *notes_section(r.meta["notes"], r.exact),
     ]
     return "\n".join(parts) + "\n"

@@ -32,7 +32,7 @@ from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
 from atlas.bench.report import Results, build_report, write_csv
-from atlas.bench.simulation import simulation
+from atlas.bench.simulation import outcome_maps, simulation
 from atlas.bench.timing import log, machine
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_write_text
@@ -87,6 +87,7 @@ def _measure(cfg, meta) -> Results:
         scaling = suites.scaling(cfg)
         atlases = suites.atlases(cfg)
         sim = simulation(cfg)
+        maps = outcome_maps(cfg)
         curve_rows = curves(cfg)
     exact = dict(points=len(cache.store), seconds=cache.seconds, failures=cache.failures)
     return Results(
@@ -101,6 +102,7 @@ def _measure(cfg, meta) -> Results:
         large=large,
         atlases=atlases,
         curves=curve_rows,
+        maps=maps,
         exact=exact,
     )
 
@@ -112,7 +114,7 @@ def _write(out: Path, r: Results, t_start: float):
         write_csv(out / f"bench_{name}.csv", section)
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
     r.meta["duration"] = time.perf_counter() - t_start
-    js = dict(meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases)
+    js = dict(meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases, outcome_maps=r.maps)
     atomic_write_text(out / "bench_headline.json", json.dumps(js, indent=1, default=_json_default))
     atomic_write_text(out / "bench.md", build_report(r))
 

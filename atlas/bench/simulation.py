@@ -1,17 +1,19 @@
-"""The simulation section: :func:`atlas.dynamics.simulate` (exact event times) against
-``solve_ivp`` (DOP853, Radau) on the Fig. 2 cases, event-time error against cost.
+"""The simulation sections: :func:`atlas.dynamics.simulate` (exact event times) against
+``solve_ivp`` (DOP853, Radau) on the Fig. 2 cases, event-time error against cost; the fast
+outcome-map engine (:mod:`atlas.dynamics.fast_engine`) against the exact simulator.
 """
 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 from atlas import dynamics
 from atlas.bench.timing import log, timeit
 
-__all__ = ["event_error", "gap_events", "simulation"]
+__all__ = ["event_error", "gap_events", "outcome_maps", "simulation"]
 
 #: the reference of ``simulate``: ``solve_ivp`` at tight tolerances
 _TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-16)
@@ -99,4 +101,48 @@ def simulation(cfg) -> list[dict]:
                         nfev=d["nfev"],
                     )
                 )
+    return rows
+
+
+def outcome_maps(cfg) -> list[dict]:
+    """Rows of the fast engine against the exact simulator on the outcome maps ``outcome_maps``
+    ``(n, kappa, q, alpha, sample)``: the whole ``n x n`` map with the fast engine (wall time,
+    trajectories per second, how the runs were decided), ``sample`` of its cells (seeded) with
+    :func:`atlas.dynamics.simulate_outcome` from the same initial states, the agreement and every
+    disagreement (``disagreements``: cell, both outcomes, the reference's stop)."""
+    rows = []
+    for n, kappa, q, alpha, sample in cfg.get("outcome_maps", ()):
+        b1, b2 = dynamics.outcome_grid(n)
+        ds = dynamics.outcome_map(b1, b2, kappa=kappa, q=q, alpha=alpha, engine="fast")
+        fast = ds["outcome"].values
+        g0 = dynamics.perturbed_initial_states(b1, b2, alpha, kappa)
+        cells = np.random.default_rng(n).choice(n * n, size=min(sample, n * n), replace=False)
+        t0 = time.perf_counter()
+        bad = []
+        for c in cells:
+            i, j = divmod(int(c), n)
+            out, res = dynamics.simulate_outcome(
+                b1[i], b2[j], alpha, k=(kappa, 1.0), q=(q, q), g0=g0[i, j, 0], max_events=2000
+            )
+            if int(out) != int(fast[i, j]):
+                bad.append(
+                    f"({i},{j}): reference {out.label} ({res.status.value} at t = "
+                    f"{res.t_final:.4g}, {res.n_events} events), fast "
+                    f"{dynamics.Outcome(int(fast[i, j])).label}"
+                )
+        ref_s = time.perf_counter() - t0
+        a = ds.attrs
+        fast_rate = a["trajectories"] / a["seconds"]
+        ref_rate = cells.size / ref_s
+        rows.append(dict(
+            map=f"{n}x{n}, kappa={kappa:g}, q={q:g}, alpha={alpha / math.pi:.3g}pi",
+            trajectories=a["trajectories"], fast_seconds=a["seconds"], fast_per_s=fast_rate,
+            ref_cells=int(cells.size), ref_per_s=ref_rate, speedup=fast_rate / ref_rate,
+            early_settle=a["runs_early_settle"] / a["trajectories"],
+            early_iwc=a["runs_early_iwc"] / a["trajectories"],
+            stepped=a["runs_stepped"] / a["trajectories"],
+            fallback=a["runs_fallback"] / a["trajectories"],
+            agreement=1 - len(bad) / cells.size, disagreements="; ".join(bad),
+        ))  # fmt: skip
+        log(f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s fast, {ref_rate:.1f}/s exact")
     return rows

@@ -6,6 +6,7 @@ engine (:mod:`atlas.dynamics.simulator` run by run, or the batched :mod:`atlas.d
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time as _time
 
@@ -14,10 +15,10 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import mechanics
-from atlas.dynamics import jax_engine
+from atlas.dynamics import fast_engine, jax_engine
 from atlas.dynamics.classification import classify, needs_longer_run
 from atlas.dynamics.simulator import simulate
-from atlas.dynamics.system import Outcome, check_finite, ss_equilibrium
+from atlas.dynamics.system import Outcome, check_finite
 
 __all__ = [
     "fig2_cases",
@@ -64,6 +65,9 @@ def fig2_cases() -> dict:
 
 
 # ----------------------------------------------------------------------------- outcome map
+
+#: engines of :func:`outcome_map`
+ENGINES = ("fast", "numpy", "jax")
 
 #: subclasses (and their duals) where the paper predicts no stable mode or impact (Sec. 6.4-6.5)
 NO_STABLE_SUBCLASSES = (132, 133, 142, 143)
@@ -118,21 +122,26 @@ def perturbed_initial_states(
     rng = np.random.default_rng(seed)
     b1 = np.atleast_1d(np.asarray(beta1_values, dtype=float))
     b2 = np.atleast_1d(np.asarray(beta2_values, dtype=float))
-    out = np.empty((b1.size, b2.size, int(n_perturb), 4))
-    for i, x1 in enumerate(b1):
-        for j, x2 in enumerate(b2):
-            d_eq = ss_equilibrium(x1, x2, alpha, k=(kappa, 1.0))
-            for m in range(int(n_perturb)):
-                xi = rng.standard_normal(4)
-                if d_eq is not None:
-                    s = np.abs(d_eq).max()
-                    out[i, j, m, :2] = d_eq + perturbation * s * xi[:2]
-                    out[i, j, m, 2:] = perturbation * s * xi[2:]
-                else:
-                    s = 1.0 / min(kappa, 1.0)
-                    out[i, j, m, :2] = -perturbation * s * np.abs(xi[:2])
-                    out[i, j, m, 2:] = perturbation * s * xi[2:]
-    return out
+    # one draw of 4 normals per run, in the order (beta1, beta2, run)
+    xi = rng.standard_normal((b1.size, b2.size, int(n_perturb), 4))
+    B = np.empty((b1.size, b2.size, 2, 2))
+    B[..., 0, 0], B[..., 1, 0] = np.cos(b1)[:, None], np.sin(b1)[:, None]
+    B[..., 0, 1], B[..., 1, 1] = np.cos(b2)[None, :], np.sin(b2)[None, :]
+    a = np.array([math.cos(alpha), math.sin(alpha)])
+    # f = B^-1 a (SS forces, LAPACK as in ss_equilibrium); the SS mode is consistent where f > 0
+    det = B[..., 0, 0] * B[..., 1, 1] - B[..., 0, 1] * B[..., 1, 0]
+    regular = det != 0
+    Bs = np.where(regular[..., None, None], B, np.eye(2))
+    f = np.linalg.solve(Bs, np.broadcast_to(a, Bs.shape[:-1])[..., None])[..., 0]
+    consistent = regular & np.all(f > 0, axis=-1)
+    d_eq = -f / np.array([kappa, 1.0])
+    s_eq = np.abs(d_eq).max(axis=-1)[..., None, None]
+    s_in = 1.0 / min(kappa, 1.0)
+    inside = np.concatenate([d_eq[:, :, None, :] + perturbation * s_eq * xi[..., :2],
+                             perturbation * s_eq * xi[..., 2:]], axis=-1)  # fmt: skip
+    outside = np.concatenate([-perturbation * s_in * np.abs(xi[..., :2]),
+                              perturbation * s_in * xi[..., 2:]], axis=-1)  # fmt: skip
+    return np.where(consistent[:, :, None, None], inside, outside)
 
 
 def simulate_outcome(*args, t_end: float = 150.0, horizon_cap: float = 8.0, **kwargs):
@@ -167,7 +176,7 @@ def outcome_map(
     t_end: float = 150.0,
     horizon_cap: float = 8.0,
     max_events: int = 2000,
-    engine: str = "numpy",
+    engine: str = "fast",
     progress=None,
 ):
     """Simulated outcome over a ``(beta1, beta2)`` grid (what the dynamics actually do).
@@ -197,9 +206,11 @@ def outcome_map(
         Relative size of the perturbation [1].
     t_end, horizon_cap, max_events
         Horizon [scaled time], its extension factor, and event cap per trajectory.
-    engine : {"numpy", "jax"}
-        ``"numpy"``: :func:`simulate` run by run; ``"jax"``: the batched stepper of
-        :mod:`atlas.dynamics.jax_engine` (one ``vmap`` over all runs, extension runs batched too).
+    engine : {"fast", "numpy", "jax"}
+        ``"fast"``: the batched event-to-event engine :mod:`atlas.dynamics.fast_engine` (modal
+        form per configuration, certified early decisions; the exact simulator for the runs it
+        cannot serve); ``"numpy"``: :func:`simulate` run by run (the reference); ``"jax"``: the
+        batched stepper of :mod:`atlas.dynamics.jax_engine`.
     progress : callable, optional
         Called with ``(done, total)`` after each grid point (numpy engine).
 
@@ -209,7 +220,8 @@ def outcome_map(
         ``outcome`` (int8, CF flags from :class:`Outcome`) and ``agreement`` (float32) over
         ``(beta1, beta2)``; ``no_stable_subclass`` (bool): subclasses 132, 133, 142, 143 or duals.
         Attributes record the parameters, ``trajectories``, ``seconds`` and
-        ``trajectories_per_second``.
+        ``trajectories_per_second``; with the fast engine ``runs_stepped``, ``runs_early_settle``,
+        ``runs_early_iwc``, ``runs_fallback`` (how each run was decided).
     """
     b1, b2, p = _map_args(
         beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, perturbation, t_end,
@@ -217,9 +229,11 @@ def outcome_map(
     )  # fmt: skip
     g0 = perturbed_initial_states(b1, b2, p.alpha, p.kappa, n_perturb, seed, p.perturbation)
     t0 = _time.perf_counter()
-    codes = _outcome_codes(b1, b2, g0, p, progress)
+    codes, how = _outcome_codes(b1, b2, g0, p, progress)
     wall = _time.perf_counter() - t0
-    return _map_dataset(b1, b2, codes, p, wall)
+    ds = _map_dataset(b1, b2, codes, p, wall)
+    ds.attrs.update(how)
+    return ds
 
 
 @dataclasses.dataclass(frozen=True)
@@ -277,24 +291,37 @@ def _map_args(beta1_values, beta2_values, kappa, q, alpha, n_perturb, seed, pert
     horizon_cap = float(check_finite("horizon_cap", horizon_cap, positive=True))
     if horizon_cap < 1:
         raise ValueError(f"horizon_cap must be >= 1, got {horizon_cap!r}")
-    if engine not in ("numpy", "jax"):
-        raise ValueError(f"engine must be 'numpy' or 'jax', got {engine!r}")
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
     params = _MapParams(kappa, qq, alpha, n_perturb, seed, perturbation, t_end, horizon_cap,
                         max_events, engine)  # fmt: skip
     return b1, b2, params
 
 
 def _outcome_codes(b1, b2, g0, p: _MapParams, progress):
-    """Outcome codes ``(n1, n2, n_perturb)`` from the chosen engine."""
+    """Outcome codes ``(n1, n2, n_perturb)`` from the chosen engine, and attributes of the run
+    (fast engine: how many runs were stepped, decided early, run by the exact simulator)."""
     k = (p.kappa, 1.0)
+    if p.engine == "fast":
+        reference = functools.partial(
+            simulate_outcome, t_end=p.t_end, horizon_cap=p.horizon_cap, max_events=p.max_events
+        )
+        codes, res = fast_engine.outcomes(
+            b1, b2, p.alpha, k, p.q, g0, reference, t_end=p.t_end, horizon_cap=p.horizon_cap,
+            max_events=p.max_events,
+        )  # fmt: skip
+        if progress is not None:
+            progress(b1.size * b2.size, b1.size * b2.size)
+        how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
+        return codes, {f"runs_{name}": int(c) for name, c in zip(fast_engine.DECIDED_BY, how)}
     if p.engine == "jax":
         return jax_engine.outcomes(
             b1, b2, p.alpha, k, p.q, g0, t_end=p.t_end, horizon_cap=p.horizon_cap,
             max_events=p.max_events,
-        )  # fmt: skip
+        ), {}  # fmt: skip
     return _numpy_outcomes(
         b1, b2, p.alpha, k, p.q, g0, p.t_end, p.horizon_cap, p.max_events, progress
-    )
+    ), {}
 
 
 def _numpy_outcomes(b1, b2, alpha, k, q, g0, t_end, horizon_cap, max_events, progress):

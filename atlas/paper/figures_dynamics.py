@@ -179,18 +179,21 @@ def run_cli(
     n=None,
     kappa=None,
     q=None,
-    engine="numpy",
+    engine="fast",
+    n_perturb=None,
     **_,
 ) -> int:
     """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
     printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``).
 
     With ``--map``: the outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` at
-    ``(kappa, q1 = q2 = q, alpha)`` (defaults 24, 0.5, 0, 0.35 pi; ``--t-end`` default 150),
+    ``(kappa, q1 = q2 = q, alpha)`` (defaults 24, 0.5, 0, 0.35 pi; ``--t-end`` default 150;
+    ``--n-perturb`` initial conditions per cell, default 1: the most frequent outcome and the
+    fraction of runs giving it),
     outcome counts printed; ``--out`` writes it as netCDF (``.nc``) or as the figure beside the
     Fig. 1 theory map (``.png``/``.pdf``)."""
     if outcome_map:
-        return _run_map(n, kappa, q, alpha, t_end, out, engine, case)
+        return _run_map(n, kappa, q, alpha, t_end, out, engine, case, n_perturb)
     case = case[len("fig2") :] if case and case.startswith("fig2") else case
     p = _case_params(case, beta1, beta2, alpha, t_end, (k1, k2), (q1, q2))
     res = simulate(**p, max_events=100_000)
@@ -251,7 +254,7 @@ def _events_csv(res) -> str:
     return "\n".join(rows) + "\n"
 
 
-def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
+def _run_map(n, kappa, q, alpha, t_end, out, engine, case, n_perturb=None) -> int:
     if case:
         raise ValueError("case: --case and --map exclude each other")
     n = 24 if n is None else int(n)
@@ -265,6 +268,10 @@ def _run_map(n, kappa, q, alpha, t_end, out, engine, case) -> int:
         kw["alpha"] = alpha
     if t_end is not None:
         kw["t_end"] = t_end
+    if n_perturb is not None:
+        if int(n_perturb) < 1:
+            raise ValueError(f"n_perturb: must be >= 1, got {n_perturb}")
+        kw["n_perturb"] = int(n_perturb)
     b1, b2 = outcome_grid(n)
     ds = outcome_map(b1, b2, engine=engine, **kw)
     vals, counts = np.unique(ds["outcome"].values, return_counts=True)

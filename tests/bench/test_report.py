@@ -121,3 +121,19 @@ def test_write_csv_columns_in_order_of_appearance(tmp_path):
         assert list(csv.reader(fh)) == [["a", "b"], ["1", ""], ["3", "2"]]
     report.write_csv(tmp_path / "none.csv", [])
     assert not (tmp_path / "none.csv").exists()
+
+
+def test_outcome_maps_section_lists_every_disagreement(results):
+    """The fast-engine section: its table, and each disagreement of a map on its own line."""
+    row = dict(map="8x8, kappa=0.5, q=0, alpha=0.35pi", trajectories=64, fast_seconds=1.5,
+               fast_per_s=42.0, ref_cells=8, ref_per_s=30.0, speedup=1.4, early_settle=0.25,
+               early_iwc=0.5, stepped=0.25, fallback=0.0, agreement=0.875,
+               disagreements="(1,2): reference IWC (diverged at t = 17, 2 events), fast undetermined")  # fmt: skip
+    results.maps = [row, dict(row, map="other", agreement=1.0, disagreements="")]
+    md = report.build_report(results)
+    heads = [ln for ln in md.splitlines() if ln.startswith("#")]
+    assert heads[-2:] == ["## Outcome maps: fast engine against the exact simulator",
+                          "## Notes, omissions"]  # fmt: skip
+    assert "| map | trajectories | fast_seconds | fast_per_s | ref_cells | ref_per_s |" in md
+    assert "* 8x8, kappa=0.5, q=0, alpha=0.35pi: (1,2): reference IWC" in md
+    assert "* other:" not in md

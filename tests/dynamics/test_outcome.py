@@ -147,7 +147,30 @@ def test_cli_simulate_map_writes_netcdf(tmp_path, capsys):
     with xr.open_dataset(path) as ds:
         assert ds.sizes == {"beta1": 2, "beta2": 2}
         assert ds.attrs["q1"] == 0.1 and ds.attrs["kappa"] == 0.5
+        assert ds.attrs["engine"] == "fast"  # the default engine
     assert main(["simulate", "--map", "--out", str(tmp_path / "m.txt")]) != 0
+
+
+def test_cli_simulate_map_several_initial_conditions(tmp_path, capsys):
+    """--n-perturb runs per cell: the netCDF records the fraction of runs giving the outcome; the
+    fast engine's outcomes equal the exact simulator's (--engine numpy) on the same runs."""
+    import xarray as xr
+
+    from atlas.cli import main
+
+    for engine in ("fast", "numpy"):
+        argv = ["simulate", "--map", "--n", "3", "--n-perturb", "3", "--engine", engine]
+        assert main([*argv, "--out", str(tmp_path / f"{engine}.nc")]) == 0
+    with (
+        xr.open_dataset(tmp_path / "fast.nc") as fast,
+        xr.open_dataset(tmp_path / "numpy.nc") as ref,
+    ):
+        assert fast.attrs["n_perturb"] == 3 and fast.attrs["trajectories"] == 27
+        assert np.array_equal(fast["outcome"].values, ref["outcome"].values)
+        assert np.array_equal(fast["agreement"].values, ref["agreement"].values)
+    bad = tmp_path / "bad.nc"
+    assert main(["simulate", "--map", "--n", "2", "--n-perturb", "0", "--out", str(bad)]) == 2
+    assert not bad.exists()
 
 
 @pytest.mark.slow

@@ -1,0 +1,862 @@
+"""Batched event-to-event engine for outcome maps, NumPy (paper Sec. 4.1, eqs. 1, 6-8).
+
+Inside one contact configuration ``S`` the gaps follow a known linear flow.  Per trajectory and
+configuration the modal form is computed once (:func:`modal_tables`): the active subsystem
+``x' = A_S x`` (``x`` = active gaps and velocities, deviation from the equilibrium
+``B_SS K_S d_S = -a_S``) in eigenvectors, the free gaps ``d_F'' = (B f)_F - a_F`` integrated
+twice in closed form.  On a segment starting at the state ``g`` every gap is::
+
+    d_i(tau) = p0_i + p1_i tau + p2_i tau^2 + Re sum_m u_im exp(lambda_m tau)
+
+and so is every event function (gaps ``d_i``, forces ``phi_i = -k_i d_i - q_i d_i'``).
+
+Event location (certified bracket)
+----------------------------------
+From ``tau`` the step ``sigma`` obeys ``|f''| <= M`` on ``[tau, tau + H]`` with ``M`` the sum of
+the moduli of the modal terms (each grown by ``exp(max(Re lambda, 0) H)``), so for the recorded
+sign ``s`` of ``f``::
+
+    s f(tau + sigma) >= s f + s f' sigma - M sigma^2 / 2     (no crossing before its root sigma_lo)
+    s f(tau + sigma) <= s f + s f' sigma + M sigma^2 / 2     (a crossing by its root sigma_hi)
+
+Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most
+``H_S = 1 / max(rho_S, omega / 4)``); the first crossing is the function whose bracket
+``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
+cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
+safeguarded Newton step from the safe side: the bracket shrinks quadratically.  The bounds hold in
+exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
+``1e-13`` of the function's scale count as zero).
+
+Early decisions (stated, checked)
+---------------------------------
+At every step each monitored function is tested for keeping its sign for all later times in the
+current configuration (:func:`_keeps_sign`: the modal terms bounded below by their moduli, a
+growing real dominant term by ``exp(x) >= 1 + x + x^2 / 2``, the remaining quadratic tested for
+positivity).  If all keep their signs, no event can follow, and:
+
+* ``settles``: every eigenvalue has ``Re lambda < 0`` (or is neutral, ``|Re lambda| <= 1e-9
+  |lambda|``, bounded over the rest of the horizon and decided at most half way through it, as
+  :func:`atlas.dynamics.classify` does): the outcome is ``settles_S``;
+* ``IWC``: the dominant eigenvalue is real and positive and every active gap is driven to ``-inf``
+  along it (its force to ``+inf``), every free gap open and driven away: an impact without
+  collision (paper Sec. 4.3), decided only if the reference's divergence limit
+  (``1e3 penetration_limit``) is provably passed within the current horizon.
+
+Both are declared only where the reference's finite-horizon stops reach the same verdict
+(:func:`_settles_first`, :func:`_aligned_at_stop`); otherwise the lane keeps stepping.
+
+Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
+Lanes the modal form cannot serve (near-defective eigenvectors, condition > ``1e8``) or whose
+root location stalls (a grazing contact) are run by the exact simulator instead (``fallback``).
+Trajectories that end without an early decision are classified by
+:func:`atlas.dynamics.classify_stats`, like the reference.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from atlas.dynamics.classification import (
+    TrajectoryStats,
+    classify_stats,
+    impacts,
+    needs_longer_run,
+)
+from atlas.dynamics.system import (
+    MODE_NAMES,
+    Mode,
+    Outcome,
+    Status,
+    System,
+    iwc_aligned,
+)
+
+__all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
+
+_COND_MAX = 1e8
+_NEUTRAL = 1e-9
+_XTOL = 1e-12
+_STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
+
+#: how a trajectory of :func:`outcomes` was decided
+DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
+
+
+# ----------------------------------------------------------------------------- per-lane system
+
+
+@dataclasses.dataclass
+class Lanes:
+    """Parameters of ``N`` trajectories: ``B`` (N, 2, 2), ``a`` (N, 2), ``k``, ``q`` (N, 2)."""
+
+    B: np.ndarray
+    a: np.ndarray
+    k: np.ndarray
+    q: np.ndarray
+
+    @classmethod
+    def of(cls, beta1, beta2, alpha, k, q):
+        """Unit ``|b_j|``, ``|a|`` (SPEC §1); inputs broadcast to ``(N,)``."""
+        beta1, beta2, alpha = np.broadcast_arrays(
+            *(np.atleast_1d(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha))
+        )
+        n = beta1.size
+        B = np.empty((n, 2, 2))
+        B[:, 0, 0], B[:, 1, 0] = np.cos(beta1.ravel()), np.sin(beta1.ravel())
+        B[:, 0, 1], B[:, 1, 1] = np.cos(beta2.ravel()), np.sin(beta2.ravel())
+        a = np.stack([np.cos(alpha.ravel()), np.sin(alpha.ravel())], axis=1)
+        kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
+        qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
+        return cls(B, a, kk, qq)
+
+    def E(self, mask: int) -> np.ndarray:
+        """Augmented matrices ``[[A_S, c_S], [0, 0]]`` (N, 5, 5) of configuration ``mask``."""
+        return _augmented(self.B, self.a, self.k, self.q, mask)
+
+
+@dataclasses.dataclass
+class ModalTable:
+    """Modal form of one configuration for ``N`` lanes: eigenvalues ``lam`` (N, 4; unused
+    entries 0 with ``valid`` False), right/left eigenvector blocks ``V``, ``W`` (N, na, na) of
+    the active subsystem, equilibrium ``d_eq`` (N, 2; NaN for free gaps), ``H`` step cap,
+    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5)."""
+
+    mask: int
+    lam: np.ndarray
+    valid: np.ndarray
+    V: np.ndarray
+    W: np.ndarray
+    d_eq: np.ndarray
+    H: np.ndarray
+    ok: np.ndarray
+    E: np.ndarray
+
+
+def modal_tables(lanes: Lanes) -> list[ModalTable]:
+    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS)."""
+    n = lanes.a.shape[0]
+    omega = np.sqrt(np.max(lanes.k, axis=1))
+    out = []
+    for mask in range(4):
+        idx = [i for i in range(2) if mask >> i & 1]
+        na = 2 * len(idx)
+        lam = np.zeros((n, 4), dtype=complex)
+        valid = np.zeros((n, 4), dtype=bool)
+        d_eq = np.full((n, 2), np.nan)
+        V = np.zeros((n, na, na), dtype=complex)
+        W = np.zeros((n, na, na), dtype=complex)
+        ok = np.ones(n, dtype=bool)
+        E = lanes.E(mask)
+        if idx:
+            sub = idx + [i + 2 for i in idx]
+            A = E[:, sub][:, :, sub]
+            w, V = np.linalg.eig(A)
+            cond = np.linalg.cond(V)
+            ok = np.isfinite(cond) & (cond < _COND_MAX)
+            V = np.where(ok[:, None, None], V, np.eye(na))
+            W = np.linalg.inv(V)
+            lam[:, :na] = w
+            valid[:, :na] = True
+            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
+            det = np.linalg.det(BS)
+            ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(n, -1).max(axis=1) ** len(idx)
+            BS = np.where(ok[:, None, None], BS, np.eye(len(idx)))
+            d_eq[:, idx] = np.linalg.solve(BS, -lanes.a[:, idx][:, :, None])[:, :, 0]
+            ok &= np.all(np.abs(w) > 0, axis=1)
+        rho = np.abs(lam).max(axis=1)
+        H = 1.0 / np.maximum(rho, 0.25 * omega)
+        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
+    return out
+
+
+def light_system(lanes: Lanes, tables, n: int) -> System:
+    """The :class:`atlas.dynamics.system.System` of lane ``n`` with what
+    :func:`atlas.dynamics.classify_stats` and :func:`atlas.dynamics.system.iwc_aligned` read
+    (``E``, ``eig``, ``stable``, ``z_eq``; no sub-step matrices)."""
+    k = lanes.k[n]
+    modes = []
+    for tab in tables:
+        na = int(tab.valid[n].sum())
+        eig = tab.lam[n, :na]
+        z_eq = None
+        if tab.mask:
+            z_eq = np.full(5, np.nan)
+            idx = [i for i in range(2) if tab.mask >> i & 1]
+            z_eq[idx] = tab.d_eq[n, idx]
+            z_eq[[i + 2 for i in idx]] = 0.0
+            z_eq[4] = 1.0
+        stable = bool(np.all(eig.real < 0)) if na else True
+        modes.append(Mode(tab.mask, tab.E[n], math.nan, None, None, None, eig, stable, z_eq))
+    return System(B=lanes.B[n], a=lanes.a[n], k=k, q=lanes.q[n], L=None, modes=tuple(modes),
+                  omega=math.sqrt(k.max()))  # fmt: skip
+
+
+def _augmented(B, a, k, q, mask):
+    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (paper eqs. 7, 8;
+    as :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
+    act = np.array([mask & 1, (mask >> 1) & 1], dtype=float)
+    E = np.zeros(a.shape[:-1] + (5, 5))
+    E[..., 0, 2] = E[..., 1, 3] = 1.0
+    E[..., 2:4, 0:2] = -B * (k * act)[..., None, :]
+    E[..., 2:4, 2:4] = -B * (q * act)[..., None, :]
+    E[..., 2:4, 4] = -a
+    return E
+
+
+# ----------------------------------------------------------------------------- segments
+
+
+def _segments(lanes: Lanes, tables, ix, mask, g):
+    """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
+    configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
+    (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
+    n = ix.size
+    P = np.zeros((n, 2, 3))
+    U = np.zeros((n, 2, 4), dtype=complex)
+    lam = np.zeros((n, 4), dtype=complex)
+    valid = np.zeros((n, 4), dtype=bool)
+    H = np.empty(n)
+    ok = np.ones(n, dtype=bool)
+    for m in range(4):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        tab = tables[m]
+        lx = ix[sel]
+        gs = g[sel]
+        lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
+        idx = [i for i in range(2) if m >> i & 1]
+        free = [i for i in range(2) if not m >> i & 1]
+        if not idx:  # FF: d'' = -a
+            P[sel, :, 0], P[sel, :, 1], P[sel, :, 2] = gs[:, :2], gs[:, 2:], -0.5 * lanes.a[lx]
+            continue
+        na = 2 * len(idx)
+        d_eq = tab.d_eq[lx]
+        x0 = np.concatenate([gs[:, idx] - d_eq[:, idx], gs[:, [i + 2 for i in idx]]], axis=1)
+        c = np.einsum("nij,nj->ni", tab.W[lx], x0)
+        V = tab.V[lx]
+        for r, i in enumerate(idx):
+            P[sel, i, 0] = d_eq[:, i]
+            U[sel, i, :na] = V[:, r, :] * c
+        for j in free:  # one active contact i: d_j'' = B_ji phi_i - a_j, integrated twice
+            i = idx[0]
+            k, q = lanes.k[lx, i], lanes.q[lx, i]
+            w = -(k[:, None] * V[:, 0, :] + q[:, None] * V[:, 1, :]) * c  # phi_i modal terms
+            Bji = lanes.B[lx, j, i]
+            Wm = Bji[:, None] * w
+            lm = tab.lam[lx, :na]
+            acc0 = -Bji * k * d_eq[:, i] - lanes.a[lx, j]
+            P[sel, j, 0] = gs[:, j] - np.sum(Wm / lm**2, axis=1).real
+            P[sel, j, 1] = gs[:, j + 2] - np.sum(Wm / lm, axis=1).real
+            P[sel, j, 2] = 0.5 * acc0
+            U[sel, j, :na] = Wm / lm**2
+    return P, U, lam, valid, H, ok
+
+
+def _evaluate(P, U, lam, tau):
+    """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
+    polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
+    UE = U * np.exp(lam * tau[:, None])[:, None, :]
+    t1 = tau[:, None]
+    p = np.empty_like(P)
+    p[:, :, 2] = P[:, :, 2]
+    p[:, :, 1] = P[:, :, 1] + 2 * t1 * P[:, :, 2]
+    p[:, :, 0] = P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2])
+    lUE = UE * lam[:, None, :]
+    d = p[:, :, 0] + UE.sum(axis=2).real
+    v = p[:, :, 1] + lUE.sum(axis=2).real
+    acc = 2 * p[:, :, 2] + (lUE * lam[:, None, :]).sum(axis=2).real
+    return d, v, acc, p, UE
+
+
+def _event_functions(d, v, acc, k, q):
+    """``f = (d1, d2, phi1, phi2)`` and ``f'`` (n, 4), ``phi_i = -k_i d_i - q_i d_i'``."""
+    f = np.concatenate([d, -k * d - q * v], axis=1)
+    fp = np.concatenate([v, -k * v - q * acc], axis=1)
+    return f, fp
+
+
+def _curvature_bound(p, UE, lam, H, k, q):
+    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
+    lr = np.abs(lam)
+    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = np.abs(UE) * grow
+    m2 = 2 * np.abs(p[:, :, 2]) + (a * lr[:, None, :] ** 2).sum(axis=2)
+    m3 = (a * lr[:, None, :] ** 3).sum(axis=2)
+    return np.concatenate([m2, k * m2 + q * m3], axis=1)
+
+
+def _flat_step(s, p, UE, lam, H, k, q):
+    """``sigma_lo`` (n, 4) of functions with ``f = f' = 0``: ``s f >= C x^2 / 2 - M3 x^3 / 6``
+    with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
+    ``C > 0``)."""
+    lr = np.abs(lam)[:, None, :]
+    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = np.abs(UE) * grow
+    d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
+    d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
+    m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
+    C = s * np.concatenate([d2, -k * d2 - q * d3], axis=1)
+    M3 = np.maximum(np.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
+    return np.where(C > 0, 3 * C / M3, 0.0)
+
+
+def _safe_steps(A, Bd, M):
+    """Roots ``sigma_lo`` of ``A + Bd s - M s^2 / 2`` and ``sigma_hi`` of ``A + Bd s + M s^2 / 2``
+    (first positive; ``inf`` if none) for ``A >= 0``: no sign change of ``f`` before ``sigma_lo``,
+    one by ``sigma_hi``."""
+    M = np.maximum(M, 1e-300)
+    with np.errstate(all="ignore"):
+        root = np.sqrt(Bd * Bd + 2 * M * A)
+        lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
+        disc = Bd * Bd - 2 * M * A
+        hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))),
+                      np.inf)  # fmt: skip
+    lo = np.where(np.isnan(lo), 0.0, lo)
+    hi = np.where(np.isnan(hi), 0.0, hi)
+    return lo, hi
+
+
+# ----------------------------------------------------------------------------- certificates
+
+
+def _positive_quadratic(a0, a1, a2, horizon):
+    """``a0 + a1 s + a2 s^2 > 0`` for all ``s`` in ``[0, horizon]`` (``horizon`` may be inf)."""
+    at_end = np.where(
+        np.isinf(horizon),
+        (a2 > 0) | ((a2 == 0) & (a1 >= 0)),
+        a0 + a1 * horizon + a2 * horizon**2 > 0,
+    )
+    vertex = -a1 / (2 * np.where(a2 > 0, a2, 1.0))
+    inside = (a2 > 0) & (a1 < 0) & (vertex < horizon)
+    at_vertex = a0 - a1 * a1 / (4 * np.where(a2 > 0, a2, 1.0)) > 0
+    return (a0 > 0) & at_end & (~inside | at_vertex)
+
+
+def _keeps_sign(c, w, lam, valid, horizon):
+    """Certificate that ``c0 + c1 s + c2 s^2 + Re sum_m w_m exp(lam_m s) > 0`` on
+    ``[0, horizon]`` (arrays (..., 3), (..., M), (..., M), (..., M), (...)).
+
+    Terms with ``Re lam <= 1e-9 |lam|`` are bounded by ``|w| exp(max(Re lam, 0) horizon)``; if
+    some have ``Re lam`` above that, the largest such ``lam_1`` must be real with
+    ``G = Re w_1 - sum_{other growing} |w_m| > 0``, and ``G exp(lam_1 s) >= G (1 + lam_1 s +
+    lam_1^2 s^2 / 2)``; the resulting quadratic is tested by :func:`_positive_quadratic`.
+
+    Returns ``(ok, G, bounded, lam_1)`` (...) each: ``bounded`` the bound of the other terms.
+    """
+    with np.errstate(all="ignore"):
+        return _keeps_sign_bound(c, w, lam, valid, horizon)
+
+
+def _keeps_sign_bound(c, w, lam, valid, horizon):
+    re = lam.real
+    scale = np.abs(lam).max(axis=-1, keepdims=True)
+    grow = valid & (re > _NEUTRAL * scale)
+    any_grow = grow.any(axis=-1)
+    j1 = np.argmax(np.where(grow, re, -np.inf), axis=-1)[..., None]
+    lam1 = np.take_along_axis(lam, j1, axis=-1)[..., 0]
+    w1 = np.take_along_axis(w, j1, axis=-1)[..., 0]
+    l1 = np.where(any_grow, lam1.real, 0.0)
+    real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
+    aw = np.abs(w)
+    others = np.where(grow, aw, 0.0).sum(axis=-1) - np.where(any_grow, np.abs(w1), 0.0)
+    G = np.where(any_grow, w1.real - others, 0.0)
+    fac = np.where(re > 0, np.exp(re * horizon[..., None]), 1.0)
+    bounded = np.where(~grow & (aw > 0), aw * fac, 0.0).sum(axis=-1)
+    margin = 1e-12 * (np.abs(c[..., 0]) + aw.sum(axis=-1)) + 1e-300
+    a0 = c[..., 0] + G - bounded - margin
+    a1 = c[..., 1] + G * l1
+    a2 = c[..., 2] + 0.5 * G * l1 * l1
+    ok = (~any_grow | (real1 & (G > 0))) & _positive_quadratic(a0, a1, a2, horizon)
+    return ok, G, bounded, l1
+
+
+def _no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
+    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
+    in the current configuration (:func:`_keeps_sign`).  Returns ``(ok (n,), G (n, 4),
+    bounded (n, 4), lam_1 (n,))``."""
+    kk, qq = k[:, :, None], q[:, :, None]
+    c = np.concatenate([p, np.stack(
+        [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
+         -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
+         -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
+    w = np.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+    sj = s[:, :, None]
+    ok, G, bounded, l1 = _keeps_sign(
+        sj * c, sj * w, lam[:, None, :], valid[:, None, :], np.repeat(horizon[:, None], 4, 1)
+    )
+    monitored = np.concatenate([np.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
+    return np.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
+
+
+# ----------------------------------------------------------------------------- batch
+
+
+_OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
+_RUNNING = -1
+_STATUS = (Status.T_END, Status.EVENT_CAP, Status.DIVERGED)
+
+
+@dataclasses.dataclass
+class _State:
+    """Per-lane state of a batch (arrays over all ``N`` lanes)."""
+
+    t: np.ndarray
+    g: np.ndarray
+    s: np.ndarray
+    n_events: np.ndarray
+    last_event: np.ndarray
+    amp: np.ndarray
+    status: np.ndarray
+    code: np.ndarray
+    decided_by: np.ndarray
+    scale: np.ndarray
+    horizon: np.ndarray
+    imp: list
+    systems: dict = dataclasses.field(default_factory=dict)
+
+    def system(self, lanes, tables, n) -> System:
+        """:func:`light_system` of lane ``n`` (cached)."""
+        if n not in self.systems:
+            self.systems[n] = light_system(lanes, tables, n)
+        return self.systems[n]
+
+    @classmethod
+    def start(cls, lanes: Lanes, g0, t_end, nbins):
+        n = g0.shape[0]
+        f, _ = _event_functions(g0[:, :2], g0[:, 2:], g0[:, :2] * 0, lanes.k, lanes.q)
+        bnorm = np.linalg.norm(lanes.B, axis=1)
+        scale = np.maximum(
+            np.abs(g0[:, :2]).max(axis=1),
+            np.linalg.norm(lanes.a, axis=1) / np.min(lanes.k * bnorm, axis=1),
+        )
+        return cls(
+            t=np.zeros(n), g=g0.copy(), s=np.where(f > 0, 1.0, -1.0), n_events=np.zeros(n, int),
+            last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, _RUNNING),
+            code=np.full(n, -1, dtype=np.int8), decided_by=np.zeros(n, dtype=np.int8),
+            scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)), imp=[],
+        )  # fmt: skip
+
+
+def _mask_of(s):
+    return ((s[:, 0] < 0) & (s[:, 2] > 0)).astype(int) | (
+        ((s[:, 1] < 0) & (s[:, 3] > 0)).astype(int) << 1
+    )
+
+
+def _switch(s, cross, f, fp, k, scale):
+    """New signs after the crossings ``cross`` (n, 4) at the event values ``f``, derivatives
+    ``fp`` (pre-event configuration), as :func:`atlas.dynamics.simulate`; returns
+    ``(s_new, closing (n, 2), n_events (n,))``."""
+    sn = np.where(cross, -s, s)
+    closing = cross[:, :2] & (sn[:, :2] < 0)
+    opening = cross[:, :2] & (sn[:, :2] > 0)
+    force = np.where(np.abs(f[:, 2:]) > 1e-9 * np.abs(k * scale[:, None]), f[:, 2:], fp[:, 2:])
+    sn[:, 2:] = np.where(closing, np.where(force > 0, 1.0, -1.0), sn[:, 2:])
+    sn[:, 2:] = np.where(opening, -1.0, sn[:, 2:])
+    # a force crossing while its gap stays open is no event (as in the reference)
+    force_ev = cross[:, 2:] & ~((sn[:, :2] > 0) & ~closing & ~opening)
+    n_ev = closing.sum(axis=1) + opening.sum(axis=1) + force_ev.sum(axis=1)
+    return sn, closing, n_ev
+
+
+def _bins(t, width, nbins):
+    return np.clip(np.ceil(t / width).astype(int) - 1, 0, nbins - 1)
+
+
+def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback):
+    """Step the lanes ``ix`` event to event until each is decided, stops (horizon
+    ``st.horizon``, event cap, divergence) or falls back; results written into ``st``."""
+    nbins = st.amp.shape[1]
+    t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
+    mask = _mask_of(s)
+    P, U, lam, valid, H, ok = _segments(lanes, tables, ix, mask, g)
+    tseg = t.copy()
+    T = st.horizon[ix].copy()
+    k, q, scale = lanes.k[ix], lanes.q[ix], st.scale[ix]
+    stall = np.zeros(ix.size, dtype=int)
+    since = np.zeros(ix.size, dtype=int)
+    rows = np.arange(ix.size)
+    fallback[ix[~ok]] = True
+    keep = ok
+    while True:
+        if not keep.all():
+            sel = keep
+            ix, t, g, s, mask, P, U, lam, valid, H = (
+                x[sel] for x in (ix, t, g, s, mask, P, U, lam, valid, H)
+            )
+            tseg, T, k, q, scale, stall, since = (
+                x[sel] for x in (tseg, T, k, q, scale, stall, since)
+            )
+            rows = np.arange(ix.size)
+        if ix.size == 0:
+            return
+        tau = t - tseg
+        d, v, acc, p, UE = _evaluate(P, U, lam, tau)
+        g = np.concatenate([d, v], axis=1)
+        b = _bins(t, width, nbins)
+        st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
+        keep = np.ones(ix.size, dtype=bool)
+
+        # stops of the reference: divergence, horizon
+        div = ~np.isfinite(g).all(axis=1)
+        div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
+        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
+        deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
+        for r in deep:
+            sysm = st.system(lanes, tables, ix[r])
+            div[r] = iwc_aligned(sysm, int(mask[r]), g[r], 1e-3)
+        _leave(st, ix, t, g, s, keep, div, 2)
+        _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
+        # early decisions (on the same schedule): no event can follow
+        r = np.flatnonzero(keep & sched)
+        if r.size:
+            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
+                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
+            dec = st.code[ix[r]] >= 0
+            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
+        # next step: certified brackets of the monitored event functions
+        f, fp = _event_functions(d, v, acc, k, q)
+        M = _curvature_bound(p, UE, lam, H, k, q)
+        A, Bd = np.maximum(s * f, 0.0), s * fp
+        lo, hi = _safe_steps(A, Bd, M)
+        flat = (A == 0) & (Bd == 0)
+        if flat.any():  # a double zero (exactly zero state): the second derivative decides
+            lo = np.where(flat, _flat_step(s, p, UE, lam, H, k, q), lo)
+        mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
+        lo = np.minimum(lo, H[:, None])
+        hi = np.where(hi <= H[:, None], hi, np.inf)
+        lo = np.where(mon, lo, np.inf)
+        hi = np.where(mon, hi, np.inf)
+        # the first crossing: smallest sigma_lo, ties to the tightest bracket
+        m = lo.min(axis=1)
+        tie_hi = np.where(lo <= m[:, None], hi, np.inf)
+        first = np.where(np.isinf(tie_hi.min(axis=1)), np.argmin(lo, axis=1),
+                         np.argmin(tie_hi, axis=1))  # fmt: skip
+        h = hi[rows, first]
+        rem = T - t
+        xtol = _XTOL * H
+        ev = keep & (h - m <= xtol) & (h <= rem)
+        # a bracket of the first function that every other function's sigma_lo lies beyond: the
+        # first crossing is in it, located by Illinois regula falsi on that function alone
+        other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
+        r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
+        if r.size:
+            fr = first[r]
+            h[r] = _illinois(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+                             s[r, fr], k[r], q[r], xtol[r])  # fmt: skip
+            lo[r, fr] = hi[r, fr] = h[r]
+            ev[r] = True
+        step = np.where(ev, h, np.minimum(np.minimum(m, H), rem))
+        t = np.where(keep, t + step, t)
+        since += 1
+        # stalled root location (a grazing contact): the exact simulator takes over
+        stall = np.where(step < 1e-9 * H, stall + 1, 0)
+        st_lane = keep & (stall > _STALL)
+        fallback[ix[st_lane]] = True
+        keep &= ~st_lane
+        ev &= keep
+        ev_r = np.flatnonzero(ev)
+        if ev_r.size:
+            _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
+                    s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+
+
+def _illinois(P, U, lam, tau, a, b, j, sj, k, q, xtol):
+    """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): Illinois regula falsi until
+    the bracket is below ``xtol``; returns its upper end ``b`` (relative to ``tau``)."""
+    i = j % 2
+    rows = np.arange(j.size)
+    ki, qi = k[rows, i], q[rows, i]
+
+    def g(x):
+        d, v, _, _, _ = _evaluate(P, U, lam, tau + x)
+        di, vi = d[rows, i], v[rows, i]
+        return sj * np.where(j < 2, di, -ki * di - qi * vi)
+
+    ga, gb = g(a), g(b)
+    side = np.zeros(j.size)
+    for _ in range(100):
+        act = (b - a) > xtol
+        if not act.any():
+            break
+        x = b - gb * (b - a) / np.where(gb != ga, gb - ga, 1.0)
+        x = np.where((x <= a) | (x >= b) | (gb == ga), 0.5 * (a + b), x)
+        gx = g(x)
+        left = gx > 0
+        a2, ga2 = np.where(left, x, a), np.where(left, gx, ga)
+        b2, gb2 = np.where(left, b, x), np.where(left, gb, gx)
+        gb2 = np.where(left & (side > 0), 0.5 * gb2, gb2)  # same end kept twice: halve it
+        ga2 = np.where(~left & (side < 0), 0.5 * ga2, ga2)
+        side = np.where(left, 1.0, -1.0)
+        a, ga, b, gb = (
+            np.where(act, new, old) for new, old in ((a2, a), (ga2, ga), (b2, b), (gb2, gb))
+        )
+    return b
+
+
+def _leave(st, ix, t, g, s, keep, sel, status):
+    """Lanes ``sel`` leave the batch: their time, state, signs and status into ``st``."""
+    st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
+    st.status[ix[sel]] = status
+    keep[sel] = False
+
+
+def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
+    """The early decisions of the module docstring for lanes ``ix`` (written into ``st.code``,
+    ``st.decided_by``)."""
+    re = lam.real
+    lscale = np.abs(lam).max(axis=1, keepdims=True)
+    growing = (valid & (re > _NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (np.abs(re) <= _NEUTRAL * lscale)).any(axis=1)
+    horizon = np.where(neutral, t_max - t, np.inf)
+    neutral &= ~growing
+    cert, G, Bn, l1 = _no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
+    free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
+    settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
+    settle &= _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H)
+    st.code[ix[settle]] = np.array([_OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
+    st.decided_by[ix[settle]] = 1
+    # time by which -d_i >= G exp(lam_1 s) + (-d_eq_i - bounded) passes 1e3 penetration_limit
+    X = 1e6 * scale[:, None]
+    sig = np.log(np.maximum((X + p[:, :, 0] + Bn[:, :2]) / G[:, :2], 1.0))
+    sig = np.where(act & (G[:, :2] > 0), sig / l1[:, None], np.inf).min(axis=1)
+    iwc = cert & growing & (mask > 0) & (t + sig <= T)
+    r = np.flatnonzero(iwc)
+    if r.size:
+        c = _modal_coordinates(tables, ix[r], mask[r], g[r])
+        iwc[r] &= _aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
+    st.code[ix[iwc]] = int(Outcome.IWC)
+    st.decided_by[ix[iwc]] = 2
+
+
+def _first_reach(c0, c1, c2, limit):
+    """First ``s >= 0`` with ``c0 + c1 s + c2 s^2 >= limit`` (``c1, c2 >= 0``; inf if never)."""
+    c0 = c0 - limit
+    with np.errstate(all="ignore"):
+        lin = np.where(c1 > 0, -c0 / c1, np.inf)
+        quad = (-c1 + np.sqrt(c1 * c1 - 4 * c2 * c0)) / (2 * c2)
+        out = np.where(c2 > 0, quad, lin)
+    return np.where(c0 >= 0, 0.0, out)
+
+
+def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
+    """The reference settles before any of its other stops: for a decaying configuration its
+    settling test (:func:`atlas.dynamics.simulate`, ``settle_rtol = 1e-6``) provably passes
+    within the horizon ``T`` and before a free gap can pass the amplitude limit ``1e4 scale``;
+    for a neutral one no free gap can pass that limit within ``T``; in FF no gap is falling."""
+    aw = np.abs(UE)
+    amp = 1e4 * scale
+    # upper bound of each free gap: |p0| + |p1| s + |p2| s^2 + sum |u|
+    reach = _first_reach(np.abs(p[:, :, 0]) + aw.sum(axis=2), np.abs(p[:, :, 1]),
+                         np.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
+    t_amp = np.where(act, np.inf, reach).min(axis=1)
+    omega = np.sqrt(k.max(axis=1))
+    decay = np.where(valid, -lam.real, np.inf).min(axis=1)
+    d_eq = np.where(act, np.abs(p[:, :, 0]), 0.0).max(axis=1)
+    size = (aw * (1 + np.abs(lam) / omega[:, None])[:, None, :]).sum(axis=(1, 2))
+    with np.errstate(all="ignore"):
+        t_set = np.maximum(np.log(size / (1e-6 * d_eq)), 0.0) / decay + 2 * H
+    t_set = np.where(act.any(axis=1), t_set, 0.0)
+    ff_falling = (~act & (p[:, :, 1] < 0)).any(axis=1)
+    decaying = ~neutral & (t_set < t_amp) & (t + t_set <= T) & ~ff_falling
+    return np.where(neutral, t_amp > T - t, decaying)
+
+
+def _modal_coordinates(tables, ix, mask, g):
+    """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
+    the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
+    c = np.zeros((ix.size, 4), dtype=complex)
+    for m in (1, 2, 3):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        tab, lx = tables[m], ix[sel]
+        idx = [i for i in range(2) if m >> i & 1]
+        x = np.concatenate([g[sel][:, idx] - tab.d_eq[lx][:, idx],
+                            g[sel][:, [i + 2 for i in idx]]], axis=1)  # fmt: skip
+        c[sel, : 2 * len(idx)] = np.einsum("nij,nj->ni", tab.W[lx], x)
+    return c
+
+
+def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
+    """The reference classifies the divergence as IWC: from the earliest time any gap can reach
+    the reference's divergence limits (``1e4 scale``; bound ``|p0| + |p1| s + |p2| s^2 + sum |u|
+    exp(max(Re lam, 0) s)``), the components off the dominant eigenvector stay below 1e-2 of the
+    deviation (:func:`atlas.dynamics.classify`'s ``align_tol``): ``sum_other |c_m| exp(Re lam_m
+    s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
+    largest real part."""
+    re = np.where(valid, lam.real, -np.inf)
+    j1 = np.argmax(re, axis=1)
+    rows = np.arange(c.shape[0])
+    dom = np.abs(c[rows, j1])
+    others = valid.copy()
+    others[rows, j1] = False
+    strict = np.all(~others | (re < l1[:, None]), axis=1)
+    # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
+    aw = np.abs(UE)
+    grow = np.maximum(lam.real, 0.0)
+
+    def bound(x):
+        e = np.exp(grow * x[:, None])[:, None, :]
+        b = (np.abs(p[:, :, 0]) + np.abs(p[:, :, 1]) * x[:, None] + np.abs(p[:, :, 2])
+             * x[:, None] ** 2 + (aw * e).sum(axis=2))  # fmt: skip
+        return b.max(axis=1)
+
+    lo, hi = np.zeros(c.shape[0]), rest.copy()
+    lim = 1e4 * scale
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        above = bound(mid) >= lim
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    s0 = lo
+    with np.errstate(all="ignore"):
+        off = np.where(others, np.abs(c) * np.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
+    return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
+
+
+def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s, mask,
+            k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
+    """Switch the lanes ``r`` (rows) at their events and start their new segments (in place)."""
+    d, v, acc, _, _ = _evaluate(P[r], U[r], lam[r], t[r] - tseg[r])
+    f, fp = _event_functions(d, v, acc, k[r], q[r])
+    tol = (h[r] + 1e3 * xtol[r])[:, None]
+    cross = (hi[r] <= tol) & (lo[r] <= tol)
+    sn, closing, n_ev = _switch(s[r], cross, f, fp, k[r], scale[r])
+    lanes_r = ix[r]
+    ci, cc = np.nonzero(closing)
+    if ci.size:
+        st.imp.append((lanes_r[ci], t[r][ci], np.abs(v[ci, cc]), cc + 1))
+    st.n_events[lanes_r] += n_ev
+    has = n_ev > 0
+    st.last_event[lanes_r[has]] = t[r][has]
+    b = _bins(t[r], width, st.amp.shape[1])
+    st.amp[lanes_r, b] = np.maximum(st.amp[lanes_r, b], np.abs(d))
+    s[r] = sn
+    mask[r] = _mask_of(sn)
+    g = np.concatenate([d, v], axis=1)
+    P[r], U[r], lam[r], valid[r], H[r], ok = _segments(lanes, tables, lanes_r, mask[r], g)
+    tseg[r] = t[r]
+    since[r] = 0
+    fallback[lanes_r[~ok]] = True
+    keep[r[~ok]] = False
+    cap = ok & (st.n_events[lanes_r] >= max_events)
+    rc = r[cap]
+    st.t[ix[rc]], st.g[ix[rc]], st.s[ix[rc]] = t[rc], g[cap], sn[cap]
+    st.status[ix[rc]] = 1
+    keep[rc] = False
+
+
+# ----------------------------------------------------------------------------- outcomes
+
+
+def _impact_log(st: _State):
+    """Impacts per lane: ``{lane: (t, speed, contact)}`` in time order."""
+    if not st.imp:
+        return {}
+    lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
+    order = np.lexsort((t, lane))
+    lane, t, v, c = lane[order], t[order], v[order], c[order]
+    cuts = np.flatnonzero(np.diff(lane)) + 1
+    starts = np.concatenate([[0], cuts])
+    return {int(lane[a]): (t[a:b], v[a:b], c[a:b])
+            for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
+
+
+def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
+    """:class:`atlas.dynamics.TrajectoryStats` of lane ``n`` (a run that stopped undecided)."""
+    T = float(st.t[n])
+    g = st.g[n]
+    t_ev, v_ev, c_ev = log.get(n, (np.zeros(0), np.zeros(0), np.zeros(0, int)))
+    states = np.zeros((t_ev.size, 4))
+    states[np.arange(t_ev.size), c_ev + 1] = v_ev
+    mode = MODE_NAMES[int(_mask_of(st.s[n : n + 1])[0])]
+    t_imp, v_imp, c_imp = impacts(sysm, mode, g, T, ["impact"] * t_ev.size, t_ev, c_ev, states)
+    nb = st.amp.shape[1]
+    starts = np.arange(nb) * width
+    late = (starts + width > 2 * T / 3) & (starts < T)
+    amp = st.amp[n, late].max(axis=0) if late.any() else np.abs(g[:2])
+    return TrajectoryStats(
+        t_final=T, status=_STATUS[int(st.status[n])], mode_final=mode, g_final=g,
+        scale=float(st.scale[n]), last_event=float(st.last_event[n]), t_imp=t_imp, v_imp=v_imp,
+        c_imp=c_imp, late_amplitude=amp,
+    )  # fmt: skip
+
+
+@dataclasses.dataclass
+class FastResult:
+    """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
+    ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
+    at), ``g_final`` (N, 4) the state there and ``n_events``."""
+
+    code: np.ndarray
+    decided_by: np.ndarray
+    t_final: np.ndarray
+    g_final: np.ndarray
+    n_events: np.ndarray
+
+
+def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
+              reference=None) -> FastResult:  # fmt: skip
+    """Outcomes of ``N`` trajectories (parameters broadcast to ``(N,)``, ``g0`` (N, 4)) with the
+    classification and horizon extension of :func:`atlas.dynamics.simulate_outcome`.
+
+    ``reference(beta1, beta2, alpha, k=, q=, g0=)`` runs one trajectory with the exact simulator
+    for the fallback lanes: :func:`atlas.dynamics.simulate_outcome` with the same ``t_end``,
+    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).
+    """
+    g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
+    lanes = Lanes.of(beta1, beta2, alpha, k, q)
+    if lanes.a.shape[0] != g0.shape[0]:
+        raise ValueError(f"g0 must have one row per trajectory, got {g0.shape[0]}")
+    tables = modal_tables(lanes)
+    width = t_end / 3.0
+    nbins = int(math.ceil(3 * horizon_cap)) + 1
+    st = _State.start(lanes, g0, t_end, nbins)
+    fallback = np.zeros(g0.shape[0], dtype=bool)
+    t_max = horizon_cap * t_end
+    ix = np.arange(g0.shape[0])
+    while ix.size:
+        with np.errstate(all="ignore"):
+            _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
+        stopped = np.flatnonzero((st.status[ix] != _RUNNING) & ~fallback[ix])
+        log = _impact_log(st)
+        again = []
+        for n in ix[stopped]:
+            sysm = st.system(lanes, tables, n)
+            out = classify_stats(_stats(st, n, sysm, log, width), sysm)
+            st.code[n] = int(out)
+            if needs_longer_run(out, _STATUS[st.status[n]], st.n_events[n], st.horizon[n], t_max):
+                again.append(n)
+        ix = np.array(again, dtype=int)
+        st.horizon[ix] *= 2
+        st.status[ix] = _RUNNING
+        st.code[ix] = -1
+    fb = np.flatnonzero(fallback)
+    if fb.size:
+        b1, b2, al = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)).ravel()
+                                           for x in (beta1, beta2, alpha)))  # fmt: skip
+        for n in fb:
+            out, _ = reference(b1[n], b2[n], al[n], k=tuple(lanes.k[n]), q=tuple(lanes.q[n]),
+                               g0=g0[n])  # fmt: skip
+            st.code[n] = int(out)
+            st.decided_by[n] = 3
+    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
+
+
+def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,
+             max_events=2000):  # fmt: skip
+    """Outcome codes ``(n1, n2, n_perturb)`` of :func:`atlas.dynamics.outcome_map` (fast engine)
+    and the :class:`FastResult` of all runs (flattened)."""
+    n1, n2, npert = g0.shape[:3]
+    B1 = np.broadcast_to(np.asarray(b1, dtype=float)[:, None, None], (n1, n2, npert))
+    B2 = np.broadcast_to(np.asarray(b2, dtype=float)[None, :, None], (n1, n2, npert))
+    res = run_batch(B1.ravel(), B2.ravel(), alpha, k, q, g0.reshape(-1, 4), t_end=t_end,
+                    horizon_cap=horizon_cap, max_events=max_events, reference=reference)  # fmt: skip
+    return res.code.reshape(n1, n2, npert), res

@@ -1,0 +1,144 @@
+"""The batched event-to-event engine (atlas.dynamics.fast_engine) against the exact simulator:
+outcomes on sampled maps, the early decisions checked by continuing the trajectory with the
+reference, the certificates and brackets against dense sampling, the Fig. 2 cases."""
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+from atlas import dynamics as S
+from atlas.dynamics import fast_engine as F
+
+PI = math.pi
+
+
+def _reference(x1, x2, alpha, k, q, g0):
+    return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
+
+
+@functools.lru_cache(maxsize=4)
+def _map(n, kappa, q, alpha):
+    b1, b2 = S.outcome_grid(n)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)
+    codes, res = F.outcomes(b1, b2, alpha, (kappa, 1.0), (q, q), g0, _reference)
+    return b1, b2, g0, codes, res
+
+
+@pytest.mark.parametrize(("n", "kappa", "q", "alpha"), [(9, 0.5, 0.0, 0.35 * PI),
+                                                        (8, 2.0, 0.5, 0.2 * PI)])  # fmt: skip
+def test_outcomes_match_the_exact_simulator(n, kappa, q, alpha):
+    b1, b2, g0, codes, res = _map(n, kappa, q, alpha)
+    ref = np.array([[int(_reference(x1, x2, alpha, (kappa, 1.0), (q, q), g0[i, j, 0])[0])
+                     for j, x2 in enumerate(b2)] for i, x1 in enumerate(b1)])  # fmt: skip
+    assert np.array_equal(codes[:, :, 0], ref)
+    assert (res.decided_by > 0).mean() > 0.5  # most runs decided early
+
+
+def _continue(b1, b2, g0, res, kappa, q, alpha, how, t_more=400.0):
+    """Runs of the exact simulator from the states where ``how`` decided (index into the
+    flattened map)."""
+    n2 = b2.size
+    for x in np.flatnonzero(res.decided_by == F.DECIDED_BY.index(how)):
+        i, j = divmod(int(x), n2)
+        yield x, S.simulate(b1[i], b2[j], alpha, k=(kappa, 1.0), q=(q, q), g0=res.g_final[x],
+                            t_end=t_more, max_events=100)  # fmt: skip
+
+
+@pytest.mark.parametrize(("kappa", "q"), [(0.5, 0.0), (0.5, 0.5)])
+def test_early_settle_is_confirmed_by_continuing_with_the_reference(kappa, q):
+    """From the state where the fast engine declared ``settles_S``: no event ever, the same
+    configuration, and the reference classifies the continuation as settled in it."""
+    alpha = 0.35 * PI
+    b1, b2, g0, codes, res = _map(10, kappa, q, alpha)
+    runs = list(_continue(b1, b2, g0, res, kappa, q, alpha, "early_settle"))
+    assert len(runs) >= 5
+    for x, r in runs:
+        assert r.n_events == 0
+        assert int(S.classify(r)) == res.code[x]
+
+
+def test_early_iwc_is_confirmed_by_continuing_with_the_reference():
+    """From the state where the fast engine declared IWC: no event ever, the reference diverges
+    with every active gap going to -inf (force to +inf) and calls it IWC."""
+    kappa, q, alpha = 0.5, 0.0, 0.35 * PI
+    b1, b2, g0, codes, res = _map(10, kappa, q, alpha)
+    runs = list(_continue(b1, b2, g0, res, kappa, q, alpha, "early_iwc", t_more=2000.0))
+    assert len(runs) >= 20
+    for _, r in runs:
+        assert r.n_events == 0
+        assert r.status == S.Status.DIVERGED
+        assert S.classify(r) == S.Outcome.IWC
+
+
+@pytest.mark.parametrize("name", ["a", "b", "c", "d", "e"])
+def test_fig2_cases_reproduced(name):
+    """The fast engine on the Fig. 2 panels gives the reference's (and the paper's) outcome over
+    the panel's horizon (atlas.paper.figures_dynamics.FIG2_T_END)."""
+    from atlas.paper.figures_dynamics import FIG2_T_END
+
+    p = S.fig2_cases()[name]
+    expected = {"a": "GROWING_BOUNCING", "b": "SETTLES_SS", "c": "GROWING_BOUNCING",
+                "d": "SUSTAINED_OSCILLATION", "e": "GROWING_BOUNCING"}[name]  # fmt: skip
+    res = F.run_batch(p["beta1"], p["beta2"], p["alpha"], p["k"], p["q"], np.array([p["g0"]]),
+                      t_end=FIG2_T_END[name], horizon_cap=1.0, max_events=100_000,
+                      reference=_reference)  # fmt: skip
+    assert S.Outcome(int(res.code[0])) == S.Outcome[expected]
+    assert F.DECIDED_BY[res.decided_by[0]] != "fallback"
+
+
+# --------------------------------------------------------------------------- certificates
+
+
+def _sampled(c, w, lam, s):
+    return c[0] + c[1] * s + c[2] * s**2 + (w[None, :] * np.exp(np.outer(s, lam))).sum(1).real
+
+
+def test_keeps_sign_closed_forms():
+    lam = np.array([-0.1 + 1j, -0.1 - 1j, 0, 0])
+    valid = np.array([True, True, False, False])
+    inf = np.array(np.inf)
+    # 1 - 0.9 cos(t) e^{-t/10} > 0; 0.5 - cos(t) e^{-t/10} is not
+    assert F._keeps_sign(np.array([1.0, 0, 0]), np.array([0.45, 0.45, 0, 0]), lam, valid, inf)[0]
+    assert not F._keeps_sign(np.array([0.5, 0, 0]), np.array([0.5, 0.5, 0, 0]), lam, valid,
+                             inf)[0]  # fmt: skip
+    # 1 - t + t^2 / 2 > 0 (no real root); 1 - 2 t + t^2 / 2 has roots 2 -+ sqrt(2)
+    z = np.zeros(4, dtype=complex)
+    assert F._keeps_sign(np.array([1.0, -1, 0.5]), z, lam, valid, inf)[0]
+    assert not F._keeps_sign(np.array([1.0, -2, 0.5]), z, lam, valid, inf)[0]
+    # growing: e^{t} - 0.5 e^{-t} - 0.2 > 0 for t >= 0; -e^{t} + 2 is not
+    lam2 = np.array([1.0, -1.0, 0, 0], dtype=complex)
+    v2 = np.array([True, True, False, False])
+    assert F._keeps_sign(np.array([-0.2, 0, 0]), np.array([1.0, -0.5, 0, 0]), lam2, v2, inf)[0]
+    assert not F._keeps_sign(np.array([2.0, 0, 0]), np.array([-1.0, 0, 0, 0]), lam2, v2, inf)[0]
+
+
+def test_keeps_sign_is_never_wrong_on_random_functions():
+    """Wherever the certificate holds, a dense sampling over [0, 60] finds no sign change."""
+    rng = np.random.default_rng(7)
+    n_ok = 0
+    s = np.linspace(0, 60, 6001)
+    for _ in range(3000):
+        re = rng.normal(size=2) * 0.3
+        im = np.abs(rng.normal(size=2))
+        lam = np.array([re[0] + 1j * im[0], re[0] - 1j * im[0], re[1], -abs(re[1]) - 0.1])
+        w1 = rng.normal() + 1j * rng.normal()
+        w = np.array([w1, np.conj(w1), rng.normal(), rng.normal()])
+        c = np.array([rng.normal() + 2, rng.normal(), rng.normal() * 0.1])
+        valid = np.ones(4, dtype=bool)
+        ok = F._keeps_sign(c, w, lam, valid, np.array(60.0))[0]
+        if ok:
+            n_ok += 1
+            assert _sampled(c, w, lam, s).min() > 0
+    assert n_ok > 50
+
+
+def test_safe_steps_bracket_the_first_crossing():
+    """No sign change before sigma_lo, one by sigma_hi (f = cos(t) - 0.3 from several points)."""
+    for t0 in np.linspace(0.0, 1.2, 13):
+        A = np.cos(t0) - 0.3
+        lo, hi = F._safe_steps(np.array(A), np.array(-np.sin(t0)), np.array(1.0))
+        root = math.acos(0.3) - t0
+        assert lo <= root * (1 + 1e-12)
+        assert hi >= root * (1 - 1e-12)
