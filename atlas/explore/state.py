@@ -214,6 +214,7 @@ class Explorer:
             und = (
                 f"; undecided: {ds.attrs['n_undecided_fast']} fast, "
                 f"{ds.attrs['n_undecided']} after exact settlement"
+                + ("" if p["max_resolve"] is None else f" (at most {p['max_resolve']} a redraw)")
             )
             if ds.attrs["n_undecided"]:
                 und += " (drawn as undecided; 'settle undecided' settles them)"
