@@ -24,15 +24,19 @@ _BOOL_COLORS = ("#f7f7f7", Consistency.CONSISTENT.color)
 def _code_palette(name: str) -> dict:
     """code -> colour of the class or subclass codes (CF flags, SPEC §2), no colour repeated.
 
-    The 24 classes ``ij`` take the 20 colours of ``tab20`` and 4 of ``Dark2``; subclass ``ijk``
-    is its class's colour shaded by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of
-    one class read as one family."""
+    The 24 classes ``ij`` (in code order) take 24 hues 105 degrees apart (neighbouring codes far
+    apart in hue) at saturation 0.75, value 0.85; subclass ``ijk`` is its class's colour shaded
+    by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of one class read as one family.
+    """
+    import colorsys
+
     import matplotlib
 
-    cm = matplotlib.colormaps
-    base = [cm["tab20"](i)[:3] for i in range(20)] + [cm["Dark2"](i)[:3] for i in (0, 3, 5, 6)]
     classes = [int(c) for c in variable_attrs("class_code")["flag_values"] if c > 0]
-    cls = dict(zip(classes, (np.array(b) for b in base)))
+    cls = {
+        c: np.array(colorsys.hsv_to_rgb((7 * i % 24) / 24, 0.75, 0.85))
+        for i, c in enumerate(classes)
+    }
     if name == "class_code":
         cols = {c: matplotlib.colors.to_hex(rgb) for c, rgb in cls.items()}
     else:
