@@ -15,6 +15,7 @@ from atlas.explore.state import Explorer
 __all__ = ["MapView", "class_lines", "FIGSIZE", "AXES_RECT"]
 
 _PI_TICKS = ["0", "π/2", "π", "3π/2", "2π"]
+_CURVE_COLORS = {"SS": "black", "II": "#0050ff"}
 #: the map figure [in]: 640 x 460 px at 100 dpi, beside the controls (400 px) in a ~1,070 px
 #: notebook column
 FIGSIZE = (6.4, 4.6)
@@ -70,6 +71,7 @@ class MapView:
             path_effects=[patheffects.withStroke(linewidth=4, foreground="black")],
         )
         self.explorer: Explorer | None = None
+        self.certified: list = []  # the artists of the certified boundaries
         ax.format_coord = self.format_coord
         self.contour = None
         self._ss_handle = Line2D([], [], color="k", ls="--", lw=0.8, label="SS boundary")
@@ -89,7 +91,7 @@ class MapView:
         t = time.perf_counter()
         for a in self.lines:
             a.set_visible("class boundaries" in p["overlays"])
-        handles = self._layer_handles(ex) + self._draw_ss_boundary(ex)
+        handles = self._layer_handles(ex) + self._draw_ss_boundary(ex) + self._draw_certified(ex)
         if ax.get_legend() is not None:
             ax.get_legend().remove()
         if handles:  # the colour key, right of the map
@@ -131,6 +133,40 @@ class MapView:
             Patch(facecolor=c, edgecolor="0.5", label=lbl)
             for c, lbl in legend_entries(ex.params["layer"], ex.ds)
         ]
+
+    def _draw_certified(self, ex: Explorer) -> list:
+        """The certified boundary curves of the slice (SS black, II blue, on a white stroke) and
+        the codimension-2 points (yellow diamonds), or a "computing" legend entry while they are
+        computed; returns the legend handles."""
+        from matplotlib import patheffects
+        from matplotlib.lines import Line2D
+
+        for a in self.certified:
+            a.remove()
+        self.certified = []
+        if "certified boundaries" not in ex.params["overlays"]:
+            return []
+        b = ex.boundaries()
+        if b is None:
+            return [Line2D([], [], color="0.5", ls=":", label="certified boundaries: computing")]
+        stroke = [patheffects.withStroke(linewidth=3, foreground="white")]
+        for c in b.curves:
+            if c.field in _CURVE_COLORS and len(c.vertices):
+                v = c.vertices
+                self.certified += self.ax.plot(
+                    v[:, 0], v[:, 1], color=_CURVE_COLORS[c.field], lw=1.3, path_effects=stroke
+                )
+        pts = np.array([(p.beta1, p.beta2) for p in b.points]).reshape(-1, 2)
+        if len(pts):
+            self.certified.append(
+                self.ax.scatter(
+                    pts[:, 0], pts[:, 1], marker="D", s=22, fc="yellow", ec="k", lw=0.8, zorder=4
+                )
+            )
+        return [
+            Line2D([], [], color=col, lw=1.3, label=f"certified {f} boundary")
+            for f, col in _CURVE_COLORS.items()
+        ] + [Line2D([], [], ls="", marker="D", mfc="yellow", mec="k", label="codim-2 point")]
 
     def _draw_ss_boundary(self, ex: Explorer) -> list:
         """Replace the dashed zero contour of the smooth SS margin; returns its legend handle."""

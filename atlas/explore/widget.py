@@ -8,13 +8,14 @@ import contextlib
 import html
 import io
 import math
+import threading
 import time
 import traceback
 
 from atlas.explore.inspector import format_inspection
 from atlas.explore.map_view import FIGSIZE, MapView
 from atlas.explore.maps import LAYERS
-from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, format_boundary
 
 __all__ = ["make_widget", "RESOLUTIONS"]
 
@@ -145,6 +146,7 @@ class _Callbacks:
         self._quiet = False  # set while a callback moves other controls
         self._requested = None  # perf_counter of a canvas draw requested and not yet done
         self._note = ""
+        self._lock = threading.RLock()  # the boundaries' worker thread redraws too
 
     @contextlib.contextmanager
     def quiet(self):
@@ -156,6 +158,8 @@ class _Callbacks:
             self._quiet = False
 
     def guarded(self, fn):
+        """``fn`` with its errors shown in the status line."""
+
         def run(*args):
             try:
                 return fn(*args)
@@ -199,9 +203,18 @@ class _Callbacks:
         )
 
     def render(self):
-        self.view.render(self.ex)
-        self.draw()
-        self.show_status()
+        with self._lock:
+            self.view.render(self.ex)
+            self.draw()
+            self.show_status()
+
+    def on_boundaries(self, key):
+        """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
+        still the slice shown."""
+        p = self.ex.params
+        if key == (p["kappa"], p["q1"], p["q2"]):
+            self._note = f", certified boundaries {self.ex.timings['boundaries_ms']:.0f} ms"
+            self.render()
 
     def model_changes(self) -> dict:
         """The Explorer's parameters as the controls show them."""
@@ -267,11 +280,14 @@ class _Callbacks:
 
     def show_point(self, b1, b2):
         info = self.ex.inspect(b1, b2)
-        self.inspector.value = (
-            "<pre>" + html.escape(format_inspection(info), quote=False) + "</pre>"
-        )
-        self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
-        self.draw()
+        text = format_inspection(info)
+        near = self.ex.nearest_boundary(*self.ex.point)
+        if near is not None:
+            text += "\n" + format_boundary(*near)
+        self.inspector.value = "<pre>" + html.escape(text, quote=False) + "</pre>"
+        with self._lock:
+            self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
+            self.draw()
 
     def on_inspect(self, _b=None):
         self.show_point(self.ctl["beta1"].value * math.pi, self.ctl["beta2"].value * math.pi)
@@ -298,6 +314,7 @@ class _Callbacks:
         self.ctl["settle"].on_click(g(self.on_settle))
         canvas = self.fig.canvas
         canvas.mpl_connect("draw_event", g(self.on_drawn))
+        self.ex.on_boundaries = g(self.on_boundaries)
         # connected on every backend; only interactive canvases (ipympl) deliver clicks from a
         # browser.  A function, not the bound method: matplotlib holds bound methods weakly.
         return canvas.mpl_connect("button_press_event", g(self.on_click))

@@ -19,6 +19,7 @@ from matplotlib.colors import to_rgba
 from scipy.interpolate import RegularGridInterpolator
 
 from atlas.core import exact
+from atlas.core.brackets import FIELD_LABELS
 from atlas.core.verdicts import Verdict
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
@@ -243,3 +244,38 @@ def test_status_times_the_repaint_not_the_request(need):
     canvas.draw()
     ms = float(re.search(r"repaint (\d+) ms", status.value).group(1))
     assert ms >= 50
+
+
+@pytest.mark.slow
+def test_certified_boundaries_overlay_and_click_near_a_curve(need):
+    """The "certified boundaries" overlay: computed in the background (the map shows
+    "computing" until then), then drawn as the curves of
+    :func:`atlas.data.boundaries.slice_boundaries`; a click next to an SS curve names it, and the
+    exact SS verdict at the clicked point is the label of one of its two sides."""
+    need("ipywidgets")
+    kappa, q = 0.5, 0.3
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=kappa, q1=q)
+    ex, ax = box.explorer, box.figure.axes[0]
+    box.controls["overlays"].value = ("certified boundaries",)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "certified boundaries: computing" in labels
+    t = time.perf_counter()
+    while ex.boundaries() is None:
+        assert time.perf_counter() - t < 900
+        time.sleep(0.2)
+    time.sleep(0.5)  # the worker's redraw
+    b = ex.boundaries()
+    drawn = [np.column_stack(a.get_data()) for a in ax.lines]
+    curves = [c for c in b.curves if c.field != "class"]
+    assert curves
+    for c in curves:
+        assert any(d.shape == c.vertices.shape and np.array_equal(d, c.vertices) for d in drawn)
+    ss = next(c for c in curves if c.field == "SS")
+    v = ss.vertices[len(ss.vertices) // 2]
+    _click(box, v[0] + 0.01, v[1])
+    text = box.inspector.value
+    assert "near the certified SS_stability boundary" in text
+    d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
+    verdict = int(exact.point_spectral(*d, kappa, q, q)["stable_SS"])
+    sides = {FIELD_LABELS["SS"][ss.side_a], FIELD_LABELS["SS"][ss.side_b]}
+    assert FIELD_LABELS["SS"][verdict] in sides
