@@ -10,7 +10,7 @@ import xarray as xr
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.outputs import variable_attrs
 
-__all__ = ["layer_rgba", "legend_entries"]
+__all__ = ["layer_rgba", "legend_entries", "value_label"]
 
 
 def _hex_rgba(h: str) -> tuple:
@@ -21,22 +21,71 @@ def _hex_rgba(h: str) -> tuple:
 _BOOL_COLORS = ("#f7f7f7", Consistency.CONSISTENT.color)
 
 
+def _code_palette(name: str) -> dict:
+    """code -> colour of the class or subclass codes (CF flags, SPEC §2), no colour repeated.
+
+    The 24 classes ``ij`` (in code order) take 24 hues 105 degrees apart (neighbouring codes far
+    apart in hue) at saturation 0.75, value 0.85; subclass ``ijk`` is its class's colour shaded
+    by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of one class read as one family.
+    """
+    import colorsys
+
+    import matplotlib
+
+    classes = [int(c) for c in variable_attrs("class_code")["flag_values"] if c > 0]
+    cls = {
+        c: np.array(colorsys.hsv_to_rgb((7 * i % 24) / 24, 0.75, 0.85))
+        for i, c in enumerate(classes)
+    }
+    if name == "class_code":
+        cols = {c: matplotlib.colors.to_hex(rgb) for c, rgb in cls.items()}
+    else:
+        cols = {}
+        for c in (int(c) for c in variable_attrs(name)["flag_values"] if c > 0):
+            t = _SHADES[c % 10 - 1]
+            rgb = cls[c // 10] * (1 - abs(t)) + (t > 0) * abs(t)  # towards white (t > 0) or black
+            cols[c] = matplotlib.colors.to_hex(rgb)
+    cols[0] = "#ffffff"
+    cols[UNDECIDED_CODE] = Verdict.UNDECIDED.color
+    return cols
+
+
+#: shade of subclass ``ijk`` by ``k`` (negative: mixed towards black, positive: towards white)
+_SHADES = (-0.5, -0.32, -0.14, 0.14, 0.32, 0.5)
+
+
 def _category_colors(name: str) -> dict:
     """code -> colour for the categorical layers (from the verdict enumerations)."""
     if name in ("stable_SS", "stable_II"):
         return {int(v): v.color for v in Verdict}
     if name == "consistent_II":
         return {int(v): v.color for v in Consistency}
-    if name in ("class_code", "subclass_code"):
-        import matplotlib
-
-        codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]  # CF flags, SPEC §2
-        cmap = matplotlib.colormaps["tab20"]
-        cols = {c: matplotlib.colors.to_hex(cmap(i % 20)) for i, c in enumerate(codes)}
-        cols[0] = "#ffffff"
-        cols[UNDECIDED_CODE] = Verdict.UNDECIDED.color
-        return cols
+    if name in _CODE_LAYERS:
+        return _code_palette(name)
     return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
+
+
+_CODE_LAYERS = ("class_code", "subclass_code")
+_CONTINUOUS = ("margin_SS", "spectral_abscissa")
+
+
+def value_label(name: str, value) -> str:
+    """A layer's value in words: verdict labels, ``class 23`` / ``subclass 231``, true / false,
+    or the number of a continuous layer."""
+    if name in _CONTINUOUS:
+        return f"{float(value):+.4g}"
+    v = int(value)
+    if name in ("stable_SS", "stable_II", "consistent_II"):
+        enum = Consistency if name == "consistent_II" else Verdict
+        try:
+            return enum(v).label
+        except ValueError:
+            return f"code {v}"
+    if name in _CODE_LAYERS:
+        if v == UNDECIDED_CODE:
+            return Verdict.UNDECIDED.label
+        return "degenerate" if v == 0 else f"{name.split('_')[0]} {v}"
+    return "true" if v else "false"
 
 
 def _image_values(ds: xr.Dataset, name: str) -> np.ndarray:
@@ -80,17 +129,15 @@ def layer_rgba(ds: xr.Dataset, name: str) -> np.ndarray:
 
 
 def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, str]]:
-    """(colour, label) pairs of a categorical layer (only codes present in ``ds`` if given)."""
+    """(colour, label) pairs of a categorical layer (only codes present in ``ds`` if given);
+    none for the continuous layers."""
+    if name in _CONTINUOUS:
+        return []
     present = None if ds is None else set(np.unique(ds[name].values.astype(np.int64)).tolist())
-    if name in ("stable_SS", "stable_II"):
-        items = [(v.color, v.label) for v in Verdict if present is None or int(v) in present]
-    elif name == "consistent_II":
-        items = [(v.color, v.label) for v in Consistency if present is None or int(v) in present]
-    elif name in ("class_code", "subclass_code", "margin_SS", "spectral_abscissa"):
-        items = []
+    cols = _category_colors(name)
+    if name in ("stable_SS", "stable_II", "consistent_II"):
+        enum = Consistency if name == "consistent_II" else Verdict
+        codes = [int(v) for v in enum]
     else:
-        items = [(_BOOL_COLORS[0], "false"), (_BOOL_COLORS[1], "true")]
-    return items
-
-
-# --------------------------------------------------------------------------- widget state
+        codes = sorted(cols)
+    return [(cols[c], value_label(name, c)) for c in codes if present is None or c in present]

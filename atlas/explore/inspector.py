@@ -18,7 +18,7 @@ from atlas.core import points as evaluate
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.explore.maps import checked_model
 
-__all__ = ["inspect_point", "format_inspection"]
+__all__ = ["inspect_point", "format_inspection", "format_roots"]
 
 _FLAGS = ("stable_SS", "consistent_II", "stable_II")
 _SOURCES = (
@@ -171,8 +171,19 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
     return out
 
 
-def _fmt_z(z) -> str:
-    return f"{z.real:+.6g}{z.imag:+.6g}i"
+def format_roots(roots, digits: int = 6) -> str:
+    """Complex roots to ``digits`` significant digits of the largest modulus: parts below that
+    resolution (a float ``eig``'s ``-1.9e-16`` for an exact 0) print as ``+0``, like the exact
+    reference's."""
+    z = np.asarray(roots, complex)
+    scale = float(np.max(np.abs(z))) if z.size else 0.0
+    unit = 10.0 ** (math.floor(math.log10(scale)) - digits + 1) if scale > 0 else 1.0
+
+    def part(x: float) -> str:
+        v = round(x / unit) * unit
+        return f"{v if v != 0 else 0.0:+.{digits}g}"
+
+    return ", ".join(f"{part(w.real)}{part(w.imag)}i" for w in z)
 
 
 def _codes_lines(info: dict) -> list[str]:
@@ -221,8 +232,8 @@ def _stability_lines(info: dict) -> list[str]:
 def _spectrum_lines(info: dict) -> list[str]:
     m = info["margins"]
     return [
-        "eigenvalues of M (eig): " + ", ".join(_fmt_z(z) for z in info["eigenvalues"]),
-        "eigenvalues (exact ref): " + ", ".join(_fmt_z(z) for z in info["eigenvalues_exact"]),
+        "eigenvalues of M (eig): " + format_roots(info["eigenvalues"]),
+        "eigenvalues (exact ref): " + format_roots(info["eigenvalues_exact"]),
         f"margins: ss_margin = {m['ss_margin']:+.4g}, det B = {m['det_B']:+.4g}, "
         f"a3 = {m['a3']:+.4g}, a2 = {m['a2']:+.4g}, a1 = {m['a1']:+.4g}, a0 = {m['a0']:+.4g}, "
         f"spectral abscissa = {m['spectral_abscissa_exact']:+.6g}",

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import time
 
-from atlas.explore.map_view import MapView
+from atlas.explore.map_view import FIGSIZE, MapView
 from atlas.explore.state import LIVE_MAX_RESOLVE, Explorer
+from atlas.explore.widget import KAPPA_LOG_STEP
 
 __all__ = ["measure_redraw", "format_redraw"]
-
-#: one slider step of the widget's kappa slider: x 10^0.05
-_KAPPA_STEP = 0.05
 
 
 def _drawn_view(ex: Explorer) -> tuple:
@@ -19,7 +17,7 @@ def _drawn_view(ex: Explorer) -> tuple:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(5.6, 5.6))
+    fig = Figure(figsize=FIGSIZE)
     FigureCanvasAgg(fig)
     view = MapView(fig.add_subplot())
     ex.update()
@@ -54,7 +52,7 @@ def _fastest_redraw(ex: Explorer, kappa: float, repeats: int, case: dict) -> dic
     fig, view = _drawn_view(ex)
     best = None
     for i in range(repeats):
-        row = _timed_redraw(ex, fig, view, kappa * 10 ** (_KAPPA_STEP * (i + 1)), case)
+        row = _timed_redraw(ex, fig, view, kappa * 10 ** (KAPPA_LOG_STEP * (i + 1)), case)
         if best is None or row["total_ms"] < best["total_ms"]:
             best = row
     return best
@@ -74,7 +72,7 @@ def measure_redraw(
 
     For each layer and each ``(q1, q2)`` in ``cases``: an :class:`Explorer` and the widget's map
     figure (:class:`MapView` on an offscreen Agg canvas) are set up and drawn once (compiling
-    the kernels), then ``repeats`` times ``kappa`` moves one slider step (x 10^0.05) and the
+    the kernels), then ``repeats`` times ``kappa`` moves one slider step (x 10^0.01) and the
     redraw runs: :meth:`Explorer.update` (map computation with at most ``max_resolve`` exact
     settlements, plus the margin for the SS-boundary overlay), :meth:`MapView.render` (RGBA
     image, legend, contour) and ``canvas.draw()``.  Not included: PNG encoding and transport to

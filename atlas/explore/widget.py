@@ -4,23 +4,34 @@ the ``notebook`` extra)."""
 
 from __future__ import annotations
 
+import contextlib
+import html
 import io
 import math
+import threading
 import time
+import traceback
 
 from atlas.explore.inspector import format_inspection
-from atlas.explore.map_view import MapView
+from atlas.explore.map_view import FIGSIZE, MapView
 from atlas.explore.maps import LAYERS
-from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, format_boundary
 
 __all__ = ["make_widget", "RESOLUTIONS"]
 
 #: resolutions offered by the widget (odd: no cell centre on beta2 = beta1 + pi)
 RESOLUTIONS = (65, 129, 257, 513, 1025)
+#: one step of the kappa slider, in log10 kappa: kappa x 1.023 (the arrow keys move one step)
+KAPPA_LOG_STEP = 0.01
 
-_STYLE = {"description_width": "80px"}
-#: controls whose change redraws the map, in the order shown
-_WATCHED = ("kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
+_STYLE = {"description_width": "100px"}
+#: the controls' column: sliders wide enough to aim (log10 kappa: ~0.025 decades a pixel)
+_WIDTH = "400px"
+#: controls whose change redraws the map through :meth:`_Callbacks.on_change`
+_WATCHED = ("kappa", "q", "q1", "q2", "alpha", "n", "layer", "overlays", "max_resolve")
+#: the controls, in the order shown
+_SHOWN = ("log10_kappa", "kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
+_SHOWN += ("max_resolve", "settle")
 _HINT = "<pre>click the map or enter beta1, beta2 and press 'inspect point'</pre>"
 
 
@@ -34,24 +45,28 @@ def _slider(W, name, value, lo, hi, step, desc=None, fmt=".3g"):
         readout_format=fmt,
         continuous_update=False,  # one redraw per move, not a queue of them while dragging
         style=_STYLE,
+        layout={"width": _WIDTH},
     )
 
 
 def _model_controls(W, p: dict) -> dict:
-    """kappa (log slider), q or q1 and q2, alpha / pi."""
+    """kappa (a slider in log10 kappa and a text box with the exact value), q or q1 and q2,
+    alpha / pi."""
     return {
-        "kappa": W.FloatLogSlider(
-            value=p["kappa"],
-            base=10,
-            min=-3,
-            max=3,
-            step=0.05,
-            description="kappa",
-            readout_format=".3g",
-            continuous_update=False,
-            style=_STYLE,
+        "log10_kappa": _slider(
+            W,
+            "log10_kappa",
+            math.log10(p["kappa"]),
+            -3.0,
+            3.0,
+            KAPPA_LOG_STEP,
+            "log10 kappa",
+            ".2f",
         ),
-        "separate": W.Checkbox(value=p["q1"] != p["q2"], description="q1, q2 separately"),
+        "kappa": W.FloatText(value=p["kappa"], description="kappa", style=_STYLE),
+        "separate": W.Checkbox(
+            value=p["q1"] != p["q2"], description="q1, q2 separately", indent=False
+        ),
         "q": _slider(W, "q", p["q1"], 0.0, 5.0, 0.01),
         "q1": _slider(W, "q1", p["q1"], 0.0, 5.0, 0.01),
         "q2": _slider(W, "q2", p["q2"], 0.0, 5.0, 0.01),
@@ -107,10 +122,11 @@ def _map_figure(W):
     backend = matplotlib.get_backend()
     interactive = "ipympl" in backend or "widget" in backend
     with plt.ioff():  # shown inside the box, not a second time at the end of the cell
-        fig, ax = plt.subplots(figsize=(5.6, 5.6))
+        fig, ax = plt.subplots(figsize=FIGSIZE)
     view = MapView(ax)
     if interactive:
         fig.canvas.header_visible = False
+        fig.canvas.toolbar_position = "top"  # over the title margin, not over the tick labels
         return fig, view, fig.canvas, None
     plt.close(fig)
     image = W.Image(format="png")
@@ -118,27 +134,87 @@ def _map_figure(W):
 
 
 class _Callbacks:
-    """The widget's callbacks: a control moved, "settle undecided", "inspect point", a click."""
+    """The widget's callbacks: a control moved, "settle undecided", "inspect point", a click.
+
+    A bad value (``ValueError``, e.g. kappa <= 0) shows its one-line message in the status line;
+    any other error shows its traceback there (and is re-raised), not only in the kernel's log."""
 
     def __init__(self, ex: Explorer, ctl: dict, view: MapView, image, status, inspector):
         self.ex, self.ctl, self.view = ex, ctl, view
         self.fig, self.ax = view.fig, view.ax
         self.image, self.status, self.inspector = image, status, inspector
+        self._quiet = False  # set while a callback moves other controls
+        self._requested = None  # perf_counter of a canvas draw requested and not yet done
+        self._note = ""
+        self._lock = threading.RLock()  # the boundaries' worker thread redraws too
+
+    @contextlib.contextmanager
+    def quiet(self):
+        """Move controls without their callbacks redrawing."""
+        self._quiet = True
+        try:
+            yield
+        finally:
+            self._quiet = False
+
+    def guarded(self, fn):
+        """``fn`` with its errors shown in the status line."""
+
+        def run(*args):
+            try:
+                return fn(*args)
+            except ValueError as e:
+                self.status.value = f"<tt style='color:#b00020'>{html.escape(str(e))}</tt>"
+            except Exception:
+                tb = html.escape(traceback.format_exc())
+                self.status.value = f"<pre style='color:#b00020'>{tb}</pre>"
+                raise
+
+        return run
 
     def draw(self):
-        t = time.perf_counter()
+        """Request the canvas draw (ipympl: drawn when the browser asks, see :meth:`on_drawn`) or
+        draw the PNG image."""
         if self.image is None:
+            self._requested = time.perf_counter()
             self.fig.canvas.draw_idle()
         else:
+            t = time.perf_counter()
             buf = io.BytesIO()
             self.fig.savefig(buf, format="png", dpi=80)
             self.image.value = buf.getvalue()
-        self.ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - t)
+            self.ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - t)
+
+    def on_drawn(self, _event=None):
+        """``draw_event``: the requested canvas draw is done (ipympl sends the image next)."""
+        if self._requested is None:
+            return
+        self.ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - self._requested)
+        self._requested = None
+        self.show_status()
+
+    def show_status(self):
+        if self._requested is not None:
+            drawn = "repaint pending"
+        else:
+            drawn = f"repaint {self.ex.timings.get('draw_ms', float('nan')):.0f} ms"
+        self.status.value = (
+            f"<tt>{html.escape(self.ex.status(), quote=False)}, {drawn}{self._note}</tt>"
+        )
 
     def render(self):
-        self.view.render(self.ex)
-        self.draw()
-        self.status.value = f"<tt>{self.ex.status()}, draw {self.ex.timings['draw_ms']:.0f} ms</tt>"
+        with self._lock:
+            self.view.render(self.ex)
+            self.draw()
+            self.show_status()
+
+    def on_boundaries(self, key):
+        """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
+        still the slice shown."""
+        p = self.ex.params
+        if key == (p["kappa"], p["q1"], p["q2"]):
+            self._note = f", certified boundaries {self.ex.timings['boundaries_ms']:.0f} ms"
+            self.render()
 
     def model_changes(self) -> dict:
         """The Explorer's parameters as the controls show them."""
@@ -157,25 +233,61 @@ class _Callbacks:
             max_resolve=int(ctl["max_resolve"].value),
         )
 
-    def on_change(self, _change=None):
+    def show_q(self):
         sep = self.ctl["separate"].value
         self.ctl["q"].layout.display = "none" if sep else None
         self.ctl["q1"].layout.display = None if sep else "none"
         self.ctl["q2"].layout.display = None if sep else "none"
+
+    def on_change(self, _change=None):
+        if self._quiet:
+            return
+        self.show_q()
+        kappa = float(self.ctl["kappa"].value)
+        if kappa > 0 and math.isfinite(kappa):
+            with self.quiet():
+                self.ctl["log10_kappa"].value = math.log10(kappa)
         self.ex.update(**self.model_changes())
+        self._note = ""
         self.render()
         if self.ex.point is not None:
             self.show_point(*self.ex.point)
 
+    def on_log_kappa(self, change):
+        """The log10 kappa slider moved: the text box shows kappa to 4 digits."""
+        if self._quiet:
+            return
+        with self.quiet():
+            self.ctl["kappa"].value = float(f"{10 ** change['new']:.4g}")
+        self.on_change()
+
+    def on_separate(self, change):
+        """q1, q2 start from q (ticked); q takes q1 (unticked): the model does not jump."""
+        c = self.ctl
+        with self.quiet():
+            if change["new"]:
+                c["q1"].value = c["q2"].value = c["q"].value
+            else:
+                c["q"].value = c["q1"].value
+        self.on_change()
+
     def on_settle(self, _b=None):
         self.ex.settle()
-        self.render()
+        self.view.render(self.ex)
+        self.draw()
+        self._note = f", settled in {self.ex.timings['settle_ms']:.0f} ms"
+        self.show_status()
 
     def show_point(self, b1, b2):
         info = self.ex.inspect(b1, b2)
-        self.inspector.value = "<pre>" + format_inspection(info) + "</pre>"
-        self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
-        self.draw()
+        text = format_inspection(info)
+        near = self.ex.nearest_boundary(*self.ex.point)
+        if near is not None:
+            text += "\n" + format_boundary(*near)
+        self.inspector.value = "<pre>" + html.escape(text, quote=False) + "</pre>"
+        with self._lock:
+            self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
+            self.draw()
 
     def on_inspect(self, _b=None):
         self.show_point(self.ctl["beta1"].value * math.pi, self.ctl["beta2"].value * math.pi)
@@ -193,17 +305,23 @@ class _Callbacks:
 
     def connect(self) -> int:
         """Observe the controls and the canvas; returns the click handler's connection id."""
-        for key in _WATCHED + ("max_resolve",):
-            self.ctl[key].observe(self.on_change, names="value")
-        self.ctl["inspect"].on_click(self.on_inspect)
-        self.ctl["settle"].on_click(self.on_settle)
+        g = self.guarded
+        for key in _WATCHED:
+            self.ctl[key].observe(g(self.on_change), names="value")
+        self.ctl["log10_kappa"].observe(g(self.on_log_kappa), names="value")
+        self.ctl["separate"].observe(g(self.on_separate), names="value")
+        self.ctl["inspect"].on_click(g(self.on_inspect))
+        self.ctl["settle"].on_click(g(self.on_settle))
+        canvas = self.fig.canvas
+        canvas.mpl_connect("draw_event", g(self.on_drawn))
+        self.ex.on_boundaries = g(self.on_boundaries)
         # connected on every backend; only interactive canvases (ipympl) deliver clicks from a
         # browser.  A function, not the bound method: matplotlib holds bound methods weakly.
-        return self.fig.canvas.mpl_connect("button_press_event", lambda e: self.on_click(e))
+        return canvas.mpl_connect("button_press_event", g(self.on_click))
 
 
 def make_widget(explorer: Explorer | None = None, **initial):
-    """An ipywidgets UI over :class:`Explorer`: kappa (log slider), q or q1 and q2, alpha,
+    """An ipywidgets UI over :class:`Explorer`: kappa (a log10 slider and a text box), q or q1 and q2, alpha,
     resolution, layer, overlays, exact settlements per redraw and a "settle undecided" button;
     the map redraws on every change; clicking the map fills the point inspector (needs an
     interactive matplotlib backend: ``%matplotlib widget`` with ipympl, the ``notebook`` extra),
@@ -221,15 +339,21 @@ def make_widget(explorer: Explorer | None = None, **initial):
     fig, view, shown, image = _map_figure(W)
     cb = _Callbacks(ex, ctl, view, image, status, inspector)
     cid = cb.connect()
-    cb.on_change()
-    controls = W.VBox([ctl[k] for k in _WATCHED + ("max_resolve", "settle")])
+    cb.on_change()  # a bad initial value raises
+    for key, c in ctl.items():  # names for the page's CSS and the browser test
+        c.add_class(f"atlas-{key.replace('_', '-')}")
+    status.add_class("atlas-status")
+    inspector.add_class("atlas-inspector")
+    controls = W.VBox([ctl[k] for k in _SHOWN], layout={"width": _WIDTH, "flex": "0 0 auto"})
     point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]])
     box = W.VBox([W.HBox([controls, shown]), status, point, inspector])
+    box.add_class("atlas-explorer")
     box.explorer = ex
     box.controls = ctl
     box.figure = fig
     box.inspector = inspector
     box.click_cid = cid
+    box.status = status
     box.callbacks = {
         "change": cb.on_change,
         "inspect": cb.on_inspect,

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from notebook_run import prepare_notebook
 
 ROOT = Path(__file__).resolve().parents[2]
 _NOTEBOOK_TEST = re.compile(r"test_(\w+)_notebook_executes$")
@@ -36,7 +37,7 @@ def pytest_collection_modifyitems(items):
 
 
 # Each notebook runs in its own process (nbclient -> a fresh ``python3`` kernel of this interpreter,
-# found through ipykernel's kernel spec in sys.prefix).  They start with the first test of this
+# found through ipykernel's kernel spec in sys.prefix), as :func:`prepare_notebook` copies it.  They start with the first test of this
 # directory, so they overlap with each other and with the in-process tests (most of their time is
 # single-threaded XLA compilation); ``test_<name>_notebook_executes`` waits for ``<name>.ipynb``.
 _RUNNER = """
@@ -44,11 +45,6 @@ import json, sys, time
 import nbclient, nbformat
 src, cwd = sys.argv[1], sys.argv[2]
 nb = nbformat.read(src, as_version=4)
-first = next(c for c in nb.cells if c.cell_type == "code")
-first.source = first.source.replace("CI = False", "CI = True")  # the smallest sizes
-# the run's shared compilation cache ($ATLAS_JAX_CACHE, tests/conftest.py)
-nb.cells.insert(0, nbformat.v4.new_code_cell(
-    "from atlas.core.config import use_compile_cache\\nuse_compile_cache(min_compile_seconds=0.2)"))
 client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
                                  resources={"metadata": {"path": cwd}})
 t = time.perf_counter()
@@ -77,10 +73,11 @@ class NotebookRuns:
         path = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
         env = dict(os.environ, PYTHONPATH=path, MPLBACKEND="Agg")
         cwd = self.tmp_path_factory.mktemp(f"nb_{name}")
+        src = prepare_notebook(ROOT / "notebooks" / f"{name}.ipynb", cwd / f"_{name}.ipynb")
         out = open(cwd / "_runner.out", "w")  # closed by close()
         err = open(cwd / "_runner.err", "w")
         proc = subprocess.Popen(
-            [sys.executable, "-c", _RUNNER, str(ROOT / "notebooks" / f"{name}.ipynb"), str(cwd)],
+            [sys.executable, "-c", _RUNNER, str(src), str(cwd)],
             cwd=cwd,
             env=env,
             stdout=out,

@@ -55,4 +55,26 @@ def test_legend_lists_the_codes_present():
         (Consistency.UNDECIDED.color, "undecided"),
     ]
     assert [lbl for _, lbl in colors.legend_entries("stable_II")] == [v.label for v in Verdict]
-    assert colors.legend_entries("class_code") == []
+    assert colors.legend_entries("margin_SS") == []  # continuous: no key
+
+
+def test_class_and_subclass_codes_have_a_key_and_distinct_colours():
+    """Every class (24) and subclass (144) code has its own colour (no two closer than 0.06 in
+    RGB), and the legend names the codes present."""
+    from atlas.data.outputs import variable_attrs
+
+    for name, n in (("class_code", 24), ("subclass_code", 144)):
+        codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]
+        assert len(codes) == n
+        cols = colors._category_colors(name)
+        rgb = np.array([to_rgba(cols[c])[:3] for c in codes])
+        d = np.linalg.norm(rgb[:, None] - rgb[None], axis=-1) + 10 * np.eye(n)
+        assert d.min() > 0.06, name
+    ds = _ds(class_code=(("beta1", "beta2"), np.array([[11, 11], [23, 0], [11, 23]], np.int8)))
+    assert [lbl for _, lbl in colors.legend_entries("class_code", ds)] == [
+        "degenerate",
+        "class 11",
+        "class 23",
+    ]
+    c = colors._category_colors("class_code")
+    assert colors.legend_entries("class_code", ds)[1][0] == c[11]

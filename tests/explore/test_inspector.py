@@ -32,3 +32,13 @@ def test_inspector_agrees_with_exact_and_map():
             atol=1e-9,
         )
         assert "class" in inspector.format_inspection(info)
+
+
+def test_roots_print_zero_parts_as_zero():
+    """A float eig's rounding residue of an exact zero part prints like the exact root's 0."""
+    eig = [-1.94e-16 + 0.96j, -1.94e-16 - 0.96j, -2.5 + 3e-17j, 1e-3]
+    exact = [0.96j, -0.96j, -2.5, 1e-3]
+    assert inspector.format_roots(eig) == inspector.format_roots(exact)
+    assert inspector.format_roots(exact) == "+0+0.96i, +0-0.96i, -2.5+0i, +0.001+0i"
+    # 6 significant digits of the largest modulus: small nonzero parts above that stay
+    assert inspector.format_roots([1.0, 2e-5j]) == "+1+0i, +0+2e-05i"

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +19,7 @@ from matplotlib.colors import to_rgba
 from scipy.interpolate import RegularGridInterpolator
 
 from atlas.core import exact
+from atlas.core.brackets import FIELD_LABELS
 from atlas.core.verdicts import Verdict
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
@@ -183,3 +186,96 @@ def test_overlays(need):
     assert "SS boundary" not in [t.get_text() for t in ax.get_legend().get_texts()]
     with pytest.raises(ValueError, match="overlays"):
         box.explorer.update(overlays=("nope",))
+
+
+def test_separately_starts_q1_q2_from_q(need):
+    """Ticking "q1, q2 separately" keeps the model: q1 = q2 = the current q; unticking gives q
+    the value of q1."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_II", kappa=0.5, q1=0.0)
+    c, ex = box.controls, box.explorer
+    c["q"].value = 1.2
+    drawn = ex.ds["stable_II"].values.copy()
+    c["separate"].value = True
+    assert c["q1"].value == c["q2"].value == 1.2
+    assert ex.params["q1"] == ex.params["q2"] == 1.2
+    np.testing.assert_array_equal(ex.ds["stable_II"].values, drawn)
+    c["q1"].value, c["q2"].value = 0.4, 2.0
+    assert (ex.params["q1"], ex.params["q2"]) == (0.4, 2.0)
+    c["separate"].value = False
+    assert c["q"].value == 0.4 and ex.params["q1"] == ex.params["q2"] == 0.4
+
+
+def test_kappa_log10_slider_and_text_box(need):
+    """The slider moves log10 kappa in steps of 0.01 (x 1.023) over 1e-3 .. 1e3; the text box
+    holds kappa exactly; a bad kappa is a one-line message in the status line."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    c, ex = box.controls, box.explorer
+    s = c["log10_kappa"]
+    assert (s.min, s.max, s.step) == (-3.0, 3.0, 0.01)
+    assert s.value == pytest.approx(math.log10(0.5), abs=0.005)
+    c["kappa"].value = 2.0
+    assert ex.params["kappa"] == 2.0  # exactly the typed value
+    assert s.value == pytest.approx(math.log10(2.0), abs=0.005)
+    s.value = round(s.value - s.step, 2)  # one step left, as the arrow key moves it
+    assert c["kappa"].value == pytest.approx(10**0.29, rel=1e-3)
+    assert ex.params["kappa"] == c["kappa"].value
+    c["kappa"].value = -1.0
+    assert "kappa: must be &gt; 0" in box.status.value and "Traceback" not in box.status.value
+    assert ex.params["kappa"] == pytest.approx(10**0.29, rel=1e-3)  # unchanged
+
+
+def test_status_times_the_repaint_not_the_request(need):
+    """On a canvas that draws later (ipympl draws when the browser asks), the status line says
+    "repaint pending" until the canvas has drawn, then the time from the request to the draw."""
+    need("ipywidgets")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    canvas, status = FigureCanvasAgg(box.figure), box.status
+    cb = box.callbacks["change"].__self__
+    cb.image = None  # the interactive path: draw_idle requests, the canvas draws later
+    requested = []
+    canvas.draw_idle = lambda: requested.append(1)
+    box.controls["kappa"].value = 0.7
+    assert requested and "repaint pending" in status.value
+    time.sleep(0.05)
+    canvas.draw()
+    ms = float(re.search(r"repaint (\d+) ms", status.value).group(1))
+    assert ms >= 50
+
+
+@pytest.mark.slow
+def test_certified_boundaries_overlay_and_click_near_a_curve(need):
+    """The "certified boundaries" overlay: computed in the background (the map shows
+    "computing" until then), then drawn as the curves of
+    :func:`atlas.data.boundaries.slice_boundaries`; a click next to an SS curve names it, and the
+    exact SS verdict at the clicked point is the label of one of its two sides."""
+    need("ipywidgets")
+    kappa, q = 0.5, 0.3
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=kappa, q1=q)
+    ex, ax = box.explorer, box.figure.axes[0]
+    box.controls["overlays"].value = ("certified boundaries",)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "certified boundaries: computing" in labels
+    t = time.perf_counter()
+    while ex.boundaries() is None:
+        assert time.perf_counter() - t < 900
+        time.sleep(0.2)
+    time.sleep(0.5)  # the worker's redraw
+    b = ex.boundaries()
+    drawn = [np.column_stack(a.get_data()) for a in ax.lines]
+    curves = [c for c in b.curves if c.field != "class"]
+    assert curves
+    for c in curves:
+        assert any(d.shape == c.vertices.shape and np.array_equal(d, c.vertices) for d in drawn)
+    ss = next(c for c in curves if c.field == "SS")
+    v = ss.vertices[len(ss.vertices) // 2]
+    _click(box, v[0] + 0.01, v[1])
+    text = box.inspector.value
+    assert "near the certified SS_stability boundary" in text
+    d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
+    verdict = int(exact.point_spectral(*d, kappa, q, q)["stable_SS"])
+    sides = {FIELD_LABELS["SS"][ss.side_a], FIELD_LABELS["SS"][ss.side_b]}
+    assert FIELD_LABELS["SS"][verdict] in sides
