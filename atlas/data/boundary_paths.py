@@ -2,7 +2,9 @@
 
 * **Wrapped.** Vertex coordinates are reduced into ``[0, 2 pi)`` (the tracing grid reaches a
   nudge past ``2 pi``); a piece is cut where it crosses a seam (the segment across the seam is
-  dropped: each coordinate of every vertex stays a certified bracket midpoint).
+  dropped: each coordinate of every vertex stays a certified bracket midpoint).  A piece on the
+  class line ``beta = 0`` itself, whose vertices lie on both sides of the seam, is put exactly on
+  the line (moved by at most :data:`SEAM`; its side codes are those of the line).
 * **Simple.** A piece that crosses or touches itself (a polyline that doubled back over a stretch,
   e.g. into a needle) is cut in halves until every part is simple (:mod:`shapely`
   ``is_simple``).
@@ -24,6 +26,9 @@ from atlas.data.boundary_curves import Curve
 __all__ = ["simple_paths", "wrapped"]
 
 TWO_PI = 2 * math.pi
+#: distance [rad] within which a class-line piece running along a seam (``beta = 0``) is put on
+#: it: its vertices lie on both sides of the seam within the on-line distance of the tracing
+SEAM = 1e-6
 
 
 def _sub(c: Curve, sl) -> Curve:
@@ -39,6 +44,9 @@ def wrapped(c: Curve) -> list[Curve]:
     """``c`` with its vertices in ``[0, 2 pi)``, cut where it crosses a seam."""
     xy = np.where(c.vertices >= TWO_PI, c.vertices - TWO_PI, c.vertices)
     xy = np.where(xy < 0, xy + TWO_PI, xy)
+    if c.on_class_line:  # a piece along a seam line beta = 0 is put on it, not on both sides
+        seam = np.minimum(xy, TWO_PI - xy) <= SEAM
+        xy = np.where(seam.all(0), 0.0, xy)
     w = replace(c, vertices=xy)
     jump = np.flatnonzero((np.abs(np.diff(xy, axis=0)) > math.pi).any(1))
     cuts = np.r_[0, jump + 1, len(xy)]

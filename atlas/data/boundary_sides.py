@@ -151,13 +151,21 @@ def _merged(curves: list[Curve], near) -> list[Curve]:
         if not c.on_class_line:
             rest.append(c)
             continue
-        m = int(np.bincount(line_labels(c.vertices, near).clip(0)).argmax())
+        lab = line_labels(c.vertices, near)
+        if not (lab >= 0).any():
+            rest.append(c)
+            continue
+        m = int(np.bincount(lab[lab >= 0]).argmax())
         groups.setdefault((m, c.side_left, c.side_right, c.side_on), []).append(c)
     for (m, *_), group in groups.items():
         g = LINE_GRADS[m] / math.hypot(*LINE_GRADS[m])
         along = np.array([-g[1], g[0]])  # the line's direction: its left is where g grows
         spans = sorted(
-            (float((c.vertices @ along).min()), float((c.vertices @ along).max()), c) for c in group
+            (
+                (float((c.vertices @ along).min()), float((c.vertices @ along).max()), c)
+                for c in group
+            ),
+            key=lambda span: span[:2],
         )
         merged = []
         for lo, hi, c in spans:

@@ -36,3 +36,14 @@ def test_vertices_are_wrapped_and_cut_at_the_seam():
     xy = np.concatenate([p.vertices for p in out])
     assert (xy >= 0).all() and (xy < TWO_PI).all()
     assert len(out) == 2
+
+
+def test_a_piece_along_the_seam_stays_whole():
+    """A class-line piece on beta1 = 0 whose vertices alternate between the two sides of the
+    seam (2 pi - 1e-12, 1e-12) was cut into two-vertex fragments; it is one piece on the line."""
+    y = np.linspace(1.50, 1.57, 8)
+    x = np.where(np.arange(8) % 2 == 0, TWO_PI - 1e-12, 1e-12)
+    c = _curve(np.stack([x, y], 1))
+    c.on_class_line = True
+    out, _ = simple_paths([c], chord=1e-6)
+    assert len(out) == 1 and (out[0].vertices[:, 0] == 0.0).all()
