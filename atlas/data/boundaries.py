@@ -46,7 +46,14 @@
    of vertices on a straight class line (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1)
    are split off as ``on_class_line`` pieces; the junctions, the points where a boundary leaves
    or crosses a class line, and where SS and II boundaries cross are returned as
-   :attr:`Boundaries.points` with their location uncertainty.
+   :attr:`Boundaries.points`.  Where an SS boundary meets a class line the point is located by
+   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`); every
+   other point is an estimate (``proven = False``, ``uncertainty`` NaN).
+7. **Side labels.** Each piece carries the certified codes found just off it on each side and on
+   it (:mod:`atlas.data.boundary_sides`): cut where they change, oriented with the higher code on
+   the left, coincident pieces on a line merged.
+8. **Paths.** Coordinates in ``[0, 2 pi)``, every piece simple, no stretch twice
+   (:mod:`atlas.data.boundary_paths`).
 
 The straight class boundaries themselves are returned in closed form (``field = "class"``,
 :mod:`atlas.data.class_lines`, with the lines' geometry).  The tips of step 5b live in
