@@ -35,7 +35,8 @@ CHORD = 1e-6
 #: ``side_right``, ``side_on`` the codes left / right of the direction of travel and on the curve
 #: (-1: none; SS 0 unstable, 1 stable, 2 neutral; II 0 inconsistent, 1 consistent and unstable,
 #: 2 consistent and stable, 3 consistent and neutral); ``on_class_line`` 0/1; ``kappa, q1, q2``
-#: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad];
+#: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad]
+#: (``nan``: a point where the curve crosses a seam, interpolated on its segment);
 #: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1
 CSV_COLUMNS = (
     "record",
@@ -67,8 +68,10 @@ class Curve:
     right of the direction of travel, the higher code on the left (-1 for class lines);
     ``side_on``: the code on the piece itself where it lies on a class line and differs from both
     sides, else -1 (:mod:`atlas.data.boundary_sides`); ``bracket``: per vertex, the length of its
-    certified bracket [rad] (0 for the closed-form class lines); ``ends``: per vertex the
-    bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint), ``None`` for class lines.
+    certified bracket [rad] (0 for the closed-form class lines; NaN for a point where the curve
+    crosses a seam of the torus, interpolated on its segment); ``ends``: per vertex the
+    bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint; NaN at a seam point),
+    ``None`` for class lines.
     """
 
     field: str
@@ -188,7 +191,7 @@ def _curve_props(c: Curve) -> dict:
         "kappa": c.kappa,
         "q1": c.q1,
         "q2": c.q2,
-        "max_bracket": float(np.max(c.bracket)),
+        "max_bracket": float(np.nanmax(c.bracket, initial=0.0)),
     }
     return _json(props)
 
@@ -256,7 +259,12 @@ def _to_dataset(bd: Boundaries) -> xr.Dataset:
             "node_bracket": (
                 "node",
                 np.concatenate([c.bracket for c in cs]) if cs else np.zeros(0),
-                rad | {"long_name": "length of the certified bracket of the vertex"},
+                rad
+                | {
+                    "long_name": "length of the certified bracket of the vertex",
+                    "comment": "NaN: a point where the curve crosses a seam of the torus, "
+                    "interpolated on its segment (no bracket)",
+                },
             ),
             "curve_field": ("curve", per("field").astype(str), geo | {"long_name": "field"}),
             "curve_kind": ("curve", per("kind").astype(str), geo | {"long_name": "boundary kind"}),

@@ -1,10 +1,10 @@
 """Pieces as simple paths on the torus (step 8 of :mod:`atlas.data.boundaries`).
 
 * **Wrapped.** Vertex coordinates are reduced into ``[0, 2 pi)`` (the tracing grid reaches a
-  nudge past ``2 pi``); a piece is cut where it crosses a seam (the segment across the seam is
-  dropped: each coordinate of every vertex stays a certified bracket midpoint).  A piece on the
-  class line ``beta = 0`` itself, whose vertices lie on both sides of the seam, is put exactly on
-  the line (moved by at most :data:`SEAM`; its side codes are those of the line).
+  nudge past ``2 pi``); a piece is cut where it crosses a seam, both parts ending at the point
+  where the segment crosses it (interpolated on the segment, like any point of a chord: its
+  ``bracket`` is NaN, it has no certified bracket; on the far side of the seam the coordinate
+  is written ``nextafter(2 pi, 0)``).
 * **Simple.** A piece that crosses or touches itself (a polyline that doubled back over a stretch,
   e.g. into a needle) is cut in halves until every part is simple (:mod:`shapely`
   ``is_simple``).
@@ -26,9 +26,6 @@ from atlas.data.boundary_curves import Curve
 __all__ = ["simple_paths", "wrapped"]
 
 TWO_PI = 2 * math.pi
-#: distance [rad] within which a class-line piece running along a seam (``beta = 0``) is put on
-#: it: its vertices lie on both sides of the seam within the on-line distance of the tracing
-SEAM = 1e-6
 
 
 def _sub(c: Curve, sl) -> Curve:
@@ -41,16 +38,58 @@ def _sub(c: Curve, sl) -> Curve:
 
 
 def wrapped(c: Curve) -> list[Curve]:
-    """``c`` with its vertices in ``[0, 2 pi)``, cut where it crosses a seam."""
-    xy = np.where(c.vertices >= TWO_PI, c.vertices - TWO_PI, c.vertices)
-    xy = np.where(xy < 0, xy + TWO_PI, xy)
-    if c.on_class_line:  # a piece along a seam line beta = 0 is put on it, not on both sides
-        seam = np.minimum(xy, TWO_PI - xy) <= SEAM
-        xy = np.where(seam.all(0), 0.0, xy)
-    w = replace(c, vertices=xy)
-    jump = np.flatnonzero((np.abs(np.diff(xy, axis=0)) > math.pi).any(1))
-    cuts = np.r_[0, jump + 1, len(xy)]
-    return [_sub(w, slice(a, b)) for a, b in zip(cuts[:-1], cuts[1:]) if b - a >= 2]
+    """``c`` with its vertices in ``[0, 2 pi)``, cut where it crosses a seam; the two parts end
+    at the crossing point, interpolated on the segment (``bracket`` and ``ends`` NaN)."""
+    raw = c.vertices
+    turns = np.floor(raw / TWO_PI)
+    cross = np.flatnonzero((turns[1:] != turns[:-1]).any(1))
+    if not len(cross) and not turns.any():
+        return [c]
+    xy, bracket = [], []
+    ends = [] if c.ends is not None else None
+    nan_ends = np.full((2, 2), np.nan)
+    pieces, start = [], 0
+    for k in list(cross) + [len(raw) - 1]:
+        part = slice(start, k + 1)
+        xy = list(raw[part] - TWO_PI * turns[part])
+        bracket = list(c.bracket[part])
+        if ends is not None:
+            ends = list(c.ends[part] - TWO_PI * turns[part][:, None, :])
+        if start > 0:  # begins at the previous crossing point
+            xy.insert(0, pieces[-1][3])
+            bracket.insert(0, np.nan)
+            if ends is not None:
+                ends.insert(0, nan_ends)
+        nxt = None
+        if k < len(raw) - 1:  # ends at the crossing point of segment k
+            a, b = raw[k], raw[k + 1]
+            j = int(np.flatnonzero(turns[k] != turns[k + 1])[0])
+            seam = TWO_PI * max(turns[k, j], turns[k + 1, j])
+            t = (seam - a[j]) / (b[j] - a[j])
+            point = a + t * (b - a)
+            point[j] = seam
+            here = point - TWO_PI * turns[k]
+            here[j] = math.nextafter(TWO_PI, 0.0) if turns[k, j] < turns[k + 1, j] else 0.0
+            nxt = point - TWO_PI * turns[k + 1]
+            nxt[j] = 0.0 if turns[k, j] < turns[k + 1, j] else math.nextafter(TWO_PI, 0.0)
+            xy.append(here)
+            bracket.append(np.nan)
+            if ends is not None:
+                ends.append(nan_ends)
+        pieces.append((np.array(xy), np.array(bracket), ends, nxt))
+        start = k + 1
+    out = []
+    for v, w, e, _ in pieces:
+        v = np.mod(v, TWO_PI)  # the other coordinate of a crossing point near a corner
+        v = np.where(v >= TWO_PI, math.nextafter(TWO_PI, 0.0), v)
+        keep = np.r_[True, (np.diff(v, axis=0) != 0).any(1)]
+        e = None if e is None else np.array(e)[keep]
+        part = replace(c, vertices=v[keep], bracket=w[keep], ends=e)
+        # a segment that still jumps across the box (through a corner of the torus) is cut
+        jump = np.flatnonzero((np.abs(np.diff(part.vertices, axis=0)) > math.pi).any(1))
+        cuts = np.r_[0, jump + 1, len(part.vertices)]
+        out += [_sub(part, slice(a, b)) for a, b in zip(cuts[:-1], cuts[1:]) if b - a >= 2]
+    return out
 
 
 def _simple_parts(c: Curve) -> list[Curve]:
@@ -75,11 +114,13 @@ def _unique(curves: list[Curve], chord: float) -> tuple[list[Curve], int]:
         t = np.diff(xy, axis=0)
         t_v = np.concatenate([t[:1], t[:-1] + t[1:], t[-1:]])  # a direction at each vertex
         dup = np.zeros(len(xy), bool)
-        for segs, dirs in seen.get(key, []):
+        for segs, dirs, tips in seen.get(key, []):
             tree = shapely.STRtree(segs)
             pi, si = tree.query(shapely.points(xy), predicate="dwithin", distance=chord)
             same_way = np.sum(t_v[pi] * dirs[si], axis=1) > 0
-            dup[pi[same_way]] = True
+            # where two pieces meet end to start, the shared vertex is no retrace
+            at_tip = np.hypot(*(xy[pi, None, :] - tips[None, :, :]).transpose(2, 0, 1)).min(-1)
+            dup[pi[same_way & (at_tip > chord)]] = True
         keep = ~dup
         dropped += int(dup.sum())
         edges = np.flatnonzero(np.diff(np.r_[False, keep, False].astype(int)))
@@ -89,7 +130,11 @@ def _unique(curves: list[Curve], chord: float) -> tuple[list[Curve], int]:
                 out.append(part)
                 v = part.vertices
                 seen.setdefault(key, []).append(
-                    (shapely.linestrings(np.stack([v[:-1], v[1:]], 1)), np.diff(v, axis=0))
+                    (
+                        shapely.linestrings(np.stack([v[:-1], v[1:]], 1)),
+                        np.diff(v, axis=0),
+                        v[[0, -1]],
+                    )
                 )
             else:
                 dropped += int(b - a)

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 import shapely
 
 from atlas.data.boundary_curves import Curve
@@ -31,19 +32,26 @@ def test_a_curve_that_doubles_back_becomes_simple_without_the_retraced_stretch()
 
 
 def test_vertices_are_wrapped_and_cut_at_the_seam():
-    c = _curve([[6.0, 1.0], [6.2, 1.0], [TWO_PI + 3e-8, 1.0], [0.1 + TWO_PI, 1.0]])
+    c = _curve([[6.0, 1.0], [6.2, 1.0], [TWO_PI + 3e-8, 1.0], [0.1 + TWO_PI, 1.1]])
     out, _ = simple_paths([c], chord=1e-6)
     xy = np.concatenate([p.vertices for p in out])
     assert (xy >= 0).all() and (xy < TWO_PI).all()
     assert len(out) == 2
+    # both parts end at the interpolated crossing point, which has no bracket
+    assert out[0].vertices[-1, 0] == np.nextafter(TWO_PI, 0) and out[1].vertices[0, 0] == 0.0
+    assert np.isnan(out[0].bracket[-1]) and np.isnan(out[1].bracket[0])
 
 
 def test_a_piece_along_the_seam_stays_whole():
     """A class-line piece on beta1 = 0 whose vertices alternate between the two sides of the
-    seam (2 pi - 1e-12, 1e-12) was cut into two-vertex fragments; it is one piece on the line."""
+    seam (2 pi - 1e-12, 2 pi + 3e-8) was cut into fragments with the segments across the seam
+    dropped; every part now reaches the seam, and together they cover the whole stretch."""
     y = np.linspace(1.50, 1.57, 8)
-    x = np.where(np.arange(8) % 2 == 0, TWO_PI - 1e-12, 1e-12)
+    x = np.where(np.arange(8) % 2 == 0, TWO_PI - 1e-12, TWO_PI + 3e-8)
     c = _curve(np.stack([x, y], 1))
-    c.on_class_line = True
     out, _ = simple_paths([c], chord=1e-6)
-    assert len(out) == 1 and (out[0].vertices[:, 0] == 0.0).all()
+    ys = np.concatenate([p.vertices[:, 1] for p in out])
+    assert ys.min() == 1.50 and ys.max() == 1.57
+    assert sum(np.ptp(p.vertices[:, 1]) for p in out) == pytest.approx(0.07)
+    for p in out:
+        assert (p.vertices >= 0).all() and (p.vertices < TWO_PI).all()

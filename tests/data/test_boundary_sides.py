@@ -101,7 +101,7 @@ def test_labels_hold_off_every_piece_undamped(undamped):
             max(a.vertices[:, 1].min(), c.vertices[:, 1].min()),
             min(a.vertices[:, 1].max(), c.vertices[:, 1].max()),
         )
-        assert lo >= hi  # no two pieces over the same stretch
+        assert lo >= hi - 1e-12  # no two pieces over the same stretch (they may share an end)
 
 
 def test_labels_hold_off_every_piece_damped():
