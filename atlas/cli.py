@@ -202,7 +202,8 @@ def _add_mechanism(sub) -> None:
 
 
 def _add_boundaries(sub) -> None:
-    from atlas.data.boundaries import CHORD, TOL
+    from atlas.data.boundaries import CHORD, MAX_CHECK, MIN_CHORD, MIN_TOL, TOL
+    from atlas.data.boundary_curves import CODE_MEANINGS, CSV_COLUMNS
 
     pb = sub.add_parser(
         "boundaries",
@@ -211,19 +212,36 @@ def _add_boundaries(sub) -> None:
         "vertices are certified within --tol of the true boundary (bisection on certified "
         "verdicts), the closed-form class lines, and the codimension-2 points.  Ranges as for "
         "generate.  Without an output file, print a summary.",
+        epilog=f"CSV columns: {', '.join(CSV_COLUMNS)} (record: vertex or point; side_left / "
+        f"side_right: the codes left / right of the direction of travel, the higher on the "
+        f"left; side_on: the code on a class-line piece where it differs from both; "
+        f"uncertainty: a point's proven enclosure radius, empty when not proven).  "
+        f"Codes: {CODE_MEANINGS}.",
     )
     for name in ("beta1", "beta2", "kappa", "q", "q1", "q2"):
         pb.add_argument(f"--{name}", metavar="RANGE", help=f"{name} (as for generate)")
     pb.add_argument("--fields", default="SS,II", help="SS, II or SS,II (default)")
-    pb.add_argument("--tol", type=_number("tol"), default=TOL, help=f"vertex bracket [rad] ({TOL})")
     pb.add_argument(
-        "--chord", type=_number("chord"), default=CHORD, help=f"chord sagitta [rad] ({CHORD})"
+        "--tol",
+        type=_number("tol"),
+        default=TOL,
+        help=f"vertex bracket [rad], >= {MIN_TOL:.3g} ({TOL})",
     )
     pb.add_argument(
-        "--check", type=int, default=2, help="resample cells N x finer for hidden branches (2)"
+        "--chord",
+        type=_number("chord"),
+        default=CHORD,
+        help=f"chord sagitta [rad], in [max(tol, {MIN_CHORD:g}), 0.1] ({CHORD})",
+    )
+    pb.add_argument(
+        "--check",
+        type=int,
+        default=2,
+        help=f"resample cells N x finer for hidden branches, 0..{MAX_CHECK}; 0 or 1: no check; "
+        "refused if the refined grids may need more than 4 GiB (2)",
     )
     pb.add_argument("--out", metavar="FILE.nc", help="CF-1.10 geometry container")
-    pb.add_argument("--csv", metavar="FILE.csv", help="one row per vertex")
+    pb.add_argument("--csv", metavar="FILE.csv", help="one row per vertex and per point")
     pb.add_argument("--geojson", metavar="FILE.json", help="GeoJSON FeatureCollection")
     pb.add_argument("--overwrite", action="store_true", help="replace existing output files")
     pb.add_argument("--dtype", choices=["float64", "float32"], default="float64")

@@ -30,7 +30,15 @@ from atlas.core import mechanics
 from atlas.core import points as evaluate
 from atlas.core.verdicts import UNDECIDED_FLAG
 
-__all__ = ["FIELDS", "FIELD_LABELS", "field_codes", "bisect", "boundary_kind"]
+__all__ = [
+    "FIELDS",
+    "FIELD_LABELS",
+    "bisect",
+    "boundary_kind",
+    "codes_of",
+    "direction_codes",
+    "field_codes",
+]
 
 #: the two batch sizes a kernel call sees: small batches are padded to ``MIN_BATCH`` points,
 #: larger ones cut into padded batches of ``MAX_BATCH`` (two compilations per kernel)
@@ -72,32 +80,69 @@ def field_codes(field: str, beta1, beta2, kappa, q1, q2, *, dtype="float64") -> 
 
 
 def _batch_codes(field, b1, b2, kappa, q1, q2, dtype) -> np.ndarray:
-    """:func:`field_codes` of at most ``MAX_BATCH`` points, padded with :data:`PAD_POINT` to
-    ``MIN_BATCH`` or ``MAX_BATCH`` points (two batch sizes: two compilations per kernel)."""
-    n = b1.size
-    pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
-    b1, b2 = (np.pad(b, (0, pad), constant_values=v) for b, v in zip((b1, b2), PAD_POINT))
+    """:func:`field_codes` of at most ``MAX_BATCH`` points (:func:`direction_codes` of their
+    direction vectors)."""
     c1, s1 = mechanics.direction(b1, dtype)
     c2, s2 = mechanics.direction(b2, dtype)
+    return direction_codes(field, c1, s1, c2, s2, kappa, q1, q2, dtype=dtype)
+
+
+def direction_codes(field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64") -> np.ndarray:
+    """Certified codes of ``field`` at 1-D arrays of at most ``MAX_BATCH`` direction vectors
+    ``(c1, s1)``, ``(c2, s2)`` [1] (e.g. exactly on a class line: ``(c2, s2) = -(c1, s1)`` on
+    ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``MIN_BATCH`` or ``MAX_BATCH``
+    points (two batch sizes: two compilations per kernel); every point settled exactly."""
+    _check_field(field)
+    n = np.size(c1)
+    pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
+    pc, ps = mechanics.direction(np.array(PAD_POINT), dtype)
+    c1, c2 = (
+        np.pad(np.asarray(v, dtype), (0, pad), constant_values=pc[i]) for i, v in ((0, c1), (1, c2))
+    )
+    s1, s2 = (
+        np.pad(np.asarray(v, dtype), (0, pad), constant_values=ps[i]) for i, v in ((0, s1), (1, s2))
+    )
     res = evaluate.spectral_points(
         c1, s1, c2, s2, kappa, q1, q2, names=FIELDS[field], dtype=dtype, resolve=True
     )
     res = {k: v[:n] for k, v in res.items()}
     if any((v == UNDECIDED_FLAG).any() for v in res.values()):  # the exact tier never leaves one
         raise RuntimeError("field_codes: a point stayed undecided after exact settlement")
+    return codes_of(field, res)
+
+
+def codes_of(field: str, verdicts: dict) -> np.ndarray:
+    """The codes of ``field`` (module docstring) from its verdicts (:data:`FIELDS`)."""
     if field == "SS":
-        return res["stable_SS"].astype(np.int8)
-    cons = res["consistent_II"].astype(np.int8)
-    return np.where(cons == 1, 1 + res["stable_II"].astype(np.int8), 0).astype(np.int8)
+        return np.asarray(verdicts["stable_SS"]).astype(np.int8)
+    cons = np.asarray(verdicts["consistent_II"]).astype(np.int8)
+    stab = np.asarray(verdicts["stable_II"]).astype(np.int8)
+    return np.where(cons == 1, 1 + stab, 0).astype(np.int8)
+
+
+#: the most sample points per bracket and kernel call of :func:`bisect` (a ``k``-section with
+#: ``k`` up to 64 gains 6 bits a call where few brackets leave a padded batch mostly empty)
+MAX_SECTIONS = 64
+
+
+def _sections(n: int, ratio: float) -> int:
+    """Sections per bracket for ``n`` brackets still ``ratio`` times too long: a power of two
+    that fills one padded batch (:data:`MIN_BATCH`), at most :data:`MAX_SECTIONS`, no more than
+    the ratio needs."""
+    fill = 2 ** max(1, int(math.log2(max(MIN_BATCH // max(n, 1), 2))))
+    need = 2 ** max(1, math.ceil(math.log2(max(ratio, 2.0))))
+    return int(min(MAX_SECTIONS, fill, need))
 
 
 def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float64"):
     """Shrink brackets ``[p, q]`` (``(m, 2)`` arrays of ``(beta1, beta2)`` [rad], codes ``vp != vq``)
     to a length ``<= tol`` [rad]; returns ``(p, q, vp, vq)``.
 
-    The midpoint's certified code replaces the end whose code it equals; a third code replaces
-    ``q`` (the bracket then straddles the boundary between ``vp`` and that code).  The number of
-    halvings is ``ceil(log2(max length / tol))``, the same for every bracket (one kernel call each).
+    Each kernel call evaluates ``k - 1`` points splitting every bracket into ``k`` equal parts
+    (``k = 2``: bisection; larger where few brackets leave the batch mostly padding,
+    :func:`_sections`); the first point whose certified code differs from ``vp`` becomes ``q``
+    (with its code: a third code makes the bracket straddle the boundary between ``vp`` and
+    it), the point before it ``p``.  Repeated until every bracket is ``<= tol`` long.
     """
     p, q = np.array(p, np.float64), np.array(q, np.float64)
     vp, vq = np.array(vp, np.int8), np.array(vq, np.int8)
@@ -107,14 +152,23 @@ def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float6
         raise ValueError(f"tol: must be positive, got {tol!r}")
     if len(p) == 0:
         return p, q, vp, vq
-    longest = float(np.max(np.hypot(*(q - p).T)))
-    for _ in range(max(0, math.ceil(math.log2(longest / tol)))):
-        mid = 0.5 * (p + q)
-        v = field_codes(field, mid[:, 0], mid[:, 1], kappa, q1, q2, dtype=dtype)
-        to_p = v == vp
-        p[to_p] = mid[to_p]
-        q[~to_p], vq[~to_p] = mid[~to_p], v[~to_p]
-    return p, q, vp, vq
+    r = np.arange(len(p))
+    for _ in range(4 * 64):  # each call shrinks by at least 2 while the floats can
+        longest = float(np.max(np.hypot(*(q - p).T)))
+        if longest <= tol:
+            return p, q, vp, vq
+        k = _sections(len(p), longest / tol)
+        t = np.arange(1, k) / k
+        pts = p[:, None, :] + t[None, :, None] * (q - p)[:, None, :]  # (m, k - 1, 2)
+        v = field_codes(field, pts[..., 0], pts[..., 1], kappa, q1, q2, dtype=dtype)
+        differs = np.concatenate([v != vp[:, None], np.ones((len(p), 1), bool)], axis=1)
+        i = differs.argmax(1)  # the first sample off vp's code (k - 1: q itself)
+        inner = i < k - 1
+        new_q = np.where(inner[:, None], pts[r, np.minimum(i, k - 2)], q)
+        vq = np.where(inner, v[r, np.minimum(i, k - 2)], vq).astype(np.int8)
+        p = np.where((i > 0)[:, None], pts[r, np.maximum(i - 1, 0)], p)
+        q = new_q
+    raise RuntimeError(f"tol: brackets did not shrink to {tol!r} rad (float resolution)")
 
 
 def boundary_kind(field: str, a, b) -> np.ndarray:

@@ -46,7 +46,14 @@
    of vertices on a straight class line (``beta_j = k pi/2``, ``beta2 = beta1 + k pi``, SPEC §1)
    are split off as ``on_class_line`` pieces; the junctions, the points where a boundary leaves
    or crosses a class line, and where SS and II boundaries cross are returned as
-   :attr:`Boundaries.points` with their location uncertainty.
+   :attr:`Boundaries.points`.  Where an SS boundary meets a class line the point is located by
+   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`); every
+   other point is an estimate (``proven = False``, ``uncertainty`` NaN).
+7. **Side labels.** Each piece carries the certified codes found just off it on each side and on
+   it (:mod:`atlas.data.boundary_sides`): cut where they change, oriented with the higher code on
+   the left, coincident pieces on a line merged.
+8. **Paths.** Coordinates in ``[0, 2 pi)``, every piece simple, no stretch twice
+   (:mod:`atlas.data.boundary_paths`).
 
 The straight class boundaries themselves are returned in closed form (``field = "class"``,
 :mod:`atlas.data.class_lines`, with the lines' geometry).  The tips of step 5b live in
@@ -58,6 +65,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 import time
 from dataclasses import dataclass
 
@@ -67,7 +75,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
 from atlas.core import brackets
-from atlas.data import boundary_tips, marching
+from atlas.data import boundary_paths, boundary_points, boundary_sides, boundary_tips, marching
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
     LINE_GRADS,
@@ -75,6 +83,7 @@ from atlas.data.class_lines import (
     line_distances,
     line_labels,
     line_values,
+    torus_class_lines,
 )
 from atlas.data.io import check_output_path
 from atlas.data.scene import Scene
@@ -141,7 +150,7 @@ def _hidden_cells(coarse, fine, k: int) -> np.ndarray:
 def _checked_grid(fld, b1, b2, model, check, max_levels, dtype):
     """Axes and certified codes of the grid, refined until no cell hides a branch (step 2)."""
     codes = brackets.field_codes(fld, b1[:, None], b2[None, :], *model, dtype=dtype)
-    hidden, levels = 0, 0
+    hidden, levels = (0 if check > 1 else None), 0  # None: not checked
     while check > 1:
         f1, f2 = _finer(b1, check), _finer(b2, check)
         fine = brackets.field_codes(fld, f1[:, None], f2[None, :], *model, dtype=dtype)
@@ -407,9 +416,7 @@ def _pieces(fld, polys, model, tol, box):
         for (b0, g0), (b1, g1) in zip(runs, runs[1:]):
             if b0 > a and b1 > a:  # a | b0 turns into a | b1: three codes meet in between
                 m, n = xy[g0[-1]], xy[g1[0]]
-                pts.append(
-                    Point(*(0.5 * (m + n)), "junction", 0.5 * float(np.hypot(*(n - m))), *model)
-                )
+                pts.append(Point(*(0.5 * (m + n)), "junction", math.nan, *model))
         for b, g in runs:
             if b > a:
                 sl = slice(*_reaching(g[0], g[-1] + 1, labels))
@@ -467,14 +474,8 @@ def _line_pieces(fld, a, b, cols, model, near):
     for (_, e0, l0), (_, _, l1) in zip(runs, runs[1:]):
         if (l0 >= 0) != (l1 >= 0):
             j = e0 - 1 if l0 >= 0 else e0
-            pts.append(Point(*xy[j], "leaves_class_line", _spacing(xy, j), *model))
+            pts.append(Point(*xy[j], "leaves_class_line", math.nan, *model))
     return curves, pts + _crossings(xy, labels, model)
-
-
-def _spacing(xy, j) -> float:
-    """Distance from vertex ``j`` to its farthest neighbour [rad]."""
-    nb = [xy[i] for i in (j - 1, j + 1) if 0 <= i < len(xy)]
-    return float(max(np.hypot(*(xy[j] - v)) for v in nb)) if nb else math.nan
 
 
 def _crossings(xy, labels, model) -> list[Point]:
@@ -486,7 +487,7 @@ def _crossings(xy, labels, model) -> list[Point]:
     for k, m in zip(*np.nonzero(seg[:, None] & (np.sign(g[:-1]) * np.sign(g[1:]) < 0))):
         t = g[k, m] / (g[k, m] - g[k + 1, m])
         p = xy[k] + t * (xy[k + 1] - xy[k])
-        out.append(Point(*p, "crosses_class_line", float(np.hypot(*(xy[k + 1] - xy[k]))), *model))
+        out.append(Point(*p, "crosses_class_line", math.nan, *model))
     return out
 
 
@@ -498,7 +499,7 @@ def _ends(xy, box, model) -> list[Point]:
     for p in (xy[0], xy[-1]):
         edge = min(p[0] - x0, x1 - p[0], p[1] - y0, y1 - p[1]) <= 0.5 * h
         if not edge:
-            out.append(Point(*p, "end", h * math.sqrt(2), *model))
+            out.append(Point(*p, "end", math.nan, *model))
     return out
 
 
@@ -529,8 +530,7 @@ def _meetings(ss: list[Curve], ii: list[Curve], model, min_sin=1e-3) -> list[Poi
     sin = np.abs(den) / np.maximum(la[i] * lb[j], 1e-300)
     hit = (sin >= min_sin) & (t >= 0) & (t < 1) & (u >= 0) & (u < 1)
     pts = a0[i[hit]] + t[hit, None] * da[hit]
-    unc = np.maximum(la[i[hit]], lb[j[hit]])
-    return [Point(*p, "SS_meets_II", float(e), *model) for p, e in zip(pts, unc)]
+    return [Point(*p, "SS_meets_II", math.nan, *model) for p in pts]
 
 
 # --- drivers -------------------------------------------------------------------------------------
@@ -552,7 +552,8 @@ def slice_boundaries(
 ) -> Boundaries:
     """The boundary curves of one slice ``(kappa, q1, q2)`` over the grid ``beta1 x beta2``
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
-    _check_args(tol, chord, check, max_levels, fields)
+    shape = (np.size(beta1), np.size(beta2))
+    _check_args(tol, chord, check, max_levels, fields, shape)
     model = (float(kappa), float(q1), float(q2))
     out = Boundaries()
     by_field = {}
@@ -577,6 +578,12 @@ def slice_boundaries(
         if spiked:
             unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
         curves, pts = _pieces(fld, polys, model, tol, box)
+        curves, dropped = boundary_sides.label_pieces(fld, curves, model, tol, near, dtype)
+        curves, retraced = boundary_paths.simple_paths(curves, chord)
+        for p in pts:
+            p.field = fld
+        if fld == "SS":
+            pts = _proven_line_points(pts, polys.xy, model, chord, cell)
         by_field[fld] = curves
         out.curves += curves
         out.points += pts
@@ -584,26 +591,77 @@ def slice_boundaries(
         out.attrs[f"{fld}_refined_levels"] = levels
         out.attrs[f"{fld}_hidden_cells"] = hidden
         out.attrs[f"{fld}_unrefined_segments"] = unrefined
+        out.attrs[f"{fld}_unlabelled_segments"] = dropped
+        out.attrs[f"{fld}_retraced_vertices"] = retraced
         out.attrs[f"{fld}_tips_attached"] = attached + spiked
         out.attrs[f"{fld}_tips_unreached"] = boundary_tips.unreached(tips, polys.xy, cell)
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
+        if out.attrs[f"{fld}_max_bracket"] > tol:  # bisect shrinks every bracket to <= tol
+            raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
         out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0
     out.points += _meetings(by_field.get("SS", []), by_field.get("II", []), model)
+    for p in out.points:
+        p.beta1, p.beta2 = float(p.beta1) % TWO_PI, float(p.beta2) % TWO_PI
     return out
 
 
-def _check_args(tol, chord, check, max_levels, fields):
-    if not (isinstance(tol, (int, float)) and 0 < tol < 0.1):
-        raise ValueError(f"tol: must be in (0, 0.1) rad, got {tol!r}")
-    if not (isinstance(chord, (int, float)) and tol <= chord):
-        raise ValueError(f"chord: must be >= tol ({tol}), got {chord!r}")
-    if not (isinstance(check, int) and check >= 0):
-        raise ValueError(f"check: must be a non-negative integer, got {check!r}")
-    if not (isinstance(max_levels, int) and max_levels >= 0):
-        raise ValueError(f"max_levels: must be a non-negative integer, got {max_levels!r}")
+def _proven_line_points(pts, xy, model, chord, cell) -> list[Point]:
+    """The SS points where a boundary meets a class line with proven enclosures
+    (:mod:`atlas.data.boundary_points`), replacing the estimated ``leaves_class_line`` and
+    ``crosses_class_line`` points within a grid ``cell`` of one."""
+    proven = boundary_points.ss_line_points(xy, model, reach=max(16 * chord, 1e-4))
+    if not proven:
+        return pts
+    tree = cKDTree([[p.beta1, p.beta2] for p in proven])
+    kinds = ("leaves_class_line", "crosses_class_line")
+    kept = [p for p in pts if p.kind not in kinds or tree.query([p.beta1, p.beta2])[0] > cell]
+    return kept + proven
+
+
+#: the smallest vertex tolerance [rad]: a bracket between float coordinates near ``2 pi``
+#: (spacing 8.9e-16 rad) cannot be shrunk reliably below a few units in the last place
+MIN_TOL = 2.0**-47
+#: the largest resampling factor of the lost-branch check and its refinement levels
+MAX_CHECK, MAX_LEVELS = 16, 4
+#: the smallest chord tolerance [rad]: below it a curve needs ~1e6 vertices per radian
+MIN_CHORD = 1e-9
+#: bytes per point of the finest checked grid (nodes, codes, kernel batches), and the limit [B]
+BYTES_PER_POINT, MEMORY_LIMIT = 64, 4 << 30
+
+
+def check_memory(n1: int, n2: int, check: int, max_levels: int) -> int:
+    """Worst-case bytes of the lost-branch check on an ``n1 x n2`` grid: the grid refined
+    ``max_levels`` times by ``check`` and resampled once more."""
+    k = max(check, 1) ** (max_levels + 1) if check > 1 else 1
+    return BYTES_PER_POINT * (n1 * k) * (n2 * k)
+
+
+def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)):
+    """One-line ``ValueError`` naming the first bad argument."""
+    num = (int, float)
+    if not (isinstance(tol, num) and MIN_TOL <= tol < 0.1):
+        raise ValueError(
+            f"tol: must be in [{MIN_TOL:.3g}, 0.1) rad (float coordinates near 2 pi cannot "
+            f"resolve a smaller bracket), got {tol!r}"
+        )
+    if not (isinstance(chord, num) and max(tol, MIN_CHORD) <= chord <= 0.1):
+        raise ValueError(f"chord: must be in [max(tol, {MIN_CHORD:g}), 0.1] rad, got {chord!r}")
+    if not (isinstance(check, int) and 0 <= check <= MAX_CHECK):
+        raise ValueError(f"check: must be an integer in [0, {MAX_CHECK}], got {check!r}")
+    if not (isinstance(max_levels, int) and 0 <= max_levels <= MAX_LEVELS):
+        raise ValueError(f"max_levels: must be an integer in [0, {MAX_LEVELS}], got {max_levels!r}")
     bad = [f for f in fields if f not in brackets.FIELDS]
     if bad or not fields:
         raise ValueError(f"fields: must be a non-empty subset of {list(brackets.FIELDS)}")
+    for name, n in zip(("beta1", "beta2"), shape):
+        if n < 2:
+            raise ValueError(f"{name}: needs at least 2 values for a grid of cells, got {n}")
+    need = check_memory(*shape, check, max_levels)
+    if need > MEMORY_LIMIT:
+        raise ValueError(
+            f"check: {check} on a {shape[0]}x{shape[1]} grid may need {need / 2**30:.1f} GiB "
+            f"(limit {MEMORY_LIMIT / 2**30:.0f} GiB); use a smaller check or grid"
+        )
 
 
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
@@ -631,7 +689,9 @@ def boundaries(source, **options) -> Boundaries:
     (the atlas's ``beta1 x beta2`` grid; options as :func:`slice_boundaries`), plus the
     closed-form class lines once."""
     b1, b2, models = _slices(source)
-    out = Boundaries(curves=class_lines((b1.min(), b1.max()), (b2.min(), b2.max())))
+    torus = all(_wrapped(np.sort(b)).size > b.size for b in (b1, b2))
+    box = ((b1.min(), b1.max()), (b2.min(), b2.max()))
+    out = Boundaries(curves=torus_class_lines() if torus else class_lines(*box))
     t0 = time.perf_counter()
     for model in models:
         one = slice_boundaries(b1, b2, *model, **options)
@@ -640,7 +700,9 @@ def boundaries(source, **options) -> Boundaries:
         out.attrs.setdefault("slices", []).append(
             dict(zip(("kappa", "q1", "q2"), model)) | one.attrs
         )
+    args = ", ".join(f"{k}={v!r}" for k, v in sorted(options.items()))
     out.attrs.update(
+        history=f"atlas.boundaries({args}) over {len(models)} slice(s)",
         tolerance=options.get("tol", TOL),
         chord_tolerance=options.get("chord", CHORD),
         seconds=time.perf_counter() - t0,
@@ -662,9 +724,12 @@ def run_cli(
 ) -> int:
     """``atlas boundaries --beta1 R --beta2 R --kappa V [--q V | --q1 V --q2 V] [--out F.nc]
     [--csv F.csv] [--geojson F.json]``."""
-    for path in (out, csv, geojson):
-        if path is not None:
-            check_output_path(path, overwrite)
+    paths = [p for p in (out, csv, geojson) if p is not None]
+    real = [os.path.realpath(p) for p in paths]
+    if len(set(real)) < len(real):
+        raise ValueError("out: --out, --csv and --geojson must be different files")
+    for path in paths:
+        check_output_path(path, overwrite)
     scene = Scene(**{k: v for k, v in axes.items() if v is not None})
     names = tuple(f.strip() for f in fields.split(",") if f.strip())
     bd = boundaries(scene, fields=names, tol=tol, chord=chord, check=check, dtype=dtype)

@@ -9,6 +9,7 @@ node coordinates ``node_beta1``/``node_beta2`` [rad]) plus the codimension-2 poi
 from __future__ import annotations
 
 import collections
+import datetime
 import json
 import math
 from dataclasses import dataclass, field
@@ -18,14 +19,43 @@ import xarray as xr
 
 from atlas.core import brackets
 from atlas.core.config import __version__
+from atlas.data.engine import REFERENCES
 from atlas.data.io import atomic_path, atomic_write_text
 
-__all__ = ["CHORD", "TOL", "Boundaries", "Curve", "Point", "summary"]
+__all__ = ["CHORD", "CSV_COLUMNS", "TOL", "Boundaries", "Curve", "Point", "summary"]
 
 #: default certified vertex tolerance (bracket length) [rad]
 TOL = 1e-10
 #: default chord tolerance (measured sagitta between vertices) [rad]
 CHORD = 1e-6
+#: the columns of :meth:`Boundaries.to_csv`: ``record`` ``vertex`` (one row per curve vertex, in
+#: order along the curve) or ``point`` (a codimension-2 point); ``curve`` the curve's index;
+#: ``field`` ``SS``/``II``/``class``; ``kind`` the curve kind (``SS_stability``,
+#: ``II_consistency``, ``II_stability``, ``class_line``) or point kind; ``side_left``,
+#: ``side_right``, ``side_on`` the codes left / right of the direction of travel and on the curve
+#: (-1: none; SS 0 unstable, 1 stable, 2 neutral; II 0 inconsistent, 1 consistent and unstable,
+#: 2 consistent and stable, 3 consistent and neutral); ``on_class_line`` 0/1; ``kappa, q1, q2``
+#: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad]
+#: (``nan``: a point where the curve crosses a seam, interpolated on its segment);
+#: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1
+CSV_COLUMNS = (
+    "record",
+    "curve",
+    "field",
+    "kind",
+    "side_left",
+    "side_right",
+    "side_on",
+    "on_class_line",
+    "kappa",
+    "q1",
+    "q2",
+    "beta1",
+    "beta2",
+    "bracket",
+    "uncertainty",
+    "proven",
+)
 
 
 @dataclass
@@ -33,17 +63,21 @@ class Curve:
     """One boundary polyline: ``vertices`` ``(m, 2)`` of ``(beta1, beta2)`` [rad].
 
     ``field``: ``"SS"``, ``"II"`` or ``"class"``; ``kind``: ``SS_stability``, ``II_consistency``,
-    ``II_stability`` or ``class_line``; ``side_a``/``side_b``: the field codes on its two sides
-    (:data:`atlas.core.brackets.FIELD_LABELS`; -1 for class lines); ``bracket``: per vertex, the
-    length of its certified bracket [rad] (0 for the closed-form class lines); ``ends``: per
-    vertex the bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint), ``None`` for
-    class lines.
+    ``II_stability`` or ``class_line``; ``side_left``/``side_right``: the certified field codes
+    (:data:`atlas.core.brackets.FIELD_LABELS`) found just off every vertex to the left and to the
+    right of the direction of travel, the higher code on the left (-1 for class lines);
+    ``side_on``: the code on the piece itself where it lies on a class line and differs from both
+    sides, else -1 (:mod:`atlas.data.boundary_sides`); ``bracket``: per vertex, the length of its
+    certified bracket [rad] (0 for the closed-form class lines; NaN for a point where the curve
+    crosses a seam of the torus, interpolated on its segment); ``ends``: per vertex the
+    bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint; NaN at a seam point),
+    ``None`` for class lines.
     """
 
     field: str
     kind: str
-    side_a: int
-    side_b: int
+    side_left: int
+    side_right: int
     vertices: np.ndarray
     bracket: np.ndarray
     on_class_line: bool = False
@@ -51,11 +85,16 @@ class Curve:
     q1: float = math.nan
     q2: float = math.nan
     ends: np.ndarray | None = None
+    side_on: int = -1
 
 
 @dataclass
 class Point:
-    """A codimension-2 point: where boundaries meet, cross a class line, or end."""
+    """A codimension-2 point: where boundaries meet, cross or touch a class line, or end.
+
+    ``proven``: the true point lies within ``uncertainty`` [rad] (Euclidean) of ``(beta1,
+    beta2)``, a proven enclosure; else ``uncertainty`` is NaN and the position is an estimate
+    (no bound is claimed).  ``field``: the field whose boundary it is on (``""``: both)."""
 
     beta1: float
     beta2: float
@@ -64,6 +103,8 @@ class Point:
     kappa: float = math.nan
     q1: float = math.nan
     q2: float = math.nan
+    proven: bool = False
+    field: str = ""
 
 
 @dataclass
@@ -92,17 +133,23 @@ class Boundaries:
             self.to_dataset().to_netcdf(tmp)
 
     def to_csv(self, path) -> None:
-        """One row per vertex: ``curve,field,kind,side_a,side_b,kappa,q1,q2,beta1,beta2,bracket``."""
-        rows = ["curve,field,kind,side_a,side_b,on_class_line,kappa,q1,q2,beta1,beta2,bracket"]
+        """One row per curve vertex, then one per codimension-2 point (:data:`CSV_COLUMNS`)."""
+        rows = [",".join(CSV_COLUMNS)]
         for i, c in enumerate(self.curves):
             head = (
-                f"{i},{c.field},{c.kind},{c.side_a},{c.side_b},{int(c.on_class_line)},"
-                f"{float(c.kappa)!r},{float(c.q1)!r},{float(c.q2)!r}"
+                f"vertex,{i},{c.field},{c.kind},{c.side_left},{c.side_right},{c.side_on},"
+                f"{int(c.on_class_line)},{float(c.kappa)!r},{float(c.q1)!r},{float(c.q2)!r}"
             )
             rows += [
-                f"{head},{x!r},{y!r},{w!r}"
+                f"{head},{x!r},{y!r},{w!r},,"
                 for (x, y), w in zip(c.vertices.tolist(), c.bracket.tolist())
             ]
+        for p in self.points:
+            unc = "" if not p.proven else repr(float(p.uncertainty))
+            rows.append(
+                f"point,,{p.field},{p.kind},,,,,{float(p.kappa)!r},{float(p.q1)!r},"
+                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)}"
+            )
         atomic_write_text(path, "\n".join(rows) + "\n")
 
     def to_geojson(self, path) -> None:
@@ -137,13 +184,14 @@ def _curve_props(c: Curve) -> dict:
     props = {
         "field": c.field,
         "kind": c.kind,
-        "side_a": labels.get(c.side_a, ""),
-        "side_b": labels.get(c.side_b, ""),
+        "side_left": labels.get(c.side_left, ""),
+        "side_right": labels.get(c.side_right, ""),
+        "side_on": labels.get(c.side_on, ""),
         "on_class_line": bool(c.on_class_line),
         "kappa": c.kappa,
         "q1": c.q1,
         "q2": c.q2,
-        "max_bracket": float(np.max(c.bracket)),
+        "max_bracket": float(np.nanmax(c.bracket, initial=0.0)),
     }
     return _json(props)
 
@@ -156,13 +204,39 @@ def _feature(kind, coords, props) -> dict:
     }
 
 
+#: the meanings of the side codes, for the ``comment`` of the side variables
+CODE_MEANINGS = (
+    "-1: none; field SS: 0 unstable, 1 stable, 2 neutral; field II: 0 inconsistent, "
+    "1 consistent and unstable, 2 consistent and stable, 3 consistent and neutral"
+)
+
+
 def _to_dataset(bd: Boundaries) -> xr.Dataset:
     cs, ps = bd.curves, bd.points
     geo = {"geometry": "boundary_geometry"}
     rad = {"units": "rad"}
+    one = {"units": "1"}
     per = lambda attr: np.array([getattr(c, attr) for c in cs])  # noqa: E731
     pp = lambda attr: np.array([getattr(p, attr) for p in ps])  # noqa: E731
     nodes = np.concatenate([c.vertices for c in cs]) if cs else np.zeros((0, 2))
+
+    def side(which):
+        return (
+            "curve",
+            per(f"side_{which}").astype(np.int8),
+            geo
+            | {
+                "long_name": f"certified field code {which} of the curve"
+                + (" (direction of travel)" if which != "on" else " where it differs from both"),
+                "comment": CODE_MEANINGS,
+            },
+        )
+
+    def model(of, attr, name):
+        data = (pp if of == "point" else per)(attr).astype(float)
+        return (of, data, one | {"long_name": f"{name} of the {of}'s slice"})
+
+    flag = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"}
     ds = xr.Dataset(
         {
             "boundary_geometry": (
@@ -172,37 +246,72 @@ def _to_dataset(bd: Boundaries) -> xr.Dataset:
                     "geometry_type": "line",
                     "node_count": "node_count",
                     "node_coordinates": "node_beta1 node_beta2",
+                    "long_name": "geometry container of the boundary curves",
                 },
             ),
-            "node_count": ("curve", np.array([len(c.vertices) for c in cs], np.int32)),
+            "node_count": (
+                "curve",
+                np.array([len(c.vertices) for c in cs], np.int32),
+                {"long_name": "number of vertices of each curve"},
+            ),
             "node_beta1": ("node", nodes[:, 0], rad | {"axis": "X", "long_name": "beta1"}),
             "node_beta2": ("node", nodes[:, 1], rad | {"axis": "Y", "long_name": "beta2"}),
             "node_bracket": (
                 "node",
                 np.concatenate([c.bracket for c in cs]) if cs else np.zeros(0),
-                rad | {"long_name": "length of the certified bracket of the vertex"},
+                rad
+                | {
+                    "long_name": "length of the certified bracket of the vertex",
+                    "comment": "NaN: a point where the curve crosses a seam of the torus, "
+                    "interpolated on its segment (no bracket)",
+                },
             ),
-            "curve_field": ("curve", per("field").astype(str), geo),
-            "curve_kind": ("curve", per("kind").astype(str), geo),
-            "curve_side_a": ("curve", per("side_a").astype(np.int8), geo),
-            "curve_side_b": ("curve", per("side_b").astype(np.int8), geo),
-            "curve_on_class_line": ("curve", per("on_class_line").astype(np.int8), geo),
-            "curve_kappa": ("curve", per("kappa").astype(float), geo),
-            "curve_q1": ("curve", per("q1").astype(float), geo),
-            "curve_q2": ("curve", per("q2").astype(float), geo),
-            "point_beta1": ("point", pp("beta1").astype(float), rad),
-            "point_beta2": ("point", pp("beta2").astype(float), rad),
-            "point_kind": ("point", pp("kind").astype(str)),
-            "point_uncertainty": ("point", pp("uncertainty").astype(float), rad),
-            "point_kappa": ("point", pp("kappa").astype(float)),
-            "point_q1": ("point", pp("q1").astype(float)),
-            "point_q2": ("point", pp("q2").astype(float)),
+            "curve_field": ("curve", per("field").astype(str), geo | {"long_name": "field"}),
+            "curve_kind": ("curve", per("kind").astype(str), geo | {"long_name": "boundary kind"}),
+            "curve_side_left": side("left"),
+            "curve_side_right": side("right"),
+            "curve_side_on": side("on"),
+            "curve_on_class_line": (
+                "curve",
+                per("on_class_line").astype(np.int8),
+                geo | flag | {"long_name": "the curve lies on a class line"},
+            ),
+            "curve_kappa": model("curve", "kappa", "kappa"),
+            "curve_q1": model("curve", "q1", "q1"),
+            "curve_q2": model("curve", "q2", "q2"),
+            "point_beta1": ("point", pp("beta1").astype(float), rad | {"long_name": "beta1"}),
+            "point_beta2": ("point", pp("beta2").astype(float), rad | {"long_name": "beta2"}),
+            "point_kind": ("point", pp("kind").astype(str), {"long_name": "point kind"}),
+            "point_field": ("point", pp("field").astype(str), {"long_name": "field"}),
+            "point_uncertainty": (
+                "point",
+                pp("uncertainty").astype(float),
+                rad
+                | {
+                    "long_name": "proven bound on the distance to the true point",
+                    "comment": "NaN where point_proven is 0: the position is an estimate",
+                },
+            ),
+            "point_proven": (
+                "point",
+                pp("proven").astype(np.int8),
+                flag | {"long_name": "the point has a proven enclosure"},
+            ),
+            "point_kappa": model("point", "kappa", "kappa"),
+            "point_q1": model("point", "q1", "q1"),
+            "point_q2": model("point", "q2", "q2"),
         }
     )
+    for v in ds.variables.values():
+        if v.dtype.kind == "f":
+            v.encoding["_FillValue"] = None  # no missing values: NaN means "not proven"
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     ds.attrs.update(
         Conventions="CF-1.10",
         title="painleve-atlas boundary curves",
         source=f"painleve-atlas {__version__}",
+        history=f"{now}: {bd.attrs.get('history', 'atlas.boundaries')}",
+        references=REFERENCES,
         tolerance=float(bd.attrs.get("tolerance", TOL)),
         chord_tolerance=float(bd.attrs.get("chord_tolerance", CHORD)),
         field_labels=json.dumps({k: v for k, v in brackets.FIELD_LABELS.items()}),
@@ -225,7 +334,8 @@ def summary(bd: Boundaries) -> str:
     pts = collections.Counter(p.kind for p in bd.points)
     lines += [f"  point {k}: {n}" for k, n in sorted(pts.items())]
     for s in bd.attrs.get("slices", []):
-        hidden = sum(v for k, v in s.items() if k.endswith("hidden_cells"))
+        counts = [v for k, v in s.items() if k.endswith("hidden_cells")]
+        hidden = "not checked" if None in counts else sum(counts)
         lines.append(
             f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden}"
         )

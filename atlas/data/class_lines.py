@@ -17,6 +17,7 @@ __all__ = [
     "line_frames",
     "line_labels",
     "line_values",
+    "torus_class_lines",
 ]
 
 TWO_PI = 2 * math.pi
@@ -37,6 +38,23 @@ def class_lines(b1_range=(0.0, TWO_PI), b2_range=(0.0, TWO_PI)) -> list[Curve]:
         lo, hi = max(x0, y0 - k * math.pi), min(x1, y1 - k * math.pi)
         if lo < hi:
             segs.append([[lo, lo + k * math.pi], [hi, hi + k * math.pi]])
+    return [
+        Curve("class", "class_line", -1, -1, np.array(s, float), np.zeros(2), on_class_line=True)
+        for s in segs
+    ]
+
+
+def torus_class_lines() -> list[Curve]:
+    """The class lines of the whole torus ``[0, 2 pi)^2`` [rad], each once: ``beta1, beta2 = k pi/2``
+    (``k = 0..3``), ``beta2 = beta1`` and ``beta2 = beta1 + pi`` (in two parts, ``beta2 = beta1
+    + pi`` and ``beta2 = beta1 - pi``), ending a float short of ``2 pi``."""
+    end = math.nextafter(TWO_PI, 0.0)
+    segs = []
+    for k in range(4):
+        v = k * math.pi / 2
+        segs += [[[v, 0.0], [v, end]], [[0.0, v], [end, v]]]
+    segs += [[[0.0, 0.0], [end, end]], [[0.0, math.pi], [math.pi, end]]]
+    segs += [[[math.pi, 0.0], [end, math.pi]]]
     return [
         Curve("class", "class_line", -1, -1, np.array(s, float), np.zeros(2), on_class_line=True)
         for s in segs

@@ -30,6 +30,7 @@ _MARKERS = {
     "junction": "ks",
     "leaves_class_line": "r.",
     "crosses_class_line": "g+",
+    "touches_class_line": "b^",
     "SS_meets_II": "m*",
     "end": "kx",
 }

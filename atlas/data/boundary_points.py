@@ -1,0 +1,178 @@
+"""Proven enclosures of the points where an SS boundary meets a class line (codimension 2).
+
+On a class line the SS boundary's defining polynomials become univariate: with ``t = tan(beta /
+2)`` along the line (``cos beta = (1 - t^2) / (1 + t^2)``, ``sin beta = 2 t / (1 + t^2)``) each is
+a rational function of ``t`` with exact rational coefficients (``kappa, q1, q2`` read as exact
+dyadic rationals), whose numerator ``R(t)`` is factored over Q (python-flint).  A real root of a
+factor of multiplicity 1 is a transversal crossing of that component with the line
+(``crosses_class_line``); of even multiplicity, a tangency (``touches_class_line``: the boundary
+leaves the line tangentially).  Arb root isolation gives a certified interval of ``t``, and
+``beta = 2 atan(t)`` in ball arithmetic a certified interval of the angle: the stated uncertainty
+is its radius, a proven bound.
+
+The components (characteristic polynomial ``l^4 + a3 l^3 + a2 l^2 + a1 l + a0``, paper eq. 9,
+:mod:`atlas.core.exact`): ``a3 = q1 c1 + q2 s2``, ``a2 = kappa c1 + s2 + q1 q2 D``, ``a1 = (q1 +
+kappa q2) D``, ``a0 = kappa D`` with ``D = c1 s2 - s1 c2``.  Damped, SS is stable iff the
+Routh-Hurwitz minors are positive, and the boundary lies on ``a3 = 0``, ``H2 = a3 a2 - a1 = 0`` or
+``G = (q1 + kappa q2) H2 - kappa a3^2 = 0`` (``H3 = D G``) or a class line ``D = 0``; undamped
+(``q1 = q2 = 0``) on ``a2 = 0`` or ``disc = a2^2 - 4 a0 = (kappa c1 - s2)^2 + 4 kappa s1 c2 = 0``.
+Only roots within ``reach`` of a traced boundary vertex are reported (a component's zero set is a
+boundary only where the other minors allow it); ``beta = pi`` (``t`` infinite) is not covered.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import flint
+import numpy as np
+from scipy.spatial import cKDTree
+
+from atlas.data.boundary_curves import Point
+
+__all__ = ["ss_line_points", "line_polynomials"]
+
+TWO_PI = 2 * math.pi
+
+
+class _Rat:
+    """``num / (1 + t^2)^k``: a polynomial in the line parameter over a power of ``1 + t^2``."""
+
+    W = flint.fmpq_poly([1, 0, 1])
+
+    def __init__(self, num, k=0):
+        self.num, self.k = flint.fmpq_poly(num), k
+
+    def _lift(self, k):
+        return self.num * self.W ** (k - self.k)
+
+    def __add__(self, o):
+        o = o if isinstance(o, _Rat) else _Rat([o])
+        k = max(self.k, o.k)
+        return _Rat(self._lift(k) + o._lift(k), k)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return _Rat(-self.num, self.k)
+
+    def __sub__(self, o):
+        return self + (-o)
+
+    def __rsub__(self, o):
+        return (-self) + o
+
+    def __mul__(self, o):
+        o = o if isinstance(o, _Rat) else _Rat([o])
+        return _Rat(self.num * o.num, self.k + o.k)
+
+    __rmul__ = __mul__
+
+
+_COS = _Rat([1, 0, -1], 1)
+_SIN = _Rat([0, 2], 1)
+_AXES = {0: (1, 0), 1: (0, 1), 2: (-1, 0), 3: (0, -1), 4: (1, 0)}
+
+
+def _on_line(m):
+    """``(c1, s1, c2, s2)`` along class line ``m`` (columns of
+    :func:`atlas.data.class_lines.line_distances`) as functions of ``t = tan(beta / 2)``, ``beta``
+    the line's free angle (``beta2`` on ``beta1 = k pi/2``, else ``beta1``)."""
+    if m < 5:
+        return (*_AXES[m], _COS, _SIN)
+    if m < 10:
+        return (_COS, _SIN, *_AXES[m - 5])
+    sign = 1 if m == 11 else -1
+    return _COS, _SIN, sign * _COS, sign * _SIN
+
+
+def _components(c1, s1, c2, s2, kappa, q1, q2) -> dict:
+    """The SS boundary's defining polynomials (module docstring) at the given values."""
+    D = c1 * s2 - s1 * c2
+    a2 = kappa * c1 + s2 + q1 * q2 * D
+    if q1 == 0 and q2 == 0:
+        return {"a2": a2, "disc": a2 * a2 - 4 * kappa * D}
+    a3 = q1 * c1 + q2 * s2
+    H2 = a3 * a2 - (q1 + kappa * q2) * D
+    return {"a3": a3, "H2": H2, "G": (q1 + kappa * q2) * H2 - kappa * a3 * a3}
+
+
+def line_polynomials(m, kappa, q1, q2) -> dict:
+    """Per component, the numerator ``R(t)`` (``flint.fmpq_poly``) of its restriction to class
+    line ``m``; identically zero components (the line lies in them) are left out."""
+    model = [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in (kappa, q1, q2)]
+    comps = _components(*_on_line(m), *model)
+    return {k: v.num for k, v in comps.items() if isinstance(v, _Rat) and v.num != 0}
+
+
+def _real_roots(R) -> list[tuple[flint.arb, int]]:
+    """Certified real roots of ``R`` (arb balls of ``t``) with their multiplicity."""
+    out = []
+    _, factors = R.factor()
+    for f, mult in factors:
+        num = flint.fmpz_poly([int(c * f.denom()) for c in f.coeffs()])
+        for z, _ in num.complex_roots():
+            if z.imag == 0:  # flint isolates real roots with an exactly zero imaginary part
+                out.append((z.real, mult))
+    return out
+
+
+def _angle(t: flint.arb) -> flint.arb:
+    """``2 atan(t)`` wrapped into ``[0, 2 pi)`` as a ball [rad]."""
+    beta = 2 * t.atan()
+    return beta + 2 * flint.arb.pi() if beta.mid() < 0 else beta
+
+
+def _point_xy(m, beta: float) -> tuple[float, float]:
+    if m < 5:
+        return m * math.pi / 2 % TWO_PI, beta
+    if m < 10:
+        return beta, (m - 5) * math.pi / 2 % TWO_PI
+    return beta, (beta + (m - 11) * math.pi) % TWO_PI
+
+
+#: the class lines of the torus: ``beta = 2 pi`` (columns 4 and 9) is ``beta = 0``, and
+#: ``beta2 = beta1 - pi`` (column 10) is ``beta2 = beta1 + pi``
+TORUS_LINES = (0, 1, 2, 3, 5, 6, 7, 8, 11, 12)
+
+
+def _line_roots(m, model) -> list[tuple[flint.arb, int]]:
+    """The certified angles (balls [rad]) where the components vanish on line ``m``, each with
+    its largest multiplicity over the components whose enclosures overlap it (at ``q = 0`` the
+    trace ``a2`` vanishes simply where ``disc`` touches a diagonal)."""
+    out = []
+    for R in line_polynomials(m, *model).values():
+        for t, mult in _real_roots(R):
+            beta = _angle(t)
+            same = [k for k, (b, _) in enumerate(out) if b.overlaps(beta)]
+            if not same:
+                out.append((beta, mult))
+                continue
+            k = same[0]
+            b, mu = out[k]
+            out[k] = (beta if beta.rad() < b.rad() else b, max(mu, mult))
+    return out
+
+
+def ss_line_points(vertices, model, reach, lines=TORUS_LINES) -> list[Point]:
+    """Proven points where the SS boundary meets the class lines ``lines`` (indices ``m``):
+    roots of the components' restrictions within ``reach`` [rad] of a traced SS vertex
+    (``vertices``, ``(n, 2)``); kind ``touches_class_line`` (even multiplicity) or
+    ``crosses_class_line``.  The uncertainty bounds the distance of the stated point to the
+    true one: the radius of the certified angle interval plus the rounding of the stated
+    coordinates, times ``sqrt 2`` on a diagonal (both coordinates move)."""
+    if not len(vertices):
+        return []
+    tree = cKDTree(np.mod(vertices, TWO_PI), boxsize=TWO_PI + 1e-9)
+    out = []
+    for m in lines:
+        for beta, mult in _line_roots(m, model):
+            mid = float(beta.mid()) % TWO_PI
+            x, y = _point_xy(m, mid)
+            if tree.query([x % TWO_PI, y % TWO_PI])[0] > reach:
+                continue
+            unc = (float(beta.rad()) + 4 * math.ulp(TWO_PI)) * (math.sqrt(2) if m >= 10 else 1.0)
+            kind = "touches_class_line" if mult % 2 == 0 else "crosses_class_line"
+            out.append(Point(x, y, kind, unc, *model, proven=True, field="SS"))
+    return out

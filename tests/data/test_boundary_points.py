@@ -1,0 +1,111 @@
+"""Proven enclosures of the points where the SS boundary meets a class line, against 50-digit
+references: the closed form at q = 0 and mpmath roots of the Hurwitz minors when damped."""
+
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+from atlas.data import boundaries as bd
+from atlas.data import boundary_points as bp
+
+PI = math.pi
+mp.mp.dps = 50
+
+
+def _on_line(m, beta):
+    """``(c1, s1, c2, s2)`` at angle ``beta`` along class line ``m`` (mpmath)."""
+    c, s = mp.cos(beta), mp.sin(beta)
+    axes = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 0)]
+    if m < 5:
+        return (*axes[m], c, s)
+    if m < 10:
+        return (c, s, *axes[m - 5])
+    sign = 1 if m == 11 else -1
+    return c, s, sign * c, sign * s
+
+
+def _minors(m, beta, kappa, q1, q2):
+    """The SS boundary's candidate functions at ``beta`` on line ``m``, from the characteristic
+    polynomial p(l) = (l^2 + c1 d1)(l^2 + s2 d2) - c2 s1 d1 d2 (d1 = kappa + q1 l, d2 = 1 + q2 l)
+    expanded here in mpmath (coefficients of l^3 .. l^0)."""
+    c1, s1, c2, s2 = _on_line(m, beta)
+    kappa, q1, q2 = (mp.mpf(float(v)) for v in (kappa, q1, q2))
+
+    def mul(a, b):
+        out = [mp.mpf(0)] * (len(a) + len(b) - 1)
+        for i, x in enumerate(a):
+            for j, y in enumerate(b):
+                out[i + j] += x * y
+        return out
+
+    d1, d2 = [kappa, q1], [mp.mpf(1), q2]
+    h1 = [c1 * d1[0], c1 * d1[1], mp.mpf(1)]
+    h2 = [s2 * d2[0], s2 * d2[1], mp.mpf(1)]
+    p = [x - c2 * s1 * y for x, y in zip(mul(h1, h2), mul(d1, d2) + [0, 0])]
+    a0, a1, a2, a3 = p[:4]
+    if q1 == 0 and q2 == 0:
+        return [a2, a2 * a2 - 4 * a0]
+    H2 = a3 * a2 - a1
+    D = c1 * s2 - s1 * c2
+    return [a3, H2, a1 * H2 - a3 * a3 * a0 if D != 0 else (q1 + kappa * q2) * H2 - kappa * a3**2]
+
+
+def _line_of(p):
+    """The class line ``m`` of a point and its angle along it (``beta2 = beta1 - pi`` is
+    ``beta2 = beta1 + pi`` on the torus)."""
+    for k in range(4):
+        if p.beta1 == k * PI / 2:
+            return k, p.beta2
+        if p.beta2 == k * PI / 2:
+            return 5 + k, p.beta1
+    d = (p.beta2 - p.beta1) % (2 * PI)
+    return (11 if min(d, 2 * PI - d) < 1e-9 else 12), p.beta1
+
+
+def _reference(p, model):
+    """The 50-digit angle of ``p`` along its line: a root of the candidate function that is
+    smallest there (of its derivative for a tangency, a double root)."""
+    m, beta = _line_of(p)
+    k = int(np.argmin([abs(f) for f in _minors(m, mp.mpf(beta), *model)]))
+    f = lambda b: _minors(m, b, *model)[k]  # noqa: E731
+    g = (lambda b: mp.diff(f, b)) if p.kind == "touches_class_line" else f
+    return m, mp.findroot(g, mp.mpf(beta))
+
+
+def _ratios(points, model):
+    out = []
+    for p in points:
+        m, ref = _reference(p, model)
+        err = abs(ref - mp.mpf(p.beta1 if m >= 5 else p.beta2)) * (mp.sqrt(2) if m >= 10 else 1)
+        out.append(float(err / p.uncertainty))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("kappa", [0.5, 2.0])
+def test_q0_tangencies_are_the_closed_form(kappa):
+    """q = 0: the discriminant curve (kappa C1 - S2)^2 + 4 kappa S1 C2 = 0 touches beta2 = beta1
+    where kappa cos + sin = 0 (disc = (kappa C + S)^2 there) and beta2 = beta1 + pi where
+    kappa cos = sin; each proven enclosure holds the 50-digit closed form."""
+    vertices = np.array([[t, t] for t in (PI - math.atan(kappa), 2 * PI - math.atan(kappa))])
+    vertices = np.concatenate([vertices, [[t, t + PI] for t in (math.atan(kappa),)]])
+    pts = bp.ss_line_points(vertices, (kappa, 0.0, 0.0), reach=1e-3)
+    touch = [p for p in pts if p.kind == "touches_class_line"]
+    assert len(touch) == 3 and all(p.proven for p in touch)
+    want = [PI - mp.atan(kappa), 2 * mp.pi - mp.atan(kappa), mp.atan(kappa)]
+    for p in touch:
+        err = min(abs(mp.mpf(p.beta1) - w) for w in want) * mp.sqrt(2)
+        assert 0 < p.uncertainty < 1e-13 and err <= p.uncertainty
+
+
+def test_points_of_a_slice_hold_their_enclosures():
+    """Every proven point of two 32 x 32 slices lies within its uncertainty of the mpmath
+    reference; the other points state no number."""
+    g = np.arange(32) * 2 * PI / 32
+    for model in ((0.5, 0.0, 0.0), (2.0, 0.1, 0.1)):
+        b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=1e-4)
+        proven = [p for p in b.points if p.proven]
+        assert proven
+        assert _ratios(proven, model).max() <= 1
+        assert all(math.isnan(p.uncertainty) for p in b.points if not p.proven)
