@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import math
 import os
 import shlex
 import signal
@@ -124,7 +125,22 @@ def _add_generate(sub) -> None:
         help="keep undecided points instead of resolving them exactly",
     )
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_limits(g)
     _add_distributed(g)
+
+
+def _add_limits(p) -> None:
+    """``--dry-run`` and ``--no-size-check`` (see :mod:`atlas.data.limits`)."""
+    p.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="print the estimated points, output bytes, peak memory and time, then stop",
+    )
+    p.add_argument(
+        "--no-size-check",
+        action="store_true",
+        help="run even when the estimate exceeds the free memory or disk space",
+    )
 
 
 def _add_distributed(g) -> None:
@@ -185,6 +201,7 @@ def _add_mechanism(sub) -> None:
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+    _add_limits(pm)
 
 
 def _add_boundaries(sub) -> None:
@@ -213,6 +230,7 @@ def _add_boundaries(sub) -> None:
     pb.add_argument("--geojson", metavar="FILE.json", help="GeoJSON FeatureCollection")
     pb.add_argument("--overwrite", action="store_true", help="replace existing output files")
     pb.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+    _add_limits(pb)
 
 
 def _add_paper(sub) -> None:
@@ -241,6 +259,7 @@ def _add_simulate(sub) -> None:
     ps.add_argument("--kappa", type=_number("kappa"), metavar="K", help="map: default 0.5")
     ps.add_argument("--q", type=_number("q"), metavar="Q", help="map: q1 = q2, default 0")
     ps.add_argument("--engine", choices=["numpy", "jax"], default="numpy", help="map engine")
+    _add_limits(ps)
 
 
 def _add_table(sub) -> None:
@@ -342,6 +361,8 @@ def _cmd_generate(args, argv) -> int:
     if args.resume or any(a is not None for a in dist):
         return _cmd_generate_distributed(args, argv, scene)
     out = args.out or f"{scene.name}.nc"
+    if _limits(args, _generate_estimate(args, scene, [out])):
+        return 0
     check_output_path(out, args.overwrite)  # fail before any computation
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
@@ -392,6 +413,9 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
     from atlas.data.distributed import generate_distributed
 
     store = _store_arg(args, scene)
+    outs = [store] if args.out is None else [store, args.out]
+    if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
+        return 0
     if args.out is not None:
         check_output_path(args.out, args.overwrite)  # fail before any computation
     use_compile_cache()
@@ -422,6 +446,73 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         ) from None
     print(_distributed_summary(s), file=sys.stderr)
     return 0
+
+
+def _generate_estimate(args, scene, outs, scheduler=False):
+    """The :class:`atlas.data.limits.Estimate` of an ``atlas generate`` run (``scheduler``:
+    that of the distributed path, ``False``: the streamed netCDF file)."""
+    from atlas.data.limits import generate_estimate
+
+    workers = 1
+    if isinstance(scheduler, str) and scheduler.startswith("local"):
+        n = scheduler.partition(":")[2]
+        workers = int(n) if n else (os.cpu_count() or 1)
+    return generate_estimate(
+        scene,
+        dtype=args.dtype,
+        tile_points=args.tile_points,
+        distributed=scheduler is not False,
+        workers=workers,
+        outputs=outs,
+    )
+
+
+def _limits(args, estimate) -> bool:
+    """Print the estimate with ``--dry-run`` (true: stop here), else refuse a run that cannot
+    fit (unless ``--no-size-check``)."""
+    if estimate is None:
+        return False
+    if args.dry_run:
+        print(estimate.describe())
+        return True
+    if not args.no_size_check:
+        estimate.check()
+    return False
+
+
+def _dispatch_estimate(args):
+    """The estimate of a dispatched command that holds its grid in memory, or ``None``."""
+    from atlas.data import limits
+    from atlas.data.scene import parse_values
+
+    if args.command == "mechanism":
+        from atlas.data.mechanisms import MECHANISM_SCENES
+
+        sc = MECHANISM_SCENES.get(args.name)
+        if sc is None:
+            return None
+        points = 1
+        for axis, (default, *_r) in sc.axes.items():
+            spec = getattr(args, axis, None)
+            points *= parse_values(default if spec is None else spec, axis)[0].size
+        outs = [args.out] if args.out else []
+        return limits.grid_estimate("mechanism", points, outputs=outs, **limits.MECHANISM)
+    if args.command == "boundaries":
+        from atlas.data.scene import Scene
+
+        axes = {k: getattr(args, k) for k in ("beta1", "beta2", "kappa", "q", "q1", "q2")}
+        scene = Scene(**{k: v for k, v in axes.items() if v is not None})
+        slices = math.prod(scene.axes[m].size for m in scene.model_names)
+        grid = scene.axes["beta1"].size * scene.axes["beta2"].size * max(1, args.check) ** 2
+        outs = [p for p in (args.out, args.csv, args.geojson) if p]
+        return limits.grid_estimate(
+            "boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES
+        )
+    if args.command == "simulate" and args.outcome_map:
+        n = 24 if args.n is None else args.n
+        outs = [args.out] if args.out else []
+        return limits.grid_estimate("simulate --map", n * n, outputs=outs, **limits.OUTCOME_MAP)
+    return None
 
 
 def _require_dask(scheduler) -> None:
@@ -480,48 +571,172 @@ _DISPATCH = {
 
 
 def _cmd_dispatch(args) -> int:
+    if hasattr(args, "dry_run") and _limits(args, _dispatch_estimate(args)):
+        return 0
     module, func = _DISPATCH[args.command]
     fn = getattr(importlib.import_module(module), func)
-    opts = {k: v for k, v in vars(args).items() if k != "command"}
+    skip = ("command", "dry_run", "no_size_check")
+    opts = {k: v for k, v in vars(args).items() if k not in skip}
     rc = fn(**opts)
     return rc if isinstance(rc, int) else 0
 
 
-#: seconds after which an unacknowledged SIGTERM is delivered again
-SIGTERM_REPEAT = 5.0
+# --- signals -------------------------------------------------------------------------------------
+#
+# SIGINT and SIGTERM are recorded in atlas.core.interrupts and raised as KeyboardInterrupt, so every
+# writer removes its temporary files as on Ctrl-C; the run exits 128 + the signal number (130 for
+# SIGINT, 143 for SIGTERM).  The KeyboardInterrupt can be lost (raised inside a gc callback it is
+# only reported), so: the writers check the record before every commit and between tiles
+# (no output is committed after a signal), a swallowed KeyboardInterrupt is raised again at once
+# (sys.unraisablehook) and, as a last resort, an alarm raises it again every SIGNAL_REPEAT seconds
+# until main() has caught it.  main() cancels the alarm on every way out.  A run that received a
+# signal never exits 0, even when its outputs were complete before the signal came.  The console
+# script ends with os._exit after flushing (no interpreter teardown under XLA threads, where a late
+# signal could still kill the process); from then on a signal ends the process at once with 128 +
+# its number.
+
+#: seconds after which a stop signal that did not end the run is raised again
+SIGNAL_REPEAT = 5.0
+#: seconds after which a KeyboardInterrupt swallowed by a gc callback is raised again
+SIGNAL_RETRY = 0.02
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_ALARM = getattr(signal, "SIGALRM", None)
+_state = {"exit_now": False}
 
 
-def _sigterm(signum, frame):
-    """SIGTERM (and its repeats) -> KeyboardInterrupt, so temporary files are cleaned up as on
-    Ctrl-C.  A KeyboardInterrupt raised while Python runs a gc or ``__del__`` callback is swallowed
-    ("Exception ignored in ..."); an alarm re-delivers it every ``SIGTERM_REPEAT`` s until
-    :func:`main` has caught it."""
-    if hasattr(signal, "setitimer"):
-        signal.signal(signal.SIGALRM, _sigterm)
-        signal.setitimer(signal.ITIMER_REAL, SIGTERM_REPEAT)
+def _arm(seconds: float) -> None:
+    if _ALARM is not None:
+        signal.setitimer(signal.ITIMER_REAL, seconds)
+
+
+def _on_signal(signum, frame):
+    """SIGINT / SIGTERM: record it; the first one raises KeyboardInterrupt (later ones are
+    delivered by the alarm while the first is unwinding, so cleanup is not cut short)."""
+    from atlas.core import interrupts
+
+    first = interrupts.requested() is None
+    interrupts.request(signum)
+    if _state["exit_now"]:
+        _hard_exit(128 + interrupts.requested())
+    if first:
+        _arm(SIGNAL_REPEAT)
+        raise KeyboardInterrupt
+
+
+def _on_alarm(signum, frame):
+    """The alarm: raise the recorded stop signal again (the last one was swallowed)."""
+    from atlas.core import interrupts
+
+    code = interrupts.requested()
+    if code is None:
+        return
+    if _state["exit_now"]:
+        _hard_exit(128 + code)
+    _arm(SIGNAL_REPEAT)
     raise KeyboardInterrupt
 
 
 def _unraisable(info):
-    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is not reported (the
-    alarm of :func:`_sigterm` delivers it again); anything else is, as by default."""
+    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is raised again at
+    once (by the alarm) and not reported; anything else is reported as by default."""
     if isinstance(info.exc_value, KeyboardInterrupt):
+        from atlas.core import interrupts
+
+        if interrupts.requested() is not None and not _state["exit_now"]:
+            _arm(SIGNAL_RETRY)
         return
     sys.__unraisablehook__(info)
 
 
-def _acknowledge_sigterm():
-    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
-        signal.setitimer(signal.ITIMER_REAL, 0)
+def _install_signals():
+    """Install the handlers (main thread only); returns what to restore, or ``None``."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    from atlas.core import interrupts
+
+    interrupts.clear()
+    _state["exit_now"] = False
+    saved = {s: signal.signal(s, _on_signal) for s in _STOP_SIGNALS}
+    if _ALARM is not None:
+        saved[_ALARM] = signal.signal(_ALARM, _on_alarm)
+    saved["unraisablehook"] = sys.unraisablehook
+    sys.unraisablehook = _unraisable
+    return saved
+
+
+def _restore_signals(saved) -> None:
+    """Cancel the alarm and put back the handlers of before :func:`main`."""
+    if saved is None:
+        return
+    from atlas.core import interrupts
+
+    _arm(0)
+    interrupts.clear()  # the library, called again in this process, runs normally
+    sys.unraisablehook = saved.pop("unraisablehook")
+    for s, h in saved.items():
+        signal.signal(s, h)
+
+
+def _hard_exit(code: int):  # pragma: no cover - ends the process
+    _arm(0)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:
+            pass
+    os._exit(code)
+
+
+def _signal_code(rc: int) -> int:
+    """The exit code of a run: ``128 + signal`` if a stop signal arrived at any time."""
+    from atlas.core import interrupts
+
+    signum = interrupts.requested()
+    if signum is None:
+        return rc
+    if rc not in (128 + signal.SIGINT, 128 + signum):  # the outputs were complete before it came
+        print("atlas: interrupted (after the run had finished)", file=sys.stderr)
+    return 128 + signum
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``atlas`` console script; returns the exit code."""
+    """Entry point of the ``atlas`` console script; returns the exit code (the console script
+    itself ends the process with it, see the comment above)."""
     console = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _sigterm)  # clean up temporary files like Ctrl-C does
-        sys.unraisablehook = _unraisable
+    saved = _install_signals()
+    rc = 130
+    try:
+        try:
+            rc = _main(argv)
+        except KeyboardInterrupt as e:
+            _arm(0)
+            rc = _interrupted(e)
+        rc = _signal_code(rc)
+        _state["exit_now"] = console and saved is not None  # a signal now ends the process
+    except KeyboardInterrupt:  # a signal while the first one was being reported
+        _state["exit_now"] = console and saved is not None
+        rc = _signal_code(130)
+    finally:
+        _state["exit_now"] = console and saved is not None
+        if _state["exit_now"]:
+            _arm(0)
+        else:
+            _restore_signals(saved)
+    if console:
+        _hard_exit(rc)
+    return rc
+
+
+def _interrupted(e) -> int:
+    from atlas.core import interrupts
+
+    why = _one_line(e) or "no partial output file left"
+    print(f"atlas: interrupted ({why})", file=sys.stderr)
+    return 128 + (interrupts.requested() or signal.SIGINT)
+
+
+def _main(argv) -> int:
     try:
         args = build_parser().parse_args(argv)
         if args.command == "generate":
@@ -530,20 +745,11 @@ def main(argv=None) -> int:
     except _UsageError as e:
         print(_one_line(e), file=sys.stderr)
         return EXIT_USAGE
-    except (ValueError, OSError) as e:
+    except (ValueError, OSError, MemoryError) as e:
         print(f"atlas: error: {_one_line(e)}", file=sys.stderr)
         return EXIT_USAGE
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
-    except KeyboardInterrupt as e:
-        _acknowledge_sigterm()
-        why = _one_line(e) or "no partial output file left"
-        print(f"atlas: interrupted ({why})", file=sys.stderr)
-        if console:  # skip interpreter teardown under running XLA threads (it can segfault)
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os._exit(130)
-        return 130
     except Exception as e:  # a bug, not bad input: still one line (ATLAS_DEBUG=1 re-raises)
         if os.environ.get("ATLAS_DEBUG", "") not in ("", "0"):
             raise
@@ -552,10 +758,5 @@ def main(argv=None) -> int:
         return 1
 
 
-def _exit(code):  # pragma: no cover - trivial
-    _acknowledge_sigterm()  # a run that finished despite a swallowed SIGTERM: no late alarm
-    sys.exit(code)
-
-
 if __name__ == "__main__":  # pragma: no cover
-    _exit(main())
+    sys.exit(main())

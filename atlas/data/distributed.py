@@ -62,11 +62,13 @@ Example
 
 from __future__ import annotations
 
+import collections.abc
 import contextlib
 import dataclasses
 import datetime
 import hashlib
 import json
+import operator
 import os
 import shutil
 import tempfile
@@ -75,6 +77,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from atlas.core import interrupts
 from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
 from atlas.data.engine import (
     DEFAULT_TILE_POINTS,
@@ -93,6 +96,7 @@ __all__ = [
     "open_store",
     "verify_store",
     "tile_plan",
+    "TilePlan",
     "WORKER_ENV",
     "worker_env",
     "local_cluster",
@@ -170,15 +174,16 @@ DEFAULT_SLAB_POINTS = 1 << 18
 CHUNK_POINTS = 1 << 20
 TILES = "_tiles"
 PLAN_ATTR = "atlas_plan"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 # --- the plan -----------------------------------------------------------------------------------
 
 
-def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> list[tuple]:
+def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> TilePlan:
     """The tiles of a scene: ``[(start, stop), ...]`` (``beta1`` slabs; one tile if ``beta1`` is
-    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks).
+    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks),
+    as a lazy :class:`TilePlan` (no tile is materialised: a 1e14-point scene costs nothing).
 
     ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile; if then one ``beta1``
     value alone holds more than that and ``block2`` is not given, ``beta2`` is split into blocks of
@@ -193,13 +198,64 @@ def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) 
             block2 = max(1, round(DEFAULT_SLAB_POINTS / max(1, per // n2)))
             block2 = None if block2 >= n2 else block2
     s = _positive("slab", slab)
-    b1 = [(a, min(a + s, n1)) for a in range(0, n1, s)]
     if block2 is None:
-        return b1
+        return TilePlan(n1, n2, s, None)
     b = _positive("block2", block2)
     if "beta2" not in scene.dims:
         raise ValueError("block2: the scene has a single beta2 value")
-    return [(a, e, c, min(c + b, n2)) for a, e in b1 for c in range(0, n2, b)]
+    return TilePlan(n1, n2, s, b)
+
+
+@dataclasses.dataclass(frozen=True)
+class TilePlan(collections.abc.Sequence):
+    """The tiles of :func:`tile_plan`, computed on demand: ``n1`` x ``n2`` (beta1, beta2) values in
+    slabs of ``slab`` beta1 values, split into blocks of ``block2`` beta2 values (``None``: not
+    split).  A sequence of tuples; equal to the list of its tiles."""
+
+    n1: int
+    n2: int
+    slab: int
+    block2: int | None
+
+    @property
+    def _per1(self) -> int:
+        return 1 if self.block2 is None else -(-self.n2 // self.block2)
+
+    def __len__(self) -> int:
+        return -(-self.n1 // self.slab) * self._per1
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        n = len(self)
+        i = operator.index(i)
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError(i)
+        a, c = divmod(i, self._per1)
+        a *= self.slab
+        tile = (a, min(a + self.slab, self.n1))
+        if self.block2 is None:
+            return tile
+        c *= self.block2
+        return (*tile, c, min(c + self.block2, self.n2))
+
+    def __eq__(self, other):
+        if isinstance(other, collections.abc.Sequence) and not isinstance(other, str):
+            return len(self) == len(other) and all(a == tuple(b) for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None
+
+    def describe(self) -> dict:
+        """The plan's parameters (stored in the store's plan instead of every tile)."""
+        return {"n1": self.n1, "n2": self.n2, "slab": self.slab, "block2": self.block2}
+
+    @classmethod
+    def of(cls, stored) -> TilePlan | list:
+        """The tiles of a stored plan (:meth:`describe`, or a list of tiles)."""
+        return cls(**stored) if isinstance(stored, dict) else [tuple(t) for t in stored]
 
 
 def _positive(name, value) -> int:
@@ -276,7 +332,7 @@ def _plan(scene, sch, tiles, opts) -> dict:
         "scene": scene.describe(),
         "coords": coords,
         "variables": variables,
-        "tiles": [list(t) for t in tiles],
+        "tiles": tiles.describe() if isinstance(tiles, TilePlan) else [list(t) for t in tiles],
         "source": sch.attrs["source"],
         **opts,
     }
@@ -344,6 +400,7 @@ def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int |
         ds.to_zarr(tmp, mode="w", compute=False, encoding=enc, consolidated=False)
         zarr.open_group(tmp, mode="r+").require_group(TILES)
         os.chmod(tmp, 0o777 & ~_umask())
+        interrupts.check()
         os.replace(tmp, store)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -546,7 +603,7 @@ def verify_store(store, scheduler=None) -> dict:
     plan = _stored_plan(store)
     ex = _executor(scheduler)
     try:
-        return _verify_all(ex, store, plan["tiles"])[0]
+        return _verify_all(ex, store, TilePlan.of(plan["tiles"]))[0]
     finally:
         ex.close()
 
@@ -669,7 +726,7 @@ class _Job:
 
     scene: Scene
     store: str
-    tiles: list
+    tiles: TilePlan
     sch: Schema
     opts: dict
     plan: dict
@@ -738,6 +795,7 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     calls = [(i, (job.store, job.scene, i, job.tiles[i], job.opts)) for i in todo]
     computed = {}
     for i, rec in ex.map(_run_tile, calls):
+        interrupts.check()  # a stop signal lost in a gc callback still ends the run here
         recs[i] = computed[i] = rec
         if bar is not None:
             bar.update(1)
@@ -808,6 +866,7 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     if failures:
         attrs["exact_failures"] = len(failures)
         attrs["exact_failure_example"] = repr(tuple(failures[0]))
+    interrupts.check()  # no store is marked complete after a stop signal
     group = zarr.open_group(store, mode="r+")
     history = str(group.attrs.get("history", sch.attrs["history"]))
     if resumed:

@@ -31,6 +31,7 @@ import tempfile
 import numpy as np
 import xarray as xr
 
+from atlas.core import interrupts
 from atlas.data.engine import DEFAULT_TILE_POINTS, Schema, block_shape, run
 from atlas.data.scene import Scene
 
@@ -93,11 +94,17 @@ class AtomicFile:
         self.tmp = os.path.join(directory, f".{name}.{secrets.token_hex(12)}{suffix}")
 
     def commit(self) -> str:
-        if not self.overwrite and os.path.exists(self.path):
+        """Rename the temporary file onto ``path``; nothing is committed after a stop signal
+        (:func:`atlas.core.interrupts.check`): the temporary file is removed instead."""
+        try:
+            interrupts.check()
+            if not self.overwrite and os.path.exists(self.path):
+                raise FileExistsError(f"out: {self.path} exists (use --overwrite to replace it)")
+            os.chmod(self.tmp, 0o644 & ~_umask())
+            os.replace(self.tmp, self.path)
+        except BaseException:
             self.discard()
-            raise FileExistsError(f"out: {self.path} exists (use --overwrite to replace it)")
-        os.chmod(self.tmp, 0o644 & ~_umask())
-        os.replace(self.tmp, self.path)
+            raise
         return self.path
 
     def discard(self) -> None:
@@ -219,6 +226,7 @@ class NetCDFSink:
         nc.setncatts(sch.attrs)
 
     def write(self, name, index, block):
+        interrupts.check()  # a stop signal lost in a gc callback still ends the run here
         v, stored = self.vars[name]
         v[index] = np.asarray(block).astype(stored, copy=False)
 
