@@ -476,3 +476,44 @@ def test_signal_after_the_commit_is_not_exit_0(tmp_path, monkeypatch, capsys):
     assert "after the run had finished" in capsys.readouterr().err
     with xr.open_dataset(out) as ds:
         assert ds.class_code.shape == (8, 8)
+
+
+# --- sizes: refused before any work -------------------------------------------------------------
+
+HUGE_AXES = ["--beta1", "0:2pi:10000000", "--beta2", "0:2pi:10000000"]
+
+
+@pytest.mark.parametrize(
+    "args, limit",
+    [
+        (["generate", *HUGE_AXES], "free"),  # 1e14 points of every output: the disk
+        (["generate", *HUGE_AXES, "--kappa", "0.5,2"], "memory"),
+        (["generate", *HUGE_AXES, "--scheduler", "inprocess"], "free"),
+        (["generate", *HUGE_AXES, "--scheduler", "local:2"], "free"),
+        (["boundaries", *HUGE_AXES, "--kappa", "2", "--q", "0.1"], "memory"),
+        (["mechanism", "ladder", "--theta", "0.1:1:10000000", "--mu", "0:1:10000000"], "memory"),
+        (["simulate", "--map", "--n", "10000000"], "memory"),
+    ],
+)
+def test_a_1e14_point_scene_is_refused_at_once(args, limit, tmp_path, capsys):
+    """One line naming the numbers and the way out, exit 2, nothing written, in well under a
+    second of CPU (most of it parsing the two 1e7-value axes; no cluster is started)."""
+    import time
+
+    out = tmp_path / "a.nc"
+    t0 = time.process_time()
+    assert cli.main([*args, "--out", str(out)]) == 2
+    cpu = time.process_time() - t0
+    err = capsys.readouterr().err
+    _check_one_line(err, "size:", args)
+    assert "e+14 points" in err and limit in err and "coarser" in err
+    assert os.listdir(tmp_path) == []
+    assert cpu < 1.0, cpu
+
+
+def test_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "a.nc"
+    assert cli.main([*TINY_RUN, "--out", str(out), "--dry-run"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("atlas generate: 64 points; output ~128 B uncompressed; peak memory")
+    assert os.listdir(tmp_path) == []

@@ -91,7 +91,7 @@ def free_disk(path) -> int | None:
 @dataclasses.dataclass(frozen=True)
 class Estimate:
     """The cost of one run: ``points`` evaluated, ``output_bytes`` (uncompressed) written to
-    ``outputs`` (paths), ``peak_bytes`` of memory, ``seconds`` (rough, one core), and the way out
+    each of ``outputs`` (paths; outputs on one file system add up), ``peak_bytes`` of memory, ``seconds`` (rough, one core), and the way out
     for each limit (``memory_hint``, ``disk_hint``: what to change)."""
 
     command: str
@@ -128,12 +128,19 @@ class Estimate:
                 f"size: {self.points:.4g} points need ~{human_bytes(self.peak_bytes)} of memory, "
                 f"{human_bytes(mem)} available: {self.memory_hint} (--dry-run shows the estimate)"
             )
+        need = {}  # file system -> bytes written there (each output holds output_bytes)
         for path in self.outputs:
-            free = free_disk(path)
-            if free is not None and self.output_bytes > free:
-                where = os.path.dirname(os.path.abspath(path))
+            where = os.path.dirname(os.path.abspath(path))
+            try:
+                dev = os.stat(where).st_dev
+            except OSError:
+                continue
+            need.setdefault(dev, [where, 0])[1] += self.output_bytes
+        for where, nbytes in need.values():
+            free = free_disk(os.path.join(where, "x"))
+            if free is not None and nbytes > free:
                 raise OSError(
-                    f"size: {self.points:.4g} points write ~{human_bytes(self.output_bytes)} "
+                    f"size: {self.points:.4g} points write ~{human_bytes(nbytes)} "
                     f"(uncompressed) to {where}, which has {human_bytes(free)} free: "
                     f"{self.disk_hint} (--no-size-check to try anyway: files are compressed)"
                 )
@@ -169,7 +176,7 @@ def generate_estimate(
         per_point = out_bytes / max(points, 1)
         worker = STORE_PEAK_FACTOR * per_point * min(points, DEFAULT_SLAB_POINTS) + tile
         peak = axes + workers * worker
-        written = 2 * out_bytes if outputs else out_bytes
+        written = out_bytes  # the store, and as much again for a netCDF copy
         mem_hint = "use a coarser grid or smaller tiles (--slab, --block2)"
     else:
         peak = axes + tile + md  # model_dependent_* accumulate over (beta1, beta2) in memory
