@@ -444,6 +444,18 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         raise KeyboardInterrupt(
             f"finished tiles are kept in {store}: continue with the same command and --resume"
         ) from None
+    except (OSError, RuntimeError) as e:
+        from atlas.data.io import write_error
+
+        err = e if ": cannot write " in str(e) else write_error(store, e, "store")
+        if err is None:  # not a failed write (a refused argument, a bug)
+            raise
+        if os.path.isdir(store):
+            raise OSError(
+                f"{err}; finished tiles are kept in {store}: make room and continue with the same "
+                "command and --resume"
+            ) from None
+        raise err from None
     print(_distributed_summary(s), file=sys.stderr)
     return 0
 
@@ -577,8 +589,19 @@ def _cmd_dispatch(args) -> int:
     fn = getattr(importlib.import_module(module), func)
     skip = ("command", "dry_run", "no_size_check")
     opts = {k: v for k, v in vars(args).items() if k not in skip}
-    rc = fn(**opts)
+    if args.command in _TOGETHER:
+        from atlas.data.io import committed_together
+
+        with committed_together():
+            rc = fn(**opts)
+    else:
+        rc = fn(**opts)
     return rc if isinstance(rc, int) else 0
+
+
+#: commands whose output files are committed together at the end, or none of them
+#: (``paper`` and ``bench`` read back what they wrote and keep the files finished before a stop)
+_TOGETHER = ("mechanism", "boundaries", "simulate", "table")
 
 
 # --- signals -------------------------------------------------------------------------------------
@@ -705,6 +728,9 @@ def main(argv=None) -> int:
     console = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
     saved = _install_signals()
+    written = sys.modules.get("atlas.data.io")
+    if written is not None:
+        written.forget_commits()
     rc = 130
     try:
         try:
@@ -732,6 +758,9 @@ def _interrupted(e) -> int:
     from atlas.core import interrupts
 
     why = _one_line(e) or "no partial output file left"
+    done = sys.modules.get("atlas.data.io")
+    if done is not None and done.COMMITTED and not _one_line(e):
+        why += f"; complete before it: {', '.join(done.COMMITTED)}"
     print(f"atlas: interrupted ({why})", file=sys.stderr)
     return 128 + (interrupts.requested() or signal.SIGINT)
 

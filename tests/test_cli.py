@@ -517,3 +517,103 @@ def test_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, capsys):
     line = capsys.readouterr().out.strip()
     assert line.startswith("atlas generate: 64 points; output ~128 B uncompressed; peak memory")
     assert os.listdir(tmp_path) == []
+
+
+# --- faults: a full disk is one line naming the path, and nothing partial is left ---------------
+
+
+@pytest.fixture
+def full_disk(monkeypatch):
+    """A full file system for the outputs whose names end with one of ``full_disk.suffixes``:
+    their temporary files are links to ``/dev/full`` (every write fails with ENOSPC); netCDF
+    files (HDF5 refuses to open the link) fail as HDF5 does on a full disk, with netCDF4's
+    ``RuntimeError: NetCDF: HDF error`` after part of the file was written, and the file
+    system reports no free space."""
+    from atlas.data import io as aio
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("needs /dev/full")
+    init = aio.AtomicFile.__init__
+    state = type("FullDisk", (), {"suffixes": ("",)})()
+
+    def on_full_disk(self, path, *a, **kw):
+        init(self, path, *a, **kw)
+        if str(path).endswith(state.suffixes) and not str(path).endswith(".nc"):
+            os.symlink("/dev/full", self.tmp)
+
+    def hdf_error(path):
+        if str(path).endswith(state.suffixes):
+            raise RuntimeError("NetCDF: HDF error")
+
+    to_netcdf, write = xr.Dataset.to_netcdf, aio.NetCDFSink.write
+
+    def to_netcdf_full(self, path, *a, **kw):
+        with open(path, "wb") as fh:
+            fh.write(b"\x89HDF\r\n\x1a\n")
+        hdf_error(path)
+        return to_netcdf(self, path, *a, **kw)
+
+    class Unwritable:  # a tile whose write into the netCDF variable fails
+        def __array__(self, *a, **kw):
+            hdf_error(self_path[0])
+
+    def write_full(self, name, index, block):
+        self_path[:] = [self.path]
+        full = str(self.path).endswith(state.suffixes)
+        return write(self, name, index, Unwritable() if full else block)
+
+    self_path = [None]
+
+    monkeypatch.setattr(aio.AtomicFile, "__init__", on_full_disk)
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", to_netcdf_full)
+    monkeypatch.setattr(aio.NetCDFSink, "write", write_full)
+    monkeypatch.setattr(aio, "_FULL", float("inf"))  # below any free space: "full"
+    return state
+
+
+WRITERS = {
+    "generate": ["generate", *TINY, "--outputs", "class_code", "--out", "{d}/a.nc"],
+    "mechanism": ["mechanism", "ladder", "--theta", "0.1:1:3", "--mu", "0:1:3", "--out", "{d}/m.nc"],
+    "table": ["table", "--format", "csv", "--out", "{d}/t.csv"],
+    "simulate": ["simulate", "--case", "fig2b", "--t-end", "1", "--out", "{d}/s.csv"],
+    "boundaries": ["boundaries", *TINY, "--kappa", "2", "--q", "0.1", "--out", "{d}/b.nc"]
+    + ["--csv", "{d}/b.csv", "--geojson", "{d}/b.json"],
+}
+
+
+@pytest.mark.parametrize("writer", sorted(WRITERS))
+def test_a_full_disk_is_one_line_and_leaves_nothing(writer, full_disk, tmp_path, capsys):
+    if writer == "boundaries":  # the netCDF file and the CSV fit, the GeoJSON does not
+        full_disk.suffixes = (".json",)
+    args = [a.format(d=tmp_path) for a in WRITERS[writer]]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, "out: cannot write " + str(tmp_path), args)
+    assert "no space left on device" in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_full_disk_under_the_store_says_how_to_resume(tmp_path, monkeypatch, capsys):
+    """ENOSPC while a tile is written into the zarr store: one line naming the store, the cause
+    and ``--resume``; the store is kept (its finished tiles are verified on resume)."""
+    import errno
+
+    pytest.importorskip("zarr")
+    to_zarr = xr.Dataset.to_zarr
+
+    def full(self, store, *a, region=None, **kw):
+        if region is not None and region["beta1"].start >= 4:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), f"{store}/class_code/4.0")
+        return to_zarr(self, store, *a, region=region, **kw)
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", full)
+    args = ["generate", *TINY, "--outputs", "class_code", "--scheduler", "inprocess"]
+    args += ["--slab", "4", "--out", str(tmp_path / "a.nc"), "--no-progress"]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, f"store: cannot write {tmp_path / 'a.zarr'}", args)
+    assert "no space left on device" in err and "--resume" in err
+    assert os.listdir(tmp_path) == ["a.zarr"]
+    monkeypatch.setattr(xr.Dataset, "to_zarr", to_zarr)
+    assert cli.main([*args, "--resume"]) == 0
+    assert "1 computed, 1 verified" in capsys.readouterr().err
