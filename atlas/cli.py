@@ -517,9 +517,7 @@ def _dispatch_estimate(args):
         slices = math.prod(scene.axes[m].size for m in scene.model_names)
         grid = scene.axes["beta1"].size * scene.axes["beta2"].size * max(1, args.check) ** 2
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
-        return limits.grid_estimate(
-            "boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES
-        )
+        return limits.grid_estimate("boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES)
     if args.command == "simulate" and args.outcome_map:
         n = 24 if args.n is None else args.n
         outs = [args.out] if args.out else []
@@ -564,7 +562,8 @@ def _distributed_summary(s: dict) -> str:
         f"({s['points_per_second']:.3g} points/s) on {s['scheduler']} with {s['workers']} "
         f"worker(s); {s['tiles']} tiles: {len(s['computed'])} computed, {len(s['verified'])} "
         f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
-        f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
+        + (f"repaired {', '.join(s['repaired'])}; " if s.get("repaired") else "")
+        + f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
     )
 
 

@@ -573,7 +573,16 @@ def full_disk(monkeypatch):
 
 WRITERS = {
     "generate": ["generate", *TINY, "--outputs", "class_code", "--out", "{d}/a.nc"],
-    "mechanism": ["mechanism", "ladder", "--theta", "0.1:1:3", "--mu", "0:1:3", "--out", "{d}/m.nc"],
+    "mechanism": [
+        "mechanism",
+        "ladder",
+        "--theta",
+        "0.1:1:3",
+        "--mu",
+        "0:1:3",
+        "--out",
+        "{d}/m.nc",
+    ],
     "table": ["table", "--format", "csv", "--out", "{d}/t.csv"],
     "simulate": ["simulate", "--case", "fig2b", "--t-end", "1", "--out", "{d}/s.csv"],
     "boundaries": ["boundaries", *TINY, "--kappa", "2", "--q", "0.1", "--out", "{d}/b.nc"]

@@ -173,6 +173,8 @@ DEFAULT_SLAB_POINTS = 1 << 18
 #: maximum elements per zarr chunk (chunks never straddle slabs)
 CHUNK_POINTS = 1 << 20
 TILES = "_tiles"
+#: attribute of the ``_tiles`` group: SHA-256 of every attribute of the store
+ATTRS_RECORD = "attributes_sha256"
 PLAN_ATTR = "atlas_plan"
 FORMAT_VERSION = 2
 
@@ -367,6 +369,9 @@ def read_record(store: str, i: int) -> dict | None:
         rec = dict(zarr.open_group(store, path=_record_path(i), mode="r").attrs)
     except Exception:  # truncated or unreadable metadata: the tile counts as missing
         return None
+    body = {k: v for k, v in rec.items() if k != "record_sha256"}
+    if rec.get("record_sha256") != _sha(json.dumps(body, sort_keys=True)):
+        return None  # any byte of the record changed
     return rec if rec.get("index") == i and "checksums" in rec else None
 
 
@@ -376,6 +381,111 @@ def _drop_record(store: str, i: int):
 
 def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
     return {k: _digest(ds[k].isel(_region(ds[k].dims, split)).values) for k in names}
+
+
+_METADATA = ("zarr.json", ".zarray", ".zattrs", ".zgroup", ".zmetadata")
+
+
+def _metadata_digests(store: str) -> dict:
+    """SHA-256 of the raw bytes of every metadata file of the store (array and group metadata
+    with their attributes; the tile records have their own checksums)."""
+    out = {}
+    for dirpath, dirnames, filenames in os.walk(store):
+        rel = os.path.relpath(dirpath, store)
+        if rel == TILES or rel.startswith(TILES + os.sep):
+            dirnames[:] = []
+            continue
+        if rel == ".":
+            dirnames[:] = [d for d in dirnames if d != TILES]
+        for f in filenames:
+            if f in _METADATA:
+                with open(os.path.join(dirpath, f), "rb") as fh:
+                    out[os.path.normpath(os.path.join(rel, f))] = hashlib.sha256(
+                        fh.read()
+                    ).hexdigest()
+    return out
+
+
+def _all_attrs(store: str) -> dict:
+    """The attributes of the store and of every array in it, in their stored order."""
+    import zarr
+
+    root = zarr.open_group(store, mode="r")
+    out = {"": dict(root.attrs)}
+    for name, arr in root.arrays():
+        out[name] = dict(arr.attrs)
+    return out
+
+
+def _sha(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _record_attrs(store: str) -> None:
+    """Record the checksums of the metadata files and a copy of every attribute (to restore
+    them), with a checksum of the record itself, in the attributes of the ``_tiles`` group."""
+    import zarr
+
+    body = {"metadata": _metadata_digests(store), "attributes": _all_attrs(store)}
+    text = json.dumps(body, default=repr)
+    zarr.open_group(store, path=TILES, mode="r+").attrs.put(
+        {ATTRS_RECORD: text, ATTRS_RECORD + "_sha256": _sha(text)}
+    )
+
+
+def _attrs_record(store: str) -> dict | None:
+    """The record of :func:`_record_attrs` if it is intact, else ``None``."""
+    import zarr
+
+    try:
+        rec = dict(zarr.open_group(store, path=TILES, mode="r").attrs)
+        text = rec[ATTRS_RECORD]
+        if _sha(text) != rec.get(ATTRS_RECORD + "_sha256"):
+            return None
+        return json.loads(text)
+    except Exception:
+        return None
+
+
+def _corrupt_arrays(store: str, plan: dict) -> list[str]:
+    """The coordinates whose stored bytes differ from the plan's checksums, and ``"attributes"``
+    when a byte of the metadata (attributes included) differs from its record."""
+    import zarr
+
+    bad = []
+    for name, digest in plan["coords"].items():
+        try:
+            ok = _digest(zarr.open_array(store, path=name, mode="r")[...]) == digest
+        except Exception:  # undecodable metadata or chunk bytes
+            ok = False
+        if not ok:
+            bad.append(name)
+    rec = _attrs_record(store)
+    ok = rec is not None and rec["metadata"] == _metadata_digests(store)
+    return bad + ([] if ok else ["attributes"])
+
+
+def _repair_layout(store: str, sch: Schema, names) -> None:
+    """Rewrite the coordinates ``names`` from the schema and (with ``"attributes"``) every
+    attribute from its record; ``ValueError`` naming ``store`` if that does not restore every
+    metadata byte (the record itself, or metadata other than attributes, damaged)."""
+    import zarr
+
+    group = zarr.open_group(store, mode="r+")
+    for name in names:
+        if name in sch.coords:
+            group[name][...] = sch.coords[name][1]
+    if "attributes" in names:
+        rec = _attrs_record(store)
+        if rec is not None:
+            attrs = rec["attributes"]
+            group.attrs.put(attrs.pop(""))
+            for name, a in attrs.items():
+                group[name].attrs.put(a)
+        if rec is None or rec["metadata"] != _metadata_digests(store):
+            raise ValueError(
+                f"store: {store}: metadata damaged beyond its record (start again with --overwrite)"
+            )
 
 
 def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):
@@ -399,6 +509,7 @@ def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int |
         ds = xr.Dataset(data, coords=coords, attrs=attrs)
         ds.to_zarr(tmp, mode="w", compute=False, encoding=enc, consolidated=False)
         zarr.open_group(tmp, mode="r+").require_group(TILES)
+        _record_attrs(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
         interrupts.check()
         os.replace(tmp, store)
@@ -484,6 +595,7 @@ def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
         "host": os.uname().nodename,
         "pid": os.getpid(),
     }
+    rec["record_sha256"] = _sha(json.dumps(rec, sort_keys=True))
     zarr.open_group(store, path=_record_path(i), mode="w").attrs.put(rec)
     return rec
 
@@ -596,16 +708,21 @@ def _executor(scheduler):
 def verify_store(store, scheduler=None) -> dict:
     """Check every tile of a store against its record.
 
-    Returns ``{"ok": [...], "missing": [...], "corrupt": [...]}`` (tile indices): *missing* = no
-    readable record, *corrupt* = a record whose checksums the stored bytes no longer match.
+    Returns ``{"ok": [...], "missing": [...], "corrupt": [...], "arrays": [...]}``: tile
+    indices (*missing* = no readable record, *corrupt* = a record whose checksums the stored bytes
+    no longer match) and the coordinates whose bytes differ from the plan's checksums, with
+    ``"attributes"`` when any attribute of the store or of an array differs from its record.
+    Every byte of the store is covered: a resume rewrites what is listed.
     """
     store = os.fspath(store)
     plan = _stored_plan(store)
     ex = _executor(scheduler)
     try:
-        return _verify_all(ex, store, TilePlan.of(plan["tiles"]))[0]
+        report = _verify_all(ex, store, TilePlan.of(plan["tiles"]))[0]
     finally:
         ex.close()
+    report["arrays"] = _corrupt_arrays(store, plan)
+    return report
 
 
 def _verify_all(ex, store, tiles):
@@ -696,7 +813,8 @@ def generate_distributed(
         ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
         (``None``: beta2 not split), ``points``,
         ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
-        ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
+        ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates, ``"attributes"``:
+        found damaged on resume and rewritten), ``seconds``, ``points_per_second``,
         ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
         computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
     """
@@ -788,7 +906,14 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     Returns ``(report, records, computed)``: the verification report (``None`` unless resuming),
     the records of every finished tile, and those of the tiles computed here.
     """
+    damaged = []
+    if resumed:
+        damaged = _corrupt_arrays(job.store, job.plan)
+        if damaged:
+            _repair_layout(job.store, job.sch, damaged)
     report, recs = _verify_all(ex, job.store, job.tiles) if resumed else (None, {})
+    if report is not None:
+        report["arrays"] = damaged
     todo = [i for i in range(len(job.tiles)) if i not in recs]
     if bar is not None:
         bar.update(len(recs))
@@ -818,6 +943,7 @@ def _summary(job: _Job, ex, netcdf, report, recs, computed, totals, seconds) -> 
         "verified": sorted(set(recs) - set(computed)),
         "missing": report["missing"] if report else [],
         "corrupt": report["corrupt"] if report else [],
+        "repaired": report["arrays"] if report else [],
         "seconds": seconds,
         "points_per_second": points / seconds if seconds > 0 else float("inf"),
         "tile_seconds": [computed[i]["seconds"] for i in sorted(computed)],
@@ -875,6 +1001,8 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     for k, a in var_attrs.items():
         group[k].attrs.update(a)
     group.attrs.update({**attrs, "history": history, "atlas_complete": 1})
+    _record_attrs(store)  # killed before this: the attributes differ from the record, and a
+    # resume restores the recorded ones (atlas_complete = 0) and finishes again
     return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
 
 

@@ -116,7 +116,9 @@ class Estimate:
         for path in self.outputs:
             free = free_disk(path)
             if free is not None:
-                parts.append(f"{human_bytes(free)} free at {os.path.dirname(os.path.abspath(path))}")
+                parts.append(
+                    f"{human_bytes(free)} free at {os.path.dirname(os.path.abspath(path))}"
+                )
         return "; ".join(parts)
 
     def check(self) -> None:

@@ -47,8 +47,8 @@ def test_tile_plan_is_lazy():
     t0 = time.process_time()
     plan = tile_plan(scene)
     assert isinstance(plan, TilePlan) and time.process_time() - t0 < 0.05
-    per = -(-10**7 // plan.block2) if plan.block2 else 1
-    assert len(plan) == -(-10**7 // plan.slab) * per
+    per = -(-(10**7) // plan.block2) if plan.block2 else 1
+    assert len(plan) == -(-(10**7) // plan.slab) * per
     assert plan[-1][1] == 10**7 and plan[0][0] == 0
     small = TilePlan(5, 7, 2, 3)
     want = [(a, min(a + 2, 5), c, min(c + 3, 7)) for a in range(0, 5, 2) for c in range(0, 7, 3)]
