@@ -7,7 +7,9 @@ implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, `
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
-code 2 -- never a traceback.  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
+code 2 -- never a traceback; so is a run that cannot fit (``size: ...``, see ``--dry-run``) and a
+failed write (``out: cannot write PATH: no space left on device``).  SIGINT / SIGTERM end a run
+with exit 130 / 143 and nothing committed after them (see the signals section below).  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
 ``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
 ~15 s compilation of the eigenvalue kernel.
 
@@ -31,6 +33,7 @@ import argparse
 import importlib
 import math
 import os
+import re
 import shlex
 import signal
 import sys
@@ -44,10 +47,16 @@ EXIT_USAGE = 2
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (no usage dump) and exit code 2."""
+    """argparse with one-line errors ``atlas: error: ...`` (no usage dump, one prefix for every
+    subcommand) and exit code 2.  Values that start with ``-`` and then a digit, ``.`` or ``pi``
+    are values, not options: ``--beta1 -0.5pi:0.5pi:9`` needs no ``=``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d|\.\d|pi)")
 
     def error(self, message):  # noqa: D401 - argparse API
-        raise _UsageError(f"{self.prog}: error: {message}")
+        raise _UsageError(f"atlas: error: {message}")
 
 
 class _UsageError(Exception):
@@ -235,7 +244,13 @@ def _add_boundaries(sub) -> None:
 
 def _add_paper(sub) -> None:
     pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
-    pp.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    pp.add_argument(
+        "--out",
+        default="outputs",
+        metavar="DIR",
+        help="output directory (created if its parent exists; the files atlas paper writes "
+        "are replaced)",
+    )
     pp.add_argument("--quick", action="store_true", help="low resolution (seconds, for CI)")
 
 
@@ -248,7 +263,10 @@ def _add_simulate(sub) -> None:
         )
     for name in ("k1", "k2", "q1", "q2", "t-end"):
         ps.add_argument(f"--{name}", type=_number(name), metavar="X")
-    ps.add_argument("--out", metavar="FILE", help="output file (figure or data)")
+    ps.add_argument(
+        "--out", metavar="FILE", help="output file: .csv, .png, .pdf, .svg (--map: .nc, .png, .pdf)"
+    )
+    ps.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     ps.add_argument(
         "--map",
         dest="outcome_map",
@@ -265,15 +283,68 @@ def _add_simulate(sub) -> None:
 def _add_table(sub) -> None:
     pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
     pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
-    pt.add_argument("--out", metavar="FILE", help="output file (default: stdout)")
+    pt.add_argument("--out", metavar="FILE", help="output file .md or .csv (default: stdout)")
+    pt.add_argument("--overwrite", action="store_true", help="replace an existing output file")
 
 
 def _add_bench(sub) -> None:
     pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
     pb.add_argument(
-        "--out", metavar="DIR", help="output directory (default: outputs, --quick: outputs/quick)"
+        "--out",
+        metavar="DIR",
+        help="output directory (default: outputs, --quick: outputs/quick; created if its parent "
+        "exists; the files atlas bench writes are replaced)",
     )
+
+
+#: the output options of each command and the file name endings they take
+_EXTENSIONS = {
+    "generate": {"out": (".nc",), "store": (".zarr",)},
+    "mechanism": {"out": (".nc",)},
+    "boundaries": {"out": (".nc",), "csv": (".csv",), "geojson": (".json", ".geojson")},
+    "simulate": {"out": (".csv", ".png", ".pdf", ".svg")},
+    "simulate --map": {"out": (".nc", ".png", ".pdf")},
+    "table": {"out": (".md", ".csv", ".txt")},
+}
+
+
+def _output_rules(args) -> None:
+    """The rules every writing command follows, checked before any work: an output file has a
+    name with a known ending (``out: ...`` otherwise), its directory exists and is writable, and an
+    existing file is replaced only with ``--overwrite``; ``paper`` and ``bench`` write into a
+    directory that exists or whose parent does."""
+    from atlas.data.io import check_output_path
+
+    command = args.command
+    if command == "simulate" and args.outcome_map:
+        command = "simulate --map"
+    for opt, endings in _EXTENSIONS.get(command, {}).items():
+        path = getattr(args, opt, None)
+        if path is None:
+            continue
+        if not path.strip():
+            raise ValueError(f"{opt}: empty path")
+        if not path.lower().endswith(endings):
+            raise ValueError(
+                f"{opt}: expected a file name ending in {', '.join(endings)}, got {path!r}"
+            )
+        if opt != "store" and command != "generate":  # generate checks after --resume/--store
+            check_output_path(path, getattr(args, "overwrite", False))
+    if command in ("paper", "bench") and args.out is not None:
+        _check_output_dir(args.out)
+
+
+def _check_output_dir(path: str) -> None:
+    """``out``: a directory that exists and is writable, or can be created (its parent exists)."""
+    from atlas.data.io import check_output_path
+
+    if not path.strip():
+        raise ValueError("out: empty path")
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise NotADirectoryError(f"out: {path} is not a directory")
+    probe = os.path.join(path, ".atlas-probe") if os.path.isdir(path) else path.rstrip("/")
+    check_output_path(probe, overwrite=True)
 
 
 def _positive_int(name):
@@ -360,7 +431,7 @@ def _cmd_generate(args, argv) -> int:
     dist = (args.scheduler, args.store, args.slab, args.block2)
     if args.resume or any(a is not None for a in dist):
         return _cmd_generate_distributed(args, argv, scene)
-    out = args.out or f"{scene.name}.nc"
+    out = args.out if args.out is not None else f"{scene.name}.nc"
     if _limits(args, _generate_estimate(args, scene, [out])):
         return 0
     check_output_path(out, args.overwrite)  # fail before any computation
@@ -541,7 +612,7 @@ def _require_dask(scheduler) -> None:
 def _store_arg(args, scene) -> str:
     """The zarr store of ``--store`` (default: the netCDF name with ``.zarr``), checked against
     ``--resume`` / ``--overwrite``."""
-    stem = args.out or f"{scene.name}.nc"
+    stem = args.out if args.out is not None else f"{scene.name}.nc"
     store = args.store or (os.path.splitext(stem)[0] + ".zarr")
     if args.resume and args.overwrite:
         raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
@@ -591,7 +662,7 @@ def _cmd_dispatch(args) -> int:
     if args.command in _TOGETHER:
         from atlas.data.io import committed_together
 
-        with committed_together():
+        with committed_together(overwrite=getattr(args, "overwrite", False)):
             rc = fn(**opts)
     else:
         rc = fn(**opts)
@@ -767,6 +838,7 @@ def _interrupted(e) -> int:
 def _main(argv) -> int:
     try:
         args = build_parser().parse_args(argv)
+        _output_rules(args)
         if args.command == "generate":
             return _cmd_generate(args, argv)
         return _cmd_dispatch(args)

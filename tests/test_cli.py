@@ -170,7 +170,7 @@ def test_dispatch_passes_options(monkeypatch):
     monkeypatch.setitem(sys.modules, "atlas._fake_table", fake)
     monkeypatch.setitem(cli._DISPATCH, "table", ("atlas._fake_table", "run_cli"))
     assert cli.main(["table", "--format", "csv"]) == 0
-    assert seen == {"format": "csv", "out": None}
+    assert seen == {"format": "csv", "out": None, "overwrite": False}
 
 
 def test_no_subcommand_is_usage_error(capsys):
@@ -626,3 +626,85 @@ def test_a_full_disk_under_the_store_says_how_to_resume(tmp_path, monkeypatch, c
     monkeypatch.setattr(xr.Dataset, "to_zarr", to_zarr)
     assert cli.main([*args, "--resume"]) == 0
     assert "1 computed, 1 verified" in capsys.readouterr().err
+
+
+# --- one option parser and the output rules of every writer ---------------------------------------
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["generate", "--beta1", "0:2PI:8", "--beta2", "0:2pi:8"], "beta1"),  # case-sensitive
+        (["generate", *TINY, "--out", ""], "out: empty path"),
+        (["generate", *TINY, "--out", "{d}/a.txt"], "out: expected a file name ending in .nc"),
+        (["generate", *TINY, "--store", "{d}/s.db", "--out", "{d}/a.nc"], "store:"),
+        (["mechanism", "ladder", "--out", "{d}/m.csv"], "out:"),
+        (["boundaries", *TINY, "--kappa", "2", "--csv", "{d}/b.txt"], "csv:"),
+        (["boundaries", *TINY, "--kappa", "2", "--geojson", ""], "geojson: empty path"),
+        (["simulate", "--case", "fig2b", "--out", "{d}/fig.nc"], "out:"),  # before simulating
+        (["simulate", "--map", "--out", "{d}/map.csv"], "out:"),
+        (["table", "--out", "{d}/t.nc"], "out:"),
+        (["table", "--out", "{d}/missing/t.md"], "out: directory"),  # never created silently
+        (["simulate", "--case", "fig2b", "--out", "/proc/s.csv"], "out: directory /proc is not"),
+        (["paper", "--out", "/proc/paper"], "out: directory /proc is not"),
+        (["paper", "--out", "{d}/no/such/dir"], "out: directory"),
+        (["bench", "--out", "{d}/existing.md"], "out: "),  # a file, not a directory
+        (["generate", *TINY, "--dtype", "float16"], "dtype"),
+        (["generate", "--no-such-option"], "unrecognized"),
+        (["nonsense"], "invalid choice"),
+    ],
+)
+def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):
+    """One line ``atlas: error: ...`` naming the parameter for every subcommand (argparse's
+    errors included), exit 2, before any work, and no file or directory made."""
+    (tmp_path / "existing.md").write_text("keep me")
+    args = [a.format(d=tmp_path) for a in args]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, name, args)
+    assert err.startswith("atlas: error: "), err
+    assert sorted(os.listdir(tmp_path)) == ["existing.md"]
+    assert (tmp_path / "existing.md").read_text() == "keep me"
+
+
+def test_negative_range_start_needs_no_equals_sign(capsys):
+    args = ["generate", "--beta1", "-0.5pi:0.5pi:8", "--beta2", "-pi:pi:4", "--kappa", "2"]
+    assert cli.main([*args, "--q", "-0", "--dry-run"]) == 0
+    assert capsys.readouterr().out.startswith("atlas generate: 32 points")
+
+
+def test_table_and_simulate_replace_only_with_overwrite(tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    out.write_text("keep me")
+    assert cli.main(["table", "--format", "csv", "--out", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert cli.main(["table", "--format", "csv", "--out", str(out), "--overwrite"]) == 0
+    assert out.read_text().startswith("class")
+    sim = tmp_path / "s.csv"
+    sim.write_text("keep me")
+    args = ["simulate", "--case", "fig2b", "--t-end", "1", "--out", str(sim)]
+    assert cli.main(args) == 2 and sim.read_text() == "keep me"
+    assert cli.main([*args, "--overwrite"]) == 0 and sim.read_text().startswith("t,kind")
+
+
+def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, capsys):
+    """``atlas paper`` keeps the files finished before a Ctrl-C: the message says which."""
+    import types
+
+    from atlas.data.io import atomic_write_text
+
+    def run(out, **_):
+        atomic_write_text(os.path.join(out, "table2.md"), "done\n")
+        with open(os.path.join(out, "partial.tmp"), "w"):
+            pass
+        os.unlink(os.path.join(out, "partial.tmp"))
+        raise KeyboardInterrupt
+
+    fake = types.ModuleType("atlas._fake_paper")
+    fake.run = run
+    monkeypatch.setitem(sys.modules, "atlas._fake_paper", fake)
+    monkeypatch.setitem(cli._DISPATCH, "paper", ("atlas._fake_paper", "run"))
+    assert cli.main(["paper", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err
+    assert "no partial output file left; complete before it: " in err
+    assert str(tmp_path / "table2.md") in err

@@ -66,7 +66,7 @@ import xarray as xr
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
-from atlas.core import brackets
+from atlas.core import brackets, checks
 from atlas.data import boundary_tips, marching
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
@@ -552,8 +552,9 @@ def slice_boundaries(
 ) -> Boundaries:
     """The boundary curves of one slice ``(kappa, q1, q2)`` over the grid ``beta1 x beta2``
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
-    _check_args(tol, chord, check, max_levels, fields)
-    model = (float(kappa), float(q1), float(q2))
+    fields = _check_args(tol, chord, check, max_levels, fields)
+    dtype = checks.float_dtype(dtype)
+    model = tuple(float(checks.real(k, v)) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
     out = Boundaries()
     by_field = {}
     for fld in fields:
@@ -597,13 +598,19 @@ def _check_args(tol, chord, check, max_levels, fields):
         raise ValueError(f"tol: must be in (0, 0.1) rad, got {tol!r}")
     if not (isinstance(chord, (int, float)) and tol <= chord):
         raise ValueError(f"chord: must be >= tol ({tol}), got {chord!r}")
-    if not (isinstance(check, int) and check >= 0):
+    if not (isinstance(check, int) and not isinstance(check, bool) and check >= 0):
         raise ValueError(f"check: must be a non-negative integer, got {check!r}")
-    if not (isinstance(max_levels, int) and max_levels >= 0):
+    if not (isinstance(max_levels, int) and not isinstance(max_levels, bool) and max_levels >= 0):
         raise ValueError(f"max_levels: must be a non-negative integer, got {max_levels!r}")
+    if isinstance(fields, str):  # "SS", "SS,II"
+        fields = tuple(f.strip() for f in fields.split(",") if f.strip())
+    fields = tuple(fields)
     bad = [f for f in fields if f not in brackets.FIELDS]
     if bad or not fields:
-        raise ValueError(f"fields: must be a non-empty subset of {list(brackets.FIELDS)}")
+        raise ValueError(
+            f"fields: must be a non-empty subset of {list(brackets.FIELDS)}, got {fields!r}"
+        )
+    return fields
 
 
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:

@@ -77,7 +77,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from atlas.core import interrupts
+from atlas.core import checks, interrupts
 from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
 from atlas.data.engine import (
     DEFAULT_TILE_POINTS,
@@ -867,6 +867,7 @@ def _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_poi
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     method, dtype, tile_points = check_options(method, dtype, tile_points)
+    resolve = checks.boolean("resolve", resolve)
     _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab, block2)

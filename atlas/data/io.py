@@ -116,11 +116,12 @@ _GROUP: list | None = None
 
 
 @contextlib.contextmanager
-def committed_together():
+def committed_together(overwrite: bool | None = None):
     """Every :class:`AtomicFile` committed inside the block is renamed onto its path only when the
     block ends without error, all together; otherwise none is (their temporary files are removed).
     Multi-file outputs (``atlas boundaries``' netCDF, CSV and GeoJSON, ``atlas paper``) are thus
-    complete or absent.  Nested blocks join the outermost one."""
+    complete or absent.  Nested blocks join the outermost one.  ``overwrite`` (if not None)
+    applies to every file of the block: ``False`` refuses to replace any existing file."""
     global _GROUP
     if _GROUP is not None:
         yield
@@ -131,6 +132,8 @@ def committed_together():
         _GROUP = None
         interrupts.check()
         for f in pending:
+            if overwrite is not None:
+                f.overwrite = overwrite
             f.check_target()
         for f in pending:
             f.rename()
@@ -156,7 +159,7 @@ class AtomicFile:
         self.path = os.fspath(path)
         self.overwrite = overwrite
         directory = os.path.dirname(os.path.abspath(self.path))
-        os.makedirs(directory, exist_ok=True)
+        os.makedirs(directory, exist_ok=True)  # the library's writers create their directory
         name = os.path.basename(self.path)
         self.tmp = os.path.join(directory, f".{name}.{secrets.token_hex(12)}{suffix}")
 

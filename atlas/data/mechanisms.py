@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from atlas.core import config
+from atlas.core import checks, config
 from atlas.core.mechanism import BODIES, VERDICT_NAMES, body_invariants, verdicts_at
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, to_storage, variable_attrs
@@ -106,6 +106,7 @@ def mechanism_atlas(name: str, *, dtype: str = "float64", **axes) -> xr.Dataset:
     axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``)."""
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
+    dtype = checks.float_dtype(dtype)
     scene = MECHANISM_SCENES[name]
     values = _axis_values(scene, axes)
     grids = np.meshgrid(*values.values(), indexing="ij")

@@ -245,3 +245,15 @@ def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
     assert "fields:" in capsys.readouterr().err
     assert main(args + ["--out", str(out)]) == 2  # exists, no --overwrite: untouched
     assert "exists" in capsys.readouterr().err
+
+
+def test_fields_as_a_string_and_float16_refused():
+    """``fields="SS"`` is the one field SS (it was refused as "not a subset"); float16 refused."""
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:8", kappa=2, q=0.1)
+    ss = bd.boundaries(scene, fields="SS")
+    assert {c.field for c in ss.curves} <= {"SS", "class"}
+    assert any(c.field == "SS" for c in ss.curves)
+    with pytest.raises(ValueError, match="^dtype: must be float32 or float64"):
+        bd.boundaries(scene, dtype="float16")
+    with pytest.raises(ValueError, match="^fields: "):
+        bd.boundaries(scene, fields="SS,XX")

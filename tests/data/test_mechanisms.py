@@ -95,3 +95,8 @@ def test_cli_writes_the_mechanism_atlas(tmp_path, capsys):
         assert ds.sizes == {"theta": 4, "mu": 2} and ds.mu.attrs["units"] == "1"
     assert main(["mechanism", "ladder", "--h", "1"]) == 2
     assert "h: not an axis of ladder" in capsys.readouterr().err
+
+
+def test_float16_refused():
+    with pytest.raises(ValueError, match="^dtype: must be float32 or float64"):
+        mechanism_atlas("ladder", theta="0.1:1:3", mu="0:1:3", dtype="float16")
