@@ -432,9 +432,9 @@ def _cmd_generate(args, argv) -> int:
     if args.resume or any(a is not None for a in dist):
         return _cmd_generate_distributed(args, argv, scene)
     out = args.out if args.out is not None else f"{scene.name}.nc"
+    check_output_path(out, args.overwrite)  # fail before any computation
     if _limits(args, _generate_estimate(args, scene, [out])):
         return 0
-    check_output_path(out, args.overwrite)  # fail before any computation
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     stats = generate_to_file(
@@ -485,10 +485,10 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
 
     store = _store_arg(args, scene)
     outs = [store] if args.out is None else [store, args.out]
-    if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
-        return 0
     if args.out is not None:
         check_output_path(args.out, args.overwrite)  # fail before any computation
+    if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
+        return 0
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     try:
