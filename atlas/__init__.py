@@ -5,7 +5,11 @@ The package is layered; imports go one way (checked by import-linter in CI, see 
 <- ``atlas.paper`` / ``atlas.explore`` / ``atlas.bench`` <- ``atlas.cli``.
 """
 
-from atlas.core.config import __version__, enable_x64
+from atlas.core import interrupts as _interrupts
+
+_interrupts.exit_during_imports()  # the command line: a signal before main() just ends it
+
+from atlas.core.config import __version__, enable_x64  # noqa: E402
 
 enable_x64()  # float64 kernels are first-class (SPEC §4)
 

@@ -7,7 +7,9 @@ implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, `
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
-code 2 -- never a traceback.  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
+code 2 -- never a traceback; so is a run that cannot fit (``size: ...``, see ``--dry-run``) and a
+failed write (``out: cannot write PATH: no space left on device``).  SIGINT / SIGTERM end a run
+with exit 130 / 143 and nothing committed after them (see the signals section below).  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
 ``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
 ~15 s compilation of the eigenvalue kernel.
 
@@ -29,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import math
 import os
 import re
 import shlex
@@ -43,11 +46,22 @@ __all__ = ["main", "build_parser"]
 EXIT_USAGE = 2
 
 
+#: argument strings that are negative numbers or ranges, never options (``-1``, ``-0.5pi:1:3``,
+#: ``--mu -1:2:4``), so that the validators, not argparse, report them
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|pi|inf|nan)")
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (no usage dump) and exit code 2."""
+    """argparse with one-line errors ``atlas: error: ...`` (no usage dump, one prefix for every
+    subcommand) and exit code 2.  Values that start with ``-`` and then a digit, ``.`` or ``pi``
+    are values, not options: ``--beta1 -0.5pi:0.5pi:9`` needs no ``=``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE
 
     def error(self, message):  # noqa: D401 - argparse API
-        raise _UsageError(f"{self.prog}: error: {message}")
+        raise _UsageError(f"atlas: error: {message}")
 
 
 class _UsageError(Exception):
@@ -125,7 +139,22 @@ def _add_generate(sub) -> None:
         help="keep undecided points instead of resolving them exactly",
     )
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_limits(g)
     _add_distributed(g)
+
+
+def _add_limits(p) -> None:
+    """``--dry-run`` and ``--no-size-check`` (see :mod:`atlas.data.limits`)."""
+    p.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="print the estimated points, output bytes, peak memory and time, then stop",
+    )
+    p.add_argument(
+        "--no-size-check",
+        action="store_true",
+        help="run even when the estimate exceeds the free memory or disk space",
+    )
 
 
 def _add_distributed(g) -> None:
@@ -164,10 +193,6 @@ def _add_distributed(g) -> None:
     )
 
 
-#: argument strings that are negative numbers or ranges, never options (``-1``, ``-0.5pi:1:3``)
-_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|pi|inf|nan)", re.IGNORECASE)
-
-
 def _add_mechanism(sub) -> None:
     from atlas.data.mechanisms import MECHANISM_SCENES
 
@@ -181,9 +206,6 @@ def _add_mechanism(sub) -> None:
             for n, sc in MECHANISM_SCENES.items()
         ),
     )
-    # a range may start below zero (``--mu -1:2:4``): such values are arguments, not options, so
-    # that the physical validation reports them
-    pm._negative_number_matcher = _NEGATIVE_VALUE
     pm.add_argument("name", choices=sorted(MECHANISM_SCENES), help="built-in mechanism scene")
     axes = sorted({a for sc in MECHANISM_SCENES.values() for a in sc.axes})
     for a in axes:
@@ -199,6 +221,7 @@ def _add_mechanism(sub) -> None:
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+    _add_limits(pm)
 
 
 def _add_boundaries(sub) -> None:
@@ -245,11 +268,18 @@ def _add_boundaries(sub) -> None:
     pb.add_argument("--geojson", metavar="FILE.json", help="GeoJSON FeatureCollection")
     pb.add_argument("--overwrite", action="store_true", help="replace existing output files")
     pb.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+    _add_limits(pb)
 
 
 def _add_paper(sub) -> None:
     pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
-    pp.add_argument("--out", default="outputs", metavar="DIR", help="output directory")
+    pp.add_argument(
+        "--out",
+        default="outputs",
+        metavar="DIR",
+        help="output directory (created if its parent exists; the files atlas paper writes "
+        "are replaced)",
+    )
     pp.add_argument("--quick", action="store_true", help="low resolution (seconds, for CI)")
 
 
@@ -262,7 +292,10 @@ def _add_simulate(sub) -> None:
         )
     for name in ("k1", "k2", "q1", "q2", "t-end"):
         ps.add_argument(f"--{name}", type=_number(name), metavar="X")
-    ps.add_argument("--out", metavar="FILE", help="output file (figure or data)")
+    ps.add_argument(
+        "--out", metavar="FILE", help="output file: .csv, .png, .pdf, .svg (--map: .nc, .png, .pdf)"
+    )
+    ps.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     ps.add_argument(
         "--map",
         dest="outcome_map",
@@ -281,20 +314,74 @@ def _add_simulate(sub) -> None:
         default="fast",
         help="map engine: fast (batched, certified early stops), numpy (exact reference), jax",
     )
+    _add_limits(ps)
 
 
 def _add_table(sub) -> None:
     pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
     pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
-    pt.add_argument("--out", metavar="FILE", help="output file (default: stdout)")
+    pt.add_argument("--out", metavar="FILE", help="output file .md or .csv (default: stdout)")
+    pt.add_argument("--overwrite", action="store_true", help="replace an existing output file")
 
 
 def _add_bench(sub) -> None:
     pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
     pb.add_argument(
-        "--out", metavar="DIR", help="output directory (default: outputs, --quick: outputs/quick)"
+        "--out",
+        metavar="DIR",
+        help="output directory (default: outputs, --quick: outputs/quick; created if its parent "
+        "exists; the files atlas bench writes are replaced)",
     )
+
+
+#: the output options of each command and the file name endings they take
+_EXTENSIONS = {
+    "generate": {"out": (".nc",), "store": (".zarr",)},
+    "mechanism": {"out": (".nc",)},
+    "boundaries": {"out": (".nc",), "csv": (".csv",), "geojson": (".json", ".geojson")},
+    "simulate": {"out": (".csv", ".png", ".pdf", ".svg")},
+    "simulate --map": {"out": (".nc", ".png", ".pdf")},
+    "table": {"out": (".md", ".csv", ".txt")},
+}
+
+
+def _output_rules(args) -> None:
+    """The rules every writing command follows, checked before any work: an output file has a
+    name with a known ending (``out: ...`` otherwise), its directory exists and is writable, and an
+    existing file is replaced only with ``--overwrite``; ``paper`` and ``bench`` write into a
+    directory that exists or whose parent does."""
+    from atlas.data.io import check_output_path
+
+    command = args.command
+    if command == "simulate" and args.outcome_map:
+        command = "simulate --map"
+    for opt, endings in _EXTENSIONS.get(command, {}).items():
+        path = getattr(args, opt, None)
+        if path is None:
+            continue
+        if not path.strip():
+            raise ValueError(f"{opt}: empty path")
+        if not path.lower().endswith(endings):
+            raise ValueError(
+                f"{opt}: expected a file name ending in {', '.join(endings)}, got {path!r}"
+            )
+        if opt != "store" and command != "generate":  # generate checks after --resume/--store
+            check_output_path(path, getattr(args, "overwrite", False))
+    if command in ("paper", "bench") and args.out is not None:
+        _check_output_dir(args.out)
+
+
+def _check_output_dir(path: str) -> None:
+    """``out``: a directory that exists and is writable, or can be created (its parent exists)."""
+    from atlas.data.io import check_output_path
+
+    if not path.strip():
+        raise ValueError("out: empty path")
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise NotADirectoryError(f"out: {path} is not a directory")
+    probe = os.path.join(path, ".atlas-probe") if os.path.isdir(path) else path.rstrip("/")
+    check_output_path(probe, overwrite=True)
 
 
 def _positive_int(name):
@@ -381,8 +468,10 @@ def _cmd_generate(args, argv) -> int:
     dist = (args.scheduler, args.store, args.slab, args.block2)
     if args.resume or any(a is not None for a in dist):
         return _cmd_generate_distributed(args, argv, scene)
-    out = args.out or f"{scene.name}.nc"
+    out = args.out if args.out is not None else f"{scene.name}.nc"
     check_output_path(out, args.overwrite)  # fail before any computation
+    if _limits(args, _generate_estimate(args, scene, [out])):
+        return 0
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     stats = generate_to_file(
@@ -432,8 +521,11 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
     from atlas.data.distributed import generate_distributed
 
     store = _store_arg(args, scene)
+    outs = [store] if args.out is None else [store, args.out]
     if args.out is not None:
         check_output_path(args.out, args.overwrite)  # fail before any computation
+    if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
+        return 0
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     try:
@@ -460,8 +552,86 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         raise KeyboardInterrupt(
             f"finished tiles are kept in {store}: continue with the same command and --resume"
         ) from None
+    except (OSError, RuntimeError) as e:
+        from atlas.data.io import write_error
+
+        err = e if ": cannot write " in str(e) else write_error(store, e, "store")
+        if err is None:  # not a failed write (a refused argument, a bug)
+            raise
+        if os.path.isdir(store):
+            raise OSError(
+                f"{err}; finished tiles are kept in {store}: make room and continue with the same "
+                "command and --resume"
+            ) from None
+        raise err from None
     print(_distributed_summary(s), file=sys.stderr)
     return 0
+
+
+def _generate_estimate(args, scene, outs, scheduler=False):
+    """The :class:`atlas.data.limits.Estimate` of an ``atlas generate`` run (``scheduler``:
+    that of the distributed path, ``False``: the streamed netCDF file)."""
+    from atlas.data.limits import generate_estimate
+
+    workers = 1
+    if isinstance(scheduler, str) and scheduler.startswith("local"):
+        n = scheduler.partition(":")[2]
+        workers = int(n) if n else (os.cpu_count() or 1)
+    return generate_estimate(
+        scene,
+        dtype=args.dtype,
+        tile_points=args.tile_points,
+        distributed=scheduler is not False,
+        workers=workers,
+        outputs=outs,
+    )
+
+
+def _limits(args, estimate) -> bool:
+    """Print the estimate with ``--dry-run`` (true: stop here), else refuse a run that cannot
+    fit (unless ``--no-size-check``)."""
+    if estimate is None:
+        return False
+    if args.dry_run:
+        print(estimate.describe())
+        return True
+    if not args.no_size_check:
+        estimate.check()
+    return False
+
+
+def _dispatch_estimate(args):
+    """The estimate of a dispatched command that holds its grid in memory, or ``None``."""
+    from atlas.data import limits
+    from atlas.data.scene import parse_values
+
+    if args.command == "mechanism":
+        from atlas.data.mechanisms import MECHANISM_SCENES
+
+        sc = MECHANISM_SCENES.get(args.name)
+        if sc is None:
+            return None
+        points = 1
+        for axis, (default, *_r) in sc.axes.items():
+            spec = getattr(args, axis, None)
+            points *= parse_values(default if spec is None else spec, axis)[0].size
+        outs = [args.out] if args.out else []
+        return limits.grid_estimate("mechanism", points, outputs=outs, **limits.MECHANISM)
+    if args.command == "boundaries":
+        from atlas.data.scene import Scene
+
+        axes = {k: getattr(args, k) for k in ("beta1", "beta2", "kappa", "q", "q1", "q2")}
+        scene = Scene(**{k: v for k, v in axes.items() if v is not None})
+        slices = math.prod(scene.axes[m].size for m in scene.model_names)
+        grid = scene.axes["beta1"].size * scene.axes["beta2"].size * max(1, args.check) ** 2
+        outs = [p for p in (args.out, args.csv, args.geojson) if p]
+        return limits.grid_estimate("boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES)
+    if args.command == "simulate" and args.outcome_map:
+        n = 24 if args.n is None else args.n
+        runs = n * n * max(1, args.n_perturb or 1)
+        outs = [args.out] if args.out else []
+        return limits.grid_estimate("simulate --map", runs, outputs=outs, **limits.OUTCOME_MAP)
+    return None
 
 
 def _require_dask(scheduler) -> None:
@@ -480,7 +650,7 @@ def _require_dask(scheduler) -> None:
 def _store_arg(args, scene) -> str:
     """The zarr store of ``--store`` (default: the netCDF name with ``.zarr``), checked against
     ``--resume`` / ``--overwrite``."""
-    stem = args.out or f"{scene.name}.nc"
+    stem = args.out if args.out is not None else f"{scene.name}.nc"
     store = args.store or (os.path.splitext(stem)[0] + ".zarr")
     if args.resume and args.overwrite:
         raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
@@ -501,7 +671,8 @@ def _distributed_summary(s: dict) -> str:
         f"({s['points_per_second']:.3g} points/s) on {s['scheduler']} with {s['workers']} "
         f"worker(s); {s['tiles']} tiles: {len(s['computed'])} computed, {len(s['verified'])} "
         f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
-        f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
+        + (f"repaired {', '.join(s['repaired'])}; " if s.get("repaired") else "")
+        + f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
     )
 
 
@@ -520,70 +691,203 @@ _DISPATCH = {
 
 
 def _cmd_dispatch(args) -> int:
+    if hasattr(args, "dry_run") and _limits(args, _dispatch_estimate(args)):
+        return 0
     module, func = _DISPATCH[args.command]
     fn = getattr(importlib.import_module(module), func)
-    opts = {k: v for k, v in vars(args).items() if k != "command"}
-    rc = fn(**opts)
+    skip = ("command", "dry_run", "no_size_check")
+    opts = {k: v for k, v in vars(args).items() if k not in skip}
+    if args.command in _TOGETHER:
+        from atlas.data.io import committed_together
+
+        with committed_together(overwrite=getattr(args, "overwrite", False)):
+            rc = fn(**opts)
+    else:
+        rc = fn(**opts)
     return rc if isinstance(rc, int) else 0
 
 
-#: seconds after which an unacknowledged SIGTERM is delivered again
-SIGTERM_REPEAT = 5.0
+#: commands whose output files are committed together at the end, or none of them
+#: (``paper`` and ``bench`` read back what they wrote and keep the files finished before a stop)
+_TOGETHER = ("mechanism", "boundaries", "simulate", "table")
 
 
-def _sigterm(signum, frame):
-    """SIGTERM (and its repeats) -> KeyboardInterrupt, so temporary files are cleaned up as on
-    Ctrl-C.  A KeyboardInterrupt raised while Python runs a gc or ``__del__`` callback is swallowed
-    ("Exception ignored in ..."); an alarm re-delivers it every ``SIGTERM_REPEAT`` s until
-    :func:`main` has caught it."""
-    if hasattr(signal, "setitimer"):
-        signal.signal(signal.SIGALRM, _sigterm)
-        signal.setitimer(signal.ITIMER_REAL, SIGTERM_REPEAT)
+# --- signals -------------------------------------------------------------------------------------
+#
+# SIGINT and SIGTERM are recorded in atlas.core.interrupts and raised as KeyboardInterrupt, so every
+# writer removes its temporary files as on Ctrl-C; the run exits 128 + the signal number (130 for
+# SIGINT, 143 for SIGTERM).  The KeyboardInterrupt can be lost (raised inside a gc callback it is
+# only reported), so: the writers check the record before every commit and between tiles
+# (no output is committed after a signal), a swallowed KeyboardInterrupt is raised again at once
+# (sys.unraisablehook) and, as a last resort, an alarm raises it again every SIGNAL_REPEAT seconds
+# until main() has caught it.  main() cancels the alarm on every way out.  A run that received a
+# signal never exits 0, even when its outputs were complete before the signal came.  The console
+# script ends with os._exit after flushing (no interpreter teardown under XLA threads, where a late
+# signal could still kill the process); from then on a signal ends the process at once with 128 +
+# its number.
+
+#: seconds after which a stop signal that did not end the run is raised again
+SIGNAL_REPEAT = 5.0
+#: seconds after which a KeyboardInterrupt swallowed by a gc callback is raised again
+SIGNAL_RETRY = 0.02
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_ALARM = getattr(signal, "SIGALRM", None)
+_state = {"exit_now": False}
+
+
+def _arm(seconds: float) -> None:
+    if _ALARM is not None:
+        signal.setitimer(signal.ITIMER_REAL, seconds)
+
+
+def _on_signal(signum, frame):
+    """SIGINT / SIGTERM: record it; the first one raises KeyboardInterrupt (later ones are
+    delivered by the alarm while the first is unwinding, so cleanup is not cut short)."""
+    from atlas.core import interrupts
+
+    first = interrupts.requested() is None
+    interrupts.request(signum)
+    if _state["exit_now"]:
+        _hard_exit(128 + interrupts.requested())
+    if first:
+        _arm(SIGNAL_REPEAT)
+        raise KeyboardInterrupt
+
+
+def _on_alarm(signum, frame):
+    """The alarm: raise the recorded stop signal again (the last one was swallowed)."""
+    from atlas.core import interrupts
+
+    code = interrupts.requested()
+    if code is None:
+        return
+    if _state["exit_now"]:
+        _hard_exit(128 + code)
+    _arm(SIGNAL_REPEAT)
     raise KeyboardInterrupt
 
 
 def _unraisable(info):
-    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is not reported (the
-    alarm of :func:`_sigterm` delivers it again); anything else is, as by default."""
+    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is raised again at
+    once (by the alarm) and not reported; anything else is reported as by default."""
     if isinstance(info.exc_value, KeyboardInterrupt):
+        from atlas.core import interrupts
+
+        if interrupts.requested() is not None and not _state["exit_now"]:
+            _arm(SIGNAL_RETRY)
         return
     sys.__unraisablehook__(info)
 
 
-def _acknowledge_sigterm():
-    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
-        signal.setitimer(signal.ITIMER_REAL, 0)
+def _install_signals():
+    """Install the handlers (main thread only); returns what to restore, or ``None``."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    from atlas.core import interrupts
+
+    interrupts.clear()
+    _state["exit_now"] = False
+    saved = {s: signal.signal(s, _on_signal) for s in _STOP_SIGNALS}
+    if _ALARM is not None:
+        saved[_ALARM] = signal.signal(_ALARM, _on_alarm)
+    saved["unraisablehook"] = sys.unraisablehook
+    sys.unraisablehook = _unraisable
+    return saved
+
+
+def _restore_signals(saved) -> None:
+    """Cancel the alarm and put back the handlers of before :func:`main`."""
+    if saved is None:
+        return
+    from atlas.core import interrupts
+
+    _arm(0)
+    interrupts.clear()  # the library, called again in this process, runs normally
+    sys.unraisablehook = saved.pop("unraisablehook")
+    for s, h in saved.items():
+        signal.signal(s, h)
+
+
+def _hard_exit(code: int):  # pragma: no cover - ends the process
+    _arm(0)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:
+            pass
+    os._exit(code)
+
+
+def _signal_code(rc: int) -> int:
+    """The exit code of a run: ``128 + signal`` if a stop signal arrived at any time."""
+    from atlas.core import interrupts
+
+    signum = interrupts.requested()
+    if signum is None:
+        return rc
+    if rc not in (128 + signal.SIGINT, 128 + signum):  # the outputs were complete before it came
+        print("atlas: interrupted (after the run had finished)", file=sys.stderr)
+    return 128 + signum
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``atlas`` console script; returns the exit code."""
+    """Entry point of the ``atlas`` console script; returns the exit code (the console script
+    itself ends the process with it, see the comment above)."""
     console = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _sigterm)  # clean up temporary files like Ctrl-C does
-        sys.unraisablehook = _unraisable
+    saved = _install_signals()
+    written = sys.modules.get("atlas.data.io")
+    if written is not None:
+        written.forget_commits()
+    rc = 130
+    try:
+        try:
+            rc = _main(argv)
+        except KeyboardInterrupt as e:
+            _arm(0)
+            rc = _interrupted(e)
+        rc = _signal_code(rc)
+        _state["exit_now"] = console and saved is not None  # a signal now ends the process
+    except KeyboardInterrupt:  # a signal while the first one was being reported
+        _state["exit_now"] = console and saved is not None
+        rc = _signal_code(130)
+    finally:
+        _state["exit_now"] = console and saved is not None
+        if _state["exit_now"]:
+            _arm(0)
+        else:
+            _restore_signals(saved)
+    if console:
+        _hard_exit(rc)
+    return rc
+
+
+def _interrupted(e) -> int:
+    from atlas.core import interrupts
+
+    why = _one_line(e) or "no partial output file left"
+    done = sys.modules.get("atlas.data.io")
+    if done is not None and done.COMMITTED and not _one_line(e):
+        why += f"; complete before it: {', '.join(done.COMMITTED)}"
+    print(f"atlas: interrupted ({why})", file=sys.stderr)
+    return 128 + (interrupts.requested() or signal.SIGINT)
+
+
+def _main(argv) -> int:
     try:
         args = build_parser().parse_args(argv)
+        _output_rules(args)
         if args.command == "generate":
             return _cmd_generate(args, argv)
         return _cmd_dispatch(args)
     except _UsageError as e:
         print(_one_line(e), file=sys.stderr)
         return EXIT_USAGE
-    except (ValueError, OSError) as e:
+    except (ValueError, OSError, MemoryError) as e:
         print(f"atlas: error: {_one_line(e)}", file=sys.stderr)
         return EXIT_USAGE
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
-    except KeyboardInterrupt as e:
-        _acknowledge_sigterm()
-        why = _one_line(e) or "no partial output file left"
-        print(f"atlas: interrupted ({why})", file=sys.stderr)
-        if console:  # skip interpreter teardown under running XLA threads (it can segfault)
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os._exit(130)
-        return 130
     except Exception as e:  # a bug, not bad input: still one line (ATLAS_DEBUG=1 re-raises)
         if os.environ.get("ATLAS_DEBUG", "") not in ("", "0"):
             raise
@@ -592,10 +896,5 @@ def main(argv=None) -> int:
         return 1
 
 
-def _exit(code):  # pragma: no cover - trivial
-    _acknowledge_sigterm()  # a run that finished despite a swallowed SIGTERM: no late alarm
-    sys.exit(code)
-
-
 if __name__ == "__main__":  # pragma: no cover
-    _exit(main())
+    sys.exit(main())

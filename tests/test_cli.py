@@ -170,7 +170,7 @@ def test_dispatch_passes_options(monkeypatch):
     monkeypatch.setitem(sys.modules, "atlas._fake_table", fake)
     monkeypatch.setitem(cli._DISPATCH, "table", ("atlas._fake_table", "run_cli"))
     assert cli.main(["table", "--format", "csv"]) == 0
-    assert seen == {"format": "csv", "out": None}
+    assert seen == {"format": "csv", "out": None, "overwrite": False}
 
 
 def test_no_subcommand_is_usage_error(capsys):
@@ -192,7 +192,7 @@ def test_sigterm_leaves_no_partial_file(tmp_path):
         time.sleep(0.1)  # wait until the temporary file is being written
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=60)
-    assert p.returncode == 130, err
+    assert p.returncode == 128 + signal.SIGTERM, err
     assert "interrupted" in err and "Traceback" not in err
     assert os.listdir(tmp_path) == []
 
@@ -330,3 +330,383 @@ def test_swallowed_interrupt_is_not_reported_but_other_errors_are(capsys):
     finally:
         sys.__unraisablehook__ = default
     assert [str(i.exc_value) for i in forwarded] == ["boom"]
+
+
+# --- signals: SIGINT / SIGTERM always end the run, and nothing is committed after one ----------
+
+TINY_RUN = ["generate", *TINY, "--outputs", "class_code,stable_SS", "--no-progress"]
+
+
+def _handles_sigterm(pid) -> bool:
+    """True once the process catches SIGTERM (from the first line of the package's import)."""
+    import signal
+
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            mask = next(line for line in fh if line.startswith("SigCgt:")).split()[1]
+    except (OSError, StopIteration):
+        return False
+    return bool(int(mask, 16) >> (signal.SIGTERM - 1) & 1)
+
+
+def _stage(p, out) -> str:
+    """How far a run is: ``"start"`` (the interpreter), ``"main"`` (the package imports and
+    ``main()``: stop signals caught) or ``"write"`` (its temporary output file exists)."""
+    if any(n.endswith(".tmp") for n in os.listdir(out.parent)):
+        return "write"
+    return "main" if _handles_sigterm(p.pid) else "start"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+def test_sigterm_at_random_points_never_exits_0_nor_dies_late(tmp_path):
+    """SIGTERM at random points of whole runs, from the imports to just before exit: a run never
+    ends with exit 0 after the signal (ignored) nor by another signal (a late alarm), prints no
+    traceback and leaves no temporary file; with exit 143 (130 for SIGINT) the file is absent or
+    complete.  During the package imports a signal ends the run at once (130 / 143, no
+    traceback); before them, in the interpreter's start, SIGTERM kills by its default action
+    (-15).  Each delay counts from a stage of the run (``_stage``), in units of a warm-up run's
+    time from that stage to its exit; most trials aim at the end (tile writes, commit, exit)."""
+    import random
+    import signal
+    import time
+
+    env = _env()
+    warm = tmp_path / "warm" / "a.nc"
+    warm.parent.mkdir()
+    p = _spawn([*TINY_RUN, "--out", str(warm)], env)
+    seen = {}
+    while p.poll() is None:
+        seen.setdefault(_stage(p, warm), time.perf_counter())
+        time.sleep(0.002)
+    end = time.perf_counter()
+    _, err = p.communicate()
+    assert p.returncode == 0, err
+    left = {k: end - t for k, t in seen.items()}
+    rng = random.Random(28)
+    plan = [("start", rng.uniform(0, 0.5), signal.SIGTERM), ("main", 0.0, signal.SIGINT)]
+    plan += [("main", rng.uniform(0, 1), signal.SIGTERM)]
+    plan += [("write", rng.uniform(0, 1.3), signal.SIGTERM) for _ in range(5)]
+    outcomes = []
+    for batch in range(0, len(plan), 4):
+        trials = []
+        for k, (stage, f, sig) in enumerate(plan[batch : batch + 4], start=batch):
+            out = tmp_path / f"t{k}" / "a.nc"
+            out.parent.mkdir()
+            proc = _spawn([*TINY_RUN, "--out", str(out)], env)
+            at = time.perf_counter() + f if stage == "start" else None
+            delay = f * left.get(stage, 0)
+            trials.append(dict(out=out, stage=stage, delay=delay, p=proc, at=at, sig=sig))
+        pending = list(trials)
+        while pending:
+            for t in list(pending):
+                now = time.perf_counter()
+                if t["p"].poll() is not None:
+                    t["sent"] = None  # finished before its signal was due
+                    pending.remove(t)
+                elif t["at"] is None and _stage(t["p"], t["out"]) == t["stage"]:
+                    t["at"] = now + t["delay"]
+                elif t["at"] is not None and now >= t["at"]:
+                    t["sent"] = _stage(t["p"], t["out"])
+                    t["p"].send_signal(t["sig"])
+                    pending.remove(t)
+            time.sleep(0.002)
+        for t in trials:
+            _, err = t["p"].communicate(timeout=120)
+            rc, files = t["p"].returncode, os.listdir(t["out"].parent)
+            outcomes.append((t["stage"], t["sent"], rc, files))
+            assert "Traceback" not in err, err
+            assert not any(n.endswith(".tmp") for n in files), (files, err)
+            if t["sent"] is None:
+                assert rc == 0 and files == ["a.nc"], err
+            elif rc == -signal.SIGTERM:  # before the package's first line: nothing written
+                assert t["sent"] == "start" and files == [], err
+            else:
+                assert rc == 128 + t["sig"], (rc, err)
+                if files:
+                    with xr.open_dataset(t["out"]) as ds:  # complete before the signal came
+                        assert ds.attrs["undecided_after_resolve"] == 0
+    print("trials (aimed at, stage when sent, exit code, files):", outcomes)
+    assert sum(sent in ("main", "write") for _, sent, *_ in outcomes) >= 4
+
+
+def test_a_swallowed_signal_commits_nothing(tmp_path, monkeypatch, capsys):
+    """A SIGTERM whose KeyboardInterrupt was lost (as in a gc callback: recorded, not raised)
+    still ends the run with 143 before the file is committed, and main() leaves no alarm and
+    its signal handlers restored."""
+    import signal
+
+    from atlas.core import interrupts
+    from atlas.data import io as aio
+
+    begin = aio.NetCDFSink.begin
+
+    def begin_then_swallowed_signal(self, sch):
+        begin(self, sch)
+        interrupts.request(signal.SIGTERM)
+
+    monkeypatch.setattr(aio.NetCDFSink, "begin", begin_then_swallowed_signal)
+    before = signal.getsignal(signal.SIGTERM)
+    out = tmp_path / "a.nc"
+    assert cli.main([*TINY_RUN, "--out", str(out)]) == 128 + signal.SIGTERM
+    assert os.listdir(tmp_path) == []
+    assert "interrupted" in capsys.readouterr().err
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+    assert signal.getsignal(signal.SIGTERM) is before
+    # the next run in the same process starts without the old signal
+    monkeypatch.setattr(aio.NetCDFSink, "begin", begin)
+    assert cli.main([*TINY_RUN, "--out", str(out)]) == 0 and out.exists()
+
+
+def test_signal_after_the_commit_is_not_exit_0(tmp_path, monkeypatch, capsys):
+    """A signal that comes after the output was committed: the file is complete, the exit code
+    still says the run was interrupted (never 0 after a signal)."""
+    import signal
+
+    from atlas.core import interrupts
+    from atlas.data import io as aio
+
+    generate_to_file = aio.generate_to_file
+
+    def then_signal(*a, **kw):
+        stats = generate_to_file(*a, **kw)
+        interrupts.request(signal.SIGTERM)
+        return stats
+
+    monkeypatch.setattr(aio, "generate_to_file", then_signal)
+    out = tmp_path / "a.nc"
+    assert cli.main([*TINY_RUN, "--out", str(out)]) == 143
+    assert "after the run had finished" in capsys.readouterr().err
+    with xr.open_dataset(out) as ds:
+        assert ds.class_code.shape == (8, 8)
+
+
+# --- sizes: refused before any work -------------------------------------------------------------
+
+HUGE_AXES = ["--beta1", "0:2pi:10000000", "--beta2", "0:2pi:10000000"]
+
+
+@pytest.mark.parametrize(
+    "args, limit",
+    [
+        (["generate", *HUGE_AXES], "free"),  # 1e14 points of every output: the disk
+        (["generate", *HUGE_AXES, "--kappa", "0.5,2"], "memory"),
+        (["generate", *HUGE_AXES, "--scheduler", "inprocess"], "free"),
+        (["generate", *HUGE_AXES, "--scheduler", "local:2"], "free"),
+        (["boundaries", *HUGE_AXES, "--kappa", "2", "--q", "0.1"], "memory"),
+        (["mechanism", "ladder", "--theta", "0.1:1:10000000", "--mu", "0:1:10000000"], "memory"),
+        (["simulate", "--map", "--n", "10000000"], "memory"),
+    ],
+)
+def test_a_1e14_point_scene_is_refused_at_once(args, limit, tmp_path, capsys):
+    """One line naming the numbers and the way out, exit 2, nothing written, in well under a
+    second of CPU (most of it parsing the two 1e7-value axes; no cluster is started)."""
+    import time
+
+    out = tmp_path / "a.nc"
+    t0 = time.process_time()
+    assert cli.main([*args, "--out", str(out)]) == 2
+    cpu = time.process_time() - t0
+    err = capsys.readouterr().err
+    _check_one_line(err, "size:", args)
+    assert "e+14 points" in err and limit in err and "coarser" in err
+    assert os.listdir(tmp_path) == []
+    assert cpu < 1.0, cpu
+
+
+def test_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "a.nc"
+    assert cli.main([*TINY_RUN, "--out", str(out), "--dry-run"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("atlas generate: 64 points; output ~128 B uncompressed; peak memory")
+    assert os.listdir(tmp_path) == []
+
+
+# --- faults: a full disk is one line naming the path, and nothing partial is left ---------------
+
+
+@pytest.fixture
+def full_disk(monkeypatch):
+    """A full file system for the outputs whose names end with one of ``full_disk.suffixes``:
+    their temporary files are links to ``/dev/full`` (every write fails with ENOSPC); netCDF
+    files (HDF5 refuses to open the link) fail as HDF5 does on a full disk, with netCDF4's
+    ``RuntimeError: NetCDF: HDF error`` after part of the file was written, and the file
+    system reports no free space."""
+    from atlas.data import io as aio
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("needs /dev/full")
+    init = aio.AtomicFile.__init__
+    state = type("FullDisk", (), {"suffixes": ("",)})()
+
+    def on_full_disk(self, path, *a, **kw):
+        init(self, path, *a, **kw)
+        if str(path).endswith(state.suffixes) and not str(path).endswith(".nc"):
+            os.symlink("/dev/full", self.tmp)
+
+    def hdf_error(path):
+        if str(path).endswith(state.suffixes):
+            raise RuntimeError("NetCDF: HDF error")
+
+    to_netcdf, write = xr.Dataset.to_netcdf, aio.NetCDFSink.write
+
+    def to_netcdf_full(self, path, *a, **kw):
+        with open(path, "wb") as fh:
+            fh.write(b"\x89HDF\r\n\x1a\n")
+        hdf_error(path)
+        return to_netcdf(self, path, *a, **kw)
+
+    class Unwritable:  # a tile whose write into the netCDF variable fails
+        def __array__(self, *a, **kw):
+            hdf_error(self_path[0])
+
+    def write_full(self, name, index, block):
+        self_path[:] = [self.path]
+        full = str(self.path).endswith(state.suffixes)
+        return write(self, name, index, Unwritable() if full else block)
+
+    self_path = [None]
+
+    monkeypatch.setattr(aio.AtomicFile, "__init__", on_full_disk)
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", to_netcdf_full)
+    monkeypatch.setattr(aio.NetCDFSink, "write", write_full)
+    monkeypatch.setattr(aio, "_FULL", float("inf"))  # below any free space: "full"
+    return state
+
+
+WRITERS = {
+    "generate": ["generate", *TINY, "--outputs", "class_code", "--out", "{d}/a.nc"],
+    "mechanism": [
+        "mechanism",
+        "ladder",
+        "--theta",
+        "0.1:1:3",
+        "--mu",
+        "0:1:3",
+        "--out",
+        "{d}/m.nc",
+    ],
+    "table": ["table", "--format", "csv", "--out", "{d}/t.csv"],
+    "simulate": ["simulate", "--case", "fig2b", "--t-end", "1", "--out", "{d}/s.csv"],
+    "boundaries": ["boundaries", *TINY, "--kappa", "2", "--q", "0.1", "--out", "{d}/b.nc"]
+    + ["--csv", "{d}/b.csv", "--geojson", "{d}/b.json"],
+}
+
+
+@pytest.mark.parametrize("writer", sorted(WRITERS))
+def test_a_full_disk_is_one_line_and_leaves_nothing(writer, full_disk, tmp_path, capsys):
+    if writer == "boundaries":  # the netCDF file and the CSV fit, the GeoJSON does not
+        full_disk.suffixes = (".json",)
+    args = [a.format(d=tmp_path) for a in WRITERS[writer]]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, "out: cannot write " + str(tmp_path), args)
+    assert "no space left on device" in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_full_disk_under_the_store_says_how_to_resume(tmp_path, monkeypatch, capsys):
+    """ENOSPC while a tile is written into the zarr store: one line naming the store, the cause
+    and ``--resume``; the store is kept (its finished tiles are verified on resume)."""
+    import errno
+
+    pytest.importorskip("zarr")
+    to_zarr = xr.Dataset.to_zarr
+
+    def full(self, store, *a, region=None, **kw):
+        if region is not None and region["beta1"].start >= 4:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), f"{store}/class_code/4.0")
+        return to_zarr(self, store, *a, region=region, **kw)
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", full)
+    args = ["generate", *TINY, "--outputs", "class_code", "--scheduler", "inprocess"]
+    args += ["--slab", "4", "--out", str(tmp_path / "a.nc"), "--no-progress"]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, f"store: cannot write {tmp_path / 'a.zarr'}", args)
+    assert "no space left on device" in err and "--resume" in err
+    assert os.listdir(tmp_path) == ["a.zarr"]
+    monkeypatch.setattr(xr.Dataset, "to_zarr", to_zarr)
+    assert cli.main([*args, "--resume"]) == 0
+    assert "1 computed, 1 verified" in capsys.readouterr().err
+
+
+# --- one option parser and the output rules of every writer ---------------------------------------
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["generate", "--beta1", "0:2PI:8", "--beta2", "0:2pi:8"], "beta1"),  # case-sensitive
+        (["generate", *TINY, "--out", ""], "out: empty path"),
+        (["generate", *TINY, "--out", "{d}/a.txt"], "out: expected a file name ending in .nc"),
+        (["generate", *TINY, "--store", "{d}/s.db", "--out", "{d}/a.nc"], "store:"),
+        (["mechanism", "ladder", "--out", "{d}/m.csv"], "out:"),
+        (["boundaries", *TINY, "--kappa", "2", "--csv", "{d}/b.txt"], "csv:"),
+        (["boundaries", *TINY, "--kappa", "2", "--geojson", ""], "geojson: empty path"),
+        (["simulate", "--case", "fig2b", "--out", "{d}/fig.nc"], "out:"),  # before simulating
+        (["simulate", "--map", "--out", "{d}/map.csv"], "out:"),
+        (["table", "--out", "{d}/t.nc"], "out:"),
+        (["table", "--out", "{d}/missing/t.md"], "out: directory"),  # never created silently
+        (["simulate", "--case", "fig2b", "--out", "/proc/s.csv"], "out: directory /proc is not"),
+        (["paper", "--out", "/proc/paper"], "out: directory /proc is not"),
+        (["paper", "--out", "{d}/no/such/dir"], "out: directory"),
+        (["bench", "--out", "{d}/existing.md"], "out: "),  # a file, not a directory
+        (["generate", *TINY, "--dtype", "float16"], "dtype"),
+        (["generate", "--no-such-option"], "unrecognized"),
+        (["nonsense"], "invalid choice"),
+    ],
+)
+def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):
+    """One line ``atlas: error: ...`` naming the parameter for every subcommand (argparse's
+    errors included), exit 2, before any work, and no file or directory made."""
+    (tmp_path / "existing.md").write_text("keep me")
+    args = [a.format(d=tmp_path) for a in args]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, name, args)
+    assert err.startswith("atlas: error: "), err
+    assert sorted(os.listdir(tmp_path)) == ["existing.md"]
+    assert (tmp_path / "existing.md").read_text() == "keep me"
+
+
+def test_negative_range_start_needs_no_equals_sign(capsys):
+    args = ["generate", "--beta1", "-0.5pi:0.5pi:8", "--beta2", "-pi:pi:4", "--kappa", "2"]
+    assert cli.main([*args, "--q", "-0", "--dry-run"]) == 0
+    assert capsys.readouterr().out.startswith("atlas generate: 32 points")
+
+
+def test_table_and_simulate_replace_only_with_overwrite(tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    out.write_text("keep me")
+    assert cli.main(["table", "--format", "csv", "--out", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert cli.main(["table", "--format", "csv", "--out", str(out), "--overwrite"]) == 0
+    assert out.read_text().startswith("class")
+    sim = tmp_path / "s.csv"
+    sim.write_text("keep me")
+    args = ["simulate", "--case", "fig2b", "--t-end", "1", "--out", str(sim)]
+    assert cli.main(args) == 2 and sim.read_text() == "keep me"
+    assert cli.main([*args, "--overwrite"]) == 0 and sim.read_text().startswith("t,kind")
+
+
+def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, capsys):
+    """``atlas paper`` keeps the files finished before a Ctrl-C: the message says which."""
+    import types
+
+    from atlas.data.io import atomic_write_text
+
+    def run(out, **_):
+        atomic_write_text(os.path.join(out, "table2.md"), "done\n")
+        with open(os.path.join(out, "partial.tmp"), "w"):
+            pass
+        os.unlink(os.path.join(out, "partial.tmp"))
+        raise KeyboardInterrupt
+
+    fake = types.ModuleType("atlas._fake_paper")
+    fake.run = run
+    monkeypatch.setitem(sys.modules, "atlas._fake_paper", fake)
+    monkeypatch.setitem(cli._DISPATCH, "paper", ("atlas._fake_paper", "run"))
+    assert cli.main(["paper", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err
+    assert "no partial output file left; complete before it: " in err
+    assert str(tmp_path / "table2.md") in err

@@ -8,5 +8,7 @@
 * :mod:`~atlas.core.rootfree`  the root-free damped II verdicts (tiers 1 and 2);
 * :mod:`~atlas.core.exact`     the exact integer/rational tier that settles every remaining point;
 * :mod:`~atlas.core.points`    the tier driver: verdicts of arbitrary point sets, certified;
-* :mod:`~atlas.core.hardcases` the hard-case suites (near-boundary points with 50-digit references).
+* :mod:`~atlas.core.hardcases` the hard-case suites (near-boundary points with 50-digit references);
+* :mod:`~atlas.core.checks`    the one validator of the Python API's arguments;
+* :mod:`~atlas.core.interrupts` whether a stop signal arrived (writers check it before committing).
 """

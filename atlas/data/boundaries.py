@@ -74,7 +74,7 @@ import xarray as xr
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
-from atlas.core import brackets
+from atlas.core import brackets, checks
 from atlas.data import boundary_paths, boundary_points, boundary_sides, boundary_tips, marching
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
@@ -553,8 +553,9 @@ def slice_boundaries(
     """The boundary curves of one slice ``(kappa, q1, q2)`` over the grid ``beta1 x beta2``
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
     shape = (np.size(beta1), np.size(beta2))
-    _check_args(tol, chord, check, max_levels, fields, shape)
-    model = (float(kappa), float(q1), float(q2))
+    fields = _check_args(tol, chord, check, max_levels, fields, shape)
+    dtype = checks.float_dtype(dtype)
+    model = tuple(float(checks.real(k, v)) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
     out = Boundaries()
     by_field = {}
     for fld in fields:
@@ -636,23 +637,33 @@ def check_memory(n1: int, n2: int, check: int, max_levels: int) -> int:
     return BYTES_PER_POINT * (n1 * k) * (n2 * k)
 
 
-def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)):
-    """One-line ``ValueError`` naming the first bad argument."""
+def _integer(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)) -> tuple[str, ...]:
+    """One-line ``ValueError`` naming the first bad argument; returns the fields as a tuple
+    (``"SS"`` and ``"SS,II"`` are accepted as strings)."""
     num = (int, float)
-    if not (isinstance(tol, num) and MIN_TOL <= tol < 0.1):
+    if not (isinstance(tol, num) and not isinstance(tol, bool) and MIN_TOL <= tol < 0.1):
         raise ValueError(
             f"tol: must be in [{MIN_TOL:.3g}, 0.1) rad (float coordinates near 2 pi cannot "
             f"resolve a smaller bracket), got {tol!r}"
         )
     if not (isinstance(chord, num) and max(tol, MIN_CHORD) <= chord <= 0.1):
         raise ValueError(f"chord: must be in [max(tol, {MIN_CHORD:g}), 0.1] rad, got {chord!r}")
-    if not (isinstance(check, int) and 0 <= check <= MAX_CHECK):
+    if not (_integer(check) and 0 <= check <= MAX_CHECK):
         raise ValueError(f"check: must be an integer in [0, {MAX_CHECK}], got {check!r}")
-    if not (isinstance(max_levels, int) and 0 <= max_levels <= MAX_LEVELS):
+    if not (_integer(max_levels) and 0 <= max_levels <= MAX_LEVELS):
         raise ValueError(f"max_levels: must be an integer in [0, {MAX_LEVELS}], got {max_levels!r}")
+    if isinstance(fields, str):  # "SS", "SS,II"
+        fields = tuple(f.strip() for f in fields.split(",") if f.strip())
+    fields = tuple(fields)
     bad = [f for f in fields if f not in brackets.FIELDS]
     if bad or not fields:
-        raise ValueError(f"fields: must be a non-empty subset of {list(brackets.FIELDS)}")
+        raise ValueError(
+            f"fields: must be a non-empty subset of {list(brackets.FIELDS)}, got {fields!r}"
+        )
     for name, n in zip(("beta1", "beta2"), shape):
         if n < 2:
             raise ValueError(f"{name}: needs at least 2 values for a grid of cells, got {n}")
@@ -662,6 +673,7 @@ def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)):
             f"check: {check} on a {shape[0]}x{shape[1]} grid may need {need / 2**30:.1f} GiB "
             f"(limit {MEMORY_LIMIT / 2**30:.0f} GiB); use a smaller check or grid"
         )
+    return fields
 
 
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:

@@ -62,11 +62,13 @@ Example
 
 from __future__ import annotations
 
+import collections.abc
 import contextlib
 import dataclasses
 import datetime
 import hashlib
 import json
+import operator
 import os
 import shutil
 import tempfile
@@ -75,6 +77,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from atlas.core import checks, interrupts
 from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
 from atlas.data.engine import (
     DEFAULT_TILE_POINTS,
@@ -93,6 +96,7 @@ __all__ = [
     "open_store",
     "verify_store",
     "tile_plan",
+    "TilePlan",
     "WORKER_ENV",
     "worker_env",
     "local_cluster",
@@ -169,16 +173,19 @@ DEFAULT_SLAB_POINTS = 1 << 18
 #: maximum elements per zarr chunk (chunks never straddle slabs)
 CHUNK_POINTS = 1 << 20
 TILES = "_tiles"
+#: attribute of the ``_tiles`` group: SHA-256 of every attribute of the store
+ATTRS_RECORD = "attributes_sha256"
 PLAN_ATTR = "atlas_plan"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 # --- the plan -----------------------------------------------------------------------------------
 
 
-def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> list[tuple]:
+def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) -> TilePlan:
     """The tiles of a scene: ``[(start, stop), ...]`` (``beta1`` slabs; one tile if ``beta1`` is
-    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks).
+    fixed), or ``[(start, stop, start2, stop2), ...]`` when ``beta2`` is split too (2-D blocks),
+    as a lazy :class:`TilePlan` (no tile is materialised: a 1e14-point scene costs nothing).
 
     ``slab=None`` picks about :data:`DEFAULT_SLAB_POINTS` points per tile; if then one ``beta1``
     value alone holds more than that and ``block2`` is not given, ``beta2`` is split into blocks of
@@ -193,13 +200,64 @@ def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) 
             block2 = max(1, round(DEFAULT_SLAB_POINTS / max(1, per // n2)))
             block2 = None if block2 >= n2 else block2
     s = _positive("slab", slab)
-    b1 = [(a, min(a + s, n1)) for a in range(0, n1, s)]
     if block2 is None:
-        return b1
+        return TilePlan(n1, n2, s, None)
     b = _positive("block2", block2)
     if "beta2" not in scene.dims:
         raise ValueError("block2: the scene has a single beta2 value")
-    return [(a, e, c, min(c + b, n2)) for a, e in b1 for c in range(0, n2, b)]
+    return TilePlan(n1, n2, s, b)
+
+
+@dataclasses.dataclass(frozen=True)
+class TilePlan(collections.abc.Sequence):
+    """The tiles of :func:`tile_plan`, computed on demand: ``n1`` x ``n2`` (beta1, beta2) values in
+    slabs of ``slab`` beta1 values, split into blocks of ``block2`` beta2 values (``None``: not
+    split).  A sequence of tuples; equal to the list of its tiles."""
+
+    n1: int
+    n2: int
+    slab: int
+    block2: int | None
+
+    @property
+    def _per1(self) -> int:
+        return 1 if self.block2 is None else -(-self.n2 // self.block2)
+
+    def __len__(self) -> int:
+        return -(-self.n1 // self.slab) * self._per1
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        n = len(self)
+        i = operator.index(i)
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError(i)
+        a, c = divmod(i, self._per1)
+        a *= self.slab
+        tile = (a, min(a + self.slab, self.n1))
+        if self.block2 is None:
+            return tile
+        c *= self.block2
+        return (*tile, c, min(c + self.block2, self.n2))
+
+    def __eq__(self, other):
+        if isinstance(other, collections.abc.Sequence) and not isinstance(other, str):
+            return len(self) == len(other) and all(a == tuple(b) for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None
+
+    def describe(self) -> dict:
+        """The plan's parameters (stored in the store's plan instead of every tile)."""
+        return {"n1": self.n1, "n2": self.n2, "slab": self.slab, "block2": self.block2}
+
+    @classmethod
+    def of(cls, stored) -> TilePlan | list:
+        """The tiles of a stored plan (:meth:`describe`, or a list of tiles)."""
+        return cls(**stored) if isinstance(stored, dict) else [tuple(t) for t in stored]
 
 
 def _positive(name, value) -> int:
@@ -276,7 +334,7 @@ def _plan(scene, sch, tiles, opts) -> dict:
         "scene": scene.describe(),
         "coords": coords,
         "variables": variables,
-        "tiles": [list(t) for t in tiles],
+        "tiles": tiles.describe() if isinstance(tiles, TilePlan) else [list(t) for t in tiles],
         "source": sch.attrs["source"],
         **opts,
     }
@@ -311,6 +369,9 @@ def read_record(store: str, i: int) -> dict | None:
         rec = dict(zarr.open_group(store, path=_record_path(i), mode="r").attrs)
     except Exception:  # truncated or unreadable metadata: the tile counts as missing
         return None
+    body = {k: v for k, v in rec.items() if k != "record_sha256"}
+    if rec.get("record_sha256") != _sha(json.dumps(body, sort_keys=True)):
+        return None  # any byte of the record changed
     return rec if rec.get("index") == i and "checksums" in rec else None
 
 
@@ -320,6 +381,111 @@ def _drop_record(store: str, i: int):
 
 def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
     return {k: _digest(ds[k].isel(_region(ds[k].dims, split)).values) for k in names}
+
+
+_METADATA = ("zarr.json", ".zarray", ".zattrs", ".zgroup", ".zmetadata")
+
+
+def _metadata_digests(store: str) -> dict:
+    """SHA-256 of the raw bytes of every metadata file of the store (array and group metadata
+    with their attributes; the tile records have their own checksums)."""
+    out = {}
+    for dirpath, dirnames, filenames in os.walk(store):
+        rel = os.path.relpath(dirpath, store)
+        if rel == TILES or rel.startswith(TILES + os.sep):
+            dirnames[:] = []
+            continue
+        if rel == ".":
+            dirnames[:] = [d for d in dirnames if d != TILES]
+        for f in filenames:
+            if f in _METADATA:
+                with open(os.path.join(dirpath, f), "rb") as fh:
+                    out[os.path.normpath(os.path.join(rel, f))] = hashlib.sha256(
+                        fh.read()
+                    ).hexdigest()
+    return out
+
+
+def _all_attrs(store: str) -> dict:
+    """The attributes of the store and of every array in it, in their stored order."""
+    import zarr
+
+    root = zarr.open_group(store, mode="r")
+    out = {"": dict(root.attrs)}
+    for name, arr in root.arrays():
+        out[name] = dict(arr.attrs)
+    return out
+
+
+def _sha(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _record_attrs(store: str) -> None:
+    """Record the checksums of the metadata files and a copy of every attribute (to restore
+    them), with a checksum of the record itself, in the attributes of the ``_tiles`` group."""
+    import zarr
+
+    body = {"metadata": _metadata_digests(store), "attributes": _all_attrs(store)}
+    text = json.dumps(body, default=repr)
+    zarr.open_group(store, path=TILES, mode="r+").attrs.put(
+        {ATTRS_RECORD: text, ATTRS_RECORD + "_sha256": _sha(text)}
+    )
+
+
+def _attrs_record(store: str) -> dict | None:
+    """The record of :func:`_record_attrs` if it is intact, else ``None``."""
+    import zarr
+
+    try:
+        rec = dict(zarr.open_group(store, path=TILES, mode="r").attrs)
+        text = rec[ATTRS_RECORD]
+        if _sha(text) != rec.get(ATTRS_RECORD + "_sha256"):
+            return None
+        return json.loads(text)
+    except Exception:
+        return None
+
+
+def _corrupt_arrays(store: str, plan: dict) -> list[str]:
+    """The coordinates whose stored bytes differ from the plan's checksums, and ``"attributes"``
+    when a byte of the metadata (attributes included) differs from its record."""
+    import zarr
+
+    bad = []
+    for name, digest in plan["coords"].items():
+        try:
+            ok = _digest(zarr.open_array(store, path=name, mode="r")[...]) == digest
+        except Exception:  # undecodable metadata or chunk bytes
+            ok = False
+        if not ok:
+            bad.append(name)
+    rec = _attrs_record(store)
+    ok = rec is not None and rec["metadata"] == _metadata_digests(store)
+    return bad + ([] if ok else ["attributes"])
+
+
+def _repair_layout(store: str, sch: Schema, names) -> None:
+    """Rewrite the coordinates ``names`` from the schema and (with ``"attributes"``) every
+    attribute from its record; ``ValueError`` naming ``store`` if that does not restore every
+    metadata byte (the record itself, or metadata other than attributes, damaged)."""
+    import zarr
+
+    group = zarr.open_group(store, mode="r+")
+    for name in names:
+        if name in sch.coords:
+            group[name][...] = sch.coords[name][1]
+    if "attributes" in names:
+        rec = _attrs_record(store)
+        if rec is not None:
+            attrs = rec["attributes"]
+            group.attrs.put(attrs.pop(""))
+            for name, a in attrs.items():
+                group[name].attrs.put(a)
+        if rec is None or rec["metadata"] != _metadata_digests(store):
+            raise ValueError(
+                f"store: {store}: metadata damaged beyond its record (start again with --overwrite)"
+            )
 
 
 def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):
@@ -343,7 +509,9 @@ def _create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int |
         ds = xr.Dataset(data, coords=coords, attrs=attrs)
         ds.to_zarr(tmp, mode="w", compute=False, encoding=enc, consolidated=False)
         zarr.open_group(tmp, mode="r+").require_group(TILES)
+        _record_attrs(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
+        interrupts.check()
         os.replace(tmp, store)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -427,6 +595,7 @@ def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
         "host": os.uname().nodename,
         "pid": os.getpid(),
     }
+    rec["record_sha256"] = _sha(json.dumps(rec, sort_keys=True))
     zarr.open_group(store, path=_record_path(i), mode="w").attrs.put(rec)
     return rec
 
@@ -539,16 +708,21 @@ def _executor(scheduler):
 def verify_store(store, scheduler=None) -> dict:
     """Check every tile of a store against its record.
 
-    Returns ``{"ok": [...], "missing": [...], "corrupt": [...]}`` (tile indices): *missing* = no
-    readable record, *corrupt* = a record whose checksums the stored bytes no longer match.
+    Returns ``{"ok": [...], "missing": [...], "corrupt": [...], "arrays": [...]}``: tile
+    indices (*missing* = no readable record, *corrupt* = a record whose checksums the stored bytes
+    no longer match) and the coordinates whose bytes differ from the plan's checksums, with
+    ``"attributes"`` when any attribute of the store or of an array differs from its record.
+    Every byte of the store is covered: a resume rewrites what is listed.
     """
     store = os.fspath(store)
     plan = _stored_plan(store)
     ex = _executor(scheduler)
     try:
-        return _verify_all(ex, store, plan["tiles"])[0]
+        report = _verify_all(ex, store, TilePlan.of(plan["tiles"]))[0]
     finally:
         ex.close()
+    report["arrays"] = _corrupt_arrays(store, plan)
+    return report
 
 
 def _verify_all(ex, store, tiles):
@@ -639,7 +813,8 @@ def generate_distributed(
         ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
         (``None``: beta2 not split), ``points``,
         ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
-        ``missing`` / ``corrupt`` (found on resume), ``seconds``, ``points_per_second``,
+        ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates, ``"attributes"``:
+        found damaged on resume and rewritten), ``seconds``, ``points_per_second``,
         ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
         computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
     """
@@ -669,7 +844,7 @@ class _Job:
 
     scene: Scene
     store: str
-    tiles: list
+    tiles: TilePlan
     sch: Schema
     opts: dict
     plan: dict
@@ -692,6 +867,7 @@ def _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_poi
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     method, dtype, tile_points = check_options(method, dtype, tile_points)
+    resolve = checks.boolean("resolve", resolve)
     _check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab, block2)
@@ -731,13 +907,21 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     Returns ``(report, records, computed)``: the verification report (``None`` unless resuming),
     the records of every finished tile, and those of the tiles computed here.
     """
+    damaged = []
+    if resumed:
+        damaged = _corrupt_arrays(job.store, job.plan)
+        if damaged:
+            _repair_layout(job.store, job.sch, damaged)
     report, recs = _verify_all(ex, job.store, job.tiles) if resumed else (None, {})
+    if report is not None:
+        report["arrays"] = damaged
     todo = [i for i in range(len(job.tiles)) if i not in recs]
     if bar is not None:
         bar.update(len(recs))
     calls = [(i, (job.store, job.scene, i, job.tiles[i], job.opts)) for i in todo]
     computed = {}
     for i, rec in ex.map(_run_tile, calls):
+        interrupts.check()  # a stop signal lost in a gc callback still ends the run here
         recs[i] = computed[i] = rec
         if bar is not None:
             bar.update(1)
@@ -760,6 +944,7 @@ def _summary(job: _Job, ex, netcdf, report, recs, computed, totals, seconds) -> 
         "verified": sorted(set(recs) - set(computed)),
         "missing": report["missing"] if report else [],
         "corrupt": report["corrupt"] if report else [],
+        "repaired": report["arrays"] if report else [],
         "seconds": seconds,
         "points_per_second": points / seconds if seconds > 0 else float("inf"),
         "tile_seconds": [computed[i]["seconds"] for i in sorted(computed)],
@@ -808,6 +993,7 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     if failures:
         attrs["exact_failures"] = len(failures)
         attrs["exact_failure_example"] = repr(tuple(failures[0]))
+    interrupts.check()  # no store is marked complete after a stop signal
     group = zarr.open_group(store, mode="r+")
     history = str(group.attrs.get("history", sch.attrs["history"]))
     if resumed:
@@ -816,6 +1002,8 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     for k, a in var_attrs.items():
         group[k].attrs.update(a)
     group.attrs.update({**attrs, "history": history, "atlas_complete": 1})
+    _record_attrs(store)  # killed before this: the attributes differ from the record, and a
+    # resume restores the recorded ones (atlas_complete = 0) and finishes again
     return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
 
 

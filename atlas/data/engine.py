@@ -48,7 +48,7 @@ import jax
 import numpy as np
 import xarray as xr
 
-from atlas.core import config, spectral
+from atlas.core import checks, config, spectral
 from atlas.core import mechanics as mech
 from atlas.core import points as evaluate
 from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
@@ -383,6 +383,7 @@ def run(
     resolution), ``resolved_points``, ``exact_failures`` (the points the exact tier failed on).
     """
     method, dtype, tile_points = check_options(method, dtype, tile_points)
+    resolve = checks.boolean("resolve", resolve)
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     sch = schema(
@@ -607,9 +608,9 @@ def check_options(method, dtype, tile_points) -> tuple[str, str, int]:
     """``(method, dtype, tile_points)`` validated and normalised (one-line error naming the bad one)."""
     if method not in METHODS:
         raise ValueError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
-    dtype = str(np.dtype(dtype)) if dtype in DTYPES or dtype in (np.float32, np.float64) else dtype
-    if dtype not in DTYPES:
-        raise ValueError(f"dtype: must be one of {', '.join(DTYPES)}, got {dtype!r}")
+    dtype = checks.float_dtype(dtype)
+    if isinstance(tile_points, (bool, np.bool_)):
+        raise ValueError(f"tile_points: must be a positive integer, got {tile_points!r}")
     try:
         tp = int(tile_points)
     except (TypeError, ValueError):

@@ -24,13 +24,16 @@ Compression: zlib level 4 with shuffle; chunks = the generation tiles
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
+import shutil
 import tempfile
 
 import numpy as np
 import xarray as xr
 
+from atlas.core import interrupts
 from atlas.data.engine import DEFAULT_TILE_POINTS, Schema, block_shape, run
 from atlas.data.scene import Scene
 
@@ -39,6 +42,8 @@ __all__ = [
     "generate_to_file",
     "check_output_path",
     "AtomicFile",
+    "committed_together",
+    "write_error",
     "atomic_path",
     "atomic_write_text",
     "savefig",
@@ -74,6 +79,72 @@ def check_output_path(path, overwrite: bool = False) -> str:
     return path
 
 
+def write_error(path, exc: BaseException, name: str = "out") -> OSError | None:
+    """One-line ``OSError`` naming the parameter ``name``, ``path`` and the cause of a failed write (``None`` when
+    ``exc`` is not a write failure: a bug stays a bug).  netCDF/HDF errors carry no ``errno``: a
+    full file system is recognised by its free space."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        cause = exc.strerror or str(exc)
+        if exc.errno == errno.ENOSPC:
+            cause = "no space left on device"
+    elif isinstance(exc, (OSError, RuntimeError)) and str(exc).startswith(("NetCDF", "HDF")):
+        cause = str(exc)
+        directory = os.path.dirname(os.path.abspath(os.fspath(path)))
+        with contextlib.suppress(OSError):
+            if shutil.disk_usage(directory).free < _FULL:
+                cause = f"no space left on device ({cause})"
+    else:
+        return None
+    err = OSError(f"{name}: cannot write {os.fspath(path)}: {cause}")
+    err.errno = getattr(exc, "errno", None) if isinstance(exc, OSError) else None
+    return err
+
+
+#: free bytes below which a netCDF/HDF write error is reported as a full file system
+_FULL = 1 << 20
+
+#: the paths committed in this process since :func:`forget_commits` (for an honest interrupt message)
+COMMITTED: list[str] = []
+
+
+def forget_commits() -> None:
+    COMMITTED.clear()
+
+
+#: the AtomicFiles of the innermost :func:`committed_together` block (``None``: commit at once)
+_GROUP: list | None = None
+
+
+@contextlib.contextmanager
+def committed_together(overwrite: bool | None = None):
+    """Every :class:`AtomicFile` committed inside the block is renamed onto its path only when the
+    block ends without error, all together; otherwise none is (their temporary files are removed).
+    Multi-file outputs (``atlas boundaries``' netCDF, CSV and GeoJSON, ``atlas paper``) are thus
+    complete or absent.  Nested blocks join the outermost one.  ``overwrite`` (if not None)
+    applies to every file of the block: ``False`` refuses to replace any existing file."""
+    global _GROUP
+    if _GROUP is not None:
+        yield
+        return
+    _GROUP = pending = []
+    try:
+        yield
+        _GROUP = None
+        interrupts.check()
+        for f in pending:
+            if overwrite is not None:
+                f.overwrite = overwrite
+            f.check_target()
+        for f in pending:
+            f.rename()
+    except BaseException:
+        for f in pending:
+            f.discard()
+        raise
+    finally:
+        _GROUP = None
+
+
 class AtomicFile:
     """The one atomic write of the package: a temporary file in the target directory, renamed onto
     ``path`` (``os.replace``) by :meth:`commit` or removed by :meth:`discard`.  An existing ``path``
@@ -88,17 +159,34 @@ class AtomicFile:
         self.path = os.fspath(path)
         self.overwrite = overwrite
         directory = os.path.dirname(os.path.abspath(self.path))
-        os.makedirs(directory, exist_ok=True)
+        os.makedirs(directory, exist_ok=True)  # the library's writers create their directory
         name = os.path.basename(self.path)
         self.tmp = os.path.join(directory, f".{name}.{secrets.token_hex(12)}{suffix}")
 
     def commit(self) -> str:
-        if not self.overwrite and os.path.exists(self.path):
+        """Rename the temporary file onto ``path`` (inside :func:`committed_together`: when the
+        block ends); nothing is committed after a stop signal
+        (:func:`atlas.core.interrupts.check`): the temporary file is removed instead."""
+        try:
+            interrupts.check()
+            self.check_target()
+            if _GROUP is not None:
+                _GROUP.append(self)
+                return self.path
+            self.rename()
+        except BaseException:
             self.discard()
+            raise
+        return self.path
+
+    def check_target(self) -> None:
+        if not self.overwrite and os.path.exists(self.path):
             raise FileExistsError(f"out: {self.path} exists (use --overwrite to replace it)")
+
+    def rename(self) -> None:
         os.chmod(self.tmp, 0o644 & ~_umask())
         os.replace(self.tmp, self.path)
-        return self.path
+        COMMITTED.append(self.path)
 
     def discard(self) -> None:
         with contextlib.suppress(FileNotFoundError):
@@ -110,8 +198,11 @@ class AtomicFile:
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
             self.commit()
-        else:
-            self.discard()
+            return
+        self.discard()
+        err = write_error(self.path, exc)
+        if err is not None:
+            raise err from None
 
 
 atomic_path = AtomicFile  # ``with atomic_path(path) as tmp: ...``
@@ -188,9 +279,24 @@ class NetCDFSink:
         self.nc = None
 
     def begin(self, sch: Schema):
+        self.file = AtomicFile(self.path, self.overwrite)
+        with self._reported():
+            self._begin(sch)
+
+    @contextlib.contextmanager
+    def _reported(self):
+        """A failed write (a full disk: netCDF says only "HDF error") as one line naming ``path``."""
+        try:
+            yield
+        except Exception as e:
+            err = write_error(self.path, e)
+            if err is None:
+                raise
+            raise err from None
+
+    def _begin(self, sch: Schema):
         import netCDF4
 
-        self.file = AtomicFile(self.path, self.overwrite)
         nc = self.nc = netCDF4.Dataset(self.file.tmp, "w", format="NETCDF4")
         nc.set_auto_mask(False)
         for dim, n in sch.shape.items():
@@ -219,15 +325,18 @@ class NetCDFSink:
         nc.setncatts(sch.attrs)
 
     def write(self, name, index, block):
+        interrupts.check()  # a stop signal lost in a gc callback still ends the run here
         v, stored = self.vars[name]
-        v[index] = np.asarray(block).astype(stored, copy=False)
+        with self._reported():
+            v[index] = np.asarray(block).astype(stored, copy=False)
 
     def finish(self, attrs: dict, var_attrs: dict):
-        for name, a in var_attrs.items():
-            self.vars[name][0].setncatts(a)
-        self.nc.setncatts(attrs)
-        self.nc.close()
-        self.nc = None
+        with self._reported():
+            for name, a in var_attrs.items():
+                self.vars[name][0].setncatts(a)
+            self.nc.setncatts(attrs)
+            self.nc.close()
+            self.nc = None
         return self.file.commit()
 
     def abort(self):

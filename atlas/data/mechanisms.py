@@ -25,7 +25,7 @@ import shlex
 import numpy as np
 import xarray as xr
 
-from atlas.core import config
+from atlas.core import checks, config
 from atlas.core.mechanism import BODIES, VERDICT_NAMES, body_invariants, verdicts_at
 from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
@@ -184,6 +184,7 @@ def mechanism_atlas(
     """
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
+    dtype = checks.float_dtype(dtype)
     scene = MECHANISM_SCENES[name]
     consts = _fixed_values(scene, dict(fixed or {}))
     values = _axis_values(scene, axes)

@@ -39,6 +39,7 @@ from functools import cached_property
 
 import numpy as np
 
+from atlas.core import checks
 from atlas.core.mechanics import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
 from atlas.data.outputs import ATLAS_OUTPUTS, OUTPUTS, in_group
 
@@ -64,11 +65,10 @@ _MODEL_DEPENDENT = in_group("model_dependence")
 
 
 def _parse_number(text: str, name: str) -> float:
-    """A float, optionally with a ``pi`` suffix (``"0.2pi"``, ``"pi"``, ``"-1.5pi"``)."""
-    t = text.strip().lower()
-    if t in ("nan", "+nan", "-nan"):
-        raise ValueError(f"{name}: must be finite, got {text.strip()!r}")
-    if t in ("inf", "+inf", "-inf", "infinity", "-infinity"):
+    """A float, optionally with a ``pi`` suffix (``"0.2pi"``, ``"pi"``, ``"-1.5pi"``; keywords are
+    case-sensitive: ``"2PI"`` is refused)."""
+    t = text.strip()
+    if t.lower().lstrip("+-") in ("nan", "inf", "infinity"):
         raise ValueError(f"{name}: must be finite, got {text.strip()!r}")
     if t.endswith("pi"):
         head = t[:-2].strip().rstrip("*").strip()
@@ -97,7 +97,7 @@ def parse_values(spec, name: str):
         text = spec.strip()
         if not text:
             raise ValueError(f"{name}: empty value")
-        if text.lower().startswith("log:"):
+        if text.startswith("log:"):
             parts = text[4:].split(":")
             if len(parts) != 3:
                 raise ValueError(f"{name}: expected log:START:STOP:N, got {text!r}")
@@ -130,11 +130,7 @@ def parse_values(spec, name: str):
             vals = np.array([_parse_number(p, name) for p in items], dtype=np.float64)
             return _finish(vals, True, name)
         return _finish(np.array(_parse_number(text, name)), False, name)
-    arr = np.asarray(spec, dtype=np.float64) if not isinstance(spec, np.ndarray) else spec
-    try:
-        arr = np.asarray(arr, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: cannot interpret {spec!r} as numbers") from None
+    arr = checks.real(name, spec, finite=False)
     if arr.ndim == 0:
         return _finish(arr, False, name)
     if arr.ndim != 1:

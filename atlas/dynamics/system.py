@@ -29,6 +29,8 @@ import math
 
 import numpy as np
 
+from atlas.core import checks
+
 __all__ = [
     "Outcome",
     "Status",
@@ -137,7 +139,7 @@ def mask_from_signs(s) -> int:
 def check_finite(name, value, *, positive=False, nonneg=False):
     """``value`` as a float array; a one-line ``ValueError`` naming ``name`` if it is not finite
     (or not ``> 0`` / ``>= 0`` when asked)."""
-    arr = np.asarray(value, dtype=float)
+    arr = checks.real(name, value, finite=False)
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     if positive and np.any(arr <= 0):
@@ -145,10 +147,6 @@ def check_finite(name, value, *, positive=False, nonneg=False):
     if nonneg and np.any(arr < 0):
         raise ValueError(f"{name} must be >= 0, got {value!r}")
     return arr
-
-
-def _pair(value):
-    return np.broadcast_to(np.asarray(value, dtype=float), (2,)).copy()
 
 
 def _matrix_B(beta1, beta2, b_norm) -> np.ndarray:
@@ -239,9 +237,9 @@ def build_system(beta1, beta2, alpha, k, q, b_norm, a_norm, theta) -> System:
     beta1 = float(check_finite("beta1", beta1))
     beta2 = float(check_finite("beta2", beta2))
     alpha = float(check_finite("alpha", alpha))
-    k = check_finite("k", _pair(k), positive=True)
-    q = check_finite("q", _pair(q), nonneg=True)
-    b_norm = check_finite("b_norm", _pair(b_norm), positive=True)
+    k = check_finite("k", checks.pair("k", k), positive=True)
+    q = check_finite("q", checks.pair("q", q), nonneg=True)
+    b_norm = check_finite("b_norm", checks.pair("b_norm", b_norm), positive=True)
     a_norm = float(check_finite("a_norm", a_norm, nonneg=True))
     theta = float(check_finite("theta", theta, positive=True))
     if theta > 1.0:
@@ -276,8 +274,8 @@ def ss_equilibrium(beta1, beta2, alpha, k=(1.0, 1.0), b_norm=(1.0, 1.0), a_norm=
         Gaps [1] (units of the inputs) if the SS mode is consistent (``f* = B^{-1} a > 0``,
         SPEC §1), else None.
     """
-    k = check_finite("k", _pair(k), positive=True)
-    b_norm = check_finite("b_norm", _pair(b_norm), positive=True)
+    k = check_finite("k", checks.pair("k", k), positive=True)
+    b_norm = check_finite("b_norm", checks.pair("b_norm", b_norm), positive=True)
     B = _matrix_B(beta1, beta2, b_norm)
     a = a_norm * np.array([math.cos(alpha), math.sin(alpha)])
     try:

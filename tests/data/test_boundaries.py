@@ -314,3 +314,15 @@ def test_smallest_tolerance_holds_in_the_file(tmp_path, capsys):
     with xr.open_dataset(out) as ds:
         assert np.nanmax(ds["node_bracket"].values) <= ds.attrs["tolerance"] == bd.MIN_TOL
         assert '"SS_hidden_cells": null' in ds.attrs["slices"]
+
+
+def test_fields_as_a_string_and_float16_refused():
+    """``fields="SS"`` is the one field SS (it was refused as "not a subset"); float16 refused."""
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:8", kappa=2, q=0.1)
+    ss = bd.boundaries(scene, fields="SS")
+    assert {c.field for c in ss.curves} <= {"SS", "class"}
+    assert any(c.field == "SS" for c in ss.curves)
+    with pytest.raises(ValueError, match="^dtype: must be float32 or float64"):
+        bd.boundaries(scene, dtype="float16")
+    with pytest.raises(ValueError, match="^fields: "):
+        bd.boundaries(scene, fields="SS,XX")

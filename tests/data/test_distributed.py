@@ -130,7 +130,7 @@ def test_2d_blocks_equal_generate_and_resume(reference, tmp_path):
     g = zarr.open_group(str(store), mode="r+")
     g["stable_SF"][4:8] = ~np.asarray(reference["stable_SF"].values[4:8])
     shutil.rmtree(store / TILES / "t000001")
-    assert verify_store(store) == {"ok": [0, 2, 4, 5], "missing": [1], "corrupt": [3]}
+    assert verify_store(store) == {"ok": [0, 2, 4, 5], "missing": [1], "corrupt": [3], "arrays": []}
     summary = generate_distributed(scene(), store, slab=4, block2=3, tile_points=TP, resume=True)
     assert summary["computed"] == [1, 3]
     same_bytes(open_store(store).load(), reference)
@@ -164,7 +164,12 @@ def test_in_process_equals_generate(inproc, reference, tmp_path):
     assert {r["start"] for r in recs} == {0, 2, 4, 6}
     assert set(recs[0]["shared"]) == {"stable_FS", "consistent_FI"}
     assert all(r["shared"] == recs[0]["shared"] for r in recs)
-    assert verify_store(d / "a.zarr") == {"ok": [0, 1, 2, 3], "missing": [], "corrupt": []}
+    assert verify_store(d / "a.zarr") == {
+        "ok": [0, 1, 2, 3],
+        "missing": [],
+        "corrupt": [],
+        "arrays": [],
+    }
 
 
 def test_local_cluster_equals_in_process(inproc, reference, tmp_path):
@@ -251,7 +256,7 @@ def test_corrupt_tiles_detected_and_recomputed(inproc, reference, tmp_path):
         chunk.write_bytes(b"\x00garbage" * 8)
     # tile 2: record lost
     shutil.rmtree(store / TILES / "t000002")
-    assert verify_store(store) == {"ok": [0], "missing": [2], "corrupt": [1, 3]}
+    assert verify_store(store) == {"ok": [0], "missing": [2], "corrupt": [1, 3], "arrays": []}
 
     summary = generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
     assert summary["corrupt"] == [1, 3] and summary["missing"] == [2]
@@ -334,3 +339,39 @@ def test_local_cluster_pins_each_worker_to_one_core():
     affinities, flags = res
     assert len(affinities) == 1 and len(affinities[0]) == 1, affinities
     assert flags == WORKER_ENV["XLA_FLAGS"]
+
+
+def test_a_flipped_byte_anywhere_is_detected_and_repaired(inproc, reference, tmp_path):
+    """One byte flipped in any file of a finished store -- a coordinate chunk, a variable chunk,
+    array metadata, attributes, a tile record -- is found by verify_store (or the store refused
+    with a one-line ``store:`` error), and a resume restores the store bit for bit."""
+    store = tmp_path / "f.zarr"
+    shutil.copytree(inproc[0] / "a.zarr", store)
+    files = sorted(p for p in store.rglob("*") if p.is_file())
+    assert any(p.parent.name == "beta1" for p in files)
+    rng = np.random.default_rng(28)
+    missed = []
+    for path in files:
+        data = path.read_bytes()
+        at = int(rng.integers(len(data)))
+        path.write_bytes(data[:at] + bytes([data[at] ^ 1 << int(rng.integers(8))]) + data[at + 1 :])
+        try:
+            rep = verify_store(store)
+            found = rep["missing"] or rep["corrupt"] or rep["arrays"]
+        except ValueError as e:
+            found = str(e).startswith("store:")
+        if not found:
+            missed.append((str(path.relative_to(store)), at))
+        path.write_bytes(data)
+    assert missed == []
+    # a coordinate chunk and an attribute: a resume rewrites them and recomputes nothing
+    coord = next(p for p in (store / "beta1").rglob("*") if p.is_file() and p.name != "zarr.json")
+    raw = bytearray(coord.read_bytes())
+    raw[-1] ^= 0x40
+    coord.write_bytes(bytes(raw))
+    zarr.open_group(str(store), mode="r+")["class_code"].attrs["long_name"] = "tampered"
+    assert verify_store(store)["arrays"] == ["beta1", "attributes"]
+    summary = generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
+    assert summary["repaired"] == ["beta1", "attributes"] and summary["computed"] == []
+    same_bytes(open_store(store).load(), reference)
+    assert verify_store(store)["arrays"] == []

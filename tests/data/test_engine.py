@@ -232,3 +232,17 @@ def test_exact_failure_keeps_point_undecided(monkeypatch):
     n3 = int((ds.stable_SS.values == 3).sum()) + int((ds.stable_II.values == 3).sum())
     assert n3 > 0 and ds.attrs["undecided_after_resolve"] == n3
     assert ds.attrs["exact_failures"] > 0 and "exact_failure_example" in ds.attrs
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"resolve": "no"}, "resolve"),
+        ({"dtype": "float16"}, "dtype"),
+        ({"tile_points": True}, "tile_points"),
+    ],
+)
+def test_options_refused_naming_the_parameter(kw, name):
+    """A string is not a boolean (``"no"`` was read as True), float16 has no error model."""
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        generate(Scene(beta1="0:2pi:4", beta2="0:2pi:4"), **kw)

@@ -208,3 +208,8 @@ def test_cli_history_and_fixed_errors(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith(f"atlas: error: {name}: ") and err.count("\n") == 1, err
         assert not bad.exists()
+
+
+def test_float16_refused():
+    with pytest.raises(ValueError, match="^dtype: must be float32 or float64"):
+        mechanism_atlas("ladder", theta="0.1:1:3", mu="0:1:3", dtype="float16")

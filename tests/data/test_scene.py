@@ -146,3 +146,19 @@ def test_builtin_overrides_none_keep_defaults():
     a = builtin("atlas4d", beta1=None, q=None, q1=None, q2=None, kappa=None)
     assert a.dims == ("beta1", "beta2", "kappa", "q")
     assert a.shape == {"beta1": 256, "beta2": 256, "kappa": 9, "q": 9}
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"kappa": 1 + 2j}, "kappa"),
+        ({"q": True}, "q"),
+        ({"beta1": ["0", "1"]}, "beta1"),
+        ({"beta2": "0:2PI:8"}, "beta2"),
+        ({"kappa": "LOG:0.1:10:3"}, "kappa"),
+    ],
+)
+def test_non_real_and_miscased_input_refused(kw, name):
+    """Complex numbers, booleans and text arrays are not numbers; keywords are case-sensitive."""
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        Scene(**kw)

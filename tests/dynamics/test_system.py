@@ -48,3 +48,20 @@ def test_modes_match_eq7_and_expm():
 def test_bad_theta_names_parameter():
     with pytest.raises(ValueError, match="theta"):
         system.build_system(0.1, 2.0, 0.5, (1.0, 1.0), (0.0, 0.0), (1.0, 1.0), 1.0, 1.5)
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"k": (1.0,)}, "k"),
+        ({"q": (0, 0, 0)}, "q"),
+        ({"k": 1 + 1j}, "k"),
+        ({"beta1": True}, "beta1"),
+    ],
+)
+def test_build_system_refuses_bad_parameters(kw, name):
+    args = dict(beta1=0.3, beta2=1.2, alpha=2.0, k=(1.0, 2.0), q=(0.0, 0.0), b_norm=1.0)
+    args.update(a_norm=1.0, theta=1.0)
+    args.update(kw)
+    with pytest.raises(ValueError, match=f"^{name}[: ]"):
+        system.build_system(**args)

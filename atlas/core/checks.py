@@ -1,0 +1,61 @@
+"""The one validator of the Python API's arguments: one-line ``ValueError`` naming the parameter.
+
+* :func:`real`: real, finite numbers (no booleans, complex numbers, strings or objects);
+* :func:`pair`: one real number for both contacts or exactly two;
+* :func:`boolean`: ``True`` or ``False`` (``"no"``, ``1`` or ``None`` are refused, not read);
+* :func:`float_dtype`: the working precision, ``"float32"`` or ``"float64"`` only (a float16
+  kernel has no error model, and its codes differ).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["real", "pair", "boolean", "float_dtype", "FLOAT_DTYPES"]
+
+FLOAT_DTYPES = ("float64", "float32")
+
+
+def real(name: str, value, *, finite: bool = True) -> np.ndarray:
+    """``value`` as a float64 array, or ``ValueError`` naming ``name`` when it holds anything but
+    real numbers (booleans, complex numbers, strings, objects) or, with ``finite``, NaN or inf."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise ValueError(f"{name}: expected real numbers, got {value!r}")
+    try:
+        arr = np.asarray(value)
+    except Exception:
+        raise ValueError(f"{name}: expected real numbers, got {value!r}") from None
+    if arr.dtype.kind not in "iuf":  # b: booleans, c: complex, U/S: text, O: objects
+        raise ValueError(f"{name}: expected real numbers, got {value!r}")
+    arr = arr.astype(np.float64)
+    if finite and not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: must be finite, got {value!r}")
+    return arr
+
+
+def pair(name: str, value) -> np.ndarray:
+    """One real number (both contacts) or exactly two, as a float64 array of shape (2,)."""
+    arr = real(name, value)
+    if arr.shape not in ((), (2,)):
+        raise ValueError(f"{name}: expected one number or two (one per contact), got {value!r}")
+    return np.broadcast_to(arr, (2,)).copy()
+
+
+def boolean(name: str, value) -> bool:
+    """``value`` if it is ``True`` or ``False`` (numpy booleans included), else ``ValueError``."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValueError(f"{name}: expected True or False, got {value!r}")
+
+
+def float_dtype(value, name: str = "dtype") -> str:
+    """``"float32"`` or ``"float64"`` from a name or a numpy float type, else ``ValueError``."""
+    try:
+        plain = value is None or isinstance(value, (str, bool))
+        dt = None if plain else np.dtype(value)
+    except TypeError:
+        dt = None
+    text = value if isinstance(value, str) else (dt.name if dt is not None else None)
+    if text not in FLOAT_DTYPES:
+        raise ValueError(f"{name}: must be float32 or float64, got {value!r}")
+    return text

@@ -1,0 +1,237 @@
+"""What a run will cost, known before it starts: points, output bytes, peak memory, time.
+
+Every writing command of ``atlas`` builds an :class:`Estimate` from its scene alone (no kernel
+runs, no arrays of the scene's size), prints it with ``--dry-run``, and :meth:`Estimate.check`
+refuses a run that cannot fit -- peak memory above the memory available now, output bytes above
+the free space at the destination -- with one line naming the numbers and the way out.
+
+The figures are estimates, not bounds: bytes per point measured on this code (peak RSS of
+small runs, minus the interpreter and JAX runtime), times from the throughput in
+``outputs/bench.md``.  Output sizes are *uncompressed*: netCDF files are zlib-compressed (flags
+several-fold smaller), so ``--no-size-check`` runs a scene whose uncompressed size exceeds the
+free space anyway.  A refused scene costs microseconds: nothing proportional to its points is
+allocated (the tile plans of :mod:`atlas.data.distributed` are lazy too).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import shutil
+
+from atlas.data.distributed import DEFAULT_SLAB_POINTS
+from atlas.data.outputs import OUTPUTS, storage_dtype
+
+__all__ = [
+    "Estimate",
+    "available_memory",
+    "free_disk",
+    "human_bytes",
+    "generate_estimate",
+    "grid_estimate",
+    "NS_PER_POINT",
+]
+
+#: rough single-core cost of the certified atlas kernels per point and output group [ns]
+#: (outputs/bench.md: ~13 ns float32, ~21 ns float64 for all verdicts of a damped grid)
+NS_PER_POINT = {"float32": 15.0, "float64": 25.0}
+#: working bytes per point of a kernel tile (inputs, padded results, exact-tier bookkeeping)
+TILE_BYTES_PER_POINT = 160
+#: bytes per stored value a zarr tile holds at peak (the tile, its read-back copy, checksums)
+STORE_PEAK_FACTOR = 4
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as ``"12.3 GiB"``."""
+    n = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(n) < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} EiB"  # pragma: no cover
+
+
+def _human_seconds(s: float) -> str:
+    if s < 120:
+        return f"{s:.2g} s"
+    if s < 2 * 3600:
+        return f"{s / 60:.2g} min"
+    if s < 2 * 86400:
+        return f"{s / 3600:.2g} h"
+    if s < 2 * 365 * 86400:
+        return f"{s / 86400:.2g} days"
+    return f"{s / (365 * 86400):.2g} years"
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation now (``MemAvailable``), or ``None``."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - no sysconf
+        return None
+
+
+def free_disk(path) -> int | None:
+    """Free bytes on the file system that would hold ``path`` (its directory), or ``None``."""
+    directory = os.path.dirname(os.path.abspath(os.fspath(path)))
+    try:
+        return shutil.disk_usage(directory).free
+    except OSError:
+        return None
+
+
+@dataclasses.dataclass(frozen=True)
+class Estimate:
+    """The cost of one run: ``points`` evaluated, ``output_bytes`` (uncompressed) written to
+    each of ``outputs`` (paths; outputs on one file system add up), ``peak_bytes`` of memory, ``seconds`` (rough, one core), and the way out
+    for each limit (``memory_hint``, ``disk_hint``: what to change)."""
+
+    command: str
+    points: int
+    output_bytes: int
+    peak_bytes: int
+    seconds: float
+    outputs: tuple = ()
+    memory_hint: str = "use a coarser grid"
+    disk_hint: str = "use a coarser grid"
+
+    def describe(self) -> str:
+        """One line: the estimate and the room there is."""
+        mem = available_memory()
+        parts = [
+            f"atlas {self.command}: {self.points:.4g} points",
+            f"output ~{human_bytes(self.output_bytes)} uncompressed",
+            f"peak memory ~{human_bytes(self.peak_bytes)}"
+            + (f" of {human_bytes(mem)} available" if mem is not None else ""),
+            f"~{_human_seconds(self.seconds)} on one core (rough)",
+        ]
+        for path in self.outputs:
+            free = free_disk(path)
+            if free is not None:
+                parts.append(
+                    f"{human_bytes(free)} free at {os.path.dirname(os.path.abspath(path))}"
+                )
+        return "; ".join(parts)
+
+    def check(self) -> None:
+        """``MemoryError`` / ``OSError`` (one line naming the numbers and the way out) when the run
+        cannot fit in the memory available now or in the free space at an output."""
+        mem = available_memory()
+        if mem is not None and self.peak_bytes > mem:
+            raise MemoryError(
+                f"size: {self.points:.4g} points need ~{human_bytes(self.peak_bytes)} of memory, "
+                f"{human_bytes(mem)} available: {self.memory_hint} (--dry-run shows the estimate)"
+            )
+        need = {}  # file system -> bytes written there (each output holds output_bytes)
+        for path in self.outputs:
+            where = os.path.dirname(os.path.abspath(path))
+            try:
+                dev = os.stat(where).st_dev
+            except OSError:
+                continue
+            need.setdefault(dev, [where, 0])[1] += self.output_bytes
+        for where, nbytes in need.values():
+            free = free_disk(os.path.join(where, "x"))
+            if free is not None and nbytes > free:
+                raise OSError(
+                    f"size: {self.points:.4g} points write ~{human_bytes(nbytes)} "
+                    f"(uncompressed) to {where}, which has {human_bytes(free)} free: "
+                    f"{self.disk_hint} (--no-size-check to try anyway: files are compressed)"
+                )
+
+
+def _output_bytes(scene, dtype: str) -> tuple[int, int]:
+    """``(bytes of every output, bytes of the model-dependence accumulators)`` of a scene."""
+    total = md = 0
+    for name in scene.output_names:
+        size = math.prod(scene.axes[d].size for d in scene.output_dims(name))
+        total += size * storage_dtype(name, dtype).itemsize
+        if OUTPUTS[name].group == "model_dependence":
+            md += size
+    return total, md
+
+
+def generate_estimate(
+    scene,
+    *,
+    dtype: str = "float64",
+    tile_points: int = 1 << 16,
+    distributed: bool = False,
+    workers: int = 1,
+    outputs=(),
+) -> Estimate:
+    """The cost of ``atlas generate`` of ``scene`` (streamed to netCDF, or tiles into a zarr
+    store with ``distributed``; the store and the netCDF file both count at the destination)."""
+    points = scene.points()
+    out_bytes, md = _output_bytes(scene, dtype)
+    axes = sum(a.size for a in scene.axes.values()) * 8 * 4  # coordinates and their directions
+    tile = min(tile_points, points) * TILE_BYTES_PER_POINT
+    if distributed:
+        per_point = out_bytes / max(points, 1)
+        worker = STORE_PEAK_FACTOR * per_point * min(points, DEFAULT_SLAB_POINTS) + tile
+        peak = axes + workers * worker
+        written = out_bytes  # the store, and as much again for a netCDF copy
+        mem_hint = "use a coarser grid or smaller tiles (--slab, --block2)"
+    else:
+        peak = axes + tile + md  # model_dependent_* accumulate over (beta1, beta2) in memory
+        written = out_bytes
+        mem_hint = (
+            "use a coarser (beta1, beta2) grid or --outputs without model_dependent_*"
+            if md
+            else "use a coarser grid or a smaller --tile-points"
+        )
+    return Estimate(
+        "generate",
+        points,
+        written,
+        int(peak),
+        points * NS_PER_POINT.get(dtype, 25.0) * 1e-9 * len(scene.output_names) ** 0.5,
+        tuple(os.fspath(o) for o in outputs),
+        memory_hint=mem_hint,
+        disk_hint="use a coarser grid or fewer --outputs",
+    )
+
+
+def grid_estimate(
+    command: str,
+    points: int,
+    *,
+    bytes_per_point: float,
+    output_bytes_per_point: float,
+    seconds_per_point: float,
+    outputs=(),
+    hint: str = "use a coarser grid",
+) -> Estimate:
+    """The cost of a command that holds all its ``points`` in memory (``mechanism``,
+    ``boundaries``, ``simulate --map``): ``bytes_per_point`` at peak, ``output_bytes_per_point``
+    written."""
+    return Estimate(
+        command,
+        int(points),
+        int(points * output_bytes_per_point),
+        int(points * bytes_per_point),
+        points * seconds_per_point,
+        tuple(os.fspath(o) for o in outputs),
+        memory_hint=hint,
+        disk_hint=hint,
+    )
+
+
+# Measured on this code (peak RSS growth / wall time of one run over the warm-up, float64):
+#: ``atlas mechanism``: ladder 1000 x 1000 -> 320 B and 3.4 us per body; 12 float64 invariants
+#: and the int8 verdicts written
+MECHANISM = dict(bytes_per_point=400, output_bytes_per_point=110, seconds_per_point=4e-6)
+#: ``atlas boundaries`` (points = grid nodes x check**2 x slices): 256 x 256, check 2 -> 3.9 kB
+#: and 0.33 ms per grid node; curves are a small fraction of the grid
+BOUNDARIES = dict(bytes_per_point=1200, output_bytes_per_point=8, seconds_per_point=1e-4)
+#: ``atlas simulate --map`` (points = trajectories: cells x initial conditions): ~0.02 s per
+#: trajectory with the exact engine (the fast engine takes ~1 ms, so the time is an upper bound)
+OUTCOME_MAP = dict(bytes_per_point=2000, output_bytes_per_point=40, seconds_per_point=0.02)

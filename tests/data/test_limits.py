@@ -1,0 +1,56 @@
+"""Size estimates: output bytes equal what an atlas holds, a 1e14-point scene is refused at once
+(memory, disk) with one line naming the numbers, and its tile plan is never materialised."""
+
+import time
+
+import pytest
+
+from atlas.data import limits
+from atlas.data.distributed import TilePlan, tile_plan
+from atlas.data.engine import generate
+from atlas.data.scene import Scene
+
+HUGE = dict(beta1="0:2pi:10000000", beta2="0:2pi:10000000")
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_output_bytes_equal_the_atlas(dtype):
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:6", alpha="0:2pi:3", kappa="0.5,2", q="0,1")
+    ds = generate(scene, dtype=dtype, resolve=False)
+    est = limits.generate_estimate(scene, dtype=dtype)
+    assert est.points == 8 * 6 * 2 * 2
+    assert est.output_bytes == sum(v.nbytes for v in ds.data_vars.values())
+
+
+def test_huge_scene_refused_at_once(tmp_path, monkeypatch):
+    """The estimate and its refusal take no time beyond parsing the scene (CPU time: the
+    machine is shared)."""
+    scene = Scene(**HUGE, kappa="0.5,2", outputs="stable_SS,model_dependent_SS")
+    t0 = time.process_time()
+    est = limits.generate_estimate(scene, outputs=[tmp_path / "a.nc"])
+    assert 1e14 <= est.peak_bytes < 1.01e14  # the model_dependent_SS accumulator: 1 B per pair
+    with pytest.raises(MemoryError, match=r"^size: 2e\+14 points need ~9\d\.\d TiB of memory"):
+        est.check()
+    assert time.process_time() - t0 < 0.05
+    # the disk: 1e14 int8 values of stable_SS (uncompressed) to a 1 GiB file system
+    monkeypatch.setattr(limits, "free_disk", lambda path: 1 << 30)
+    est = limits.generate_estimate(
+        Scene(**HUGE, outputs="stable_SS"), distributed=True, outputs=[tmp_path / "a.zarr"]
+    )
+    with pytest.raises(OSError, match=r"^size: 1e\+14 points write ~90\.9 TiB .* 1\.0 GiB free"):
+        est.check()
+    assert "1e+14 points" in est.describe()
+
+
+def test_tile_plan_is_lazy():
+    scene = Scene(**HUGE, outputs="stable_SS")
+    t0 = time.process_time()
+    plan = tile_plan(scene)
+    assert isinstance(plan, TilePlan) and time.process_time() - t0 < 0.05
+    per = -(-(10**7) // plan.block2) if plan.block2 else 1
+    assert len(plan) == -(-(10**7) // plan.slab) * per
+    assert plan[-1][1] == 10**7 and plan[0][0] == 0
+    small = TilePlan(5, 7, 2, 3)
+    want = [(a, min(a + 2, 5), c, min(c + 3, 7)) for a in range(0, 5, 2) for c in range(0, 7, 3)]
+    assert list(small) == want and small == want and small[1:3] == want[1:3]
+    assert TilePlan.of(small.describe()) == small
