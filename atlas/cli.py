@@ -293,9 +293,7 @@ def _add_selftest(sub) -> None:
         "backend beside the compilation cache; the certified kernels refuse to run on a backend "
         "whose last self-check failed.",
     )
-    pt.add_argument(
-        "--suites", metavar="NAMES", help="comma-separated suite names (default: all)"
-    )
+    pt.add_argument("--suites", metavar="NAMES", help="comma-separated suite names (default: all)")
     pt.add_argument(
         "--dtypes", default="float64,float32", metavar="NAMES", help="float64,float32 (default)"
     )

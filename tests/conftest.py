@@ -20,6 +20,31 @@ os.environ.setdefault(CACHE_ENV, str(Path(__file__).resolve().parents[1] / ".pyt
 use_compile_cache(min_compile_seconds=0.2)
 
 
+@pytest.fixture(scope="session")
+def paper_run(tmp_path_factory):
+    """One ``atlas paper`` run at the CI size for the session (``atlas.paper.run(ci=True)``): its
+    directory, step timings and audit claims, shared by the run, audit and outputs-tree tests
+    (marked ``e2e`` and ``xdist_group("paper_run")``, so ``--dist loadgroup`` runs them in one
+    worker and the run happens once)."""
+    from types import SimpleNamespace
+
+    from atlas import paper
+    from atlas.paper import audit
+
+    out = tmp_path_factory.mktemp("paper")
+    seen = {}
+    run_audit = audit.run_audit
+
+    def keep_claims(*args, **kwargs):
+        seen["claims"] = run_audit(*args, **kwargs)
+        return seen["claims"]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(audit, "run_audit", keep_claims)
+        timings = paper.run(out=out, ci=True, progress=lambda m: None)
+    return SimpleNamespace(out=out, timings=timings, claims=seen["claims"])
+
+
 @pytest.fixture
 def bounded_det_b():
     """The fast kernels with ``sign det B`` certified by its float error bound only (as before the
