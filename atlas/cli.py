@@ -571,9 +571,12 @@ def main(argv=None) -> int:
         sys.unraisablehook = _unraisable
     try:
         args = build_parser(_command(argv)).parse_args(argv)
-        if args.command == "generate":
-            return _cmd_generate(args, argv)
-        return _cmd_dispatch(args)
+        from atlas.core.warm import kernel_cache
+
+        with kernel_cache():  # traced kernels kept on disk: the next run starts warm
+            if args.command == "generate":
+                return _cmd_generate(args, argv)
+            return _cmd_dispatch(args)
     except _UsageError as e:
         print(_one_line(e), file=sys.stderr)
         return EXIT_USAGE
