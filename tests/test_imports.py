@@ -1,6 +1,7 @@
 """Imports cost what is used: ``import atlas`` and ``atlas --help`` load no heavy library (measured
 in a fresh interpreter with ``-X importtime``), and the lazy names still resolve."""
 
+import os
 import subprocess
 import sys
 
@@ -58,9 +59,12 @@ def test_lazy_names_resolve(name, module):
     assert name in dir(atlas) and name in atlas.__all__
 
 
-def test_float64_is_on():
-    import jax.numpy as jnp
-
-    import atlas  # noqa: F401
-
-    assert jnp.asarray(1.0).dtype == jnp.float64
+@pytest.mark.parametrize(
+    "code", ["import atlas, jax.numpy as jnp", "import jax.numpy as jnp, atlas"]
+)
+def test_float64_is_on_whether_jax_comes_first_or_later(code):
+    """``import atlas`` turns float64 on before JAX is imported and after (a fresh interpreter:
+    this test process has it on already)."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_ENABLE_X64"}
+    check = f"{code}; assert jnp.asarray(1.0).dtype == jnp.float64"
+    subprocess.run([sys.executable, "-c", check], check=True, env=env, timeout=120)

@@ -94,7 +94,10 @@ class Kernel:
         return call(*args)
 
     def __getattr__(self, name):  # the rest of the jax.jit API: lower, trace, ...
-        return getattr(self.__dict__["jitted"], name)
+        jitted = self.__dict__.get("jitted")
+        if jitted is None:
+            raise AttributeError(name)
+        return getattr(jitted, name)
 
     def _load(self, where: Path, key, args, static):
         """``jax.jit`` of the exported program of ``key``: read from ``where``, or exported and
