@@ -11,7 +11,7 @@ import jax
 import numpy as np
 import pytest
 
-from atlas.core import hardcases, points, rootfree, signs, warm
+from atlas.core import hardcases, points, rootfree, signs, spectral, warm
 
 KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 
@@ -23,19 +23,18 @@ def _suite():
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
     args = _suite()
-    want = rootfree.tier2(*args)
+    want = np.asarray(spectral.abscissa(*args))
     with warm.kernel_cache(str(tmp_path)):
-        got = rootfree.tier2(*args)
+        got = np.asarray(spectral.abscissa(*args))
     files = sorted(p.name for p in tmp_path.iterdir())
-    assert files and all(f.startswith("atlas.core.rootfree._tier2_") for f in files)
-    # a fresh Kernel (as in a new process) reads the files: exporting again would raise
-    fresh = warm.Kernel(rootfree._tier2_decide.fn, ("ss", "ii", "iters"))
+    assert len(files) == 1 and files[0].startswith("atlas.core.spectral.abscissa-")
+    # a fresh Kernel (as in a new process) reads the file: exporting again would fail the test
+    fresh = warm.Kernel(spectral.abscissa.fn)
     monkeypatch.setattr(jax.export, "export", lambda *a, **k: pytest.fail("exported again"))
     with warm.kernel_cache(str(tmp_path)):
-        again = fresh(*args, ss=True, ii=True, iters=24)
-    for w, g in zip(want, got):
-        np.testing.assert_array_equal(np.asarray(w), np.asarray(g))
-    np.testing.assert_array_equal(np.asarray(again[0]), np.asarray(want[0]))
+        again = np.asarray(fresh(*args))
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(again, want)
     assert sorted(p.name for p in tmp_path.iterdir()) == files
 
 
