@@ -32,7 +32,6 @@ def test_quick_and_tiny_runs_write_elsewhere():
 
 
 @pytest.mark.e2e
-@pytest.mark.xdist_group("paper_run")
 def test_paper_run_writes_exactly_its_declared_files(paper_run):
     """The session's CI-sized ``atlas paper`` run (``paper_run``, conftest.py) writes exactly
     ``paper.files(quick=True)``: the list ``outputs/`` is compared with above."""

@@ -83,7 +83,6 @@ def _check_claims(claims):
 
 
 @pytest.mark.e2e
-@pytest.mark.xdist_group("paper_run")
 @pytest.mark.parametrize("claim_id", list(audit.CLAIMS))
 def test_claim_ci(paper_run, claim_id):
     """Each claim of the session's CI-sized ``atlas paper`` run (``paper_run``, conftest.py): its

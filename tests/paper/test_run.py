@@ -26,7 +26,6 @@ def _check_outputs(tmp_path):
 
 
 @pytest.mark.e2e
-@pytest.mark.xdist_group("paper_run")
 def test_run_ci(paper_run):
     """`atlas paper` end to end at the CI size (smallest grids, reduced audit): the session's
     shared run (``paper_run``, tests/conftest.py)."""
