@@ -3,29 +3,58 @@
 The package is layered; imports go one way (checked by import-linter in CI, see ``pyproject.toml``):
 ``atlas.core`` (mathematics) <- ``atlas.data`` (scenes, engine, I/O) <- ``atlas.dynamics`` (time)
 <- ``atlas.paper`` / ``atlas.explore`` / ``atlas.bench`` <- ``atlas.cli``.
+
+``import atlas`` is cheap: the public names below and the layers are attached lazily (PEP 562,
+the scientific-Python ``lazy_loader`` convention), so JAX, xarray, scipy and matplotlib load when
+a name that needs them is first used.  float64 is switched on for JAX here all the same (SPEC §4):
+directly if JAX is loaded, else through ``JAX_ENABLE_X64``, which JAX reads when it is imported.
 """
+
+import os
+import sys
 
 from atlas.core import interrupts as _interrupts
 
 _interrupts.exit_during_imports()  # the command line: a signal before main() just ends it
 
-from atlas.core.config import __version__, enable_x64  # noqa: E402
-
-enable_x64()  # float64 kernels are first-class (SPEC §4)
+import lazy_loader  # noqa: E402
 
 from atlas import _compat  # noqa: E402
-from atlas.core.mechanism import Mechanism as Mechanism  # noqa: E402
-from atlas.data.boundaries import boundaries as boundaries  # noqa: E402
-from atlas.data.engine import generate as generate  # noqa: E402
-from atlas.data.mechanisms import mechanism_atlas as mechanism_atlas  # noqa: E402
-from atlas.data.scene import Scene as Scene  # noqa: E402
-from atlas.dynamics.simulator import simulate as simulate  # noqa: E402
-from atlas.paper.tables import table2 as table2  # noqa: E402
 
+
+def _enable_x64() -> None:
+    """float64 kernels are first-class (SPEC §4); float32 is chosen per call."""
+    jax = sys.modules.get("jax")
+    if jax is not None and hasattr(jax, "config"):
+        jax.config.update("jax_enable_x64", True)
+    else:
+        os.environ["JAX_ENABLE_X64"] = "1"
+
+
+_enable_x64()
 _compat.install()
 
+_lazy_getattr, __dir__, _LAZY = lazy_loader.attach(
+    __name__,
+    submodules=["core", "data", "dynamics", "paper", "explore", "bench", "cli"],
+    submod_attrs={
+        "core.config": ["__version__"],
+        "core.mechanism": ["Mechanism"],
+        "data.boundaries": ["boundaries"],
+        "data.engine": ["generate"],
+        "data.mechanisms": ["mechanism_atlas"],
+        "data.scene": ["Scene"],
+        "dynamics.simulator": ["simulate"],
+        "paper.tables": ["table2"],
+    },
+)
 
-def __getattr__(name):  # old flat modules as attributes: ``from atlas import tiling``
+
+def __getattr__(name):
+    """The public names and layers on first use; old flat module names (``from atlas import
+    tiling``) through :mod:`atlas._compat`."""
+    if name in _LAZY:
+        return _lazy_getattr(name)
     return _compat.moved_attribute(name)
 
 

@@ -1,6 +1,8 @@
-"""The ``atlas`` command line: ``generate``, ``paper``, ``simulate``, ``table``, ``bench``.
+"""The ``atlas`` command line: ``generate``, ``mechanism``, ``boundaries``, ``paper``, ``simulate``,
+``table``, ``bench``, ``selftest``.
 
-A thin layer over the library.  ``atlas generate`` streams a scene into a netCDF4 file
+A thin layer over the library; each subcommand imports only its own layer, when it runs (``atlas
+--help`` imports neither JAX nor xarray).  ``atlas generate`` streams a scene into a netCDF4 file
 (:func:`atlas.data.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
 implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, ``atlas.paper.tables.run_cli``,
 ``atlas.bench.run``).
@@ -39,8 +41,6 @@ import signal
 import sys
 import threading
 
-from atlas.core.config import use_compile_cache
-
 __all__ = ["main", "build_parser"]
 
 EXIT_USAGE = 2
@@ -72,7 +72,23 @@ def _one_line(msg: str) -> str:
     return " ".join(str(msg).split())
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: the subcommands and their one-line help; each imports its own layer only when it is run or
+#: asked for its options (``atlas --help`` imports none of them)
+HELP = {
+    "generate": "compute a scene into a CF netCDF4 atlas",
+    "mechanism": "atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
+    "boundaries": "certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
+    "paper": "regenerate every figure and table of the paper",
+    "simulate": "simulate the compliant-contact dynamics (Fig. 2)",
+    "table": "Table 2 of the paper from the kernels",
+    "bench": "work-precision benchmark of the kernels",
+    "selftest": "check the certified kernels on this JAX backend against the exact tier",
+}
+
+
+def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
+    """The parser; ``command`` names the one subcommand whose options are built (the others get
+    a stub with their help line, so their layers are not imported); ``"*"``: all of them."""
     p = _Parser(
         prog="atlas",
         description="Atlases of contact-mode consistency and stability for two sliding contacts "
@@ -80,17 +96,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for add in (
-        _add_generate,
-        _add_mechanism,
-        _add_boundaries,
-        _add_paper,
-        _add_simulate,
-        _add_table,
-        _add_bench,
-    ):
-        add(sub)
+    adders = {
+        "generate": _add_generate,
+        "mechanism": _add_mechanism,
+        "boundaries": _add_boundaries,
+        "paper": _add_paper,
+        "simulate": _add_simulate,
+        "table": _add_table,
+        "bench": _add_bench,
+        "selftest": _add_selftest,
+    }
+    for name, add in adders.items():
+        if command in ("*", name):
+            add(sub)
+        else:
+            sub.add_parser(name, help=HELP[name], add_help=False)
     return p
+
+
+def _command(argv) -> str | None:
+    """The subcommand named in ``argv`` (its first word that is not an option), if any."""
+    return next((a for a in argv if not a.startswith("-")), None)
 
 
 def _add_generate(sub) -> None:
@@ -99,7 +125,7 @@ def _add_generate(sub) -> None:
 
     g = sub.add_parser(
         "generate",
-        help="compute a scene into a CF netCDF4 atlas",
+        help=HELP["generate"],
         description="Compute a scene (built-in or explicit ranges) tile by tile into a CF-1.10 "
         "netCDF4 file.  Ranges: START:STOP:N (linear; angles over a full turn exclude STOP), "
         "log:START:STOP:N, V1,V2,... or a scalar; numbers may carry a pi suffix (0.2pi).",
@@ -198,7 +224,7 @@ def _add_mechanism(sub) -> None:
 
     pm = sub.add_parser(
         "mechanism",
-        help="atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
+        help=HELP["mechanism"],
         description="Sweep a built-in body over its physical axes into a CF netCDF4 file: the "
         "invariants, B and a of eq. (1), and every verdict.  Without --out, print a summary.",
         epilog="; ".join(
@@ -230,7 +256,7 @@ def _add_boundaries(sub) -> None:
 
     pb = sub.add_parser(
         "boundaries",
-        help="certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
+        help=HELP["boundaries"],
         description="Every SS and II boundary of each (kappa, q1, q2) slice as polylines whose "
         "vertices are certified within --tol of the true boundary (bisection on certified "
         "verdicts), the closed-form class lines, and the codimension-2 points.  Ranges as for "
@@ -272,7 +298,7 @@ def _add_boundaries(sub) -> None:
 
 
 def _add_paper(sub) -> None:
-    pp = sub.add_parser("paper", help="regenerate every figure and table of the paper")
+    pp = sub.add_parser("paper", help=HELP["paper"])
     pp.add_argument(
         "--out",
         default="outputs",
@@ -284,7 +310,7 @@ def _add_paper(sub) -> None:
 
 
 def _add_simulate(sub) -> None:
-    ps = sub.add_parser("simulate", help="simulate the compliant-contact dynamics (Fig. 2)")
+    ps = sub.add_parser("simulate", help=HELP["simulate"])
     ps.add_argument("--case", choices=["fig2a", "fig2b", "fig2c", "fig2d", "fig2e"])
     for name in ("beta1", "beta2", "alpha"):
         ps.add_argument(
@@ -318,14 +344,14 @@ def _add_simulate(sub) -> None:
 
 
 def _add_table(sub) -> None:
-    pt = sub.add_parser("table", help="Table 2 of the paper from the kernels")
+    pt = sub.add_parser("table", help=HELP["table"])
     pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
     pt.add_argument("--out", metavar="FILE", help="output file .md or .csv (default: stdout)")
     pt.add_argument("--overwrite", action="store_true", help="replace an existing output file")
 
 
 def _add_bench(sub) -> None:
-    pb = sub.add_parser("bench", help="work-precision benchmark of the kernels")
+    pb = sub.add_parser("bench", help=HELP["bench"])
     pb.add_argument("--quick", action="store_true", help="small grids (CI)")
     pb.add_argument(
         "--out",
@@ -382,6 +408,22 @@ def _check_output_dir(path: str) -> None:
         raise NotADirectoryError(f"out: {path} is not a directory")
     probe = os.path.join(path, ".atlas-probe") if os.path.isdir(path) else path.rstrip("/")
     check_output_path(probe, overwrite=True)
+
+
+def _add_selftest(sub) -> None:
+    pt = sub.add_parser(
+        "selftest",
+        help=HELP["selftest"],
+        description="Run the hard-case suites (atlas.core.hardcases) through the certified "
+        "kernels on the JAX device in use and compare every decided point with the exact tier; "
+        "prints ns/point and the disagreements (exit 1 if any).  The result is recorded per "
+        "backend beside the compilation cache; the certified kernels refuse to run on a backend "
+        "whose last self-check failed.",
+    )
+    pt.add_argument("--suites", metavar="NAMES", help="comma-separated suite names (default: all)")
+    pt.add_argument(
+        "--dtypes", default="float64,float32", metavar="NAMES", help="float64,float32 (default)"
+    )
 
 
 def _positive_int(name):
@@ -472,6 +514,8 @@ def _cmd_generate(args, argv) -> int:
     check_output_path(out, args.overwrite)  # fail before any computation
     if _limits(args, _generate_estimate(args, scene, [out])):
         return 0
+    from atlas.core.config import use_compile_cache
+
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     stats = generate_to_file(
@@ -526,6 +570,8 @@ def _cmd_generate_distributed(args, argv, scene) -> int:
         check_output_path(args.out, args.overwrite)  # fail before any computation
     if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
         return 0
+    from atlas.core.config import use_compile_cache
+
     use_compile_cache()
     history = "atlas " + " ".join(shlex.quote(a) for a in argv)
     try:
@@ -687,6 +733,7 @@ _DISPATCH = {
     "simulate": ("atlas.paper.figures_dynamics", "run_cli"),
     "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),
+    "selftest": ("atlas.core.selftest", "run_cli"),
 }
 
 
@@ -875,11 +922,14 @@ def _interrupted(e) -> int:
 
 def _main(argv) -> int:
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(_command(argv)).parse_args(argv)
         _output_rules(args)
-        if args.command == "generate":
-            return _cmd_generate(args, argv)
-        return _cmd_dispatch(args)
+        from atlas.core.warm import kernel_cache
+
+        with kernel_cache():  # traced kernels kept on disk: the next run starts warm
+            if args.command == "generate":
+                return _cmd_generate(args, argv)
+            return _cmd_dispatch(args)
     except _UsageError as e:
         print(_one_line(e), file=sys.stderr)
         return EXIT_USAGE

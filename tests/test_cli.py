@@ -1,6 +1,10 @@
-"""The ``atlas`` CLI through real subprocesses: one-line errors with exit code 2, existing files
-untouched, a tiny scene end to end, ``--help`` on every subcommand."""
+"""The ``atlas`` CLI: one-line errors with exit code 2, existing files untouched, a tiny scene end to
+end, ``--help`` on every subcommand.  Through ``cli.main`` in this process (the code path of the
+console script, without an interpreter start-up each), except one subprocess smoke test and the
+signal test (``e2e``)."""
 
+import contextlib
+import io
 import os
 import subprocess
 import sys
@@ -30,7 +34,7 @@ def _spawn(args, env):
     )
 
 
-# the bad inputs of issue 3, each through the real CLI in a subprocess: (arguments, parameter)
+# bad inputs without --overwrite: (arguments, parameter)
 BAD = [
     (["--kappa", "nan"], "kappa"),
     (["--q", "inf"], "q"),
@@ -42,8 +46,8 @@ BAD = [
     (["--out", "/nonexistent-dir/a.nc"], "out"),
     (["--out", "{existing}"], "out"),  # exists, no --overwrite
 ]
-# more bad inputs, through cli.main in-process (same code path, no interpreter start-up)
-BAD_INPROCESS = [
+# more bad inputs, with --overwrite
+BAD_OVERWRITE = [
     (["--kappa", "-1"], "kappa"),
     (["--kappa", "log:1:0.1:3"], "kappa"),
     (["--alpha", "0:2pi:x"], "alpha"),
@@ -68,25 +72,20 @@ def _check_one_line(err, name, extra):
     assert name in lines[0], (extra, lines[0])
 
 
-def test_bad_inputs_exit_2_one_line(tmp_path):
+@pytest.mark.parametrize("extra, name", BAD)
+def test_bad_inputs_exit_2_one_line(extra, name, tmp_path, capsys):
     existing = tmp_path / "existing.nc"
     existing.write_bytes(b"keep me")
-    env = _env()
-    procs = []
-    for extra, name in BAD:
-        extra = [a.format(existing=existing) for a in extra]
-        args = ["generate", *TINY, "--outputs", "class_code", "--out", str(existing), *extra]
-        procs.append((extra, name, _spawn(args, env)))
-    for extra, name, p in procs:
-        _, err = p.communicate(timeout=120)
-        assert p.returncode == 2, (extra, err)
-        _check_one_line(err, name, extra)
+    extra = [a.format(existing=existing) for a in extra]
+    args = ["generate", *TINY, "--outputs", "class_code", "--out", str(existing), *extra]
+    assert cli.main(args) == 2
+    _check_one_line(capsys.readouterr().err, name, extra)
     assert existing.read_bytes() == b"keep me"
     assert sorted(os.listdir(tmp_path)) == ["existing.nc"]
 
 
-@pytest.mark.parametrize("extra, name", BAD_INPROCESS)
-def test_more_bad_inputs_in_process(extra, name, tmp_path, capsys):
+@pytest.mark.parametrize("extra, name", BAD_OVERWRITE)
+def test_bad_inputs_with_overwrite(extra, name, tmp_path, capsys):
     existing = tmp_path / "existing.nc"
     existing.write_bytes(b"keep me")
     extra = [a.format(dir=tmp_path) for a in extra]
@@ -97,14 +96,13 @@ def test_more_bad_inputs_in_process(extra, name, tmp_path, capsys):
     assert sorted(os.listdir(tmp_path)) == ["existing.nc"]
 
 
-def test_generate_end_to_end(tmp_path):
+def test_generate_end_to_end(tmp_path, capsys):
     out = tmp_path / "tiny.nc"
     args = ["generate", *TINY, "--kappa", "0.5,2", "--q", "0,0.5", "--alpha", "0:2pi:4"]
     args += ["--outputs", "class_code,subclass_code,stable_SS,model_dependent_SS,stable_SF"]
     args += ["--out", str(out), "--tile-points", "256"]
-    p = _spawn(args, _env())
-    _, err = p.communicate(timeout=300)
-    assert p.returncode == 0, err
+    rc, err = cli.main(args), capsys.readouterr().err
+    assert rc == 0, err
     summary = err.strip().splitlines()[-1]
     for word in ("points", " s ", "points/s", "undecided"):
         assert word in summary
@@ -116,21 +114,21 @@ def test_generate_end_to_end(tmp_path):
         assert ds.attrs["undecided_after_resolve"] == 0
     # an existing output is replaced only with --overwrite
     before = out.read_bytes()
-    p = _spawn(args, _env())
-    _, err = p.communicate(timeout=300)
-    assert p.returncode == 2 and "out:" in err and out.read_bytes() == before
+    rc, err = cli.main(args), capsys.readouterr().err
+    assert rc == 2 and "out:" in err and out.read_bytes() == before
     args2 = [a for a in args if a not in ("--kappa", "0.5,2", "--q", "0,0.5")]
     args2 = [a if a != "model_dependent_SS" else "cc_possible" for a in args2]
     args2 = [a.replace(",model_dependent_SS", "") for a in args2]
-    p = _spawn([*args2, "--overwrite", "--physical", "k1=100,k2=200,q1=20,q2=20"], _env())
-    _, err = p.communicate(timeout=300)
-    assert p.returncode == 0, err
+    rc = cli.main([*args2, "--overwrite", "--physical", "k1=100,k2=200,q1=20,q2=20"])
+    assert rc == 0, capsys.readouterr().err
     with xr.open_dataset(out) as ds:
         assert float(ds.kappa) == pytest.approx(0.5) and float(ds.q) == pytest.approx(2**0.5)
 
 
-def test_progress_bar_on(tmp_path):
-    """ATLAS_PROGRESS=1 forces the bar (as on a terminal): the run completes and shows it."""
+@pytest.mark.e2e
+def test_subprocess_smoke(tmp_path):
+    """The console entry point in a fresh interpreter; ATLAS_PROGRESS=1 forces the bar (as on a
+    terminal): the run completes and shows it."""
     env = _env()
     env["ATLAS_PROGRESS"] = "1"
     out = tmp_path / "p.nc"
@@ -141,23 +139,29 @@ def test_progress_bar_on(tmp_path):
     assert out.exists()
 
 
-@pytest.mark.parametrize("sub", ["generate", "paper", "simulate", "table", "bench"])
+@pytest.mark.parametrize("sub", list(cli.HELP))
 def test_help(sub, capsys):
     assert cli.main([sub, "--help"]) == 0
     assert "usage: atlas " + sub in capsys.readouterr().out
 
 
-def test_simulate_and_table_run_in_subprocesses(tmp_path):
+def test_top_level_help_lists_every_subcommand(capsys):
+    assert cli.main(["--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    for sub, line in cli.HELP.items():
+        assert f"{sub} {line}" in out, sub
+
+
+def test_simulate_and_table_run(tmp_path, capsys):
     """The dispatched subcommands resolve to real functions (no placeholder path)."""
-    env = _env()
     csv = tmp_path / "d.csv"
-    p = _spawn(["simulate", "--case", "fig2b", "--t-end", "5", "--out", str(csv)], env)
-    out, err = p.communicate(timeout=600)
-    assert p.returncode == 0, err
+    rc = cli.main(["simulate", "--case", "fig2b", "--t-end", "5", "--out", str(csv)])
+    out, err = capsys.readouterr()
+    assert rc == 0, err
     assert out.startswith("b: ") and csv.read_text().startswith("t,kind,contact")
-    p = _spawn(["table", "--format", "csv"], env)
-    out, err = p.communicate(timeout=600)
-    assert p.returncode == 0, err
+    rc = cli.main(["table", "--format", "csv"])
+    out, err = capsys.readouterr()
+    assert rc == 0, err
     assert len(out.strip().splitlines()) == 25  # header + 24 classes
 
 
@@ -178,6 +182,7 @@ def test_no_subcommand_is_usage_error(capsys):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
+@pytest.mark.e2e
 def test_sigterm_leaves_no_partial_file(tmp_path):
     import signal
     import time
@@ -205,12 +210,12 @@ SCENE5 += ["--q1", "0,1", "--q2", "0,0.5", "--tile-points", "128", "--no-progres
 SCENE5 += ["--outputs", "class_code,stable_SS,model_dependent_SS,stable_SF,stable_FS"]
 
 
-def _run(procs, timeout=300):
-    outs = []
-    for p in procs:
-        _, err = p.communicate(timeout=timeout)
-        outs.append((p.returncode, err))
-    return outs
+def _main(args) -> tuple[int, str]:
+    """``cli.main(args)`` in this process: its exit code and what it wrote on stderr."""
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        rc = cli.main(args)
+    return rc, err.getvalue()
 
 
 def _same_netcdf(a, b):
@@ -233,12 +238,10 @@ def distributed_run(tmp_path_factory):
     """The in-process ``atlas generate`` file and ``--scheduler inprocess --slab 2`` (4 tiles)."""
     pytest.importorskip("zarr")
     d = tmp_path_factory.mktemp("dist")
-    env = _env()
-    # one after the other: the second run loads the first one's compilations from the disk cache
-    ((rc, err),) = _run([_spawn(["generate", *SCENE5, "--out", str(d / "ref.nc")], env)])
+    rc, err = _main(["generate", *SCENE5, "--out", str(d / "ref.nc")])
     assert rc == 0, err
     args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
-    ((rc, err),) = _run([_spawn([*args, "--out", str(d / "a.nc")], env)])
+    rc, err = _main([*args, "--out", str(d / "a.nc")])
     assert rc == 0, err
     return d, err
 
@@ -259,7 +262,7 @@ def test_generate_scheduler_inprocess_then_resume(distributed_run):
     g["class_code"][6:8] = 0
     args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
     args += ["--store", str(d / "a.zarr"), "--out", str(d / "b.nc"), "--resume"]
-    ((rc, err),) = _run([_spawn(args, _env())])
+    rc, err = _main(args)
     assert rc == 0, err
     summary = err.strip().splitlines()[-1]
     assert "4 tiles: 2 computed, 2 verified, 1 missing and 1 corrupt before" in summary, summary
@@ -278,9 +281,7 @@ def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
         (["--resume", "--store", str(tmp_path / "none.zarr")], "resume:"),
         (["--store", str(store), "--resume", "--kappa", "0.5,3"], "store:"),  # another scene
     ]
-    # the first ones through the real CLI (in subprocesses), the rest through cli.main meanwhile
     base = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
-    procs = [_spawn([*base, *extra], _env()) for extra, _ in bad]
     more = [
         (["--scheduler", "local:0"], "scheduler:"),
         (["--scheduler", "tcp://"], "scheduler:"),
@@ -295,10 +296,9 @@ def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
         (["--store", str(tmp_path / "x.zarr"), "--block2", "2", "--beta2", "1"], "block2:"),
     ]
     got = []
-    for extra, _ in more:
+    for extra, _ in bad + more:
         rc = cli.main([*base, *extra])
         got.append((rc, capsys.readouterr().err))
-    got = _run(procs, timeout=120) + got
     for (extra, name), (rc, err) in zip(bad + more, got, strict=True):
         assert rc == 2, (extra, err)
         lines = err.strip().splitlines()

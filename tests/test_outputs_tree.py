@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 from atlas import paper
 from atlas.bench import runner
 
@@ -27,3 +29,11 @@ def test_readme_of_outputs_links_every_paper_file():
 def test_quick_and_tiny_runs_write_elsewhere():
     assert runner.files("tiny") and "distributed.md" not in runner.files("tiny")
     assert set(paper.files(quick=True)) < set(paper.FILES)
+
+
+@pytest.mark.e2e
+def test_paper_run_writes_exactly_its_declared_files(paper_run):
+    """The session's CI-sized ``atlas paper`` run (``paper_run``, conftest.py) writes exactly
+    ``paper.files(quick=True)``: the list ``outputs/`` is compared with above."""
+    written = sorted(f.name for f in paper_run.out.iterdir())
+    assert written == sorted(paper.files(quick=True))

@@ -7,9 +7,11 @@ distance), :mod:`~atlas.bench.suites` and :mod:`~atlas.bench.simulation` (the me
 :mod:`~atlas.bench.report` and :mod:`~atlas.bench.plots` (``bench.md`` and its figures),
 :mod:`~atlas.bench.runner` (:func:`run`, the entry point of ``atlas bench``), and
 :mod:`~atlas.bench.distributed` (throughput of distributed generation, ``distributed.md``).
+The names below load on first use (``lazy_loader``).
 """
 
-from atlas.bench.config import CONFIG
-from atlas.bench.runner import run
+import lazy_loader
 
-__all__ = ["CONFIG", "run"]
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__, submod_attrs={"config": ["CONFIG"], "runner": ["run"]}
+)

@@ -1,4 +1,4 @@
-"""Process configuration, one copy: the package version, float64, the persistent JAX compilation
+"""Process configuration, one copy: the package version, the persistent JAX compilation
 cache, and the provenance strings (``source``, ``history``) every written file carries."""
 
 import datetime
@@ -19,11 +19,6 @@ except PackageNotFoundError:  # pragma: no cover - a source tree without install
 CACHE_ENV = "ATLAS_JAX_CACHE"
 #: compilations shorter than this are not worth a cache entry (seconds)
 CACHE_MIN_COMPILE_SECONDS = 0.1
-
-
-def enable_x64() -> None:
-    """float64 kernels are first-class (SPEC §4); float32 is chosen per call."""
-    jax.config.update("jax_enable_x64", True)
 
 
 def compile_cache_dir() -> str | None:

@@ -25,10 +25,9 @@ from __future__ import annotations
 import functools
 import math
 
-import jax
 import numpy as np
 
-from atlas.core import exact, rootfree, spectral
+from atlas.core import backend, exact, rootfree, spectral, warm
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -72,7 +71,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     if kind == "eig":
         fn = spectral.eig_verdicts
     elif kind == "codes":
-        return jax.jit(functools.partial(rootfree.codes, **static))
+        return warm.Kernel(functools.partial(rootfree.codes, **static))
     elif kind == "tier2":
         return functools.partial(rootfree.tier2, **static)  # two compiled programs inside
     elif kind == "undamped_abscissa":
@@ -87,7 +86,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
         return two_stage
     else:  # pragma: no cover
         raise ValueError(kind)
-    return jax.jit(lambda *a: {n: v for n, v in fn(*a).items() if n in names})
+    return warm.Kernel(lambda *a: {n: v for n, v in fn(*a).items() if n in names})
 
 
 def _batches(n: int, chunk: int):
@@ -274,6 +273,7 @@ def spectral_points(
         _report(counts, stats)
         return {k: np.broadcast_to(np.asarray(res[k]), shape).copy() for k in names}
 
+    backend.require_trusted()  # a backend that failed atlas selftest certifies nothing
     flags = [k for k in names if k != "spectral_abscissa"]
     undamped_q = (inputs[5] == 0) & (inputs[6] == 0)
     out, open_idx = _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts)

@@ -87,7 +87,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import spectral
+from atlas.core import spectral, warm
 from atlas.core.signs import (
     CODE,
     DET2_ROUNDINGS,
@@ -603,7 +603,7 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
     )
 
 
-@functools.partial(jax.jit, static_argnames=("ss", "ii", "iters"))
+@warm.jit(static_argnames=("ss", "ii", "iters"))
 def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     """Program 1 of :func:`tier2`: ``stable_SS``, the II decisions from the sharp signs, where
     dominance is left to the shifted counts, the sign of ``Disc``, and the shifts ``s_lo, s_hi``
@@ -639,7 +639,7 @@ def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     return ss_code, cons, stab, dominance, g["disc"], x * (1 - delta), x * (1 + delta)
 
 
-@jax.jit
+@warm.jit
 def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_disc, s_lo, s_hi):
     """Program 2 of :func:`tier2`: certified root counts right of the shifts ``s_lo, s_hi`` (inputs
     of this program: one rounded number each) decide dominance; returns ``(consistent_II,

@@ -41,6 +41,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from atlas.core import warm
 from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, gamma
 from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
 
@@ -724,12 +725,12 @@ def _ii_stage2(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero):
     return cons, stab, jnp.ldexp(jnp.max(jnp.real(z), -1), n)
 
 
-_roots_jit = jax.jit(_roots)
-_radii_jit = jax.jit(_radii)
-_stage2_jit = jax.jit(_ii_stage2)
+_roots_jit = warm.jit(_roots)
+_radii_jit = warm.jit(_radii)
+_stage2_jit = warm.jit(_ii_stage2)
 
 
-@jax.jit
+@warm.jit
 def abscissa(c1, s1, c2, s2, kappa, q1, q2):
     """Spectral abscissa (max Re of the roots, time unit of contact 2) from the root finder alone,
     for display (not certified)."""

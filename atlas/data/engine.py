@@ -48,7 +48,7 @@ import jax
 import numpy as np
 import xarray as xr
 
-from atlas.core import checks, config, spectral
+from atlas.core import checks, config, spectral, warm
 from atlas.core import mechanics as mech
 from atlas.core import points as evaluate
 from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
@@ -181,7 +181,7 @@ def _jitted(group: str):
         "b1b2a": _kernel_b1b2a,
         "spectral": spectral.eig_verdicts,
     }
-    return jax.jit(kernels[group])
+    return warm.Kernel(kernels[group])
 
 
 # --- schema: coordinates, variables, attributes ------------------------------------------------

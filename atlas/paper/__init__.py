@@ -1,5 +1,13 @@
-"""Layer 4, the paper: its cases, Table 2, the figures, the audit of its claims, and ``atlas paper``."""
+"""Layer 4, the paper: its cases, Table 2, the figures, the audit of its claims, and ``atlas paper``.
 
-from atlas.paper.run import FILES, REFERENCE, atomic_write_text, files, run, write_netcdf
+The names below load on first use (``lazy_loader``): ``atlas table`` needs Table 2, not the
+figures."""
 
-__all__ = ["FILES", "REFERENCE", "atomic_write_text", "files", "run", "write_netcdf"]
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "run": ["FILES", "REFERENCE", "atomic_write_text", "files", "run", "write_netcdf"]
+    },
+)

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from atlas.bench import run, runner
 from atlas.bench.config import CONFIG, METHODS
@@ -20,6 +21,7 @@ def _filled(v):
     return v is not None and v != "" and not (isinstance(v, float) and np.isnan(v))
 
 
+@pytest.mark.e2e
 def test_tiny_run_end_to_end(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert run(config="tiny") == 0

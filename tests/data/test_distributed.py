@@ -172,6 +172,7 @@ def test_in_process_equals_generate(inproc, reference, tmp_path):
     }
 
 
+@pytest.mark.e2e
 def test_local_cluster_equals_in_process(inproc, reference, tmp_path):
     summary = generate_distributed(
         scene(), tmp_path / "c.zarr", scheduler="local:2", slab=2, tile_points=TP
@@ -203,6 +204,7 @@ _KILLED = textwrap.dedent(
 )
 
 
+@pytest.mark.e2e
 def test_killed_run_resumes(tmp_path):
     store = tmp_path / "k.zarr"
     script = tmp_path / "run.py"
@@ -313,6 +315,7 @@ def _thread_affinities():
     )
 
 
+@pytest.mark.e2e
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
 def test_local_cluster_pins_each_worker_to_one_core():
     """Every thread of a LocalCluster worker (XLA's task pool included) runs on one core, and the

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = ROOT / "notebooks"
 NOTEBOOK_NAMES = ("explore", "paper")
@@ -32,12 +34,14 @@ def test_notebooks_committed_without_outputs(need):
 # --- the notebooks (started in the background by ``notebook_runs``) ----------------------------
 
 
+@pytest.mark.e2e
 def test_explore_notebook_executes(notebook_runs):
     seconds, cwd = notebook_runs.wait("explore")
     assert (cwd / "tiny_atlas.nc").is_file()
     print(f"explore.ipynb: {seconds:.1f} s")
 
 
+@pytest.mark.e2e
 def test_paper_notebook_executes(notebook_runs):
     seconds, cwd = notebook_runs.wait("paper")
     for f in (

@@ -82,17 +82,13 @@ def _check_claims(claims):
     return {c.id: c for c in claims}
 
 
-@pytest.fixture(scope="module")
-def ci_context():
-    """One CI-sized context for the module: each sample computed once, on first use."""
-    return audit.Context(ci=True)
-
-
+@pytest.mark.e2e
 @pytest.mark.parametrize("claim_id", list(audit.CLAIMS))
-def test_claim_alone_ci(ci_context, claim_id):
-    """Each claim run alone at the CI size (not marked slow); its counterexamples re-verified."""
-    (c,) = audit.run_audit(select=[claim_id], context=ci_context)
-    assert c.id == claim_id
+def test_claim_ci(paper_run, claim_id):
+    """Each claim of the session's CI-sized ``atlas paper`` run (``paper_run``, conftest.py): its
+    status, evidence and counterexamples re-verified from scratch."""
+    assert [c.id for c in paper_run.claims] == list(audit.CLAIMS)
+    (c,) = [c for c in paper_run.claims if c.id == claim_id]
     _check_claim(c)
     if claim_id in SPECIFIC:
         SPECIFIC[claim_id](c)

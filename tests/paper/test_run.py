@@ -15,8 +15,7 @@ def test_atomic_write_text(tmp_path):
 
 
 def _check_outputs(tmp_path):
-    """Exactly the declared files (``outputs/`` is compared with the same list), none empty."""
-    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(paper.files(quick=True))
+    """The declared files (``outputs/`` is compared with the same list), none empty."""
     for f in paper.files(quick=True):
         assert (tmp_path / f).stat().st_size > 0, f
     ds = xr.open_dataset(tmp_path / "fig1_map.nc")
@@ -26,15 +25,17 @@ def _check_outputs(tmp_path):
     assert not list(tmp_path.glob("*.tmp*"))
 
 
-def test_run_ci(tmp_path):
-    """`atlas paper` end to end at the CI size (smallest grids, reduced audit), not marked slow."""
-    timings = paper.run(out=tmp_path, ci=True, progress=lambda m: None)
-    _check_outputs(tmp_path)
-    assert "quick = True, ci = True" in (tmp_path / "audit.md").read_text()
-    assert {"table2", "fig1 map (compute)", "audit (compute)"} <= set(timings)
+@pytest.mark.e2e
+def test_run_ci(paper_run):
+    """`atlas paper` end to end at the CI size (smallest grids, reduced audit): the session's
+    shared run (``paper_run``, tests/conftest.py)."""
+    _check_outputs(paper_run.out)
+    assert "quick = True, ci = True" in (paper_run.out / "audit.md").read_text()
+    assert {"table2", "fig1 map (compute)", "audit (compute)"} <= set(paper_run.timings)
 
 
 @pytest.mark.slow
 def test_run_quick(tmp_path):
     paper.run(out=tmp_path, quick=True, progress=lambda m: None)
     _check_outputs(tmp_path)
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(paper.files(quick=True))

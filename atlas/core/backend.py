@@ -1,0 +1,110 @@
+"""The certified kernels trust a JAX backend only if it has not failed ``atlas selftest``.
+
+Certificates are proven for IEEE arithmetic as the kernels are written; a backend whose compiler
+rewrites it (fusion, FMA contraction, approximate division on an accelerator) can break them.
+``atlas selftest`` (:mod:`atlas.core.selftest`) compares the kernels with the exact tier on the
+hard-case suites and records the result per backend (:func:`key`: platform, device kind, JAX,
+jaxlib and package versions) in ``selftest.json`` beside the persistent compilation cache
+(:func:`atlas.core.config.compile_cache_dir`).  :func:`require_trusted`, called by the certified
+driver :func:`atlas.core.points.spectral_points`, raises :class:`BackendFailed` on a backend whose
+last self-check failed.  A backend never checked is trusted (CI checks the CPU); with the cache
+switched off (``ATLAS_JAX_CACHE=0``) nothing is recorded or consulted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import os
+from pathlib import Path
+
+import jax
+import jaxlib
+
+from atlas.core import config
+
+__all__ = ["BackendFailed", "key", "record", "recorded", "require_trusted", "checking"]
+
+#: file name of the per-backend results, in the compilation cache directory
+RECORD_NAME = "selftest.json"
+_STATE = {"checking": False}
+
+
+class BackendFailed(RuntimeError):
+    """The JAX backend in use failed ``atlas selftest``: no verdict is called certified on it."""
+
+
+@functools.cache
+def key() -> str:
+    """The backend as the self-check saw it: platform, device kind and the software versions."""
+    dev = jax.devices()[0]
+    return (
+        f"{dev.platform}:{dev.device_kind} jax {jax.__version__} jaxlib {jaxlib.__version__} "
+        f"painleve-atlas {config.__version__}"
+    )
+
+
+def _path() -> Path | None:
+    where = config.compile_cache_dir()
+    return None if where is None else Path(where) / RECORD_NAME
+
+
+@functools.lru_cache(maxsize=4)
+def _read(path: str, mtime_ns: int) -> dict:
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def recorded() -> dict | None:
+    """The recorded self-check of this backend (``passed``, ``disagreements``, ``points``, ...)."""
+    path = _path()
+    if path is None:
+        return None
+    try:
+        mtime = path.stat().st_mtime_ns
+    except OSError:
+        return None
+    return _read(str(path), mtime).get(key())
+
+
+def record(result: dict) -> Path | None:
+    """Store ``result`` as this backend's self-check (atomically); returns the file, if any."""
+    path = _path()
+    if path is None:
+        return None
+    try:
+        mtime = path.stat().st_mtime_ns
+    except OSError:
+        mtime = 0
+    records = dict(_read(str(path), mtime)) if mtime else {}
+    records[key()] = result
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(records, indent=1, sort_keys=True))
+    os.replace(tmp, path)
+    return path
+
+
+@contextlib.contextmanager
+def checking():
+    """While the self-check runs, the kernels run whatever the record says."""
+    before, _STATE["checking"] = _STATE["checking"], True
+    try:
+        yield
+    finally:
+        _STATE["checking"] = before
+
+
+def require_trusted() -> None:
+    """Raise :class:`BackendFailed` if this backend's last self-check found disagreements."""
+    if _STATE["checking"]:
+        return
+    rec = recorded()
+    if rec is not None and not rec.get("passed", False):
+        raise BackendFailed(
+            f"backend: {key()} failed atlas selftest ({rec.get('disagreements')} disagreements "
+            f"with the exact tier, {rec.get('when')}); the certified kernels refuse to run on it "
+            "(run atlas selftest again after a fix, or use the CPU: JAX_PLATFORMS=cpu)"
+        )

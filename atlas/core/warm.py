@@ -1,0 +1,209 @@
+"""Kernels that start warm: jitted kernels kept as serialized ``jax.export`` programs on disk.
+
+A small run spends its seconds before any arithmetic: tracing the kernels in Python, lowering them
+to StableHLO, then (with the persistent compilation cache) loading the compiled executables.  A
+:class:`Kernel` (:func:`jit`, used where the package calls ``jax.jit`` on a top-level kernel)
+keeps, while :func:`kernel_cache` is active, the exported program of each (kernel, static options,
+input shapes and dtypes) in ``<compilation cache>/kernels``: the first process exports and stores
+it, every later one deserializes it and skips tracing and lowering; the compiled executable then
+comes from the persistent compilation cache.
+
+Staleness.  A file's name holds a digest of the JAX and jaxlib versions, the backend, float64, and
+the *live* code of the kernel modules (the code objects, defaults, closures and constants of
+every module-level name of :data:`MODULES` and of the kernel's own module, as loaded in this
+process): an edited or monkeypatched kernel function gets new files, never an old program.
+
+Without :func:`kernel_cache` (the library's default; the CLI turns it on for the command it runs)
+or with the compilation cache off, a :class:`Kernel` is exactly ``jax.jit``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import os
+import sys
+import types
+from pathlib import Path
+
+import jax
+import jaxlib
+import numpy as np
+
+from atlas.core import config
+
+__all__ = ["Kernel", "jit", "kernel_cache", "MODULES", "KERNEL_ENV"]
+
+#: modules whose live code every kernel's digest covers (the kernels and what they call)
+MODULES = (
+    "atlas.core.signs",
+    "atlas.core.verdicts",
+    "atlas.core.mechanics",
+    "atlas.core.spectral",
+    "atlas.core.rootfree",
+    "atlas.core.points",
+)
+#: environment variable: ``0`` keeps :func:`kernel_cache` off
+KERNEL_ENV = "ATLAS_KERNEL_CACHE"
+_STATE: dict = {"dir": None, "digests": {}}
+
+
+@contextlib.contextmanager
+def kernel_cache(where: str | None = None):
+    """Within the block, :class:`Kernel` calls use (and fill) the exported programs in ``where``
+    (default ``<compilation cache>/kernels``; nothing if the compilation cache is off or
+    ``$ATLAS_KERNEL_CACHE`` is ``0``)."""
+    before = dict(_STATE)
+    if where is None and os.environ.get(KERNEL_ENV, "") != "0":
+        base = config.compile_cache_dir()
+        where = None if base is None else os.path.join(base, "kernels")
+    _STATE.update(dir=where, digests={})
+    try:
+        yield where
+    finally:
+        _STATE.update(before)
+
+
+class Kernel:
+    """``jax.jit(fn, static_argnames=...)``, whose traced and lowered program is kept on disk
+    while :func:`kernel_cache` is active (module docstring).  Arguments: arrays (numpy or
+    concrete JAX) positionally, static options by keyword."""
+
+    def __init__(self, fn, static_argnames=()):
+        self.fn = fn
+        self.static_argnames = tuple(static_argnames)
+        self.jitted = jax.jit(fn, static_argnames=self.static_argnames or None)
+        base = fn.func if isinstance(fn, functools.partial) else fn
+        self.module = base.__module__
+        self.name = f"{base.__module__}.{base.__qualname__}".replace("<", "").replace(">", "")
+        #: the function's own code, closure and bound options (lambdas share a name)
+        self.code = hashlib.sha256(_value_digest(fn, 3)).hexdigest()
+        self._calls: dict = {}
+        functools.update_wrapper(self, fn)
+
+    def __call__(self, *args, **static):
+        where = _STATE["dir"]
+        if where is None or not all(_concrete(a) for a in args):
+            return self.jitted(*args, **static)
+        avals = tuple((tuple(a.shape), np.dtype(a.dtype).str) for a in args)
+        key = (where, _digest(self.module), self.code, avals, tuple(sorted(static.items())))
+        call = self._calls.get(key)
+        if call is None:
+            call = self._calls[key] = self._load(Path(where), key, args, static)
+        return call(*args)
+
+    def __getattr__(self, name):  # the rest of the jax.jit API: lower, trace, ...
+        jitted = self.__dict__.get("jitted")
+        if jitted is None:
+            raise AttributeError(name)
+        return getattr(jitted, name)
+
+    def _load(self, where: Path, key, args, static):
+        """``jax.jit`` of the exported program of ``key``: read from ``where``, or exported and
+        written there (atomically) first."""
+        from jax import export  # noqa: PLC0415 - jax.export loads on first use only
+
+        text = repr((self.name, key[1:]))
+        path = where / f"{self.name}-{hashlib.sha256(text.encode()).hexdigest()[:24]}.jaxexport"
+        exp = None
+        if path.exists():
+            try:
+                exp = export.deserialize(bytearray(path.read_bytes()))
+            except Exception:  # a damaged file: export again
+                exp = None
+        if exp is None:
+            fn = functools.partial(self.fn, **static) if static else self.fn
+            specs = [jax.ShapeDtypeStruct(a.shape, a.dtype) for a in args]
+            exp = export.export(jax.jit(fn))(*specs)
+            try:
+                where.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+                tmp.write_bytes(exp.serialize())
+                os.replace(tmp, path)
+            except OSError:  # a read-only cache: just use the program
+                pass
+        return jax.jit(exp.call)
+
+
+def jit(fn=None, *, static_argnames=()):
+    """:class:`Kernel` as a decorator (``@warm.jit`` or ``@warm.jit(static_argnames=...)``)."""
+    if fn is None:
+        return lambda f: Kernel(f, static_argnames)
+    return Kernel(fn, static_argnames)
+
+
+def _concrete(a) -> bool:
+    return isinstance(a, (np.ndarray, jax.Array)) and not isinstance(a, jax.core.Tracer)
+
+
+def _digest(module: str) -> str:
+    """Digest of the software, the backend and the live code of :data:`MODULES` and ``module``
+    (once per :func:`kernel_cache` block and module)."""
+    got = _STATE["digests"].get(module)
+    if got is None:
+        h = hashlib.sha256()
+        dev = jax.devices()[0]
+        h.update(
+            f"{jax.__version__} {jaxlib.__version__} {dev.platform} {dev.device_kind}".encode()
+        )
+        h.update(str(bool(jax.config.jax_enable_x64)).encode())
+        for name in sorted({*MODULES, module}):
+            mod = sys.modules.get(name)
+            h.update(name.encode())
+            for attr, value in sorted(vars(mod).items()) if mod else ():
+                h.update(attr.encode())
+                h.update(_value_digest(value, 3))
+        got = _STATE["digests"][module] = h.hexdigest()
+    return got
+
+
+def _code_digest(code: types.CodeType) -> bytes:
+    """The byte code, names and constants of ``code`` (``marshal`` output depends on reference
+    counts, so it differs between processes)."""
+    parts = [code.co_code, repr((code.co_names, code.co_varnames, code.co_freevars)).encode()]
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            parts.append(_code_digest(const))
+        elif isinstance(const, frozenset):
+            parts.append(repr(sorted(map(repr, const))).encode())
+        else:
+            parts.append(repr(const).encode())
+    return b"".join(parts)
+
+
+def _value_digest(value, depth: int) -> bytes:
+    """Bytes that change when a module-level name's code or constant value changes."""
+    if depth < 0:
+        return b""
+    if isinstance(value, Kernel):
+        return _value_digest(value.fn, depth)
+    if isinstance(value, functools.partial):
+        kw = sorted(value.keywords.items())
+        return _value_digest((value.func, *value.args, *(x for item in kw for x in item)), depth)
+    wrapped = getattr(value, "__wrapped__", None)
+    if wrapped is not None and not isinstance(value, types.FunctionType):  # jax.jit objects
+        return _value_digest(wrapped, depth)
+    if isinstance(value, types.FunctionType):
+        if not value.__module__.startswith("atlas"):  # a library's: its versions are elsewhere
+            return f"{value.__module__}.{value.__qualname__}".encode()
+        kw = sorted((value.__kwdefaults__ or {}).items())
+        parts = [_code_digest(value.__code__)]
+        parts.append(
+            _value_digest((*(value.__defaults__ or ()), *(x for i in kw for x in i)), depth)
+        )
+        for cell in value.__closure__ or ():
+            try:
+                parts.append(_value_digest(cell.cell_contents, depth - 1))
+            except ValueError:  # an empty cell
+                pass
+        return b"".join(parts)
+    if isinstance(value, (int, float, complex, str, bytes, bool, type(None))):
+        return repr(value).encode()
+    if isinstance(value, tuple):
+        return b"(" + b",".join(_value_digest(v, depth - 1) for v in value) + b")"
+    if isinstance(value, frozenset):
+        return b"{" + b",".join(sorted(_value_digest(v, depth - 1) for v in value)) + b"}"
+    if isinstance(value, np.ndarray):
+        return value.tobytes()
+    return type(value).__qualname__.encode()  # no repr: it may hold an address
