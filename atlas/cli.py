@@ -664,7 +664,11 @@ def _dispatch_estimate(args):
         outs = [args.out] if args.out else []
         return limits.grid_estimate("mechanism", points, outputs=outs, **limits.MECHANISM)
     if args.command == "boundaries":
+        from atlas.data.boundaries import MAX_CHECK
         from atlas.data.scene import Scene
+
+        if not 0 <= args.check <= MAX_CHECK:
+            return None  # refused by the boundaries' own check, which names the limit
 
         axes = {k: getattr(args, k) for k in ("beta1", "beta2", "kappa", "q", "q1", "q2")}
         scene = Scene(**{k: v for k, v in axes.items() if v is not None})
@@ -787,22 +791,37 @@ def _arm(seconds: float) -> None:
         signal.setitimer(signal.ITIMER_REAL, seconds)
 
 
+def _importing(frame) -> bool:
+    """Whether ``frame`` runs inside an import: a KeyboardInterrupt raised there can surface as
+    an extension module's ``ImportError`` with a printed traceback (numpy's does), so the
+    signal is raised once the import has finished."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _on_signal(signum, frame):
     """SIGINT / SIGTERM: record it; the first one raises KeyboardInterrupt (later ones are
-    delivered by the alarm while the first is unwinding, so cleanup is not cut short)."""
+    delivered by the alarm while the first is unwinding, so cleanup is not cut short); inside an
+    import, the alarm raises it as soon as the import has finished."""
     from atlas.core import interrupts
 
     first = interrupts.requested() is None
     interrupts.request(signum)
     if _state["exit_now"]:
         _hard_exit(128 + interrupts.requested())
-    if first:
+    if first and _importing(frame):
+        _arm(SIGNAL_RETRY)
+    elif first:
         _arm(SIGNAL_REPEAT)
         raise KeyboardInterrupt
 
 
 def _on_alarm(signum, frame):
-    """The alarm: raise the recorded stop signal again (the last one was swallowed)."""
+    """The alarm: raise the recorded stop signal again (the last one was swallowed, or came
+    during an import)."""
     from atlas.core import interrupts
 
     code = interrupts.requested()
@@ -810,6 +829,9 @@ def _on_alarm(signum, frame):
         return
     if _state["exit_now"]:
         _hard_exit(128 + code)
+    if _importing(frame):
+        _arm(SIGNAL_RETRY)
+        return
     _arm(SIGNAL_REPEAT)
     raise KeyboardInterrupt
 

@@ -286,7 +286,7 @@ def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
         (["--check", "1000"], "check: must be an integer in [0, 16]"),
         (["--chord", "1e-12"], "chord: must be in"),
         (["--beta1", "0"], "beta1: needs at least 2 values"),  # a 1 x n grid
-        (["--out", "{d}/b.nc", "--csv", "{d}/b.nc"], "out: --out, --csv and --geojson"),
+        (["--out", "{d}/b.nc", "--csv", "{d}/b.nc"], "csv: expected a file name ending in .csv"),
     ],
 )
 def test_cli_refuses_in_one_line(tmp_path, capsys, extra, message):
