@@ -1,4 +1,4 @@
-"""``outputs/`` is exactly what ``atlas paper`` and ``atlas bench`` write (issue 13)."""
+"""``outputs/`` is exactly what ``atlas paper`` and ``atlas bench`` write."""
 
 from pathlib import Path
 

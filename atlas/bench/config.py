@@ -40,14 +40,15 @@ CASES = (
 #: the methods compared on every grid, cheapest certified first, uncertified ``eig`` last
 METHODS = ("certified", "certified+exact", "verdicts_jit", "eig")
 
-_ISSUE12 = (
+#: a scene that includes the axes and the same scene shifted off them (compared in pairs)
+AXIS_PAIR = (
     (
-        "issue 12: axis scene",
+        "axis scene",
         ["--beta1", "0:2pi:64", "--beta2", "0:2pi:64", "--kappa", "0.5,2"]
         + ["--q1", "0,0.1", "--q2", "0,0.2", "--alpha", "0.35pi"],
     ),
     (
-        "issue 12: shifted scene",
+        "shifted scene",
         ["--beta1", "0.003pi:2.003pi:64", "--beta2", "0.003pi:2.003pi:64"]
         + ["--kappa", "0.5,2", "--q1", "0.05,0.1", "--q2", "0.05,0.2", "--alpha", "0.35pi"],
     ),
@@ -97,7 +98,7 @@ CONFIG = {
         distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
         atlases=(
-            *_ISSUE12,
+            *AXIS_PAIR,
             ("fig1", ["--scene", "fig1"]),
             ("fig1-model", ["--scene", "fig1-model"]),
             ("atlas4d", ["--scene", "atlas4d"]),

@@ -1,4 +1,4 @@
-"""Speed against error: ``atlas bench`` and its report ``bench.md`` (SPEC §4, issue 6).
+"""Speed against error: ``atlas bench`` and its report ``bench.md`` (SPEC §4).
 
 Everything is measured in one run on this machine and reported as ratios measured in that run:
 

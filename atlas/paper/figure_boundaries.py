@@ -1,4 +1,4 @@
-"""Certified boundary curves of the Fig. 1 slice (issue 15): ``fig1_boundaries.png`` and
+"""Certified boundary curves of the Fig. 1 slice: ``fig1_boundaries.png`` and
 ``fig1_boundaries.nc`` of ``atlas paper``.
 
 Two slices at ``kappa = 0.5``: Fig. 1's ``q1 = q2 = 0`` and vanishing damping ``q1 = q2 = 1e-6``

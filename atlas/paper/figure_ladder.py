@@ -1,5 +1,5 @@
-"""The ladder's atlas over (angle, friction) with the classical one-contact Painleve threshold
-(issue 14, part 4): ``ladder.png`` of ``atlas paper``."""
+"""The ladder's atlas over (angle, friction) with the classical one-contact Painleve threshold:
+``ladder.png`` of ``atlas paper``."""
 
 from __future__ import annotations
 

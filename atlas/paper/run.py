@@ -282,7 +282,7 @@ def _figure_sections(out: Path) -> list[str]:
         "",
         "![fig1 boundaries](fig1_boundaries.png)",
         "",
-        "## The ladder (issue 14)",
+        "## The ladder",
         "",
         "![ladder](ladder.png)",
         "",

@@ -59,7 +59,7 @@ def fake_results(mode="full") -> Results:
         dict(atlas=label, command="atlas generate --scene x", points=1000, wall_seconds=2.0,
              points_per_second=pps, file_mb=0.1, bytes_per_point=100.0, peak_rss_mb=600.0,
              undecided_before=5, undecided_after=0)
-        for label, pps in (("issue 12: axis scene", 1e5), ("issue 12: shifted scene", 1.2e5),
+        for label, pps in (("axis scene", 1e5), ("shifted scene", 1.2e5),
                            ("atlas4d", 19_800 * 25))
     ]  # fmt: skip
     sim = [

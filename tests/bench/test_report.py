@@ -37,11 +37,11 @@ def test_sections_in_order(results):
     assert heads == [
         "# atlas bench: speed against error",
         "## Headline",
-        "### At 1e7 points (3163 x 3163 = 10,004,569 points, issue 2)",
+        "### At 1e7 points (3163 x 3163 = 10,004,569 points)",
         "## Work-precision",
         "## Hard-case suites",
         "## Scaling",
-        "### End to end: `atlas generate` (issue 3)",
+        "### End to end: `atlas generate`",
         "### Issue 12: exact at kernel speed",
         "## Boundary curves (`atlas boundaries`)",
         "## Simulation",
@@ -70,7 +70,7 @@ def test_numbers_of_the_made_up_run(results):
     assert met == 4 * 2 * 3  # 4 cases x 2 dtypes x (certified, +exact, verdicts_jit: >= 1000x)
     # convergence orders: margin error h^2, mask errors h/2
     assert "* q=0: SS margin 2, SS mask 1, II mask 1" in md
-    # issue 12: shifted/axis = 1.2, atlas4d = 25x the 19,800 points/s before
+    # shifted/axis = 1.2, atlas4d = 25x the 19,800 points/s before
     assert "ratio **1.2**" in md and "**25x** the 19800 points/s" in md
     assert "worst hard suite **41 us/point** (class_boundaries" in md
     # the suites' totals: 2 suites x 10 points, 1 undecided each
