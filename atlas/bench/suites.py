@@ -171,7 +171,7 @@ def _large_case(case, dtype, cfg, lc, cache, rng):
 
 
 def large_grid(cfg, cache, rng) -> list[dict]:
-    """Issue 2's headline on a grid of >= 1e7 points (``large_n``; none if 0): each method called
+    """The headline on a grid of >= 1e7 points (``large_n``; none if 0): each method called
     once after compilation, errors on a capped check (``large_check`` points per kind)."""
     if not cfg["large_n"]:
         return []

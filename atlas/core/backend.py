@@ -58,16 +58,21 @@ def _read(path: str, mtime_ns: int) -> dict:
         return {}
 
 
+def _records(path: Path) -> dict:
+    """Every backend's record in ``path`` (read again only when the file changed)."""
+    try:
+        mtime = path.stat().st_mtime_ns
+    except OSError:
+        return {}
+    return _read(str(path), mtime)
+
+
 def recorded() -> dict | None:
     """The recorded self-check of this backend (``passed``, ``disagreements``, ``points``, ...)."""
     path = _path()
     if path is None:
         return None
-    try:
-        mtime = path.stat().st_mtime_ns
-    except OSError:
-        return None
-    return _read(str(path), mtime).get(key())
+    return _records(path).get(key())
 
 
 def record(result: dict) -> Path | None:
@@ -75,11 +80,7 @@ def record(result: dict) -> Path | None:
     path = _path()
     if path is None:
         return None
-    try:
-        mtime = path.stat().st_mtime_ns
-    except OSError:
-        mtime = 0
-    records = dict(_read(str(path), mtime)) if mtime else {}
+    records = dict(_records(path))
     records[key()] = result
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(records, indent=1, sort_keys=True))

@@ -74,6 +74,11 @@ def fake_results(mode="full") -> Results:
              hidden_cells=0, unrefined=4, max_bracket=9e-11)
         for n in cfg["curve_res"] for f in ("SS", "II")
     ]  # fmt: skip
+    maps = [
+        dict(map="256x256, kappa=0.5, q=0, alpha=0.35pi", trajectories=65536, fast_seconds=50.0,
+             fast_per_s=1300.0, ref_cells=500, ref_per_s=50.0, speedup=26.0, early_settle=0.13,
+             early_iwc=0.62, stepped=0.25, fallback=0.0, agreement=1.0, disagreements="")
+    ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
     meta = dict(
         mode=mode, quick=mode != "full", start="2024-06-01T12:00:00+0000",
@@ -83,7 +88,7 @@ def fake_results(mode="full") -> Results:
     )  # fmt: skip
     return Results(
         meta=meta, cfg=cfg, head=headline(wp, cfg), wp=wp, refs=refs, suites=suites,
-        scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves,
+        scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves, maps=maps,
         exact=dict(points=42, seconds=3.0, failures=0),
     )  # fmt: skip
 

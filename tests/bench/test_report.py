@@ -42,9 +42,10 @@ def test_sections_in_order(results):
         "## Hard-case suites",
         "## Scaling",
         "### End to end: `atlas generate`",
-        "### Issue 12: exact at kernel speed",
+        "### Exact at kernel speed",
         "## Boundary curves (`atlas boundaries`)",
         "## Simulation",
+        "## Outcome maps: fast engine against the exact simulator",
         "## Notes, omissions",
     ]
     assert "Mode: **full**" in md and "total duration **1234 s**" in md
@@ -55,7 +56,7 @@ def test_optional_sections_left_out(results):
     results.large, results.atlases = [], []
     md = report.build_report(results)
     assert "### At 1e7 points" not in md and "### End to end" not in md
-    assert "## Scaling" in md and "### Issue 12" in md
+    assert "## Scaling" in md and "### Exact at kernel speed" in md
 
 
 def test_numbers_of_the_made_up_run(results):

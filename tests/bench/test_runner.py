@@ -31,7 +31,7 @@ def test_tiny_run_end_to_end(tmp_path, monkeypatch, capsys):
     md = (out / "bench.md").read_text()
     for word in ("Mode: **tiny**", "JAX", "Command:", "total duration", "## Headline",
                  "## Work-precision", "## Hard-case suites", "## Scaling", "### End to end",
-                 "### Issue 12", "## Simulation", "## Notes, omissions"):  # fmt: skip
+                 "### Exact at kernel speed", "## Simulation", "## Notes, omissions"):  # fmt: skip
         assert word in md, word
     js = json.loads((out / "bench_headline.json").read_text())
     head = js["headline"]
