@@ -11,7 +11,7 @@ Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outp
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
 code 2 -- never a traceback; so is a run that cannot fit (``size: ...``, see ``--dry-run``) and a
 failed write (``out: cannot write PATH: no space left on device``).  SIGINT / SIGTERM end a run
-with exit 130 / 143 and nothing committed after them (see the signals section below).  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
+with exit 130 / 143 and nothing committed after them (:mod:`atlas.cli_signals`).  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
 ``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
 ~15 s compilation of the eigenvalue kernel.
 
@@ -39,7 +39,8 @@ import re
 import shlex
 import signal
 import sys
-import threading
+
+from atlas import cli_signals as signals
 
 __all__ = ["main", "build_parser"]
 
@@ -763,148 +764,12 @@ def _cmd_dispatch(args) -> int:
 _TOGETHER = ("mechanism", "boundaries", "simulate", "table")
 
 
-# --- signals -------------------------------------------------------------------------------------
-#
-# SIGINT and SIGTERM are recorded in atlas.core.interrupts and raised as KeyboardInterrupt, so every
-# writer removes its temporary files as on Ctrl-C; the run exits 128 + the signal number (130 for
-# SIGINT, 143 for SIGTERM).  The KeyboardInterrupt can be lost (raised inside a gc callback it is
-# only reported), so: the writers check the record before every commit and between tiles
-# (no output is committed after a signal), a swallowed KeyboardInterrupt is raised again at once
-# (sys.unraisablehook) and, as a last resort, an alarm raises it again every SIGNAL_REPEAT seconds
-# until main() has caught it.  main() cancels the alarm on every way out.  A run that received a
-# signal never exits 0, even when its outputs were complete before the signal came.  The console
-# script ends with os._exit after flushing (no interpreter teardown under XLA threads, where a late
-# signal could still kill the process); from then on a signal ends the process at once with 128 +
-# its number.
-
-#: seconds after which a stop signal that did not end the run is raised again
-SIGNAL_REPEAT = 5.0
-#: seconds after which a KeyboardInterrupt swallowed by a gc callback is raised again
-SIGNAL_RETRY = 0.02
-_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
-_ALARM = getattr(signal, "SIGALRM", None)
-_state = {"exit_now": False}
-
-
-def _arm(seconds: float) -> None:
-    if _ALARM is not None:
-        signal.setitimer(signal.ITIMER_REAL, seconds)
-
-
-def _importing(frame) -> bool:
-    """Whether ``frame`` runs inside an import: a KeyboardInterrupt raised there can surface as
-    an extension module's ``ImportError`` with a printed traceback (numpy's does), so the
-    signal is raised once the import has finished."""
-    while frame is not None:
-        if frame.f_code.co_filename.startswith("<frozen importlib"):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def _on_signal(signum, frame):
-    """SIGINT / SIGTERM: record it; the first one raises KeyboardInterrupt (later ones are
-    delivered by the alarm while the first is unwinding, so cleanup is not cut short); inside an
-    import, the alarm raises it as soon as the import has finished."""
-    from atlas.core import interrupts
-
-    first = interrupts.requested() is None
-    interrupts.request(signum)
-    if _state["exit_now"]:
-        _hard_exit(128 + interrupts.requested())
-    if first and _importing(frame):
-        _arm(SIGNAL_RETRY)
-    elif first:
-        _arm(SIGNAL_REPEAT)
-        raise KeyboardInterrupt
-
-
-def _on_alarm(signum, frame):
-    """The alarm: raise the recorded stop signal again (the last one was swallowed, or came
-    during an import)."""
-    from atlas.core import interrupts
-
-    code = interrupts.requested()
-    if code is None:
-        return
-    if _state["exit_now"]:
-        _hard_exit(128 + code)
-    if _importing(frame):
-        _arm(SIGNAL_RETRY)
-        return
-    _arm(SIGNAL_REPEAT)
-    raise KeyboardInterrupt
-
-
-def _unraisable(info):
-    """``sys.unraisablehook``: a KeyboardInterrupt swallowed in a gc callback is raised again at
-    once (by the alarm) and not reported; anything else is reported as by default."""
-    if isinstance(info.exc_value, KeyboardInterrupt):
-        from atlas.core import interrupts
-
-        if interrupts.requested() is not None and not _state["exit_now"]:
-            _arm(SIGNAL_RETRY)
-        return
-    sys.__unraisablehook__(info)
-
-
-def _install_signals():
-    """Install the handlers (main thread only); returns what to restore, or ``None``."""
-    if threading.current_thread() is not threading.main_thread():
-        return None
-    from atlas.core import interrupts
-
-    interrupts.clear()
-    _state["exit_now"] = False
-    saved = {s: signal.signal(s, _on_signal) for s in _STOP_SIGNALS}
-    if _ALARM is not None:
-        saved[_ALARM] = signal.signal(_ALARM, _on_alarm)
-    saved["unraisablehook"] = sys.unraisablehook
-    sys.unraisablehook = _unraisable
-    return saved
-
-
-def _restore_signals(saved) -> None:
-    """Cancel the alarm and put back the handlers of before :func:`main`."""
-    if saved is None:
-        return
-    from atlas.core import interrupts
-
-    _arm(0)
-    interrupts.clear()  # the library, called again in this process, runs normally
-    sys.unraisablehook = saved.pop("unraisablehook")
-    for s, h in saved.items():
-        signal.signal(s, h)
-
-
-def _hard_exit(code: int):  # pragma: no cover - ends the process
-    _arm(0)
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except Exception:
-            pass
-    os._exit(code)
-
-
-def _signal_code(rc: int) -> int:
-    """The exit code of a run: ``128 + signal`` if a stop signal arrived at any time."""
-    from atlas.core import interrupts
-
-    signum = interrupts.requested()
-    if signum is None:
-        return rc
-    if rc not in (128 + signal.SIGINT, 128 + signum):  # the outputs were complete before it came
-        print("atlas: interrupted (after the run had finished)", file=sys.stderr)
-    return 128 + signum
-
-
 def main(argv=None) -> int:
     """Entry point of the ``atlas`` console script; returns the exit code (the console script
-    itself ends the process with it, see the comment above)."""
+    itself ends the process with it, see :mod:`atlas.cli_signals`)."""
     console = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
-    saved = _install_signals()
+    saved = signals.install()
     written = sys.modules.get("atlas.data.io")
     if written is not None:
         written.forget_commits()
@@ -913,21 +778,21 @@ def main(argv=None) -> int:
         try:
             rc = _main(argv)
         except KeyboardInterrupt as e:
-            _arm(0)
+            signals.arm(0)
             rc = _interrupted(e)
-        rc = _signal_code(rc)
-        _state["exit_now"] = console and saved is not None  # a signal now ends the process
+        rc = signals.signal_code(rc)
+        signals.state["exit_now"] = console and saved is not None  # a signal now ends the process
     except KeyboardInterrupt:  # a signal while the first one was being reported
-        _state["exit_now"] = console and saved is not None
-        rc = _signal_code(130)
+        signals.state["exit_now"] = console and saved is not None
+        rc = signals.signal_code(130)
     finally:
-        _state["exit_now"] = console and saved is not None
-        if _state["exit_now"]:
-            _arm(0)
+        signals.state["exit_now"] = console and saved is not None
+        if signals.state["exit_now"]:
+            signals.arm(0)
         else:
-            _restore_signals(saved)
+            signals.restore(saved)
     if console:
-        _hard_exit(rc)
+        signals.hard_exit(rc)
     return rc
 
 

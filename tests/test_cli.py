@@ -313,20 +313,20 @@ def test_swallowed_interrupt_is_not_reported_but_other_errors_are(capsys):
     import sys
     import types
 
-    from atlas import cli
+    from atlas import cli_signals
 
     def info(exc):
         return types.SimpleNamespace(
             exc_type=type(exc), exc_value=exc, exc_traceback=None, err_msg=None, object=None
         )
 
-    cli._unraisable(info(KeyboardInterrupt()))
+    cli_signals.unraisable(info(KeyboardInterrupt()))
     assert capsys.readouterr().err == ""
     forwarded = []
     default = sys.__unraisablehook__
     try:
         sys.__unraisablehook__ = forwarded.append
-        cli._unraisable(info(RuntimeError("boom")))
+        cli_signals.unraisable(info(RuntimeError("boom")))
     finally:
         sys.__unraisablehook__ = default
     assert [str(i.exc_value) for i in forwarded] == ["boom"]
