@@ -122,7 +122,8 @@ def _command(argv) -> str | None:
 
 def _add_generate(sub) -> None:
     from atlas.data.engine import DEFAULT_TILE_POINTS, DTYPES, METHODS
-    from atlas.data.scene import ALL_OUTPUTS, BUILTIN_SCENES
+    from atlas.data.outputs import atlas_outputs
+    from atlas.data.scene import BUILTIN_SCENES
 
     g = sub.add_parser(
         "generate",
@@ -130,7 +131,7 @@ def _add_generate(sub) -> None:
         description="Compute a scene (built-in or explicit ranges) tile by tile into a CF-1.10 "
         "netCDF4 file.  Ranges: START:STOP:N (linear; angles over a full turn exclude STOP), "
         "log:START:STOP:N, V1,V2,... or a scalar; numbers may carry a pi suffix (0.2pi).",
-        epilog=f"built-in scenes: {', '.join(BUILTIN_SCENES)}; outputs: {', '.join(ALL_OUTPUTS)}",
+        epilog=f"built-in scenes: {', '.join(BUILTIN_SCENES)}; outputs: {', '.join(atlas_outputs())}",
     )
     g.add_argument("--scene", help="built-in scene to start from (options below override it)")
     for name, what in (

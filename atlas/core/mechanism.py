@@ -78,12 +78,10 @@ import math
 from fractions import Fraction
 from functools import cached_property
 
-import jax
 import numpy as np
 
+from atlas.core import kernels
 from atlas.core import mechanics as mech
-from atlas.core import points
-from atlas.core.verdicts import UNDECIDED_CODE, Verdict
 
 __all__ = [
     "Mechanism",
@@ -100,24 +98,9 @@ __all__ = [
     "free_acceleration",
     "tangent",
     "verdicts_at",
-    "VERDICT_NAMES",
+    "verdict_names",
 ]
 
-#: the atlas outputs a single mechanism has (SPEC §2; the ``model_dependent_*`` reductions need
-#: several model samples and are not among them)
-VERDICT_NAMES = (
-    "class_code",
-    "subclass_code",
-    "consistent_FF",
-    "consistent_SF",
-    "consistent_FS",
-    "consistent_SS",
-    "stable_SF",
-    "consistent_IF",
-    "stable_FS",
-    "consistent_FI",
-    "cc_possible",
-) + points.SPECTRAL_NAMES
 _TWO_PI = 2.0 * math.pi
 #: contact kinds (module docstring): a body vertex on an environment surface, an environment
 #: vertex on a body side
@@ -733,52 +716,44 @@ def _angle(x, y) -> float:
 # --- verdicts at invariants --------------------------------------------------------------------
 
 
-def _angle_codes(c1, s1, c2, s2, ca, sa):
-    out = {"class_code": mech.class_code(c1, s1, c2, s2)}
-    out["subclass_code"] = mech.subclass_code(c1, s1, c2, s2, ca, sa)
-    out.update(
-        {f"consistent_{k}": v for k, v in mech.consistent_modes(c1, s1, c2, s2, ca, sa).items()}
-    )
-    out["stable_SF"], out["consistent_IF"] = mech.stable_SF(c1), mech.consistent_IF(c1, s1)
-    out["stable_FS"], out["consistent_FI"] = mech.stable_FS(s2), mech.consistent_FI(c2, s2)
-    out["cc_possible"] = mech.cc_possible(c1, s2)
-    return out
+def verdict_names() -> tuple[str, ...]:
+    """The verdicts a single mechanism has: every result of the verdict kernels
+    (:func:`atlas.core.kernels.verdict_kernels`; the reductions over model samples need several
+    samples and are not among them)."""
+    return tuple(r for k in kernels.verdict_kernels() for r in k.results)
 
 
-_angle_kernel = jax.jit(_angle_codes)
-_CONSISTENCY = ("consistent_FF", "consistent_SF", "consistent_FS", "consistent_SS")
-
-
-def _settle_codes(codes: dict, dirs: list) -> None:
-    """Undecided class/subclass/Table 1 codes settled exactly (:func:`atlas.core.points.settle_codes`)."""
-    undecided = {k: codes[k] == UNDECIDED_CODE for k in ("class_code", "subclass_code")}
-    undecided.update({k: codes[k] == int(Verdict.UNDECIDED) for k in _CONSISTENCY})
-    points.settle_codes(codes, undecided, *dirs)
-
-
-def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64") -> dict:
-    """Every verdict of the atlas (:data:`VERDICT_NAMES`) at broadcastable invariants.
+def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64", names=None) -> dict:
+    """The verdicts ``names`` (default :func:`verdict_names`) at broadcastable invariants.
 
     The angles [rad] enter through :func:`atlas.core.mechanics.direction` in ``dtype``, exactly as
-    in :func:`atlas.generate`; undecided codes are settled exactly.  Returns numpy arrays of the
-    broadcast shape in the storage types of SPEC §2 (codes ``int8``/``int16``, Table 1, SF/FS
-    stability, IF/FI, CC as ``bool``, spectral verdict flags ``int8``, the abscissa float).
+    in :func:`atlas.generate`; each verdict comes from its kernel (:mod:`atlas.core.kernels`), and
+    undecided codes are settled exactly.  Returns numpy arrays of the broadcast shape in the
+    storage types of SPEC §2 (codes ``int8``/``int16``, flags with a ``true_code`` -- Table 1,
+    SF/FS stability, IF/FI, CC -- as ``bool``, spectral verdict flags ``int8``, the abscissa float).
     """
     dtype = np.dtype(dtype)
+    names = verdict_names() if names is None else tuple(names)
+    unknown = set(names) - set(verdict_names())
+    if unknown:
+        raise ValueError(f"names: unknown verdict(s) {sorted(unknown)}")
     args = [np.asarray(x, np.float64) for x in (beta1, beta2, alpha, kappa, q1, q2)]
     shape = np.broadcast_shapes(*(x.shape for x in args))
     args = [np.broadcast_to(x, shape) for x in args]
     dirs = [c for ang in args[:3] for c in mech.direction(ang, dtype)]
-    codes = {k: np.array(v) for k, v in _angle_kernel(*dirs).items()}
-    _settle_codes(codes, dirs)
-    spec = points.spectral_points(*dirs[:4], *args[3:], dtype=dtype)
-    out = {
-        "class_code": codes["class_code"].astype(np.int8),
-        "subclass_code": codes["subclass_code"].astype(np.int16),
-    }
-    for k in (*_CONSISTENCY, "consistent_IF", "consistent_FI", "cc_possible"):
-        out[k] = codes[k] == 1
-    for k in ("stable_SF", "stable_FS"):
-        out[k] = codes[k] == int(Verdict.STABLE)
-    out.update({k: np.asarray(spec[k]).reshape(shape) for k in points.SPECTRAL_NAMES})
-    return {k: out[k] for k in VERDICT_NAMES}
+    inputs = dict(zip(("c1", "s1", "c2", "s2", "ca", "sa"), dirs))
+    inputs.update(zip(("kappa", "q1", "q2"), args[3:]))
+    out = {}
+    for k in kernels.verdict_kernels():
+        want = tuple(r for r in k.results if r in names)
+        if not want:
+            continue
+        if k.driver is not None:
+            res = k.driver(*(inputs[i] for i in k.inputs), names=want, dtype=dtype)
+        else:
+            res = {r: np.broadcast_to(v, shape).copy() for r, v in kernels.run(k, inputs).items()}
+            kernels.settle(k, res, inputs)
+        for r in want:
+            v = np.asarray(res[r]).reshape(shape)
+            out[r] = v == k.true_code[r] if r in k.true_code else v
+    return {r: out[r] for r in names}

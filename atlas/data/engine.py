@@ -37,7 +37,6 @@ exactly is neutral and stored as ``False``); the consistency outputs are ``True`
 from __future__ import annotations
 
 import datetime
-import functools
 import itertools
 import math
 import sys
@@ -48,15 +47,12 @@ import jax
 import numpy as np
 import xarray as xr
 
-from atlas.core import checks, config, spectral, warm
+from atlas.core import checks, config, kernels
 from atlas.core import mechanics as mech
-from atlas.core import points as evaluate
-from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
 from atlas.data.outputs import (
-    GROUPS,
     OUTPUTS,
     coord_attrs,
-    in_group,
+    reductions,
     storage_dtype,
     to_storage,
     undecided,
@@ -121,22 +117,27 @@ def tile_blocks(shape: tuple[int, ...], tile_points: int):
 
 @dataclass(frozen=True)
 class _Group:
-    name: str
+    kernel: kernels.PointKernel
     params: tuple[str, ...]  # parameters (scalar or varied) the kernel needs, canonical order
     outputs: tuple[str, ...]  # outputs it can produce
 
+    @property
+    def name(self) -> str:
+        return self.kernel.name
 
-_MODEL_DEP = in_group("model_dependence")
 
-
-def _groups(scene: Scene) -> list[_Group]:
-    """The kernel groups of an atlas (:data:`atlas.data.outputs.GROUPS`; model dependence is a
-    reduction of the spectral group, not a kernel)."""
+def _groups(scene: Scene, outputs) -> list[_Group]:
+    """One group per kernel (:data:`atlas.core.kernels.KERNELS`) the wanted ``outputs`` and the
+    reductions they include read, in kernel-table order."""
+    used = {}
+    for o in outputs:
+        for n in OUTPUTS[o].needs or (o,):
+            used.setdefault(OUTPUTS[n].kernel, []).append(n)
     out = []
-    for name in GROUPS:
-        names = in_group(name)
-        if name != "model_dependence":
-            out.append(_Group(name, scene.depends(names[0]), names))
+    for name, k in kernels.KERNELS.items():
+        if name in used:
+            names = tuple(r for r in k.results if r in OUTPUTS)
+            out.append(_Group(k, scene.depends(names[0]), names))
     return out
 
 
@@ -146,42 +147,6 @@ def _needed(group: _Group, outputs: tuple[str, ...]) -> tuple[str, ...]:
     for o in outputs:
         need.update(n for n in OUTPUTS[o].needs if n in group.outputs)
     return tuple(o for o in group.outputs if o in need)
-
-
-# --- kernels (pure jnp on 1-D arrays of tile_points values) -------------------------------------
-
-
-def _kernel_b1(c1, s1):
-    return {"stable_SF": mech.stable_SF(c1), "consistent_IF": mech.consistent_IF(c1, s1)}
-
-
-def _kernel_b2(c2, s2):
-    return {"stable_FS": mech.stable_FS(s2), "consistent_FI": mech.consistent_FI(c2, s2)}
-
-
-def _kernel_b1b2(c1, s1, c2, s2):
-    return {"class_code": mech.class_code(c1, s1, c2, s2), "cc_possible": mech.cc_possible(c1, s2)}
-
-
-def _kernel_b1b2a(c1, s1, c2, s2, ca, sa):
-    out = {f"consistent_{k}": v for k, v in mech.consistent_modes(c1, s1, c2, s2, ca, sa).items()}
-    out["subclass_code"] = mech.subclass_code(c1, s1, c2, s2, ca, sa)
-    return out
-
-
-@functools.cache
-def _jitted(group: str):
-    """One jitted kernel per group (the spectral group: the uncertified ``eig`` baseline; the
-    certified spectral verdicts go through :func:`atlas.core.points.spectral_points`).  Every output
-    of the group is returned, so scenes asking for different subsets share one compilation."""
-    kernels = {
-        "b1": _kernel_b1,
-        "b2": _kernel_b2,
-        "b1b2": _kernel_b1b2,
-        "b1b2a": _kernel_b1b2a,
-        "spectral": spectral.eig_verdicts,
-    }
-    return warm.Kernel(kernels[group])
 
 
 # --- schema: coordinates, variables, attributes ------------------------------------------------
@@ -241,7 +206,7 @@ def schema(
     }
     for key, val in scene.fixed().items():
         attrs[key] = val
-    if any(n in variables for n in _MODEL_DEP):
+    if any(n in variables for n in reductions()):
         attrs["model_dependent_definition"] = (
             "True iff the set of decided verdicts over the model samples has more than one "
             "element; SS: neutral counted as stable"
@@ -298,15 +263,6 @@ def _axis_inputs(scene: Scene, dtype) -> dict:
     return src
 
 
-_GROUP_INPUTS = {
-    "b1": ("c1", "s1"),
-    "b2": ("c2", "s2"),
-    "b1b2": ("c1", "s1", "c2", "s2"),
-    "b1b2a": ("c1", "s1", "c2", "s2", "ca", "sa"),
-    "spectral": ("c1", "s1", "c2", "s2", "kappa", "q1", "q2"),
-}
-
-
 def _gather(src, inputs, dims, index, block, T):
     """Flat, padded (length T) kernel inputs for one hyperslab ``index`` of the group ``dims``.
 
@@ -340,11 +296,11 @@ def _block_inputs(src, inputs, dims, index, block):
     return out
 
 
-def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
-    """Certified spectral verdicts of one tile (all tiers and the exact settlement)."""
-    args = _block_inputs(src, _GROUP_INPUTS["spectral"], dims, index, block)
+def _driver_tile(kernel, src, dims, index, block, need, dtype, resolve, stats):
+    """Certified verdicts of one tile through the kernel's driver (all tiers, exact settlement)."""
+    args = _block_inputs(src, kernel.inputs, dims, index, block)
     st = {}
-    res = evaluate.spectral_points(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
+    res = kernel.driver(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
     settled = st["undecided_before"] - st["undecided_after"] if resolve else 0
     stats["resolved_points"] = stats.get("resolved_points", 0) + settled
     stats.setdefault("exact_failures", []).extend(st.get("exact_failures", []))
@@ -352,14 +308,11 @@ def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
     return res, st["undecided_by_name"]
 
 
-def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
-    """Settle undecided class/subclass codes and Table 1 flags of one tile exactly, in place
-    (:func:`atlas.core.points.settle_codes`; the spectral group is settled by its own driver)."""
-    masks = {k: undecided(k, v) for k, v in res.items() if OUTPUTS[k].undecided is not None}
-    if group == "spectral" or not masks:  # b1, b2: never undecided
-        return
+def _resolve(kernel, res: dict, flat_inputs: list, n: int, stats: dict):
+    """Settle the undecided codes of one tile exactly, in place (the kernel's ``settle``; a kernel
+    with a driver is settled by the driver)."""
     pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
-    evaluate.settle_codes(res, masks, *pts, stats=stats)
+    kernels.settle(kernel, res, dict(zip(kernel.inputs, pts)), stats)
 
 
 def run(
@@ -402,7 +355,7 @@ def run(
         sink.begin(sch)  # inside: an interrupt while the header is written still aborts
         for g, need, dims, shape in plan:
             T = _kernel_size(shape, tile_points)
-            if g.name == "spectral" and method == "certified":
+            if g.kernel.driver is not None and method == "certified":
                 _certified_group(writer, src, g, need, dims, shape, T)
             else:
                 _kernel_group(writer, src, g, need, dims, shape, T)
@@ -445,8 +398,8 @@ def _certified_group(writer: _TileWriter, src, g, need, dims, shape, T):
     """The certified spectral verdicts of one group, hyperslab by hyperslab."""
     for index in tile_blocks(shape, T):
         block = tuple(s.stop - s.start for s in index)
-        res, fast = _spectral_tile(
-            src, dims, index, block, need, writer.dtype, writer.resolve, writer.counts
+        res, fast = _driver_tile(
+            g.kernel, src, dims, index, block, need, writer.dtype, writer.resolve, writer.counts
         )
         _store_tile(writer, g, dims, index, block, res, fast)
         if writer.bar is not None:
@@ -456,8 +409,8 @@ def _certified_group(writer: _TileWriter, src, g, need, dims, shape, T):
 def _kernel_group(writer: _TileWriter, src, g, need, dims, shape, T):
     """One group through its jitted kernel: each tile is dispatched asynchronously and the previous
     one finished (resolved, stored) while it computes."""
-    kern = _jitted(g.name)
-    inputs = _GROUP_INPUTS[g.name]
+    kern = kernels.jitted(g.kernel)
+    inputs = g.kernel.inputs
     pending = None
     try:
         for index in tile_blocks(shape, T):
@@ -498,7 +451,7 @@ def _final_attrs(counts: dict, sch: Schema) -> tuple[dict, dict]:
 def _plan(scene: Scene, outputs) -> list[tuple]:
     """``(group, kernel results needed, varied dims, shape)`` of every group with work to do."""
     plan = []
-    for g in _groups(scene):
+    for g in _groups(scene, outputs):
         need = _needed(g, outputs)
         if need:
             dims = tuple(p for p in g.params if scene.axes[p].is_dim)
@@ -531,7 +484,7 @@ def _finish_tile(writer: _TileWriter, g, dims, index, block, flat, out):
     }
     fast = {k: int(undecided(k, v).sum()) for k, v in res.items()}
     if writer.resolve:
-        _resolve(g.name, res, flat, n, writer.counts)
+        _resolve(g.kernel, res, flat, n, writer.counts)
     _store_tile(writer, g, dims, index, block, res, fast)
     if writer.bar is not None:
         writer.bar.update(n)
@@ -543,54 +496,40 @@ def _store_tile(writer: _TileWriter, g, dims, index, block, res, fast):
     for k, v in res.items():
         stats["undecided_fast"][k] = stats["undecided_fast"].get(k, 0) + fast.get(k, 0)
         stats["undecided"][k] = stats["undecided"].get(k, 0) + int(undecided(k, v).sum())
-    if g.name == "spectral":
-        writer.md.update(dims, index, block, res)
+    writer.md.update(dims, index, block, res)
     for k, v in res.items():
         if k in writer.outputs:
             writer.sink.write(k, index, to_storage(k, v.reshape(block), writer.dtype))
 
 
 class _ModelDependence:
-    """Accumulates, per (beta1, beta2), the set of decided verdicts seen over the model samples."""
+    """Accumulates, per point of a reduction's dims, the set of decided states seen over the model
+    samples (the reduction's ``state``, :mod:`atlas.data.outputs`)."""
 
     def __init__(self, scene: Scene, outputs):
-        self.want = [o for o in _MODEL_DEP if o in outputs]
-        self.dims = scene.output_dims("model_dependent_SS")
-        shape = tuple(scene.axes[d].size for d in self.dims)
-        self.bits = {o: np.zeros(shape, np.uint8) for o in self.want}
+        self.want = [o for o in reductions() if o in outputs]
+        self.dims = {o: scene.output_dims(o) for o in self.want}
+        self.bits = {
+            o: np.zeros(tuple(scene.axes[d].size for d in self.dims[o]), np.uint8)
+            for o in self.want
+        }
 
     def update(self, dims, index, block, res):
-        if not self.want:
-            return
-        red = tuple(i for i, d in enumerate(dims) if d not in self.dims)
-        keep = tuple(index[i] for i, d in enumerate(dims) if d in self.dims)
         for o in self.want:
-            if o == "model_dependent_SS":
-                v = res["stable_SS"].reshape(block)
-                bits = np.where(
-                    (v == int(Verdict.STABLE)) | (v == int(Verdict.NEUTRAL)),
-                    1,
-                    np.where(v == int(Verdict.UNSTABLE), 2, 0),
-                )
-            else:
-                c = res["consistent_II"].reshape(block)
-                s = res["stable_II"].reshape(block)
-                bits = np.where(
-                    (c == UNDECIDED_FLAG) | (s == UNDECIDED_FLAG),
-                    0,
-                    np.where(
-                        c == int(Consistency.INCONSISTENT),
-                        1,
-                        np.where(s == int(Verdict.STABLE), 4, 2),
-                    ),
-                )
+            needs = OUTPUTS[o].needs
+            if not all(n in res for n in needs):
+                continue
+            keep_dims = self.dims[o]
+            red = tuple(i for i, d in enumerate(dims) if d not in keep_dims)
+            keep = tuple(index[i] for i, d in enumerate(dims) if d in keep_dims)
+            bits = OUTPUTS[o].state({n: res[n].reshape(block) for n in needs})
             bits = np.bitwise_or.reduce(bits.astype(np.uint8), axis=red) if red else bits
             self.bits[o][keep] |= bits.astype(np.uint8)
 
     def results(self) -> dict:
         out = {}
         for o, b in self.bits.items():
-            count = (b & 1) + ((b >> 1) & 1) + ((b >> 2) & 1)
+            count = sum((b >> i) & 1 for i in range(8))
             out[o] = count > 1
         return out
 

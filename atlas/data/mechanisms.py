@@ -5,8 +5,9 @@ A mechanism scene sweeps physical parameters of a built-in body of :mod:`atlas.c
 physical coordinates (with units), the derived invariants ``beta1, beta2, alpha, kappa, q1, q2``,
 the entries of ``B`` [1/kg] and ``a`` [m/s^2] of eq. (1), and every verdict of the atlas at them,
 so ``ds.sel(mu=0.6, method="nearest")`` reads one body's verdicts.  One friction coefficient
-``mu`` applies to both contacts.  The verdicts are those of :func:`atlas.core.mechanism.verdicts_at`
-(certified kernels, undecided points settled exactly).
+``mu`` applies to both contacts.  The verdicts (every atlas output of the registry with a verdict
+kernel, :func:`atlas.data.outputs.verdict_outputs`) are those of
+:func:`atlas.core.mechanism.verdicts_at` (certified kernels, undecided points settled exactly).
 
 Every parameter that is not an axis is stored with its units (:data:`FIXED`): the body's own (e.g.
 the ladder's ``L`` [m], ``m`` [kg]), the derived ``I`` [kg m2], the contact model ``k1, k2`` [N/m],
@@ -26,10 +27,10 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import checks, config
-from atlas.core.mechanism import BODIES, VERDICT_NAMES, body_invariants, verdicts_at
+from atlas.core.mechanism import BODIES, body_invariants, verdicts_at
 from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
-from atlas.data.outputs import coord_attrs, to_storage, variable_attrs
+from atlas.data.outputs import coord_attrs, storage_dtype, variable_attrs, verdict_outputs
 from atlas.data.scene import parse_values
 
 __all__ = ["FIXED", "MECHANISM_SCENES", "MechanismScene", "mechanism_atlas", "run_cli"]
@@ -200,16 +201,19 @@ def mechanism_atlas(
         return body, body_invariants(body, **model, g=(0.0, -g))
 
     body, inv = _validated(scene, build)
+    names = verdict_outputs()
     verdicts = verdicts_at(
-        *(inv[k] for k in ("beta1", "beta2", "alpha", "kappa", "q1", "q2")), dtype=dtype
+        *(inv[k] for k in ("beta1", "beta2", "alpha", "kappa", "q1", "q2")),
+        dtype=dtype,
+        names=names,
     )
     dims = tuple(scene.axes)
     data = {}
     for k, meta in _INVARIANTS.items():
         attrs = coord_attrs(k) if meta is None else {"units": meta[0], "long_name": meta[1]}
         data[k] = (dims, inv[k], attrs)
-    for k in VERDICT_NAMES:
-        data[k] = (dims, to_storage(k, verdicts[k], dtype), variable_attrs(k))
+    for k in names:
+        data[k] = (dims, verdicts[k].astype(storage_dtype(k, dtype)), variable_attrs(k))
     data["omega"] = (dims, inv["omega"], {"units": "rad s-1", "long_name": "angular velocity"})
     coords = {
         axis: (axis, values[axis], {"units": units, "long_name": long_name})

@@ -1,32 +1,35 @@
 """The outputs of an atlas and the coordinates they span: the one registry (SPEC §2).
 
 An *output* is a data variable of the Datasets the package builds: the atlas of
-:func:`atlas.data.engine.generate`, the explorer's map (:func:`atlas.explore.maps.compute_map`)
-and the Fig. 1 map (:func:`atlas.paper.figures.stability_map`).  Each is defined here once: the
-parameters it depends on, the kernel group that computes it, its stored type, its CF attributes
-and the raw code that means *undecided*.  :data:`COORDS` holds the attributes of the coordinates.
+:func:`atlas.data.engine.generate`, the mechanism atlases (:mod:`atlas.data.mechanisms`), the
+explorer's map (:func:`atlas.explore.maps.compute_map`) and the Fig. 1 map
+(:func:`atlas.paper.figures.stability_map`).  Each is declared here once, in the style of xclim's
+indicators: the parameters it depends on, *how it is computed*, its stored type and its CF
+attributes.  :data:`COORDS` holds the attributes of the coordinates.
 
-Kernel groups (the outputs of a group share their parameters and one jitted kernel):
+How an output is computed is one of
 
-===================  ==================================  =========================================
-group                parameters                          computed by
-===================  ==================================  =========================================
-``b1``, ``b2``       ``beta1`` / ``beta2``               :mod:`atlas.core.mechanics`
-``b1b2``             ``beta1, beta2``                    :mod:`atlas.core.mechanics`
-``b1b2a``            ``beta1, beta2, alpha``             :mod:`atlas.core.mechanics` (Table 1)
-``spectral``         ``beta1, beta2`` + model            :func:`atlas.core.points.spectral_points`
-``model_dependence``  ``beta1, beta2`` (over the model)   reduction of ``spectral`` results
-``margin``           ``beta1, beta2`` + model            smooth margins for display (not in atlases)
-===================  ==================================  =========================================
+* ``kernel``: the name of its point kernel in :data:`atlas.core.kernels.KERNELS` (the kernel's
+  inputs follow from ``depends``; the meaning of its raw codes, undecided and ``True``, is declared
+  with the kernel).  Every builder runs the kernels of the outputs it is asked for;
+* ``needs`` + ``state``: a reduction over the model samples of kernel results (model dependence:
+  ``state`` maps the needed raw results to a bit set of decided states per sample);
+* ``computed_by``: a display layer computed by one named function (not part of an atlas).
+
+:func:`register` checks a declaration completely (unknown kernel, parameters that disagree with the
+kernel's, a stored type that disagrees with its codes, CF flags that miss the undecided code ...):
+a bad output fails when it is declared, not when it is first computed.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Mapping
 from types import MappingProxyType
 
 import numpy as np
 
+from atlas.core import kernels
 from atlas.core import mechanics as mech
 from atlas.core.verdicts import (
     UNDECIDED_CODE,
@@ -39,41 +42,62 @@ from atlas.core.verdicts import (
 __all__ = [
     "Output",
     "OUTPUTS",
-    "ATLAS_OUTPUTS",
-    "GROUPS",
     "COORDS",
+    "register",
+    "unregister",
+    "atlas_outputs",
+    "kernel_outputs",
+    "verdict_outputs",
+    "reductions",
+    "kernel_of",
     "coord_attrs",
     "variable_attrs",
     "storage_dtype",
     "to_storage",
     "undecided",
-    "in_group",
+    "in_kernel",
 ]
 
-#: kernel groups of an atlas, in the order the engine computes them
-GROUPS = ("b1", "b2", "b1b2", "b1b2a", "spectral", "model_dependence")
+STORAGE = ("bool", "int8", "int16", "float")
 
 
 @dataclasses.dataclass(frozen=True)
 class Output:
-    """One output variable.
+    """One output variable (module docstring).
 
     ``depends``: parameters, ``"model"`` standing for the scene's spectral parameters (``kappa,
     q`` or ``kappa, q1, q2``).  ``storage``: ``"bool"``, ``"int8"``, ``"int16"`` or ``"float"``
-    (the working dtype).  ``undecided``: the raw kernel code meaning undecided (``None``: never
-    undecided).  ``true_code``: for a boolean output, the raw code stored as ``True``.
-    ``needs``: kernel results a reduction reads.  ``in_atlas``: part of :func:`atlas.generate`.
+    (the working dtype).  ``attrs``: CF attributes.  ``kernel``: its point kernel
+    (:data:`atlas.core.kernels.KERNELS`).  ``needs``, ``state``: a reduction of kernel results
+    over the model samples.  ``computed_by``: the function computing a display layer.
+    ``enum``: the verdict enumeration of stored flag values (colours, labels).  ``in_atlas``:
+    part of :func:`atlas.generate`.
     """
 
     name: str
     depends: tuple[str, ...]
-    group: str
     storage: str
-    attrs: MappingProxyType
-    undecided: int | None = None
-    true_code: int | None = None
+    attrs: Mapping
+    kernel: str | None = None
     needs: tuple[str, ...] = ()
+    state: Callable | None = None
+    computed_by: str | None = None
+    enum: type | None = None
     in_atlas: bool = True
+
+    @property
+    def undecided(self) -> int | None:
+        """The raw code meaning undecided (``None``: never undecided)."""
+        return (
+            None if self.kernel is None else kernels.KERNELS[self.kernel].undecided.get(self.name)
+        )
+
+    @property
+    def true_code(self) -> int | None:
+        """For a boolean output computed by a kernel, the raw code stored as ``True``."""
+        return (
+            None if self.kernel is None else kernels.KERNELS[self.kernel].true_code.get(self.name)
+        )
 
 
 # --- CF attributes -------------------------------------------------------------------------------
@@ -105,6 +129,7 @@ def _verdict_flags(long_name: str, comment: str) -> dict:
 
 
 _SUBCLASSES = [10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7)]
+_B1B2 = ("beta1", "beta2")
 _B1B2A = ("beta1", "beta2", "alpha")
 _SPECTRAL = ("beta1", "beta2", "model")
 
@@ -113,23 +138,20 @@ def _table1(mode: str) -> Output:
     return Output(
         f"consistent_{mode}",
         _B1B2A,
-        "b1b2a",
         "bool",
         _bool_flags(
             f"consistency of the {mode} contact mode (paper Table 1, Appendix A)",
             "inconsistent",
             "consistent",
         ),
-        undecided=UNDECIDED_FLAG,
-        true_code=int(Consistency.CONSISTENT),
+        kernel="b1b2a",
     )
 
 
-def _sliding(name: str, param: str, group: str, b: str) -> Output:
+def _sliding(name: str, param: str, kernel: str, b: str) -> Output:
     return Output(
         name,
         (param,),
-        group,
         "bool",
         _bool_flags(
             f"stability of the {name[-2:]} contact mode (paper Sec. 4.2)",
@@ -137,15 +159,14 @@ def _sliding(name: str, param: str, group: str, b: str) -> Output:
             "stable",
             f"stable iff {b} > 0; {b} = 0 (neutral) is stored as not_stable",
         ),
-        true_code=int(Verdict.STABLE),
+        kernel=kernel,
     )
 
 
-def _impact(name: str, param: str, group: str, cond: str) -> Output:
+def _impact(name: str, param: str, kernel: str, cond: str) -> Output:
     return Output(
         name,
         (param,),
-        group,
         "bool",
         _bool_flags(
             f"consistency of the {name[-2:]} impact without collision (paper Sec. 4.3)",
@@ -153,18 +174,36 @@ def _impact(name: str, param: str, group: str, cond: str) -> Output:
             "consistent",
             f"consistent iff {cond}; stable whenever consistent",
         ),
-        true_code=1,
+        kernel=kernel,
     )
 
 
-def _model_dependent(mode: str, long_name: str, comment: str, needs) -> Output:
+def _ss_states(res: dict) -> np.ndarray:
+    """Decided SS states of one sample as bits: 1 stable (neutral counted as stable), 2 unstable."""
+    v = res["stable_SS"]
+    ok = (v == int(Verdict.STABLE)) | (v == int(Verdict.NEUTRAL))
+    return np.where(ok, 1, np.where(v == int(Verdict.UNSTABLE), 2, 0))
+
+
+def _ii_states(res: dict) -> np.ndarray:
+    """Decided II states of one sample as bits: 1 inconsistent, 2 consistent-unstable,
+    4 consistent-stable (0: undecided)."""
+    c, s = res["consistent_II"], res["stable_II"]
+    return np.where(
+        (c == UNDECIDED_FLAG) | (s == UNDECIDED_FLAG),
+        0,
+        np.where(c == int(Consistency.INCONSISTENT), 1, np.where(s == int(Verdict.STABLE), 4, 2)),
+    )
+
+
+def _model_dependent(mode: str, long_name: str, comment: str, needs, state) -> Output:
     return Output(
         f"model_dependent_{mode}",
-        ("beta1", "beta2"),
-        "model_dependence",
+        _B1B2,
         "bool",
         _bool_flags(long_name, "model_independent", "model_dependent", comment),
         needs=needs,
+        state=state,
     )
 
 
@@ -173,8 +212,7 @@ def _geometry_outputs() -> list[Output]:
     return [
         Output(
             "class_code",
-            ("beta1", "beta2"),
-            "b1b2",
+            _B1B2,
             "int8",
             _code_flags(
                 "class code ij (rank of beta1, beta2; paper Sec. 3)",
@@ -182,17 +220,16 @@ def _geometry_outputs() -> list[Output]:
                 "class",
                 np.int8,
             ),
-            undecided=UNDECIDED_CODE,
+            kernel="b1b2",
         ),
         Output(
             "subclass_code",
             _B1B2A,
-            "b1b2a",
             "int16",
             _code_flags(
                 "subclass code ijk (rank of alpha; paper Sec. 3)", _SUBCLASSES, "subclass", np.int16
             ),
-            undecided=UNDECIDED_CODE,
+            kernel="b1b2a",
         ),
         *(_table1(m) for m in ("FF", "SF", "FS", "SS")),
         _sliding("stable_SF", "beta1", "b1", "b11"),
@@ -201,8 +238,7 @@ def _geometry_outputs() -> list[Output]:
         _impact("consistent_FI", "beta2", "b2", "b22 < 0 and b12 > 0"),
         Output(
             "cc_possible",
-            ("beta1", "beta2"),
-            "b1b2",
+            _B1B2,
             "bool",
             _bool_flags(
                 "CC inverse chattering possible (paper Sec. 5.2)",
@@ -210,7 +246,7 @@ def _geometry_outputs() -> list[Output]:
                 "possible",
                 "necessary condition b11 > 0 and b22 > 0",
             ),
-            true_code=1,
+            kernel="b1b2",
         ),
     ]
 
@@ -221,37 +257,36 @@ def _spectral_outputs() -> list[Output]:
         Output(
             "stable_SS",
             _SPECTRAL,
-            "spectral",
             "int8",
             _verdict_flags(
                 "stability verdict of the SS contact mode (eigenvalues of M, eq. 9)",
                 "neutral: no eigenvalue with Re > 0, some with Re = 0 (q = 0; Fig. 1 stable)",
             ),
-            undecided=UNDECIDED_FLAG,
+            kernel="spectral",
+            enum=Verdict,
         ),
         Output(
             "consistent_II",
             _SPECTRAL,
-            "spectral",
             "int8",
             flag_attrs(Consistency, "consistency of the II impact without collision (Sec. 4.3)"),
-            undecided=UNDECIDED_FLAG,
+            kernel="spectral",
+            enum=Consistency,
         ),
         Output(
             "stable_II",
             _SPECTRAL,
-            "spectral",
             "int8",
             _verdict_flags(
                 "stability verdict of the II impact without collision (Sec. 4.3)",
                 "stable iff the strictly dominant eigenvalue of M is a II eigenvalue",
             ),
-            undecided=UNDECIDED_FLAG,
+            kernel="spectral",
+            enum=Verdict,
         ),
         Output(
             "spectral_abscissa",
             _SPECTRAL,
-            "spectral",
             "float",
             {
                 "long_name": "spectral abscissa of M: max real part of its eigenvalues",
@@ -259,12 +294,14 @@ def _spectral_outputs() -> list[Output]:
                 "comment": "time scaled by contact 2 (unit 1/sqrt(k2 |b2|)); approximate, "
                 "not certified",
             },
+            kernel="spectral",
         ),
         _model_dependent(
             "SS",
             "SS stability verdict varies over the model samples (kappa, q)",
             "more than one decided verdict over the samples; neutral counted as stable",
             ("stable_SS",),
+            _ss_states,
         ),
         _model_dependent(
             "II",
@@ -272,8 +309,12 @@ def _spectral_outputs() -> list[Output]:
             "more than one decided state among inconsistent, consistent-unstable, "
             "consistent-stable over the samples",
             ("consistent_II", "stable_II"),
+            _ii_states,
         ),
     ]
+
+
+_FIGURE_MARGINS = "atlas.paper.figures.stability_map"
 
 
 def _margin_outputs() -> list[Output]:
@@ -282,42 +323,132 @@ def _margin_outputs() -> list[Output]:
         Output(
             "margin_SS",
             _SPECTRAL,
-            "margin",
             "float",
             {
                 "long_name": "smooth SS stability margin (zero contour drawn as the SS boundary)",
                 "units": "1",
             },
+            kernel="ss_margin",
             in_atlas=False,
         ),
         Output(
             "margin_II_consistent",
             _SPECTRAL,
-            "margin",
             "float",
             {"long_name": "scaled discriminant (zero where II consistency changes)", "units": "1"},
+            computed_by=_FIGURE_MARGINS,
             in_atlas=False,
         ),
         Output(
             "margin_II_stable",
             _SPECTRAL,
-            "margin",
             "float",
             {"long_name": "Re(l_II) - max Re(other roots)", "units": "1"},
+            computed_by=_FIGURE_MARGINS,
             in_atlas=False,
         ),
     ]
 
 
-def _registry() -> dict[str, Output]:
-    outs = _geometry_outputs() + _spectral_outputs() + _margin_outputs()
-    return {o.name: dataclasses.replace(o, attrs=MappingProxyType(o.attrs)) for o in outs}
-
+# --- declaration ---------------------------------------------------------------------------------
 
 #: every output, by name (atlas outputs first, in SPEC §2 order)
-OUTPUTS: dict[str, Output] = _registry()
-#: the outputs of :func:`atlas.generate`, in the order of the Dataset
-ATLAS_OUTPUTS: tuple[str, ...] = tuple(n for n, o in OUTPUTS.items() if o.in_atlas)
+OUTPUTS: dict[str, Output] = {}
+
+
+def _check(o: Output) -> None:
+    """A one-line ``ValueError`` naming the first incomplete or inconsistent field of ``o``."""
+    where = f"output {o.name!r}"
+    if not o.name.isidentifier():
+        raise ValueError(f"name: {o.name!r} is not an identifier")
+    if not o.depends or any(d not in kernels.PARAM_INPUTS for d in o.depends):
+        raise ValueError(
+            f"depends: {where} needs parameters among {', '.join(kernels.PARAM_INPUTS)}"
+        )
+    if o.storage not in STORAGE:
+        raise ValueError(f"storage: {where} must be one of {', '.join(STORAGE)}, got {o.storage!r}")
+    if not o.attrs.get("long_name"):
+        raise ValueError(f"attrs: {where} needs a long_name")
+    if o.storage == "float" and "units" not in o.attrs:
+        raise ValueError(f"attrs: {where} is a float and needs units")
+    if "flag_values" in o.attrs and len(o.attrs["flag_meanings"].split()) != len(
+        o.attrs["flag_values"]
+    ):
+        raise ValueError(f"attrs: {where} has as many flag_meanings as flag_values")
+    how = [o.kernel is not None, bool(o.needs) or o.state is not None, o.computed_by is not None]
+    if sum(how) != 1:
+        raise ValueError(
+            f"kernel: {where} must declare exactly one of kernel, needs + state, computed_by"
+        )
+    if o.kernel is not None:
+        _check_kernel(o, where)
+    elif how[1]:
+        _check_reduction(o, where)
+    elif o.in_atlas:
+        raise ValueError(f"computed_by: {where} has no kernel, so it cannot be an atlas output")
+
+
+def _check_kernel(o: Output, where: str) -> None:
+    k = kernels.KERNELS.get(o.kernel)
+    if k is None:
+        raise ValueError(
+            f"kernel: {where} names unknown kernel {o.kernel!r} "
+            f"(known: {', '.join(kernels.KERNELS)})"
+        )
+    if o.name not in k.results:
+        raise ValueError(f"kernel: {where} is not a result of kernel {o.kernel!r}")
+    if tuple(o.depends) != k.params:
+        raise ValueError(
+            f"depends: {where} must depend on the parameters of kernel "
+            f"{o.kernel!r}, {', '.join(k.params)}"
+        )
+    if (o.storage == "bool") != (o.name in k.true_code):
+        raise ValueError(
+            f"storage: {where} is stored as a boolean iff its kernel declares its true_code"
+        )
+    u = k.undecided.get(o.name)
+    if u is not None and o.storage != "bool":
+        flags = [int(v) for v in o.attrs.get("flag_values", ())]
+        meanings = o.attrs.get("flag_meanings", "").split()
+        if u not in flags or meanings[flags.index(u)] != "undecided":
+            raise ValueError(f"attrs: {where} stores undecided code {u}, its flags must name it")
+
+
+def _check_reduction(o: Output, where: str) -> None:
+    if not o.needs or not callable(o.state):
+        raise ValueError(f"state: {where} is a reduction and needs both needs and state")
+    for n in o.needs:
+        src = OUTPUTS.get(n)
+        if src is None or src.kernel is None:
+            raise ValueError(f"needs: {where} reads {n!r}, which is no kernel output")
+        if "model" not in src.depends or set(o.depends) != set(src.depends) - {"model"}:
+            raise ValueError(f"depends: {where} must be {n!r} reduced over the model")
+    if o.storage != "bool":
+        raise ValueError(f"storage: {where} is a reduction and is stored as a boolean")
+
+
+def register(output: Output) -> Output:
+    """Declare ``output`` (checked completely, module docstring); returns the stored copy."""
+    if not isinstance(output, Output):
+        raise ValueError(f"output: expected an Output, got {type(output).__name__}")
+    if output.name in OUTPUTS:
+        raise ValueError(f"name: output {output.name!r} is already registered")
+    o = dataclasses.replace(
+        output, depends=tuple(output.depends), needs=tuple(output.needs),
+        attrs=MappingProxyType(dict(output.attrs)),
+    )  # fmt: skip
+    _check(o)
+    OUTPUTS[o.name] = o
+    return o
+
+
+def unregister(name: str) -> None:
+    """Remove an output from :data:`OUTPUTS`."""
+    OUTPUTS.pop(name)
+
+
+for _o in _geometry_outputs() + _spectral_outputs() + _margin_outputs():
+    register(_o)
 
 #: attributes of the coordinates (scene parameters, SPEC §1-2)
 COORDS: dict[str, MappingProxyType] = {
@@ -353,11 +484,49 @@ def variable_attrs(name: str) -> dict:
     return {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in OUTPUTS[name].attrs.items()}
 
 
-def in_group(group: str, *, atlas_only: bool = True) -> tuple[str, ...]:
-    """Outputs of a kernel group, in registry order."""
+def atlas_outputs() -> tuple[str, ...]:
+    """The outputs of :func:`atlas.generate`, in the order of the Dataset."""
+    return tuple(n for n, o in OUTPUTS.items() if o.in_atlas)
+
+
+def kernel_outputs(*, atlas_only: bool = False) -> tuple[str, ...]:
+    """The outputs computed by a point kernel, in registry order."""
     return tuple(
-        n for n, o in OUTPUTS.items() if o.group == group and (o.in_atlas or not atlas_only)
+        n for n, o in OUTPUTS.items() if o.kernel is not None and (o.in_atlas or not atlas_only)
     )
+
+
+def verdict_outputs() -> tuple[str, ...]:
+    """The verdicts of one point: the atlas outputs computed by a verdict kernel (the reductions
+    over model samples need several samples), in registry order."""
+    return tuple(
+        n
+        for n in kernel_outputs(atlas_only=True)
+        if kernels.KERNELS[OUTPUTS[n].kernel].kind == "verdict"
+    )
+
+
+def reductions() -> tuple[str, ...]:
+    """The atlas outputs reduced over the model samples (``needs`` + ``state``)."""
+    return tuple(n for n, o in OUTPUTS.items() if o.needs and o.in_atlas)
+
+
+def in_kernel(kernel: str, *, atlas_only: bool = True) -> tuple[str, ...]:
+    """Outputs computed by ``kernel``, in registry order."""
+    return tuple(
+        n for n, o in OUTPUTS.items() if o.kernel == kernel and (o.in_atlas or not atlas_only)
+    )
+
+
+def kernel_of(name: str) -> kernels.PointKernel:
+    """The point kernel of output ``name``; a one-line error for an output without one."""
+    o = OUTPUTS.get(name)
+    if o is None:
+        raise ValueError(f"outputs: unknown output {name!r}")
+    if o.kernel is None:
+        how = "a reduction over the model samples" if o.needs else f"computed by {o.computed_by}"
+        raise ValueError(f"outputs: {name} has no point kernel ({how})")
+    return kernels.KERNELS[o.kernel]
 
 
 def storage_dtype(name: str, dtype) -> np.dtype:

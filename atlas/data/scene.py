@@ -41,7 +41,7 @@ import numpy as np
 
 from atlas.core import checks
 from atlas.core.mechanics import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
-from atlas.data.outputs import ATLAS_OUTPUTS, OUTPUTS, in_group
+from atlas.data.outputs import OUTPUTS, atlas_outputs, reductions
 
 __all__ = [
     "Scene",
@@ -50,18 +50,10 @@ __all__ = [
     "invariants",
     "BUILTIN_SCENES",
     "builtin",
-    "ALL_OUTPUTS",
-    "OUTPUT_DEPENDS",
 ]
 
 TWO_PI = 2.0 * math.pi
 ANGLES = ("beta1", "beta2", "alpha")
-MODEL = ("kappa", "q", "q1", "q2")
-
-#: which parameters each output depends on (SPEC §2); "model" = the spectral parameters of the scene
-OUTPUT_DEPENDS: dict[str, tuple[str, ...]] = {n: OUTPUTS[n].depends for n in ATLAS_OUTPUTS}
-ALL_OUTPUTS = ATLAS_OUTPUTS
-_MODEL_DEPENDENT = in_group("model_dependence")
 
 
 def _parse_number(text: str, name: str) -> float:
@@ -202,7 +194,7 @@ class Scene:
     q1, q2 : str, float, array or None
         The damping invariants varied separately; give both (or neither) and no ``q``.
     outputs : sequence of str or None
-        Subset of :data:`ALL_OUTPUTS`; ``None`` = every output the scene can compute (the
+        Subset of :func:`atlas.data.outputs.atlas_outputs`; ``None`` = every output the scene can compute (the
         consistency outputs need ``alpha``, the ``model_dependent_*`` reductions need ``kappa`` or
         ``q`` varied over more than one value).
     name : str
@@ -267,7 +259,7 @@ class Scene:
     def depends(self, output: str) -> tuple[str, ...]:
         """Parameters an output depends on (scalar or varied), canonical order."""
         dep = []
-        for d in OUTPUT_DEPENDS[output]:
+        for d in OUTPUTS[output].depends:
             dep.extend(self.model_names if d == "model" else (d,))
         return tuple(dep)
 
@@ -282,28 +274,29 @@ class Scene:
 
     def available(self, output: str) -> str | None:
         """``None`` if the scene can compute ``output``, else the reason."""
-        if "alpha" in OUTPUT_DEPENDS[output] and "alpha" not in self.axes:
+        if "alpha" in OUTPUTS[output].depends and "alpha" not in self.axes:
             return "needs alpha (give an alpha value or range)"
-        if output in _MODEL_DEPENDENT and not self.model_varied:
+        if output in reductions() and not self.model_varied:
             return "needs kappa or q varied over more than one value"
         return None
 
     @cached_property
     def output_names(self) -> tuple[str, ...]:
-        """The outputs to compute, in :data:`ALL_OUTPUTS` order."""
+        """The outputs to compute, in registry order (:func:`atlas.data.outputs.atlas_outputs`)."""
+        every = atlas_outputs()
         if self.outputs is None:
-            return tuple(o for o in ALL_OUTPUTS if self.available(o) is None)
+            return tuple(o for o in every if self.available(o) is None)
         wanted = list(self.outputs)
         if not wanted:
             raise ValueError("outputs: empty list")
         for o in wanted:
-            if o not in OUTPUT_DEPENDS:
-                known = ", ".join(ALL_OUTPUTS)
+            if o not in every:
+                known = ", ".join(every)
                 raise ValueError(f"outputs: unknown variable {o!r} (known: {known})")
             why = self.available(o)
             if why:
                 raise ValueError(f"outputs: {o} {why}")
-        return tuple(o for o in ALL_OUTPUTS if o in wanted)
+        return tuple(o for o in every if o in wanted)
 
     def points(self, output: str | None = None) -> int:
         """Number of points of an output (default: of the largest output)."""

@@ -1,6 +1,8 @@
-"""Colours of the explorer's map: a layer as an RGBA image and its legend, in the colours of the
-verdict enumerations (:mod:`atlas.core.verdicts`); matplotlib only for the continuous layers and
-the class-code palette."""
+"""Colours of the explorer's map: a layer as an RGBA image and its legend, chosen by what the
+registry (:mod:`atlas.data.outputs`) declares of the layer: verdict flags in the colours of their
+enumeration (:mod:`atlas.core.verdicts`), booleans in two colours, integer codes in a palette of
+their CF flag values, float layers on a diverging map; matplotlib only for the continuous layers
+and the code palettes."""
 
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
-from atlas.data.outputs import variable_attrs
+from atlas.data.outputs import OUTPUTS, variable_attrs
 
 __all__ = ["layer_rgba", "legend_entries", "value_label"]
 
@@ -22,29 +24,33 @@ _BOOL_COLORS = ("#f7f7f7", Consistency.CONSISTENT.color)
 
 
 def _code_palette(name: str) -> dict:
-    """code -> colour of the class or subclass codes (CF flags, SPEC §2), no colour repeated.
+    """code -> colour of an integer code layer (its CF flag values), no colour repeated.
 
     The 24 classes ``ij`` (in code order) take 24 hues 105 degrees apart (neighbouring codes far
-    apart in hue) at saturation 0.75, value 0.85; subclass ``ijk`` is its class's colour shaded
-    by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of one class read as one family.
+    apart in hue) at saturation 0.75, value 0.85; a code ``ijk`` whose ``ij`` is a class (the
+    subclasses) is its class's colour shaded by ``k`` (k = 1..3 darker, 4..6 lighter), so the
+    subclasses of one class read as one family; other codes take the hues in the same way.
     """
     import colorsys
 
     import matplotlib
 
+    hue = lambda i, n: np.array(colorsys.hsv_to_rgb((7 * i % n) / n, 0.75, 0.85))  # noqa: E731
     classes = [int(c) for c in variable_attrs("class_code")["flag_values"] if c > 0]
-    cls = {
-        c: np.array(colorsys.hsv_to_rgb((7 * i % 24) / 24, 0.75, 0.85))
-        for i, c in enumerate(classes)
-    }
+    cls = {c: hue(i, 24) for i, c in enumerate(classes)}
+    codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]
     if name == "class_code":
         cols = {c: matplotlib.colors.to_hex(rgb) for c, rgb in cls.items()}
-    else:
+    elif codes and all(c // 10 in cls and 1 <= c % 10 <= len(_SHADES) for c in codes):
         cols = {}
-        for c in (int(c) for c in variable_attrs(name)["flag_values"] if c > 0):
+        for c in codes:
             t = _SHADES[c % 10 - 1]
             rgb = cls[c // 10] * (1 - abs(t)) + (t > 0) * abs(t)  # towards white (t > 0) or black
             cols[c] = matplotlib.colors.to_hex(rgb)
+    else:
+        cols = {
+            c: matplotlib.colors.to_hex(hue(i, max(len(codes), 2))) for i, c in enumerate(codes)
+        }
     cols[0] = "#ffffff"
     cols[UNDECIDED_CODE] = Verdict.UNDECIDED.color
     return cols
@@ -54,34 +60,37 @@ def _code_palette(name: str) -> dict:
 _SHADES = (-0.5, -0.32, -0.14, 0.14, 0.32, 0.5)
 
 
+def _kind(name: str) -> str:
+    """How a layer is drawn: ``"enum"`` (verdict flags), ``"bool"``, ``"code"`` or ``"float"``."""
+    o = OUTPUTS[name]
+    if o.enum is not None:
+        return "enum"
+    return {"bool": "bool", "float": "float"}.get(o.storage, "code")
+
+
 def _category_colors(name: str) -> dict:
-    """code -> colour for the categorical layers (from the verdict enumerations)."""
-    if name in ("stable_SS", "stable_II"):
-        return {int(v): v.color for v in Verdict}
-    if name == "consistent_II":
-        return {int(v): v.color for v in Consistency}
-    if name in _CODE_LAYERS:
+    """code -> colour for the categorical layers (verdict flags: their enumeration's colours)."""
+    kind = _kind(name)
+    if kind == "enum":
+        return {int(v): v.color for v in OUTPUTS[name].enum}
+    if kind == "code":
         return _code_palette(name)
     return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
-
-
-_CODE_LAYERS = ("class_code", "subclass_code")
-_CONTINUOUS = ("margin_SS", "spectral_abscissa")
 
 
 def value_label(name: str, value) -> str:
     """A layer's value in words: verdict labels, ``class 23`` / ``subclass 231``, true / false,
     or the number of a continuous layer."""
-    if name in _CONTINUOUS:
+    kind = _kind(name)
+    if kind == "float":
         return f"{float(value):+.4g}"
     v = int(value)
-    if name in ("stable_SS", "stable_II", "consistent_II"):
-        enum = Consistency if name == "consistent_II" else Verdict
+    if kind == "enum":
         try:
-            return enum(v).label
+            return OUTPUTS[name].enum(v).label
         except ValueError:
             return f"code {v}"
-    if name in _CODE_LAYERS:
+    if kind == "code":
         if v == UNDECIDED_CODE:
             return Verdict.UNDECIDED.label
         return "degenerate" if v == 0 else f"{name.split('_')[0]} {v}"
@@ -131,13 +140,13 @@ def layer_rgba(ds: xr.Dataset, name: str) -> np.ndarray:
 def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, str]]:
     """(colour, label) pairs of a categorical layer (only codes present in ``ds`` if given);
     none for the continuous layers."""
-    if name in _CONTINUOUS:
+    kind = _kind(name)
+    if kind == "float":
         return []
     present = None if ds is None else set(np.unique(ds[name].values.astype(np.int64)).tolist())
     cols = _category_colors(name)
-    if name in ("stable_SS", "stable_II", "consistent_II"):
-        enum = Consistency if name == "consistent_II" else Verdict
-        codes = [int(v) for v in enum]
+    if kind == "enum":
+        codes = [int(v) for v in OUTPUTS[name].enum]
     else:
         codes = sorted(cols)
     return [(cols[c], value_label(name, c)) for c in codes if present is None or c in present]

@@ -25,20 +25,20 @@ exact sign of ``det B``, but a line of near-ties nobody asked for).
 from atlas.explore.colors import layer_rgba, legend_entries
 from atlas.explore.inspector import format_inspection, inspect_point
 from atlas.explore.maps import (
-    ALPHA_LAYERS,
-    BETA_LAYERS,
     DEFAULT_LAYERS,
-    LAYERS,
-    SPECTRAL_LAYERS,
     beta_grid,
     compute_map,
+    layer_groups,
+    layers,
 )
 from atlas.explore.redraw import format_redraw, measure_redraw
-from atlas.explore.state import LAYER_GROUPS, LIVE_MAX_RESOLVE, OVERLAYS, Explorer
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
 from atlas.explore.widget import RESOLUTIONS, make_widget
 
 __all__ = [
     "beta_grid",
+    "layers",
+    "layer_groups",
     "compute_map",
     "inspect_point",
     "format_inspection",
@@ -48,13 +48,8 @@ __all__ = [
     "make_widget",
     "measure_redraw",
     "format_redraw",
-    "LAYERS",
-    "BETA_LAYERS",
     "DEFAULT_LAYERS",
-    "LAYER_GROUPS",
     "OVERLAYS",
     "LIVE_MAX_RESOLVE",
-    "ALPHA_LAYERS",
-    "SPECTRAL_LAYERS",
     "RESOLUTIONS",
 ]

@@ -15,15 +15,15 @@ from atlas.data.boundary_curves import Boundaries, Curve
 from atlas.explore.colors import layer_rgba
 from atlas.explore.inspector import inspect_point
 from atlas.explore.maps import (
-    ALPHA_LAYERS,
-    LAYERS,
-    SPECTRAL_LAYERS,
     beta_grid,
+    check_layer,
     check_model,
     compute_map,
+    needs_alpha,
+    needs_model,
 )
 
-__all__ = ["Explorer", "LIVE_MAX_RESOLVE", "OVERLAYS", "LAYER_GROUPS", "BOUNDARY_GRID"]
+__all__ = ["Explorer", "LIVE_MAX_RESOLVE", "OVERLAYS", "BOUNDARY_GRID"]
 
 #: exact settlements per redraw: at most this many undecided points of the spectral layers are
 #: settled by :mod:`atlas.core.exact` when a control moves (up to ~20-100 ms each: the II verdicts need
@@ -35,18 +35,6 @@ OVERLAYS = ("class boundaries", "SS boundary", "certified boundaries")
 #: "certified boundaries" overlay (its vertices are certified within 1e-10 rad whatever the grid)
 BOUNDARY_GRID = 64
 
-#: layers the widget computes together (one compiled kernel per group; switching between the
-#: layers of a group needs no recomputation)
-LAYER_GROUPS = (
-    ("class_code", "cc_possible"),
-    ("stable_SF", "consistent_IF", "stable_FS", "consistent_FI"),
-    ALPHA_LAYERS,
-    ("stable_SS",),
-    ("consistent_II", "stable_II"),
-    ("spectral_abscissa",),
-    ("margin_SS",),
-)
-
 
 def format_boundary(curve: Curve, i: int, distance: float) -> str:
     """The inspector's line for a click near a certified boundary: its kind, the certified
@@ -57,13 +45,6 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
         f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_a, curve.side_a)} "
         f"| {lab.get(curve.side_b, curve.side_b)}"
     )
-
-
-def _companions(layer: str) -> tuple[str, ...]:
-    for g in LAYER_GROUPS:
-        if layer in g:
-            return g
-    raise ValueError(f"layer: unknown layer {layer!r} (known: {', '.join(LAYERS)})")
 
 
 class Explorer:
@@ -147,7 +128,7 @@ class Explorer:
         mr = p["max_resolve"]
         if mr is not None and (int(mr) != mr or mr < 0):
             raise ValueError(f"max_resolve: must be None or an integer >= 0, got {mr!r}")
-        group = _companions(p["layer"])
+        group = check_layer(p["layer"])
         check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
         self.params = p
         self._update_margin()
@@ -170,7 +151,7 @@ class Explorer:
             n=p["n"],
             dtype=p["dtype"],
             layers=group,
-            alpha=p["alpha"] if p["layer"] in ALPHA_LAYERS else None,
+            alpha=p["alpha"] if any(needs_alpha(k) for k in group) else None,
             resolve=p["resolve"] if resolve is None else resolve,
             max_resolve=max_resolve,
         )
@@ -201,16 +182,16 @@ class Explorer:
         t = time.perf_counter()
         if self.ds.attrs["n_undecided"] > 0 or not self.params["resolve"]:
             n_fast = self.ds.attrs["n_undecided_fast"]
-            self.ds = self._compute(_companions(self.params["layer"]), None, resolve=True)
+            self.ds = self._compute(check_layer(self.params["layer"]), None, resolve=True)
             self.ds.attrs["n_undecided_fast"] = n_fast
-            self._last_key = self._key(_companions(self.params["layer"]))
+            self._last_key = self._key(check_layer(self.params["layer"]))
         self.timings["settle_ms"] = 1e3 * (time.perf_counter() - t)
         return self.ds
 
     def _key(self, group):
         p = self.params
-        model = (p["kappa"], p["q1"], p["q2"]) if group[0] in SPECTRAL_LAYERS else ()
-        alpha = (p["alpha"],) if group[0] in ALPHA_LAYERS else ()
+        model = (p["kappa"], p["q1"], p["q2"]) if any(needs_model(k) for k in group) else ()
+        alpha = (p["alpha"],) if any(needs_alpha(k) for k in group) else ()
         return (group, p["n"], p["dtype"], p["resolve"], p["max_resolve"]) + model + alpha
 
     def image(self) -> np.ndarray:

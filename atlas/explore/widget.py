@@ -14,7 +14,7 @@ import traceback
 
 from atlas.explore.inspector import format_inspection
 from atlas.explore.map_view import FIGSIZE, MapView
-from atlas.explore.maps import LAYERS
+from atlas.explore.maps import layers
 from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, format_boundary
 
 __all__ = ["make_widget", "RESOLUTIONS"]
@@ -84,7 +84,7 @@ def _map_controls(W, p: dict) -> dict:
             style=_STYLE,
         ),
         "layer": W.Dropdown(
-            options=list(LAYERS), value=p["layer"], description="layer", style=_STYLE
+            options=list(layers()), value=p["layer"], description="layer", style=_STYLE
         ),
         "overlays": W.SelectMultiple(
             options=list(OVERLAYS),

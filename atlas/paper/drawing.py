@@ -3,7 +3,7 @@ boundaries, categorical layers coloured by an enumeration (``pcolormesh`` with `
 ``BoundaryNorm``), hatching, dashed zero contours of smooth margins, legend patches.
 
 Every function draws on a given ``ax`` and returns what it drew; none makes a figure or saves one
-(the ``plot_*`` wrappers of :mod:`atlas.paper.figures` and :mod:`atlas.paper.figures_dynamics` do,
+(the ``plot_*`` wrappers of :mod:`atlas.paper.plots` and :mod:`atlas.paper.figures_dynamics` do,
 through :func:`new_figure` and :func:`atlas.data.io.savefig`).  matplotlib is imported lazily.
 """
 

@@ -101,7 +101,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     Returns a dict ``{file name: seconds}``; also writes ``out/README.md`` listing them.
     """
     use_compile_cache()
-    from atlas.paper import audit, figures, tables
+    from atlas.paper import audit, figures, plots, tables
 
     say = progress or (lambda msg: print(f"[atlas paper] {msg}", file=sys.stderr, flush=True))
     out = Path(out)
@@ -114,7 +114,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
     step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
     step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
-    step("table2.png", lambda: figures.plot_table2(out / "table2.png", rows))
+    step("table2.png", lambda: plots.plot_table2(out / "table2.png", rows))
     ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
     curves = step(
         "fig1_boundaries.png",
@@ -123,7 +123,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     fig1_curves = figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])
     step(
         "fig1_stability.png",
-        lambda: figures.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
+        lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
     step(
         "fig1_map.nc",
@@ -131,14 +131,14 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
             ds[[v for v in ds.data_vars if v != "margin_II_stable"]], out / "fig1_map.nc"
         ),
     )
-    step("fig1_classes.png", lambda: figures.plot_fig1_classes(out / "fig1_classes.png"))
+    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
     maps = step(
         "fig1 variants (compute)",
         lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
     )
     step(
         "fig1_stability_variants.png",
-        lambda: figures.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
+        lambda: plots.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
     )
     claims = step(
         "audit (compute)", lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci)

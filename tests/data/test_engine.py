@@ -15,7 +15,8 @@ from atlas.core import mechanics as mech
 from atlas.core import spectral
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.engine import block_shape, generate, tile_blocks
-from atlas.data.scene import ALL_OUTPUTS, Scene, builtin
+from atlas.data.outputs import atlas_outputs
+from atlas.data.scene import Scene, builtin
 
 TILE = 1024
 HAVE_EXACT = importlib.util.find_spec("atlas.core.exact") is not None
@@ -59,7 +60,7 @@ EXPECTED_DIMS = {
 
 
 def test_schema_dims_and_types(tiny):
-    assert set(tiny.data_vars) == set(ALL_OUTPUTS)
+    assert set(tiny.data_vars) == set(atlas_outputs())
     for name, dims in EXPECTED_DIMS.items():
         assert tiny[name].dims == dims, name
     assert tiny.class_code.dtype == np.int8

@@ -8,12 +8,12 @@ stored Table 1 flag is ``True`` iff consistent, undecided verdict flags are 3 an
 import numpy as np
 import pytest
 
-from atlas.core import verdicts
+from atlas.core import kernels, verdicts
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data import outputs
 from atlas.data.engine import generate
-from atlas.data.scene import ALL_OUTPUTS, Scene
-from atlas.explore.explorer import LAYERS, beta_grid, compute_map
+from atlas.data.scene import Scene
+from atlas.explore.maps import beta_grid, compute_map, layers
 from atlas.paper.figures import stability_map
 
 N = 15  # odd: no cell centre on beta2 = beta1 + pi
@@ -47,7 +47,7 @@ def atlas_slice():
 
 @pytest.fixture(scope="module")
 def explorer_map():
-    return compute_map(KAPPA, Q1, Q2, beta=GRID, layers=LAYERS, alpha=ALPHA)
+    return compute_map(KAPPA, Q1, Q2, beta=GRID, layers=layers(), alpha=ALPHA)
 
 
 @pytest.fixture(scope="module")
@@ -56,19 +56,18 @@ def figure_map():
 
 
 def test_registry_lists_the_spec_outputs_in_order():
-    assert outputs.ATLAS_OUTPUTS == ALL_OUTPUTS
     spec = (
         "class_code subclass_code consistent_FF consistent_SF consistent_FS consistent_SS "
         "stable_SF consistent_IF stable_FS consistent_FI cc_possible stable_SS consistent_II "
         "stable_II spectral_abscissa model_dependent_SS model_dependent_II"
     ).split()
-    assert list(ALL_OUTPUTS) == spec
+    assert list(outputs.atlas_outputs()) == spec
 
 
 def test_every_output_appears_with_its_attributes(atlas_full):
     s = Scene(beta1="0:2pi:6", beta2="0:2pi:5", alpha="0.3,1.1", kappa="0.5,2", q="0,0.3")
-    assert set(atlas_full.data_vars) == set(outputs.ATLAS_OUTPUTS)
-    for name in outputs.ATLAS_OUTPUTS:
+    assert set(atlas_full.data_vars) == set(outputs.atlas_outputs())
+    for name in outputs.atlas_outputs():
         v = atlas_full[name]
         reg = outputs.variable_attrs(name)
         assert _same({k: v.attrs[k] for k in reg}, reg), name
@@ -115,13 +114,13 @@ def test_storage_follows_the_contract():
     assert outputs.to_storage("spectral_abscissa", np.zeros(2), "float32").dtype == np.float32
 
 
-def test_groups_share_their_parameters():
-    for g in outputs.GROUPS:
-        deps = {outputs.OUTPUTS[n].depends for n in outputs.in_group(g)}
-        assert len(deps) == 1, g
+def test_outputs_of_a_kernel_share_its_parameters():
+    for name, k in kernels.KERNELS.items():
+        for n in outputs.in_kernel(name, atlas_only=False):
+            assert outputs.OUTPUTS[n].depends == k.params, n
     for o in outputs.OUTPUTS.values():
         for n in o.needs:
-            assert outputs.OUTPUTS[n].group == "spectral"
+            assert outputs.OUTPUTS[n].kernel == "spectral"
 
 
 def test_builders_agree_on_shared_variables_and_coords(atlas_slice, explorer_map, figure_map):
@@ -152,7 +151,7 @@ def test_map_and_figure_equal_the_atlas_slice(atlas_slice, explorer_map, figure_
 
 def test_display_margins_are_not_atlas_outputs(figure_map, explorer_map):
     for m in ("margin_SS", "margin_II_consistent", "margin_II_stable"):
-        assert m not in outputs.ATLAS_OUTPUTS
+        assert m not in outputs.atlas_outputs()
         assert m in figure_map
     assert (
         explorer_map["margin_SS"].attrs["long_name"] == figure_map["margin_SS"].attrs["long_name"]

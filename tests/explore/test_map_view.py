@@ -25,7 +25,7 @@ def _canvas(view: MapView) -> np.ndarray:
 
 def _every_layer_colour() -> set:
     out = set()
-    for name in maps.LAYERS:
+    for name in maps.layers():
         if name in ("margin_SS", "spectral_abscissa"):
             out |= {to_rgba(c) for c in ("#053061", "#f7f7f7", "#67001f")}  # RdBu_r: ends, centre
         else:

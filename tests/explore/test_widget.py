@@ -58,7 +58,7 @@ def test_widget_map_equals_generate(kappa, q1, q2, need):
 
     beta = maps.beta_grid(N)
     model = dict(q=q1) if q1 == q2 else dict(q1=q1, q2=q2)
-    layers = [k for k in maps.LAYERS if k != "margin_SS"]
+    layers = [k for k in maps.layers() if k != "margin_SS"]
     ref = generate(
         Scene(
             beta1=beta, beta2=beta, alpha=ex.params["alpha"], kappa=kappa, outputs=layers, **model

@@ -90,45 +90,45 @@ def _outcome_dataset(kappa=0.5):
 def test_fig1_draw_functions_draw_on_the_given_ax(ds):
     import matplotlib
 
-    from atlas.paper import drawing, figures
+    from atlas.paper import drawing, plots
 
     before = {k: matplotlib.rcParams[k] for k in drawing.HATCH_STYLE}
     pos = drawing.label_positions(ds)
-    for layer in figures.FIG1_LAYERS:
+    for layer in plots.FIG1_LAYERS:
         ax = _axes()
-        art = figures.draw_fig1_layer(ax, ds, layer, pos)
+        art = plots.draw_fig1_layer(ax, ds, layer, pos)
         _check_drawn(art, ax=ax)
         assert ax.get_title() and set(art) <= set(ax.get_children())
     ax = _axes()
-    _check_drawn(figures.draw_fig1_variant(ax, ds, ds, pos), ax=ax)
+    _check_drawn(plots.draw_fig1_variant(ax, ds, ds, pos), ax=ax)
     ax = _axes()
     rep = {"beta1": 0.3, "beta2": 2.0, "alpha": {1: 1.0, 2: 4.0}}
-    art = figures.draw_class_diagram(ax, 13, rep)
+    art = plots.draw_class_diagram(ax, 13, rep)
     _check_drawn(art, ax=ax)
     assert sum(t.get_text() in ("1", "2") for t in ax.texts) == 2  # one label per subclass
     # the hatching style is scoped to the drawing: the global rcParams are untouched
     assert {k: matplotlib.rcParams[k] for k in drawing.HATCH_STYLE} == before
     with pytest.raises(ValueError, match="layer"):
-        figures.draw_fig1_layer(_axes(), ds, "XY")
+        plots.draw_fig1_layer(_axes(), ds, "XY")
 
 
 def test_fig1_multi_panel_draw_functions_fill_the_given_figure(ds):
     from matplotlib.figure import Figure
 
-    from atlas.paper import figures
+    from atlas.paper import plots
 
     fig = Figure()
-    _check_drawn(figures.draw_fig1_stability(fig, ds), fig=fig)
-    assert len(fig.axes) == len(figures.FIG1_LAYERS) and fig.legends
+    _check_drawn(plots.draw_fig1_stability(fig, ds), fig=fig)
+    assert len(fig.axes) == len(plots.FIG1_LAYERS) and fig.legends
     fig = Figure()
-    _check_drawn(figures.draw_fig1_variants(fig, [ds, ds]), fig=fig)
+    _check_drawn(plots.draw_fig1_variants(fig, [ds, ds]), fig=fig)
     assert sum(ax.get_visible() and ax.axison for ax in fig.axes) == 2  # 3rd panel switched off
 
 
 def test_table2_draw_and_plot(tmp_path):
     from types import SimpleNamespace
 
-    from atlas.paper import figures
+    from atlas.paper import plots
 
     row = SimpleNamespace(
         cls=11, dual=11, IF="x", FI="-", II="(x)", CC="?", II_stability="model-dependent",
@@ -136,11 +136,11 @@ def test_table2_draw_and_plot(tmp_path):
         stability={"FF": "stable", "SS": "unstable", "SF": "stable", "FS": "model-dependent"},
     )  # fmt: skip
     ax = _axes()
-    tab, title = figures.draw_table2(ax, [row])
+    tab, title = plots.draw_table2(ax, [row])
     _check_drawn([tab, title], ax=ax)
     assert tab[1, 0].get_text().get_text() == "11 (same)"
     assert tab[1, 2].get_facecolor()[:3] == pytest.approx((0x4D / 255,) * 3)  # SS unstable: dark
-    path = figures.plot_table2(tmp_path / "t.png", [row])
+    path = plots.plot_table2(tmp_path / "t.png", [row])
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
