@@ -154,7 +154,7 @@ def _output_bytes(scene, dtype: str) -> tuple[int, int]:
     for name in scene.output_names:
         size = math.prod(scene.axes[d].size for d in scene.output_dims(name))
         total += size * storage_dtype(name, dtype).itemsize
-        if OUTPUTS[name].group == "model_dependence":
+        if OUTPUTS[name].needs:  # a reduction over the model samples
             md += size
     return total, md
 
