@@ -15,12 +15,32 @@ import numpy as np
 from atlas.core import exact, spectral
 from atlas.core import mechanics as mech
 from atlas.core import points as evaluate
+from atlas.core.mechanism import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
+from atlas.data.outputs import OUTPUTS, verdict_outputs
+from atlas.explore.colors import value_label
 from atlas.explore.maps import checked_model
 
 __all__ = ["inspect_point", "format_inspection", "format_roots"]
 
 _FLAGS = ("stable_SS", "consistent_II", "stable_II")
+#: the outputs the inspector shows in its own lines; every other verdict of the registry is listed
+#: under ``others``
+_SHOWN = (
+    "class_code",
+    "subclass_code",
+    "consistent_FF",
+    "consistent_SF",
+    "consistent_FS",
+    "consistent_SS",
+    "stable_SF",
+    "stable_FS",
+    "consistent_IF",
+    "consistent_FI",
+    "cc_possible",
+    "spectral_abscissa",
+    *_FLAGS,
+)
 _SOURCES = (
     ("spectral_fast", "certified fast path"),
     ("spectral", "certified + exact"),
@@ -131,6 +151,21 @@ def _labels(out: dict) -> dict:
     return lab
 
 
+def _others(point: tuple, alpha, model: tuple, dt) -> dict:
+    """The registry's other verdicts at the point (stored values; those needing ``alpha`` only
+    with it)."""
+    names = tuple(
+        n
+        for n in verdict_outputs()
+        if n not in _SHOWN and (alpha is not None or "alpha" not in OUTPUTS[n].depends)
+    )
+    if not names:
+        return {}
+    a = 0.0 if alpha is None else float(alpha)
+    res = verdicts_at(*point, a, *model, dtype=dt, names=names)
+    return {k: v[()] for k, v in res.items()}
+
+
 def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="float64") -> dict:
     """Everything the theory says about one point ``(beta1, beta2, alpha)`` [rad] at ``(kappa, q)``.
 
@@ -148,6 +183,7 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
       ``eigenvalues_exact`` (>= 60-digit roots of the characteristic polynomial),
     * ``margins``: ``ss_margin`` (smooth SS margin), ``det_B``, the quartic's coefficients
       ``a3 a2 a1 a0``, ``spectral_abscissa``,
+    * ``others``: every other verdict of the output registry (stored values),
     * ``labels``: the verdicts in words.
     """
     dt = np.dtype(dtype)
@@ -166,6 +202,7 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
         **_angle_verdicts([jnp.asarray(v) for v in dirs]),
         **_alpha_verdicts(alpha, dirs, [jnp.asarray(v) for v in dirs], dt),
         **_spectrum(dirs, model, dt),
+        "others": _others((float(beta1), float(beta2)), alpha, model, dt),
     }
     out["labels"] = _labels(out)
     return out
@@ -231,7 +268,8 @@ def _stability_lines(info: dict) -> list[str]:
 
 def _spectrum_lines(info: dict) -> list[str]:
     m = info["margins"]
-    return [
+    others = ", ".join(f"{k}: {value_label(k, v)}" for k, v in info["others"].items())
+    return ([f"other outputs -- {others}"] if others else []) + [
         "eigenvalues of M (eig): " + format_roots(info["eigenvalues"]),
         "eigenvalues (exact ref): " + format_roots(info["eigenvalues_exact"]),
         f"margins: ss_margin = {m['ss_margin']:+.4g}, det B = {m['det_B']:+.4g}, "

@@ -1,5 +1,6 @@
 """A new output is its kernel plus one registry entry: it then appears in ``atlas generate``, in the
-atlas Dataset, in the mechanism verdicts, in the Fig. 1 map and as an explorer layer.
+atlas Dataset, in the mechanism verdicts, in the Fig. 1 map, as an explorer layer and in the point
+inspector.
 
 The dummy output ``aligned_b1b2`` is ``True`` iff ``b1 . b2 > 0``; its reference is the closed form
 ``cos(beta1 - beta2) > 0`` evaluated in numpy on cells away from the ties (not the kernel).
@@ -15,7 +16,7 @@ from atlas.core import kernels, mechanism
 from atlas.data import outputs
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
-from atlas.explore import colors, maps, state
+from atlas.explore import colors, inspector, maps, state
 from atlas.paper.figures import stability_map
 
 NAME = "aligned_b1b2"
@@ -86,6 +87,10 @@ def test_a_new_output_reaches_every_builder(dummy, tmp_path):
     np.testing.assert_array_equal(ex.update()[NAME].values, want)
     assert ex.image().shape == (7, 7, 4)
     assert [label for _, label in colors.legend_entries(NAME)] == ["false", "true"]
+
+    info = inspector.inspect_point(grid[1], grid[4])
+    assert info["others"] == {NAME: want[1, 4]}
+    assert f"{NAME}: {'true' if want[1, 4] else 'false'}" in inspector.format_inspection(info)
 
 
 def test_outputs_without_a_kernel_are_refused_as_layers():
