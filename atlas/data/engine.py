@@ -2,18 +2,20 @@
 
 Architecture
 ------------
-The outputs of a :class:`~atlas.data.scene.Scene` fall into *groups* that share the parameters they
+Each output names its point kernel in the registry (:mod:`atlas.data.outputs`,
+:mod:`atlas.core.kernels`); the outputs of one kernel form a *group* sharing the parameters they
 depend on (``stable_SF`` depends on ``beta1`` only, class codes on ``beta1, beta2``, the consistency
 outputs also on ``alpha``, the spectral verdicts on ``beta1, beta2`` and the model parameters).  Each
 group is computed over the *varied* parameters it depends on, in hyperslab *tiles* of at most
 ``tile_points`` points (:func:`tile_blocks`: trailing dimensions whole, one leading dimension
-partial).  For each tile the host gathers the inputs from direction vectors computed **once per
-coordinate** (:func:`atlas.core.mechanics.direction`), flattens and pads them to exactly ``tile_points``
-values (so the jitted kernel compiles once per ``tile_points`` and dtype), and dispatches the kernel
-asynchronously; the previous tile is finished (undecided points resolved exactly, codes converted to
-the stored types) while the next one computes.  The certified spectral group instead hands each
-hyperslab, as broadcastable per-axis inputs, to :func:`atlas.core.points.spectral_points` (its tiers
-and its exact settlement: the one copy of that logic).  Finished tiles go to a *sink*:
+partial).  For each tile the host gathers the kernel's inputs from direction vectors computed
+**once per coordinate** (:func:`atlas.core.mechanics.direction`), flattens and pads them to exactly
+``tile_points`` values (so the jitted kernel compiles once per ``tile_points`` and dtype), and
+dispatches the kernel asynchronously; the previous tile is finished (undecided points settled by
+the kernel's exact reference, codes converted to the stored types) while the next one computes.  A
+kernel with a certified driver (the spectral verdicts) instead hands each hyperslab, as
+broadcastable per-axis inputs, to that driver (:func:`atlas.core.points.spectral_points`: its tiers
+and its exact settlement, the one copy of that logic).  Finished tiles go to a *sink*:
 :func:`generate` keeps them in memory and returns a Dataset; :func:`atlas.data.io.generate_to_file`
 writes each tile straight into a netCDF4 file, so memory is bounded by the tile, not the atlas.
 
@@ -23,9 +25,9 @@ Undecided points.  With ``resolve=True`` every value the certified fast path lea
 outputs store ``False``).  Each variable carries ``undecided_fast`` (values left undecided by the fast
 path) and ``undecided`` (after resolution); the global attributes carry the totals.
 
-Model dependence.  ``model_dependent_SS`` (``model_dependent_II``) is ``True`` at a ``(beta1, beta2)``
-point iff the set of *decided* verdicts over the scene's model samples (``kappa``, ``q`` or
-``q1, q2``) has more than one element.  For SS, *neutral counts as stable* (the paper's Fig. 1 draws
+Model dependence (the registry's reductions: ``needs`` + ``state``).  ``model_dependent_SS``
+(``model_dependent_II``) is ``True`` at a ``(beta1, beta2)`` point iff the set of *decided* verdicts
+over the scene's model samples (``kappa``, ``q`` or ``q1, q2``) has more than one element.  For SS, *neutral counts as stable* (the paper's Fig. 1 draws
 the ``q = 0`` neutral region as stable), so the SS verdict set is a subset of {stable, unstable}.
 For II the verdict is the combined state {inconsistent, consistent & unstable, consistent & stable}.
 Undecided samples (only with ``resolve=False``) are ignored.
