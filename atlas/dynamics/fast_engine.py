@@ -71,7 +71,7 @@ from atlas.dynamics.system import (
     Outcome,
     Status,
     System,
-    iwc_aligned,
+    iwc_aligned_many,
 )
 
 __all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
@@ -507,9 +507,10 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
-        for r in deep:
-            sysm = st.system(lanes, tables, ix[r])
-            div[r] = iwc_aligned(sysm, int(mask[r]), g[r], 1e-3)
+        if deep.size:
+            lx, mk = ix[deep], mask[deep]
+            div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
+                                         g[deep], 1e-3)  # fmt: skip
         _leave(st, ix, t, g, s, keep, div, 2)
         _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
         # early decisions (on the same schedule): no event can follow
@@ -542,12 +543,12 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         xtol = _XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
-        # first crossing is in it, located by Illinois regula falsi on that function alone
+        # first crossing is in it, located on that function alone (:func:`_locate_root`)
         other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
-            h[r] = _illinois(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+            h[r] = _locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
                              s[r, fr], k[r], q[r], xtol[r])  # fmt: skip
             lo[r, fr] = hi[r, fr] = h[r]
             ev[r] = True
@@ -566,37 +567,53 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
 
 
-def _illinois(P, U, lam, tau, a, b, j, sj, k, q, xtol):
+def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol):
     """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
-    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): Illinois regula falsi until
-    the bracket is below ``xtol``; returns its upper end ``b`` (relative to ``tau``)."""
-    i = j % 2
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
+    ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
+    the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
+    root, so the far end of the bracket closes in too, and a push that does not cross is followed
+    by a bisection) until the bracket is below ``xtol``; returns its upper end ``b`` (relative to
+    ``tau``)."""
     rows = np.arange(j.size)
-    ki, qi = k[rows, i], q[rows, i]
+    i = j % 2
+    gap = j < 2
+    Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
+    p2 = P[rows, i, 2]
+    p1, p0 = P[rows, i, 1], P[rows, i, 0]
 
     def g(x):
-        d, v, _, _, _ = _evaluate(P, U, lam, tau + x)
-        di, vi = d[rows, i], v[rows, i]
-        return sj * np.where(j < 2, di, -ki * di - qi * vi)
+        t = tau + x
+        ue = Ui * np.exp(lam * t[:, None])
+        lue = ue * lam
+        d = p0 + t * (p1 + t * p2) + ue.sum(axis=1).real
+        v = p1 + 2 * t * p2 + lue.sum(axis=1).real
+        acc = 2 * p2 + (lue * lam).sum(axis=1).real
+        f = np.where(gap, d, -ki * d - qi * v)
+        fp = np.where(gap, v, -ki * v - qi * acc)
+        return sj * f, sj * fp
 
-    ga, gb = g(a), g(b)
-    side = np.zeros(j.size)
-    for _ in range(100):
+    x, (gx, gpx) = a, g(a)
+    dx = 2 * (b - a)  # the last step
+    failed = np.zeros(j.size, dtype=bool)  # the last push did not cross
+    for _ in range(200):
         act = (b - a) > xtol
         if not act.any():
             break
-        x = b - gb * (b - a) / np.where(gb != ga, gb - ga, 1.0)
-        x = np.where((x <= a) | (x >= b) | (gb == ga), 0.5 * (a + b), x)
-        gx = g(x)
-        left = gx > 0
-        a2, ga2 = np.where(left, x, a), np.where(left, gx, ga)
-        b2, gb2 = np.where(left, b, x), np.where(left, gb, gx)
-        gb2 = np.where(left & (side > 0), 0.5 * gb2, gb2)  # same end kept twice: halve it
-        ga2 = np.where(~left & (side < 0), 0.5 * ga2, ga2)
-        side = np.where(left, 1.0, -1.0)
-        a, ga, b, gb = (
-            np.where(act, new, old) for new, old in ((a2, a), (ga2, ga), (b2, b), (gb2, gb))
-        )
+        with np.errstate(all="ignore"):
+            step = -gx / gpx
+        toward = np.where(gx > 0, 0.5, -0.5) * xtol
+        push = np.abs(step) < 0.5 * xtol
+        xn = np.where(push, x + toward, x + step)
+        bad = ~np.isfinite(xn) | (xn <= a) | (xn >= b) | (np.abs(step) > 0.5 * np.abs(dx)) | failed
+        xn = np.where(bad, 0.5 * (a + b), xn)
+        gn, gpn = g(xn)
+        left = gn > 0
+        failed = act & push & ~bad & (left == (gx > 0))
+        dx = np.where(act, xn - x, dx)
+        a = np.where(act & left, xn, a)
+        b = np.where(act & ~left, xn, b)
+        x, gx, gpx = (np.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
     return b
 
 
@@ -666,6 +683,28 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     ff_falling = (~act & (p[:, :, 1] < 0)).any(axis=1)
     decaying = ~neutral & (t_set < t_amp) & (t + t_set <= T) & ~ff_falling
     return np.where(neutral, t_amp > T - t, decaying)
+
+
+def _stack(tables, name, ix, mask):
+    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
+    arrays = [getattr(tab, name) for tab in tables]
+    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
+    for m in range(4):
+        sel = mask == m
+        out[sel] = arrays[m][ix[sel]]
+    return out
+
+
+def _z_eq(tables, ix, mask):
+    """Equilibria ``z_eq`` (n, 5) of :func:`light_system`'s modes: ``d_eq`` of the active gaps,
+    zero velocities, NaN for free gaps, 1 last."""
+    z = np.full((ix.size, 5), np.nan)
+    d_eq = _stack(tables, "d_eq", ix, mask)
+    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    z[:, :2] = np.where(act, d_eq, np.nan)
+    z[:, 2:4] = np.where(act, 0.0, np.nan)
+    z[:, 4] = 1.0
+    return z
 
 
 def _modal_coordinates(tables, ix, mask, g):
