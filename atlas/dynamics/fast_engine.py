@@ -61,9 +61,7 @@ import numpy as np
 
 from atlas.dynamics.classification import (
     TrajectoryStats,
-    classify_stats,
     impacts,
-    needs_longer_run,
 )
 from atlas.dynamics.system import (
     MODE_NAMES,
@@ -416,13 +414,6 @@ class _State:
     scale: np.ndarray
     horizon: np.ndarray
     imp: list
-    systems: dict = dataclasses.field(default_factory=dict)
-
-    def system(self, lanes, tables, n) -> System:
-        """:func:`light_system` of lane ``n`` (cached)."""
-        if n not in self.systems:
-            self.systems[n] = light_system(lanes, tables, n)
-        return self.systems[n]
 
     @classmethod
     def start(cls, lanes: Lanes, g0, t_end, nbins):
@@ -828,6 +819,102 @@ def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
     )  # fmt: skip
 
 
+def _classify_many(st: _State, tables, n, width) -> np.ndarray:
+    """:func:`atlas.dynamics.classify_stats` (default thresholds) of the stopped lanes ``n``
+    (statuses ``t_end``, ``event_cap``, ``diverged``), the same tests in the same order on arrays:
+    :func:`_stats` and :func:`light_system` give the per-lane form of the same inputs."""
+    m = n.size
+    out = np.full(m, int(Outcome.UNDETERMINED), dtype=np.int8)
+    if m == 0:
+        return out
+    T, g, status, scale = st.t[n], st.g[n], st.status[n], st.scale[n]
+    last = st.last_event[n]
+    mask = _mask_of(st.s[n])
+    E = _stack(tables, "E", n, mask)
+    z1 = np.concatenate([g, np.ones((m, 1))], axis=1)
+    acc = np.einsum("nij,nj->ni", E[:, 2:4], z1)
+    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    done = np.zeros(m, dtype=bool)
+
+    def decide(sel, code):
+        sel = sel & ~done
+        out[sel] = code[sel] if np.ndim(code) else code
+        done[sel] = True
+
+    diverged, t_end, cap = status == 2, status == 0, status == 1
+    iwc = diverged & (mask > 0)
+    r = np.flatnonzero(iwc)
+    iwc[r] = iwc_aligned_many(E[r], _z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
+    decide(iwc, int(Outcome.IWC))
+    # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
+    # free gaps leaving (classification._free_gaps_leaving)
+    lam = _stack(tables, "lam", n, mask)
+    valid = _stack(tables, "valid", n, mask)
+    lmax = np.where(valid, np.abs(lam), 0.0).max(axis=1)
+    neutral_or_stable = np.all(~valid | (lam.real <= 1e-9 * lmax[:, None]), axis=1)
+    d_eq = _stack(tables, "d_eq", n, mask)
+    z = z1.copy()
+    z[:, :2] = np.where(act, d_eq, z[:, :2])
+    z[:, 2:4] = np.where(act, 0.0, z[:, 2:4])
+    acc_eq = np.einsum("nij,nj->ni", E[:, 2:4], z)
+    leaving = np.all(act | ((g[:, :2] > 0) & (g[:, 2:] >= 0) & (acc_eq > 0)), axis=1)
+    settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
+    decide(settle, np.array([_OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
+    # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T
+    lane, t_i, v_i, c_i = _impacts_of(st, n)
+    pos = np.full(st.t.size, -1)
+    pos[n] = np.arange(m)
+    row = pos[lane]
+    fly = (mask == 0)[:, None] & (g[:, :2] > 0) & (acc < 0)
+    fr, fc = np.nonzero(fly)
+    row = np.concatenate([row, fr])
+    t_i = np.concatenate([t_i, T[fr]])
+    c_i = np.concatenate([c_i, fc + 1])
+    v_i = np.concatenate([v_i, np.sqrt(g[fr, fc + 2] ** 2 + 2 * np.abs(acc[fr, fc]) * g[fr, fc])])
+    count = np.bincount(row, minlength=m)
+    in_flight = np.any(~act & (acc < 0), axis=1)
+    decide(diverged & (count >= 3) & ((last >= 0.8 * T) | in_flight),
+           int(Outcome.GROWING_BOUNCING))  # fmt: skip
+    decide(diverged | (count < 6), int(Outcome.UNDETERMINED))
+    Tr = T[row]
+    mid, late = (t_i >= Tr / 3) & (t_i < 2 * Tr / 3), t_i >= 2 * Tr / 3
+    m2, m3, t_last = np.full(m, -np.inf), np.full(m, -np.inf), np.full(m, -np.inf)
+    t_first = np.full(m, np.inf)
+    np.maximum.at(m2, row[mid], v_i[mid])
+    np.maximum.at(m3, row[late], v_i[late])
+    np.maximum.at(t_last, row, t_i)
+    np.minimum.at(t_first, row, t_i)
+    bouncing = np.zeros((m, 2), dtype=bool)
+    bouncing[row[late], c_i[late] - 1] = True
+    n_mid, n_late = np.bincount(row[mid], minlength=m), np.bincount(row[late], minlength=m)
+    decide((n_mid == 0) | (n_late == 0), int(Outcome.UNDETERMINED))
+    decide(m3 > 1.25 * m2, int(Outcome.GROWING_BOUNCING))
+    amp = _late_amplitude(st, n, width)
+    big = np.where(bouncing, amp, -np.inf).max(axis=1) > 10.0 * scale
+    decide(big, int(Outcome.GROWING_BOUNCING))
+    spread = t_end | (cap & (t_last - t_first > 0.5 * T))
+    decide((m3 >= m2 / 1.25) & (t_last >= 0.9 * T) & spread, int(Outcome.SUSTAINED_OSCILLATION))
+    return out
+
+
+def _impacts_of(st: _State, n):
+    """Logged impacts ``(lane, t, speed, contact)`` of the lanes ``n``."""
+    if not st.imp:
+        return np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0, int)
+    lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
+    sel = np.isin(lane, n)
+    return lane[sel], t[sel], v[sel], c[sel]
+
+
+def _late_amplitude(st: _State, n, width):
+    """``max |d_i|`` (n, 2) over the bins overlapping ``[2T/3, T]`` (``|d(T)|`` if none)."""
+    T = st.t[n][:, None]
+    starts = np.arange(st.amp.shape[1])[None, :] * width
+    late = (starts + width > 2 * T / 3) & (starts < T)
+    amp = np.where(late[:, :, None], st.amp[n], -np.inf).max(axis=1)
+    return np.where(late.any(axis=1)[:, None], amp, np.abs(st.g[n, :2]))
+
+
 @dataclasses.dataclass
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
@@ -864,16 +951,11 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     while ix.size:
         with np.errstate(all="ignore"):
             _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
-        stopped = np.flatnonzero((st.status[ix] != _RUNNING) & ~fallback[ix])
-        log = _impact_log(st)
-        again = []
-        for n in ix[stopped]:
-            sysm = st.system(lanes, tables, n)
-            out = classify_stats(_stats(st, n, sysm, log, width), sysm)
-            st.code[n] = int(out)
-            if needs_longer_run(out, _STATUS[st.status[n]], st.n_events[n], st.horizon[n], t_max):
-                again.append(n)
-        ix = np.array(again, dtype=int)
+        n = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
+        st.code[n] = _classify_many(st, tables, n, width)
+        # the horizon extension of atlas.dynamics.needs_longer_run
+        ix = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
+               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
         st.horizon[ix] *= 2
         st.status[ix] = _RUNNING
         st.code[ix] = -1
