@@ -504,13 +504,6 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
                                          g[deep], 1e-3)  # fmt: skip
         _leave(st, ix, t, g, s, keep, div, 2)
         _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
-        # early decisions (on the same schedule): no event can follow
-        r = np.flatnonzero(keep & sched)
-        if r.size:
-            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
-                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
-            dec = st.code[ix[r]] >= 0
-            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # next step: certified brackets of the monitored event functions
         f, fp = _event_functions(d, v, acc, k, q)
         M = _curvature_bound(p, UE, lam, H, k, q)
@@ -524,6 +517,15 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         hi = np.where(hi <= H[:, None], hi, np.inf)
         lo = np.where(mon, lo, np.inf)
         hi = np.where(mon, hi, np.inf)
+        # early decisions (on the same schedule): no event can follow; not tried where a crossing
+        # is certified (sigma_hi) before t_max, which no certificate can pass
+        r = np.flatnonzero(keep & sched & np.all(hi > (t_max - t)[:, None], axis=1))
+        r = r[_may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        if r.size:
+            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
+                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
+            dec = st.code[ix[r]] >= 0
+            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # the first crossing: smallest sigma_lo, ties to the tightest bracket
         m = lo.min(axis=1)
         tie_hi = np.where(lo <= m[:, None], hi, np.inf)
@@ -613,6 +615,17 @@ def _leave(st, ix, t, g, s, keep, sel, status):
     st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
     st.status[ix[sel]] = status
     keep[sel] = False
+
+
+def _may_decide(lam, valid, s, p, act, mask, t, T):
+    """The conditions of :func:`_decide` other than the certificate: a growing configuration
+    with a contact (IWC), or a non-growing one whose free gaps are open and accelerating away
+    (settles; a neutral one at most half way through the horizon)."""
+    lscale = np.abs(lam).max(axis=1, keepdims=True)
+    growing = (valid & (lam.real > _NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (np.abs(lam.real) <= _NEUTRAL * lscale)).any(axis=1)
+    free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
+    return np.where(growing, mask > 0, free_ok & (~neutral | (t <= 0.5 * T)))
 
 
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
