@@ -78,6 +78,7 @@ _COND_MAX = 1e8
 _NEUTRAL = 1e-9
 _XTOL = 1e-12
 _STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
+_ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
 
 #: how a trajectory of :func:`outcomes` was decided
 DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
@@ -541,10 +542,15 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
-            h[r] = _locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
-                             s[r, fr], k[r], q[r], xtol[r])  # fmt: skip
-            lo[r, fr] = hi[r, fr] = h[r]
-            ev[r] = True
+            a_r, b_r = _locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+                                    s[r, fr], k[r], q[r], xtol[r], _ROOT_ITER)  # fmt: skip
+            # located: the event at the upper end; not yet: step to the lower end, no crossing
+            # of any function before it
+            done = b_r - a_r <= xtol[r]
+            h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
+            rd, fd = r[done], fr[done]
+            lo[rd, fd] = hi[rd, fd] = h[rd]
+            ev[rd] = True
         step = np.where(ev, h, np.minimum(np.minimum(m, H), rem))
         t = np.where(keep, t + step, t)
         since += 1
@@ -560,14 +566,14 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
 
 
-def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol):
+def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
     ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
     ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
     the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
     root, so the far end of the bracket closes in too, and a push that does not cross is followed
-    by a bisection) until the bracket is below ``xtol``; returns its upper end ``b`` (relative to
-    ``tau``)."""
+    by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
+    the bracket ``(a, b)`` (relative to ``tau``)."""
     rows = np.arange(j.size)
     i = j % 2
     gap = j < 2
@@ -589,7 +595,7 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol):
     x, (gx, gpx) = a, g(a)
     dx = 2 * (b - a)  # the last step
     failed = np.zeros(j.size, dtype=bool)  # the last push did not cross
-    for _ in range(200):
+    for _ in range(max_iter):
         act = (b - a) > xtol
         if not act.any():
             break
@@ -607,7 +613,7 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol):
         a = np.where(act & left, xn, a)
         b = np.where(act & ~left, xn, b)
         x, gx, gpx = (np.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
-    return b
+    return a, b
 
 
 def _leave(st, ix, t, g, s, keep, sel, status):

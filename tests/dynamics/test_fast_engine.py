@@ -165,10 +165,14 @@ def test_locate_root_closes_a_certified_bracket_on_the_root():
     j = np.array([0, 1, 0, 2, 3, 2])
     sj = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])  # the force is negative before its root
     xtol = np.full(n, 1e-12)
-    got = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol)
+    lo, got = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol)
     want = np.where(j < 2, root, root_f)
+    assert np.all(got - lo <= xtol)
     assert np.all(got >= want - 1e-15)
-    assert np.all(got <= want + xtol + 1e-15)
+    assert np.all(lo <= want + 1e-15)
+    # cut short: a bracket of the root all the same
+    lo, hi = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol, 2)
+    assert np.all((lo <= want + 1e-15) & (hi >= want - 1e-15) & (lo >= a) & (hi <= b))
 
 
 def test_iwc_aligned_many_on_closed_form_states():
