@@ -23,16 +23,20 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 ``H_S = 1 / max(rho_S, omega / 4)``); the first crossing is the function whose bracket
 ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
-safeguarded Newton step from the safe side: the bracket shrinks quadratically.  The bounds hold in
+safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
+bracket of the first function that every other function's ``sigma_lo`` lies beyond is closed by
+:func:`_locate_root` (safeguarded Newton, at most ``_ROOT_ITER`` evaluations per step; an
+unfinished bracket resumes from its lower end at the next step).  The bounds hold in
 exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
 ``1e-13`` of the function's scale count as zero).
 
 Early decisions (stated, checked)
 ---------------------------------
-At every step each monitored function is tested for keeping its sign for all later times in the
-current configuration (:func:`_keeps_sign`: the modal terms bounded below by their moduli, a
-growing real dominant term by ``exp(x) >= 1 + x + x^2 / 2``, the remaining quadratic tested for
-positivity).  If all keep their signs, no event can follow, and:
+On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
+(:func:`_may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
+for keeping its sign for all later times in the current configuration (:func:`_keeps_sign`: the
+modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
+x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
 
 * ``settles``: every eigenvalue has ``Re lambda < 0`` (or is neutral, ``|Re lambda| <= 1e-9
   |lambda|``, bounded over the rest of the horizon and decided at most half way through it, as
@@ -48,9 +52,10 @@ Both are declared only where the reference's finite-horizon stops reach the same
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Lanes the modal form cannot serve (near-defective eigenvectors, condition > ``1e8``) or whose
 root location stalls (a grazing contact) are run by the exact simulator instead (``fallback``).
-Trajectories that end without an early decision are classified by
-:func:`atlas.dynamics.classify_stats`, like the reference.
-"""
+Trajectories that end without an early decision are classified as
+:func:`atlas.dynamics.classify_stats` classifies the reference's runs, on arrays
+(:func:`_classify_many`; :func:`_stats` and :func:`light_system` are the per-run form it is
+tested against)."""
 
 from __future__ import annotations
 
