@@ -23,16 +23,20 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 ``H_S = 1 / max(rho_S, omega / 4)``); the first crossing is the function whose bracket
 ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
-safeguarded Newton step from the safe side: the bracket shrinks quadratically.  The bounds hold in
+safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
+bracket of the first function that every other function's ``sigma_lo`` lies beyond is closed by
+:func:`_locate_root` (safeguarded Newton, at most ``_ROOT_ITER`` evaluations per step; an
+unfinished bracket resumes from its lower end at the next step).  The bounds hold in
 exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
 ``1e-13`` of the function's scale count as zero).
 
 Early decisions (stated, checked)
 ---------------------------------
-At every step each monitored function is tested for keeping its sign for all later times in the
-current configuration (:func:`_keeps_sign`: the modal terms bounded below by their moduli, a
-growing real dominant term by ``exp(x) >= 1 + x + x^2 / 2``, the remaining quadratic tested for
-positivity).  If all keep their signs, no event can follow, and:
+On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
+(:func:`_may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
+for keeping its sign for all later times in the current configuration (:func:`_keeps_sign`: the
+modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
+x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
 
 * ``settles``: every eigenvalue has ``Re lambda < 0`` (or is neutral, ``|Re lambda| <= 1e-9
   |lambda|``, bounded over the rest of the horizon and decided at most half way through it, as
@@ -48,9 +52,10 @@ Both are declared only where the reference's finite-horizon stops reach the same
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Lanes the modal form cannot serve (near-defective eigenvectors, condition > ``1e8``) or whose
 root location stalls (a grazing contact) are run by the exact simulator instead (``fallback``).
-Trajectories that end without an early decision are classified by
-:func:`atlas.dynamics.classify_stats`, like the reference.
-"""
+Trajectories that end without an early decision are classified as
+:func:`atlas.dynamics.classify_stats` classifies the reference's runs, on arrays
+(:func:`_classify_many`; :func:`_stats` and :func:`light_system` are the per-run form it is
+tested against)."""
 
 from __future__ import annotations
 
@@ -61,9 +66,7 @@ import numpy as np
 
 from atlas.dynamics.classification import (
     TrajectoryStats,
-    classify_stats,
     impacts,
-    needs_longer_run,
 )
 from atlas.dynamics.system import (
     MODE_NAMES,
@@ -71,7 +74,7 @@ from atlas.dynamics.system import (
     Outcome,
     Status,
     System,
-    iwc_aligned,
+    iwc_aligned_many,
 )
 
 __all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
@@ -80,6 +83,7 @@ _COND_MAX = 1e8
 _NEUTRAL = 1e-9
 _XTOL = 1e-12
 _STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
+_ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
 
 #: how a trajectory of :func:`outcomes` was decided
 DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
@@ -416,13 +420,6 @@ class _State:
     scale: np.ndarray
     horizon: np.ndarray
     imp: list
-    systems: dict = dataclasses.field(default_factory=dict)
-
-    def system(self, lanes, tables, n) -> System:
-        """:func:`light_system` of lane ``n`` (cached)."""
-        if n not in self.systems:
-            self.systems[n] = light_system(lanes, tables, n)
-        return self.systems[n]
 
     @classmethod
     def start(cls, lanes: Lanes, g0, t_end, nbins):
@@ -507,18 +504,12 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
-        for r in deep:
-            sysm = st.system(lanes, tables, ix[r])
-            div[r] = iwc_aligned(sysm, int(mask[r]), g[r], 1e-3)
+        if deep.size:
+            lx, mk = ix[deep], mask[deep]
+            div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
+                                         g[deep], 1e-3)  # fmt: skip
         _leave(st, ix, t, g, s, keep, div, 2)
         _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
-        # early decisions (on the same schedule): no event can follow
-        r = np.flatnonzero(keep & sched)
-        if r.size:
-            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
-                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
-            dec = st.code[ix[r]] >= 0
-            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # next step: certified brackets of the monitored event functions
         f, fp = _event_functions(d, v, acc, k, q)
         M = _curvature_bound(p, UE, lam, H, k, q)
@@ -532,6 +523,15 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         hi = np.where(hi <= H[:, None], hi, np.inf)
         lo = np.where(mon, lo, np.inf)
         hi = np.where(mon, hi, np.inf)
+        # early decisions (on the same schedule): no event can follow; not tried where a crossing
+        # is certified (sigma_hi) before t_max, which no certificate can pass
+        r = np.flatnonzero(keep & sched & np.all(hi > (t_max - t)[:, None], axis=1))
+        r = r[_may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        if r.size:
+            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
+                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
+            dec = st.code[ix[r]] >= 0
+            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # the first crossing: smallest sigma_lo, ties to the tightest bracket
         m = lo.min(axis=1)
         tie_hi = np.where(lo <= m[:, None], hi, np.inf)
@@ -542,15 +542,20 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         xtol = _XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
-        # first crossing is in it, located by Illinois regula falsi on that function alone
+        # first crossing is in it, located on that function alone (:func:`_locate_root`)
         other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
-            h[r] = _illinois(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
-                             s[r, fr], k[r], q[r], xtol[r])  # fmt: skip
-            lo[r, fr] = hi[r, fr] = h[r]
-            ev[r] = True
+            a_r, b_r = _locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+                                    s[r, fr], k[r], q[r], xtol[r], _ROOT_ITER)  # fmt: skip
+            # located: the event at the upper end; not yet: step to the lower end, no crossing
+            # of any function before it
+            done = b_r - a_r <= xtol[r]
+            h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
+            rd, fd = r[done], fr[done]
+            lo[rd, fd] = hi[rd, fd] = h[rd]
+            ev[rd] = True
         step = np.where(ev, h, np.minimum(np.minimum(m, H), rem))
         t = np.where(keep, t + step, t)
         since += 1
@@ -566,38 +571,54 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
 
 
-def _illinois(P, U, lam, tau, a, b, j, sj, k, q, xtol):
+def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
-    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): Illinois regula falsi until
-    the bracket is below ``xtol``; returns its upper end ``b`` (relative to ``tau``)."""
-    i = j % 2
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
+    ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
+    the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
+    root, so the far end of the bracket closes in too, and a push that does not cross is followed
+    by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
+    the bracket ``(a, b)`` (relative to ``tau``)."""
     rows = np.arange(j.size)
-    ki, qi = k[rows, i], q[rows, i]
+    i = j % 2
+    gap = j < 2
+    Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
+    p2 = P[rows, i, 2]
+    p1, p0 = P[rows, i, 1], P[rows, i, 0]
 
     def g(x):
-        d, v, _, _, _ = _evaluate(P, U, lam, tau + x)
-        di, vi = d[rows, i], v[rows, i]
-        return sj * np.where(j < 2, di, -ki * di - qi * vi)
+        t = tau + x
+        ue = Ui * np.exp(lam * t[:, None])
+        lue = ue * lam
+        d = p0 + t * (p1 + t * p2) + ue.sum(axis=1).real
+        v = p1 + 2 * t * p2 + lue.sum(axis=1).real
+        acc = 2 * p2 + (lue * lam).sum(axis=1).real
+        f = np.where(gap, d, -ki * d - qi * v)
+        fp = np.where(gap, v, -ki * v - qi * acc)
+        return sj * f, sj * fp
 
-    ga, gb = g(a), g(b)
-    side = np.zeros(j.size)
-    for _ in range(100):
+    x, (gx, gpx) = a, g(a)
+    dx = 2 * (b - a)  # the last step
+    failed = np.zeros(j.size, dtype=bool)  # the last push did not cross
+    for _ in range(max_iter):
         act = (b - a) > xtol
         if not act.any():
             break
-        x = b - gb * (b - a) / np.where(gb != ga, gb - ga, 1.0)
-        x = np.where((x <= a) | (x >= b) | (gb == ga), 0.5 * (a + b), x)
-        gx = g(x)
-        left = gx > 0
-        a2, ga2 = np.where(left, x, a), np.where(left, gx, ga)
-        b2, gb2 = np.where(left, b, x), np.where(left, gb, gx)
-        gb2 = np.where(left & (side > 0), 0.5 * gb2, gb2)  # same end kept twice: halve it
-        ga2 = np.where(~left & (side < 0), 0.5 * ga2, ga2)
-        side = np.where(left, 1.0, -1.0)
-        a, ga, b, gb = (
-            np.where(act, new, old) for new, old in ((a2, a), (ga2, ga), (b2, b), (gb2, gb))
-        )
-    return b
+        with np.errstate(all="ignore"):
+            step = -gx / gpx
+        toward = np.where(gx > 0, 0.5, -0.5) * xtol
+        push = np.abs(step) < 0.5 * xtol
+        xn = np.where(push, x + toward, x + step)
+        bad = ~np.isfinite(xn) | (xn <= a) | (xn >= b) | (np.abs(step) > 0.5 * np.abs(dx)) | failed
+        xn = np.where(bad, 0.5 * (a + b), xn)
+        gn, gpn = g(xn)
+        left = gn > 0
+        failed = act & push & ~bad & (left == (gx > 0))
+        dx = np.where(act, xn - x, dx)
+        a = np.where(act & left, xn, a)
+        b = np.where(act & ~left, xn, b)
+        x, gx, gpx = (np.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+    return a, b
 
 
 def _leave(st, ix, t, g, s, keep, sel, status):
@@ -605,6 +626,17 @@ def _leave(st, ix, t, g, s, keep, sel, status):
     st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
     st.status[ix[sel]] = status
     keep[sel] = False
+
+
+def _may_decide(lam, valid, s, p, act, mask, t, T):
+    """The conditions of :func:`_decide` other than the certificate: a growing configuration
+    with a contact (IWC), or a non-growing one whose free gaps are open and accelerating away
+    (settles; a neutral one at most half way through the horizon)."""
+    lscale = np.abs(lam).max(axis=1, keepdims=True)
+    growing = (valid & (lam.real > _NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (np.abs(lam.real) <= _NEUTRAL * lscale)).any(axis=1)
+    free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
+    return np.where(growing, mask > 0, free_ok & (~neutral | (t <= 0.5 * T)))
 
 
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
@@ -666,6 +698,28 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     ff_falling = (~act & (p[:, :, 1] < 0)).any(axis=1)
     decaying = ~neutral & (t_set < t_amp) & (t + t_set <= T) & ~ff_falling
     return np.where(neutral, t_amp > T - t, decaying)
+
+
+def _stack(tables, name, ix, mask):
+    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
+    arrays = [getattr(tab, name) for tab in tables]
+    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
+    for m in range(4):
+        sel = mask == m
+        out[sel] = arrays[m][ix[sel]]
+    return out
+
+
+def _z_eq(tables, ix, mask):
+    """Equilibria ``z_eq`` (n, 5) of :func:`light_system`'s modes: ``d_eq`` of the active gaps,
+    zero velocities, NaN for free gaps, 1 last."""
+    z = np.full((ix.size, 5), np.nan)
+    d_eq = _stack(tables, "d_eq", ix, mask)
+    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    z[:, :2] = np.where(act, d_eq, np.nan)
+    z[:, 2:4] = np.where(act, 0.0, np.nan)
+    z[:, 4] = 1.0
+    return z
 
 
 def _modal_coordinates(tables, ix, mask, g):
@@ -789,6 +843,102 @@ def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
     )  # fmt: skip
 
 
+def _classify_many(st: _State, tables, n, width) -> np.ndarray:
+    """:func:`atlas.dynamics.classify_stats` (default thresholds) of the stopped lanes ``n``
+    (statuses ``t_end``, ``event_cap``, ``diverged``), the same tests in the same order on arrays:
+    :func:`_stats` and :func:`light_system` give the per-lane form of the same inputs."""
+    m = n.size
+    out = np.full(m, int(Outcome.UNDETERMINED), dtype=np.int8)
+    if m == 0:
+        return out
+    T, g, status, scale = st.t[n], st.g[n], st.status[n], st.scale[n]
+    last = st.last_event[n]
+    mask = _mask_of(st.s[n])
+    E = _stack(tables, "E", n, mask)
+    z1 = np.concatenate([g, np.ones((m, 1))], axis=1)
+    acc = np.einsum("nij,nj->ni", E[:, 2:4], z1)
+    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    done = np.zeros(m, dtype=bool)
+
+    def decide(sel, code):
+        sel = sel & ~done
+        out[sel] = code[sel] if np.ndim(code) else code
+        done[sel] = True
+
+    diverged, t_end, cap = status == 2, status == 0, status == 1
+    iwc = diverged & (mask > 0)
+    r = np.flatnonzero(iwc)
+    iwc[r] = iwc_aligned_many(E[r], _z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
+    decide(iwc, int(Outcome.IWC))
+    # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
+    # free gaps leaving (classification._free_gaps_leaving)
+    lam = _stack(tables, "lam", n, mask)
+    valid = _stack(tables, "valid", n, mask)
+    lmax = np.where(valid, np.abs(lam), 0.0).max(axis=1)
+    neutral_or_stable = np.all(~valid | (lam.real <= 1e-9 * lmax[:, None]), axis=1)
+    d_eq = _stack(tables, "d_eq", n, mask)
+    z = z1.copy()
+    z[:, :2] = np.where(act, d_eq, z[:, :2])
+    z[:, 2:4] = np.where(act, 0.0, z[:, 2:4])
+    acc_eq = np.einsum("nij,nj->ni", E[:, 2:4], z)
+    leaving = np.all(act | ((g[:, :2] > 0) & (g[:, 2:] >= 0) & (acc_eq > 0)), axis=1)
+    settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
+    decide(settle, np.array([_OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
+    # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T
+    lane, t_i, v_i, c_i = _impacts_of(st, n)
+    pos = np.full(st.t.size, -1)
+    pos[n] = np.arange(m)
+    row = pos[lane]
+    fly = (mask == 0)[:, None] & (g[:, :2] > 0) & (acc < 0)
+    fr, fc = np.nonzero(fly)
+    row = np.concatenate([row, fr])
+    t_i = np.concatenate([t_i, T[fr]])
+    c_i = np.concatenate([c_i, fc + 1])
+    v_i = np.concatenate([v_i, np.sqrt(g[fr, fc + 2] ** 2 + 2 * np.abs(acc[fr, fc]) * g[fr, fc])])
+    count = np.bincount(row, minlength=m)
+    in_flight = np.any(~act & (acc < 0), axis=1)
+    decide(diverged & (count >= 3) & ((last >= 0.8 * T) | in_flight),
+           int(Outcome.GROWING_BOUNCING))  # fmt: skip
+    decide(diverged | (count < 6), int(Outcome.UNDETERMINED))
+    Tr = T[row]
+    mid, late = (t_i >= Tr / 3) & (t_i < 2 * Tr / 3), t_i >= 2 * Tr / 3
+    m2, m3, t_last = np.full(m, -np.inf), np.full(m, -np.inf), np.full(m, -np.inf)
+    t_first = np.full(m, np.inf)
+    np.maximum.at(m2, row[mid], v_i[mid])
+    np.maximum.at(m3, row[late], v_i[late])
+    np.maximum.at(t_last, row, t_i)
+    np.minimum.at(t_first, row, t_i)
+    bouncing = np.zeros((m, 2), dtype=bool)
+    bouncing[row[late], c_i[late] - 1] = True
+    n_mid, n_late = np.bincount(row[mid], minlength=m), np.bincount(row[late], minlength=m)
+    decide((n_mid == 0) | (n_late == 0), int(Outcome.UNDETERMINED))
+    decide(m3 > 1.25 * m2, int(Outcome.GROWING_BOUNCING))
+    amp = _late_amplitude(st, n, width)
+    big = np.where(bouncing, amp, -np.inf).max(axis=1) > 10.0 * scale
+    decide(big, int(Outcome.GROWING_BOUNCING))
+    spread = t_end | (cap & (t_last - t_first > 0.5 * T))
+    decide((m3 >= m2 / 1.25) & (t_last >= 0.9 * T) & spread, int(Outcome.SUSTAINED_OSCILLATION))
+    return out
+
+
+def _impacts_of(st: _State, n):
+    """Logged impacts ``(lane, t, speed, contact)`` of the lanes ``n``."""
+    if not st.imp:
+        return np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0, int)
+    lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
+    sel = np.isin(lane, n)
+    return lane[sel], t[sel], v[sel], c[sel]
+
+
+def _late_amplitude(st: _State, n, width):
+    """``max |d_i|`` (n, 2) over the bins overlapping ``[2T/3, T]`` (``|d(T)|`` if none)."""
+    T = st.t[n][:, None]
+    starts = np.arange(st.amp.shape[1])[None, :] * width
+    late = (starts + width > 2 * T / 3) & (starts < T)
+    amp = np.where(late[:, :, None], st.amp[n], -np.inf).max(axis=1)
+    return np.where(late.any(axis=1)[:, None], amp, np.abs(st.g[n, :2]))
+
+
 @dataclasses.dataclass
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
@@ -825,16 +975,11 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     while ix.size:
         with np.errstate(all="ignore"):
             _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
-        stopped = np.flatnonzero((st.status[ix] != _RUNNING) & ~fallback[ix])
-        log = _impact_log(st)
-        again = []
-        for n in ix[stopped]:
-            sysm = st.system(lanes, tables, n)
-            out = classify_stats(_stats(st, n, sysm, log, width), sysm)
-            st.code[n] = int(out)
-            if needs_longer_run(out, _STATUS[st.status[n]], st.n_events[n], st.horizon[n], t_max):
-                again.append(n)
-        ix = np.array(again, dtype=int)
+        n = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
+        st.code[n] = _classify_many(st, tables, n, width)
+        # the horizon extension of atlas.dynamics.needs_longer_run
+        ix = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
+               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
         st.horizon[ix] *= 2
         st.status[ix] = _RUNNING
         st.code[ix] = -1

@@ -46,6 +46,7 @@ __all__ = [
     "check_finite",
     "expm",
     "iwc_aligned",
+    "iwc_aligned_many",
     "mask_from_signs",
     "mode_name",
     "run_scale",
@@ -294,33 +295,57 @@ def iwc_aligned(sysm: System, mask: int, g, tol) -> bool:
     eigenvectors of the active subsystem; it must lie in the span of the real positive eigenvalues
     (other components below ``tol`` relative), the component along the dominant one must be
     non-zero and send every active gap to ``-inf`` (its force to ``+inf``), the active gaps must be
-    negative and decreasing, and every free gap open and opening.
+    negative and decreasing, and every free gap open and opening (:func:`iwc_aligned_many` of
+    one state).
     """
     mode = sysm.modes[mask]
-    idx = [i for i in range(2) if mask >> i & 1]
-    if not idx or mode.z_eq is None:
+    if not mask or mode.z_eq is None:
         return False
-    sub = idx + [i + 2 for i in idx]
-    if any(g[i] >= 0 or g[i + 2] >= 0 for i in idx):
-        return False
-    if any(g[i] < 0 or g[i + 2] < 0 for i in range(2) if i not in idx):
-        return False
-    A = mode.E[np.ix_(sub, sub)]
-    w, V = np.linalg.eig(A)
-    dev = g[sub] - mode.z_eq[sub]
-    try:
-        c = np.linalg.solve(V, dev)
-    except np.linalg.LinAlgError:
-        return False
-    real_pos = (np.abs(w.imag) <= 1e-9 * np.abs(w).max()) & (w.real > 0)
-    if not real_pos.any():
-        return False
-    norm = np.linalg.norm(dev)
-    parts = np.abs(c) * np.linalg.norm(V, axis=0)
-    if np.any(parts[~real_pos] > tol * norm):
-        return False
-    dom = int(np.argmax(np.where(real_pos, w.real, -np.inf)))
-    if parts[dom] <= tol * norm:
-        return False
-    direction = (c[dom] * V[:, dom]).real
-    return bool(np.all(direction[: len(idx)] < 0))
+    g = np.asarray(g, dtype=float)[None, :4]
+    return bool(iwc_aligned_many(mode.E[None], mode.z_eq[None], np.array([mask]), g, tol)[0])
+
+
+def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
+    """:func:`iwc_aligned` of ``n`` states ``g`` (n, 4) in the modes ``mask`` (n,) with augmented
+    matrices ``E`` (n, 5, 5) and equilibria ``z_eq`` (n, 5); the same arithmetic per state
+    (LAPACK ``geev`` and ``gesv`` per matrix).  Returns bool (n,)."""
+    mask = np.asarray(mask, dtype=int)
+    out = np.zeros(mask.shape[0], dtype=bool)
+    for m in (1, 2, 3):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        idx = [i for i in range(2) if m >> i & 1]
+        free = [i for i in range(2) if not m >> i & 1]
+        sub = idx + [i + 2 for i in idx]
+        gs = g[sel]
+        signs = np.all(gs[:, sub] < 0, axis=1)
+        for i in free:
+            signs &= (gs[:, i] >= 0) & (gs[:, i + 2] >= 0)
+        sel, gs = sel[signs], gs[signs]
+        if sel.size == 0:
+            continue
+        A = E[sel][:, sub][:, :, sub]
+        w, V = np.linalg.eig(A)
+        dev = gs[:, sub] - z_eq[sel][:, sub]
+        try:
+            c = np.linalg.solve(V, dev[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:  # a singular basis: that state is not aligned
+            c = np.full(dev.shape, np.nan, dtype=complex)
+            for r in range(sel.size):
+                try:
+                    c[r] = np.linalg.solve(V[r], dev[r])
+                except np.linalg.LinAlgError:
+                    pass
+        real_pos = (np.abs(w.imag) <= 1e-9 * np.abs(w).max(axis=1, keepdims=True)) & (w.real > 0)
+        norm = np.linalg.norm(dev, axis=1)[:, None]
+        parts = np.abs(c) * np.linalg.norm(V, axis=1)
+        rows = np.arange(sel.size)
+        dom = np.argmax(np.where(real_pos, w.real, -np.inf), axis=1)
+        direction = (c[rows, dom][:, None] * V[rows, :, dom]).real
+        ok = real_pos.any(axis=1) & np.isfinite(c).all(axis=1)
+        ok &= ~np.any(~real_pos & (parts > tol * norm), axis=1)
+        ok &= parts[rows, dom] > tol * norm[:, 0]
+        ok &= np.all(direction[:, : len(idx)] < 0, axis=1)
+        out[sel] = ok
+    return out

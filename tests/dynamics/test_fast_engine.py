@@ -10,6 +10,7 @@ import pytest
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
+from atlas.dynamics import system as SY
 
 PI = math.pi
 
@@ -142,3 +143,91 @@ def test_safe_steps_bracket_the_first_crossing():
         root = math.acos(0.3) - t0
         assert lo <= root * (1 + 1e-12)
         assert hi >= root * (1 - 1e-12)
+
+
+def test_locate_root_closes_a_certified_bracket_on_the_root():
+    """d(t) = cos(t) - 0.3 as a segment (U = 1/2, 1/2 on lam = +-i): from brackets of several
+    widths the returned upper end lies within xtol above the closed-form root acos(0.3), for the
+    gap and for its force -k d - q d' (root of cos(t) - q sin(t) / k = 0.3)."""
+    n = 6
+    P = np.zeros((n, 2, 3))
+    P[:, :, 0] = -0.3
+    U = np.zeros((n, 2, 4), dtype=complex)
+    U[:, :, :2] = 0.5
+    lam = np.tile(np.array([1j, -1j, 0, 0]), (n, 1))
+    k, q = np.full((n, 2), 2.0), np.full((n, 2), 0.5)
+    root = math.acos(0.3)
+    # the force -k d - q d' = -2 cos t - 0.5 (-sin t) + 0.6 = 0: 2 cos t - 0.5 sin t = 0.6
+    A, phi = math.hypot(2.0, 0.5), math.atan2(0.5, 2.0)
+    root_f = math.acos(0.6 / A) - phi
+    a = np.array([0.0, 1.0, 1.26, 0.0, 0.5, 0.9])
+    b = np.array([1.5, 1.3, 1.27, 1.4, 1.4, 1.1])
+    j = np.array([0, 1, 0, 2, 3, 2])
+    sj = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])  # the force is negative before its root
+    xtol = np.full(n, 1e-12)
+    lo, got = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol)
+    want = np.where(j < 2, root, root_f)
+    assert np.all(got - lo <= xtol)
+    assert np.all(got >= want - 1e-15)
+    assert np.all(lo <= want + 1e-15)
+    # cut short: a bracket of the root all the same
+    lo, hi = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol, 2)
+    assert np.all((lo <= want + 1e-15) & (hi >= want - 1e-15) & (lo >= a) & (hi <= b))
+
+
+def test_iwc_aligned_many_on_closed_form_states():
+    """SF of beta1 = 0.6 pi (b11 < 0): d1'' = |b11| d1 + const, eigenvalues +-sqrt(|b11|).
+    A deviation along the growing eigenvector (1, lam) with d1 -> -inf and gap 2 open and opening
+    is IWC; with a decaying component, with the deviation sent to +inf, or with gap 2 closing it
+    is not; the batch (mixed with SS and FS states) gives each state's verdict."""
+    sysm = SY.build_system(0.6 * PI, 0.25 * PI, 0.3 * PI, (1.0, 1.0), (0.0, 0.0), (1.0, 1.0), 1.0,
+                          0.5)  # fmt: skip
+    b11 = math.cos(0.6 * PI)
+    lam = math.sqrt(-b11)
+    d_eq = -math.cos(0.3 * PI) / b11
+    on = [d_eq - 10, 1.0, -10 * lam, 0.5]
+    mixed = [d_eq - 10 + 5, 1.0, -10 * lam - 5 * lam, 0.5]  # + 5 (1, -lam)
+    wrong_way = [d_eq + 10, 1.0, 10 * lam, 0.5]
+    closing = [d_eq - 10, 1.0, -10 * lam, -0.5]
+    states = np.array([on, mixed, wrong_way, closing, on, on])
+    mask = np.array([1, 1, 1, 1, 3, 2])
+    E = np.stack([sysm.modes[m].E for m in mask])
+    z_eq = np.stack([sysm.modes[m].z_eq for m in mask])
+    got = SY.iwc_aligned_many(E, z_eq, mask, states, 1e-3)
+    assert got[:4].tolist() == [True, False, False, False]
+    for r in range(states.shape[0]):
+        assert got[r] == SY.iwc_aligned(sysm, int(mask[r]), states[r], 1e-3)
+
+
+@pytest.mark.parametrize(("n", "kappa", "q", "alpha"), [(9, 0.5, 0.0, 0.35 * PI),
+                                                        (12, 2.0, 0.5, 0.2 * PI)])  # fmt: skip
+def test_classify_many_matches_classify_stats(monkeypatch, n, kappa, q, alpha):
+    """The array classification of the stopped runs equals classify_stats of each run's
+    TrajectoryStats and System (light_system), through the horizon extensions."""
+    seen = []
+    lanes_of = {}
+    modal, classify = F.modal_tables, F._classify_many
+
+    def tables(lanes):
+        out = modal(lanes)
+        lanes_of[id(out)] = lanes
+        return out
+
+    def check(st, tabs, ix, width):
+        codes = classify(st, tabs, ix, width)
+        log = F._impact_log(st)
+        for lane, code in zip(ix, codes, strict=True):
+            sysm = F.light_system(lanes_of[id(tabs)], tabs, lane)
+            seen.append((int(code), int(S.classify_stats(F._stats(st, lane, sysm, log, width),
+                                                         sysm))))  # fmt: skip
+        return codes
+
+    monkeypatch.setattr(F, "modal_tables", tables)
+    monkeypatch.setattr(F, "_classify_many", check)
+    b1, b2 = S.outcome_grid(n)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)
+    F.outcomes(b1, b2, alpha, (kappa, 1.0), (q, q), g0, _reference)
+    got, want = np.array(seen).T
+    assert len(seen) >= 15
+    assert len(set(want.tolist())) >= 3  # several classes exercised
+    assert np.array_equal(got, want)
