@@ -15,17 +15,13 @@ import jax
 import numpy as np
 
 from atlas.core.config import use_compile_cache
-from atlas.data.distributed import (
-    compute_tile,
-    generate_distributed,
-    local_cluster,
-    read_record,
-    tile_plan,
-    worker_env,
-)
+from atlas.data.cluster import local_cluster, worker_env
+from atlas.data.distributed import compute_tile, generate_distributed
 from atlas.data.engine import DEFAULT_TILE_POINTS
 from atlas.data.io import atomic_write_text
 from atlas.data.scene import Scene
+from atlas.data.tile_store import read_record
+from atlas.data.tiles import tile_plan
 
 __all__ = ["MEASURE_SCENE", "measure_throughput", "throughput_markdown"]
 

@@ -20,8 +20,8 @@ import math
 import os
 import shutil
 
-from atlas.data.distributed import DEFAULT_SLAB_POINTS
 from atlas.data.outputs import OUTPUTS, storage_dtype
+from atlas.data.tiles import DEFAULT_SLAB_POINTS
 
 __all__ = [
     "Estimate",
