@@ -22,9 +22,9 @@ import jax
 import numpy as np
 
 from atlas.bench.config import FLAGS
-from atlas.core import points as evaluate
 from atlas.core.config import use_compile_cache
 from atlas.core.mechanics import direction
+from atlas.core.points import spectral_points
 from atlas.data.io import generate_to_file
 from atlas.data.scene import Scene
 
@@ -123,7 +123,7 @@ def scale_worker(n_target: int, q: float, dtype: str) -> dict:
 
     def tile(r0, stats=None):
         sl = slice(r0, r0 + rows_per_tile)
-        return evaluate.spectral_points(
+        return spectral_points(
             c1[sl, None],
             s1[sl, None],
             c2[None],

@@ -50,7 +50,7 @@ import xarray as xr
 
 from atlas.core import checks, config, spectral, warm
 from atlas.core import mechanics as mech
-from atlas.core import points as evaluate
+from atlas.core.points import settle_codes, spectral_points
 from atlas.core.verdicts import UNDECIDED_FLAG, Consistency, Verdict
 from atlas.data.outputs import (
     GROUPS,
@@ -344,7 +344,7 @@ def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
     """Certified spectral verdicts of one tile (all tiers and the exact settlement)."""
     args = _block_inputs(src, _GROUP_INPUTS["spectral"], dims, index, block)
     st = {}
-    res = evaluate.spectral_points(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
+    res = spectral_points(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
     settled = st["undecided_before"] - st["undecided_after"] if resolve else 0
     stats["resolved_points"] = stats.get("resolved_points", 0) + settled
     stats.setdefault("exact_failures", []).extend(st.get("exact_failures", []))
@@ -359,7 +359,7 @@ def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
     if group == "spectral" or not masks:  # b1, b2: never undecided
         return
     pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
-    evaluate.settle_codes(res, masks, *pts, stats=stats)
+    settle_codes(res, masks, *pts, stats=stats)
 
 
 def run(

@@ -24,8 +24,8 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import mechanics as mech
-from atlas.core import points as evaluate
 from atlas.core import spectral
+from atlas.core.points import SPECTRAL_NAMES, settle_codes, spectral_points
 from atlas.data.outputs import (
     OUTPUTS,
     coord_attrs,
@@ -187,16 +187,16 @@ def _angle_layers(layers, plane, ca, sa, dt, resolve) -> dict:
     res = {k: np.broadcast_to(v, full).copy() for k, v in res.items()}
     if resolve:
         masks = {k: undecided(k, v) for k, v in res.items() if OUTPUTS[k].undecided is not None}
-        evaluate.settle_codes(res, masks, *plane, ca, sa)
+        settle_codes(res, masks, *plane, ca, sa)
     return {k: (_PLANE, to_storage(k, res[k], dt)) for k in names}
 
 
 def _spectral_layers(layers, plane, model, dt, resolve, max_resolve, counts) -> dict:
     """SS and II verdicts (and the spectral abscissa) through the certified driver."""
-    spec = tuple(k for k in layers if k in evaluate.SPECTRAL_NAMES)
+    spec = tuple(k for k in layers if k in SPECTRAL_NAMES)
     if not spec:
         return {}
-    res = evaluate.spectral_points(
+    res = spectral_points(
         *plane,
         *model,
         names=spec,

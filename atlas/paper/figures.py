@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import mechanics, spectral
-from atlas.core import points as evaluate
+from atlas.core.points import SPECTRAL_NAMES, settle_codes, spectral_points
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.io import savefig
 from atlas.data.outputs import OUTPUTS, coord_attrs, to_storage, undecided, variable_attrs
@@ -85,7 +85,7 @@ def evaluate_points(
     (points settled exactly) and ``n_undecided`` (left undecided).
     """
     counts: dict = {}
-    res = evaluate.spectral_points(
+    res = spectral_points(
         c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve, stats=counts
     )
     if margin:
@@ -194,7 +194,7 @@ def stability_map(
     C1, S1 = c[:, None], s[:, None]
     C2, S2 = c[None, :], s[None, :]
     ev = evaluate_points(C1, S1, C2, S2, kappa, q1, q2, margin=True)
-    raw = {**_mechanics_layers(c, s), **{k: ev[k] for k in evaluate.SPECTRAL_NAMES}}
+    raw = {**_mechanics_layers(c, s), **{k: ev[k] for k in SPECTRAL_NAMES}}
     if margins:
         raw.update(_margin_layers(ev["margin_SS"], C1, S1, C2, S2, kappa, q1, q2))
     coords = {k: (k, b, coord_attrs(k)) for k in ("beta1", "beta2")}
@@ -235,7 +235,7 @@ def _mechanics_layers(c, s) -> dict:
         "cc_possible": np.broadcast_to(np.asarray(mechanics.cc_possible(j[0], j[3])), (n, n)),
     }
     masks = {"class_code": undecided("class_code", raw["class_code"])}
-    evaluate.settle_codes(raw, masks, C1, S1, C2, S2)
+    settle_codes(raw, masks, C1, S1, C2, S2)
     return raw
 
 

@@ -94,7 +94,7 @@ def _write_realisability(path) -> None:
     atomic_write_text(path, realisability.markdown(found, stats))
 
 
-def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, **_) -> dict:
+def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False) -> dict:
     """Regenerate Fig. 1 (classes, stability map, variants), Table 2 (md, csv, png), the audit,
     Fig. 2 (if :mod:`atlas.paper.figures_dynamics` is available) and ``fig1_map.nc`` into ``out``.
 

@@ -4,21 +4,18 @@ All spectral runs use ``TILE = 1024`` on scenes of <= 1024 spectral points, so t
 compiles once per test session.
 """
 
-import importlib.util
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import exact, spectral
 from atlas.core import mechanics as mech
-from atlas.core import spectral
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.engine import block_shape, generate, tile_blocks
 from atlas.data.scene import ALL_OUTPUTS, Scene, builtin
 
 TILE = 1024
-HAVE_EXACT = importlib.util.find_spec("atlas.core.exact") is not None
 
 
 def tiny_scene(**kw):
@@ -125,9 +122,7 @@ def test_fig1_equals_pointwise_kernels(fig1_small):
         v = {
             n: int(x) for n, x in kern(c1, s1, c2, s2, k, q, q).items() if n != "spectral_abscissa"
         }
-        if HAVE_EXACT and 3 in v.values():  # the atlas resolved it exactly
-            from atlas.core import exact
-
+        if 3 in v.values():  # the atlas resolved it exactly
             pt = dict(zip(("c1", "s1", "c2", "s2", "kappa", "q1", "q2"), (c1, s1, c2, s2, k, q, q)))
             ex = exact.resolve({n: np.asarray(x) for n, x in pt.items()})
             v.update({n: int(ex[n][0]) for n in v if v[n] == 3})
@@ -179,7 +174,6 @@ def test_unresolved_counts_reported(tiny):
     assert tiny.stable_SS.attrs["undecided"] == n3
 
 
-@pytest.mark.skipif(not HAVE_EXACT, reason="atlas.core.exact is not importable yet")
 def test_resolve_leaves_no_undecided(fig1_small):
     st = {}
     ds = generate(tiny_scene(), tile_points=TILE, resolve=True, stats=st)
@@ -220,10 +214,7 @@ def test_bad_options(kw, name):
         generate(tiny_scene(outputs="class_code"), **kw)
 
 
-@pytest.mark.skipif(not HAVE_EXACT, reason="atlas.core.exact is not importable yet")
 def test_exact_failure_keeps_point_undecided(monkeypatch):
-    from atlas.core import exact
-
     def broken(points, names=()):
         raise ArithmeticError("no convergence")
 

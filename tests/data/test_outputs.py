@@ -13,7 +13,7 @@ from atlas.core.verdicts import Consistency, Verdict
 from atlas.data import outputs
 from atlas.data.engine import generate
 from atlas.data.scene import ALL_OUTPUTS, Scene
-from atlas.explore.explorer import LAYERS, beta_grid, compute_map
+from atlas.explore.maps import LAYERS, beta_grid, compute_map
 from atlas.paper.figures import stability_map
 
 N = 15  # odd: no cell centre on beta2 = beta1 + pi
