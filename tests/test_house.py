@@ -70,7 +70,8 @@ def _tracked_text_files():
 
 
 def test_no_issue_numbers_outside_the_changelog():
-    assert ISSUE.search("see issue " + "12") and not ISSUE.search("the issues")  # the check can fail
+    # the check can fail
+    assert ISSUE.search("see issue " + "12") and not ISSUE.search("the issues")
     offences = [
         f"{rel}:{n}"
         for rel, path in _tracked_text_files()

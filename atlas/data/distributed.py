@@ -37,18 +37,11 @@ import time
 
 import xarray as xr
 
-from atlas.core import checks, interrupts
+from atlas.core import interrupts
 from atlas.data import tile_store
 from atlas.data import tiles as tiling
 from atlas.data.cluster import check_scheduler, executor
-from atlas.data.engine import (
-    DEFAULT_TILE_POINTS,
-    Schema,
-    check_options,
-    generate,
-    progress_bar,
-    schema,
-)
+from atlas.data.engine import MemorySink, RunOptions, Schema, progress_bar, run, schema
 from atlas.data.io import NetCDFSink, check_output_path
 from atlas.data.scene import Scene
 from atlas.data.tiles import TilePlan, tile_plan
@@ -59,22 +52,15 @@ __all__ = ["generate_distributed", "verify_store", "compute_tile"]
 # --- the tile tasks (run on the workers, or in process) -----------------------------------------
 
 
-def compute_tile(scene: Scene, tile, opts: dict) -> tuple[xr.Dataset, dict]:
-    """One tile of the atlas and its run summary, in this process (a separate function: tests
-    slow it down, and :mod:`atlas.bench.distributed` warms the kernels with it)."""
-    stats: dict = {}
-    ds = generate(
-        tiling.sub_scene(scene, tile),
-        method=opts["method"],
-        dtype=opts["dtype"],
-        resolve=opts["resolve"],
-        tile_points=opts["tile_points"],
-        stats=stats,
-    )
-    return ds, stats
+def compute_tile(scene: Scene, tile, options: RunOptions) -> tuple[xr.Dataset, dict]:
+    """One tile of the atlas and its run diagnostics, in this process, without progress bar (a
+    separate function: tests slow it down, and :mod:`atlas.bench.distributed` warms the kernels
+    with it)."""
+    opts = dataclasses.replace(options, progress=False, history=None)
+    return run(tiling.sub_scene(scene, tile), MemorySink(), opts)
 
 
-def _run_tile(store: str, scene: Scene, i: int, tile, opts: dict) -> dict:
+def _run_tile(store: str, scene: Scene, i: int, tile, opts: RunOptions) -> dict:
     """Compute tile ``i``, write the regions it owns, read them back, then write its record."""
     tile_store.drop_record(store, i)
     t0, c0 = time.perf_counter(), time.process_time()
@@ -132,20 +118,16 @@ def _verify_all(ex, store, tiles):
 def generate_distributed(
     scene: Scene,
     store,
+    options: RunOptions | None = None,
     *,
     scheduler=None,
     slab: int | None = None,
     block2: int | None = None,
     resume: bool = False,
     overwrite: bool = False,
-    method: str = "certified",
-    dtype: str = "float64",
-    resolve: bool = True,
-    tile_points: int = DEFAULT_TILE_POINTS,
     to_netcdf=None,
     overwrite_netcdf: bool = False,
-    progress=False,
-    history: str | None = None,
+    **changes,
 ) -> dict:
     """Generate an atlas tile by tile (on dask workers or in process) into a resumable zarr store.
 
@@ -171,17 +153,16 @@ def generate_distributed(
     overwrite : bool
         Replace an existing store (without ``resume``); otherwise an existing store raises
         ``FileExistsError``.
-    method, dtype, resolve, tile_points
-        As for :func:`atlas.generate` (``tile_points`` = kernel tile inside each slab).
+    options : atlas.data.engine.RunOptions, optional
+        As for :func:`atlas.generate` (``tile_points`` = kernel tile inside each slab;
+        ``progress``: a bar over tiles; ``history``: the command recorded).
+    **changes
+        Run options changed by name (see :class:`atlas.data.engine.RunOptions`).
     to_netcdf : str or os.PathLike, optional
         Also convert the finished store to this netCDF4 file, streaming slab by slab through
         :class:`atlas.data.io.NetCDFSink` (atomic; same file as ``io.write_netcdf(generate(scene))``).
     overwrite_netcdf : bool
         Replace an existing netCDF file.
-    progress : bool
-        tqdm progress bar over tiles on stderr.
-    history : str, optional
-        Command recorded in the ``history`` attribute.
 
     Returns
     -------
@@ -195,12 +176,12 @@ def generate_distributed(
         computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
     """
     t0 = time.perf_counter()
-    job = _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_points, history)
+    job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes))
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
     resumed = _prepare_store(job, resume, overwrite)
     ex = executor(scheduler)
-    bar = progress_bar(progress, len(job.tiles), "atlas tiles", unit="tile")
+    bar = progress_bar(job.opts.progress, len(job.tiles), "atlas tiles", unit="tile")
     try:
         report, recs, computed = _run_tiles(ex, job, resumed, bar)
         totals = _finalize(job.store, job.sch, job.plan, job.tiles, recs, computed, resumed)
@@ -222,7 +203,7 @@ class _Job:
     store: str
     tiles: TilePlan
     sch: Schema
-    opts: dict
+    opts: RunOptions
     plan: dict
 
     @property
@@ -237,21 +218,17 @@ class _Job:
         return first[3] - first[2] if len(first) == 4 else None
 
 
-def _job(scene, store, scheduler, slab, block2, method, dtype, resolve, tile_points, history):
+def _job(scene, store, scheduler, slab, block2, opts: RunOptions):
     """The checked arguments of :func:`generate_distributed` (one-line errors naming the
     parameter), its tiles, schema and plan."""
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
-    method, dtype, tile_points = check_options(method, dtype, tile_points)
-    resolve = checks.boolean("resolve", resolve)
     check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     tiles = tile_plan(scene, slab, block2)
-    sch = schema(
-        scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
-    )
-    opts = dict(method=method, dtype=dtype, resolve=bool(resolve), tile_points=tile_points)
-    return _Job(scene, store, tiles, sch, opts, tile_store.make_plan(scene, sch, tiles, opts))
+    sch = schema(scene, opts)
+    plan = tile_store.make_plan(scene, sch, tiles, opts.stored())
+    return _Job(scene, store, tiles, sch, opts, plan)
 
 
 def _prepare_store(job: _Job, resume: bool, overwrite: bool) -> bool:

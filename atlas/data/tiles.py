@@ -21,6 +21,7 @@ import operator
 
 import numpy as np
 
+from atlas.core import checks
 from atlas.data.scene import Scene
 
 __all__ = [
@@ -55,10 +56,10 @@ def tile_plan(scene: Scene, slab: int | None = None, block2: int | None = None) 
         if block2 is None and per > DEFAULT_SLAB_POINTS and n2 > 1:
             block2 = max(1, round(DEFAULT_SLAB_POINTS / max(1, per // n2)))
             block2 = None if block2 >= n2 else block2
-    s = _positive("slab", slab)
+    s = checks.positive_int("slab", slab)
     if block2 is None:
         return TilePlan(n1, n2, s, None)
-    b = _positive("block2", block2)
+    b = checks.positive_int("block2", block2)
     if "beta2" not in scene.dims:
         raise ValueError("block2: the scene has a single beta2 value")
     return TilePlan(n1, n2, s, b)
@@ -114,16 +115,6 @@ class TilePlan(collections.abc.Sequence):
     def of(cls, stored) -> TilePlan | list:
         """The tiles of a stored plan (:meth:`describe`, or a list of tiles)."""
         return cls(**stored) if isinstance(stored, dict) else [tuple(t) for t in stored]
-
-
-def _positive(name, value) -> int:
-    try:
-        n = int(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: must be a positive integer, got {value!r}") from None
-    if n < 1 or n != value:
-        raise ValueError(f"{name}: must be a positive integer, got {value!r}")
-    return n
 
 
 def sub_scene(scene: Scene, tile) -> Scene:
