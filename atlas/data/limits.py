@@ -121,6 +121,17 @@ class Estimate:
                 )
         return "; ".join(parts)
 
+    def screen(self, dry_run: bool = False, no_size_check: bool = False) -> bool:
+        """The ``--dry-run`` / ``--no-size-check`` rule of every command: with ``dry_run`` print
+        :meth:`describe` and return true (stop here); else :meth:`check` unless
+        ``no_size_check``, and return false (run)."""
+        if dry_run:
+            print(self.describe())
+            return True
+        if not no_size_check:
+            self.check()
+        return False
+
     def check(self) -> None:
         """``MemoryError`` / ``OSError`` (one line naming the numbers and the way out) when the run
         cannot fit in the memory available now or in the free space at an output."""
