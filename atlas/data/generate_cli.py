@@ -31,13 +31,6 @@ PHYSICAL = ("k1", "k2", "q1", "q2", "b1", "b2")
 def run_cli(
     *,
     scene=None,
-    beta1=None,
-    beta2=None,
-    alpha=None,
-    kappa=None,
-    q=None,
-    q1=None,
-    q2=None,
     physical=None,
     outputs=None,
     out=None,
@@ -55,9 +48,11 @@ def run_cli(
     resume=False,
     slab=None,
     block2=None,
+    **ranges,
 ) -> int:
-    """``atlas generate`` (the options of its parser; ``history``: the command line)."""
-    sc = scene_from_options(scene, physical, outputs, beta1, beta2, alpha, kappa, q, q1, q2)
+    """``atlas generate`` (the options of its parser; ``ranges``: ``beta1 ... q2`` of
+    :func:`scene_from_options`; ``history``: the command line)."""
+    sc = scene_from_options(scene, physical, outputs, **ranges)
     opts = RunOptions(method, dtype, resolve, tile_points, progress, history)
     screen = (dry_run, no_size_check)
     if resume or any(a is not None for a in (scheduler, store, slab, block2)):
