@@ -89,8 +89,7 @@ def write_netcdf(ds, path) -> Path:
 
 def _write_realisability(path) -> None:
     """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
-    stats: dict = {}
-    found = realisability.search(1 << 19, stats=stats)
+    found, stats = realisability.search(1 << 19)
     atomic_write_text(path, realisability.markdown(found, stats))
 
 
