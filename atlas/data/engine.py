@@ -432,8 +432,8 @@ def _block_inputs(src, inputs, dims, index, block):
 def _spectral_tile(src, dims, index, block, need, dtype, resolve, stats):
     """Certified spectral verdicts of one tile (all tiers and the exact settlement)."""
     args = _block_inputs(src, _GROUP_INPUTS["spectral"], dims, index, block)
-    st = {}
-    res = spectral_points(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
+    res = spectral_points(*args, names=need, dtype=dtype, resolve=resolve)
+    st = res.stats
     settled = st["undecided_before"] - st["undecided_after"] if resolve else 0
     stats["resolved_points"] = stats.get("resolved_points", 0) + settled
     stats.setdefault("exact_failures", []).extend(st.get("exact_failures", []))
@@ -448,7 +448,9 @@ def _resolve(group: str, res: dict, flat_inputs: list, n: int, stats: dict):
     if group == "spectral" or not masks:  # b1, b2: never undecided
         return
     pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
-    settle_codes(res, masks, *pts, stats=stats)
+    st = settle_codes(res, masks, *pts)
+    stats["resolved_points"] = stats.get("resolved_points", 0) + st["resolved_points"]
+    stats.setdefault("exact_failures", []).extend(st["exact_failures"])
 
 
 def run(scene: Scene, sink: Sink, options: RunOptions | None = None) -> Run:

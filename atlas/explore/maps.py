@@ -203,8 +203,8 @@ def _spectral_layers(layers, plane, model, dt, resolve, max_resolve, counts) -> 
         dtype=dt,
         resolve=resolve,
         max_resolve=max_resolve,
-        stats=counts,
     )
+    counts.update(res.stats)
     return {k: (_PLANE, to_storage(k, res[k], dt)) for k in spec}
 
 

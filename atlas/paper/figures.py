@@ -84,10 +84,8 @@ def evaluate_points(
     ``spectral_abscissa`` [(time of contact 2)^-1], optionally ``margin_SS``; ints ``n_resolved``
     (points settled exactly) and ``n_undecided`` (left undecided).
     """
-    counts: dict = {}
-    res = spectral_points(
-        c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve, stats=counts
-    )
+    res = spectral_points(c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve)
+    counts = res.stats
     if margin:
         args = [jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2)]
         shape = res["stable_SS"].shape

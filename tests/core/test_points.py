@@ -35,8 +35,8 @@ def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
     on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat."""
     monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
     args = grid()
-    st = {}
-    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",), stats=st)
+    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
+    st = res.stats
     shape = np.broadcast_shapes(*(a.shape for a in args))
     flat = [np.broadcast_to(a, shape).ravel() for a in args]
     ref = points.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
@@ -78,8 +78,8 @@ def test_slabs_and_padding(monkeypatch):
 
 def test_only_what_is_asked():
     args = grid(6)
-    st = {}
-    res = points.spectral_points(*args, names=("stable_SS",), stats=st)
+    res = points.spectral_points(*args, names=("stable_SS",))
+    st = res.stats
     assert set(res) == {"stable_SS"}
     assert st["tier2_points"] >= 0 and st["roots_points"] == 0
 
@@ -92,8 +92,8 @@ def test_exact_failure_keeps_point_undecided(monkeypatch, bounded_det_b):
         raise ArithmeticError("no convergence")
 
     monkeypatch.setattr(exact, "resolve", broken)
-    st = {}
-    res = points.spectral_points(*grid(8), names=FLAGS, stats=st)
+    res = points.spectral_points(*grid(8), names=FLAGS)
+    st = res.stats
     und = np.zeros(res["stable_SS"].shape, bool)
     for k in FLAGS:
         und |= res[k] == 3
@@ -125,8 +125,8 @@ def test_scalar_point():
     c1, s1 = direction(np.array(1.25 * np.pi))
     c2, s2 = direction(np.array(0.25 * np.pi))
     pt = dict(c1=float(c1), s1=float(s1), c2=float(c2), s2=float(s2), kappa=0.5, q1=0.1, q2=0.1)
-    st = {}
-    res = points.spectral_points(*pt.values(), names=FLAGS, stats=st)
+    res = points.spectral_points(*pt.values(), names=FLAGS)
+    st = res.stats
     assert st["undecided_before"] == 1 and st["undecided_after"] == 0
     ref = exact.resolve({k: np.array([v]) for k, v in pt.items()}, names=FLAGS)
     assert all(res[k] == ref[k][0] for k in FLAGS)
@@ -166,10 +166,9 @@ def test_settle_codes_restores_certified_codes():
     masks = {k: rng.random(v.shape) < 0.3 for k, v in codes.items()}
     for k, m in masks.items():
         codes[k][m] = UNDECIDED_CODE if k.endswith("_code") else UNDECIDED_FLAG
-    st = {}
-    n = points.settle_codes(codes, masks, *args, stats=st)
+    st = points.settle_codes(codes, masks, *args)
     anyu = np.logical_or.reduce(list(masks.values()))
-    assert n == st["resolved_points"] == int(anyu.sum()) > 0
+    assert st["resolved_points"] == int(anyu.sum()) > 0 and st["exact_failures"] == []
     for k in ref:
         assert np.array_equal(codes[k], ref[k]), k
 
@@ -181,11 +180,10 @@ def test_settle_codes_records_failures_and_keeps_them_undecided():
     s = np.array([0.0, 0.5])
     codes = {"class_code": np.array([UNDECIDED_CODE, UNDECIDED_CODE])}
     masks = {"class_code": np.array([True, True])}
-    st = {}
-    n = points.settle_codes(codes, masks, c, s, np.array(0.6), np.array(0.8), stats=st)
-    assert n == 1 and len(st["exact_failures"]) == 1
+    st = points.settle_codes(codes, masks, c, s, np.array(0.6), np.array(0.8))
+    assert st["resolved_points"] == 1 and len(st["exact_failures"]) == 1
     assert codes["class_code"][1] == UNDECIDED_CODE and codes["class_code"][0] > 0
-    assert not hasattr(points, "last_counts")  # diagnostics go to stats=, never a global
+    assert not hasattr(points, "last_counts")  # diagnostics are returned, never a global
 
 
 def test_small_grids_share_one_compilation():
@@ -230,8 +228,8 @@ def test_near_singular_B_decided_by_the_fast_tiers():
     the exact tier does (every damped decision reads ``sign det B``; ``a1``, ``a0`` are
     multiples of ``D``)."""
     pts, ref = _near_singular_points()
-    st = {}
-    got = points.spectral_points(*pts.values(), names=FLAGS, resolve=False, stats=st)
+    got = points.spectral_points(*pts.values(), names=FLAGS, resolve=False)
+    st = got.stats
     assert st["roots_points"] == 0 and st["undecided_after"] == 0
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
@@ -245,8 +243,8 @@ def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
     unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
     monkeypatch.setattr(rootfree, "det2_sign", unknown)
     monkeypatch.setattr(points, "_kernel", functools.cache(points._kernel.__wrapped__))
-    st = {}
-    got = points.spectral_points(*pts.values(), names=FLAGS, stats=st)
+    got = points.spectral_points(*pts.values(), names=FLAGS)
+    st = got.stats
     assert st["tier2_points"] == 0
     assert st["roots_points"] == len(pts["c1"])
     for k in FLAGS:
@@ -284,10 +282,8 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
     c2, s2 = direction(beta[i + 256], np.float32)
     pts = dict(c1=c1, s1=s1, c2=c2, s2=s2, kappa=np.full(i.size, 0.5, np.float32))
     pts.update(q1=np.float32(0.1), q2=np.float32(0.1))
-    st = {}
-    got = points.spectral_points(
-        *pts.values(), names=FLAGS, dtype="float32", resolve=False, stats=st
-    )
+    got = points.spectral_points(*pts.values(), names=FLAGS, dtype="float32", resolve=False)
+    st = got.stats
     if later is np.float32:
         assert st["undecided_before"] > 0  # what float64 later tiers settle
         return
