@@ -19,8 +19,6 @@ _interrupts.exit_during_imports()  # the command line: a signal before main() ju
 
 import lazy_loader  # noqa: E402
 
-from atlas import _compat  # noqa: E402
-
 
 def _enable_x64() -> None:
     """float64 kernels are first-class (SPEC §4); float32 is chosen per call."""
@@ -32,9 +30,8 @@ def _enable_x64() -> None:
 
 
 _enable_x64()
-_compat.install()
 
-_lazy_getattr, __dir__, _LAZY = lazy_loader.attach(
+__getattr__, __dir__, _ = lazy_loader.attach(
     __name__,
     submodules=["core", "data", "dynamics", "paper", "explore", "bench", "cli"],
     submod_attrs={
@@ -48,15 +45,6 @@ _lazy_getattr, __dir__, _LAZY = lazy_loader.attach(
         "paper.tables": ["table2"],
     },
 )
-
-
-def __getattr__(name):
-    """The public names and layers on first use; old flat module names (``from atlas import
-    tiling``) through :mod:`atlas._compat`."""
-    if name in _LAZY:
-        return _lazy_getattr(name)
-    return _compat.moved_attribute(name)
-
 
 __all__ = [
     "Mechanism",

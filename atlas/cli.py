@@ -1,11 +1,20 @@
 """The ``atlas`` command line: ``generate``, ``mechanism``, ``boundaries``, ``paper``, ``simulate``,
 ``table``, ``bench``, ``selftest``.
 
-A thin layer over the library; each subcommand imports only its own layer, when it runs (``atlas
---help`` imports neither JAX nor xarray).  ``atlas generate`` streams a scene into a netCDF4 file
-(:func:`atlas.data.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
-implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, ``atlas.paper.tables.run_cli``,
-``atlas.bench.run``).
+The parser and the dispatch, nothing else: each subcommand imports only the module that
+implements it, when it runs (``atlas --help`` imports neither JAX nor xarray):
+
+==============  ===========================================================================
+``generate``    :func:`atlas.data.generate_cli.run_cli` (a scene into a netCDF4 file, or tiles
+                into a resumable zarr store)
+``mechanism``   :func:`atlas.data.mechanisms.run_cli`
+``boundaries``  :func:`atlas.data.boundaries.run_cli`
+``paper``       :func:`atlas.paper.run`
+``simulate``    :func:`atlas.paper.figures_dynamics.run_cli`
+``table``       :func:`atlas.paper.tables.run_cli`
+``bench``       :func:`atlas.bench.run`
+``selftest``    :func:`atlas.core.selftest.run_cli`
+==============  ===========================================================================
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
@@ -163,10 +172,11 @@ def _add_generate(sub) -> None:
     )
     g.add_argument(
         "--no-resolve",
-        action="store_true",
+        dest="resolve",
+        action="store_false",
         help="keep undecided points instead of resolving them exactly",
     )
-    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     _add_limits(g)
     _add_distributed(g)
 
@@ -458,196 +468,6 @@ def _number(name):
     return conv
 
 
-def _parse_physical(text: str) -> dict:
-    from atlas.data.scene import invariants
-
-    kw = {}
-    for item in text.split(","):
-        if not item.strip():
-            continue
-        if "=" not in item:
-            raise ValueError(f"physical: expected key=value, got {item.strip()!r}")
-        key, val = (s.strip() for s in item.split("=", 1))
-        if key not in ("k1", "k2", "q1", "q2", "b1", "b2"):
-            raise ValueError(f"physical: unknown parameter {key!r} (k1, k2, q1, q2, b1, b2)")
-        if key in kw:
-            raise ValueError(f"physical: {key} given twice")
-        try:
-            kw[key] = float(val)
-        except ValueError:
-            raise ValueError(f"{key}: cannot parse {val!r} as a number") from None
-    for key in ("k1", "k2"):
-        if key not in kw:
-            raise ValueError(f"physical: {key} is required")
-    return invariants(**kw)
-
-
-def _scene_from_args(args):
-    from atlas.data.scene import Scene, builtin
-
-    fields = {k: getattr(args, k) for k in ("beta1", "beta2", "alpha", "kappa", "q", "q1", "q2")}
-    if args.outputs is not None:
-        fields["outputs"] = args.outputs
-    if args.physical is not None:
-        for k in ("kappa", "q", "q1", "q2"):
-            if fields[k] is not None:
-                raise ValueError(f"physical: conflicts with --{k}")
-        inv = _parse_physical(args.physical)
-        fields["kappa"] = repr(inv["kappa"])
-        if inv["q1"] == inv["q2"]:
-            fields["q"] = repr(inv["q1"])
-        else:
-            fields["q1"], fields["q2"] = repr(inv["q1"]), repr(inv["q2"])
-    if fields["q"] is not None and (fields["q1"] is not None or fields["q2"] is not None):
-        raise ValueError("q: give either --q or --q1 and --q2, not both")
-    if args.scene:
-        return builtin(args.scene, **fields)
-    return Scene(**{k: v for k, v in fields.items() if v is not None})
-
-
-def _cmd_generate(args, argv) -> int:
-    from atlas.data.io import check_output_path, generate_to_file
-
-    scene = _scene_from_args(args)
-    dist = (args.scheduler, args.store, args.slab, args.block2)
-    if args.resume or any(a is not None for a in dist):
-        return _cmd_generate_distributed(args, argv, scene)
-    out = args.out if args.out is not None else f"{scene.name}.nc"
-    check_output_path(out, args.overwrite)  # fail before any computation
-    if _limits(args, _generate_estimate(args, scene, [out])):
-        return 0
-    from atlas.core.config import use_compile_cache
-
-    use_compile_cache()
-    history = "atlas " + " ".join(shlex.quote(a) for a in argv)
-    stats = generate_to_file(
-        scene,
-        out,
-        overwrite=args.overwrite,
-        method=args.method,
-        dtype=args.dtype,
-        resolve=not args.no_resolve,
-        tile_points=args.tile_points,
-        progress=not args.no_progress and sys.stderr.isatty() or _force_progress(),
-        history=history,
-    )
-    print(
-        f"atlas generate: {stats['path']}: {stats['points']} points in {stats['seconds']:.2f} s "
-        f"({stats['points_per_second']:.3g} points/s), {stats['bytes'] / 1e6:.2f} MB; "
-        f"undecided {stats['undecided_fast']} before, {stats['undecided']} after exact resolution",
-        file=sys.stderr,
-    )
-    return 0
-
-
-def _scheduler_arg(text: str):
-    """``--scheduler`` -> the ``scheduler`` argument of ``generate_distributed``."""
-    if text == "inprocess":
-        return None
-    kind, _, n = text.partition(":")
-    if kind == "local":
-        if text == "local" or (n.isdigit() and int(n) >= 1):
-            return text
-        raise ValueError(f"scheduler: expected local:N with N >= 1, got {text!r}")
-    proto, sep, address = text.partition("://")
-    if sep and proto and address:
-        return text
-    raise ValueError(
-        f"scheduler: expected inprocess, local, local:N or a scheduler address tcp://HOST:PORT, "
-        f"got {text!r}"
-    )
-
-
-def _cmd_generate_distributed(args, argv, scene) -> int:
-    """``atlas generate --scheduler/--store/--resume``: tiles into a zarr store, then netCDF."""
-    from atlas.data.io import check_output_path
-
-    scheduler = _scheduler_arg(args.scheduler or "inprocess")
-    _require_dask(scheduler)
-    from atlas.data.distributed import generate_distributed
-
-    store = _store_arg(args, scene)
-    outs = [store] if args.out is None else [store, args.out]
-    if args.out is not None:
-        check_output_path(args.out, args.overwrite)  # fail before any computation
-    if _limits(args, _generate_estimate(args, scene, outs, scheduler)):
-        return 0
-    from atlas.core.config import use_compile_cache
-
-    use_compile_cache()
-    history = "atlas " + " ".join(shlex.quote(a) for a in argv)
-    try:
-        s = generate_distributed(
-            scene,
-            store,
-            scheduler=scheduler,
-            slab=args.slab,
-            block2=args.block2,
-            resume=args.resume,
-            overwrite=args.overwrite,
-            method=args.method,
-            dtype=args.dtype,
-            resolve=not args.no_resolve,
-            tile_points=args.tile_points,
-            to_netcdf=args.out,
-            overwrite_netcdf=args.overwrite,
-            progress=not args.no_progress and sys.stderr.isatty() or _force_progress(),
-            history=history,
-        )
-    except KeyboardInterrupt:
-        if not os.path.isdir(store):
-            raise
-        raise KeyboardInterrupt(
-            f"finished tiles are kept in {store}: continue with the same command and --resume"
-        ) from None
-    except (OSError, RuntimeError) as e:
-        from atlas.data.io import write_error
-
-        err = e if ": cannot write " in str(e) else write_error(store, e, "store")
-        if err is None:  # not a failed write (a refused argument, a bug)
-            raise
-        if os.path.isdir(store):
-            raise OSError(
-                f"{err}; finished tiles are kept in {store}: make room and continue with the same "
-                "command and --resume"
-            ) from None
-        raise err from None
-    print(_distributed_summary(s), file=sys.stderr)
-    return 0
-
-
-def _generate_estimate(args, scene, outs, scheduler=False):
-    """The :class:`atlas.data.limits.Estimate` of an ``atlas generate`` run (``scheduler``:
-    that of the distributed path, ``False``: the streamed netCDF file)."""
-    from atlas.data.limits import generate_estimate
-
-    workers = 1
-    if isinstance(scheduler, str) and scheduler.startswith("local"):
-        n = scheduler.partition(":")[2]
-        workers = int(n) if n else (os.cpu_count() or 1)
-    return generate_estimate(
-        scene,
-        dtype=args.dtype,
-        tile_points=args.tile_points,
-        distributed=scheduler is not False,
-        workers=workers,
-        outputs=outs,
-    )
-
-
-def _limits(args, estimate) -> bool:
-    """Print the estimate with ``--dry-run`` (true: stop here), else refuse a run that cannot
-    fit (unless ``--no-size-check``)."""
-    if estimate is None:
-        return False
-    if args.dry_run:
-        print(estimate.describe())
-        return True
-    if not args.no_size_check:
-        estimate.check()
-    return False
-
-
 def _dispatch_estimate(args):
     """The estimate of a dispatched command that holds its grid in memory, or ``None``."""
     from atlas.data import limits
@@ -686,48 +506,6 @@ def _dispatch_estimate(args):
     return None
 
 
-def _require_dask(scheduler) -> None:
-    """``ValueError`` naming ``scheduler`` if zarr (and, for a cluster, distributed) is missing."""
-    try:
-        import zarr  # noqa: F401
-
-        if scheduler is not None:
-            import distributed  # noqa: F401
-    except ImportError as e:  # pragma: no cover - the dask extra is missing
-        raise ValueError(
-            f"scheduler: needs the dask extra (pip install -e '.[dask]'): {e}"
-        ) from None
-
-
-def _store_arg(args, scene) -> str:
-    """The zarr store of ``--store`` (default: the netCDF name with ``.zarr``), checked against
-    ``--resume`` / ``--overwrite``."""
-    stem = args.out if args.out is not None else f"{scene.name}.nc"
-    store = args.store or (os.path.splitext(stem)[0] + ".zarr")
-    if args.resume and args.overwrite:
-        raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
-    if args.resume and not os.path.exists(store):
-        raise FileNotFoundError(f"resume: store {store} does not exist")
-    if os.path.exists(store) and not (args.resume or args.overwrite):
-        raise FileExistsError(
-            f"store: {store} exists (use --resume to continue it or --overwrite to replace it)"
-        )
-    return store
-
-
-def _distributed_summary(s: dict) -> str:
-    """The line ``atlas generate`` prints for a :func:`generate_distributed` summary."""
-    where = s["store"] if s["netcdf"] is None else f"{s['netcdf']} (store {s['store']})"
-    return (
-        f"atlas generate: {where}: {s['points']} points in {s['seconds']:.2f} s "
-        f"({s['points_per_second']:.3g} points/s) on {s['scheduler']} with {s['workers']} "
-        f"worker(s); {s['tiles']} tiles: {len(s['computed'])} computed, {len(s['verified'])} "
-        f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
-        + (f"repaired {', '.join(s['repaired'])}; " if s.get("repaired") else "")
-        + f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
-    )
-
-
 def _force_progress() -> bool:
     return os.environ.get("ATLAS_PROGRESS", "") not in ("", "0")
 
@@ -743,8 +521,19 @@ _DISPATCH = {
 }
 
 
+def _cmd_generate(args, argv) -> int:
+    """``atlas generate``: its options, the progress bar decided here (a terminal, or
+    ``ATLAS_PROGRESS=1``) and the command line as ``history``."""
+    from atlas.data.generate_cli import run_cli
+
+    opts = {k: v for k, v in vars(args).items() if k != "command"}
+    opts["progress"] = args.progress and sys.stderr.isatty() or _force_progress()
+    return run_cli(history="atlas " + " ".join(shlex.quote(a) for a in argv), **opts)
+
+
 def _cmd_dispatch(args) -> int:
-    if hasattr(args, "dry_run") and _limits(args, _dispatch_estimate(args)):
+    estimate = _dispatch_estimate(args) if hasattr(args, "dry_run") else None
+    if estimate is not None and estimate.screen(args.dry_run, args.no_size_check):
         return 0
     module, func = _DISPATCH[args.command]
     fn = getattr(importlib.import_module(module), func)

@@ -463,16 +463,16 @@ def test_signal_after_the_commit_is_not_exit_0(tmp_path, monkeypatch, capsys):
     import signal
 
     from atlas.core import interrupts
-    from atlas.data import io as aio
+    from atlas.data import generate_cli
 
-    generate_to_file = aio.generate_to_file
+    generate_to_file = generate_cli.generate_to_file
 
     def then_signal(*a, **kw):
         stats = generate_to_file(*a, **kw)
         interrupts.request(signal.SIGTERM)
         return stats
 
-    monkeypatch.setattr(aio, "generate_to_file", then_signal)
+    monkeypatch.setattr(generate_cli, "generate_to_file", then_signal)
     out = tmp_path / "a.nc"
     assert cli.main([*TINY_RUN, "--out", str(out)]) == 143
     assert "after the run had finished" in capsys.readouterr().err
@@ -695,7 +695,7 @@ def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, 
 
     from atlas.data.io import atomic_write_text
 
-    def run(out, **_):
+    def run(out, quick):
         atomic_write_text(os.path.join(out, "table2.md"), "done\n")
         with open(os.path.join(out, "partial.tmp"), "w"):
             pass

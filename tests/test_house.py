@@ -2,6 +2,8 @@
 steps of ``.ci/run``, not tests)."""
 
 import ast
+import re
+import subprocess
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,4 +51,52 @@ def test_no_private_names_across_modules():
                 and not node.attr.startswith("__")
             ):
                 offences.append(f"{rel}:{node.lineno} {node.value.id}.{node.attr}")
+    assert not offences, "\n".join(offences)
+
+
+#: a reference to an issue number (history belongs in the git log and CHANGELOG.md)
+ISSUE = re.compile(r"issue [0-9]")
+TEXT_SUFFIXES = {".py", ".md", ".toml", ".ipynb", ".txt", ".cfg", ".json", ".csv"}
+
+
+def _tracked_text_files():
+    out = subprocess.run(
+        ["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.split()
+    for rel in out:
+        path = ROOT / rel
+        if path.suffix in TEXT_SUFFIXES and rel != "CHANGELOG.md" and path.is_file():
+            yield rel, path
+
+
+def test_no_issue_numbers_outside_the_changelog():
+    # the check can fail
+    assert ISSUE.search("see issue " + "12") and not ISSUE.search("the issues")
+    offences = [
+        f"{rel}:{n}"
+        for rel, path in _tracked_text_files()
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1)
+        if ISSUE.search(line)
+    ]
+    assert not offences, "\n".join(offences)
+
+
+def _swallowing(tree) -> list[int]:
+    """Lines of functions with a ``**_`` parameter (unknown options silently ignored)."""
+    return [
+        node.lineno
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.args.kwarg is not None
+        and node.args.kwarg.arg.startswith("_")
+    ]
+
+
+def test_no_parameter_swallows_unknown_options():
+    assert _swallowing(ast.parse("def f(a, **_):\n    pass\n")) == [1]  # the check can fail
+    offences = [
+        f"{path.relative_to(ROOT)}:{line}"
+        for path, tree in _modules()
+        for line in _swallowing(tree)
+    ]
     assert not offences, "\n".join(offences)

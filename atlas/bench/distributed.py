@@ -15,17 +15,13 @@ import jax
 import numpy as np
 
 from atlas.core.config import use_compile_cache
-from atlas.data.distributed import (
-    compute_tile,
-    generate_distributed,
-    local_cluster,
-    read_record,
-    tile_plan,
-    worker_env,
-)
-from atlas.data.engine import DEFAULT_TILE_POINTS
+from atlas.data.cluster import local_cluster, worker_env
+from atlas.data.distributed import compute_tile, generate_distributed
+from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions
 from atlas.data.io import atomic_write_text
 from atlas.data.scene import Scene
+from atlas.data.tile_store import read_record
+from atlas.data.tiles import tile_plan
 
 __all__ = ["MEASURE_SCENE", "measure_throughput", "throughput_markdown"]
 
@@ -39,7 +35,7 @@ MEASURE_SCENE = dict(
 )
 
 
-def _warm(scene: Scene, tile, opts: dict) -> float:
+def _warm(scene: Scene, tile, opts: RunOptions) -> float:
     """Compile (or load from the cache) the kernels of one tile; returns the seconds it took."""
     t0 = time.perf_counter()
     compute_tile(scene, tile, opts)
@@ -59,7 +55,9 @@ def _measure_one(scene, store, scheduler, slab, opts, n_workers) -> dict:
         client.run(_warm, scene, tiles[0], opts)  # every worker compiles before the clock runs
     warm = time.perf_counter() - t0
     try:
-        s = generate_distributed(scene, store, scheduler=client, slab=slab, overwrite=True, **opts)
+        s = generate_distributed(
+            scene, store, scheduler=client, slab=slab, overwrite=True, options=opts
+        )
     finally:
         if client is not None:
             client.close()
@@ -125,7 +123,7 @@ def measure_throughput(
     """
     use_compile_cache(worker_env().get("JAX_COMPILATION_CACHE_DIR"))
     scene = Scene(**MEASURE_SCENE) if scene is None else scene
-    opts = dict(method="certified", dtype="float64", resolve=True, tile_points=tile_points)
+    opts = RunOptions(method="certified", dtype="float64", resolve=True, tile_points=tile_points)
     load0 = os.getloadavg()
     runs = []
     with tempfile.TemporaryDirectory(prefix="atlas-measure-") as tmp:

@@ -17,8 +17,8 @@ from atlas.bench.boundaries import contour_lines, masks, ss_margin
 from atlas.bench.config import FLAGS, KEYS, UNDECIDED
 from atlas.bench.timing import timeit
 from atlas.core import exact, spectral
-from atlas.core import points as evaluate
 from atlas.core.mechanics import direction
+from atlas.core.points import spectral_points
 
 __all__ = [
     "ExactCache",
@@ -118,14 +118,14 @@ def _floor(c1, s1, c2, s2, kappa, q1, q2):
     return z, z + 1, z + 2, z + 3
 
 
-def run_method(method, args, names, dtype, damped, stats=None):
+def run_method(method, args, names, dtype, damped) -> dict:
     """One evaluation by ``method`` (``certified``, ``eig`` or ``verdicts_jit``); the verdicts
-    ``names`` as numpy arrays on the host (synchronised); ``stats`` is filled with the
-    certified driver's counts."""
+    ``names`` as numpy arrays on the host (synchronised; the certified driver's counts in
+    ``.stats``)."""
     if method == "certified":
-        return evaluate.spectral_points(*args, names=names, dtype=dtype, resolve=False, stats=stats)
+        return spectral_points(*args, names=names, dtype=dtype, resolve=False)
     if method == "eig":
-        return evaluate.spectral_points(*args, names=names, dtype=dtype, method="eig")
+        return spectral_points(*args, names=names, dtype=dtype, method="eig")
     if method == "verdicts_jit":
         dev = [jnp.asarray(a) for a in args]
         if names == ("stable_SS",):
@@ -149,8 +149,8 @@ def _time_methods(args, shape, names, methods, dtype, damped, cfg):
         box = {}
 
         def call(m=m, box=box):
-            box["c"] = {}
-            box["r"] = run_method(m, args, names, dtype, damped, stats=box["c"])
+            box["r"] = run_method(m, args, names, dtype, damped)
+            box["c"] = getattr(box["r"], "stats", {})
 
         budget = cfg["budget"] / (2 if m == "eig" else 1)
         # up to 25 repeats where they fit the budget: a shared machine needs many for a stable minimum
@@ -261,7 +261,7 @@ def reference(case, cfg, cache):
     _, kappa, q1, q2 = case
     beta, args = grid_inputs(n, kappa, q1, q2, "float64")
     shape = (n + 1, n + 1)
-    res = evaluate.spectral_points(*args, names=FLAGS, dtype="float64", resolve=False)
+    res = spectral_points(*args, names=FLAGS, dtype="float64", resolve=False)
     idx = np.flatnonzero(_any_undecided(res, FLAGS))
     if idx.size:
         ex = cache.get(flat_points(args, shape, idx))

@@ -282,7 +282,7 @@ def work_precision_section(wp, refs, cfg) -> list[str]:
     )
     return [
         "## Work-precision\n",
-        "Every method x dtype x grid resolution x case. `certified` = `evaluate.spectral_points"
+        "Every method x dtype x grid resolution x case. `certified` = `atlas.core.points.spectral_points"
         "(..., resolve=False)`; `certified+exact` = the same plus exact settlement of the undecided "
         "points (time = min certified time + one measured `exact` run over those points, which is "
         "what `resolve=True` adds); `verdicts_jit` = `spectral.verdicts_jit` in one jit over the "
@@ -378,7 +378,7 @@ def scaling_section(scaling) -> list[str]:
     return [
         "## Scaling\n",
         "Each size in a fresh subprocess: the Fig. 1 scene family (kappa = 0.5, float64, all three "
-        "flag verdicts) on a beta1 x 1024 grid streamed through `evaluate.spectral_points` in tiles "
+        "flag verdicts) on a beta1 x 1024 grid streamed through `atlas.core.points.spectral_points` in tiles "
         "of 256 x 1024 points; the verdicts are written to a scratch file (3 bytes/point) and "
         "deleted. Time excludes the first (compiling) tile; peak RSS = `VmHWM` of the subprocess "
         "(includes the JAX runtime). Undecided = before exact settlement (settling costs ~20-100 ms "

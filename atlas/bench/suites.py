@@ -18,7 +18,7 @@ from atlas.bench.config import AXIS_PAIR, CASES, FLAGS, KEYS, METHODS
 from atlas.bench.grids import ExactCache, measure_grid, misclassified, reference, run_method
 from atlas.bench.timing import log, run_cli, run_worker, timeit
 from atlas.core import exact, hardcases
-from atlas.core import points as evaluate
+from atlas.core.points import spectral_points
 
 __all__ = [
     "atlases",
@@ -212,7 +212,7 @@ def _suite_points(sname, dtype, cfg, rng):
 
 def _suite_verdicts(method, args, dtype, damped):
     if method == "certified+exact":
-        return evaluate.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=True)
+        return spectral_points(*args, names=FLAGS, dtype=dtype, resolve=True)
     return run_method(method, args, FLAGS, dtype, damped)
 
 

@@ -22,9 +22,9 @@ import jax
 import numpy as np
 
 from atlas.bench.config import FLAGS
-from atlas.core import points as evaluate
 from atlas.core.config import use_compile_cache
 from atlas.core.mechanics import direction
+from atlas.core.points import spectral_points
 from atlas.data.io import generate_to_file
 from atlas.data.scene import Scene
 
@@ -121,9 +121,9 @@ def scale_worker(n_target: int, q: float, dtype: str) -> dict:
     c2, s2 = direction(np.linspace(0, 2 * np.pi, cols, endpoint=False), dtype)
     k, qq = np.asarray(0.5, dtype), np.asarray(q, dtype)
 
-    def tile(r0, stats=None):
+    def tile(r0):
         sl = slice(r0, r0 + rows_per_tile)
-        return evaluate.spectral_points(
+        return spectral_points(
             c1[sl, None],
             s1[sl, None],
             c2[None],
@@ -134,7 +134,6 @@ def scale_worker(n_target: int, q: float, dtype: str) -> dict:
             names=FLAGS,
             dtype=dtype,
             resolve=False,
-            stats=stats,
         )
 
     tile(0)  # compile
@@ -145,9 +144,8 @@ def scale_worker(n_target: int, q: float, dtype: str) -> dict:
         t0 = time.perf_counter()
         with open(path, "wb") as fh:
             for r0 in range(0, rows, rows_per_tile):
-                counts: dict = {}
-                res = tile(r0, counts)
-                und += counts["undecided_before"]
+                res = tile(r0)
+                und += res.stats["undecided_before"]
                 for name in FLAGS:
                     fh.write(res[name].tobytes())
         seconds = time.perf_counter() - t0

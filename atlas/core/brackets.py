@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from atlas.core import mechanics
-from atlas.core import points as evaluate
+from atlas.core.points import spectral_points
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -102,7 +102,7 @@ def direction_codes(field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64
     s1, s2 = (
         np.pad(np.asarray(v, dtype), (0, pad), constant_values=ps[i]) for i, v in ((0, s1), (1, s2))
     )
-    res = evaluate.spectral_points(
+    res = spectral_points(
         c1, s1, c2, s2, kappa, q1, q2, names=FIELDS[field], dtype=dtype, resolve=True
     )
     res = {k: v[:n] for k, v in res.items()}

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["real", "pair", "boolean", "float_dtype", "FLOAT_DTYPES"]
+__all__ = ["real", "pair", "boolean", "positive_int", "float_dtype", "FLOAT_DTYPES"]
 
 FLOAT_DTYPES = ("float64", "float32")
 
@@ -46,6 +46,20 @@ def boolean(name: str, value) -> bool:
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
     raise ValueError(f"{name}: expected True or False, got {value!r}")
+
+
+def positive_int(name: str, value) -> int:
+    """``value`` as an ``int`` if it is an integral number >= 1 (not a bool), else ``ValueError``."""
+    bad = ValueError(f"{name}: must be a positive integer, got {value!r}")
+    if isinstance(value, (bool, np.bool_)):
+        raise bad
+    try:
+        n = int(value)
+    except (TypeError, ValueError):
+        raise bad from None
+    if n < 1 or n != value:
+        raise bad
+    return n
 
 
 def float_dtype(value, name: str = "dtype") -> str:

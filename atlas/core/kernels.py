@@ -60,9 +60,9 @@ class PointKernel:
     ``params``: the parameters, in :data:`PARAM_INPUTS` order.  ``results``: the names ``fn``
     returns.  ``undecided``: per result, the raw code meaning undecided (absent: always decided).
     ``true_code``: per boolean result, the raw code meaning ``True``.  ``driver``: certified tiers,
-    ``driver(*inputs, names=, dtype=, resolve=, max_resolve=, stats=) -> {result: array}``.
-    ``settle``: exact settlement, ``settle(codes, masks, *inputs, stats=)`` replaces the codes
-    where ``masks`` hold.  ``batches``: result sets computed together (default: all at once).
+    ``driver(*inputs, names=, dtype=, resolve=, max_resolve=) -> {result: array}`` with its
+    diagnostics in ``.stats``.  ``settle``: exact settlement, ``settle(codes, masks, *inputs)``
+    replaces the codes where ``masks`` hold and returns its diagnostics.  ``batches``: result sets computed together (default: all at once).
     ``kind``: ``"verdict"`` or ``"display"``.
     """
 
@@ -241,13 +241,14 @@ def run(kernel: PointKernel, inputs: Mapping, names=None) -> dict:
     return {k: np.asarray(res[k]) for k in names}
 
 
-def settle(kernel: PointKernel, codes: dict, inputs: Mapping, stats=None) -> None:
+def settle(kernel: PointKernel, codes: dict, inputs: Mapping) -> dict:
     """Settle exactly, in place, the undecided results of ``kernel`` among ``codes`` (arrays of
-    one shape; ``inputs`` broadcast to it)."""
+    one shape; ``inputs`` broadcast to it); returns the diagnostics ``resolved_points`` and
+    ``exact_failures``."""
     masks = {k: codes[k] == u for k, u in kernel.undecided.items() if k in codes}
     if kernel.settle is None or not masks:
-        return
-    kernel.settle(codes, masks, *(inputs[i] for i in kernel.inputs), stats=stats)
+        return {"resolved_points": 0, "exact_failures": []}
+    return kernel.settle(codes, masks, *(inputs[i] for i in kernel.inputs))
 
 
 _JITTED: dict = {}

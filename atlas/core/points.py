@@ -32,6 +32,7 @@ from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
     "spectral_points",
+    "Verdicts",
     "settle_codes",
     "SPECTRAL_NAMES",
     "CHUNK",
@@ -41,6 +42,20 @@ __all__ = [
 ]
 
 SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa")
+
+
+class Verdicts(dict):
+    """What :func:`spectral_points` returns: the verdict arrays by name, and in ``stats`` the
+    call's diagnostics: ``points``, ``tier2_points``, ``roots_points`` (points that needed root
+    enclosures), ``undecided_before`` and ``undecided_after`` exact settlement (points with any
+    verdict undecided), ``undecided_by_name`` (per output, before), ``exact_failures`` (points
+    the exact tier failed on, if any)."""
+
+    def __init__(self, arrays: dict, stats: dict):
+        super().__init__(arrays)
+        self.stats = stats
+
+
 #: length of the padded chunks of the later tiers
 CHUNK = 1 << 16
 #: largest number of points the first-pass kernel sees at once (bounds its temporaries)
@@ -235,9 +250,9 @@ def spectral_points(
     resolve: bool = True,
     max_resolve: int | None = None,
     chunk: int = CHUNK,
-    stats: dict | None = None,
-) -> dict:
-    """Verdicts for broadcastable arrays of points; returns numpy arrays of the broadcast shape.
+) -> Verdicts:
+    """Verdicts for broadcastable arrays of points: numpy arrays of the broadcast shape by name,
+    with the call's diagnostics in ``.stats`` (:class:`Verdicts`).
 
     Parameters
     ----------
@@ -251,10 +266,6 @@ def spectral_points(
         Certified kernels (default) or the uncertified batched-``eig`` baseline.
     resolve : bool
         Settle ``UNDECIDED`` points exactly (at most ``max_resolve`` of them; the rest stay 3).
-    stats : dict, optional
-        Filled with the diagnostics of the call: ``points``, ``tier2_points``, ``roots_points``
-        (points that needed root enclosures), ``undecided_before`` and ``undecided_after`` exact
-        settlement (points with any verdict undecided), ``undecided_by_name`` (per output, before).
     """
     names = tuple(names)
     bad = set(names) - set(SPECTRAL_NAMES)
@@ -270,8 +281,9 @@ def spectral_points(
     if method == "eig":
         res = _kernel("eig", names)(*inputs)
         counts.update(roots_points=n, undecided_before=0, undecided_after=0)
-        _report(counts, stats)
-        return {k: np.broadcast_to(np.asarray(res[k]), shape).copy() for k in names}
+        return Verdicts(
+            {k: np.broadcast_to(np.asarray(res[k]), shape).copy() for k in names}, counts
+        )
 
     backend.require_trusted()  # a backend that failed atlas selftest certifies nothing
     flags = [k for k in names if k != "spectral_abscissa"]
@@ -287,8 +299,7 @@ def spectral_points(
         _settle_exact(inputs, shape, out, flags, open_idx[und], max_resolve, counts)
     after = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
     counts["undecided_after"] = int(np.logical_or.reduce(after).sum()) if flags else 0
-    _report(counts, stats)
-    return out
+    return Verdicts(out, counts)
 
 
 def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts):
@@ -404,29 +415,25 @@ def _resolve_each(exact, pts, names, counts):
     return ref
 
 
-def _report(counts, stats):
-    if stats is not None:
-        stats.update(counts)
-
-
-def settle_codes(codes: dict, undecided: dict, c1, s1, c2, s2, ca=None, sa=None, *, stats=None):
+def settle_codes(codes: dict, undecided: dict, c1, s1, c2, s2, ca=None, sa=None) -> dict:
     """Exact class/subclass codes and Table 1 flags where the fast kernels left them undecided.
 
     ``codes``: arrays of one shape (``class_code``, ``subclass_code``, ``consistent_FF`` ...),
     replaced in place at the points where the matching mask of ``undecided`` holds; the inputs
     (direction components [1], ``ca, sa`` only for the ``alpha`` outputs) broadcast to that shape.
     The exact reference is :func:`atlas.core.exact.resolve_codes` (rational arithmetic).  A point on
-    which it fails stays undecided and is recorded in ``stats["exact_failures"]`` (a long atlas run
-    is never aborted by one point).  Returns the number of points settled (also added to
-    ``stats["resolved_points"]``).
+    which it fails stays undecided and is recorded (a long atlas run is never aborted by one
+    point).  Returns the diagnostics: ``resolved_points`` (points settled) and ``exact_failures``
+    (the points the exact reference failed on).
     """
+    stats = {"resolved_points": 0, "exact_failures": []}
     undecided = {k: np.asarray(u) for k, u in undecided.items() if k in codes}
     if not undecided:
-        return 0
+        return stats
     shape = next(iter(undecided.values())).shape
     idx = np.flatnonzero(np.logical_or.reduce([u.reshape(-1) for u in undecided.values()]))
     if idx.size == 0:
-        return 0
+        return stats
     args = (c1, s1, c2, s2) if ca is None else (c1, s1, c2, s2, ca, sa)
     pts = [np.broadcast_to(np.asarray(a), shape).reshape(-1)[idx] for a in args]
     try:
@@ -436,10 +443,8 @@ def settle_codes(codes: dict, undecided: dict, c1, s1, c2, s2, ca=None, sa=None,
     for k, u in undecided.items():
         sel = u.reshape(-1)[idx] & ok
         codes[k].reshape(-1)[idx[sel]] = np.asarray(ref[k])[sel]
-    settled = int(ok.sum())
-    if stats is not None:
-        stats["resolved_points"] = stats.get("resolved_points", 0) + settled
-    return settled
+    stats["resolved_points"] = int(ok.sum())
+    return stats
 
 
 def _codes_each(pts, names, stats):
@@ -451,9 +456,7 @@ def _codes_each(pts, names, stats):
         try:
             one = exact.resolve_codes(*(p[i : i + 1] for p in pts))
         except Exception:
-            if stats is not None:
-                fail = stats.setdefault("exact_failures", [])
-                fail.append(tuple(float(p[i]) for p in pts))
+            stats["exact_failures"].append(tuple(float(p[i]) for p in pts))
             continue
         ok[i] = True
         for k in names:

@@ -104,7 +104,7 @@ def report(res: dict) -> str:
     return "\n".join(lines)
 
 
-def run_cli(suites=None, dtypes=",".join(DTYPES), **_) -> int:
+def run_cli(suites=None, dtypes=",".join(DTYPES)) -> int:
     """``atlas selftest``: run, print, record; exit code 0 if passed, 1 if not."""
     names = [s for s in (suites or "").split(",") if s] or None
     unknown = sorted(set(names or ()) - set(hardcases.SUITES))

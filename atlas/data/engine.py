@@ -15,9 +15,11 @@ dispatches the kernel asynchronously; the previous tile is finished (undecided p
 the kernel's exact reference, codes converted to the stored types) while the next one computes.  A
 kernel with a certified driver (the spectral verdicts) instead hands each hyperslab, as
 broadcastable per-axis inputs, to that driver (:func:`atlas.core.points.spectral_points`: its tiers
-and its exact settlement, the one copy of that logic).  Finished tiles go to a *sink*:
+and its exact settlement, the one copy of that logic).  Finished tiles go to a *sink* (:class:`Sink`):
 :func:`generate` keeps them in memory and returns a Dataset; :func:`atlas.data.io.generate_to_file`
 writes each tile straight into a netCDF4 file, so memory is bounded by the tile, not the atlas.
+How a run computes is one :class:`RunOptions`; :func:`run` returns the sink's result with the run's
+diagnostics (:class:`Run`).
 
 Undecided points.  With ``resolve=True`` every value the certified fast path leaves undecided
 (``Verdict.UNDECIDED``/``Consistency.UNDECIDED`` = 3, code -1) is recomputed by the exact reference
@@ -38,12 +40,14 @@ exactly is neutral and stored as ``False``); the consistency outputs are ``True`
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import itertools
 import math
 import sys
 import time
 from dataclasses import dataclass, field
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import jax
 import numpy as np
@@ -64,8 +68,10 @@ from atlas.data.scene import Scene
 
 __all__ = [
     "generate",
-    "check_options",
+    "RunOptions",
     "run",
+    "Run",
+    "Sink",
     "schema",
     "tile_blocks",
     "block_shape",
@@ -83,6 +89,67 @@ REFERENCES = (
     "Varkonyi, P. L.: Dynamics of mechanical systems with multiple sliding contacts: "
     "new faces of Painleve's paradox."
 )
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How an atlas is computed: the one set of options of :func:`generate`, :func:`run`,
+    :func:`schema`, :func:`atlas.data.io.generate_to_file` and
+    :func:`atlas.data.distributed.generate_distributed` (validated on construction: one-line
+    ``ValueError`` naming the option).
+
+    Attributes
+    ----------
+    method : {"certified", "eig"}
+        ``certified``: proven signs, undecided where floating point cannot certify (then exact
+        resolution); ``eig``: the uncertified batched-``eig`` baseline (never undecided).
+    dtype : {"float64", "float32"}
+        Working precision of the kernels (direction vectors are rounded to it).
+    resolve : bool
+        Recompute undecided values exactly with :mod:`atlas.core.exact` (slow per point, few points).
+    tile_points : int
+        Points per tile: bounds the kernel's memory; one compilation per value.
+    progress : bool
+        tqdm progress bar on stderr.
+    history : str, optional
+        Command recorded in the ``history`` attribute (default: the Python call).
+    """
+
+    method: str = "certified"
+    dtype: str = "float64"
+    resolve: bool = True
+    tile_points: int = DEFAULT_TILE_POINTS
+    progress: bool = False
+    history: str | None = None
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"method: must be one of {', '.join(METHODS)}, got {self.method!r}")
+        object.__setattr__(self, "dtype", checks.float_dtype(self.dtype))
+        object.__setattr__(
+            self, "tile_points", checks.positive_int("tile_points", self.tile_points)
+        )
+        object.__setattr__(self, "resolve", checks.boolean("resolve", self.resolve))
+
+    @classmethod
+    def of(cls, options: RunOptions | None = None, **changes) -> RunOptions:
+        """``options`` (default: the defaults) with some options changed by name."""
+        if options is None:
+            options = cls()
+        elif not isinstance(options, cls):
+            raise ValueError(f"options: expected RunOptions, got {options!r}")
+        known = [f.name for f in dataclasses.fields(cls)]
+        for name in changes:
+            if name not in known:
+                raise ValueError(f"{name}: not a run option (known: {', '.join(known)})")
+        return dataclasses.replace(options, **changes) if changes else options
+
+    def stored(self) -> dict:
+        """The options that decide the stored values (``method, dtype, resolve, tile_points``)."""
+        return dict(
+            method=self.method, dtype=self.dtype, resolve=self.resolve, tile_points=self.tile_points
+        )
+
 
 # --- tiling -------------------------------------------------------------------------------------
 
@@ -164,6 +231,34 @@ class Schema:
     shape: dict = field(default_factory=dict)  # dim -> size
 
 
+@runtime_checkable
+class Sink(Protocol):
+    """Where :func:`run` puts an atlas: laid out once, written tile by tile, then finished (its
+    result is what :func:`run` returns) or, on any error or interrupt, aborted (nothing left)."""
+
+    def begin(self, sch: Schema) -> None:
+        """Lay out every coordinate and variable of ``sch`` before the first tile."""
+
+    def write(self, name: str, index: tuple, block: np.ndarray) -> None:
+        """Store ``block`` (the stored dtype) at the hyperslab ``index`` of variable ``name``."""
+
+    def finish(self, attrs: dict, var_attrs: dict) -> Any:
+        """Add the run's global and per-variable attributes; return the finished atlas."""
+
+    def abort(self) -> None:
+        """Discard everything written (called once, from an error or interrupt)."""
+
+
+class Run(NamedTuple):
+    """What :func:`run` returns: the sink's ``result`` and the run's diagnostics ``stats``:
+    ``scene``, ``points``, ``values`` (computed values over all groups), ``seconds``,
+    ``points_per_second``, ``undecided_fast``, ``undecided`` (after exact resolution),
+    ``resolved_points``, ``exact_failures`` (the points the exact tier failed on)."""
+
+    result: Any
+    stats: dict
+
+
 def _versions() -> str:
     return config.source()
 
@@ -172,16 +267,10 @@ def _default_history(scene: Scene, method: str, dtype: str) -> str:
     return f"atlas.generate(scene={scene.describe()!r}, method={method!r}, dtype={dtype!r})"
 
 
-def schema(
-    scene: Scene,
-    *,
-    method: str = "certified",
-    dtype: str = "float64",
-    resolve: bool = True,
-    tile_points: int = DEFAULT_TILE_POINTS,
-    history: str | None = None,
-) -> Schema:
+def schema(scene: Scene, options: RunOptions | None = None) -> Schema:
     """Coordinates, variables (dims, dtype, attributes, chunks) and global attributes of an atlas."""
+    opts = RunOptions.of(options)
+    method, dtype, history = opts.method, opts.dtype, opts.history
     coords = {}
     for key, ax in scene.axes.items():
         dims = (key,) if ax.is_dim else ()
@@ -190,7 +279,7 @@ def schema(
     for name in scene.output_names:
         dims = scene.output_dims(name)
         shape = tuple(scene.axes[d].size for d in dims)
-        chunks = block_shape(shape, tile_points) if dims else None
+        chunks = block_shape(shape, opts.tile_points) if dims else None
         variables[name] = (dims, storage_dtype(name, dtype), variable_attrs(name), chunks)
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
@@ -203,7 +292,7 @@ def schema(
         "scene_description": scene.describe(),
         "method": method,
         "dtype": dtype,
-        "exact_resolution": int(bool(resolve)),
+        "exact_resolution": int(opts.resolve),
         "model_parameters": " ".join(scene.model_names),
     }
     for key, val in scene.fixed().items():
@@ -220,7 +309,7 @@ def schema(
 # --- sinks --------------------------------------------------------------------------------------
 
 
-class MemorySink:
+class MemorySink(Sink):
     """Collects tiles in numpy arrays and builds the :class:`xarray.Dataset`."""
 
     def begin(self, sch: Schema):
@@ -301,8 +390,8 @@ def _block_inputs(src, inputs, dims, index, block):
 def _driver_tile(kernel, src, dims, index, block, need, dtype, resolve, stats):
     """Certified verdicts of one tile through the kernel's driver (all tiers, exact settlement)."""
     args = _block_inputs(src, kernel.inputs, dims, index, block)
-    st = {}
-    res = kernel.driver(*args, names=need, dtype=dtype, resolve=resolve, stats=st)
+    res = kernel.driver(*args, names=need, dtype=dtype, resolve=resolve)
+    st = res.stats
     settled = st["undecided_before"] - st["undecided_after"] if resolve else 0
     stats["resolved_points"] = stats.get("resolved_points", 0) + settled
     stats.setdefault("exact_failures", []).extend(st.get("exact_failures", []))
@@ -314,36 +403,20 @@ def _resolve(kernel, res: dict, flat_inputs: list, n: int, stats: dict):
     """Settle the undecided codes of one tile exactly, in place (the kernel's ``settle``; a kernel
     with a driver is settled by the driver)."""
     pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
-    kernels.settle(kernel, res, dict(zip(kernel.inputs, pts)), stats)
+    st = kernels.settle(kernel, res, dict(zip(kernel.inputs, pts)))
+    stats["resolved_points"] = stats.get("resolved_points", 0) + st["resolved_points"]
+    stats.setdefault("exact_failures", []).extend(st["exact_failures"])
 
 
-def run(
-    scene: Scene,
-    sink,
-    *,
-    method: str = "certified",
-    dtype: str = "float64",
-    resolve: bool = True,
-    tile_points: int = DEFAULT_TILE_POINTS,
-    progress=False,
-    history: str | None = None,
-    stats: dict | None = None,
-):
-    """Compute every output of ``scene`` tile by tile into ``sink``; returns ``sink.finish(...)``.
-
-    ``sink`` has ``begin(schema)``, ``write(name, index, block)``, ``finish(attrs, var_attrs)`` and
-    ``abort()``; see :class:`MemorySink` and :class:`atlas.data.io.NetCDFSink`.  ``stats``, if
-    given, is filled with the run's summary: ``scene``, ``points``, ``values`` (computed values over
-    all groups), ``seconds``, ``points_per_second``, ``undecided_fast``, ``undecided`` (after exact
-    resolution), ``resolved_points``, ``exact_failures`` (the points the exact tier failed on).
-    """
-    method, dtype, tile_points = check_options(method, dtype, tile_points)
-    resolve = checks.boolean("resolve", resolve)
+def run(scene: Scene, sink: Sink, options: RunOptions | None = None) -> Run:
+    """Compute every output of ``scene`` tile by tile into ``sink`` (a :class:`Sink`, e.g.
+    :class:`MemorySink` or :class:`atlas.data.io.NetCDFSink`); returns ``sink.finish(...)`` with
+    the run's diagnostics (:class:`Run`)."""
+    opts = RunOptions.of(options)
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
-    sch = schema(
-        scene, method=method, dtype=dtype, resolve=resolve, tile_points=tile_points, history=history
-    )
+    method, dtype, resolve, tile_points = opts.method, opts.dtype, opts.resolve, opts.tile_points
+    sch = schema(scene, opts)
     outputs = scene.output_names
     src = _axis_inputs(scene, dtype)
     plan = _plan(scene, outputs)
@@ -351,7 +424,7 @@ def run(
     t0 = time.perf_counter()
     counts = {"undecided_fast": {}, "undecided": {}}
     md = _ModelDependence(scene, outputs)
-    bar = progress_bar(progress, total, f"atlas {scene.name}")
+    bar = progress_bar(opts.progress, total, f"atlas {scene.name}")
     writer = _TileWriter(sink, outputs, dtype, resolve, counts, md, bar)
     try:
         sink.begin(sch)  # inside: an interrupt while the header is written still aborts
@@ -371,9 +444,7 @@ def run(
     finally:
         if bar is not None:
             bar.close()
-    if stats is not None:
-        stats.update(_summary(scene, total, seconds, counts))
-    return result
+    return Run(result, _summary(scene, total, seconds, counts))
 
 
 @dataclass
@@ -545,69 +616,24 @@ def progress_bar(progress, total, desc, unit="pt"):
     return tqdm(total=total, unit=unit, unit_scale=True, desc=desc, file=sys.stderr, leave=False)
 
 
-def check_options(method, dtype, tile_points) -> tuple[str, str, int]:
-    """``(method, dtype, tile_points)`` validated and normalised (one-line error naming the bad one)."""
-    if method not in METHODS:
-        raise ValueError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
-    dtype = checks.float_dtype(dtype)
-    if isinstance(tile_points, (bool, np.bool_)):
-        raise ValueError(f"tile_points: must be a positive integer, got {tile_points!r}")
-    try:
-        tp = int(tile_points)
-    except (TypeError, ValueError):
-        raise ValueError(f"tile_points: must be a positive integer, got {tile_points!r}") from None
-    if tp < 1 or tp != tile_points:
-        raise ValueError(f"tile_points: must be a positive integer, got {tile_points!r}")
-    return method, dtype, tp
-
-
-def generate(
-    scene: Scene,
-    *,
-    method: str = "certified",
-    dtype: str = "float64",
-    resolve: bool = True,
-    tile_points: int = DEFAULT_TILE_POINTS,
-    progress=False,
-    history: str | None = None,
-    stats: dict | None = None,
-) -> xr.Dataset:
+def generate(scene: Scene, options: RunOptions | None = None, **changes) -> xr.Dataset:
     """Compute an atlas in memory (SPEC §2).
 
     Parameters
     ----------
     scene : atlas.Scene
         Parameters, ranges and wanted outputs.
-    method : {"certified", "eig"}
-        ``certified``: proven signs, undecided where floating point cannot certify (then exact
-        resolution); ``eig``: the uncertified batched-``eig`` baseline (never undecided).
-    dtype : {"float64", "float32"}
-        Working precision of the kernels (direction vectors are rounded to it).
-    resolve : bool
-        Recompute undecided values exactly with :mod:`atlas.core.exact` (slow per point, few points).
-    tile_points : int
-        Points per tile: bounds the kernel's memory; one compilation per value.
-    progress : bool
-        tqdm progress bar on stderr.
-    history : str, optional
-        Command recorded in the ``history`` attribute (default: the Python call).
-    stats : dict, optional
-        Filled with the run's summary (points, seconds, undecided counts; see :func:`run`).
+    options : RunOptions, optional
+        How to compute it (method, dtype, exact resolution, tile size, progress bar, history).
+    **changes
+        Options changed by name, e.g. ``generate(scene, dtype="float32")`` (see
+        :class:`RunOptions`; an unknown name is refused).
 
     Returns
     -------
     xarray.Dataset
         Each variable spans only the varied parameters it depends on; see :mod:`atlas.data.engine`.
+        The undecided counts are its attributes; :func:`run` also returns the run's diagnostics.
         For atlases larger than memory use :func:`atlas.data.io.generate_to_file`.
     """
-    return run(
-        scene,
-        MemorySink(),
-        method=method,
-        dtype=dtype,
-        resolve=resolve,
-        tile_points=tile_points,
-        progress=progress,
-        history=history,
-        stats=stats,
-    )
+    return run(scene, MemorySink(), RunOptions.of(options, **changes)).result

@@ -34,7 +34,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import interrupts
-from atlas.data.engine import DEFAULT_TILE_POINTS, Schema, block_shape, run
+from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions, Schema, Sink, block_shape, run
 from atlas.data.scene import Scene
 
 __all__ = [
@@ -269,7 +269,7 @@ def write_netcdf(ds: xr.Dataset, path, overwrite: bool = False, tile_points=DEFA
     return path
 
 
-class NetCDFSink:
+class NetCDFSink(Sink):
     """Writes tiles from :func:`atlas.data.engine.run` straight into a netCDF4 file (streaming)."""
 
     def __init__(self, path, overwrite: bool = False):
@@ -353,33 +353,18 @@ class NetCDFSink:
 def generate_to_file(
     scene: Scene,
     path,
+    options: RunOptions | None = None,
     *,
     overwrite: bool = False,
-    method: str = "certified",
-    dtype: str = "float64",
-    resolve: bool = True,
-    tile_points: int = DEFAULT_TILE_POINTS,
-    progress=False,
-    history: str | None = None,
+    **changes,
 ) -> dict:
     """Generate an atlas tile by tile straight into a netCDF4 file (memory bounded by the tile).
 
-    Same options as :func:`atlas.generate`; the file equals ``write_netcdf(generate(...))``.
-    Returns the run summary: ``points``, ``seconds``, ``points_per_second``, ``undecided_fast``,
-    ``undecided`` (after exact resolution), ``path``, ``bytes`` (file size).
+    Same options as :func:`atlas.generate` (:class:`atlas.data.engine.RunOptions`, or changed by
+    name); the file equals ``write_netcdf(generate(...))``.  Returns the run's diagnostics
+    (:class:`atlas.data.engine.Run`) with ``path`` and ``bytes`` (file size).
     """
+    opts = RunOptions.of(options, **changes)
     sink = NetCDFSink(path, overwrite)
-    stats: dict = {}
-    run(
-        scene,
-        sink,
-        method=method,
-        dtype=dtype,
-        resolve=resolve,
-        tile_points=tile_points,
-        progress=progress,
-        history=history,
-        stats=stats,
-    )
-    stats.update(path=sink.path, bytes=os.path.getsize(sink.path))
-    return stats
+    stats = run(scene, sink, opts).stats
+    return {**stats, "path": sink.path, "bytes": os.path.getsize(sink.path)}

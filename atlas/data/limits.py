@@ -20,8 +20,8 @@ import math
 import os
 import shutil
 
-from atlas.data.distributed import DEFAULT_SLAB_POINTS
 from atlas.data.outputs import OUTPUTS, storage_dtype
+from atlas.data.tiles import DEFAULT_SLAB_POINTS
 
 __all__ = [
     "Estimate",
@@ -120,6 +120,17 @@ class Estimate:
                     f"{human_bytes(free)} free at {os.path.dirname(os.path.abspath(path))}"
                 )
         return "; ".join(parts)
+
+    def screen(self, dry_run: bool = False, no_size_check: bool = False) -> bool:
+        """The ``--dry-run`` / ``--no-size-check`` rule of every command: with ``dry_run`` print
+        :meth:`describe` and return true (stop here); else :meth:`check` unless
+        ``no_size_check``, and return false (run)."""
+        if dry_run:
+            print(self.describe())
+            return True
+        if not no_size_check:
+            self.check()
+        return False
 
     def check(self) -> None:
         """``MemoryError`` / ``OSError`` (one line naming the numbers and the way out) when the run

@@ -15,6 +15,7 @@ import numpy as np
 
 from atlas.core import kernels
 from atlas.core import mechanics as mech
+from atlas.core.points import Verdicts
 from atlas.data.outputs import OUTPUTS, kernel_of
 
 __all__ = ["plane_outputs", "map_dims", "PLANE"]
@@ -50,14 +51,13 @@ def plane_outputs(
     dtype="float64",
     resolve: bool = True,
     max_resolve: int | None = None,
-    stats: dict | None = None,
-) -> dict:
+) -> Verdicts:
     """Raw results of the outputs ``names`` on the grid ``beta`` [rad] (both angles).
 
     ``model``: ``(kappa, q1, q2)`` [1]; ``alpha`` [rad] for the outputs that need it.  Returns
     ``{name: array}`` shaped by :func:`map_dims` (``(n, n)``, ``(n,)`` or ``()``), undecided codes
-    settled exactly if ``resolve`` (at most ``max_resolve`` points of a certified kernel; its
-    diagnostics go to ``stats``).  Raises a one-line ``ValueError`` for an output without a kernel.
+    settled exactly if ``resolve`` (at most ``max_resolve`` points of a certified kernel), with the
+    certified driver's diagnostics in ``.stats``.  Raises a one-line ``ValueError`` for an output without a kernel.
     """
     dt = np.dtype(dtype)
     beta = np.asarray(beta, np.float64).reshape(-1)
@@ -65,16 +65,16 @@ def plane_outputs(
     by_kernel: dict = {}
     for name in names:
         by_kernel.setdefault(kernel_of(name), []).append(name)
-    out = {}
+    out, stats = {}, {}
     for k, want in by_kernel.items():
         both = "beta1" in k.params and "beta2" in k.params
         inputs = plane if both else line
         if k.driver is not None:
             args = [inputs[i] for i in k.inputs]
             res = k.driver(
-                *args, names=tuple(want), dtype=dt, resolve=resolve, max_resolve=max_resolve,
-                stats=stats,
-            )  # fmt: skip
+                *args, names=tuple(want), dtype=dt, resolve=resolve, max_resolve=max_resolve
+            )
+            stats.update(res.stats)
         else:
             args = {i: dt.type(v) if isinstance(v, float) else v for i, v in inputs.items()}
             res = kernels.run(k, args)
@@ -84,7 +84,7 @@ def plane_outputs(
                 res = full
         for r in want:
             out[r] = _full(np.asarray(res[r]), r, beta.size)
-    return {r: out[r] for r in names}
+    return Verdicts({r: out[r] for r in names}, stats)
 
 
 def _full(v: np.ndarray, name: str, n: int) -> np.ndarray:

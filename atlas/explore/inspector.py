@@ -12,9 +12,8 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import exact, spectral
+from atlas.core import exact, points, spectral
 from atlas.core import mechanics as mech
-from atlas.core import points as evaluate
 from atlas.core.mechanism import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.outputs import OUTPUTS, verdict_outputs
@@ -118,8 +117,8 @@ def _spectrum(dirs: tuple, model: tuple, dt) -> dict:
     j = [jnp.asarray(v) for v in dirs]
     jm = [jnp.asarray(dt.type(v)) for v in model]
     pt = [np.asarray(v, dt) for v in dirs] + [dt.type(v) for v in model]
-    fast = evaluate.spectral_points(*pt, names=evaluate.SPECTRAL_NAMES, dtype=dt, resolve=False)
-    settled = evaluate.spectral_points(*pt, names=evaluate.SPECTRAL_NAMES, dtype=dt, resolve=True)
+    fast = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=False)
+    settled = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=True)
     ref = exact.point_spectral(*(float(v) for v in pt))
     M = np.asarray(spectral.build_M(*j, *jm))
     return {

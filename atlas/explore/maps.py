@@ -202,11 +202,10 @@ def compute_map(
     model = checked_model(kappa, q1, q2)
     dt = _working_dtype(dtype)
     b = beta_grid(n) if beta is None else np.asarray(beta, np.float64).reshape(-1)
-    counts = {"undecided_before": 0, "undecided_after": 0}
     raw = plane_outputs(
-        layers, b, model, alpha=alpha, dtype=dt, resolve=resolve, max_resolve=max_resolve,
-        stats=counts,
-    )  # fmt: skip
+        layers, b, model, alpha=alpha, dtype=dt, resolve=resolve, max_resolve=max_resolve
+    )
+    counts = {"undecided_before": 0, "undecided_after": 0, **raw.stats}
     out = {k: (map_dims(k), to_storage(k, v, dt)) for k, v in raw.items()}
     ds = _dataset(out, layers, _coords(b, model, alpha))
     ds.attrs.update(

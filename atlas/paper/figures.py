@@ -68,10 +68,8 @@ def evaluate_points(
     ``spectral_abscissa`` [(time of contact 2)^-1]; ints ``n_resolved`` (points settled exactly)
     and ``n_undecided`` (left undecided).
     """
-    counts: dict = {}
-    res = spectral_points(
-        c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve, stats=counts
-    )
+    res = spectral_points(c1, s1, c2, s2, kappa, q1, q2, resolve=resolve, max_resolve=max_resolve)
+    counts = res.stats
     res["n_resolved"] = counts["undecided_before"] - counts["undecided_after"] if resolve else 0
     res["n_undecided"] = counts["undecided_after"]
     return res
@@ -170,9 +168,9 @@ def stability_map(
     import xarray as xr
 
     b = _offset_grid(n)
-    counts: dict = {}
     names = map_outputs() + (("margin_SS",) if margins else ())
-    raw = plane_outputs(names, b, (kappa, q1, q2), max_resolve=MAX_RESOLVE, stats=counts)
+    raw = plane_outputs(names, b, (kappa, q1, q2), max_resolve=MAX_RESOLVE)
+    counts = raw.stats
     if margins:
         c, s = mechanics.direction(b)
         C1, S1, C2, S2 = c[:, None], s[:, None], c[None, :], s[None, :]

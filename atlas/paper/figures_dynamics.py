@@ -13,7 +13,7 @@ import numpy as np
 
 from atlas.core import config
 from atlas.core.verdicts import Consistency, Verdict
-from atlas.data.io import atomic_write_text, savefig
+from atlas.data.io import atomic_write_text, check_output_path, savefig
 from atlas.dynamics import (
     Outcome,
     classify,
@@ -175,13 +175,13 @@ def run_cli(
     q2=None,
     t_end=None,
     out=None,
+    overwrite=False,
     outcome_map=False,
     n=None,
     kappa=None,
     q=None,
     engine="fast",
     n_perturb=None,
-    **_,
 ) -> int:
     """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
     printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``).
@@ -191,7 +191,10 @@ def run_cli(
     ``--n-perturb`` initial conditions per cell, default 1: the most frequent outcome and the
     fraction of runs giving it),
     outcome counts printed; ``--out`` writes it as netCDF (``.nc``) or as the figure beside the
-    Fig. 1 theory map (``.png``/``.pdf``)."""
+    Fig. 1 theory map (``.png``/``.pdf``).  An existing ``out`` is replaced only with
+    ``overwrite``."""
+    if out:
+        check_output_path(out, overwrite)
     if outcome_map:
         return _run_map(n, kappa, q, alpha, t_end, out, engine, case, n_perturb)
     case = case[len("fig2") :] if case and case.startswith("fig2") else case

@@ -53,6 +53,7 @@ import dataclasses
 import math
 import time
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 
@@ -278,8 +279,7 @@ def search(
     seed: int = 0,
     mu_max=MU_MAX,
     chunk: int = 1 << 17,
-    stats: dict | None = None,
-) -> dict:
+) -> Search:
     """Per subclass, a verified realisation (a rigid body, else the body with a driven wheel) or
     "none found in the searched set".
 
@@ -291,14 +291,13 @@ def search(
         Seed of :func:`numpy.random.default_rng` (the result is deterministic).
     mu_max : Fraction or str
         Largest friction coefficient searched (a multiple of 1/10; default 2).
-    stats : dict, optional
-        Filled with ``samples``, ``mu_max``, ``seconds_search``, ``seconds_verify``, ``found``,
-        ``verified`` and ``rigid`` / ``wheel`` (subclasses verified per system).
 
     Returns
     -------
-    dict
-        ``{subclass code: Realisation}`` for all 144 subclasses, in Table 2 order.
+    Search
+        ``found``: ``{subclass code: Realisation}`` for all 144 subclasses, in Table 2 order;
+        ``stats``: ``samples``, ``mu_max``, ``seconds_search``, ``seconds_verify``, ``found``,
+        ``verified`` and ``rigid`` / ``wheel`` (subclasses verified per system).
     """
     if samples < 1:
         raise ValueError(f"samples: must be >= 1, got {samples}")
@@ -311,17 +310,23 @@ def search(
         best[WHEEL] = _search(WHEEL, samples, seed, mu_max, chunk)
     t1 = time.perf_counter()
     out = {c: _verify(c, best, samples, mu_max) for c in ALL_SUBCLASSES}
-    if stats is not None:
-        stats.update(
-            samples=samples,
-            mu_max=mu_max,
-            seconds_search=t1 - t0,
-            seconds_verify=time.perf_counter() - t1,
-            found=sum(r.found for r in out.values()),
-            verified=sum(r.verified for r in out.values()),
-            **{k: sum(r.verified and r.system == s for r in out.values()) for k, s in _SYSTEMS},
-        )
-    return out
+    stats = dict(
+        samples=samples,
+        mu_max=mu_max,
+        seconds_search=t1 - t0,
+        seconds_verify=time.perf_counter() - t1,
+        found=sum(r.found for r in out.values()),
+        verified=sum(r.verified for r in out.values()),
+        **{k: sum(r.verified and r.system == s for r in out.values()) for k, s in _SYSTEMS},
+    )
+    return Search(out, stats)
+
+
+class Search(NamedTuple):
+    """What :func:`search` returns: the realisations ``found`` and the search's ``stats``."""
+
+    found: dict
+    stats: dict
 
 
 def _search(system: str, samples: int, seed: int, mu_max: Fraction, chunk: int) -> dict:

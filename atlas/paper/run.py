@@ -89,12 +89,11 @@ def write_netcdf(ds, path) -> Path:
 
 def _write_realisability(path) -> None:
     """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
-    stats: dict = {}
-    found = realisability.search(1 << 19, stats=stats)
+    found, stats = realisability.search(1 << 19)
     atomic_write_text(path, realisability.markdown(found, stats))
 
 
-def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, **_) -> dict:
+def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False) -> dict:
     """Regenerate Fig. 1 (classes, stability map, variants), Table 2 (md, csv, png), the audit,
     Fig. 2 (if :mod:`atlas.paper.figures_dynamics` is available) and ``fig1_map.nc`` into ``out``.
 

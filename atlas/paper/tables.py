@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import mechanics
-from atlas.core import points as evaluate
+from atlas.core.points import spectral_points
 from atlas.core.verdicts import Consistency, Verdict
 
 __all__ = [
@@ -224,7 +224,7 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         row.stability["FS"] = _word(mechanics.stable_FS(s2))
         # SS and II over the kappa-q sample (undecided points settled exactly)
         kq = np.array(KAPPA_Q_SAMPLE)
-        v = evaluate.spectral_points(
+        v = spectral_points(
             c1,
             s1,
             c2,
@@ -315,14 +315,17 @@ def to_csv(rows: list[Row]) -> str:
     return buf.getvalue()
 
 
-def run_cli(format: str = "markdown", out: str | None = None, **_):
-    """``atlas table``: print Table 2 (Markdown) or write CSV."""
+def run_cli(format: str = "markdown", out: str | None = None, overwrite: bool = False):
+    """``atlas table``: print Table 2 (Markdown) or write CSV (an existing ``out`` is replaced
+    only with ``overwrite``)."""
+    from atlas.data.io import atomic_write_text, check_output_path
+
+    if out:
+        check_output_path(out, overwrite)
     rows = table2()
     text = to_markdown(rows) if format == "markdown" else to_csv(rows)
     if out:
-        from atlas.data.io import atomic_write_text
-
-        atomic_write_text(out, text)
+        atomic_write_text(out, text, overwrite=overwrite)
     else:
         print(text, end="")
     return 0

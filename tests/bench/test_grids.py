@@ -5,8 +5,7 @@ import pytest
 
 from atlas.bench import grids
 from atlas.bench.config import CONFIG, FLAGS, KEYS
-from atlas.core import exact
-from atlas.core import points as evaluate
+from atlas.core import exact, points
 
 
 def test_misclassified_counts_decided_differences_only():
@@ -61,7 +60,7 @@ def test_small_case_recomputed_independently(dtype):
     pts = {k: np.broadcast_to(a, shape).ravel().astype(np.float64) for k, a in zip(KEYS, args)}
     ref = exact.resolve(pts, names=FLAGS)
     for m in ("certified", "eig"):
-        fast = evaluate.spectral_points(
+        fast = points.spectral_points(
             *args, names=FLAGS, dtype=dtype,
             method="certified" if m == "certified" else "eig", resolve=False,
         )  # fmt: skip
@@ -77,7 +76,7 @@ def test_small_case_recomputed_independently(dtype):
         assert row["misclassified_sample"] == bad
         assert row["undecided"] == und
     # certified+exact equals the driver's own settlement (resolve=True)
-    settled = evaluate.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=True)
+    settled = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=True)
     for k in FLAGS:
         np.testing.assert_array_equal(res["certified+exact"][k], settled[k].reshape(shape))
     assert next(r for r in rows if r["method"] == "certified")["misclassified"] == 0

@@ -40,9 +40,8 @@ def test_padding_point_is_decided_by_the_first_pass(model):
     np.testing.assert_array_equal(
         np.stack([c1, s1, c2, s2]), np.array([[1], [0], [0], [1]]) * np.ones(4)
     )
-    stats = {}
     names = ("stable_SS", "consistent_II", "stable_II")
-    points.spectral_points(c1, s1, c2, s2, *model, names=names, stats=stats)
+    stats = points.spectral_points(c1, s1, c2, s2, *model, names=names).stats
     assert stats["tier2_points"] == stats["roots_points"] == stats["undecided_before"] == 0
 
 

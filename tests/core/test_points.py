@@ -7,8 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, rootfree
-from atlas.core import points as evaluate
+from atlas.core import exact, points, rootfree
 from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 
@@ -30,17 +29,17 @@ def grid(n=12, dtype=np.float64):
     )
 
 
-@pytest.mark.parametrize("flat_limit", [0, evaluate.FLAT_LIMIT])
+@pytest.mark.parametrize("flat_limit", [0, points.FLAT_LIMIT])
 def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
     """The grid path (per-axis inputs, gathers by index; small grids as flat columns, or always
     on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat."""
-    monkeypatch.setattr(evaluate, "FLAT_LIMIT", flat_limit)
+    monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
     args = grid()
-    st = {}
-    res = evaluate.spectral_points(*args, names=FLAGS + ("spectral_abscissa",), stats=st)
+    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
+    st = res.stats
     shape = np.broadcast_shapes(*(a.shape for a in args))
     flat = [np.broadcast_to(a, shape).ravel() for a in args]
-    ref = evaluate.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
+    ref = points.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
     for k in FLAGS:
         assert res[k].shape == shape
         assert np.array_equal(res[k].ravel(), ref[k]), k
@@ -52,7 +51,7 @@ def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
 def test_settled_points_match_exact():
     """Every verdict after settlement equals the exact tier (independent of the fast tiers)."""
     args = grid(8)
-    res = evaluate.spectral_points(*args, names=FLAGS)
+    res = points.spectral_points(*args, names=FLAGS)
     shape = res["stable_SS"].shape
     pts = dict(
         zip(
@@ -69,18 +68,18 @@ def test_slabs_and_padding(monkeypatch):
     """Splitting a large grid into slabs (small BLOCK) and padding axes gives the same verdicts
     as the flat columns of a small grid."""
     args = grid(10)
-    ref = evaluate.spectral_points(*args, names=FLAGS, resolve=False)
-    monkeypatch.setattr(evaluate, "BLOCK", 50)
-    monkeypatch.setattr(evaluate, "FLAT_LIMIT", 0)
-    got = evaluate.spectral_points(*args, names=FLAGS, resolve=False)
+    ref = points.spectral_points(*args, names=FLAGS, resolve=False)
+    monkeypatch.setattr(points, "BLOCK", 50)
+    monkeypatch.setattr(points, "FLAT_LIMIT", 0)
+    got = points.spectral_points(*args, names=FLAGS, resolve=False)
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
 
 
 def test_only_what_is_asked():
     args = grid(6)
-    st = {}
-    res = evaluate.spectral_points(*args, names=("stable_SS",), stats=st)
+    res = points.spectral_points(*args, names=("stable_SS",))
+    st = res.stats
     assert set(res) == {"stable_SS"}
     assert st["tier2_points"] >= 0 and st["roots_points"] == 0
 
@@ -93,8 +92,8 @@ def test_exact_failure_keeps_point_undecided(monkeypatch, bounded_det_b):
         raise ArithmeticError("no convergence")
 
     monkeypatch.setattr(exact, "resolve", broken)
-    st = {}
-    res = evaluate.spectral_points(*grid(8), names=FLAGS, stats=st)
+    res = points.spectral_points(*grid(8), names=FLAGS)
+    st = res.stats
     und = np.zeros(res["stable_SS"].shape, bool)
     for k in FLAGS:
         und |= res[k] == 3
@@ -108,17 +107,17 @@ def test_exact_failure_keeps_point_undecided(monkeypatch, bounded_det_b):
 )
 def test_bad_options(kw, name):
     with pytest.raises(ValueError, match=f"^{name}:"):
-        evaluate.spectral_points(*grid(4), **kw)
+        points.spectral_points(*grid(4), **kw)
 
 
 def test_eig_baseline_shapes():
-    res = evaluate.spectral_points(*grid(4), names=FLAGS, method="eig")
+    res = points.spectral_points(*grid(4), names=FLAGS, method="eig")
     assert all(v.shape == (4, 4, 2, 3, 2) for v in res.values())
 
 
 def test_scalar_point():
     """One point given as Python scalars (the notebook's click path)."""
-    res = evaluate.spectral_points(-1.0, 0.0, 0.0, -1.0, 1.0, 0.1, 0.1, names=FLAGS)
+    res = points.spectral_points(-1.0, 0.0, 0.0, -1.0, 1.0, 0.1, 0.1, names=FLAGS)
     assert all(v.shape == () for v in res.values())
     assert res["consistent_II"] == 1 and res["stable_II"] == 0  # double root: closed form
     # a point the fast tiers leave (b2 ~ -b1 at 45 degrees: stable_II undecided by the
@@ -126,8 +125,8 @@ def test_scalar_point():
     c1, s1 = direction(np.array(1.25 * np.pi))
     c2, s2 = direction(np.array(0.25 * np.pi))
     pt = dict(c1=float(c1), s1=float(s1), c2=float(c2), s2=float(s2), kappa=0.5, q1=0.1, q2=0.1)
-    st = {}
-    res = evaluate.spectral_points(*pt.values(), names=FLAGS, stats=st)
+    res = points.spectral_points(*pt.values(), names=FLAGS)
+    st = res.stats
     assert st["undecided_before"] == 1 and st["undecided_after"] == 0
     ref = exact.resolve({k: np.array([v]) for k, v in pt.items()}, names=FLAGS)
     assert all(res[k] == ref[k][0] for k in FLAGS)
@@ -167,10 +166,9 @@ def test_settle_codes_restores_certified_codes():
     masks = {k: rng.random(v.shape) < 0.3 for k, v in codes.items()}
     for k, m in masks.items():
         codes[k][m] = UNDECIDED_CODE if k.endswith("_code") else UNDECIDED_FLAG
-    st = {}
-    n = evaluate.settle_codes(codes, masks, *args, stats=st)
+    st = points.settle_codes(codes, masks, *args)
     anyu = np.logical_or.reduce(list(masks.values()))
-    assert n == st["resolved_points"] == int(anyu.sum()) > 0
+    assert st["resolved_points"] == int(anyu.sum()) > 0 and st["exact_failures"] == []
     for k in ref:
         assert np.array_equal(codes[k], ref[k]), k
 
@@ -182,26 +180,25 @@ def test_settle_codes_records_failures_and_keeps_them_undecided():
     s = np.array([0.0, 0.5])
     codes = {"class_code": np.array([UNDECIDED_CODE, UNDECIDED_CODE])}
     masks = {"class_code": np.array([True, True])}
-    st = {}
-    n = evaluate.settle_codes(codes, masks, c, s, np.array(0.6), np.array(0.8), stats=st)
-    assert n == 1 and len(st["exact_failures"]) == 1
+    st = points.settle_codes(codes, masks, c, s, np.array(0.6), np.array(0.8))
+    assert st["resolved_points"] == 1 and len(st["exact_failures"]) == 1
     assert codes["class_code"][1] == UNDECIDED_CODE and codes["class_code"][0] > 0
-    assert not hasattr(evaluate, "last_counts")  # diagnostics go to stats=, never a global
+    assert not hasattr(points, "last_counts")  # diagnostics are returned, never a global
 
 
 def test_small_grids_share_one_compilation():
     """Grids of up to FLAT_LIMIT points run as flat columns of 4096 points: one compiled shape
     for every grid size and output choice (each compilation costs ~1 s, each grid here < 1 ms)."""
-    kern = evaluate._kernel("codes", ss=True, ii=True, damped=None)
+    kern = points._kernel("codes", ss=True, ii=True, damped=None)
     before = kern._cache_size()
     for n, names in ((3, FLAGS), (5, FLAGS[:1]), (7, FLAGS[1:]), (11, FLAGS)):
-        evaluate.spectral_points(*grid(n), names=names, resolve=False)
+        points.spectral_points(*grid(n), names=names, resolve=False)
     assert kern._cache_size() - before <= 1
 
 
 def test_flat_columns_pad_with_the_last_point():
     a, b = np.arange(3.0)[:, None], np.array([10.0, 20.0])
-    cols = evaluate._flat_columns([a, b, np.array(5.0)], (3, 2))
+    cols = points._flat_columns([a, b, np.array(5.0)], (3, 2))
     assert [c.shape for c in cols] == [(4096,)] * 3 and (cols[2] == 5).all()
     assert cols[0][:7].tolist() == [0, 0, 1, 1, 2, 2, 2]
     assert cols[1][:7].tolist() == [10, 20, 10, 20, 10, 20, 20]
@@ -231,8 +228,8 @@ def test_near_singular_B_decided_by_the_fast_tiers():
     the exact tier does (every damped decision reads ``sign det B``; ``a1``, ``a0`` are
     multiples of ``D``)."""
     pts, ref = _near_singular_points()
-    st = {}
-    got = evaluate.spectral_points(*pts.values(), names=FLAGS, resolve=False, stats=st)
+    got = points.spectral_points(*pts.values(), names=FLAGS, resolve=False)
+    st = got.stats
     assert st["roots_points"] == 0 and st["undecided_after"] == 0
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
@@ -245,9 +242,9 @@ def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
     pts, ref = _near_singular_points()
     unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
     monkeypatch.setattr(rootfree, "det2_sign", unknown)
-    monkeypatch.setattr(evaluate, "_kernel", functools.cache(evaluate._kernel.__wrapped__))
-    st = {}
-    got = evaluate.spectral_points(*pts.values(), names=FLAGS, stats=st)
+    monkeypatch.setattr(points, "_kernel", functools.cache(points._kernel.__wrapped__))
+    got = points.spectral_points(*pts.values(), names=FLAGS)
+    st = got.stats
     assert st["tier2_points"] == 0
     assert st["roots_points"] == len(pts["c1"])
     for k in FLAGS:
@@ -267,7 +264,7 @@ def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
     ],
 )
 def test_batches_pad_little(n, chunk, lengths):
-    got = list(evaluate._batches(n, chunk))
+    got = list(points._batches(n, chunk))
     assert [b[2] for b in got] == lengths
     assert got[0][0] == 0 and got[-1][1] == n
     assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
@@ -278,17 +275,15 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
     """Float32 inputs near ``b2 = -b1`` (directions of the 513-point headline grid): the later
     tiers in float64 (the inputs convert exactly) decide every point without the exact tier; in
     float32 some stay undecided."""
-    monkeypatch.setattr(evaluate, "LATER_DTYPE", later)
+    monkeypatch.setattr(points, "LATER_DTYPE", later)
     beta = np.linspace(0.0, 2 * np.pi, 513)
     i = np.arange(0, 256)
     c1, s1 = direction(beta[i], np.float32)
     c2, s2 = direction(beta[i + 256], np.float32)
     pts = dict(c1=c1, s1=s1, c2=c2, s2=s2, kappa=np.full(i.size, 0.5, np.float32))
     pts.update(q1=np.float32(0.1), q2=np.float32(0.1))
-    st = {}
-    got = evaluate.spectral_points(
-        *pts.values(), names=FLAGS, dtype="float32", resolve=False, stats=st
-    )
+    got = points.spectral_points(*pts.values(), names=FLAGS, dtype="float32", resolve=False)
+    st = got.stats
     if later is np.float32:
         assert st["undecided_before"] > 0  # what float64 later tiers settle
         return

@@ -21,18 +21,12 @@ pytest.importorskip("dask")
 pytest.importorskip("distributed")
 zarr = pytest.importorskip("zarr")
 
-from atlas.data.distributed import (  # noqa: E402
-    TILES,
-    generate_distributed,
-    open_store,
-    read_record,
-    tile_plan,
-    verify_store,
-    worker_env,
-)
+from atlas.data.cluster import worker_env  # noqa: E402
+from atlas.data.distributed import generate_distributed, verify_store  # noqa: E402
 from atlas.data.engine import generate  # noqa: E402
 from atlas.data.io import write_netcdf  # noqa: E402
 from atlas.data.scene import Scene  # noqa: E402
+from atlas.data.tile_store import TILES, open_store, read_record  # noqa: E402
 
 TP = 128  # kernel tile (points): one spectral compilation for the reference and the slabs
 SCENE = dict(beta1="0:2pi:8", beta2="0:2pi:8", kappa="0.5,2", q1="0,1", q2="0,0.5")
@@ -79,32 +73,6 @@ def inproc(tmp_path_factory, reference):
         scene(), d / "a.zarr", slab=2, tile_points=TP, to_netcdf=d / "a.nc"
     )
     return d, summary
-
-
-def test_tile_plan():
-    assert tile_plan(scene(), 3) == [(0, 3), (3, 6), (6, 8)]
-    assert tile_plan(scene(), 100) == [(0, 8)]
-    assert tile_plan(scene(beta1=0.3)) == [(0, 1)]
-    assert tile_plan(scene()) == [(0, 8)]  # default: ~2**18 points per tile
-    with pytest.raises(ValueError, match="^slab:"):
-        tile_plan(scene(), 0)
-    # 2-D (beta1, beta2) blocks, given explicitly
-    assert tile_plan(scene(), 4, 3) == [
-        (0, 4, 0, 3),
-        (0, 4, 3, 6),
-        (0, 4, 6, 8),
-        (4, 8, 0, 3),
-        (4, 8, 3, 6),
-        (4, 8, 6, 8),
-    ]
-    with pytest.raises(ValueError, match="^block2:"):
-        tile_plan(scene(), 2, 0)
-    with pytest.raises(ValueError, match="^block2:"):
-        tile_plan(scene(beta2=0.2), 2, 2)
-    # ... and by default when one beta1 value holds 1024 * 512 = 2**19 points > 2**18 per tile
-    big = scene(beta1="0:2pi:4", beta2="0:2pi:1024", kappa="log:0.1:10:32", q1="0:1:4", q2="0:1:4")
-    assert tile_plan(big) == [(a, a + 1, c, c + 512) for a in range(4) for c in (0, 512)]
-    assert tile_plan(big, slab=2) == [(0, 2), (2, 4)]  # an explicit slab alone: beta1 slabs
 
 
 def test_2d_blocks_equal_generate_and_resume(reference, tmp_path):
@@ -305,43 +273,6 @@ def test_fixed_beta1_is_one_tile(tmp_path):
     summary = generate_distributed(sc, tmp_path / "f.zarr")
     assert summary["tiles"] == 1
     same_bytes(open_store(tmp_path / "f.zarr").load(), generate(sc))
-
-
-def _thread_affinities():
-    import os
-
-    return sorted(
-        {tuple(sorted(os.sched_getaffinity(int(t)))) for t in os.listdir("/proc/self/task")}
-    )
-
-
-@pytest.mark.e2e
-@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
-def test_local_cluster_pins_each_worker_to_one_core():
-    """Every thread of a LocalCluster worker (XLA's task pool included) runs on one core, and the
-    worker has the single-thread XLA environment."""
-    import jax.numpy as jnp  # noqa: F401  (XLA's pools exist in this process too)
-
-    from atlas.data.distributed import WORKER_ENV, local_cluster
-
-    cluster, client = local_cluster(1)
-    try:
-
-        def probe():
-            import os
-
-            import jax.numpy as jnp
-
-            jnp.ones(1 << 16).sum().block_until_ready()  # start XLA's threads
-            return _thread_affinities(), os.environ.get("XLA_FLAGS")
-
-        (res,) = client.run(probe).values()
-    finally:
-        client.close()
-        cluster.close()
-    affinities, flags = res
-    assert len(affinities) == 1 and len(affinities[0]) == 1, affinities
-    assert flags == WORKER_ENV["XLA_FLAGS"]
 
 
 def test_a_flipped_byte_anywhere_is_detected_and_repaired(inproc, reference, tmp_path):

@@ -4,22 +4,27 @@ All spectral runs use ``TILE = 1024`` on scenes of <= 1024 spectral points, so t
 compiles once per test session.
 """
 
-import importlib.util
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import exact, spectral
 from atlas.core import mechanics as mech
-from atlas.core import spectral
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
-from atlas.data.engine import block_shape, generate, tile_blocks
+from atlas.data.engine import (
+    MemorySink,
+    RunOptions,
+    Sink,
+    block_shape,
+    generate,
+    run,
+    tile_blocks,
+)
 from atlas.data.outputs import atlas_outputs
 from atlas.data.scene import Scene, builtin
 
 TILE = 1024
-HAVE_EXACT = importlib.util.find_spec("atlas.core.exact") is not None
 
 
 def tiny_scene(**kw):
@@ -126,9 +131,7 @@ def test_fig1_equals_pointwise_kernels(fig1_small):
         v = {
             n: int(x) for n, x in kern(c1, s1, c2, s2, k, q, q).items() if n != "spectral_abscissa"
         }
-        if HAVE_EXACT and 3 in v.values():  # the atlas resolved it exactly
-            from atlas.core import exact
-
+        if 3 in v.values():  # the atlas resolved it exactly
             pt = dict(zip(("c1", "s1", "c2", "s2", "kappa", "q1", "q2"), (c1, s1, c2, s2, k, q, q)))
             ex = exact.resolve({n: np.asarray(x) for n, x in pt.items()})
             v.update({n: int(ex[n][0]) for n in v if v[n] == 3})
@@ -180,10 +183,8 @@ def test_unresolved_counts_reported(tiny):
     assert tiny.stable_SS.attrs["undecided"] == n3
 
 
-@pytest.mark.skipif(not HAVE_EXACT, reason="atlas.core.exact is not importable yet")
 def test_resolve_leaves_no_undecided(fig1_small):
-    st = {}
-    ds = generate(tiny_scene(), tile_points=TILE, resolve=True, stats=st)
+    ds, st = run(tiny_scene(), MemorySink(), RunOptions(tile_points=TILE, resolve=True))
     assert ds.attrs["undecided_fast"] > 0  # the fast path did leave some
     assert ds.attrs["undecided_after_resolve"] == 0
     for n in ("stable_SS", "consistent_II", "stable_II"):
@@ -191,7 +192,7 @@ def test_resolve_leaves_no_undecided(fig1_small):
     assert not (ds.class_code.values == UNDECIDED_CODE).any()
     assert not (ds.subclass_code.values == UNDECIDED_CODE).any()
     assert fig1_small.attrs["undecided_after_resolve"] == 0
-    # the run's summary is returned to the caller, not kept in a module global
+    # the run's diagnostics are returned with its result
     assert st["undecided"] == 0 and st["undecided_fast"] == ds.attrs["undecided_fast"]
     assert st["points"] == tiny_scene().points() and st["resolved_points"] > 0
     assert st["exact_failures"] == []
@@ -221,10 +222,7 @@ def test_bad_options(kw, name):
         generate(tiny_scene(outputs="class_code"), **kw)
 
 
-@pytest.mark.skipif(not HAVE_EXACT, reason="atlas.core.exact is not importable yet")
 def test_exact_failure_keeps_point_undecided(monkeypatch):
-    from atlas.core import exact
-
     def broken(points, names=()):
         raise ArithmeticError("no convergence")
 
@@ -247,3 +245,15 @@ def test_options_refused_naming_the_parameter(kw, name):
     """A string is not a boolean (``"no"`` was read as True), float16 has no error model."""
     with pytest.raises(ValueError, match=f"^{name}: "):
         generate(Scene(beta1="0:2pi:4", beta2="0:2pi:4"), **kw)
+
+
+def test_run_options_are_one_checked_object():
+    """Every builder takes one RunOptions; a bad or unknown option is a one-line error naming it."""
+    assert RunOptions.of(None, dtype="float32") == RunOptions(dtype="float32")
+    with pytest.raises(ValueError, match="^tile_points:"):
+        RunOptions(tile_points=True)
+    with pytest.raises(ValueError, match="^method:"):
+        RunOptions(method="guess")
+    with pytest.raises(ValueError, match="^tile_pints: not a run option"):
+        generate(tiny_scene(outputs="class_code"), tile_pints=TILE)
+    assert isinstance(MemorySink(), Sink)

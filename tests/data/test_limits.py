@@ -6,9 +6,9 @@ import time
 import pytest
 
 from atlas.data import limits
-from atlas.data.distributed import TilePlan, tile_plan
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
+from atlas.data.tiles import TilePlan, tile_plan
 
 HUGE = dict(beta1="0:2pi:10000000", beta2="0:2pi:10000000")
 

@@ -12,8 +12,7 @@ from atlas.paper import realisability as R
 
 @pytest.fixture(scope="module")
 def found():
-    stats = {}
-    return R.search(stats=stats), stats
+    return R.search()
 
 
 def _sympy_subclass(p) -> int:
@@ -96,7 +95,7 @@ def test_float_mechanisms_agree(found):
 def test_frictionless_bodies_only_reach_classes_12_and_42():
     """Without friction B is symmetric positive definite: exactly the 12 subclasses of classes 12
     and 42 exist (module docstring); the search finds all of them and none other."""
-    res = R.search(1 << 17, mu_max=0)
+    res = R.search(1 << 17, mu_max=0).found
     got = {c for c, r in res.items() if r.verified}
     assert got == {c for c in R.ALL_SUBCLASSES if c // 10 in R.FRICTIONLESS_CLASSES}
     assert all(r.impossible for c, r in res.items() if c not in got)
@@ -104,7 +103,7 @@ def test_frictionless_bodies_only_reach_classes_12_and_42():
 
 def test_deterministic_and_markdown(found):
     result, stats = found
-    one, two = R.search(1 << 14, seed=3), R.search(1 << 14, seed=3)
+    one, two = R.search(1 << 14, seed=3).found, R.search(1 << 14, seed=3).found
     assert {c: r.params for c, r in one.items()} == {c: r.params for c, r in two.items()}
     assert any(not r.found for r in one.values())  # a small search misses some subclasses...
     assert all(r.note.startswith("none found") for r in one.values() if not r.found)

@@ -77,11 +77,10 @@ class Context:
     # ---- evaluated points ---------------------------------------------------------------------
 
     @cached_property
-    def realisations(self) -> tuple[dict, dict]:
+    def realisations(self) -> realisability.Search:
         """:func:`atlas.paper.realisability.search` (2^19 random bodies, mu <= 2) and its stats."""
         self.say("searching single rigid bodies for the 144 subclasses")
-        stats: dict = {}
-        return realisability.search(1 << 19, stats=stats), stats
+        return realisability.search(1 << 19)
 
     @cached_property
     def class_points(self) -> dict:

@@ -1,0 +1,51 @@
+"""``atlas generate``'s scene: built-in or explicit ranges, the model from physical parameters.
+
+Reference values: SPEC §1 in closed form (``kappa = k1 |b1| / (k2 |b2|)``,
+``q_j = q_j |b_j| / sqrt(k2 |b2|)``) and the paper's Fig. 2 parameters
+(``k = (100, 200)``, ``q = (20, 20)``: ``kappa = 0.5``, ``q = sqrt(2)``).
+"""
+
+import math
+
+import pytest
+
+from atlas.data.generate_cli import parse_physical, scene_from_options
+from atlas.data.scene import BUILTIN_SCENES
+
+
+def test_physical_model_on_a_builtin_scene_keeps_its_ranges_and_name():
+    sc = scene_from_options("fig1", physical="k1=100,k2=200,q1=20,q2=20")
+    assert sc.name == "fig1" and sc.beta1 == BUILTIN_SCENES["fig1"]["beta1"]
+    assert float(sc.axes["kappa"].values) == 0.5
+    assert float(sc.axes["q"].values) == pytest.approx(math.sqrt(2), rel=1e-15)
+    # the same scene (and atlas attributes) as the model typed as numbers
+    typed = scene_from_options("fig1", kappa="0.5", q=repr(float(sc.axes["q"].values)))
+    assert sc.describe() == typed.describe()
+
+
+def test_unequal_damping_gives_q1_q2_on_explicit_ranges():
+    sc = scene_from_options(None, "k1=50,k2=200,q1=10,b2=2", None, "0:2pi:4", "0:2pi:4")
+    assert sc.model_names == ("kappa", "q1", "q2") and sc.name == "custom"
+    assert float(sc.axes["kappa"].values) == 50 / 400
+    assert float(sc.axes["q1"].values) == pytest.approx(10 / 20, rel=1e-15)
+    assert float(sc.axes["q2"].values) == 0.0
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        (dict(physical="k1=1,k2=1", kappa="2"), "physical"),
+        (dict(q="0.1", q1="0.1", q2="0.2"), "q"),
+        (dict(physical="k1=-1,k2=1"), "k1"),
+    ],
+)
+def test_conflicts_and_bad_values_name_the_option(kw, name):
+    with pytest.raises(ValueError, match=f"^{name}:"):
+        scene_from_options(**kw)
+
+
+def test_parse_physical():
+    assert parse_physical("k1=100, k2=2e2,") == {"k1": 100.0, "k2": 200.0}
+    for text, name in (("k1=1", "physical"), ("k1=1,k2=1,k1=2", "physical"), ("k1=x,k2=1", "k1")):
+        with pytest.raises(ValueError, match=f"^{name}:"):
+            parse_physical(text)
