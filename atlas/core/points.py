@@ -10,7 +10,7 @@ each on the points the previous one left ``UNDECIDED``:
 2. :func:`atlas.core.rootfree.tier2` on the points the first pass flagged (sharper error bounds,
    dominance by shifted Routh counts): typically < 0.1 % of the points; damped points whose
    ``det B`` has no certified sign (an input not a normal number) skip it (it cannot decide them);
-3. the certified root enclosures of :func:`atlas.core.spectral.ii_verdicts_two_stage` on what is left;
+3. the certified root enclosures of :func:`atlas.core.enclosures.ii_verdicts_two_stage` on what is left;
 4. the exact tier :func:`atlas.core.exact.resolve` (rational arithmetic) on the rest.
 
 Compacted points are gathered by index into each input's own (broadcast) shape, never through a
@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from atlas.core import backend, exact, rootfree, spectral, warm
+from atlas.core import backend, baseline, enclosures, exact, rootfree, spectral, warm
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -69,7 +69,7 @@ _UND = UNDECIDED_FLAG
 def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     """Jitted kernels by kind (one compilation per kind, names, static flags and dtype)."""
     if kind == "eig":
-        fn = spectral.eig_verdicts
+        fn = baseline.eig_verdicts
     elif kind == "codes":
         return warm.Kernel(functools.partial(rootfree.codes, **static))
     elif kind == "tier2":
@@ -80,7 +80,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
         keys = ("consistent_II", "stable_II", "spectral_abscissa")
 
         def two_stage(*a):
-            res = dict(zip(keys, spectral.ii_verdicts_two_stage(*a)))
+            res = dict(zip(keys, enclosures.ii_verdicts_two_stage(*a)))
             return {k: res[k] for k in names}
 
         return two_stage
@@ -358,7 +358,7 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
             absc[...] = np.broadcast_to(np.asarray(kern(*inputs)["spectral_abscissa"]), shape)
     idx = np.flatnonzero(~und)
     if idx.size:
-        res = _run_chunked(spectral.abscissa, _gather(inputs, shape, idx), dtype, chunk)
+        res = _run_chunked(enclosures.abscissa, _gather(inputs, shape, idx), dtype, chunk)
         absc.reshape(-1)[idx] = res[0]
     return absc
 
