@@ -186,7 +186,7 @@ def arc_W(c1, s2, k1, k2, q1, q2, *, sub):
     """``W = A^2 h2(-B/A) = B^2 - s2 q2 A B + s2 k2 A^2``: where ``A, B`` have opposite signs,
     ``sign h1(r2) = -sign(A) sign(W)`` at the positive root ``r2`` of ``h2``."""
     A = arc_A(c1, s2, q1, q2, sub=sub)
-    B = sub(c1 * k1, s2 * k2)
+    B = x_undamped(k1, c1, k2, s2, sub=sub)
     return sub(B * B + s2 * k2 * A * A, s2 * q2 * A * B)
 
 

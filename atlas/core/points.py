@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from atlas.core import backend, baseline, enclosures, exact, rootfree, spectral, warm
+from atlas.core.invariants import KEYS, PAD, Invariants
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -58,10 +59,6 @@ LATER_DTYPE = np.float64
 #: for 256 (float64, best of 300 calls), so a handful of points must not run padded to 256; each
 #: length is one trace and compilation (~3.5 s for the five programs) per process, so few lengths
 CHUNK_SIZES = (1 << 4, 1 << 8, 1 << 12)
-_KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
-#: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
-#: undamped, a regular point every tier decides at once
-PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
 _UND = UNDECIDED_FLAG
 
 
@@ -130,17 +127,17 @@ def _run_chunked(kernel, cols, dtype, chunk):
     return out or {}
 
 
-def _gather(inputs, shape, idx):
+def _gather(inputs: Invariants, shape, idx) -> Invariants:
     """1-D columns of the inputs at flat indices ``idx`` of the broadcast ``shape``."""
     if not shape:  # one point given as scalars
-        return [np.broadcast_to(a, idx.shape) for a in inputs]
+        return Invariants(*(np.broadcast_to(a, idx.shape) for a in inputs))
     sub = np.unravel_index(idx, shape)
     cols = []
     for a in inputs:
         a = a.reshape((1,) * (len(shape) - a.ndim) + a.shape)
         ix = tuple(s if a.shape[d] > 1 else 0 for d, s in enumerate(sub))
         cols.append(np.broadcast_to(a[ix], idx.shape))
-    return cols
+    return Invariants(*cols)
 
 
 def _blocks(shape, limit):
@@ -263,7 +260,7 @@ def spectral_points(
     if method not in ("certified", "eig"):
         raise ValueError(f"method: must be 'certified' or 'eig', not {method!r}")
     dtype = np.dtype(dtype)
-    inputs = [np.asarray(a, dtype) for a in (c1, s1, c2, s2, kappa, q1, q2)]
+    inputs = Invariants(*(np.asarray(a, dtype) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     shape = np.broadcast_shapes(*(a.shape for a in inputs))
     n = math.prod(shape)
     counts = {"points": n, "tier2_points": 0, "roots_points": 0}
@@ -275,7 +272,7 @@ def spectral_points(
 
     backend.require_trusted()  # a backend that failed atlas selftest certifies nothing
     flags = [k for k in names if k != "spectral_abscissa"]
-    undamped_q = (inputs[5] == 0) & (inputs[6] == 0)
+    undamped_q = (inputs.q1 == 0) & (inputs.q2 == 0)
     out, open_idx = _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
@@ -378,7 +375,7 @@ def _settle_exact(inputs, shape, out, flags, idx, max_resolve, counts):
         if not sel.size:
             continue
         cols = _gather(inputs, shape, sel)
-        pts = {key: c.astype(np.float64) for key, c in zip(_KEYS, cols)}
+        pts = {key: c.astype(np.float64) for key, c in zip(KEYS, cols)}
         try:
             ref = exact.resolve(pts, names=sel_names)
         except Exception:  # the exact tier must not raise; if it does, keep those points undecided

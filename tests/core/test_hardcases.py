@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from atlas.core import baseline, exact, hardcases, points, spectral
+from atlas.core.invariants import KEYS
 
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 _EIG_MISSES = {}
 

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from atlas.core import enclosures, exact, hardcases, points, rootfree, spectral
+from atlas.core.invariants import KEYS
 from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 from atlas.core.verdicts import Verdict
 
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 _codes = jax.jit(rootfree.codes)
 _tier2 = rootfree.tier2  # two compiled programs inside (not to be jitted as one)

@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from atlas.core import enclosures, hardcases, points, rootfree, signs, warm
-
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
+from atlas.core.invariants import KEYS
 
 
 def _suite():
