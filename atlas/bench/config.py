@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -25,8 +26,6 @@ __all__ = [
 
 #: the flag verdicts measured (``spectral_abscissa`` is not)
 FLAGS = ("stable_SS", "consistent_II", "stable_II")
-#: the inputs of a point, in the order of :func:`atlas.core.points.spectral_points`
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 #: the flag code of an undecided point (SPEC §2)
 UNDECIDED = UNDECIDED_FLAG
 

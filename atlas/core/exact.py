@@ -49,12 +49,15 @@ multiple ``l*``, and non-physical inputs.
 
 from __future__ import annotations
 
+import operator
 from fractions import Fraction
 from typing import NamedTuple
 
 import flint
 import numpy as np
 
+from atlas.core import expressions as ex
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import Verdict
 
 __all__ = [
@@ -66,10 +69,12 @@ __all__ = [
     "resolve_codes",
 ]
 
-_KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 _SPECTRAL = ("stable_SS", "consistent_II", "stable_II")
 _S, _U, _N = int(Verdict.STABLE), int(Verdict.UNSTABLE), int(Verdict.NEUTRAL)
 # consistent_II codes are int(bool): Consistency.INCONSISTENT = 0, Consistency.CONSISTENT = 1
+
+
+_SUB = operator.sub  # the exact subtraction of the expressions
 
 
 def _sign(x) -> int:
@@ -155,21 +160,17 @@ def _scaled(c1, s1, c2, s2, kappa, q1, q2) -> _Scaled:
         raise ValueError(f"exact: inputs must be finite, got {args}") from None
     N = max(d for _, d in ratios)
     C1, S1, C2, S2, K, Q1, Q2 = [n * (N // d) for n, d in ratios]
-    N2 = N * N
-    N3 = N2 * N
-    H1 = (C1 * K * N2, C1 * Q1, 1)
-    H2 = (S2 * N3, S2 * Q2, 1)
-    # P = H1 H2 - c2 s1 N^8 d1 d2 with N^6 d1 d2 = (K N^2 + Q1 x)(N^3 + Q2 x)
-    g = C2 * S1
-    KN2 = K * N2
-    P = (
-        H1[0] * H2[0] - g * KN2 * N3,
-        H1[0] * H2[1] + H1[1] * H2[0] - g * (KN2 * Q2 + Q1 * N3),
-        H1[0] + H2[0] + H1[1] * H2[1] - g * Q1 * Q2,
-        H1[1] + H2[1],
-        1,
-    )
-    return _Scaled(C1, S1, C2, S2, K, Q1, Q2, N, P, H1, H2)
+    k1, k2 = _stiffness(K, N)
+    (h1q, h1k), (h2q, h2k) = ex.h_coefficients(C1, S2, k1, k2, Q1, Q2, sub=_SUB)
+    D = ex.det(C1, S1, C2, S2, sub=_SUB)
+    A3, A2, A1, A0 = ex.coefficients(C1, S1, C2, S2, k1, k2, Q1, Q2, D, sub=_SUB)
+    return _Scaled(C1, S1, C2, S2, K, Q1, Q2, N, (A0, A1, A2, A3, 1), (h1k, h1q, 1), (h2k, h2q, 1))
+
+
+def _stiffness(K, N) -> tuple[int, int]:
+    """``k1, k2`` in the integer scaling of :mod:`atlas.core.expressions` (``c -> N c``,
+    ``q -> N q``, ``k -> N^3 k``): ``K N^2`` and ``N^3``."""
+    return K * N * N, N * N * N
 
 
 def characteristic_poly(c1, s1, c2, s2, kappa, q1, q2) -> flint.fmpq_poly:
@@ -190,8 +191,8 @@ def _ss_closed(P) -> int | None:
         return _N if A3 >= 0 and A2 >= 0 else _U  # p = l^2 (l^2 + a3 l + a2)
     if A3 == 0 and A1 == 0:  # l^2 = mu, mu^2 + a2 mu + a0 = 0: never stable
         return _N if A2 >= 0 and A0 > 0 and A2 * A2 >= 4 * A0 else _U
-    H2 = A3 * A2 - A1
-    H3 = A1 * H2 - A3 * A3 * A0
+    H2 = ex.hurwitz_H2(A3, A2, A1, sub=_SUB)
+    H3 = ex.hurwitz_H3(A3, A2, A1, A0, sub=_SUB)
     if A3 > 0 and H2 > 0 and H3 > 0 and A0 > 0:
         return _S
     if H3:
@@ -207,26 +208,24 @@ def _h1_at_r2(s: _Scaled) -> int:
     for opposite signs of ``A, B`` compare ``r2`` with ``t = -B/A > 0`` by the sign of
     ``h2(t) = W / A^2``, ``W = B^2 - s2 q2 A B + s2 A^2``.
     """
-    N = s.N
-    A = s.C1 * s.Q1 - s.S2 * s.Q2  # N^2 A
-    B = s.C1 * s.K - s.S2 * N  # N^2 B
+    k1, k2 = _stiffness(s.K, s.N)
+    A = ex.arc_A(s.C1, s.S2, s.Q1, s.Q2, sub=_SUB)  # N^2 A
+    B = ex.x_undamped(k1, s.C1, k2, s.S2, sub=_SUB)  # N^4 B
     sa, sb = _sign(A), _sign(B)
     if sa * sb >= 0:
         return _sign(sa + sb)
-    W = B * B * N * N - s.S2 * s.Q2 * A * B + s.S2 * N * A * A  # N^6 W
-    return -sa * _sign(W)
+    return -sa * _sign(ex.arc_W(s.C1, s.S2, k1, k2, s.Q1, s.Q2, sub=_SUB))  # N^8 W
 
 
 def _routh_rhp(P) -> int | None:
     """Roots of the monic quartic ``P`` with ``Re > 0`` (Routh), ``None`` if a Hurwitz determinant
     vanishes."""
     A0, A1, A2, A3, _ = P
-    H2 = A3 * A2 - A1
-    H3 = A1 * H2 - A3 * A3 * A0
+    H2 = ex.hurwitz_H2(A3, A2, A1, sub=_SUB)
+    H3 = ex.hurwitz_H3(A3, A2, A1, A0, sub=_SUB)
     if not (A3 and H2 and H3 and A0):
         return None
-    s3, s2 = _sign(A3), _sign(H2)
-    return _variations((1, s3, s3 * s2, s2 * _sign(H3), _sign(A0)))
+    return _variations(ex.routh_signs(1, _sign(A3), _sign(H2), _sign(H3), _sign(A0)))
 
 
 def _dominance(P, simple) -> int | None:
@@ -273,9 +272,9 @@ def _ii_closed(s: _Scaled) -> tuple[int, int] | None:
         return int(cons), _S if cons and c2 < 0 else _U
     P = s.P
     A0, A1, A2, A3, _ = P
-    d = _sign(s.C1 * s.S2 - s.S1 * s.C2)
+    d = _sign(ex.det(s.C1, s.S1, s.C2, s.S2, sub=_SUB))
     if d == 0:  # p = l^2 e(l), e = l^2 + a3 l + a2; at a root of e, h1 = -s2 d2
-        dq = A3 * A3 - 4 * A2
+        dq = ex.disc_singular(s.C1, s.S2, *_stiffness(s.K, s.N), s.Q1, s.Q2, sub=_SUB)
         cons = c2 * s2 > 0 and (A2 < 0 or (A3 < 0 and dq >= 0))
         return int(cons), _S if cons and dq > 0 else _U
     if s1 == c2:  # gamma > 0: crossings in QI (f1 f2 increasing) and QIII (decreasing)
@@ -438,7 +437,7 @@ def ss_hurwitz(c1, s1, c2, s2, kappa, q1, q2):
 
 def resolve(points: dict, names=_SPECTRAL) -> dict:
     """Exact verdicts (int8 codes) for 1-D arrays of points (keys ``c1 s1 c2 s2 kappa q1 q2``)."""
-    arrs = np.broadcast_arrays(*(np.atleast_1d(np.asarray(points[k])) for k in _KEYS))
+    arrs = np.broadcast_arrays(*(np.atleast_1d(np.asarray(points[k])) for k in KEYS))
     n = arrs[0].size
     rows = [_verdicts(_scaled(*p), names) for p in zip(*(a.ravel().tolist() for a in arrs))]
     return {name: np.array([r[name] for r in rows], np.int8).reshape(n) for name in names}

@@ -8,15 +8,19 @@ arithmetic (mpmath) and then offset by relative amounts ``1e-4 .. 0`` before rou
 
 from __future__ import annotations
 
+import operator
+
 import mpmath
 import numpy as np
 
+from atlas.core import expressions as ex
 from atlas.core.mechanics import direction
 
 __all__ = ["SUITES", "suite", "OFFSETS"]
 
 OFFSETS = (1e-4, 1e-8, 1e-12, 1e-15, 0.0, -1e-15, -1e-12, -1e-8, -1e-4)
 _mp = mpmath.mp
+_SUB = operator.sub  # the expressions of atlas.core.expressions on mpmath numbers
 
 
 def _pack(beta1, beta2, kappa, q1, q2, dtype):
@@ -53,15 +57,16 @@ def _q_to_zero(rng, dtype):
 
 
 def _G_parts(b1, b2, kap):
-    """G/q^2 = G2 + q^2 X for q1 = q2 = q (kappa, 1 stiffness), 50 digits."""
+    """G/q^2 = G2 + q^2 X for q1 = q2 = q (kappa, 1 stiffness), 50 digits: the parts of degree 2
+    and 4 of :func:`atlas.core.expressions.G_scaled` at ``q = 1``; also ``det B`` and ``a3/q``."""
     with mpmath.workdps(50):
         c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
-        k = mpmath.mpf(kap)
-        det = c1 * s2 - s1 * c2
-        m = k + 1
-        g2 = s1 * c2 * m**2 + (k * c1 - s2) ** 2
-        x = det * (c1 + s2) * m
-        return g2, x, det, c1 + s2
+        k, one = mpmath.mpf(kap), mpmath.mpf(1)
+        det = ex.det(c1, s1, c2, s2, sub=_SUB)
+        args = (c1, s1, c2, s2, k, one, one, one, det)
+        g2 = ex.G_scaled(*args, 1, 0, sub=_SUB)
+        x = ex.G_scaled(*args, 0, 1, sub=_SUB)
+        return g2, x, det, ex.a3(c1, s2, one, one, sub=_SUB)
 
 
 def _near_hurwitz(rng, dtype):
@@ -86,8 +91,10 @@ def _near_discriminant(rng, dtype):
         b1, b2 = rng.uniform(0, 2 * np.pi, 2)
         with mpmath.workdps(50):
             c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
-            # c1^2 k^2 + (4 s1 c2 - 2 c1 s2) k + s2^2 = 0
-            A, B, C = c1**2, 4 * s1 * c2 - 2 * c1 * s2, s2**2
+            # disc = A k^2 + B k + C (A = c1^2, B = 4 s1 c2 - 2 c1 s2, C = s2^2) from its values
+            # at k = 0, 1, -1
+            d0, dp, dm = (ex.disc_undamped(k, c1, 1, s2, s1, c2, sub=_SUB) for k in (0, 1, -1))
+            A, B, C = (dp + dm) / 2 - d0, (dp - dm) / 2, d0
             disc = B * B - 4 * A * C
             if disc <= 0:
                 continue
@@ -134,8 +141,8 @@ def _offdiag_to_zero(rng, dtype):
 def _n_real_roots(b1, b2, kap, q):
     with mpmath.workdps(40):
         c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
-        det = c1 * s2 - s1 * c2
-        co = [1, c1 * q + s2 * q, kap * c1 + s2 + det * q * q, det * (kap * q + q), det * kap]
+        det = ex.det(c1, s1, c2, s2, sub=_SUB)
+        co = [1, *ex.coefficients(c1, s1, c2, s2, kap, 1, q, q, det, sub=_SUB)]
         r = mpmath.polyroots(co, maxsteps=200, extraprec=80)
         return sum(1 for z in r if abs(mpmath.im(z)) < mpmath.mpf(10) ** -25)
 

@@ -10,7 +10,7 @@ each on the points the previous one left ``UNDECIDED``:
 2. :func:`atlas.core.rootfree.tier2` on the points the first pass flagged (sharper error bounds,
    dominance by shifted Routh counts): typically < 0.1 % of the points; damped points whose
    ``det B`` has no certified sign (an input not a normal number) skip it (it cannot decide them);
-3. the certified root enclosures of :func:`atlas.core.spectral.ii_verdicts_two_stage` on what is left;
+3. the certified root enclosures of :func:`atlas.core.enclosures.ii_verdicts_two_stage` on what is left;
 4. the exact tier :func:`atlas.core.exact.resolve` (rational arithmetic) on the rest.
 
 Compacted points are gathered by index into each input's own (broadcast) shape, never through a
@@ -27,7 +27,8 @@ import math
 
 import numpy as np
 
-from atlas.core import backend, exact, rootfree, spectral, warm
+from atlas.core import backend, baseline, enclosures, exact, rootfree, spectral, warm
+from atlas.core.invariants import KEYS, PAD, Invariants
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -73,10 +74,6 @@ LATER_DTYPE = np.float64
 #: for 256 (float64, best of 300 calls), so a handful of points must not run padded to 256; each
 #: length is one trace and compilation (~3.5 s for the five programs) per process, so few lengths
 CHUNK_SIZES = (1 << 4, 1 << 8, 1 << 12)
-_KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
-#: the padding point of fixed-length chunks, in the order of the inputs: ``B = I``, ``kappa = 1``,
-#: undamped, a regular point every tier decides at once
-PAD = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
 _UND = UNDECIDED_FLAG
 
 
@@ -84,7 +81,7 @@ _UND = UNDECIDED_FLAG
 def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     """Jitted kernels by kind (one compilation per kind, names, static flags and dtype)."""
     if kind == "eig":
-        fn = spectral.eig_verdicts
+        fn = baseline.eig_verdicts
     elif kind == "codes":
         return warm.Kernel(functools.partial(rootfree.codes, **static))
     elif kind == "tier2":
@@ -95,7 +92,7 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
         keys = ("consistent_II", "stable_II", "spectral_abscissa")
 
         def two_stage(*a):
-            res = dict(zip(keys, spectral.ii_verdicts_two_stage(*a)))
+            res = dict(zip(keys, enclosures.ii_verdicts_two_stage(*a)))
             return {k: res[k] for k in names}
 
         return two_stage
@@ -145,17 +142,17 @@ def _run_chunked(kernel, cols, dtype, chunk):
     return out or {}
 
 
-def _gather(inputs, shape, idx):
+def _gather(inputs: Invariants, shape, idx) -> Invariants:
     """1-D columns of the inputs at flat indices ``idx`` of the broadcast ``shape``."""
     if not shape:  # one point given as scalars
-        return [np.broadcast_to(a, idx.shape) for a in inputs]
+        return Invariants(*(np.broadcast_to(a, idx.shape) for a in inputs))
     sub = np.unravel_index(idx, shape)
     cols = []
     for a in inputs:
         a = a.reshape((1,) * (len(shape) - a.ndim) + a.shape)
         ix = tuple(s if a.shape[d] > 1 else 0 for d, s in enumerate(sub))
         cols.append(np.broadcast_to(a[ix], idx.shape))
-    return cols
+    return Invariants(*cols)
 
 
 def _blocks(shape, limit):
@@ -274,7 +271,7 @@ def spectral_points(
     if method not in ("certified", "eig"):
         raise ValueError(f"method: must be 'certified' or 'eig', not {method!r}")
     dtype = np.dtype(dtype)
-    inputs = [np.asarray(a, dtype) for a in (c1, s1, c2, s2, kappa, q1, q2)]
+    inputs = Invariants(*(np.asarray(a, dtype) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     shape = np.broadcast_shapes(*(a.shape for a in inputs))
     n = math.prod(shape)
     counts = {"points": n, "tier2_points": 0, "roots_points": 0}
@@ -287,7 +284,7 @@ def spectral_points(
 
     backend.require_trusted()  # a backend that failed atlas selftest certifies nothing
     flags = [k for k in names if k != "spectral_abscissa"]
-    undamped_q = (inputs[5] == 0) & (inputs[6] == 0)
+    undamped_q = (inputs.q1 == 0) & (inputs.q2 == 0)
     out, open_idx = _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts)
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
@@ -369,7 +366,7 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
             absc[...] = np.broadcast_to(np.asarray(kern(*inputs)["spectral_abscissa"]), shape)
     idx = np.flatnonzero(~und)
     if idx.size:
-        res = _run_chunked(spectral.abscissa, _gather(inputs, shape, idx), dtype, chunk)
+        res = _run_chunked(enclosures.abscissa, _gather(inputs, shape, idx), dtype, chunk)
         absc.reshape(-1)[idx] = res[0]
     return absc
 
@@ -389,7 +386,7 @@ def _settle_exact(inputs, shape, out, flags, idx, max_resolve, counts):
         if not sel.size:
             continue
         cols = _gather(inputs, shape, sel)
-        pts = {key: c.astype(np.float64) for key, c in zip(_KEYS, cols)}
+        pts = {key: c.astype(np.float64) for key, c in zip(KEYS, cols)}
         try:
             ref = exact.resolve(pts, names=sel_names)
         except Exception:  # the exact tier must not raise; if it does, keep those points undecided

@@ -33,7 +33,7 @@ equivalently ``s1 f2 < 0``: II roots are the crossings in the quadrant ``(-sgn c
 **Stability** (consistent cases except QIII): the largest real root ``l*`` is then the II root, and
 II is stable iff ``l*`` is simple and strictly dominant.  The Routh array of ``p`` counts the roots
 with ``Re > 0`` from the signs of ``a3``, ``H2 = a3 a2 - a1``, ``H3 = D G`` (``G`` of
-:mod:`atlas.core.spectral`) and ``a0``: 1 or 2 such roots -> stable (two RHP roots with a real ``l*``
+:mod:`atlas.core.expressions`) and ``a0``: 1 or 2 such roots -> stable (two RHP roots with a real ``l*``
 are both real, and simple where they came from a transversal crossing or a nonzero ``Disc``);
 3 -> ``Disc > 0``: four simple real roots, stable; ``Disc < 0``: ``l*`` and a complex pair in the
 right half plane, decided by :func:`tier2` (certified shifted Routh counts around a float estimate of
@@ -45,7 +45,7 @@ root ``r1`` of ``h1`` (``c1 < 0``) with ``s1 f2(r1) < 0``; ``s1 = 0`` symmetric;
 ``det B = 0``: ``p = l^2 (l^2 + a3 l + a2)`` and every positive root is II iff ``c2 s2 > 0``
 (``c1 s1 > 0`` if ``c2 = 0``).
 
-**Scaling** (exact powers of two, every sign kept): :func:`atlas.core.spectral.normalize` makes
+**Scaling** (exact powers of two, every sign kept): :func:`atlas.core.expressions.normalize` makes
 ``max(k) <= 1``, then ``l -> 2^e l`` brings ``k1, k2, q1, q2`` to ``<= 1``, the input bound of every
 error model here (:func:`atlas.core.signs.error_model`).
 
@@ -67,7 +67,7 @@ is harmless for the inputs (exact power-of-two scalings) and the intermediate va
 expression (an FMA only removes roundings; any copy of a coefficient is within its bound), but not
 
 * for a point at which expressions are evaluated (the shifts of :func:`tier2`, the roots of
-  :mod:`atlas.core.spectral`): these are computed in one compiled program and certified in
+  :mod:`atlas.core.enclosures`): these are computed in one compiled program and certified in
   another, where each is an input, one rounded number;
 * for a sign code whose certification is checked in one place and whose value is used in another:
   counts are self-gating (:func:`_variations` gives :data:`NOT_COUNTED` unless every code is
@@ -87,7 +87,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import spectral, warm
+from atlas.core import expressions as ex
+from atlas.core import hurwitz, undamped, warm
 from atlas.core.signs import (
     CODE,
     DET2_ROUNDINGS,
@@ -108,119 +109,52 @@ TIER2_BIT = 6
 OPEN_BIT = 7
 
 
-# --- polynomial expressions (inputs c1, s1, c2, s2, k1, k2, q1, q2, all |.| <= 1, and D = det B:
-# computed inside by the first pass (_det_inside), an accurate input in tier 2) -------------------
+# --- the expressions, on the 9 inputs c1, s1, c2, s2, k1, k2, q1, q2 (all |.| <= 1) and D = det B
+# (computed inside by the first pass, :func:`atlas.core.expressions.with_det`; an accurate input in
+# tier 2), and the shift s of tier 2 ----------------------------------------------------------------
+
+_INPUTS = ("c1", "s1", "c2", "s2", "k1", "k2", "q1", "q2", "D")
 
 
-def _coef(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    a3 = c1 * q1 + s2 * q2
-    a2 = k1 * c1 + k2 * s2 + D * q1 * q2
-    a1 = D * (k1 * q2 + k2 * q1)
-    a0 = D * k1 * k2
-    return a3, a2, a1, a0
+@functools.cache
+def _on_inputs(expr, *names):
+    """``expr`` of the inputs ``names`` as a function of the 9 inputs."""
+    idx = tuple(_INPUTS.index(n) for n in names)
+
+    def picked(*args, sub):
+        return expr(*(args[i] for i in idx), sub=sub)
+
+    return picked
 
 
-def _a3(*a, sub):
-    return _coef(*a, sub=sub)[0]
+@functools.cache
+def _on_coefficients(expr, shift: bool = False):
+    """``expr(a3, a2, a1, a0)`` of ``p`` (of ``p(l + s)`` with ``shift``, ``s`` a 10th input) as a
+    function of the 9 inputs."""
+
+    def composed(*args, sub):
+        coef = ex.coefficients(*args[:9], sub=sub)
+        if shift:
+            coef = ex.shifted(*coef, args[9], sub=sub)
+        return expr(*coef, sub=sub)
+
+    return composed
 
 
-def _a2(*a, sub):
-    return _coef(*a, sub=sub)[1]
+def _a3_of(a3, a2, a1, a0, *, sub):
+    return a3
 
 
-def _H2(*a, sub):
-    a3, a2, a1, _ = _coef(*a, sub=sub)
-    return sub(a3 * a2, a1)
+def _a2_of(a3, a2, a1, a0, *, sub):
+    return a2
 
 
-def _G(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    m = k1 * q2 + k2 * q1
-    a3 = c1 * q1 + s2 * q2
-    return s1 * c2 * m * m + q1 * q2 * (sub(k1 * c1, k2 * s2) ** 2 + D * a3 * m)
+def _a0_of(a3, a2, a1, a0, *, sub):
+    return a0
 
 
-def _P2(*a, sub):
-    a3, a2, _, _ = _coef(*a, sub=sub)
-    return sub(3 * a3 * a3, 8 * a2)
-
-
-def _C2(*a, sub):
-    a3, _, a1, a0 = _coef(*a, sub=sub)
-    return sub(a3 * a1, 16 * a0)
-
-
-def _T1(*args, sub):
-    a, b, c, d = _coef(*args, sub=sub)
-    aa, bb = a * a, b * b
-    return sub(
-        3 * aa * a * c + 6 * aa * d + 4 * bb * b + 18 * c * c, aa * bb + 14 * a * b * c + 16 * b * d
-    )
-
-
-def _T0(*args, sub):
-    a, b, c, d = _coef(*args, sub=sub)
-    aa = a * a
-    return sub(
-        9 * aa * a * d + 4 * b * b * c + 48 * c * d, aa * b * c + 32 * a * b * d + 3 * a * c * c
-    )
-
-
-def _quartic_disc(a, b, c, d, *, sub):
-    """Discriminant of ``l^4 + a l^3 + b l^2 + c l + d`` (positive and negative monomials)."""
-    aa, bb, cc, dd = a * a, b * b, c * c, d * d
-    pos = (
-        18 * aa * a * b * c * d
-        + 144 * aa * b * dd
-        + 18 * a * b * cc * c
-        + 16 * bb * bb * d
-        + 256 * dd * d
-        + aa * bb * cc
-        + 144 * b * cc * d
-    )
-    neg = (
-        27 * aa * aa * dd
-        + 4 * aa * a * cc * c
-        + 4 * aa * bb * b * d
-        + 6 * aa * cc * d
-        + 80 * a * bb * c * d
-        + 192 * a * c * dd
-        + 4 * bb * b * cc
-        + 128 * bb * dd
-        + 27 * cc * cc
-    )
-    return sub(pos, neg)
-
-
-def _disc(*args, sub):
-    return _quartic_disc(*_coef(*args, sub=sub), sub=sub)
-
-
-def _arcA(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    return sub(c1 * q1, s2 * q2)
-
-
-def _arcB(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    return sub(c1 * k1, s2 * k2)
-
-
-def _arcW(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    A = sub(c1 * q1, s2 * q2)
-    B = sub(c1 * k1, s2 * k2)
-    return sub(B * B + s2 * k2 * A * A, s2 * q2 * A * B)
-
-
-def _a2_d0(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    return k1 * c1 + k2 * s2
-
-
-def _disc_d0(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    a3 = c1 * q1 + s2 * q2
-    return sub(a3 * a3, 4 * (k1 * c1 + k2 * s2))
-
-
-def _disc_u(c1, s1, c2, s2, k1, k2, q1, q2, D, *, sub):
-    """Discriminant of ``mu^2 + a2 mu + a0`` (``Q = 0``, SS of :mod:`atlas.core.spectral`)."""
-    return sub(k1 * c1, k2 * s2) ** 2 + 4 * k1 * k2 * s1 * c2
+def _H2_of(a3, a2, a1, a0, *, sub):
+    return ex.hurwitz_H2(a3, a2, a1, sub=sub)
 
 
 _BOUNDS8 = (1.0,) * 8
@@ -228,17 +162,6 @@ _BOUNDS8 = (1.0,) * 8
 _BOUNDS9, _ROUNDED9 = _BOUNDS8 + (2.0,), (0,) * 8 + (DET2_ROUNDINGS,)
 #: magnitude bound of the shift ``s`` of tier 2 (the Cauchy bound of ``p`` is <= 5 for inputs <= 1)
 _SHIFT_BOUND = 8.0
-
-
-@functools.cache
-def _det_inside(fn):
-    """``fn`` of the 8 inputs, ``D = c1 s2 - s1 c2`` computed inside: the first pass's form (its
-    error bound covers the cancellation in ``D``, relative to ``|c1 s2| + |s1 c2|``)."""
-
-    def with_det(c1, s1, c2, s2, k1, k2, q1, q2, *rest, sub):
-        return fn(c1, s1, c2, s2, k1, k2, q1, q2, sub(c1 * s2, s1 * c2), *rest, sub=sub)
-
-    return with_det
 
 
 def _accurate_det(c1, s1, c2, s2):
@@ -253,34 +176,40 @@ def _accurate_det(c1, s1, c2, s2):
 
 #: certified signs of the first pass (cheap: <= 3 ns a point each)
 _CHEAP = dict(
-    A=_arcA, B=_arcB, W=_arcW, a3=_a3, a2=_a2, H2=_H2, G=_G, a2_d0=_a2_d0, disc_d0=_disc_d0
+    A=_on_inputs(ex.arc_A, "c1", "s2", "q1", "q2"),
+    B=_on_inputs(ex.x_undamped, "k1", "c1", "k2", "s2"),
+    W=_on_inputs(ex.arc_W, "c1", "s2", "k1", "k2", "q1", "q2"),
+    a3=_on_coefficients(_a3_of),
+    a2=_on_coefficients(_a2_of),
+    H2=_on_coefficients(_H2_of),
+    G=ex.G,
+    a2_d0=_on_inputs(ex.a2_undamped, "k1", "c1", "k2", "s2"),
+    disc_d0=_on_inputs(ex.disc_singular, "c1", "s2", "k1", "k2", "q1", "q2"),
 )
 #: signs of the Sturm count and of the discriminant (float64 also for float32 inputs); read only
 #: as certified nonzero signs (:func:`_hard_count`, tier 2's ``Disc``), so they skip the
 #: structural zeros (``zeros=False`` of :func:`atlas.core.signs.evaluate_certified`)
-_STURM = dict(P2=_P2, C2=_C2, T1=_T1, T0=_T0, disc=_disc)
+_STURM = dict(
+    P2=_on_coefficients(ex.sturm_P2),
+    C2=_on_coefficients(ex.sturm_C2),
+    T1=_on_coefficients(ex.sturm_T1),
+    T0=_on_coefficients(ex.sturm_T0),
+    disc=_on_coefficients(ex.quartic_discriminant),
+)
+#: the discriminant of ``mu^2 + a2 mu + a0`` (``Q = 0``), for stable_SS
+_DISC_U = _on_inputs(ex.disc_undamped, "k1", "c1", "k2", "s2", "s1", "c2")
 #: the signs evaluated in float64 for float32 inputs
 _WIDE = frozenset(_STURM)
-#: the signs stable_SS needs (SPEC §1 conventions; decision logic of :mod:`atlas.core.spectral`)
+#: the signs stable_SS needs (SPEC §1 conventions; decision logic of :mod:`atlas.core.hurwitz`)
 _SS_NAMES = ("a3", "G", "a2_d0")
 
 
-def _balance(kappa, q1, q2):
-    """Exact power-of-two scaling to ``k1, k2, q1, q2 <= 1`` (time ``l -> 2^e l``)."""
-    k1, k2, q1s, q2s, _ = spectral.normalize(kappa, q1, q2)
-    qm = jnp.maximum(q1s, q2s)
-    _, eq = jnp.frexp(qm)
-    _, ek = jnp.frexp(jnp.maximum(k1, k2))
-    e = jnp.maximum(jnp.where(qm > 0, eq, -100000), (ek + 1) // 2)
-    f = jnp.ldexp(jnp.ones_like(k1), -e)
-    return k1 * f * f, k2 * f * f, q1s * f, q2s * f
-
-
 def _csign(fn, args, majorants=None, zeros=True, shift=None):
-    """Certified sign code of ``fn`` on the 8 inputs (``D`` computed inside, :func:`_det_inside`)
+    """Certified sign code of ``fn`` on the 8 inputs (``D`` computed inside,
+    :func:`atlas.core.expressions.with_det`)
     or on 9 (an accurate ``D`` last, :func:`_accurate_det`), and the ``shift`` of tier 2."""
     if len(args) == 8:
-        fn, bounds, rounded = _det_inside(fn), _BOUNDS8, (0,) * 8
+        fn, bounds, rounded = ex.with_det(fn), _BOUNDS8, (0,) * 8
     else:
         bounds, rounded = _BOUNDS9, _ROUNDED9
     if shift is not None:
@@ -309,7 +238,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     (``sharp=True``) uses the inputs' absolute values and the accurate ``D`` of
     :func:`_accurate_det` as an input.
     """
-    k1, k2, q1s, q2s = _balance(kappa, q1, q2)
+    k1, k2, q1s, q2s = ex.balance(kappa, q1, q2)
     args = (c1, s1, c2, s2, k1, k2, q1s, q2s)
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in args))
     if sharp:
@@ -325,7 +254,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
         wide = [jnp.asarray(a, jnp.float64) for a in args]
     sg = {n: jnp.sign(v).astype(CODE) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
     sg["D"] = det2_sign(c1, s1, c2, s2)
-    for name, fn in {**_CHEAP, **_STURM, "disc_u": _disc_u}.items():
+    for name, fn in {**_CHEAP, **_STURM, "disc_u": _DISC_U}.items():
         if name not in names:
             sg[name] = jnp.full(shape, UNKNOWN, CODE)
         else:
@@ -341,7 +270,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
             sg[name] = jnp.where(same & (exact != UNKNOWN), exact, sg[name])
     if "B" in names:
         sg["B"] = jnp.where((k1 == k2) & (minus != UNKNOWN), minus, sg["B"])
-    lost = spectral.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
+    lost = ex.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
     for name in sorted(names):  # sorted: the same program (and compilation-cache key) every run
         sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(CODE)
     # A = B = 0 exactly (h1 == h2): c1 == s2 and q1 == q2, k1 == k2 as floats
@@ -431,7 +360,7 @@ def _routh(g):
     s_a3, s_H2, s_G, sd = g["a3"], g["H2"], g["G"], g["D"]
     one = jnp.ones(sd.shape, CODE)
     ok = _K(s_a3) & _K(s_H2) & _K(s_G) & _K(sd)
-    nrhp = _variations(one, s_a3, s_a3 * s_H2, s_H2 * sd * s_G, sd)
+    nrhp = _variations(*ex.routh_signs(one, s_a3, s_H2, sd * s_G, sd))
     a3_zero = (s_a3 == 0) & _K(sd)
     return ok | a3_zero, jnp.where(a3_zero, jnp.where(sd == 1, 2, 1), nrhp)
 
@@ -537,43 +466,27 @@ def _ii_decide(g):
 # --- tier 2: dominance when three roots lie right of the imaginary axis ---------------------------
 
 
-def _shifted(c1, s1, c2, s2, k1, k2, q1, q2, D, s, *, sub):
-    """Coefficients of ``p(l + s)``."""
-    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1, q2, D, sub=sub)
-    b3 = a3 + 4 * s
-    b2 = a2 + 3 * a3 * s + 6 * s * s
-    b1 = a1 + 2 * a2 * s + 3 * a3 * s * s + 4 * s * s * s
-    b0 = (((s + a3) * s + a2) * s + a1) * s + a0
-    return b3, b2, b1, b0
+def _sb3_of(b3, b2, b1, b0, *, sub):
+    return b3
 
 
-def _sb0(*a, sub):
-    return _shifted(*a, sub=sub)[3]
+def _sH3_of(b3, b2, b1, b0, *, sub):
+    return ex.hurwitz_H3(b3, b2, b1, b0, sub=sub)
 
 
-def _sb3(*a, sub):
-    return _shifted(*a, sub=sub)[0]
-
-
-def _sH2(*a, sub):
-    b3, b2, b1, _ = _shifted(*a, sub=sub)
-    return sub(b3 * b2, b1)
-
-
-def _sH3(*a, sub):
-    b3, b2, b1, b0 = _shifted(*a, sub=sub)
-    return sub(b1 * sub(b3 * b2, b1), b3 * b3 * b0)
+#: the signs of the shifted Routh count: ``b0 = p(s)``, ``b3``, ``H2``, ``H3`` of ``p(l + s)``
+_SHIFTED = tuple(_on_coefficients(f, shift=True) for f in (_a0_of, _sb3_of, _H2_of, _sH3_of))
 
 
 def _count_right(args, s):
     """Certified number of roots with ``Re > s`` (``-1`` if not certified) and sign ``p(s)``."""
     # read only as certified nonzero signs: no structural zeros
-    sb0, sb3, sh2, sh3 = (_csign(f, args, zeros=False, shift=s) for f in (_sb0, _sb3, _sH2, _sH3))
+    sb0, sb3, sh2, sh3 = (_csign(f, args, zeros=False, shift=s) for f in _SHIFTED)
     ok = (jnp.abs(s) <= _SHIFT_BOUND) & (s > 0)
     for t in (sb0, sb3, sh2, sh3):
         ok = ok & ((t == 1) | (t == -1))
     one = jnp.ones_like(sb0)
-    v = _variations(one, sb3, sb3 * sh2, sh2 * sh3, sb0)
+    v = _variations(*ex.routh_signs(one, sb3, sh2, sh3, sb0))
     return jnp.where(ok, v, -1), sb0
 
 
@@ -581,7 +494,8 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
     """Second pass on the points the first pass of :func:`codes` left undecided:
     ``(stable_SS, consistent_II, stable_II)`` (``UNDECIDED`` for outputs not asked for).
 
-    ``stable_SS`` by :func:`atlas.core.spectral.ss_verdict` (sharp error bounds).  II: every sign of :func:`ii_damped` (with the Sturm count), then dominance where three roots have
+    ``stable_SS`` by :func:`atlas.core.hurwitz.ss_verdict` (sharp error bounds).  II: every sign of
+    :func:`ii_damped` (with the Sturm count), then dominance where three roots have
     ``Re > 0`` and the largest real root ``l*`` is II: ``Disc > 0``: four simple real roots, ``l*``
     strictly dominant -> stable.  ``Disc < 0``: ``l*``, a negative root and a complex pair; a float
     estimate ``x`` of ``l*`` (bracketed Newton) gives shifts ``s = x (1 -/+ 4 sqrt(eps))``; one root
@@ -610,17 +524,17 @@ def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     around a bracketed-Newton estimate of ``l*``."""
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     xs = jnp.full(shape, X, jnp.int8)
-    ss_code = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+    ss_code = hurwitz.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
     if not ii:
         zero = jnp.zeros(shape, c1.dtype)
         return ss_code, xs, xs, jnp.zeros(shape, bool), xs, zero, zero
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(_CHEAP) | frozenset(_STURM), sharp=True)
     cons, stab, dominance = _ii_decide(g)
-    k1, k2, q1s, q2s = _balance(kappa, q1, q2)
+    k1, k2, q1s, q2s = ex.balance(kappa, q1, q2)
     D = c1 * s2 - s1 * c2
     for accurate in _accurate_det(c1, s1, c2, s2):  # an estimate: the shifts are certified later
         D = jnp.where(jnp.isnan(accurate), D, accurate)
-    a3, a2, a1, a0 = _coef(c1, s1, c2, s2, k1, k2, q1s, q2s, D, sub=jnp.subtract)
+    a3, a2, a1, a0 = ex.coefficients(c1, s1, c2, s2, k1, k2, q1s, q2s, D, sub=jnp.subtract)
     hi = 1 + jnp.maximum(
         jnp.maximum(jnp.abs(a3), jnp.abs(a2)), jnp.maximum(jnp.abs(a1), jnp.abs(a0))
     )
@@ -644,7 +558,7 @@ def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_dis
     """Program 2 of :func:`tier2`: certified root counts right of the shifts ``s_lo, s_hi`` (inputs
     of this program: one rounded number each) decide dominance; returns ``(consistent_II,
     stable_II)``."""
-    args = (c1, s1, c2, s2, *_balance(kappa, q1, q2), *_accurate_det(c1, s1, c2, s2))
+    args = (c1, s1, c2, s2, *ex.balance(kappa, q1, q2), *_accurate_det(c1, s1, c2, s2))
     n_lo, p_lo = _count_right(args, s_lo)
     n_hi, p_hi = _count_right(args, s_hi)
     stable = (s_disc == 1) | ((s_disc == -1) & (n_lo == 1) & (p_lo == -1))
@@ -688,30 +602,11 @@ def unpack(code):
     )
 
 
-def _ii_undamped(c1, s1, c2, s2, kappa):
-    """II verdicts for ``q1 = q2 = 0``: :func:`atlas.core.spectral.ii_undamped`, and for diagonal ``B``
-    (``c2 = s1 = 0``, where its eigenvector rows say nothing) the closed form: ``p = h1 h2`` with
-    ``h1 = l^2 + c1 k1``, ``h2 = l^2 + s2 k2``; II needs a common positive root (``c1, s2 < 0``,
-    ``c1 k1 = s2 k2``): a double eigenvalue, never stable."""
-    cu, su, _ = spectral.ii_undamped(c1, s1, c2, s2, kappa)
-    k1, k2 = spectral.normalize(kappa, jnp.zeros_like(kappa), jnp.zeros_like(kappa))[:2]
-    sx = evaluate_certified(spectral.x_undamped, k1, c1, k2, s2)[2]
-    common = (c1 < 0) & (s2 < 0) & (c1 == s2) & (k1 == k2)
-    apart = (c1 >= 0) | (s2 >= 0) | (sx == 1) | (sx == -1)
-    cons_d = jnp.where(common, 1, jnp.where(apart, 0, X))
-    stab_d = jnp.where(cons_d == X, X, int(Verdict.UNSTABLE))
-    diag = (c2 == 0) & (s1 == 0)
-    lost = spectral.lost_to_underflow((kappa, kappa), (k1, k2))
-    cons = jnp.where(diag, jnp.where(lost, X, cons_d), cu)
-    stab = jnp.where(diag, jnp.where(lost, X, stab_d), su)
-    return cons.astype(jnp.int8), stab.astype(jnp.int8)
-
-
 def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, damped=None):
     """Packed certified verdicts of every point: one fused kernel, no roots (:func:`pack`).
 
-    ``stable_SS`` by the decision logic of :mod:`atlas.core.spectral` on the signs computed here (one
-    copy shared with II); II from the closed form :func:`atlas.core.spectral.ii_undamped` where
+    ``stable_SS`` by the decision logic of :mod:`atlas.core.hurwitz` on the signs computed here (one
+    copy shared with II); II from the closed form :func:`atlas.core.undamped.ii_undamped` where
     ``q1 = q2 = 0`` (except diagonal ``B``) and from the first pass of :func:`ii_damped` elsewhere.
     Bit 6 marks points with a verdict left for :func:`tier2` (``stable_SS``, or II where damped).  ``damped=True``
     (``False``) promises every point is damped (undamped) and skips the other branch.  Outputs not
@@ -719,13 +614,13 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     """
     shape = jnp.broadcast_shapes(*(jnp.shape(a) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     xs = jnp.full(shape, X, jnp.int8)
-    if not ii:  # SS alone: the cheaper signs of atlas.core.spectral (no shared work to amortize)
-        s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+    if not ii:  # SS alone: the cheaper signs of atlas.core.hurwitz (no shared work to amortize)
+        s = hurwitz.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
         s, later = jnp.broadcast_to(s, shape), jnp.broadcast_to(s == X, shape)
         return pack(s, xs, xs, later, ss_asked=ss, ii_asked=False)
     if damped is False:  # all undamped: closed forms only
-        s = spectral.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
-        cons, stab = _ii_undamped(c1, s1, c2, s2, kappa)
+        s = hurwitz.ss_verdict(c1, s1, c2, s2, kappa, q1, q2) if ss else xs
+        cons, stab = undamped.ii_undamped_full(c1, s1, c2, s2, kappa)
         later = (s == X) if ss else jnp.zeros(shape, bool)
         bc = lambda a: jnp.broadcast_to(a, shape)  # noqa: E731
         return pack(bc(s), bc(cons), bc(stab), bc(later), ss_asked=ss)
@@ -737,14 +632,14 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
     is_damped = (q1 != 0) | (q2 != 0)
     if ss:
         parts = dict(sd=g["D"], s_a2u=g["a2_d0"], s_disc=g["disc_u"], s_a3=g["a3"], s_G=g["G"])
-        s = spectral.ss_from_signs({**parts, "damped": is_damped})
+        s = hurwitz.ss_from_signs({**parts, "damped": is_damped})
     else:
         s = xs
     cd, sdm, _ = _ii_decide(g)
     if damped is True:
         cons, stab = cd, sdm
     else:
-        cu, su = _ii_undamped(c1, s1, c2, s2, kappa)
+        cu, su = undamped.ii_undamped_full(c1, s1, c2, s2, kappa)
         cons, stab = jnp.where(is_damped, cd, cu), jnp.where(is_damped, sdm, su)
     later = is_damped & ((cons == X) | (stab == X))
     if ss:

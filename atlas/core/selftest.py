@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from atlas.core import backend, config, exact, hardcases, points
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = ["check", "report", "run_cli", "DTYPES", "NAMES"]
@@ -26,7 +27,6 @@ __all__ = ["check", "report", "run_cli", "DTYPES", "NAMES"]
 #: the verdicts checked (the spectral abscissa is not a certified verdict)
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 DTYPES = ("float64", "float32")
-_KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 
 
 def check(suites=None, dtypes=DTYPES) -> dict:
@@ -40,12 +40,12 @@ def check(suites=None, dtypes=DTYPES) -> dict:
     with backend.checking():
         for dtype in dtypes:
             parts = [hardcases.suite(name, dtype) for name in suites]
-            cols = [np.concatenate([p[k] for p in parts]) for k in _KEYS]
+            cols = [np.concatenate([p[k] for p in parts]) for k in KEYS]
             fast = points.spectral_points(*cols, names=NAMES, dtype=dtype, resolve=False)
             t = time.perf_counter()
             points.spectral_points(*cols, names=NAMES, dtype=dtype, resolve=False)
             speed[dtype] = (time.perf_counter() - t) / cols[0].size * 1e9
-            ref = exact.resolve({k: c.astype(np.float64) for k, c in zip(_KEYS, cols)}, NAMES)
+            ref = exact.resolve({k: c.astype(np.float64) for k, c in zip(KEYS, cols)}, NAMES)
             start = 0
             for name, part in zip(suites, parts):
                 sl = slice(start, start + part["c1"].size)

@@ -10,9 +10,9 @@ import pytest
 import reference_sympy
 
 from atlas.core import exact, hardcases
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import Consistency, Verdict
 
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 S, U, N = int(Verdict.STABLE), int(Verdict.UNSTABLE), int(Verdict.NEUTRAL)
 

@@ -8,9 +8,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, hardcases, points, spectral
+from atlas.core import baseline, exact, hardcases, points, spectral
+from atlas.core.invariants import KEYS
 
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 _EIG_MISSES = {}
 
@@ -37,7 +37,7 @@ def test_fast_path_never_disagrees_with_exact(name, dtype):
     args = _padded_args(P)
     fast = {k: np.asarray(v)[:n] for k, v in spectral.verdicts_jit(*args).items()}
     ref = exact.resolve({k: P[k] for k in KEYS}, names=NAMES)
-    eig = {k: np.asarray(v)[:n] for k, v in spectral.eig_verdicts_jit(*args).items()}
+    eig = {k: np.asarray(v)[:n] for k, v in baseline.eig_verdicts_jit(*args).items()}
     report = []
     for k in NAMES:
         f, r = np.asarray(fast[k]), ref[k]
@@ -57,7 +57,7 @@ def test_eig_baseline_misclassifies_hard_cases():
     """Recorded, not hidden: the tolerance-based eig baseline gets the Hurwitz boundary wrong."""
     P = hardcases.suite("near_hurwitz", "float64")
     ref = exact.resolve({k: P[k] for k in KEYS}, names=("stable_SS",))["stable_SS"]
-    eig = np.asarray(spectral.eig_verdicts_jit(*_padded_args(P))["stable_SS"])[: ref.size]
+    eig = np.asarray(baseline.eig_verdicts_jit(*_padded_args(P))["stable_SS"])[: ref.size]
     miss = int((eig != ref).sum())
     print(f"eig misclassified {miss} of {ref.size} near-Hurwitz points")
     assert miss > 0

@@ -9,12 +9,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, hardcases, points, rootfree, spectral
+from atlas.core import enclosures, exact, hardcases, points, rootfree, spectral
+from atlas.core.invariants import KEYS
 from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 from atlas.core.verdicts import Verdict
 
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
 NAMES = ("stable_SS", "consistent_II", "stable_II")
 _codes = jax.jit(rootfree.codes)
 _tier2 = rootfree.tier2  # two compiled programs inside (not to be jitted as one)
@@ -197,10 +197,10 @@ def test_evaluation_points_are_program_inputs():
     dominance = _primitives(rootfree._tier2_dominance, *(x,) * 7, i, i, x > 0, i, x, x)
     loops = ("scan", "while")
     assert sum(decide[k] for k in loops) >= 1 and sum(dominance[k] for k in loops) == 0
-    z, zq = spectral._roots_jit(*(x,) * 7)
+    z, zq = enclosures._roots_jit(*(x,) * 7)
     roots, radii = (
-        _primitives(spectral._roots, *(x,) * 7),
-        _primitives(spectral._radii, z, zq, *(x,) * 7),
+        _primitives(enclosures._roots, *(x,) * 7),
+        _primitives(enclosures._radii, z, zq, *(x,) * 7),
     )
     assert radii["sqrt"] < roots["sqrt"] / 4
     # the driver calls tier 2 as its two programs, never wrapped into one

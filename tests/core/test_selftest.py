@@ -7,7 +7,17 @@ import jax.numpy as jnp
 import pytest
 
 from atlas import cli
-from atlas.core import backend, mechanics, points, rootfree, signs, spectral
+from atlas.core import (
+    backend,
+    enclosures,
+    hurwitz,
+    mechanics,
+    points,
+    rootfree,
+    signs,
+    spectral,
+    undamped,
+)
 from atlas.core.config import CACHE_ENV
 
 ONE_POINT = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # B = I, kappa = 1, undamped
@@ -36,7 +46,7 @@ def test_a_broken_sign_fails_and_the_backend_is_refused(tmp_path, monkeypatch, c
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))
     args = ["selftest", "--suites", "near_detB,class_boundaries", "--dtypes", "float64"]
     with pytest.MonkeyPatch.context() as mp:
-        for mod in (mechanics, rootfree, spectral):
+        for mod in (mechanics, rootfree, spectral, hurwitz, enclosures, undamped):
             mp.setattr(mod, "det2_sign", _flipped(signs.det2_sign))
         jax.clear_caches()  # the kernels retrace with the broken sign
         try:

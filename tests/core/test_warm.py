@@ -11,9 +11,8 @@ import jax
 import numpy as np
 import pytest
 
-from atlas.core import hardcases, points, rootfree, signs, spectral, warm
-
-KEYS = ("c1", "s1", "c2", "s2", "kappa", "q1", "q2")
+from atlas.core import enclosures, hardcases, points, rootfree, signs, warm
+from atlas.core.invariants import KEYS
 
 
 def _suite():
@@ -23,13 +22,13 @@ def _suite():
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
     args = _suite()
-    want = np.asarray(spectral.abscissa(*args))
+    want = np.asarray(enclosures.abscissa(*args))
     with warm.kernel_cache(str(tmp_path)):
-        got = np.asarray(spectral.abscissa(*args))
+        got = np.asarray(enclosures.abscissa(*args))
     files = sorted(p.name for p in tmp_path.iterdir())
-    assert len(files) == 1 and files[0].startswith("atlas.core.spectral.abscissa-")
+    assert len(files) == 1 and files[0].startswith("atlas.core.enclosures.abscissa-")
     # a fresh Kernel (as in a new process) reads the file: exporting again would fail the test
-    fresh = warm.Kernel(spectral.abscissa.fn)
+    fresh = warm.Kernel(enclosures.abscissa.fn)
     monkeypatch.setattr(jax.export, "export", lambda *a, **k: pytest.fail("exported again"))
     with warm.kernel_cache(str(tmp_path)):
         again = np.asarray(fresh(*args))
