@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.spatial import cKDTree
 
-from atlas.core import spectral
+from atlas.core import hurwitz
 
 __all__ = ["contour_lines", "hausdorff", "masks", "ss_margin", "torus_hausdorff"]
 
@@ -129,6 +129,6 @@ def masks(res: dict, damped: bool) -> dict:
 
 
 def ss_margin(args):
-    """The smooth SS margin :func:`atlas.core.spectral.ss_margin` on the broadcast grid ``args``
+    """The smooth SS margin :func:`atlas.core.hurwitz.ss_margin` on the broadcast grid ``args``
     (float64 on the host); its zero contour is the SS boundary."""
-    return np.asarray(spectral.ss_margin(*(jnp.asarray(a) for a in args)), np.float64)
+    return np.asarray(hurwitz.ss_margin(*(jnp.asarray(a) for a in args)), np.float64)

@@ -293,7 +293,7 @@ def work_precision_section(wp, refs, cfg) -> list[str]:
         f"Reference: float64 certified verdicts on the {cfg['res'][-1] * cfg['ref_factor']}-cell "
         f"grid ({cfg['ref_factor']}x the finest measured), every undecided point settled by "
         "`atlas.core.exact`, drawn the "
-        "same way. `SS margin` = zero contour of `spectral.ss_margin` (smooth; the curved, "
+        "same way. `SS margin` = zero contour of `hurwitz.ss_margin` (smooth; the curved, "
         "model-dependent SS boundary; float64 reference margin on the fine grid); `SS mask` / "
         "`II mask` = 0.5 contour of the 0/1 masks (SS stable-or-neutral; II consistent; undecided "
         "drawn as 0). Contours by marching squares with linear interpolation (contourpy); distances "

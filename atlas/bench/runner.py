@@ -44,7 +44,7 @@ NOTES = (
     "`verdicts_jit` on the damped grids is measured only at the headline size for q1 = q2 "
     "(each grid shape costs 10-30 s of compilation); never for q1 != q2.",
     "The SS-alone rows (a) reuse the damped q = 0.1 grid; `eig` there still computes "
-    "eigenvectors (`atlas.core.spectral.eig_verdicts`).",
+    "eigenvectors (`atlas.core.baseline.eig_verdicts`).",
     "II boundaries here are drawn from 0/1 masks (the figures' II margin comes from "
     "uncertified eigenvalues, so it is not used as a reference).",
     "Misclassification counts are exact-verified on the checked points only (not every grid "

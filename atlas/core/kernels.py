@@ -24,8 +24,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from atlas.core import baseline, hurwitz, points, warm
 from atlas.core import mechanics as mech
-from atlas.core import points, spectral, warm
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Consistency, Verdict
 
 __all__ = [
@@ -142,11 +142,11 @@ def _b1b2a(c1, s1, c2, s2, ca, sa):
 
 def _spectral_eig(c1, s1, c2, s2, kappa, q1, q2):
     """The uncertified batched-``eig`` baseline (``method="eig"``)."""
-    return spectral.eig_verdicts(c1, s1, c2, s2, kappa, q1, q2)
+    return baseline.eig_verdicts(c1, s1, c2, s2, kappa, q1, q2)
 
 
 def _ss_margin(c1, s1, c2, s2, kappa, q1, q2):
-    return {"margin_SS": spectral.ss_margin(c1, s1, c2, s2, kappa, q1, q2)}
+    return {"margin_SS": hurwitz.ss_margin(c1, s1, c2, s2, kappa, q1, q2)}
 
 
 _TABLE1 = tuple(f"consistent_{m}" for m in ("FF", "SF", "FS", "SS"))

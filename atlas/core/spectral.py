@@ -21,9 +21,8 @@ import jax
 import jax.numpy as jnp
 
 from atlas.core import expressions as ex
-from atlas.core.baseline import build_M, eig_verdicts
-from atlas.core.enclosures import abscissa, ii_verdicts, ii_verdicts_two_stage
-from atlas.core.hurwitz import ss_margin, ss_verdict
+from atlas.core.enclosures import ii_verdicts
+from atlas.core.hurwitz import ss_verdict
 from atlas.core.signs import CODE, UNKNOWN, det2_sign
 from atlas.core.undamped import ii_undamped
 from atlas.core.verdicts import Consistency, Verdict
@@ -33,15 +32,6 @@ __all__ = [
     "ii_possible",
     "verdicts",
     "verdicts_jit",
-    # the parts' entry points, for callers of the spectral tier as a whole
-    "ss_verdict",
-    "ss_margin",
-    "ii_undamped",
-    "ii_verdicts",
-    "ii_verdicts_two_stage",
-    "abscissa",
-    "build_M",
-    "eig_verdicts",
 ]
 
 

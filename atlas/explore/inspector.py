@@ -12,7 +12,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import exact, points, spectral
+from atlas.core import baseline, exact, hurwitz, points, spectral
 from atlas.core import mechanics as mech
 from atlas.core.mechanism import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
@@ -100,7 +100,7 @@ def _margins(j, model, dirs, fast, ref) -> dict:
     c1, s1, c2, s2 = (float(v) for v in dirs)
     a3, a2, a1, a0 = (float(x) for x in spectral.coefficients(*j, *model))
     return {
-        "ss_margin": float(spectral.ss_margin(*j, *model)),
+        "ss_margin": float(hurwitz.ss_margin(*j, *model)),
         "det_B": c1 * s2 - s1 * c2,
         "a3": a3,
         "a2": a2,
@@ -120,7 +120,7 @@ def _spectrum(dirs: tuple, model: tuple, dt) -> dict:
     fast = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=False)
     settled = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=True)
     ref = exact.point_spectral(*(float(v) for v in pt))
-    M = np.asarray(spectral.build_M(*j, *jm))
+    M = np.asarray(baseline.build_M(*j, *jm))
     return {
         "spectral_fast": {k: int(fast[k]) for k in _FLAGS},
         "spectral": {k: int(settled[k]) for k in _FLAGS},

@@ -39,7 +39,7 @@ __all__ = [
 ]
 
 DEFAULT_LAYERS = ("class_code", "stable_SS", "consistent_II", "stable_II")
-_MARGIN_COMMENT = "atlas.core.spectral.ss_margin: zero on the curved SS boundary"
+_MARGIN_COMMENT = "atlas.core.hurwitz.ss_margin: zero on the curved SS boundary"
 
 
 def layers() -> tuple[str, ...]:
@@ -181,7 +181,7 @@ def compute_map(
     dtype : {"float64", "float32"}
         Working precision of the kernels (direction vectors are rounded to it).
     layers : sequence of str
-        Any of :func:`layers`.  ``margin_SS`` is :func:`atlas.core.spectral.ss_margin` (smooth, its zero
+        Any of :func:`layers`.  ``margin_SS`` is :func:`atlas.core.hurwitz.ss_margin` (smooth, its zero
         set is the curved SS boundary); the others are the SPEC §2 variables.
     alpha : float, optional
         Direction of ``a`` [rad]; needed by the layers that depend on it.

@@ -7,7 +7,7 @@ this module arranges them in Datasets (:func:`stability_map`, :func:`class_repre
 ``atlas paper`` from the certified curves of :func:`atlas.boundaries`, else as zero contours of the
 *smooth margins* computed here (never of 0/1 masks):
 
-* SS stability: :func:`atlas.core.spectral.ss_margin` (``G/|G|`` when damped, the discriminant of the
+* SS stability: :func:`atlas.core.hurwitz.ss_margin` (``G/|G|`` when damped, the discriminant of the
   ``mu``-quadratic when ``Q = 0``).
 * II consistency: inside a class the eigenvector sign ``x1 x2`` of a positive real root cannot change
   (``h1(l) = 0`` at a root forces ``c2 s1 = 0``, a class boundary), and a positive root cannot reach 0
@@ -28,7 +28,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import mechanics, spectral
+from atlas.core import baseline, expressions, mechanics, spectral
 from atlas.core.points import spectral_points
 from atlas.data.outputs import OUTPUTS, coord_attrs, kernel_outputs, to_storage, variable_attrs
 from atlas.data.plane import map_dims, plane_outputs
@@ -83,24 +83,7 @@ def _offset_grid(n):
 def _quartic_discriminant(a3, a2, a1, a0):
     """Discriminant of the monic quartic, divided by a positive degree-12 scale (smooth, bounded)."""
     b, c, d, e = a3, a2, a1, a0
-    disc = (
-        256 * e**3
-        - 192 * b * d * e**2
-        - 128 * c**2 * e**2
-        + 144 * c * d**2 * e
-        - 27 * d**4
-        + 144 * b**2 * c * e**2
-        - 6 * b**2 * d**2 * e
-        - 80 * b * c**2 * d * e
-        + 18 * b * c * d**3
-        + 16 * c**4 * e
-        - 4 * c**3 * d**2
-        - 27 * b**4 * e**2
-        + 18 * b**3 * c * d * e
-        - 4 * b**3 * d**3
-        - 4 * b**2 * c**3 * e
-        + b**2 * c**2 * d**2
-    )
+    disc = expressions.quartic_discriminant(b, c, d, e, sub=np.subtract)
     scale = (np.abs(b) + np.abs(c) ** 0.5 + np.abs(d) ** (1 / 3) + np.abs(e) ** 0.25) ** 12
     return disc / np.where(scale > 0, scale, 1.0)
 
@@ -108,7 +91,7 @@ def _quartic_discriminant(a3, a2, a1, a0):
 def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
     """SS margin whose zero set is *every* model-dependent SS boundary.
 
-    :func:`atlas.core.spectral.ss_margin` covers ``G`` (damped) and the discriminant (``Q = 0``); the
+    :func:`atlas.core.hurwitz.ss_margin` covers ``G`` (damped) and the discriminant (``Q = 0``); the
     other condition that depends on the model is ``a2 = kappa c1 + s2 >= 0`` (``Q = 0``) or
     ``a3 = c1 q1 + s2 q2 > 0`` (damped), whose sign changes inside classes 23 and 46.  The minimum
     of the normalised quantities is continuous and its zero set is the boundary.
@@ -124,7 +107,7 @@ def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
 def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     """``Re(l_II) - max Re(other roots)`` (NaN where no II root), scaled by the root magnitude."""
     M = np.asarray(
-        spectral.build_M(
+        baseline.build_M(
             *(jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2))
         )
     )
@@ -198,7 +181,7 @@ def map_outputs() -> tuple[str, ...]:
 
 _MODEL = ("kappa", "q1", "q2")
 _MARGIN_SS_COMMENT = (
-    "min(atlas.core.spectral.ss_margin, a2 (q = 0) or a3 (damped) normalised): "
+    "min(atlas.core.hurwitz.ss_margin, a2 (q = 0) or a3 (damped) normalised): "
     "zero on every model-dependent SS boundary"
 )
 

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import enclosures, exact, hardcases, points, rootfree, spectral
+from atlas.core import enclosures, exact, hardcases, hurwitz, points, rootfree
 from atlas.core.invariants import KEYS
 from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
@@ -149,13 +149,13 @@ def test_closed_form_det_zero():
 
 
 def test_ss_matches_spectral_where_both_decide():
-    """SS from the shared signs never contradicts :func:`atlas.core.spectral.ss_verdict`."""
+    """SS from the shared signs never contradicts :func:`atlas.core.hurwitz.ss_verdict`."""
     rng = np.random.default_rng(3)
     for dtype in (np.float64, np.float32):
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = np.asarray(spectral.ss_verdict(*(jnp.asarray(c) for c in cols)))
+        ref = np.asarray(hurwitz.ss_verdict(*(jnp.asarray(c) for c in cols)))
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98

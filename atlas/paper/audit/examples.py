@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import exact, mechanics
-from atlas.core.spectral import ss_margin
+from atlas.core.hurwitz import ss_margin
 from atlas.core.verdicts import Verdict
 from atlas.paper.audit.printed import MODES
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
