@@ -20,7 +20,6 @@ import math
 import os
 import shutil
 
-from atlas.data.distributed import DEFAULT_SLAB_POINTS
 from atlas.data.outputs import OUTPUTS, storage_dtype
 
 __all__ = [
@@ -175,6 +174,8 @@ def generate_estimate(
     axes = sum(a.size for a in scene.axes.values()) * 8 * 4  # coordinates and their directions
     tile = min(tile_points, points) * TILE_BYTES_PER_POINT
     if distributed:
+        from atlas.data.distributed import DEFAULT_SLAB_POINTS  # noqa: PLC0415 - imports xarray
+
         per_point = out_bytes / max(points, 1)
         worker = STORE_PEAK_FACTOR * per_point * min(points, DEFAULT_SLAB_POINTS) + tile
         peak = axes + workers * worker
