@@ -47,11 +47,10 @@ import math
 import sys
 import time
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, runtime_checkable
 
 import jax
 import numpy as np
-import xarray as xr
 
 from atlas.core import checks, config, kernels
 from atlas.core import mechanics as mech
@@ -65,6 +64,9 @@ from atlas.data.outputs import (
     variable_attrs,
 )
 from atlas.data.scene import Scene
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = [
     "generate",
@@ -323,6 +325,8 @@ class MemorySink(Sink):
         self.arrays[name][index] = block
 
     def finish(self, attrs: dict, var_attrs: dict):
+        import xarray as xr  # noqa: PLC0415 - the streaming path (atlas generate) needs no xarray
+
         sch = self.schema
         coords = {k: xr.Variable(d, v, a) for k, (d, v, a) in sch.coords.items()}
         data = {}

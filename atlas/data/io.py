@@ -29,13 +29,16 @@ import os
 import secrets
 import shutil
 import tempfile
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from atlas.core import interrupts
 from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions, Schema, Sink, block_shape, run
 from atlas.data.scene import Scene
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = [
     "write_netcdf",

@@ -155,7 +155,7 @@ def test_ss_matches_spectral_where_both_decide():
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = np.asarray(hurwitz.ss_verdict(*(jnp.asarray(c) for c in cols)))
+        ref = np.asarray(jax.jit(hurwitz.ss_verdict)(*(jnp.asarray(c) for c in cols)))
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98
@@ -215,8 +215,9 @@ def test_float32_sturm_signs_are_the_float64_signs():
         k: np.asarray(v, np.float32) for k, v in _random(rng, 2000, np.float32, span=1.0).items()
     }
     names = frozenset(rootfree._STURM)
-    narrow = rootfree._signs(*(jnp.asarray(pts[k]) for k in KEYS), names)
-    wide = rootfree._signs(*(jnp.asarray(pts[k], jnp.float64) for k in KEYS), names)
+    signs_of = jax.jit(rootfree._signs, static_argnums=len(KEYS))  # as in the kernels
+    narrow = signs_of(*(jnp.asarray(pts[k]) for k in KEYS), names)
+    wide = signs_of(*(jnp.asarray(pts[k], jnp.float64) for k in KEYS), names)
     for k in names:
         assert np.array_equal(np.asarray(narrow[k]), np.asarray(wide[k])), k
     assert all((np.asarray(wide[k]) != UNKNOWN).mean() > 0.99 for k in names)

@@ -267,8 +267,9 @@ def test_scene_and_dataset_give_the_same_curves(tmp_path):
 
 def test_cli_writes_and_refuses_bad_input(tmp_path, capsys):
     out = tmp_path / "b.nc"
-    args = ["boundaries", "--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5"]
-    assert main(args + ["--q", "0", "--check", "0", "--out", str(out)]) == 0
+    args = ["boundaries", "--beta1", "0:2pi:8", "--beta2", "0:2pi:8", "--kappa", "0.5"]
+    run = ["--q", "0", "--fields", "SS", "--check", "0", "--chord", "1e-2"]  # a cheap slice
+    assert main(args + run + ["--out", str(out)]) == 0
     assert out.exists() and "boundaries:" in capsys.readouterr().out
     assert main(args + ["--tol", "-1"]) == 2
     assert capsys.readouterr().err.strip().splitlines()[-1].startswith("atlas: error: tol:")

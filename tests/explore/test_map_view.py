@@ -41,6 +41,7 @@ def test_marker_visible_on_every_colour():
     view = MapView(fig.add_subplot())
     for a in view.lines:
         a.set_visible(False)
+    view.ax.set_axis_off()  # ticks and labels lie outside the map: the same marker pixels, half the drawing
     for rgba in sorted(_every_layer_colour()):
         view.im.set_data(np.tile(np.array(rgba), (4, 4, 1)))
         view.marker.set_data([], [])
