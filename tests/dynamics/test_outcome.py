@@ -128,7 +128,7 @@ def test_outcome_map_dataset_contract(tmp_path):
         np.testing.assert_array_equal(back["outcome"].values, ds["outcome"].values)
         np.testing.assert_array_equal(back["no_stable_subclass"], ds["no_stable_subclass"])
         assert back.attrs["Conventions"].startswith("CF-")
-        assert "outcome_map" in back.attrs["history"]
+        assert "outcome_atlas" in back.attrs["history"]
     import netCDF4
 
     with netCDF4.Dataset(path) as nc:
