@@ -354,11 +354,12 @@ def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
 def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
     """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
     ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
-    :func:`plot_outcome_map`).  ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
+    :func:`plot_outcome_map`; the netCDF holds the theory verdicts of the same cells too).
+    ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     b1, b2 = outcome_grid(n)
-    ds = outcome_map(b1, b2, **kwargs)
+    ds = outcome_map(b1, b2, **{"theory": True, **kwargs})
     nc = Path(write_outcome_map(ds, out / "outcome_map.nc"))
     png = plot_outcome_map(ds, out / "outcome_map.png", theory=theory)
     return [nc, png]
@@ -402,7 +403,7 @@ def draw_distribution(ax, ds, title: str) -> list:
         left = 0.0
         for o, f in zip(Outcome, frac, strict=True):
             if f > 0:
-                art.append(ax.barh(y, f, left=left, color=o.color, edgecolor="k", lw=0.3))
+                art += ax.barh(y, f, left=left, color=o.color, edgecolor="k", lw=0.3).patches
                 left += f
         art.append(
             ax.text(
