@@ -30,7 +30,7 @@ import tempfile
 import numpy as np
 
 from atlas.core import config, interrupts
-from atlas.data.distributed import tile_plan
+from atlas.data.distributed import local_cluster, tile_plan
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.scene import Scene
 from atlas.dynamics.outcomes import (
@@ -118,6 +118,38 @@ def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile) -> dict:
     return rec
 
 
+def _map_tiles(scheduler, store, scene, dyn, todo):
+    """Yield ``(index, record)`` of the tiles ``todo`` run here or on dask workers."""
+    if scheduler is None:
+        for i, tile in todo:
+            yield i, _run_tile(store, scene, dyn, i, tile)
+        return
+    from distributed import Client, as_completed
+
+    kind, _, n = str(scheduler).partition(":")
+    cluster = None
+    if kind == "local":
+        if n and not (n.isdigit() and int(n) >= 1):
+            raise ValueError(f"scheduler: expected local:N with N >= 1, got {scheduler!r}")
+        cluster, client = local_cluster(int(n) if n else (os.cpu_count() or 1))
+    elif "://" in str(scheduler):
+        client = Client(scheduler)
+    else:
+        raise ValueError(
+            f"scheduler: expected None, local, local:N or tcp://HOST:PORT, got {scheduler!r}"
+        )
+    try:
+        futures = {
+            client.submit(_run_tile, store, scene, dyn, i, tile, pure=False): i for i, tile in todo
+        }
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def _prepare(store: str, plan: dict, resume: bool, overwrite: bool) -> bool:
     """Continue an existing store of the same plan, or lay out a new one; true when resuming."""
     exists = os.path.exists(store)
@@ -164,6 +196,7 @@ def outcome_atlas_tiles(
     theory: bool = True,
     progress=None,
     history: str | None = None,
+    scheduler=None,
 ) -> dict:
     """An outcome atlas tile by tile into the store directory ``store`` (see the module
     docstring), then, with ``to_netcdf``, the netCDF file of
@@ -189,6 +222,10 @@ def outcome_atlas_tiles(
         Called with ``(tiles done, tiles)`` after each tile.
     history : str, optional
         Command recorded in ``history``.
+    scheduler : None, "local", "local:N" or "tcp://host:port"
+        Where the tiles run: in this process, on a dask LocalCluster of N single-thread workers
+        (:func:`atlas.data.distributed.local_cluster`), or on a running scheduler whose workers
+        see ``store``.
 
     Returns
     -------
@@ -216,10 +253,9 @@ def outcome_atlas_tiles(
     verified = sorted(recs)
     if progress is not None:
         progress(len(recs), len(tiles))
-    for i, tile in enumerate(tiles):
-        if i in recs:
-            continue
-        recs[i] = _run_tile(store, scene, dyn, i, tile)
+    todo = [(i, tile) for i, tile in enumerate(tiles) if i not in recs]
+    for i, rec in _map_tiles(scheduler, store, scene, dyn, todo):
+        recs[i] = rec
         interrupts.check()
         if progress is not None:
             progress(len(recs), len(tiles))

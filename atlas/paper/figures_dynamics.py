@@ -43,6 +43,7 @@ __all__ = [
     "draw_distribution",
     "outcome_distribution_files",
     "DISTRIBUTION_MODELS",
+    "distribution_grid",
     "PAPER_DISTRIBUTION",
 ]
 
@@ -170,7 +171,7 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
 
 
 #: grid of the outcome map in ``atlas paper`` (quick mode, full) [cells per axis]
-PAPER_MAP_N = (6, 48)
+PAPER_MAP_N = (6, 256)
 
 
 def write_outcome_map(ds, path, overwrite: bool = True) -> str:
@@ -368,36 +369,53 @@ def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
 # --------------------------------------------------------------------------- outcome distribution
 
 #: the model of each row of the outcome-distribution figure: Fig. 2 a-c and d-e (k = (100, 200),
-#: |b| = 1: kappa = 0.5; q_hat = 20 / sqrt(200) for d-e; alpha as in the caption)
+#: |b| = 1: kappa = 0.5; q_hat = 20 / sqrt(200) for d-e; alpha as in the caption; subclasses 132,
+#: 142), and alpha = 0.65 pi, where subclasses 133 and 143 lie
 DISTRIBUTION_MODELS = (
     {"label": "Fig. 2 a-c", "kappa": 0.5, "q": 0.0, "alpha": 0.35 * math.pi},
     {"label": "Fig. 2 d-e", "kappa": 0.5, "q": 20.0 / math.sqrt(200.0), "alpha": 0.2 * math.pi},
+    {"label": "133, 143", "kappa": 0.5, "q": 0.0, "alpha": 0.65 * math.pi},
 )
-#: grid and runs per cell of the outcome distribution in ``atlas paper`` (quick mode, full)
-PAPER_DISTRIBUTION = ((8, 4), (40, 16))
+#: grid (``m`` of :func:`distribution_grid`) and runs per cell of the outcome distribution in
+#: ``atlas paper`` (quick mode, full)
+PAPER_DISTRIBUTION = ((4, 4), (16, 16))
+
+
+def distribution_grid(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """``beta1 = (i + 1/3) (pi/2) / m``, ``beta2 = pi/2 + (j + 2/3) (pi/2) / m`` [rad], ``i < m``,
+    ``j < 2 m``: the box ``(0, pi/2) x (pi/2, 3 pi/2)`` that holds subclasses 132, 133, 142, 143
+    (not their duals), offset from the degenerate directions like
+    :func:`atlas.dynamics.outcome_grid`."""
+    step = 0.5 * math.pi / int(m)
+    return (np.arange(m) + 1 / 3) * step, 0.5 * math.pi + (np.arange(2 * m) + 2 / 3) * step
 
 
 def subclass_distribution(ds) -> dict:
     """Runs per outcome class summed over the cells of each subclass 132, 133, 142, 143 of an
-    outcome atlas with theory verdicts (one ``(kappa, q, alpha)``): ``{code: (cells, mixed cells,
-    counts per class)}`` for the subclasses present; *mixed*: runs of the cell disagree."""
+    outcome atlas with theory verdicts (one ``(kappa, q, alpha)``), split by the certified SS
+    verdict of the cell: ``{(code, ss): (cells, mixed cells, counts per class)}`` for the groups
+    present, ``ss`` = ``"SS stable"`` (stable or neutral) or ``"SS unstable"`` (unstable or SS
+    inconsistent); *mixed*: the runs of the cell disagree."""
     code = ds["subclass_code"].values
     counts = ds["outcome_count"].values
     mixed = ds["agreement"].values < 1
+    ss = np.isin(ds["stable_SS"].values, (Verdict.STABLE, Verdict.NEUTRAL))
+    ss &= ds["consistent_SS"].values
     out = {}
     for c in NO_STABLE_SUBCLASSES:
-        sel = code == c
-        if sel.any():
-            out[c] = (int(sel.sum()), int(mixed[sel].sum()), counts[sel].sum(axis=0))
+        for name, flag in (("SS stable", True), ("SS unstable", False)):
+            sel = (code == c) & (ss == flag)
+            if sel.any():
+                out[(c, name)] = (int(sel.sum()), int(mixed[sel].sum()), counts[sel].sum(axis=0))
     return out
 
 
 def draw_distribution(ax, ds, title: str) -> list:
     """Stacked bars of :func:`subclass_distribution`: fraction of the runs per outcome class in
-    each subclass without a stable mode, with the cells, runs and mixed cells written on them."""
+    each subclass without a stable mode (split by the theory's SS verdict), with the cells, runs
+    and mixed cells written beside them."""
     dist = subclass_distribution(ds)
     art = []
-    names = [str(c) for c in dist]
     for y, (cells, mixed, counts) in enumerate(dist.values()):
         frac = counts / max(1, counts.sum())
         left = 0.0
@@ -405,25 +423,19 @@ def draw_distribution(ax, ds, title: str) -> list:
             if f > 0:
                 art += ax.barh(y, f, left=left, color=o.color, edgecolor="k", lw=0.3).patches
                 left += f
-        art.append(
-            ax.text(
-                1.01,
-                y,
-                f"{cells} cells, {int(counts.sum())} runs\n{mixed} cells mixed",
-                va="center",
-                fontsize=7,
-            )  # fmt: skip
-        )
-    ax.set_yticks(range(len(names)), [f"subclass {n}" for n in names])
+        text = f"{cells} cells, {int(counts.sum())} runs; {mixed} mixed"
+        art.append(ax.text(1.01, y, text, va="center", fontsize=7))
+    ax.set_yticks(range(len(dist)), [f"{c}, theory: {ss}" for c, ss in dist])
+    ax.set_ylim(len(dist) - 0.5, -0.5)
     ax.set_xlim(0, 1)
     ax.set_xlabel("fraction of the perturbed runs")
     art.append(ax.set_title(title, fontsize=9))
     return art
 
 
-def outcome_distribution_files(out, n: int = 40, n_perturb: int = 16, models=None) -> list:
+def outcome_distribution_files(out, m: int = 16, n_perturb: int = 16, models=None) -> list:
     """The outcome distribution where the paper predicts no stable mode (Sec. 6.4-6.5): an
-    outcome atlas with theory verdicts on :func:`atlas.dynamics.outcome_grid` ``(n)`` with
+    outcome atlas with theory verdicts on :func:`distribution_grid` ``(m)`` with
     ``n_perturb`` runs per cell for each model of ``models`` (default
     :data:`DISTRIBUTION_MODELS`), summed per subclass 132, 133, 142, 143
     (:func:`subclass_distribution`).  Writes ``out/outcome_distribution.png`` and
@@ -433,25 +445,25 @@ def outcome_distribution_files(out, n: int = 40, n_perturb: int = 16, models=Non
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     models = DISTRIBUTION_MODELS if models is None else models
-    b1, b2 = outcome_grid(n)
-    fig = drawing.new_figure(figsize=(9, 2.2 + 1.6 * len(models)), constrained_layout=True)
+    b1, b2 = distribution_grid(m)
+    fig = drawing.new_figure(figsize=(10, 1.2 + 1.9 * len(models)), constrained_layout=True)
     axes = fig.subplots(len(models), 1, squeeze=False)[:, 0]
     rows = [
-        "| model | subclass | cells | cells mixed | runs | "
+        "| model | subclass | theory | cells | cells mixed | runs | "
         + " | ".join(o.label for o in Outcome)
         + " |",
-        "|---|---|---|---|---|" + "---|" * len(Outcome),
+        "|---|---|---|---|---|---|" + "---|" * len(Outcome),
     ]
-    for ax, m in zip(axes, models, strict=True):
-        ds = outcome_map(b1, b2, m["kappa"], m["q"], m["alpha"], n_perturb=n_perturb, theory=True)
+    for ax, p in zip(axes, models, strict=True):
+        ds = outcome_map(b1, b2, p["kappa"], p["q"], p["alpha"], n_perturb=n_perturb, theory=True)
         title = (
-            f"{m['label']}: kappa = {m['kappa']:g}, q = {m['q']:.4g}, alpha = "
-            f"{m['alpha'] / math.pi:.3g} pi ({n}$^2$ grid, {n_perturb} runs per cell)"
+            f"{p['label']}: kappa = {p['kappa']:g}, q = {p['q']:.4g}, alpha = "
+            f"{p['alpha'] / math.pi:.3g} pi ({b1.size} x {b2.size} cells, {n_perturb} runs each)"
         )
         draw_distribution(ax, ds, title)
-        for c, (cells, mixed, counts) in subclass_distribution(ds).items():
+        for (c, ss), (cells, mixed, counts) in subclass_distribution(ds).items():
             rows.append(
-                f"| {m['label']} | {c} | {cells} | {mixed} | {int(counts.sum())} | "
+                f"| {p['label']} | {c} | {ss} | {cells} | {mixed} | {int(counts.sum())} | "
                 + " | ".join(str(int(x)) for x in counts)
                 + " |"
             )
@@ -467,8 +479,8 @@ def outcome_distribution_files(out, n: int = 40, n_perturb: int = 16, models=Non
     atomic_write_text(
         md,
         "Outcome distribution in the subclasses without a stable mode (paper Sec. 6.4-6.5): "
-        f"runs per outcome class summed over the cells of each subclass, {n}x{n} offset grid, "
-        f"{n_perturb} perturbed SS equilibria per cell "
+        f"runs per outcome class summed over the cells of each subclass, {b1.size} x {b2.size} "
+        f"offset grid of (0, pi/2) x (pi/2, 3 pi/2), {n_perturb} perturbed SS equilibria per cell "
         "(`atlas.paper.figures_dynamics.outcome_distribution_files`).\n\n" + "\n".join(rows) + "\n",
     )
     return [png, md]
