@@ -366,6 +366,11 @@ def _add_simulate(sub) -> None:
     )
     ps.add_argument("--resume", action="store_true", help="map: continue the tiles in --store")
     ps.add_argument("--slab", type=int, metavar="N", help="map: beta1 values per tile")
+    ps.add_argument(
+        "--scheduler",
+        metavar="WHERE",
+        help="map with --store: local, local:N (dask workers) or tcp://HOST:PORT (default: here)",
+    )
     _add_limits(ps)
 
 
@@ -708,9 +713,17 @@ def _dispatch_estimate(args):
         scene = map_scene(**vars(args))
         dyn = map_dynamics(args.n_perturb, args.seed, args.engine, args.t_end)
         outs = [p for p in (args.out, args.store) if p]
+        tile = None
+        if args.store:
+            from atlas.dynamics.outcome_tiles import default_slab
+
+            slab = args.slab or default_slab(scene, dyn.n_perturb)
+            tile = slab * math.prod(a.size for k, a in scene.axes.items() if k != "beta1")
+            tile *= dyn.n_perturb
         return limits.outcome_estimate(
-            scene, dyn.n_perturb, engine=dyn.engine, theory=not args.no_theory, outputs=outs
-        )
+            scene, dyn.n_perturb, engine=dyn.engine, theory=not args.no_theory, outputs=outs,
+            tile_runs=tile,
+        )  # fmt: skip
     return None
 
 

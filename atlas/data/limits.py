@@ -243,15 +243,23 @@ OUTCOME_CELL_BYTES = 8 * 2 + 1 + 4 + 1
 
 
 def outcome_estimate(
-    scene, n_perturb: int, *, engine: str = "fast", theory: bool = True, outputs=()
+    scene,
+    n_perturb: int,
+    *,
+    engine: str = "fast",
+    theory: bool = True,
+    outputs=(),
+    tile_runs: int | None = None,
 ) -> Estimate:
     """The cost of an outcome atlas (``atlas simulate --map``) of ``scene``: points =
-    trajectories (cells over every axis x ``n_perturb``); with ``theory`` the theory verdicts of
-    the same cells (:func:`generate_estimate`) are held and written too."""
+    trajectories (cells over every axis x ``n_perturb``), simulated ``tile_runs`` at a time
+    (default all); with ``theory`` the theory verdicts of the same cells
+    (:func:`generate_estimate`) are held and written too."""
     cells = math.prod(a.size for a in scene.axes.values())
     runs = cells * max(1, int(n_perturb))
+    batch = runs if tile_runs is None else min(runs, int(tile_runs))
     out_bytes = cells * OUTCOME_CELL_BYTES
-    peak = runs * OUTCOME_TRAJECTORY_BYTES + out_bytes
+    peak = batch * OUTCOME_TRAJECTORY_BYTES + out_bytes
     seconds = runs * OUTCOME_SECONDS.get(engine, OUTCOME_SECONDS["numpy"])
     if theory:
         th = generate_estimate(scene)

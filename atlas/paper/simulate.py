@@ -44,7 +44,8 @@ def run_cli(case=None, t_end=None, out=None, outcome_map=False, k1=None, k2=None
         if case:
             raise ValueError("case: --case and --map exclude each other")
         return _run_map(t_end, out, argv=argv, **kw)
-    for name in ("n", "kappa", "q", "n_perturb", "seed", "store", "slab", "resume", "no_theory"):
+    for name in ("n", "kappa", "q", "n_perturb", "seed", "store", "slab", "resume", "no_theory",
+                 "scheduler"):  # fmt: skip
         if kw.get(name) not in (None, False):
             raise ValueError(f"{name.replace('_', '-')}: only with --map")
     case = case[len("fig2") :] if case and case.startswith("fig2") else case
@@ -143,7 +144,7 @@ def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None, **_) -> D
 
 
 def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, overwrite=False,
-             no_theory=False, argv=None, **kw) -> int:  # fmt: skip
+             no_theory=False, argv=None, scheduler=None, **kw) -> int:  # fmt: skip
     scene = map_scene(**kw)
     dyn = map_dynamics(kw.get("n_perturb"), kw.get("seed"), engine, t_end)
     suffix = Path(out).suffix.lower() if out else ""
@@ -154,8 +155,9 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
             f"out: a figure shows one (kappa, q, alpha); the map varies {', '.join(scene.dims[2:])}"
             " (write FILE.nc)"
         )
-    if resume and store is None:
-        raise ValueError("resume: needs --store")
+    for name, v in (("resume", resume), ("scheduler", scheduler)):
+        if v and store is None:
+            raise ValueError(f"{name}: needs --store")
     history = "atlas " + " ".join(shlex.quote(a) for a in argv) if argv else None
     theory = not no_theory or suffix in (".png", ".pdf")
     if store is not None:
@@ -163,7 +165,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
 
         s = outcome_atlas_tiles(
             scene, store, dynamics=dyn, slab=slab, resume=resume, overwrite=overwrite,
-            theory=theory, history=history,
+            theory=theory, history=history, scheduler=scheduler,
         )  # fmt: skip
         ds = s["dataset"]
         print(
