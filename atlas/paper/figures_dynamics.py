@@ -378,7 +378,7 @@ DISTRIBUTION_MODELS = (
 )
 #: grid (``m`` of :func:`distribution_grid`) and runs per cell of the outcome distribution in
 #: ``atlas paper`` (quick mode, full)
-PAPER_DISTRIBUTION = ((4, 4), (16, 16))
+PAPER_DISTRIBUTION = ((4, 4), (12, 12))
 
 
 def distribution_grid(m: int) -> tuple[np.ndarray, np.ndarray]:
