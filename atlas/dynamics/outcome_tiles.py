@@ -118,26 +118,34 @@ def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile) -> dict:
     return rec
 
 
-def _map_tiles(scheduler, store, scene, dyn, todo):
-    """Yield ``(index, record)`` of the tiles ``todo`` run here or on dask workers."""
+def _where(scheduler) -> tuple[str, int | str | None]:
+    """``("here", None)``, ``("local", N)`` or ``("address", address)``; one-line ``ValueError``
+    naming ``scheduler`` otherwise."""
     if scheduler is None:
+        return "here", None
+    text = str(scheduler)
+    kind, _, n = text.partition(":")
+    if kind == "local" and (n == "" or (n.isdigit() and int(n) >= 1)):
+        return "local", int(n) if n else (os.cpu_count() or 1)
+    if kind != "local" and "://" in text:
+        return "address", text
+    raise ValueError(f"scheduler: expected None, local, local:N or tcp://HOST:PORT, got {text!r}")
+
+
+def _map_tiles(where, store, scene, dyn, todo):
+    """Yield ``(index, record)`` of the tiles ``todo`` run here or on dask workers."""
+    kind, arg = where
+    if kind == "here":
         for i, tile in todo:
             yield i, _run_tile(store, scene, dyn, i, tile)
         return
     from distributed import Client, as_completed
 
-    kind, _, n = str(scheduler).partition(":")
     cluster = None
     if kind == "local":
-        if n and not (n.isdigit() and int(n) >= 1):
-            raise ValueError(f"scheduler: expected local:N with N >= 1, got {scheduler!r}")
-        cluster, client = local_cluster(int(n) if n else (os.cpu_count() or 1))
-    elif "://" in str(scheduler):
-        client = Client(scheduler)
+        cluster, client = local_cluster(arg)
     else:
-        raise ValueError(
-            f"scheduler: expected None, local, local:N or tcp://HOST:PORT, got {scheduler!r}"
-        )
+        client = Client(arg)
     try:
         futures = {
             client.submit(_run_tile, store, scene, dyn, i, tile, pure=False): i for i, tile in todo
@@ -237,6 +245,7 @@ def outcome_atlas_tiles(
     dyn = Dynamics() if dynamics is None else dynamics
     if not isinstance(dyn, Dynamics):
         raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
+    where = _where(scheduler)
     store = os.path.abspath(os.fspath(store))
     slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
     tiles = tile_plan(scene, slab=slab)
@@ -254,7 +263,7 @@ def outcome_atlas_tiles(
     if progress is not None:
         progress(len(recs), len(tiles))
     todo = [(i, tile) for i, tile in enumerate(tiles) if i not in recs]
-    for i, rec in _map_tiles(scheduler, store, scene, dyn, todo):
+    for i, rec in _map_tiles(where, store, scene, dyn, todo):
         recs[i] = rec
         interrupts.check()
         if progress is not None:

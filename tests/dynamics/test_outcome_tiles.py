@@ -52,6 +52,9 @@ def test_tiles_bit_identical_and_resumable(tmp_path, single):
 
 
 def test_store_of_another_atlas_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="^scheduler: "):
+        T.outcome_atlas_tiles(SCENE, tmp_path / "e.tiles", dynamics=DYN, scheduler="local:0")
+    assert not (tmp_path / "e.tiles").exists()
     store = tmp_path / "m.tiles"
     T.outcome_atlas_tiles(SCENE.replace(beta1="0.1,0.2"), store, dynamics=DYN, theory=False)
     with pytest.raises(FileExistsError, match="^store: "):
@@ -62,3 +65,13 @@ def test_store_of_another_atlas_is_refused(tmp_path):
         T.outcome_atlas_tiles(
             SCENE.replace(beta1="0.1,0.2"), store, dynamics=O.Dynamics(n_perturb=3), resume=True
         )
+
+
+@pytest.mark.slow
+def test_tiles_on_dask_workers_bit_identical(tmp_path, single):
+    pytest.importorskip("distributed")
+    s = T.outcome_atlas_tiles(
+        SCENE, tmp_path / "d.tiles", dynamics=DYN, slab=1, theory=False, scheduler="local:2"
+    )
+    assert s["computed"] == list(range(5))
+    _same(s["dataset"], single)
