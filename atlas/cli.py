@@ -4,7 +4,7 @@
 A thin layer over the library; each subcommand imports only its own layer, when it runs (``atlas
 --help`` imports neither JAX nor xarray).  ``atlas generate`` streams a scene into a netCDF4 file
 (:func:`atlas.data.io.generate_to_file`); the other subcommands dispatch lazily to the modules that
-implement them (``atlas.paper.run``, ``atlas.paper.figures_dynamics.run_cli``, ``atlas.paper.tables.run_cli``,
+implement them (``atlas.paper.run``, ``atlas.paper.simulate.run_cli``, ``atlas.paper.tables.run_cli``,
 ``atlas.bench.run``).
 
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
@@ -80,7 +80,7 @@ HELP = {
     "mechanism": "atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
     "boundaries": "certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
     "paper": "regenerate every figure and table of the paper",
-    "simulate": "simulate the compliant-contact dynamics (Fig. 2)",
+    "simulate": "simulate the compliant-contact dynamics (Fig. 2), or an outcome atlas (--map)",
     "table": "Table 2 of the paper from the kernels",
     "bench": "work-precision benchmark of the kernels",
     "selftest": "check the certified kernels on this JAX backend against the exact tier",
