@@ -23,6 +23,7 @@ import contextlib
 import hashlib
 import io
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -227,7 +228,7 @@ def outcome_atlas_tiles(
     theory : bool
         Add the certified theory verdicts of the same cells.
     progress : callable, optional
-        Called with ``(tiles done, tiles)`` after each tile.
+        Called with ``(trajectories done, trajectories)`` after each tile.
     history : str, optional
         Command recorded in ``history``.
     scheduler : None, "local", "local:N" or "tcp://host:port"
@@ -260,14 +261,18 @@ def outcome_atlas_tiles(
             if rec is not None:
                 recs[i] = rec
     verified = sorted(recs)
-    if progress is not None:
-        progress(len(recs), len(tiles))
+    total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
+
+    def report():
+        if progress is not None:
+            progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
+
+    report()
     todo = [(i, tile) for i, tile in enumerate(tiles) if i not in recs]
     for i, rec in _map_tiles(where, store, scene, dyn, todo):
         recs[i] = rec
         interrupts.check()
-        if progress is not None:
-            progress(len(recs), len(tiles))
+        report()
     counts = np.concatenate(
         [np.load(os.path.join(store, _name(i, "npy"))) for i in range(len(tiles))]
     )

@@ -4,15 +4,18 @@ as CF netCDF or drawn beside the theory map (:mod:`atlas.paper.figures_dynamics`
 
 from __future__ import annotations
 
+import functools
 import shlex
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from atlas.data.engine import progress_bar
 from atlas.data.io import atomic_write_text, savefig
 from atlas.data.scene import parse_values
 from atlas.dynamics import Outcome, classify, fig2_cases, outcome_grid, simulate
+from atlas.dynamics.outcome_tiles import default_slab, outcome_atlas_tiles
 from atlas.dynamics.outcomes import Dynamics, outcome_atlas, outcome_scene
 from atlas.paper import drawing
 from atlas.paper.figures_dynamics import (
@@ -134,6 +137,13 @@ def map_scene(n=None, beta1=None, beta2=None, alpha=None, kappa=None, q=None, q1
     )
 
 
+def _advance(bar, done, total):
+    """A progress callback ``(done, total)`` on a tqdm ``bar``."""
+    bar.total = total
+    bar.n = done
+    bar.refresh()
+
+
 def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None, **_) -> Dynamics:
     """The :class:`~atlas.dynamics.outcomes.Dynamics` of ``atlas simulate --map``."""
     kw = {"engine": engine}
@@ -160,21 +170,29 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
             raise ValueError(f"{name}: needs --store")
     history = "atlas " + " ".join(shlex.quote(a) for a in argv) if argv else None
     theory = not no_theory or suffix in (".png", ".pdf")
-    if store is not None:
-        from atlas.dynamics.outcome_tiles import outcome_atlas_tiles
-
-        s = outcome_atlas_tiles(
-            scene, store, dynamics=dyn, slab=slab, resume=resume, overwrite=overwrite,
-            theory=theory, history=history, scheduler=scheduler,
-        )  # fmt: skip
-        ds = s["dataset"]
-        print(
-            f"store {s['store']}: {s['tiles']} tiles, {len(s['computed'])} computed, "
-            f"{len(s['verified'])} verified",
-            file=sys.stderr,
-        )
-    else:
-        ds = outcome_atlas(scene, theory=theory, slab=slab, history=history, **dyn.attrs())
+    bar = progress_bar(sys.stderr.isatty(), 1, "outcome atlas", unit="run")
+    try:
+        progress = None if bar is None else functools.partial(_advance, bar)
+        if store is not None:
+            s = outcome_atlas_tiles(
+                scene, store, dynamics=dyn, slab=slab, resume=resume, overwrite=overwrite,
+                theory=theory, history=history, scheduler=scheduler, progress=progress,
+            )  # fmt: skip
+            ds = s["dataset"]
+            print(
+                f"store {s['store']}: {s['tiles']} tiles, {len(s['computed'])} computed, "
+                f"{len(s['verified'])} verified",
+                file=sys.stderr,
+            )
+        else:
+            slab = default_slab(scene, dyn.n_perturb) if slab is None else slab
+            ds = outcome_atlas(
+                scene, theory=theory, slab=slab, history=history, progress=progress,
+                **dyn.attrs(),
+            )  # fmt: skip
+    finally:
+        if bar is not None:
+            bar.close()
     vals, counts = np.unique(ds["outcome"].values, return_counts=True)
     summary = ", ".join(f"{Outcome(int(v)).label} {c}" for v, c in zip(vals, counts, strict=True))
     shape = "x".join(str(ds.sizes[d]) for d in scene.dims)
