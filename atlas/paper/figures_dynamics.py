@@ -481,6 +481,8 @@ def outcome_distribution_files(out, m: int = 16, n_perturb: int = 16, models=Non
         "Outcome distribution in the subclasses without a stable mode (paper Sec. 6.4-6.5): "
         f"runs per outcome class summed over the cells of each subclass, {b1.size} x {b2.size} "
         f"offset grid of (0, pi/2) x (pi/2, 3 pi/2), {n_perturb} perturbed SS equilibria per cell "
-        "(`atlas.paper.figures_dynamics.outcome_distribution_files`).\n\n" + "\n".join(rows) + "\n",
+        "(`atlas.paper.figures_dynamics.outcome_distribution_files`). *theory*: the certified SS "
+        "verdict of the cell (stable: stable or neutral and SS consistent); *cells mixed*: cells "
+        "whose runs do not all agree.\n\n" + "\n".join(rows) + "\n",
     )
     return [png, md]
