@@ -4,18 +4,7 @@
 The parser and the dispatch, nothing else: each subcommand imports only the module that
 implements it, when it runs (``atlas --help`` imports neither JAX nor xarray):
 
-==============  ===========================================================================
-``generate``    :func:`atlas.data.generate_cli.run_cli` (a scene into a netCDF4 file, or tiles
-                into a resumable zarr store)
-``mechanism``   :func:`atlas.data.mechanisms.run_cli`
-``boundaries``  :func:`atlas.data.boundaries.run_cli`
-``paper``       :func:`atlas.paper.run`
-``simulate``    :func:`atlas.paper.figures_dynamics.run_cli`
-``table``       :func:`atlas.paper.tables.run_cli`
-``bench``       :func:`atlas.bench.run`
-``selftest``    :func:`atlas.core.selftest.run_cli`
-==============  ===========================================================================
-
+==============  ====================================================================
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
 code 2 -- never a traceback; so is a run that cannot fit (``size: ...``, see ``--dry-run``) and a
@@ -89,7 +78,7 @@ HELP = {
     "mechanism": "atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
     "boundaries": "certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
     "paper": "regenerate every figure and table of the paper",
-    "simulate": "simulate the compliant-contact dynamics (Fig. 2)",
+    "simulate": "simulate the compliant-contact dynamics (Fig. 2), or an outcome atlas (--map)",
     "table": "Table 2 of the paper from the kernels",
     "bench": "work-precision benchmark of the kernels",
     "selftest": "check the certified kernels on this JAX backend against the exact tier",
@@ -322,13 +311,26 @@ def _add_paper(sub) -> None:
 
 
 def _add_simulate(sub) -> None:
-    ps = sub.add_parser("simulate", help=HELP["simulate"])
+    ps = sub.add_parser(
+        "simulate",
+        help=HELP["simulate"],
+        description="One trajectory (a Fig. 2 case, or --beta1, --beta2, --alpha numbers with the "
+        "physical --k1, --k2, --q1, --q2), or with --map an outcome atlas: the axes take the "
+        "ranges of atlas generate (START:STOP:N, log:START:STOP:N, V1,V2,... or a scalar; pi "
+        "suffix ok) and --q, --q1, --q2 are the dimensionless dampings there.",
+    )
     ps.add_argument("--case", choices=["fig2a", "fig2b", "fig2c", "fig2d", "fig2e"])
-    for name in ("beta1", "beta2", "alpha"):
-        ps.add_argument(
-            f"--{name}", type=_number(name), metavar="ANGLE", help="[rad], pi suffix ok"
-        )
-    for name in ("k1", "k2", "q1", "q2", "t-end"):
+    for name, what in (
+        ("beta1", "direction angle of b1 [rad]"),
+        ("beta2", "direction angle of b2 [rad]"),
+        ("alpha", "direction angle of a [rad] (--map default 0.35pi)"),
+        ("kappa", "--map: stiffness ratio k1|b1|/(k2|b2|) [1] (default 0.5)"),
+        ("q", "--map: dimensionless damping q1_hat = q2_hat [1] (default 0)"),
+        ("q1", "damping of contact 1 (--map: dimensionless, with --q2; else physical)"),
+        ("q2", "damping of contact 2"),
+    ):
+        ps.add_argument(f"--{name}", metavar="RANGE", help=what)
+    for name in ("k1", "k2", "t-end"):
         ps.add_argument(f"--{name}", type=_number(name), metavar="X")
     ps.add_argument(
         "--out", metavar="FILE", help="output file: .csv, .png, .pdf, .svg (--map: .nc, .png, .pdf)"
@@ -338,19 +340,36 @@ def _add_simulate(sub) -> None:
         "--map",
         dest="outcome_map",
         action="store_true",
-        help="outcome map over beta1 x beta2 (--out FILE.nc or FILE.png)",
+        help="outcome atlas over the given axes (--out FILE.nc, or FILE.png for one model)",
     )
-    ps.add_argument("--n", type=int, metavar="N", help="map: cells per axis (default 24)")
-    ps.add_argument("--kappa", type=_number("kappa"), metavar="K", help="map: default 0.5")
-    ps.add_argument("--q", type=_number("q"), metavar="Q", help="map: q1 = q2, default 0")
+    ps.add_argument(
+        "--n",
+        type=int,
+        metavar="N",
+        help="map: cells per axis when --beta1/--beta2 are not given (offset grid, default 24)",
+    )
     ps.add_argument(
         "--n-perturb", type=int, metavar="M", help="map: initial conditions per cell (default 1)"
     )
+    ps.add_argument("--seed", type=int, metavar="S", help="map: seed of the perturbations (0)")
     ps.add_argument(
         "--engine",
         choices=["fast", "numpy", "jax"],
         default="fast",
         help="map engine: fast (batched, certified early stops), numpy (exact reference), jax",
+    )
+    ps.add_argument(
+        "--no-theory", action="store_true", help="map: without the theory verdicts of the cells"
+    )
+    ps.add_argument(
+        "--store", metavar="DIR", help="map: tile by tile into this resumable store directory"
+    )
+    ps.add_argument("--resume", action="store_true", help="map: continue the tiles in --store")
+    ps.add_argument("--slab", type=int, metavar="N", help="map: beta1 values per tile")
+    ps.add_argument(
+        "--scheduler",
+        metavar="WHERE",
+        help="map with --store: local, local:N (dask workers) or tcp://HOST:PORT (default: here)",
     )
     _add_limits(ps)
 
@@ -499,10 +518,22 @@ def _dispatch_estimate(args):
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
         return limits.grid_estimate("boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES)
     if args.command == "simulate" and args.outcome_map:
-        n = 24 if args.n is None else args.n
-        runs = n * n * max(1, args.n_perturb or 1)
-        outs = [args.out] if args.out else []
-        return limits.grid_estimate("simulate --map", runs, outputs=outs, **limits.OUTCOME_MAP)
+        from atlas.paper.simulate import map_dynamics, map_scene
+
+        scene = map_scene(**vars(args))
+        dyn = map_dynamics(args.n_perturb, args.seed, args.engine, args.t_end)
+        outs = [p for p in (args.out, args.store) if p]
+        tile = None
+        if args.store:
+            from atlas.dynamics.outcome_tiles import default_slab
+
+            slab = args.slab or default_slab(scene, dyn.n_perturb)
+            tile = slab * math.prod(a.size for k, a in scene.axes.items() if k != "beta1")
+            tile *= dyn.n_perturb
+        return limits.outcome_estimate(
+            scene, dyn.n_perturb, engine=dyn.engine, theory=not args.no_theory, outputs=outs,
+            tile_runs=tile,
+        )  # fmt: skip
     return None
 
 
@@ -514,7 +545,7 @@ _DISPATCH = {
     "paper": ("atlas.paper", "run"),
     "mechanism": ("atlas.data.mechanisms", "run_cli"),
     "boundaries": ("atlas.data.boundaries", "run_cli"),
-    "simulate": ("atlas.paper.figures_dynamics", "run_cli"),
+    "simulate": ("atlas.paper.simulate", "run_cli"),
     "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),
     "selftest": ("atlas.core.selftest", "run_cli"),
@@ -531,7 +562,7 @@ def _cmd_generate(args, argv) -> int:
     return run_cli(history="atlas " + " ".join(shlex.quote(a) for a in argv), **opts)
 
 
-def _cmd_dispatch(args) -> int:
+def _cmd_dispatch(args, argv=()) -> int:
     estimate = _dispatch_estimate(args) if hasattr(args, "dry_run") else None
     if estimate is not None and estimate.screen(args.dry_run, args.no_size_check):
         return 0
@@ -539,6 +570,8 @@ def _cmd_dispatch(args) -> int:
     fn = getattr(importlib.import_module(module), func)
     skip = ("command", "dry_run", "no_size_check")
     opts = {k: v for k, v in vars(args).items() if k not in skip}
+    if args.command == "simulate":  # the command line, for the map's history attribute
+        opts["argv"] = [args.command, *argv[1:]] if argv else None
     if args.command in _TOGETHER:
         from atlas.data.io import committed_together
 
@@ -606,7 +639,7 @@ def _main(argv) -> int:
         with kernel_cache():  # traced kernels kept on disk: the next run starts warm
             if args.command == "generate":
                 return _cmd_generate(args, argv)
-            return _cmd_dispatch(args)
+            return _cmd_dispatch(args, argv)
     except _UsageError as e:
         print(_one_line(e), file=sys.stderr)
         return EXIT_USAGE

@@ -30,6 +30,7 @@ __all__ = [
     "human_bytes",
     "generate_estimate",
     "grid_estimate",
+    "outcome_estimate",
     "NS_PER_POINT",
 ]
 
@@ -243,6 +244,47 @@ MECHANISM = dict(bytes_per_point=400, output_bytes_per_point=110, seconds_per_po
 #: ``atlas boundaries`` (points = grid nodes x check**2 x slices): 256 x 256, check 2 -> 3.9 kB
 #: and 0.33 ms per grid node; curves are a small fraction of the grid
 BOUNDARIES = dict(bytes_per_point=1200, output_bytes_per_point=8, seconds_per_point=1e-4)
-#: ``atlas simulate --map`` (points = trajectories: cells x initial conditions): ~0.02 s per
-#: trajectory with the exact engine (the fast engine takes ~1 ms, so the time is an upper bound)
-OUTCOME_MAP = dict(bytes_per_point=2000, output_bytes_per_point=40, seconds_per_point=0.02)
+#: ``atlas simulate --map`` per trajectory: peak bytes (engine state, initial states, codes),
+#: seconds by engine (outputs/bench.md: ~0.4 ms fast, ~0.012 s exact, run by run; jax ~0.04 s)
+OUTCOME_TRAJECTORY_BYTES = 2000
+OUTCOME_SECONDS = {"fast": 4e-4, "numpy": 0.02, "jax": 0.04}
+#: stored bytes per cell of an outcome atlas: 8 int16 counts, int8 outcome, float32 agreement,
+#: the no-stable-subclass flag
+OUTCOME_CELL_BYTES = 8 * 2 + 1 + 4 + 1
+
+
+def outcome_estimate(
+    scene,
+    n_perturb: int,
+    *,
+    engine: str = "fast",
+    theory: bool = True,
+    outputs=(),
+    tile_runs: int | None = None,
+) -> Estimate:
+    """The cost of an outcome atlas (``atlas simulate --map``) of ``scene``: points =
+    trajectories (cells over every axis x ``n_perturb``), simulated ``tile_runs`` at a time
+    (default all); with ``theory`` the theory verdicts of the same cells
+    (:func:`generate_estimate`) are held and written too."""
+    cells = math.prod(a.size for a in scene.axes.values())
+    runs = cells * max(1, int(n_perturb))
+    batch = runs if tile_runs is None else min(runs, int(tile_runs))
+    out_bytes = cells * OUTCOME_CELL_BYTES
+    peak = batch * OUTCOME_TRAJECTORY_BYTES + out_bytes
+    seconds = runs * OUTCOME_SECONDS.get(engine, OUTCOME_SECONDS["numpy"])
+    if theory:
+        th = generate_estimate(scene)
+        out_bytes += th.output_bytes
+        peak += th.output_bytes + th.peak_bytes
+        seconds += th.seconds
+    hint = "use a coarser grid, fewer --n-perturb, or --store with a smaller --slab"
+    return Estimate(
+        "simulate --map",
+        runs,
+        int(out_bytes),
+        int(peak),
+        seconds,
+        tuple(os.fspath(o) for o in outputs),
+        memory_hint=hint,
+        disk_hint="use a coarser grid",
+    )

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.core import config
 from atlas.core.verdicts import Consistency, Verdict
-from atlas.data.io import atomic_write_text, check_output_path, savefig
+from atlas.data.io import atomic_write_text, savefig
 from atlas.dynamics import (
+    NO_STABLE_SUBCLASSES,
     Outcome,
     classify,
     fig2_cases,
@@ -39,19 +39,25 @@ __all__ = [
     "plot_outcome_map",
     "write_outcome_map",
     "outcome_map_files",
+    "subclass_distribution",
+    "draw_distribution",
+    "outcome_distribution_files",
+    "DISTRIBUTION_MODELS",
+    "distribution_grid",
+    "PAPER_DISTRIBUTION",
 ]
 
 #: simulated horizon of each Fig. 2 panel (the paper does not state its time axes) [time]
 FIG2_T_END = {"a": 400.0, "b": 20.0, "c": 400.0, "d": 40.0, "e": 100.0}
 
-_PAPER_SAYS = {
+PAPER_SAYS = {
     "a": "paper: inverse chattering (growing)",
     "b": "paper: SS stable, settles",
     "c": "paper: inverse chattering (growing)",
     "d": "caption: sustained small oscillation; text: growing, simultaneous impacts",
     "e": "caption: growing, simultaneous impacts; text: sustained micro-oscillation",
 }
-_TIME_LABEL = "time [rescaled, paper eq. 6]"
+TIME_LABEL = "time [rescaled, paper eq. 6]"
 
 
 # --------------------------------------------------------------------------- Fig. 2
@@ -108,8 +114,8 @@ def draw_fig2(fig, runs: dict, n_samples: int = 6000) -> list:
     axes = fig.subplots(len(runs), 1, squeeze=False)[:, 0]
     art = []
     for ax, (name, (p, res, outcome)) in zip(axes, runs.items(), strict=True):
-        art += draw_trajectory(ax, res, p, name, _PAPER_SAYS[name], n_samples, outcome)
-    axes[-1].set_xlabel(_TIME_LABEL)
+        art += draw_trajectory(ax, res, p, name, PAPER_SAYS[name], n_samples, outcome)
+    axes[-1].set_xlabel(TIME_LABEL)
     return art
 
 
@@ -123,7 +129,7 @@ def _fig2_table(runs) -> str:
         rows.append(
             f"| {name} | {ang} | {p['k'][0]:g}, {p['k'][1]:g}; {p['q'][0]:g}, {p['q'][1]:g} "
             f"| **{outcome.label}** "
-            f"(t <= {p['t_end']:g}, {res.n_events} events) | {_PAPER_SAYS[name]} |"
+            f"(t <= {p['t_end']:g}, {res.n_events} events) | {PAPER_SAYS[name]} |"
         )
     return (
         "Fig. 2, simulated outcome per panel (`atlas.paper.figures_dynamics.plot_fig2`; the "
@@ -161,166 +167,20 @@ def plot_fig2(outdir, t_end: dict | None = None, n_samples: int = 6000) -> list:
     return [path]
 
 
-# --------------------------------------------------------------------------- atlas simulate
-
-
-def run_cli(
-    case=None,
-    beta1=None,
-    beta2=None,
-    alpha=None,
-    k1=None,
-    k2=None,
-    q1=None,
-    q2=None,
-    t_end=None,
-    out=None,
-    overwrite=False,
-    outcome_map=False,
-    n=None,
-    kappa=None,
-    q=None,
-    engine="fast",
-    n_perturb=None,
-) -> int:
-    """``atlas simulate``: one trajectory (a Fig. 2 case, optionally overridden), its outcome
-    printed; ``--out`` writes a figure (``.png``/``.pdf``) or the events (``.csv``).
-
-    With ``--map``: the outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` at
-    ``(kappa, q1 = q2 = q, alpha)`` (defaults 24, 0.5, 0, 0.35 pi; ``--t-end`` default 150;
-    ``--n-perturb`` initial conditions per cell, default 1: the most frequent outcome and the
-    fraction of runs giving it),
-    outcome counts printed; ``--out`` writes it as netCDF (``.nc``) or as the figure beside the
-    Fig. 1 theory map (``.png``/``.pdf``).  An existing ``out`` is replaced only with
-    ``overwrite``."""
-    if out:
-        check_output_path(out, overwrite)
-    if outcome_map:
-        return _run_map(n, kappa, q, alpha, t_end, out, engine, case, n_perturb)
-    case = case[len("fig2") :] if case and case.startswith("fig2") else case
-    p = _case_params(case, beta1, beta2, alpha, t_end, (k1, k2), (q1, q2))
-    res = simulate(**p, max_events=100_000)
-    outcome = classify(res)
-    print(
-        f"{case or 'custom'}: {outcome.label}; {res.n_events} events, status {res.status.value}, "
-        f"t = {res.t_final:g}"
-    )
-    if out:
-        out = Path(out)
-        if out.suffix.lower() == ".csv":
-            atomic_write_text(out, _events_csv(res))
-        else:
-            fig = drawing.new_figure(figsize=(8, 3), constrained_layout=True)
-            ax = fig.subplots()
-            draw_trajectory(
-                ax, res, p, case or "custom", _PAPER_SAYS.get(case, ""), outcome=outcome
-            )
-            ax.set_xlabel(_TIME_LABEL)
-            savefig(fig, out)
-        print(f"wrote {out}")
-    return 0
-
-
-def _case_params(case, beta1, beta2, alpha, t_end, k, q) -> dict:
-    """Keyword arguments of :func:`atlas.dynamics.simulate`: a Fig. 2 case (or the default
-    physical parameters) with the given values overriding."""
-    p = (
-        dict(fig2_cases()[case])
-        if case
-        else {
-            "k": (100.0, 200.0),
-            "q": (0.0, 0.0),
-            "b_norm": (1.0, 1.0),
-            "a_norm": 1.0,
-            "g0": (0.0, 0.0, 0.0, 0.0),
-            "t_end": 10.0,
-        }
-    )
-    if not case and None in (beta1, beta2, alpha):
-        raise ValueError("case: give --case or all of --beta1, --beta2, --alpha")
-    for key, v in (("beta1", beta1), ("beta2", beta2), ("alpha", alpha), ("t_end", t_end)):
-        if v is not None:
-            p[key] = v
-    p["k"] = tuple(old if new is None else new for old, new in zip(p["k"], k, strict=True))
-    p["q"] = tuple(old if new is None else new for old, new in zip(p["q"], q, strict=True))
-    return p
-
-
-def _events_csv(res) -> str:
-    rows = ["t,kind,contact,d1,d2,d1dot,d2dot,mode_after"]
-    for t, kind, c, g, m in zip(
-        res.t_events, res.kinds, res.contacts, res.states, res.modes, strict=True
-    ):
-        rows.append(
-            ",".join([repr(float(t)), kind, str(int(c))] + [repr(float(x)) for x in g] + [m])
-        )
-    return "\n".join(rows) + "\n"
-
-
-def _run_map(n, kappa, q, alpha, t_end, out, engine, case, n_perturb=None) -> int:
-    if case:
-        raise ValueError("case: --case and --map exclude each other")
-    n = 24 if n is None else int(n)
-    if n < 1:
-        raise ValueError(f"n: must be >= 1, got {n}")
-    suffix = Path(out).suffix.lower() if out else ""
-    if out and suffix not in (".nc", ".png", ".pdf"):
-        raise ValueError(f"out: expected FILE.nc, FILE.png or FILE.pdf, got {out!r}")
-    kw = {"kappa": 0.5 if kappa is None else kappa, "q": 0.0 if q is None else q}
-    if alpha is not None:
-        kw["alpha"] = alpha
-    if t_end is not None:
-        kw["t_end"] = t_end
-    if n_perturb is not None:
-        if int(n_perturb) < 1:
-            raise ValueError(f"n_perturb: must be >= 1, got {n_perturb}")
-        kw["n_perturb"] = int(n_perturb)
-    b1, b2 = outcome_grid(n)
-    ds = outcome_map(b1, b2, engine=engine, **kw)
-    vals, counts = np.unique(ds["outcome"].values, return_counts=True)
-    summary = ", ".join(f"{Outcome(int(v)).label} {c}" for v, c in zip(vals, counts, strict=True))
-    print(
-        f"outcome map {n}x{n}: {summary}; {ds.attrs['trajectories']} trajectories in "
-        f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine})"
-    )
-    if out:
-        if suffix == ".nc":
-            write_outcome_map(ds, out)
-        else:
-            plot_outcome_map(ds, out)
-        print(f"wrote {out}")
-    return 0
+# --------------------------------------------------------------------------- outcome map
 
 
 #: grid of the outcome map in ``atlas paper`` (quick mode, full) [cells per axis]
-PAPER_MAP_N = (6, 48)
+PAPER_MAP_N = (6, 256)
 
 
-def write_outcome_map(ds, path, overwrite: bool = True, history: str | None = None) -> str:
-    """Write an :func:`atlas.dynamics.outcome_map` dataset to netCDF4, atomically.
-
-    Through :func:`atlas.data.io.write_netcdf` (temporary file + ``os.replace``; no ``_FillValue`` on
-    the int8 flags or the coordinates), with the CF global attributes of the atlases
-    (``Conventions``, ``source``, ``history``).
-    """
-
+def write_outcome_map(ds, path, overwrite: bool = True) -> str:
+    """Write an outcome atlas (:mod:`atlas.dynamics.outcomes`, CF attributes included) to
+    netCDF4 through :func:`atlas.data.io.write_netcdf` (temporary file + ``os.replace``; no
+    ``_FillValue`` on the int8 flags or the coordinates)."""
     from atlas.data.io import write_netcdf
 
-    ds = ds.copy()
-    call = history or (
-        f"atlas.dynamics.outcome_map(kappa={ds.attrs['kappa']:g}, q=({ds.attrs['q1']:g}, "
-        f"{ds.attrs['q2']:g}), alpha={ds.attrs['alpha']:.6g}, n={ds.sizes['beta1']}x"
-        f"{ds.sizes['beta2']}, engine={ds.attrs.get('engine', 'numpy')!r})"
-    )
-    ds.attrs.update(
-        Conventions="CF-1.10",
-        source=config.source(),
-        history=config.history(call),
-    )
     return write_netcdf(ds, path, overwrite=overwrite)
-
-
-# --------------------------------------------------------------------------- outcome map
 
 
 def draw_theory(ax, theory) -> list:
@@ -495,11 +355,134 @@ def plot_outcome_map(ds, path, theory=None, n_outline: int = 600) -> Path:
 def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
     """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
     ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
-    :func:`plot_outcome_map`).  ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
+    :func:`plot_outcome_map`; the netCDF holds the theory verdicts of the same cells too).
+    ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     b1, b2 = outcome_grid(n)
-    ds = outcome_map(b1, b2, **kwargs)
+    ds = outcome_map(b1, b2, **{"theory": True, **kwargs})
     nc = Path(write_outcome_map(ds, out / "outcome_map.nc"))
     png = plot_outcome_map(ds, out / "outcome_map.png", theory=theory)
     return [nc, png]
+
+
+# --------------------------------------------------------------------------- outcome distribution
+
+#: the model of each row of the outcome-distribution figure: Fig. 2 a-c and d-e (k = (100, 200),
+#: |b| = 1: kappa = 0.5; q_hat = 20 / sqrt(200) for d-e; alpha as in the caption; subclasses 132,
+#: 142), and alpha = 0.65 pi, where subclasses 133 and 143 lie
+DISTRIBUTION_MODELS = (
+    {"label": "Fig. 2 a-c", "kappa": 0.5, "q": 0.0, "alpha": 0.35 * math.pi},
+    {"label": "Fig. 2 d-e", "kappa": 0.5, "q": 20.0 / math.sqrt(200.0), "alpha": 0.2 * math.pi},
+    {"label": "133, 143", "kappa": 0.5, "q": 0.0, "alpha": 0.65 * math.pi},
+)
+#: grid (``m`` of :func:`distribution_grid`) and runs per cell of the outcome distribution in
+#: ``atlas paper`` (quick mode, full)
+PAPER_DISTRIBUTION = ((4, 4), (12, 12))
+
+
+def distribution_grid(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """``beta1 = (i + 1/3) (pi/2) / m``, ``beta2 = pi/2 + (j + 2/3) (pi/2) / m`` [rad], ``i < m``,
+    ``j < 2 m``: the box ``(0, pi/2) x (pi/2, 3 pi/2)`` that holds subclasses 132, 133, 142, 143
+    (not their duals), offset from the degenerate directions like
+    :func:`atlas.dynamics.outcome_grid`."""
+    step = 0.5 * math.pi / int(m)
+    return (np.arange(m) + 1 / 3) * step, 0.5 * math.pi + (np.arange(2 * m) + 2 / 3) * step
+
+
+def subclass_distribution(ds) -> dict:
+    """Runs per outcome class summed over the cells of each subclass 132, 133, 142, 143 of an
+    outcome atlas with theory verdicts (one ``(kappa, q, alpha)``), split by the certified SS
+    verdict of the cell: ``{(code, ss): (cells, mixed cells, counts per class)}`` for the groups
+    present, ``ss`` = ``"SS stable"`` (stable or neutral) or ``"SS unstable"`` (unstable or SS
+    inconsistent); *mixed*: the runs of the cell disagree."""
+    code = ds["subclass_code"].values
+    counts = ds["outcome_count"].values
+    mixed = ds["agreement"].values < 1
+    ss = np.isin(ds["stable_SS"].values, (Verdict.STABLE, Verdict.NEUTRAL))
+    ss &= ds["consistent_SS"].values
+    out = {}
+    for c in NO_STABLE_SUBCLASSES:
+        for name, flag in (("SS stable", True), ("SS unstable", False)):
+            sel = (code == c) & (ss == flag)
+            if sel.any():
+                out[(c, name)] = (int(sel.sum()), int(mixed[sel].sum()), counts[sel].sum(axis=0))
+    return out
+
+
+def draw_distribution(ax, ds, title: str) -> list:
+    """Stacked bars of :func:`subclass_distribution`: fraction of the runs per outcome class in
+    each subclass without a stable mode (split by the theory's SS verdict), with the cells, runs
+    and mixed cells written beside them."""
+    dist = subclass_distribution(ds)
+    art = []
+    for y, (cells, mixed, counts) in enumerate(dist.values()):
+        frac = counts / max(1, counts.sum())
+        left = 0.0
+        for o, f in zip(Outcome, frac, strict=True):
+            if f > 0:
+                art += ax.barh(y, f, left=left, color=o.color, edgecolor="k", lw=0.3).patches
+                left += f
+        text = f"{cells} cells, {int(counts.sum())} runs; {mixed} mixed"
+        art.append(ax.text(1.01, y, text, va="center", fontsize=7))
+    ax.set_yticks(range(len(dist)), [f"{c}, theory: {ss}" for c, ss in dist])
+    ax.set_ylim(len(dist) - 0.5, -0.5)
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("fraction of the perturbed runs")
+    art.append(ax.set_title(title, fontsize=9))
+    return art
+
+
+def outcome_distribution_files(out, m: int = 16, n_perturb: int = 16, models=None) -> list:
+    """The outcome distribution where the paper predicts no stable mode (Sec. 6.4-6.5): an
+    outcome atlas with theory verdicts on :func:`distribution_grid` ``(m)`` with
+    ``n_perturb`` runs per cell for each model of ``models`` (default
+    :data:`DISTRIBUTION_MODELS`), summed per subclass 132, 133, 142, 143
+    (:func:`subclass_distribution`).  Writes ``out/outcome_distribution.png`` and
+    ``out/outcome_distribution.md`` (the counts)."""
+    from matplotlib.patches import Patch
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    models = DISTRIBUTION_MODELS if models is None else models
+    b1, b2 = distribution_grid(m)
+    fig = drawing.new_figure(figsize=(10, 1.2 + 1.9 * len(models)), constrained_layout=True)
+    axes = fig.subplots(len(models), 1, squeeze=False)[:, 0]
+    rows = [
+        "| model | subclass | theory | cells | cells mixed | runs | "
+        + " | ".join(o.label for o in Outcome)
+        + " |",
+        "|---|---|---|---|---|---|" + "---|" * len(Outcome),
+    ]
+    for ax, p in zip(axes, models, strict=True):
+        ds = outcome_map(b1, b2, p["kappa"], p["q"], p["alpha"], n_perturb=n_perturb, theory=True)
+        title = (
+            f"{p['label']}: kappa = {p['kappa']:g}, q = {p['q']:.4g}, alpha = "
+            f"{p['alpha'] / math.pi:.3g} pi ({b1.size} x {b2.size} cells, {n_perturb} runs each)"
+        )
+        draw_distribution(ax, ds, title)
+        for (c, ss), (cells, mixed, counts) in subclass_distribution(ds).items():
+            rows.append(
+                f"| {p['label']} | {c} | {ss} | {cells} | {mixed} | {int(counts.sum())} | "
+                + " | ".join(str(int(x)) for x in counts)
+                + " |"
+            )
+    fig.legend(
+        handles=[Patch(color=o.color, label=o.label) for o in Outcome],
+        loc="outside lower center",
+        ncol=4,
+        fontsize=8,
+    )
+    png = out / "outcome_distribution.png"
+    savefig(fig, png)
+    md = out / "outcome_distribution.md"
+    atomic_write_text(
+        md,
+        "Outcome distribution in the subclasses without a stable mode (paper Sec. 6.4-6.5): "
+        f"runs per outcome class summed over the cells of each subclass, {b1.size} x {b2.size} "
+        f"offset grid of (0, pi/2) x (pi/2, 3 pi/2), {n_perturb} perturbed SS equilibria per cell "
+        "(`atlas.paper.figures_dynamics.outcome_distribution_files`). *theory*: the certified SS "
+        "verdict of the cell (stable: stable or neutral and SS consistent); *cells mixed*: cells "
+        "whose runs do not all agree.\n\n" + "\n".join(rows) + "\n",
+    )
+    return [png, md]

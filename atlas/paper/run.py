@@ -33,6 +33,8 @@ FILES = (
     "fig1_stability.png",
     "fig1_stability_variants.png",
     "ladder.png",
+    "outcome_distribution.md",
+    "outcome_distribution.png",
     "outcome_map.nc",
     "outcome_map.png",
     "realisability.md",
@@ -177,7 +179,13 @@ def _dynamics_steps(step: _Steps, out: Path, quick: bool, ds) -> list[str]:
     :mod:`atlas.paper.figures_dynamics` imports; returns notes for the README."""
     notes: list[str] = []
     try:
-        from atlas.paper.figures_dynamics import PAPER_MAP_N, outcome_map_files, plot_fig2
+        from atlas.paper.figures_dynamics import (
+            PAPER_DISTRIBUTION,
+            PAPER_MAP_N,
+            outcome_distribution_files,
+            outcome_map_files,
+            plot_fig2,
+        )
     except ImportError as e:  # another module of the package; optional here
         notes.append(f"fig2.png not made: atlas.paper.figures_dynamics not importable ({e}).")
         return notes
@@ -186,6 +194,8 @@ def _dynamics_steps(step: _Steps, out: Path, quick: bool, ds) -> list[str]:
     else:
         step("fig2.png", lambda: plot_fig2(out))
     step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
+    n, runs = PAPER_DISTRIBUTION[not quick]
+    step("outcome_distribution.png", lambda: outcome_distribution_files(out, n, runs))
     return notes
 
 
@@ -299,9 +309,20 @@ def _figure_sections(out: Path) -> list[str]:
             "## Outcome map (simulated, beside the Fig. 1 theory map)",
             "",
             "[outcome_map.nc](outcome_map.nc): outcome of a perturbed SS equilibrium per "
-            "cell (atlas.dynamics.outcome_map); outlined: subclasses 132/133/142/143 + duals.",
+            "cell (atlas.dynamics.outcome_map) and the certified theory verdicts of the same "
+            "cells; outlined: subclasses 132/133/142/143 + duals.",
             "",
             "![outcome map](outcome_map.png)",
+            "",
+        ]
+    if (out / "outcome_distribution.png").exists():
+        lines += [
+            "## Outcome distribution where the paper predicts no stable mode",
+            "",
+            "[outcome_distribution.md](outcome_distribution.md): runs per outcome class in the "
+            "cells of subclasses 132, 133, 142, 143 (several perturbed SS equilibria per cell).",
+            "",
+            "![outcome distribution](outcome_distribution.png)",
             "",
         ]
     return lines

@@ -54,3 +54,20 @@ def test_tile_plan_is_lazy():
     want = [(a, min(a + 2, 5), c, min(c + 3, 7)) for a in range(0, 5, 2) for c in range(0, 7, 3)]
     assert list(small) == want and small == want and small[1:3] == want[1:3]
     assert TilePlan.of(small.describe()) == small
+
+
+def test_outcome_estimate_counts_every_axis_and_the_theory():
+    """Points = trajectories over every axis x n_perturb; the bytes written are those of the
+    outcome variables (8 int16 counts, int8 outcome, float32 agreement, the subclass flag per
+    cell) plus the theory verdicts of the scene; tiles bound the trajectories held at once."""
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:6", alpha="0.1,0.2,0.3", kappa="0.5,2", q=0.5)
+    cells = 8 * 6 * 3 * 2
+    est = limits.outcome_estimate(scene, 5, theory=False)
+    assert est.points == cells * 5 and est.command == "simulate --map"
+    assert est.output_bytes == cells * (8 * 2 + 1 + 4 + 1)
+    both = limits.outcome_estimate(scene, 5)
+    assert both.output_bytes == est.output_bytes + limits.generate_estimate(scene).output_bytes
+    tiled = limits.outcome_estimate(scene, 5, theory=False, tile_runs=10)
+    assert tiled.peak_bytes == est.peak_bytes - (cells * 5 - 10) * limits.OUTCOME_TRAJECTORY_BYTES
+    slow = limits.outcome_estimate(scene, 5, theory=False, engine="numpy")
+    assert slow.seconds > 10 * est.seconds

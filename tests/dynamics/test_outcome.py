@@ -2,6 +2,7 @@
 ``atlas simulate --map`` command and the Fig. 2 / outcome-map files written from them."""
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -128,7 +129,7 @@ def test_outcome_map_dataset_contract(tmp_path):
         np.testing.assert_array_equal(back["outcome"].values, ds["outcome"].values)
         np.testing.assert_array_equal(back["no_stable_subclass"], ds["no_stable_subclass"])
         assert back.attrs["Conventions"].startswith("CF-")
-        assert "outcome_map" in back.attrs["history"]
+        assert "outcome_atlas" in back.attrs["history"]
     import netCDF4
 
     with netCDF4.Dataset(path) as nc:
@@ -145,10 +146,51 @@ def test_cli_simulate_map_writes_netcdf(tmp_path, capsys):
     assert main(["simulate", "--map", "--n", "2", "--q", "0.1", "--out", str(path)]) == 0
     assert "outcome map 2x2" in capsys.readouterr().out
     with xr.open_dataset(path) as ds:
-        assert ds.sizes == {"beta1": 2, "beta2": 2}
+        assert ds.sizes == {"beta1": 2, "beta2": 2, "outcome_class": len(S.Outcome)}
         assert ds.attrs["q1"] == 0.1 and ds.attrs["kappa"] == 0.5
         assert ds.attrs["engine"] == "fast"  # the default engine
+        assert ds.attrs["history"].split(": ", 1)[1].startswith("atlas simulate --map --n 2")
+        assert "stable_SS" in ds and "subclass_code" in ds  # the theory beside the outcomes
     assert main(["simulate", "--map", "--out", str(tmp_path / "m.txt")]) != 0
+
+
+def test_cli_simulate_map_axes_of_generate(tmp_path, capsys):
+    """The axes take the ranges of atlas generate; --dry-run counts trajectories over every
+    axis; --store tiles, --resume continues; bad input: one line naming the parameter, exit 2,
+    nothing written."""
+    import xarray as xr
+
+    from atlas.cli import main
+
+    axes = ["--beta1", "0.1:3:3", "--beta2", "0.65pi", "--q1", "0,1", "--q2", "0.5", "--no-theory"]
+    argv = ["simulate", "--map", *axes, "--n-perturb", "2", "--t-end", "40"]
+    assert main([*argv, "--dry-run"]) == 0
+    assert "atlas simulate --map: 12 points" in capsys.readouterr().out
+    store, path = tmp_path / "m.tiles", tmp_path / "m.nc"
+    assert main([*argv, "--store", str(store), "--slab", "2", "--out", str(path)]) == 0
+    with xr.open_dataset(path) as ds:
+        assert ds["outcome_count"].dims == ("beta1", "q1", "outcome_class")  # scalars: no dim
+        assert ds.sizes["beta1"] == 3 and ds.sizes["q1"] == 2
+        assert np.all(ds["outcome_count"].sum("outcome_class") == 2)
+        first = ds["outcome_count"].values
+    os.remove(store / "t000001.npy")
+    again = [*argv, "--store", str(store), "--slab", "2", "--resume", "--overwrite"]
+    assert main([*again, "--out", str(path)]) == 0
+    assert "1 computed, 1 verified" in capsys.readouterr().err
+    with xr.open_dataset(path) as ds:
+        np.testing.assert_array_equal(ds["outcome_count"].values, first)
+    for bad, name in (
+        (["--beta1", "nope"], "beta1"),
+        (["--kappa", "0"], "kappa"),
+        (["--seed", "-1"], "seed"),
+        (["--resume"], "resume"),
+        (["--kappa", "0.5,2", "--out", str(tmp_path / "f.png")], "out"),
+    ):
+        out = tmp_path / "bad.nc"
+        rc = main(["simulate", "--map", "--n", "2", "--out", str(out), *bad])
+        err = capsys.readouterr().err.strip()
+        assert rc == 2 and err.startswith(f"atlas: error: {name}: ") and "\n" not in err, err
+        assert not out.exists() and not (tmp_path / "f.png").exists()
 
 
 def test_cli_simulate_map_several_initial_conditions(tmp_path, capsys):

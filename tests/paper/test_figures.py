@@ -171,3 +171,47 @@ def test_dynamics_draw_functions_draw_on_the_given_ax(ds):
     fig = Figure()
     runs = {"d": (p, res, fd.classify(res))}
     _check_drawn(fd.draw_fig2(fig, runs, n_samples=50), fig=fig)
+
+
+def test_outcome_distribution_per_subclass_and_its_bars():
+    """Runs per class summed over the cells of each subclass without a stable mode, split by the
+    cell's SS verdict (hand-made counts: subclass 132 has two cells with SS unstable, one of them
+    mixed, and one with SS stable; 142 one cell where SS is inconsistent; 121 is left out)."""
+    import xarray as xr
+
+    from atlas.core.verdicts import Verdict
+    from atlas.dynamics import Outcome
+    from atlas.paper import figures_dynamics as fd
+
+    n = len(Outcome)
+    counts = np.zeros((2, 3, n), np.int16)
+    counts[0, 0, int(Outcome.IWC)] = 4
+    counts[0, 1, int(Outcome.IWC)] = 1
+    counts[0, 1, int(Outcome.GROWING_BOUNCING)] = 3
+    counts[0, 2, int(Outcome.SETTLES_SS)] = 4
+    counts[1, 0, int(Outcome.GROWING_BOUNCING)] = 4
+    counts[1, 1, int(Outcome.SETTLES_FF)] = 4
+    S, U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
+    dims = ("beta1", "beta2")
+    ds = xr.Dataset(
+        {
+            "subclass_code": (dims, np.array([[132, 132, 132], [142, 121, 121]], np.int16)),
+            "outcome_count": ((*dims, "outcome_class"), counts),
+            "agreement": (dims, np.array([[1, 0.75, 1], [1, 1, 1]], np.float32)),
+            "stable_SS": (dims, np.array([[U, U, S], [S, S, S]], np.int8)),
+            "consistent_SS": (dims, np.array([[1, 1, 1], [0, 1, 1]], bool)),
+        }
+    )
+    dist = fd.subclass_distribution(ds)
+    assert list(dist) == [(132, "SS stable"), (132, "SS unstable"), (142, "SS unstable")]
+    cells, mixed, c132 = dist[(132, "SS unstable")]
+    assert (cells, mixed) == (2, 1)
+    assert c132[int(Outcome.IWC)] == 5 and c132[int(Outcome.GROWING_BOUNCING)] == 3
+    assert c132.sum() == 8
+    assert dist[(132, "SS stable")][2][int(Outcome.SETTLES_SS)] == 4
+    assert dist[(142, "SS unstable")][:2] == (1, 0)
+    ax = _axes()
+    _check_drawn(fd.draw_distribution(ax, ds, "t"), ax=ax)
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    assert labels == ["132, theory: SS stable", "132, theory: SS unstable",
+                      "142, theory: SS unstable"]  # fmt: skip

@@ -1,0 +1,300 @@
+"""Outcome atlases tile by tile into a resumable store, then one netCDF file.
+
+The tiles are ``beta1`` slabs (:func:`atlas.data.tiles.tile_plan`); each is one
+:func:`atlas.dynamics.outcomes.outcome_slab` call.  A cell's runs depend on the cell alone
+(its initial states come from :func:`atlas.dynamics.outcome.standard_normals`, the engines run
+lane by lane), so the assembled counts equal the single-process atlas bit for bit.
+
+Store layout (a directory)::
+
+    STORE/plan.json       the scene, the dynamics options, the tiles and the package versions
+    STORE/t000012.npy     the outcome counts of tile 12 (int16, written atomically)
+    STORE/t000012.json    its record: rows, SHA-256 of the ``.npy`` bytes, runs and timings
+
+A record is written only after its tile file, so a killed run leaves finished tiles with records
+and at most one tile without.  ``resume=True`` keeps every tile whose record matches the bytes of
+its file and recomputes the others; the store must have been made for the same plan (else
+``ValueError: store: ...``).  The theory verdicts are computed once, when the file is assembled.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+import math
+import os
+import shutil
+import tempfile
+
+import numpy as np
+
+from atlas.core import config, interrupts
+from atlas.data.cluster import local_cluster
+from atlas.data.tiles import tile_plan
+from atlas.data.io import check_output_path, write_netcdf
+from atlas.data.scene import Scene
+from atlas.dynamics.outcomes import (
+    Dynamics,
+    check_scene,
+    integer,
+    outcome_dataset,
+    outcome_slab,
+    sum_info,
+)
+
+__all__ = ["outcome_atlas_tiles", "default_slab", "TILE_TRAJECTORIES"]
+
+#: default trajectories per tile (a batch of the fast engine)
+TILE_TRAJECTORIES = 1 << 15
+PLAN = "plan.json"
+
+
+def default_slab(scene: Scene, n_perturb: int) -> int:
+    """``beta1`` values per tile: about :data:`TILE_TRAJECTORIES` trajectories."""
+    per_row = n_perturb
+    for key, ax in scene.axes.items():
+        per_row *= 1 if key == "beta1" else ax.size
+    return max(1, min(scene.axes["beta1"].size, round(TILE_TRAJECTORIES / per_row)))
+
+
+def _sha(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _plan(scene: Scene, dyn: Dynamics, tiles) -> dict:
+    plan = {
+        "scene": scene.describe(),
+        "coords": {
+            k: _sha(np.ascontiguousarray(a.values).tobytes()) for k, a in scene.axes.items()
+        },
+        "dynamics": dyn.attrs(),
+        "tiles": tiles.describe(),
+        "source": config.source(),
+    }
+    plan["hash"] = _sha(json.dumps(plan, sort_keys=True).encode())
+    return plan
+
+
+def _name(i: int, ext: str) -> str:
+    return f"t{i:06d}.{ext}"
+
+
+def _record(store: str, i: int, tile) -> dict | None:
+    """The record of tile ``i`` if it is readable and matches the bytes of its tile file."""
+    try:
+        with open(os.path.join(store, _name(i, "json")), encoding="utf-8") as fh:
+            rec = json.load(fh)
+        with open(os.path.join(store, _name(i, "npy")), "rb") as fh:
+            ok = _sha(fh.read()) == rec["sha256"]
+    except (OSError, ValueError, KeyError):
+        return None
+    return rec if ok and rec.get("index") == i and rec.get("rows") == list(tile) else None
+
+
+def _write(path: str, data: bytes) -> None:
+    """Write a store file at once (temporary file, then ``os.replace``): a store keeps each tile
+    as soon as it is finished, also inside :func:`atlas.data.io.committed_together`."""
+    tmp = f"{path}.{os.getpid()}.tmp"
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile) -> dict:
+    """Compute tile ``i``, write its counts, then its record."""
+    counts, info = outcome_slab(scene, range(*tile), dyn)
+    buf = io.BytesIO()
+    np.save(buf, counts, allow_pickle=False)
+    data = buf.getvalue()
+    rec = {"index": i, "rows": list(tile), "sha256": _sha(data), "info": info}
+    interrupts.check()
+    _write(os.path.join(store, _name(i, "npy")), data)
+    _write(os.path.join(store, _name(i, "json")), json.dumps(rec, sort_keys=True).encode())
+    return rec
+
+
+def _where(scheduler) -> tuple[str, int | str | None]:
+    """``("here", None)``, ``("local", N)`` or ``("address", address)``; one-line ``ValueError``
+    naming ``scheduler`` otherwise."""
+    if scheduler is None:
+        return "here", None
+    text = str(scheduler)
+    kind, _, n = text.partition(":")
+    if kind == "local" and (n == "" or (n.isdigit() and int(n) >= 1)):
+        return "local", int(n) if n else (os.cpu_count() or 1)
+    if kind != "local" and "://" in text:
+        return "address", text
+    raise ValueError(f"scheduler: expected None, local, local:N or tcp://HOST:PORT, got {text!r}")
+
+
+def _map_tiles(where, store, scene, dyn, todo):
+    """Yield ``(index, record)`` of the tiles ``todo`` run here or on dask workers."""
+    kind, arg = where
+    if kind == "here":
+        for i, tile in todo:
+            yield i, _run_tile(store, scene, dyn, i, tile)
+        return
+    from distributed import Client, as_completed
+
+    cluster = None
+    if kind == "local":
+        cluster, client = local_cluster(arg)
+    else:
+        client = Client(arg)
+    try:
+        futures = {
+            client.submit(_run_tile, store, scene, dyn, i, tile, pure=False): i for i, tile in todo
+        }
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _prepare(store: str, plan: dict, resume: bool, overwrite: bool) -> bool:
+    """Continue an existing store of the same plan, or lay out a new one; true when resuming."""
+    exists = os.path.exists(store)
+    if exists and resume:
+        try:
+            with open(os.path.join(store, PLAN), encoding="utf-8") as fh:
+                old = json.load(fh)
+        except (OSError, ValueError):
+            raise ValueError(f"store: {store} is not an outcome-atlas store (no {PLAN})") from None
+        if old.get("hash") != plan["hash"]:
+            diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]]
+            raise ValueError(
+                f"store: {store} was made for a different atlas (differs in {', '.join(diff)})"
+            )
+        return True
+    if exists and not overwrite:
+        raise FileExistsError(f"store: {store} exists (use resume or overwrite)")
+    parent = os.path.dirname(store)
+    if not os.path.isdir(parent):
+        raise FileNotFoundError(f"store: directory {parent} does not exist")
+    tmp = tempfile.mkdtemp(prefix=f".{os.path.basename(store)}.", suffix=".tmp", dir=parent)
+    try:
+        with open(os.path.join(tmp, PLAN), "w", encoding="utf-8") as fh:
+            json.dump(plan, fh, sort_keys=True)
+        if exists:
+            shutil.rmtree(store)
+        os.replace(tmp, store)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return False
+
+
+def outcome_atlas_tiles(
+    scene: Scene,
+    store,
+    *,
+    dynamics: Dynamics | None = None,
+    slab: int | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    to_netcdf=None,
+    overwrite_netcdf: bool = False,
+    theory: bool = True,
+    progress=None,
+    history: str | None = None,
+    scheduler=None,
+) -> dict:
+    """An outcome atlas tile by tile into the store directory ``store`` (see the module
+    docstring), then, with ``to_netcdf``, the netCDF file of
+    :func:`atlas.dynamics.outcomes.outcome_dataset` (atomic).
+
+    Parameters
+    ----------
+    scene : atlas.Scene
+        The parameters (``alpha`` required).
+    store : path-like
+        Store directory (its parent must exist).
+    dynamics : Dynamics, optional
+        Runs per cell, horizon, engine (default :class:`Dynamics` ``()``).
+    slab : int, optional
+        ``beta1`` values per tile (default :func:`default_slab`).
+    resume, overwrite : bool
+        Continue an existing store (same plan), or replace it.
+    to_netcdf : path-like, optional
+        The assembled atlas; ``overwrite_netcdf`` replaces an existing file.
+    theory : bool
+        Add the certified theory verdicts of the same cells.
+    progress : callable, optional
+        Called with ``(trajectories done, trajectories)`` after each tile.
+    history : str, optional
+        Command recorded in ``history``.
+    scheduler : None, "local", "local:N" or "tcp://host:port"
+        Where the tiles run: in this process, on a dask LocalCluster of N single-thread workers
+        (:func:`atlas.data.cluster.local_cluster`), or on a running scheduler whose workers
+        see ``store``.
+
+    Returns
+    -------
+    dict
+        ``store``, ``netcdf``, ``dataset`` (the assembled atlas), ``tiles``, ``slab``,
+        ``computed`` and ``verified`` (tile indices), ``trajectories``, ``seconds``.
+    """
+    scene = check_scene(scene)
+    dyn = Dynamics() if dynamics is None else dynamics
+    if not isinstance(dyn, Dynamics):
+        raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
+    where = _where(scheduler)
+    store = os.path.abspath(os.fspath(store))
+    slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
+    tiles = tile_plan(scene, slab=slab)
+    plan = _plan(scene, dyn, tiles)
+    if to_netcdf is not None:
+        check_output_path(to_netcdf, overwrite_netcdf)
+    resumed = _prepare(store, plan, resume, overwrite)
+    recs = {}
+    if resumed:
+        for i, tile in enumerate(tiles):
+            rec = _record(store, i, tile)
+            if rec is not None:
+                recs[i] = rec
+    verified = sorted(recs)
+    total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
+
+    def report():
+        if progress is not None:
+            progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
+
+    report()
+    todo = [(i, tile) for i, tile in enumerate(tiles) if i not in recs]
+    for i, rec in _map_tiles(where, store, scene, dyn, todo):
+        recs[i] = rec
+        interrupts.check()
+        report()
+    counts = np.concatenate(
+        [np.load(os.path.join(store, _name(i, "npy"))) for i in range(len(tiles))]
+    )
+    info = sum_info(recs[i]["info"] for i in range(len(tiles)))
+    call = history
+    if resumed:
+        call = (history or "atlas.dynamics.outcome_tiles.outcome_atlas_tiles(...)") + (
+            f" (resumed: {len(tiles) - len(verified)} of {len(tiles)} tiles computed)"
+        )
+    ds = outcome_dataset(scene, counts, dyn, info, theory=theory, history=call)
+    netcdf = None
+    if to_netcdf is not None:
+        netcdf = write_netcdf(ds, to_netcdf, overwrite=overwrite_netcdf)
+    return {
+        "store": store,
+        "netcdf": netcdf,
+        "dataset": ds,
+        "tiles": len(tiles),
+        "slab": slab,
+        "computed": sorted(set(range(len(tiles))) - set(verified)),
+        "verified": verified,
+        "trajectories": int(info["trajectories"]),
+        "seconds": float(info["seconds"]),
+    }
