@@ -374,7 +374,7 @@ def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
 DISTRIBUTION_MODELS = (
     {"label": "Fig. 2 a-c", "kappa": 0.5, "q": 0.0, "alpha": 0.35 * math.pi},
     {"label": "Fig. 2 d-e", "kappa": 0.5, "q": 20.0 / math.sqrt(200.0), "alpha": 0.2 * math.pi},
-    {"label": "133, 143", "kappa": 0.5, "q": 0.0, "alpha": 0.65 * math.pi},
+    {"label": "alpha 0.65 pi", "kappa": 0.5, "q": 0.0, "alpha": 0.65 * math.pi},
 )
 #: grid (``m`` of :func:`distribution_grid`) and runs per cell of the outcome distribution in
 #: ``atlas paper`` (quick mode, full)
