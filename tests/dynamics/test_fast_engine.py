@@ -37,6 +37,24 @@ def test_outcomes_match_the_exact_simulator(n, kappa, q, alpha):
     assert (res.decided_by > 0).mean() > 0.5  # most runs decided early
 
 
+def test_degenerate_directions_fall_back_to_the_exact_simulator():
+    """On grid directions where ``sin beta2`` or ``det B`` is a rounding residue (``beta2 = pi``,
+    ``beta2 = beta1 + pi``) the double eigenvalue is split by rounding: the modal form is not
+    used (condition ``~ 1e7``) and the exact simulator gives the outcome."""
+    b = np.linspace(0, 2 * PI, 32, endpoint=False)
+    cells = [(4, 16), (4, 20), (8, 0)]
+    alpha, k, q = 0.35 * PI, (0.5, 1.0), (0.0, 0.0)
+    g0 = np.array([S.perturbed_initial_states(b, b, alpha, 0.5)[c][0] for c in cells])
+    b1, b2 = (b[list(c)] for c in zip(*cells, strict=True))
+    tables = F.modal_tables(F.Lanes.of(b1, b2, alpha, k, q))
+    assert not tables[2].ok[0]  # FS at beta2 = pi: s2 = 1.2e-16
+    assert not tables[3].ok[1]  # SS at beta2 = beta1 + pi: det B ~ 1e-17
+    res = F.run_batch(b1, b2, alpha, k, q, g0, reference=_reference)
+    ref = [int(_reference(x1, x2, alpha, k, q, g)[0]) for x1, x2, g in zip(b1, b2, g0, strict=True)]
+    assert res.code.tolist() == ref
+    assert res.decided_by[0] == F.DECIDED_BY.index("fallback")
+
+
 def _continue(b1, b2, g0, res, kappa, q, alpha, how, t_more=400.0):
     """Runs of the exact simulator from the states where ``how`` decided (index into the
     flattened map)."""
