@@ -741,8 +741,8 @@ def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64", names=No
     shape = np.broadcast_shapes(*(x.shape for x in args))
     args = [np.broadcast_to(x, shape) for x in args]
     dirs = [c for ang in args[:3] for c in mech.direction(ang, dtype)]
-    inputs = dict(zip(("c1", "s1", "c2", "s2", "ca", "sa"), dirs))
-    inputs.update(zip(("kappa", "q1", "q2"), args[3:]))
+    keys = [i for p in ("beta1", "beta2", "alpha", "model") for i in kernels.PARAM_INPUTS[p]]
+    inputs = dict(zip(keys, dirs + args[3:]))
     out = {}
     for k in kernels.verdict_kernels():
         want = tuple(r for r in k.results if r in names)

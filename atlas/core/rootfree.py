@@ -531,7 +531,7 @@ def _tier2_decide(c1, s1, c2, s2, kappa, q1, q2, *, ss, ii, iters):
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(_CHEAP) | frozenset(_STURM), sharp=True)
     cons, stab, dominance = _ii_decide(g)
     k1, k2, q1s, q2s = ex.balance(kappa, q1, q2)
-    D = c1 * s2 - s1 * c2
+    D = ex.det(c1, s1, c2, s2, sub=jnp.subtract)
     for accurate in _accurate_det(c1, s1, c2, s2):  # an estimate: the shifts are certified later
         D = jnp.where(jnp.isnan(accurate), D, accurate)
     a3, a2, a1, a0 = ex.coefficients(c1, s1, c2, s2, k1, k2, q1s, q2s, D, sub=jnp.subtract)

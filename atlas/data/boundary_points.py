@@ -11,11 +11,14 @@ leaves the line tangentially).  Arb root isolation gives a certified interval of
 is its radius, a proven bound.
 
 The components (characteristic polynomial ``l^4 + a3 l^3 + a2 l^2 + a1 l + a0``, paper eq. 9,
-:mod:`atlas.core.exact`): ``a3 = q1 c1 + q2 s2``, ``a2 = kappa c1 + s2 + q1 q2 D``, ``a1 = (q1 +
-kappa q2) D``, ``a0 = kappa D`` with ``D = c1 s2 - s1 c2``.  Damped, SS is stable iff the
+written once in :mod:`atlas.core.expressions` and evaluated here on rational functions of ``t``
+with ``k1 = kappa``, ``k2 = 1``): ``a3 = q1 c1 + q2 s2``, ``a2 = kappa c1 + s2 + q1 q2 D``, ``a1 =
+(q1 + kappa q2) D``, ``a0 = kappa D`` with ``D = c1 s2 - s1 c2``.  Damped, SS is stable iff the
 Routh-Hurwitz minors are positive, and the boundary lies on ``a3 = 0``, ``H2 = a3 a2 - a1 = 0`` or
-``G = (q1 + kappa q2) H2 - kappa a3^2 = 0`` (``H3 = D G``) or a class line ``D = 0``; undamped
-(``q1 = q2 = 0``) on ``a2 = 0`` or ``disc = a2^2 - 4 a0 = (kappa c1 - s2)^2 + 4 kappa s1 c2 = 0``.
+``G = 0`` (:func:`atlas.core.expressions.G`, ``H3 = D G``, equal to ``(q1 + kappa q2) H2 - kappa
+a3^2``) or a class line ``D = 0``; undamped (``q1 = q2 = 0``) on ``a2 = 0`` or ``disc = a2^2 - 4 a0
+= (kappa c1 - s2)^2 + 4 kappa s1 c2 = 0``.  A numerator may carry extra factors ``1 + t^2``
+(no real roots).
 Only roots within ``reach`` of a traced boundary vertex are reported (a component's zero set is a
 boundary only where the other minors allow it); ``beta = pi`` (``t`` infinite) is not covered.
 """
@@ -23,12 +26,14 @@ boundary only where the other minors allow it); ``beta = pi`` (``t`` infinite) i
 from __future__ import annotations
 
 import math
+import operator
 from fractions import Fraction
 
 import flint
 import numpy as np
 from scipy.spatial import cKDTree
 
+from atlas.core import expressions
 from atlas.data.boundary_curves import Point
 
 __all__ = ["ss_line_points", "line_polynomials"]
@@ -69,6 +74,9 @@ class _Rat:
 
     __rmul__ = __mul__
 
+    def __pow__(self, n: int):
+        return _Rat(self.num**n, self.k * n)
+
 
 _COS = _Rat([1, 0, -1], 1)
 _SIN = _Rat([0, 2], 1)
@@ -88,14 +96,21 @@ def _on_line(m):
 
 
 def _components(c1, s1, c2, s2, kappa, q1, q2) -> dict:
-    """The SS boundary's defining polynomials (module docstring) at the given values."""
-    D = c1 * s2 - s1 * c2
-    a2 = kappa * c1 + s2 + q1 * q2 * D
+    """The SS boundary's defining polynomials (module docstring) at the given values
+    (:mod:`atlas.core.expressions` with ``k1 = kappa``, ``k2 = 1``)."""
+    sub = operator.sub
     if q1 == 0 and q2 == 0:
-        return {"a2": a2, "disc": a2 * a2 - 4 * kappa * D}
-    a3 = q1 * c1 + q2 * s2
-    H2 = a3 * a2 - (q1 + kappa * q2) * D
-    return {"a3": a3, "H2": H2, "G": (q1 + kappa * q2) * H2 - kappa * a3 * a3}
+        return {
+            "a2": expressions.a2_undamped(kappa, c1, 1, s2, sub=sub),
+            "disc": expressions.disc_undamped(kappa, c1, 1, s2, s1, c2, sub=sub),
+        }
+    D = expressions.det(c1, s1, c2, s2, sub=sub)
+    a3, a2, a1, _ = expressions.coefficients(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=sub)
+    return {
+        "a3": a3,
+        "H2": expressions.hurwitz_H2(a3, a2, a1, sub=sub),
+        "G": expressions.G(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=sub),
+    }
 
 
 def line_polynomials(m, kappa, q1, q2) -> dict:

@@ -348,7 +348,7 @@ def _axis_inputs(scene: Scene, dtype) -> dict:
     for key, ax in scene.axes.items():
         if key in ("beta1", "beta2", "alpha"):
             c, s = mech.direction(ax.values, dt)
-            tag = {"beta1": ("c1", "s1"), "beta2": ("c2", "s2"), "alpha": ("ca", "sa")}[key]
+            tag = kernels.PARAM_INPUTS[key]
             src[tag[0]] = (key, np.asarray(c, dt))
             src[tag[1]] = (key, np.asarray(s, dt))
         else:

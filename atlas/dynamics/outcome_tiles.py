@@ -31,10 +31,10 @@ import tempfile
 import numpy as np
 
 from atlas.core import config, interrupts
-from atlas.data.cluster import local_cluster
-from atlas.data.tiles import tile_plan
+from atlas.data.cluster import check_scheduler, executor
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.scene import Scene
+from atlas.data.tiles import tile_plan
 from atlas.dynamics.outcomes import (
     Dynamics,
     check_scene,
@@ -120,46 +120,6 @@ def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile) -> dict:
     return rec
 
 
-def _where(scheduler) -> tuple[str, int | str | None]:
-    """``("here", None)``, ``("local", N)`` or ``("address", address)``; one-line ``ValueError``
-    naming ``scheduler`` otherwise."""
-    if scheduler is None:
-        return "here", None
-    text = str(scheduler)
-    kind, _, n = text.partition(":")
-    if kind == "local" and (n == "" or (n.isdigit() and int(n) >= 1)):
-        return "local", int(n) if n else (os.cpu_count() or 1)
-    if kind != "local" and "://" in text:
-        return "address", text
-    raise ValueError(f"scheduler: expected None, local, local:N or tcp://HOST:PORT, got {text!r}")
-
-
-def _map_tiles(where, store, scene, dyn, todo):
-    """Yield ``(index, record)`` of the tiles ``todo`` run here or on dask workers."""
-    kind, arg = where
-    if kind == "here":
-        for i, tile in todo:
-            yield i, _run_tile(store, scene, dyn, i, tile)
-        return
-    from distributed import Client, as_completed
-
-    cluster = None
-    if kind == "local":
-        cluster, client = local_cluster(arg)
-    else:
-        client = Client(arg)
-    try:
-        futures = {
-            client.submit(_run_tile, store, scene, dyn, i, tile, pure=False): i for i, tile in todo
-        }
-        for fut in as_completed(futures):
-            yield futures[fut], fut.result()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
 def _prepare(store: str, plan: dict, resume: bool, overwrite: bool) -> bool:
     """Continue an existing store of the same plan, or lay out a new one; true when resuming."""
     exists = os.path.exists(store)
@@ -232,10 +192,10 @@ def outcome_atlas_tiles(
         Called with ``(trajectories done, trajectories)`` after each tile.
     history : str, optional
         Command recorded in ``history``.
-    scheduler : None, "local", "local:N" or "tcp://host:port"
-        Where the tiles run: in this process, on a dask LocalCluster of N single-thread workers
-        (:func:`atlas.data.cluster.local_cluster`), or on a running scheduler whose workers
-        see ``store``.
+    scheduler : None, "local", "local:N", "tcp://host:port" or a distributed.Client
+        Where the tiles run (:func:`atlas.data.cluster.executor`): in this process, on a dask
+        LocalCluster of N single-thread workers, or on a running cluster whose workers see
+        ``store``.
 
     Returns
     -------
@@ -247,7 +207,7 @@ def outcome_atlas_tiles(
     dyn = Dynamics() if dynamics is None else dynamics
     if not isinstance(dyn, Dynamics):
         raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
-    where = _where(scheduler)
+    check_scheduler(scheduler)
     store = os.path.abspath(os.fspath(store))
     slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
     tiles = tile_plan(scene, slab=slab)
@@ -269,11 +229,15 @@ def outcome_atlas_tiles(
             progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
 
     report()
-    todo = [(i, tile) for i, tile in enumerate(tiles) if i not in recs]
-    for i, rec in _map_tiles(where, store, scene, dyn, todo):
-        recs[i] = rec
-        interrupts.check()
-        report()
+    todo = [(i, (store, scene, dyn, i, tile)) for i, tile in enumerate(tiles) if i not in recs]
+    ex = executor(scheduler)
+    try:
+        for i, rec in ex.map(_run_tile, todo):
+            recs[i] = rec
+            interrupts.check()
+            report()
+    finally:
+        ex.close()
     counts = np.concatenate(
         [np.load(os.path.join(store, _name(i, "npy"))) for i in range(len(tiles))]
     )

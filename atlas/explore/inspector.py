@@ -8,11 +8,12 @@ eigenvalues of ``M`` and the margins; :func:`format_inspection` is the widget's 
 from __future__ import annotations
 
 import math
+import operator
 
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import baseline, exact, hurwitz, points, spectral
+from atlas.core import baseline, exact, expressions, hurwitz, points, spectral
 from atlas.core import mechanics as mech
 from atlas.core.mechanism import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
@@ -101,7 +102,7 @@ def _margins(j, model, dirs, fast, ref) -> dict:
     a3, a2, a1, a0 = (float(x) for x in spectral.coefficients(*j, *model))
     return {
         "ss_margin": float(hurwitz.ss_margin(*j, *model)),
-        "det_B": c1 * s2 - s1 * c2,
+        "det_B": expressions.det(c1, s1, c2, s2, sub=operator.sub),
         "a3": a3,
         "a2": a2,
         "a1": a1,

@@ -98,9 +98,15 @@ def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
     """
     c1, s2 = np.asarray(c1, float), np.asarray(s2, float)
     if q1 == 0 and q2 == 0:
-        a = (kappa * c1 + s2) / (kappa * np.abs(c1) + np.abs(s2) + 1e-300)
+
+        def part(c, s, sub):
+            return expressions.a2_undamped(kappa, c, 1, s, sub=sub)
     else:
-        a = (c1 * q1 + s2 * q2) / (np.abs(c1) * q1 + np.abs(s2) * q2 + 1e-300)
+
+        def part(c, s, sub):
+            return expressions.a3(c, s, q1, q2, sub=sub)
+
+    a = part(c1, s2, np.subtract) / (part(np.abs(c1), np.abs(s2), np.add) + 1e-300)
     return np.minimum(np.asarray(margin, float), a)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from atlas.core import exact, points, rootfree
+from atlas.core.invariants import KEYS
 from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 
@@ -53,12 +54,7 @@ def test_settled_points_match_exact():
     args = grid(8)
     res = points.spectral_points(*args, names=FLAGS)
     shape = res["stable_SS"].shape
-    pts = dict(
-        zip(
-            ("c1", "s1", "c2", "s2", "kappa", "q1", "q2"),
-            (np.broadcast_to(a, shape).ravel().astype(np.float64) for a in args),
-        )
-    )
+    pts = dict(zip(KEYS, (np.broadcast_to(a, shape).ravel().astype(np.float64) for a in args)))
     ref = exact.resolve(pts, names=FLAGS)
     for k in FLAGS:
         assert np.array_equal(res[k].ravel(), ref[k]), k

@@ -11,6 +11,7 @@ import pytest
 
 from atlas.core import exact, spectral
 from atlas.core import mechanics as mech
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.engine import (
     MemorySink,
@@ -132,7 +133,7 @@ def test_fig1_equals_pointwise_kernels(fig1_small):
             n: int(x) for n, x in kern(c1, s1, c2, s2, k, q, q).items() if n != "spectral_abscissa"
         }
         if 3 in v.values():  # the atlas resolved it exactly
-            pt = dict(zip(("c1", "s1", "c2", "s2", "kappa", "q1", "q2"), (c1, s1, c2, s2, k, q, q)))
+            pt = dict(zip(KEYS, (c1, s1, c2, s2, k, q, q)))
             ex = exact.resolve({n: np.asarray(x) for n, x in pt.items()})
             v.update({n: int(ex[n][0]) for n in v if v[n] == 3})
         for n in ("stable_SS", "consistent_II", "stable_II"):

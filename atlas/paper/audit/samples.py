@@ -17,7 +17,7 @@ from fractions import Fraction
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import expressions, mechanics
 from atlas.paper.audit.records import Counterexample, N, S, U
 from atlas.paper.figures import evaluate_points
 
@@ -190,8 +190,8 @@ class NegBK:
 
 def neg_bk(R: Points, undamped) -> NegBK:
     c1, s1, c2, s2 = directions(R.b1, R.b2)
-    det = R.kappa * (c1 * s2 - s1 * c2)
-    tr = -(R.kappa * c1 + s2)
+    det = R.kappa * expressions.det(c1, s1, c2, s2, sub=np.subtract)
+    tr = -expressions.a2_undamped(R.kappa, c1, 1, s2, sub=np.subtract)
     disc = tr**2 - 4 * det
     clear = (np.abs(det) > 1e-9) & (np.abs(tr) > 1e-9) & (np.abs(disc) > 1e-9) & undamped
     return NegBK(det, tr, disc, R.v["stable_SS"] == U, clear)
