@@ -48,7 +48,7 @@ def _compare_with_reference(points) -> tuple[list, int]:
     """(disagreements, skipped): the sympy reference raises on exact multiple roots (skipped)."""
     bad, skipped = [], 0
     for p in points:
-        want = _reference(p)
+        want = _reference(tuple(p))
         if want is None:
             skipped += 1
             continue
@@ -319,7 +319,7 @@ def _ss_hurwitz_check(per_suite):
     for q in ((0.0, 0.0), (0.1, 0.1), (0.05, 0.2)):
         pts += [(c1[i], s1[i], c2[i], s2[i], 0.5, *q) for i in range(beta.size)]
     for p in pts:
-        want = _reference(p)
+        want = _reference(tuple(p))
         assert want is not None and exact.ss_hurwitz(*p) == want[0], p
 
 
