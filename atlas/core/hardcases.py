@@ -8,6 +8,7 @@ arithmetic (mpmath) and then offset by relative amounts ``1e-4 .. 0`` before rou
 
 from __future__ import annotations
 
+import functools
 import operator
 
 import mpmath
@@ -225,5 +226,13 @@ def suite(name: str, dtype=np.float64, seed: int = 0) -> dict:
     """The named hard-case suite as arrays in ``dtype`` (seeded, reproducible)."""
     if name not in SUITES:
         raise ValueError(f"suite: unknown name {name!r}; choose from {', '.join(SUITES)}")
+    s = _suite_float64(name, seed)
+    return _pack(s["beta1"], s["beta2"], s["kappa"], s["q1"], s["q2"], dtype)
+
+
+@functools.cache
+def _suite_float64(name: str, seed: int) -> dict:
+    """The suite in float64, built once per process (the mpmath bisections take seconds); every
+    dtype is rounded from it (rows do not depend on the dtype)."""
     rng = np.random.default_rng([seed, list(SUITES).index(name)])
-    return SUITES[name](rng, dtype)
+    return SUITES[name](rng, np.float64)

@@ -153,16 +153,26 @@ def _reached(b):
     ]
 
 
-def test_coarse_grid_finds_every_branch_of_a_4x_finer_grid():
+#: the one-q = 0 slice (kappa, q1, q2) of the grid comparison and the checkerboard corner
+ONE_Q0 = (0.5, 0.35, 0.0)
+ONE_Q0_OPTS = dict(fields=("SS", "II"), check=2, chord=1e-4)
+
+
+@pytest.fixture(scope="module")
+def one_q0_64():
+    """The one-q = 0 slice on a 64 x 64 grid, traced once for the two tests below."""
+    g = np.arange(64) * 2 * PI / 64
+    return bd.slice_boundaries(g, g, *ONE_Q0, **ONE_Q0_OPTS)
+
+
+def test_coarse_grid_finds_every_branch_of_a_4x_finer_grid(one_q0_64):
     """Every curve the 4x finer grid finds (damped, one q = 0: II junctions, class-line pieces)
     passes within 2e-4 rad of a curve of the 16 x 16 grid (cell 0.39 rad; two chords: the
     segment where the side codes change, up to a chord long, belongs to no piece), and most of
     it lies within the chord tolerance scale of the coarse curves."""
-    opts = dict(fields=("SS", "II"), check=2, chord=1e-4)
-    g16, g64 = (np.arange(n) * 2 * PI / n for n in (16, 64))
-    model = (0.5, 0.35, 0.0)
-    coarse = bd.slice_boundaries(g16, g16, *model, **opts)
-    fine = bd.slice_boundaries(g64, g64, *model, **opts)
+    g16 = np.arange(16) * 2 * PI / 16
+    coarse = bd.slice_boundaries(g16, g16, *ONE_Q0, **ONE_Q0_OPTS)
+    fine = one_q0_64
     for field in ("SS", "II"):
         a = [c.vertices for c in coarse.curves if c.field == field]
         b = [c.vertices for c in fine.curves if c.field == field and len(c.vertices) >= 3]
@@ -173,16 +183,15 @@ def test_coarse_grid_finds_every_branch_of_a_4x_finer_grid():
         assert np.median(d) < 1e-6
 
 
-def test_corner_of_a_checkerboard_is_reached():
+def test_corner_of_a_checkerboard_is_reached(one_q0_64):
     """Where two class lines cross with one SS code in opposite quadrants (one q = 0 slice at
     (2 pi, pi / 2), i.e. (0, pi / 2) on the torus), the curves reach the crossing itself: the
     chord through the middle of a corner-cutting segment runs through the saddle from the region
     into the region, so the quarter-point probes must find it (the curves stopped a grid cell
     short before)."""
-    g = np.arange(64) * 2 * PI / 64
-    b = bd.slice_boundaries(g, g, 0.5, 0.35, 0.0, fields=("SS",))
     corners = np.array([[2 * PI, PI / 2], [0.0, PI / 2], [PI / 2, PI / 2]])
-    assert _torus_distance(corners, [c.vertices for c in b.curves]).max() < 1e-5
+    curves = [c.vertices for c in one_q0_64.curves if c.field == "SS"]
+    assert _torus_distance(corners, curves).max() < 1e-5
 
 
 def test_wedge_tips_on_a_class_line_are_reached():
