@@ -36,10 +36,10 @@ __getattr__, __dir__, _ = lazy_loader.attach(
     submodules=["core", "data", "dynamics", "paper", "explore", "bench", "cli"],
     submod_attrs={
         "core.config": ["__version__"],
-        "core.mechanism": ["Mechanism"],
+        "core.rigid_body": ["Mechanism"],
         "data.boundaries": ["boundaries"],
         "data.engine": ["generate"],
-        "data.mechanisms": ["mechanism_atlas"],
+        "data.body_atlas": ["mechanism_atlas"],
         "data.scene": ["Scene"],
         "dynamics.simulator": ["simulate"],
         "paper.tables": ["table2"],

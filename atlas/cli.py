@@ -221,7 +221,7 @@ def _add_distributed(g) -> None:
 
 
 def _add_mechanism(sub) -> None:
-    from atlas.data.mechanisms import MECHANISM_SCENES
+    from atlas.data.body_atlas import MECHANISM_SCENES
 
     pm = sub.add_parser(
         "mechanism",
@@ -243,7 +243,7 @@ def _add_mechanism(sub) -> None:
         "--fixed",
         metavar="K=V,...",
         help="other parameters in SI units, e.g. L=3,m=10,k1=2e5,c1=20,speed=0.5 (see "
-        "atlas.data.mechanisms.FIXED)",
+        "atlas.data.body_atlas.FIXED)",
     )
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -493,7 +493,7 @@ def _dispatch_estimate(args):
     from atlas.data.scene import parse_values
 
     if args.command == "mechanism":
-        from atlas.data.mechanisms import MECHANISM_SCENES
+        from atlas.data.body_atlas import MECHANISM_SCENES
 
         sc = MECHANISM_SCENES.get(args.name)
         if sc is None:
@@ -543,7 +543,7 @@ def _force_progress() -> bool:
 
 _DISPATCH = {
     "paper": ("atlas.paper", "run"),
-    "mechanism": ("atlas.data.mechanisms", "run_cli"),
+    "mechanism": ("atlas.data.body_atlas", "run_cli"),
     "boundaries": ("atlas.data.boundaries", "run_cli"),
     "simulate": ("atlas.paper.simulate", "run_cli"),
     "table": ("atlas.paper.tables", "run_cli"),

@@ -78,10 +78,10 @@ def bounded_det_b():
     exact integer sign): cells on ``beta2 = beta1 + pi`` of an even grid (``det B`` of the rounded
     directions ~ 1e-17) are then undecided, which exercises the settlement paths.  Every jit cache
     is cleared before (the kernels retrace with it) and after."""
-    from atlas.core import enclosures, hurwitz, mechanics, rootfree, signs, spectral, undamped
+    from atlas.core import contact_modes, enclosures, hurwitz, rootfree, signs, spectral, undamped
 
     with pytest.MonkeyPatch.context() as mp:
-        for mod in (mechanics, rootfree, spectral, hurwitz, enclosures, undamped):
+        for mod in (contact_modes, rootfree, spectral, hurwitz, enclosures, undamped):
             mp.setattr(mod, "det2_sign", signs.det2_sign_bounded)
         jax.clear_caches()
         yield

@@ -56,7 +56,7 @@ def test_the_importtime_check_can_fail():
         ("generate", "atlas.data.engine"),
         ("Scene", "atlas.data.scene"),
         ("table2", "atlas.paper.tables"),
-        ("Mechanism", "atlas.core.mechanism"),
+        ("Mechanism", "atlas.core.rigid_body"),
         ("simulate", "atlas.dynamics.simulator"),
     ],
 )

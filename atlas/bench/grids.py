@@ -17,7 +17,7 @@ from atlas.bench.boundaries import contour_lines, masks, ss_margin
 from atlas.bench.config import FLAGS, KEYS, UNDECIDED
 from atlas.bench.timing import timeit
 from atlas.core import exact, spectral
-from atlas.core.mechanics import direction
+from atlas.core.contact_modes import direction
 from atlas.core.points import spectral_points
 
 __all__ = [

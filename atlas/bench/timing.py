@@ -23,7 +23,7 @@ import numpy as np
 
 from atlas.bench.config import FLAGS
 from atlas.core.config import use_compile_cache
-from atlas.core.mechanics import direction
+from atlas.core.contact_modes import direction
 from atlas.core.points import spectral_points
 from atlas.data.io import generate_to_file
 from atlas.data.scene import Scene

@@ -2,8 +2,8 @@
 
 * :mod:`~atlas.core.verdicts`  the verdict and class codes (SPEC §2) and their CF flag attributes;
 * :mod:`~atlas.core.signs`     certified signs of polynomials in float arithmetic (error models);
-* :mod:`~atlas.core.mechanics` B, its invariants, the class code and the consistency of FF, SF, FS;
-* :mod:`~atlas.core.mechanism` a rigid body with two sliding contacts -> B, a, invariants, verdicts;
+* :mod:`~atlas.core.contact_modes` B, its invariants, the class code and the consistency of FF, SF, FS;
+* :mod:`~atlas.core.rigid_body` a rigid body with two sliding contacts -> B, a, invariants, verdicts;
 * :mod:`~atlas.core.invariants` the typed point ``Invariants(c1, s1, c2, s2, kappa, q1, q2)``;
 * :mod:`~atlas.core.expressions` every polynomial and exact scaling of the spectral problem, once;
 * :mod:`~atlas.core.hurwitz`   the certified SS verdict (Hurwitz signs);

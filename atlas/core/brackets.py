@@ -15,7 +15,7 @@ The two fields (paper Sec. 4-6, SPEC §1):
   boundary (one side 0) and the II stability boundary (both sides consistent), including the
   damped dominance switch of classes 15/32.
 
-Angles are in radians; a point's direction is :func:`atlas.core.mechanics.direction` of its
+Angles are in radians; a point's direction is :func:`atlas.core.contact_modes.direction` of its
 angle, i.e. the certified statement is about the rounded direction vectors (within 1 ulp of the
 nominal angle, far below any tolerance used here).
 """
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.core.points import spectral_points
 from atlas.core.verdicts import UNDECIDED_FLAG
 
@@ -82,8 +82,8 @@ def field_codes(field: str, beta1, beta2, kappa, q1, q2, *, dtype="float64") -> 
 def _batch_codes(field, b1, b2, kappa, q1, q2, dtype) -> np.ndarray:
     """:func:`field_codes` of at most ``MAX_BATCH`` points (:func:`direction_codes` of their
     direction vectors)."""
-    c1, s1 = mechanics.direction(b1, dtype)
-    c2, s2 = mechanics.direction(b2, dtype)
+    c1, s1 = contact_modes.direction(b1, dtype)
+    c2, s2 = contact_modes.direction(b2, dtype)
     return direction_codes(field, c1, s1, c2, s2, kappa, q1, q2, dtype=dtype)
 
 
@@ -95,7 +95,7 @@ def direction_codes(field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64
     _check_field(field)
     n = np.size(c1)
     pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
-    pc, ps = mechanics.direction(np.array(PAD_POINT), dtype)
+    pc, ps = contact_modes.direction(np.array(PAD_POINT), dtype)
     c1, c2 = (
         np.pad(np.asarray(v, dtype), (0, pad), constant_values=pc[i]) for i, v in ((0, c1), (1, c2))
     )

@@ -1,7 +1,7 @@
 """Exact classifier in integer arithmetic (SPEC §4 "Accuracy").
 
 Takes the *same floating-point inputs* as the fast kernels (direction components ``c1, s1, c2, s2``,
-``kappa``, ``q1``, ``q2``; see :func:`atlas.core.mechanics.direction`) as exact dyadic rationals and
+``kappa``, ``q1``, ``q2``; see :func:`atlas.core.contact_modes.direction`) as exact dyadic rationals and
 decides every verdict without rounding: it never returns ``UNDECIDED`` and raises only on
 non-finite input.  It settles the points the fast kernels leave undecided and is the reference
 of the tests and benchmarks.

@@ -15,7 +15,7 @@ import mpmath
 import numpy as np
 
 from atlas.core import expressions as ex
-from atlas.core.mechanics import direction
+from atlas.core.contact_modes import direction
 
 __all__ = ["SUITES", "suite", "OFFSETS"]
 

@@ -20,7 +20,7 @@ class Invariants(NamedTuple):
     ----------
     c1, s1 : array
         Direction ``(cos beta1, sin beta1)`` of ``b1`` [1], rounded to the dtype
-        (:func:`atlas.core.mechanics.direction`).
+        (:func:`atlas.core.contact_modes.direction`).
     c2, s2 : array
         Direction ``(cos beta2, sin beta2)`` of ``b2`` [1].
     kappa : array

@@ -11,7 +11,7 @@ meaning of the raw codes is declared here: ``undecided`` (the code meaning undec
 ``true_code`` (for a result stored as a boolean, the code stored as ``True``).
 
 :data:`KERNELS` is the table the output registry (:mod:`atlas.data.outputs`) points into; every
-builder runs these kernels: the atlas engine, :func:`atlas.core.mechanism.verdicts_at`, the figures
+builder runs these kernels: the atlas engine, :func:`atlas.core.rigid_body.verdicts_at`, the figures
 and the explorer.  :func:`register` adds a kernel (checked at once: a bad declaration fails here,
 not at first use).
 """
@@ -25,7 +25,7 @@ from types import MappingProxyType
 import numpy as np
 
 from atlas.core import baseline, hurwitz, points, warm
-from atlas.core import mechanics as mech
+from atlas.core import contact_modes as mech
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Consistency, Verdict
 
 __all__ = [

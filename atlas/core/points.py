@@ -254,7 +254,7 @@ def spectral_points(
     Parameters
     ----------
     c1, s1, c2, s2 : array_like
-        Direction components of ``b1``, ``b2`` [1] (:func:`atlas.core.mechanics.direction`).
+        Direction components of ``b1``, ``b2`` [1] (:func:`atlas.core.contact_modes.direction`).
     kappa, q1, q2 : array_like
         ``kappa = k1|b1|/(k2|b2|)`` and the damping ``q_hat`` (SPEC §1) [1].
     names : tuple of str

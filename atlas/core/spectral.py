@@ -2,7 +2,7 @@
 
 Inputs are the invariant parameters of SPEC §1 (:class:`atlas.core.invariants.Invariants`):
 direction vectors ``(c1, s1)``, ``(c2, s2)`` of ``b1``, ``b2`` (see
-:func:`atlas.core.mechanics.direction`), ``kappa = k1|b1|/(k2|b2|)`` and the damping
+:func:`atlas.core.contact_modes.direction`), ``kappa = k1|b1|/(k2|b2|)`` and the damping
 ``q_j_hat = q_j |b_j| / sqrt(k2 |b2|)``; time is scaled by contact 2.  The parts:
 
 * :mod:`atlas.core.expressions`  the polynomials (``p = l^4 + a3 l^3 + a2 l^2 + a1 l + a0``, ``G``...);

@@ -39,7 +39,7 @@ __all__ = ["Kernel", "jit", "kernel_cache", "MODULES", "KERNEL_ENV"]
 MODULES = (
     "atlas.core.signs",
     "atlas.core.verdicts",
-    "atlas.core.mechanics",
+    "atlas.core.contact_modes",
     "atlas.core.invariants",
     "atlas.core.expressions",
     "atlas.core.hurwitz",

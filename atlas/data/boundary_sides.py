@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from atlas.core import brackets, mechanics
+from atlas.core import brackets, contact_modes
 from atlas.data.boundary_curves import Curve
 from atlas.data.class_lines import LINE_GRADS, line_labels
 
@@ -53,8 +53,8 @@ def normals(xy) -> np.ndarray:
 def _line_directions(xy, m) -> tuple[np.ndarray, ...]:
     """Direction vectors ``(c1, s1, c2, s2)`` of the projections of points ``xy`` onto class
     lines ``m`` (columns of :func:`atlas.data.class_lines.line_distances`), exactly on the line."""
-    c1, s1 = mechanics.direction(xy[:, 0])
-    c2, s2 = mechanics.direction(xy[:, 1])
+    c1, s1 = contact_modes.direction(xy[:, 0])
+    c2, s2 = contact_modes.direction(xy[:, 1])
     k = m % 5
     ca, sa = np.array([1.0, 0.0, -1.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0, -1.0, 0.0])
     axis1, axis2, diag = m < 5, (m >= 5) & (m < 10), m >= 10
@@ -62,7 +62,7 @@ def _line_directions(xy, m) -> tuple[np.ndarray, ...]:
     c2, s2 = np.where(axis2, ca[k], c2), np.where(axis2, sa[k], s2)
     # on beta2 = beta1 + j pi (m = 11 + j): (c2, s2) = (-1)^j (c1, s1) at the projection's beta1
     j = np.where(diag, m - 11, 0)
-    cd, sd = mechanics.direction(0.5 * (xy[:, 0] + xy[:, 1] - j * math.pi))
+    cd, sd = contact_modes.direction(0.5 * (xy[:, 0] + xy[:, 1] - j * math.pi))
     c1, s1 = np.where(diag, cd, c1), np.where(diag, sd, s1)
     sign = np.where(m == 11, 1.0, -1.0)
     c2, s2 = np.where(diag, sign * c1, c2), np.where(diag, sign * s1, s2)

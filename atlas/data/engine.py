@@ -9,7 +9,7 @@ outputs also on ``alpha``, the spectral verdicts on ``beta1, beta2`` and the mod
 group is computed over the *varied* parameters it depends on, in hyperslab *tiles* of at most
 ``tile_points`` points (:func:`tile_blocks`: trailing dimensions whole, one leading dimension
 partial).  For each tile the host gathers the kernel's inputs from direction vectors computed
-**once per coordinate** (:func:`atlas.core.mechanics.direction`), flattens and pads them to exactly
+**once per coordinate** (:func:`atlas.core.contact_modes.direction`), flattens and pads them to exactly
 ``tile_points`` values (so the jitted kernel compiles once per ``tile_points`` and dtype), and
 dispatches the kernel asynchronously; the previous tile is finished (undecided points settled by
 the kernel's exact reference, codes converted to the stored types) while the next one computes.  A
@@ -53,7 +53,7 @@ import jax
 import numpy as np
 
 from atlas.core import checks, config, kernels
-from atlas.core import mechanics as mech
+from atlas.core import contact_modes as mech
 from atlas.data.outputs import (
     OUTPUTS,
     coord_attrs,

@@ -1,7 +1,7 @@
 """The outputs of an atlas and the coordinates they span: the one registry (SPEC §2).
 
 An *output* is a data variable of the Datasets the package builds: the atlas of
-:func:`atlas.data.engine.generate`, the mechanism atlases (:mod:`atlas.data.mechanisms`), the
+:func:`atlas.data.engine.generate`, the mechanism atlases (:mod:`atlas.data.body_atlas`), the
 explorer's map (:func:`atlas.explore.maps.compute_map`) and the Fig. 1 map
 (:func:`atlas.paper.figures.stability_map`).  Each is declared here once, in the style of xclim's
 indicators: the parameters it depends on, *how it is computed*, its stored type and its CF
@@ -29,8 +29,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from atlas.core import contact_modes as mech
 from atlas.core import kernels
-from atlas.core import mechanics as mech
 from atlas.core.verdicts import (
     UNDECIDED_CODE,
     UNDECIDED_FLAG,

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from atlas.core import contact_modes as mech
 from atlas.core import kernels
-from atlas.core import mechanics as mech
 from atlas.core.points import Verdicts
 from atlas.data.outputs import OUTPUTS, kernel_of
 

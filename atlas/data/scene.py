@@ -40,7 +40,7 @@ from functools import cached_property
 import numpy as np
 
 from atlas.core import checks
-from atlas.core.mechanics import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
+from atlas.core.contact_modes import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
 from atlas.data.outputs import OUTPUTS, atlas_outputs, reductions
 
 __all__ = [

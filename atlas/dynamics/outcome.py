@@ -11,7 +11,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.dynamics.classification import classify, needs_longer_run
 from atlas.dynamics.simulator import simulate
 
@@ -67,24 +67,26 @@ NO_STABLE_SUBCLASSES = (132, 133, 142, 143)
 
 
 def _code_args(beta1, beta2, alpha):
-    vec = [mechanics.direction(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha)]
+    vec = [contact_modes.direction(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha)]
     return [jnp.asarray(v) for cs in vec for v in cs]
 
 
 def subclass_codes(beta1, beta2, alpha) -> np.ndarray:
-    """Subclass codes ``ijk`` (SPEC §1) of angles [rad] via :func:`atlas.core.mechanics.subclass_code`
+    """Subclass codes ``ijk`` (SPEC §1) of angles [rad] via :func:`atlas.core.contact_modes.subclass_code`
     (the reference implementation; 0 degenerate, -1 undecided); arrays broadcast."""
-    return np.asarray(mechanics.subclass_code(*_code_args(beta1, beta2, alpha))).astype(np.int16)
+    return np.asarray(contact_modes.subclass_code(*_code_args(beta1, beta2, alpha))).astype(
+        np.int16
+    )
 
 
 def no_stable_subclass(beta1, beta2, alpha) -> np.ndarray:
     """True in subclasses 132, 133, 142, 143 or their duals (paper Sec. 6.4-6.5); arrays broadcast.
 
-    The dual (contacts swapped) is :func:`atlas.core.mechanics.dual_vectors` of the direction vectors.
+    The dual (contacts swapped) is :func:`atlas.core.contact_modes.dual_vectors` of the direction vectors.
     """
     args = _code_args(beta1, beta2, alpha)
-    code = np.asarray(mechanics.subclass_code(*args))
-    dual = np.asarray(mechanics.subclass_code(*mechanics.dual_vectors(*args)))
+    code = np.asarray(contact_modes.subclass_code(*args))
+    dual = np.asarray(contact_modes.subclass_code(*contact_modes.dual_vectors(*args)))
     return np.isin(code, NO_STABLE_SUBCLASSES) | np.isin(dual, NO_STABLE_SUBCLASSES)
 
 

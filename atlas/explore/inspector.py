@@ -14,8 +14,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import baseline, exact, expressions, hurwitz, points, spectral
-from atlas.core import mechanics as mech
-from atlas.core.mechanism import verdicts_at
+from atlas.core import contact_modes as mech
+from atlas.core.rigid_body import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.outputs import OUTPUTS, verdict_outputs
 from atlas.explore.colors import value_label

@@ -13,7 +13,7 @@ import functools
 
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.core.verdicts import Verdict
 
 __all__ = [
@@ -91,7 +91,7 @@ def label_positions(ds):
     cls = ds["class_code"].values
     b1, b2 = ds["beta1"].values, ds["beta2"].values
     pos = {}
-    for code in mechanics.ALL_CLASSES:
+    for code in contact_modes.ALL_CLASSES:
         mask = cls == code
         if not mask.any():
             continue

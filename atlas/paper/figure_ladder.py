@@ -8,8 +8,8 @@ from matplotlib.colors import ListedColormap
 from matplotlib.patches import Patch
 
 from atlas.core.verdicts import Consistency, Verdict
+from atlas.data.body_atlas import mechanism_atlas
 from atlas.data.io import savefig
-from atlas.data.mechanisms import mechanism_atlas
 
 #: (label, colour) of the II categories drawn
 CATEGORIES = (

@@ -28,7 +28,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import baseline, expressions, mechanics, spectral
+from atlas.core import baseline, contact_modes, expressions, spectral
 from atlas.core.points import spectral_points
 from atlas.data.outputs import OUTPUTS, coord_attrs, kernel_outputs, to_storage, variable_attrs
 from atlas.data.plane import map_dims, plane_outputs
@@ -161,7 +161,7 @@ def stability_map(
     raw = plane_outputs(names, b, (kappa, q1, q2), max_resolve=MAX_RESOLVE)
     counts = raw.stats
     if margins:
-        c, s = mechanics.direction(b)
+        c, s = contact_modes.direction(b)
         C1, S1, C2, S2 = c[:, None], s[:, None], c[None, :], s[None, :]
         raw.update(_margin_layers(raw["margin_SS"], C1, S1, C2, S2, kappa, q1, q2))
     coords = {k: (k, b, coord_attrs(k)) for k in ("beta1", "beta2")}
@@ -217,7 +217,9 @@ def _margin_layers(ss_margin, C1, S1, C2, S2, kappa, q1, q2) -> dict:
 
 # --------------------------------------------------------------------------- Fig. 1, classes
 
-_subclass_jit = jax.jit(mechanics.subclass_code)  # eager, the 24 calls took ~20 s of op dispatch
+_subclass_jit = jax.jit(
+    contact_modes.subclass_code
+)  # eager, the 24 calls took ~20 s of op dispatch
 
 
 def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
@@ -225,13 +227,13 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
 
     The class point is the class sample (:func:`atlas.paper.tables.class_samples`) farthest from the
     class boundaries (largest minimum angular gap to beta1, beta1*, and the axes); alpha for
-    subclass ``k`` is the middle of the arc of ``k`` found by :func:`atlas.core.mechanics.subclass_code`.
+    subclass ``k`` is the middle of the arc of ``k`` found by :func:`atlas.core.contact_modes.subclass_code`.
     """
     from atlas.paper.tables import class_samples
 
     samples = class_samples(n, per_class=10_000)
     alpha = _offset_grid(n_alpha)
-    ca, sa = (jnp.asarray(v) for v in mechanics.direction(alpha))
+    ca, sa = (jnp.asarray(v) for v in contact_modes.direction(alpha))
     out = {}
     for cls, pts in samples.items():
         b1, b2 = pts[:, 0], pts[:, 1]
@@ -241,8 +243,8 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
         gap2 = np.min([np.abs(np.angle(np.exp(1j * (b2 - r)))) for r in refs2], 0)
         best = int(np.argmax(np.minimum(gap1, gap2)))
         beta1, beta2 = float(b1[best]), float(b2[best])
-        c1, s1 = mechanics.direction(beta1)
-        c2, s2 = mechanics.direction(beta2)
+        c1, s1 = contact_modes.direction(beta1)
+        c2, s2 = contact_modes.direction(beta2)
         sub = np.asarray(_subclass_jit(*(jnp.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
         alphas = {}
         for k in range(1, 7):

@@ -15,7 +15,7 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.io import savefig
 from atlas.paper import drawing
@@ -92,11 +92,11 @@ def draw_class_diagram(ax, cls: int, rep: dict) -> list:
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
-    dual = mechanics.class_code(
+    dual = contact_modes.class_code(
         *(
             jnp.asarray(v)
-            for v in mechanics.dual_vectors(
-                *mechanics.direction(rep["beta1"]), *mechanics.direction(rep["beta2"])
+            for v in contact_modes.dual_vectors(
+                *contact_modes.direction(rep["beta1"]), *contact_modes.direction(rep["beta2"])
             )
         )
     )
@@ -110,7 +110,7 @@ def draw_fig1_classes(fig, reps: dict | None = None) -> list:
     reps = reps or class_representatives()
     axes = fig.subplots(4, 6)
     art = []
-    for ax, cls in zip(axes.ravel(), mechanics.ALL_CLASSES, strict=True):
+    for ax, cls in zip(axes.ravel(), contact_modes.ALL_CLASSES, strict=True):
         art += draw_class_diagram(ax, cls, reps[cls])
     art.append(
         fig.suptitle(

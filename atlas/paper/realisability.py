@@ -14,16 +14,16 @@ stated set of bodies with *rational* parameters:
   <= 12.7 degrees);
 * friction ``mu_j in {0, 1/10, ..., MU_MAX}`` (``MU_MAX = 2``) and ``s1 = +-1``; **``s2`` is the
   admissible one**: with both contacts closed a rigid body has one line of twists, and the sliding
-  directions are tied (:func:`atlas.core.mechanism.admissible_twist`); bodies where a contact cannot
+  directions are tied (:func:`atlas.core.rigid_body.admissible_twist`); bodies where a contact cannot
   slide are left out.
 
 Random bodies from this set (fixed seed) are classified in float64 by the package's own certified
-kernels (:func:`atlas.core.mechanics.subclass_code`); for each subclass the body farthest from every
+kernels (:func:`atlas.core.contact_modes.subclass_code`); for each subclass the body farthest from every
 boundary of the subclass is kept (``margin``: sine of the smallest angle between the direction of
 ``b1``, ``b2`` or ``a`` and the axes or another of them).  Every kept example is then re-verified in
 exact rational arithmetic: the admissible sliding signs from the exact twist (:func:`admissible`),
 ``B`` and ``a`` of eq. (1) on :class:`fractions.Fraction` inputs by
-:func:`atlas.core.mechanism.mobility` / :func:`~atlas.core.mechanism.free_acceleration`, and the
+:func:`atlas.core.rigid_body.mobility` / :func:`~atlas.core.rigid_body.free_acceleration`, and the
 codes by :func:`atlas.core.exact.point_codes` on integer (hence exactly representable) multiples of
 the columns of ``B`` and of ``a``.
 
@@ -57,9 +57,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from atlas.core import contact_modes as mech
 from atlas.core import exact
-from atlas.core import mechanics as mech
-from atlas.core.mechanism import Mechanism, admissible_twist, free_acceleration, mobility
+from atlas.core.rigid_body import Mechanism, admissible_twist, free_acceleration, mobility
 
 __all__ = [
     "ALL_SUBCLASSES",
@@ -116,7 +116,7 @@ NORMALS = _normals()
 class Realisation:
     """One subclass's outcome: an exactly verified body, or none in the searched set.
 
-    ``params``: the :class:`~atlas.core.mechanism.Mechanism` parameters (``m, I, r1, r2, n1, n2,
+    ``params``: the :class:`~atlas.core.rigid_body.Mechanism` parameters (``m, I, r1, r2, n1, n2,
     mu1, mu2, s1, s2, g``) as Fractions, or ``None``; ``system``: :data:`RIGID` or :data:`WHEEL`;
     ``verified``: ``(s1, s2)`` is admissible for ``system`` and the exact subclass code of
     ``params`` is ``subclass``; ``margin``: sine of the angular distance to the nearest boundary of
@@ -218,7 +218,7 @@ def _integer_direction(v) -> tuple[int, int]:
 def admissible(params: dict, system: str = RIGID) -> bool:
     """Exactly: can ``system`` (:data:`RIGID`, :data:`WHEEL`) slide with ``(s1, s2)``?
 
-    The sliding speeds along the body's twist line (:func:`atlas.core.mechanism.admissible_twist`,
+    The sliding speeds along the body's twist line (:func:`atlas.core.rigid_body.admissible_twist`,
     in :class:`~fractions.Fraction` arithmetic): a rigid body needs ``u1, u2 != 0`` and
     ``s2 = s1 sign(u1 u2)``; with the wheel contact 1 must slide (``u1 != 0``), ``s2`` is free.
     Contacts on one normal line (a 2-D twist space) admit every pair.
@@ -252,7 +252,7 @@ def exact_codes(params: dict) -> dict:
 
 
 def mechanism(params: dict, **kw) -> Mechanism:
-    """The float :class:`~atlas.core.mechanism.Mechanism` of exact parameters (``kw``: k, c, name)."""
+    """The float :class:`~atlas.core.rigid_body.Mechanism` of exact parameters (``kw``: k, c, name)."""
     return Mechanism(**{k: _as_float(v) for k, v in params.items()}, **kw)
 
 

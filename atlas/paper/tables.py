@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.core.points import spectral_points
 from atlas.core.verdicts import Consistency, Verdict
 
@@ -101,13 +101,13 @@ def _grid(n):
     return (np.arange(n) + 0.5) * (2 * np.pi / n)
 
 
-_class_code_jit = jax.jit(mechanics.class_code)  # eager op dispatch took ~10 s
+_class_code_jit = jax.jit(contact_modes.class_code)  # eager op dispatch took ~10 s
 
 
 def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid.
 
-    The samples are closed under the dual map (:func:`atlas.core.mechanics.dual_angles`): the sample of
+    The samples are closed under the dual map (:func:`atlas.core.contact_modes.dual_angles`): the sample of
     a class's dual is the dual image of the class's sample (a self-dual class's sample contains
     the dual of each of its points), so a class and its dual are judged on the same systems.
     ``n`` must be a multiple of 4, which makes the offset grid itself closed under the dual map:
@@ -116,7 +116,7 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     if n % 4:
         raise ValueError(f"n: must be a multiple of 4 (dual-closed grid), not {n}")
     b = _grid(n)
-    c, s = mechanics.direction(b)
+    c, s = contact_modes.direction(b)
     code = np.asarray(
         _class_code_jit(
             jnp.asarray(c)[:, None],
@@ -135,7 +135,7 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
         return np.stack([(n // 4 - 1 - idx[:, 1]) % n, (n // 4 - 1 - idx[:, 0]) % n], -1)
 
     out = {}
-    for cls in mechanics.ALL_CLASSES:
+    for cls in contact_modes.ALL_CLASSES:
         if cls in out:
             continue
         idx = np.argwhere(code == cls)
@@ -157,7 +157,7 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
         out[cls] = np.stack([b[idx[:, 0]], b[idx[:, 1]]], -1)
         didx = dual_idx(idx)
         out[dcls] = np.stack([b[didx[:, 0]], b[didx[:, 1]]], -1)
-    return {cls: out[cls] for cls in mechanics.ALL_CLASSES}
+    return {cls: out[cls] for cls in contact_modes.ALL_CLASSES}
 
 
 def _word(verdicts) -> str:
@@ -176,9 +176,9 @@ def class_kernel(c1, s1, c2, s2, ca, sa):
 
     Shared with the audit's Sec. 6.2 check so both compile the same shapes once.
     """
-    dual = mechanics.class_code(*mechanics.dual_vectors(c1, s1, c2, s2))
-    sub = mechanics.subclass_code(c1, s1, c2, s2, ca, sa)
-    cons = mechanics.consistent_modes(c1, s1, c2, s2, ca, sa)
+    dual = contact_modes.class_code(*contact_modes.dual_vectors(c1, s1, c2, s2))
+    sub = contact_modes.subclass_code(c1, s1, c2, s2, ca, sa)
+    cons = contact_modes.consistent_modes(c1, s1, c2, s2, ca, sa)
     cons = {m: jnp.broadcast_to(v, sub.shape) for m, v in cons.items()}
     return dual, sub, cons
 
@@ -187,16 +187,16 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
     """Regenerate Table 2 (all 24 classes) from the kernels."""
     samples = class_samples(n, per_class)
     alpha = _grid(n_alpha)
-    ca, sa = (jnp.asarray(v) for v in mechanics.direction(alpha, dtype))
+    ca, sa = (jnp.asarray(v) for v in contact_modes.direction(alpha, dtype))
     rows = []
     # one array shape for every class (repeat the last point; sets of verdicts are unchanged), so
     # each jitted kernel compiles once instead of once per distinct class sample size
     size = max(len(p) for p in samples.values())
-    for cls in mechanics.ALL_CLASSES:
+    for cls in contact_modes.ALL_CLASSES:
         pts = samples[cls]
         pts = np.concatenate([pts, np.repeat(pts[-1:], size - len(pts), 0)])
-        c1, s1 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 0], dtype))
-        c2, s2 = (jnp.asarray(v)[:, None] for v in mechanics.direction(pts[:, 1], dtype))
+        c1, s1 = (jnp.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 0], dtype))
+        c2, s2 = (jnp.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
         dual, sub, cons = class_kernel(c1, s1, c2, s2, ca[None, :], sa[None, :])
         duals = set(np.asarray(dual).ravel().tolist())
@@ -220,8 +220,8 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
                     ks.append(k)
             row.subclasses[m] = ks
         row.stability["FF"] = "stable"
-        row.stability["SF"] = _word(mechanics.stable_SF(c1))
-        row.stability["FS"] = _word(mechanics.stable_FS(s2))
+        row.stability["SF"] = _word(contact_modes.stable_SF(c1))
+        row.stability["FS"] = _word(contact_modes.stable_FS(s2))
         # SS and II over the kappa-q sample (undecided points settled exactly)
         kq = np.array(KAPPA_Q_SAMPLE)
         v = spectral_points(
@@ -237,16 +237,16 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
         )
         ss, ci, si = v["stable_SS"], v["consistent_II"], v["stable_II"]
         row.stability["SS"] = _word(ss)
-        if_ = np.asarray(mechanics.consistent_IF(c1, s1))
-        fi = np.asarray(mechanics.consistent_FI(c2, s2))
+        if_ = np.asarray(contact_modes.consistent_IF(c1, s1))
+        fi = np.asarray(contact_modes.consistent_FI(c2, s2))
         row.IF = _marker(if_)
         row.FI = _marker(fi)
         row.II = _marker(ci)
         row.II_stability = _word(si[ci == 1]) if (ci == 1).any() else "-"
         row.CC = (
             "?"
-            if bool(np.all(mechanics.cc_possible(c1, s2)))
-            else ("" if not np.any(mechanics.cc_possible(c1, s2)) else "(?)")
+            if bool(np.all(contact_modes.cc_possible(c1, s2)))
+            else ("" if not np.any(contact_modes.cc_possible(c1, s2)) else "(?)")
         )
         rows.append(row)
     return rows

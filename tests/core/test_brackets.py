@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from atlas.core import brackets, exact, mechanics, points
+from atlas.core import brackets, contact_modes, exact, points
 
 
 def _exact_code(field, b1, b2, kappa, q1, q2):
     """The field code from the exact tier alone (FLINT rational arithmetic, no float kernel)."""
-    c1, s1 = (float(v) for v in mechanics.direction(b1))
-    c2, s2 = (float(v) for v in mechanics.direction(b2))
+    c1, s1 = (float(v) for v in contact_modes.direction(b1))
+    c2, s2 = (float(v) for v in contact_modes.direction(b2))
     v = exact.point_spectral(c1, s1, c2, s2, kappa, q1, q2)
     if field == "SS":
         return v["stable_SS"]
@@ -35,8 +35,8 @@ def test_field_codes_match_the_exact_tier(field, model):
 def test_padding_point_is_decided_by_the_first_pass(model):
     """Batches are padded to MIN_BATCH with PAD_POINT: were it undecided, every copy would go
     through tier 2, root enclosures or the exact tier (a 4096-fold cost on a 1-point bisection)."""
-    c1, s1 = mechanics.direction(np.full(4, brackets.PAD_POINT[0]))
-    c2, s2 = mechanics.direction(np.full(4, brackets.PAD_POINT[1]))
+    c1, s1 = contact_modes.direction(np.full(4, brackets.PAD_POINT[0]))
+    c2, s2 = contact_modes.direction(np.full(4, brackets.PAD_POINT[1]))
     np.testing.assert_array_equal(
         np.stack([c1, s1, c2, s2]), np.array([[1], [0], [0], [1]]) * np.ones(4)
     )

@@ -310,7 +310,7 @@ def test_resolve_never_undecided_and_ss_only_is_consistent():
 
 
 def _ss_hurwitz_check(per_suite):
-    from atlas.core.mechanics import direction
+    from atlas.core.contact_modes import direction
 
     pts = _suite_points(per_suite)
     beta = np.linspace(0.0, 2 * np.pi, 65)[1:16]

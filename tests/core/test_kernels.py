@@ -4,7 +4,7 @@ the verdict functions it names (closed forms at axis-free points)."""
 import numpy as np
 import pytest
 
-from atlas.core import kernels, mechanics
+from atlas.core import contact_modes, kernels
 from atlas.core.verdicts import Verdict
 
 
@@ -48,7 +48,7 @@ def test_kernel_inputs_follow_the_parameters():
 def test_b1_kernel_matches_the_sign_of_b11():
     # beta1 in (pi/2, 3 pi/2) <=> b11 = cos(beta1) < 0: SF unstable (paper Sec. 4.2)
     beta = np.array([0.3, 2.0, 4.0, 5.5])
-    c, s = mechanics.direction(beta)
+    c, s = contact_modes.direction(beta)
     res = kernels.run(kernels.KERNELS["b1"], {"c1": c, "s1": s})
     want = np.where(np.cos(beta) > 0, int(Verdict.STABLE), int(Verdict.UNSTABLE))
     np.testing.assert_array_equal(res["stable_SF"], want)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from atlas.core import exact, points, rootfree
+from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
-from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 
 FLAGS = ("stable_SS", "consistent_II", "stable_II")
@@ -132,7 +132,7 @@ def _codes_grid(n=9):
     """Class, subclass and Table 1 codes of the certified fast path on an offset grid."""
     import jax.numpy as jnp
 
-    from atlas.core import mechanics as mech
+    from atlas.core import contact_modes as mech
 
     g = (np.arange(n) + 0.5) * (2 * np.pi / n)
     c, s = direction(g)

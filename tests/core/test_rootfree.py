@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from atlas.core import enclosures, exact, hardcases, hurwitz, points, rootfree
+from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
-from atlas.core.mechanics import direction
 from atlas.core.signs import UNKNOWN
 from atlas.core.verdicts import Verdict
 

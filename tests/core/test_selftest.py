@@ -9,9 +9,9 @@ import pytest
 from atlas import cli
 from atlas.core import (
     backend,
+    contact_modes,
     enclosures,
     hurwitz,
-    mechanics,
     points,
     rootfree,
     signs,
@@ -46,7 +46,7 @@ def test_a_broken_sign_fails_and_the_backend_is_refused(tmp_path, monkeypatch, c
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))
     args = ["selftest", "--suites", "near_detB,class_boundaries", "--dtypes", "float64"]
     with pytest.MonkeyPatch.context() as mp:
-        for mod in (mechanics, rootfree, spectral, hurwitz, enclosures, undamped):
+        for mod in (contact_modes, rootfree, spectral, hurwitz, enclosures, undamped):
             mp.setattr(mod, "det2_sign", _flipped(signs.det2_sign))
         jax.clear_caches()  # the kernels retrace with the broken sign
         try:

@@ -6,7 +6,7 @@ import shapely
 import xarray as xr
 
 from atlas.cli import main
-from atlas.core import brackets, exact, mechanics
+from atlas.core import brackets, contact_modes, exact
 from atlas.data import boundaries as bd
 from atlas.data.scene import Scene
 
@@ -68,9 +68,9 @@ def test_class_lines_are_the_class_code_ties():
         codes = []
         for off in (0.0, 1e-7, -1e-7):
             q = p + off * n
-            c1, s1 = mechanics.direction(q[:, 0])
-            c2, s2 = mechanics.direction(q[:, 1])
-            codes.append(np.asarray(mechanics.class_code(c1, s1, c2, s2)))
+            c1, s1 = contact_modes.direction(q[:, 0])
+            c2, s2 = contact_modes.direction(q[:, 1])
+            codes.append(np.asarray(contact_modes.class_code(c1, s1, c2, s2)))
         on, plus, minus = codes
         assert (plus != minus).all() and (plus > 0).all() and (minus > 0).all()
         # on the line: a tie (0, or -1 where rounding leaves it undecided) or a side's code
@@ -84,8 +84,8 @@ def damped():
 
 
 def _code(field, point, model):
-    c1, s1 = (float(x) for x in mechanics.direction(point[0]))
-    c2, s2 = (float(x) for x in mechanics.direction(point[1]))
+    c1, s1 = (float(x) for x in contact_modes.direction(point[0]))
+    c2, s2 = (float(x) for x in contact_modes.direction(point[1]))
     v = exact.point_spectral(c1, s1, c2, s2, *model)
     if field == "SS":
         return v["stable_SS"]

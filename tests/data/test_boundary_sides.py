@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.data import boundaries as bd
 from atlas.data.boundary_sides import side_step
 
@@ -20,8 +20,8 @@ def _exact_code(field, c1, s1, c2, s2, model):
 
 
 def _code_at(field, point, model):
-    c1, s1 = mechanics.direction(point[0])
-    c2, s2 = mechanics.direction(point[1])
+    c1, s1 = contact_modes.direction(point[0])
+    c2, s2 = contact_modes.direction(point[1])
     return _exact_code(field, c1, s1, c2, s2, model)
 
 
@@ -42,9 +42,9 @@ def _on_line_code(field, point, model):
         sign = 1 if j == 0 else -1
         return _exact_code(field, c, s, sign * c, sign * s, model)
     if d1 <= d2:
-        c2, s2 = mechanics.direction(y)
+        c2, s2 = contact_modes.direction(y)
         return _exact_code(field, *axes[k1], c2, s2, model)
-    c1, s1 = mechanics.direction(x)
+    c1, s1 = contact_modes.direction(x)
     return _exact_code(field, c1, s1, *axes[k2], model)
 
 

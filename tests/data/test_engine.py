@@ -9,8 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import contact_modes as mech
 from atlas.core import exact, spectral
-from atlas.core import mechanics as mech
 from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.engine import (

@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from atlas import cli
-from atlas.core import kernels, mechanism
+from atlas.core import kernels, rigid_body
 from atlas.data import outputs
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
@@ -76,8 +76,8 @@ def test_a_new_output_reaches_every_builder(dummy, tmp_path):
     assert NAME in atlas and atlas[NAME].dims == ("beta1", "beta2")
     np.testing.assert_array_equal(atlas[NAME].values, want)
 
-    assert NAME in mechanism.verdict_names() and NAME in outputs.verdict_outputs()
-    at = mechanism.verdicts_at(grid[:, None], grid[None, :], 0.3, 0.5, 0.0, 0.0, names=(NAME,))
+    assert NAME in rigid_body.verdict_names() and NAME in outputs.verdict_outputs()
+    at = rigid_body.verdicts_at(grid[:, None], grid[None, :], 0.3, 0.5, 0.0, 0.0, names=(NAME,))
     np.testing.assert_array_equal(at[NAME], want)
 
     np.testing.assert_array_equal(stability_map(7, margins=False)[NAME].values, want)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.core.verdicts import Verdict
 from atlas.paper.figures import _offset_grid, stability_map
 
@@ -17,7 +17,7 @@ def test_schema(ds):
     assert ds["stable_SS"].dims == ("beta1", "beta2")
     assert ds["stable_SF"].dims == ("beta1",)
     assert ds["stable_SS"].dtype == np.int8
-    assert set(np.unique(ds["class_code"].values)) <= set(mechanics.ALL_CLASSES) | {
+    assert set(np.unique(ds["class_code"].values)) <= set(contact_modes.ALL_CLASSES) | {
         0
     }  # 0: beta2 = beta1
     assert ds.attrs["n_undecided"] == 0
@@ -27,8 +27,8 @@ def test_regions_match_exact_reference(ds):
     rng = np.random.default_rng(0)
     b = _offset_grid(41)
     for i, j in rng.integers(0, 41, (25, 2)):
-        c1, s1 = (float(v) for v in mechanics.direction(b[i]))
-        c2, s2 = (float(v) for v in mechanics.direction(b[j]))
+        c1, s1 = (float(v) for v in contact_modes.direction(b[i]))
+        c2, s2 = (float(v) for v in contact_modes.direction(b[j]))
         r = exact.point_spectral(c1, s1, c2, s2, 0.5, 0.0, 0.0)
         for k in ("stable_SS", "consistent_II", "stable_II"):
             assert int(ds[k].values[i, j]) == r[k], (k, i, j)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.paper import tables as t2
 
 # The paper's Table 2, transcribed: class: (dual, FF, SS, SF, FS, IF, FI, II, CC)
@@ -108,9 +108,9 @@ def test_kappa_q_sample_closed_under_dual_map():
 def test_class_samples_closed_under_dual_map():
     smp = t2.class_samples(96, 12)
     for cls, pts in smp.items():
-        b1, b2 = mechanics.dual_angles(pts[:, 0], pts[:, 1])
-        c1, s1 = mechanics.direction(b1)
-        c2, s2 = mechanics.direction(b2)
+        b1, b2 = contact_modes.dual_angles(pts[:, 0], pts[:, 1])
+        c1, s1 = contact_modes.direction(b1)
+        c2, s2 = contact_modes.direction(b2)
         duals = {exact.point_codes(*v)["class_code"] for v in zip(c1, s1, c2, s2)}
         assert len(duals) == 1
         target = smp[duals.pop()]
@@ -126,7 +126,7 @@ def test_dual_map_preserves_exact_verdicts():
         b1, b2 = rng.uniform(0, 2 * np.pi, 2)
         pts.append((b1, b2, 10 ** rng.uniform(-3, 3), *(10 ** rng.uniform(-2, 1, 2))))
     for b1, b2, k, q1, q2 in pts:
-        d1, d2 = mechanics.dual_angles(b1, b2)
+        d1, d2 = contact_modes.dual_angles(b1, b2)
         a = exact.point_spectral(*_dirs(b1, b2), k, q1, q2)
         b = exact.point_spectral(*_dirs(d1, d2), *t2.dual_kq(k, q1, q2))
         for key in ("stable_SS", "consistent_II", "stable_II"):
@@ -137,7 +137,7 @@ def test_ii_class_15_and_32_model_dependent(rows):
     """Exact reference: II in class 32 at (kappa, q) = (0.1, 1, 0.01) is consistent and unstable, and
     so is its dual point in class 15; at Q = 0 both are stable. Table 2 must shade both light."""
     b1, b2 = 1.38541667 * np.pi, 0.40625 * np.pi
-    d1, d2 = mechanics.dual_angles(b1, b2)
+    d1, d2 = contact_modes.dual_angles(b1, b2)
     for (x1, x2), kq, cls in (
         ((b1, b2), (0.1, 1.0, 0.01), 32),
         ((d1, d2), t2.dual_kq(0.1, 1.0, 0.01), 15),
@@ -152,8 +152,8 @@ def test_ii_class_15_and_32_model_dependent(rows):
 
 
 def _dirs(b1, b2):
-    c1, s1 = mechanics.direction(b1)
-    c2, s2 = mechanics.direction(b2)
+    c1, s1 = contact_modes.direction(b1)
+    c2, s2 = contact_modes.direction(b2)
     return float(c1), float(s1), float(c2), float(s2)
 
 

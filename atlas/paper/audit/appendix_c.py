@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.core.verdicts import Verdict
 from atlas.paper.audit.context import KAPPAS_Q0
 from atlas.paper.audit.printed import SS_CURVED
@@ -109,7 +109,7 @@ def q1_never_unstable(ctx) -> Finding:
     "the other 16 classes.",
 )
 def q1_where_unstable(ctx) -> Finding:
-    rest = [c for c in mechanics.ALL_CLASSES if c not in SS_CURVED and c not in (12, 42)]
+    rest = [c for c in contact_modes.ALL_CLASSES if c not in SS_CURVED and c not in (12, 42)]
     bad_rest = [c for c in rest if ctx.ss_q0[c] != {U}]
     some = [c for c in SS_CURVED if ctx.ss_word_q0[c] == "model-dependent"]
     return Finding(
@@ -218,8 +218,8 @@ def _damped_changes(ctx):
     """Classes whose Q1 / Q2 / Q3 pattern changes with damping, and random points showing it."""
     R, RD, v = ctx.random, ctx.random_damped, ctx.random.v
     ss0, ci0 = ctx.ss_q0, ctx.ii_consistent_q0
-    q1 = [c for c in mechanics.ALL_CLASSES if ctx.ss_word_q0[c] != ctx.ss_word_all[c]]
-    q2 = [c for c in mechanics.ALL_CLASSES if ctx.ii_consistent_any(c) != ci0[c]]
+    q1 = [c for c in contact_modes.ALL_CLASSES if ctx.ss_word_q0[c] != ctx.ss_word_all[c]]
+    q2 = [c for c in contact_modes.ALL_CLASSES if ctx.ii_consistent_any(c) != ci0[c]]
     q3, cxs = [], []
     for c in q1:
         for st in (S, U):
@@ -231,7 +231,7 @@ def _damped_changes(ctx):
             i = first((R.cls == c) & (v["consistent_II"] == val) & RD)
             if i is not None:
                 cxs.append(R.point(i, {"consistent_II": val, "class_code": c}))
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         base = ctx.ii_stable_q0_consistent[c]
         new = (ctx.ii_stable_damped[c] | ctx.ii_stable_random[c]) - base
         if not (new and base):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.paper import realisability
 from atlas.paper.audit.printed import DUAL_MODES, PAPER_TABLE2
 from atlas.paper.audit.records import Finding
@@ -45,7 +45,7 @@ def table1(ctx) -> Finding:
 def subclasses_144(ctx) -> Finding:
     sub = ctx.table1_points.subclass
     seen = set(np.unique(sub[sub > 0]).tolist())
-    expected = {10 * c + k for c in mechanics.ALL_CLASSES for k in range(1, 7)}
+    expected = {10 * c + k for c in contact_modes.ALL_CLASSES for k in range(1, 7)}
     found, stats = ctx.realisations
     rigid = {c for c, r in found.items() if r.verified and r.system == realisability.RIGID}
     wheel = {c for c, r in found.items() if r.verified and r.system == realisability.WHEEL}
@@ -94,7 +94,7 @@ def _table2_diffs(rows) -> list[str]:
 def _unprinted_not_mirroring(rows) -> list[int]:
     """The unprinted rows that do not mirror their printed dual (SF <-> FS, IF <-> FI swapped)."""
     bad = []
-    for cls in mechanics.ALL_CLASSES:
+    for cls in contact_modes.ALL_CLASSES:
         if cls in PAPER_TABLE2:
             continue
         r, d = rows[cls], rows[rows[cls].dual]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.core.verdicts import Consistency
 from atlas.paper.audit.printed import MODES, PAPER_TABLE2
 from atlas.paper.audit.records import Finding
@@ -23,13 +23,13 @@ def dense_alpha(class_points: dict, blocks: int):
     the rows ``(c1, s1, c2, s2, cos alpha, sin alpha)`` for an exact re-check.
     """
     subs, conss, spots = [], {m: [] for m in MODES}, []
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         p = class_points[c]
         c1, s1, c2, s2 = (jnp.asarray(v)[:, None] for v in directions(p[:, 0], p[:, 1]))
         ii, jj = np.meshgrid(np.arange(len(p)), np.arange(720), indexing="ij")
         for blk in range(blocks):
             al = (np.arange(720) + (blk + 0.5) / blocks) * (2 * PI / 720)
-            ca, sa = (jnp.asarray(v)[None, :] for v in mechanics.direction(al))
+            ca, sa = (jnp.asarray(v)[None, :] for v in contact_modes.direction(al))
             _, sub, cons = class_kernel(c1, s1, c2, s2, ca, sa)
             subs.append(np.asarray(sub).ravel())
             for m in conss:
@@ -111,7 +111,7 @@ def if_fi_marks(class_points: dict) -> tuple[dict, dict]:
     for IF (the force at contact 1 lifts contact 2) and b12 for FI.
     """
     text, fixed = {}, {}
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         p = class_points[c]
         c1, s1, c2, s2 = directions(p[:, 0], p[:, 1])
         text[c] = (_mark((c1 < 0) & (c2 > 0)), _mark((s2 < 0) & (s1 > 0)))
@@ -145,7 +145,7 @@ def if_fi(ctx) -> Finding:
         status = "refuted"
     else:
         status = "imprecise" if typo else "confirmed"
-    unprinted = (c for c in mechanics.ALL_CLASSES if c not in PAPER_TABLE2)
+    unprinted = (c for c in contact_modes.ALL_CLASSES if c not in PAPER_TABLE2)
     return Finding(
         status,
         "Against the paper's own printed Table 2 columns 6-7 (16 rows), on the class samples: "
@@ -169,7 +169,7 @@ def cone_classes(class_points: dict) -> set:
     """Classes where the cone of b1, b2 meets the open third quadrant at some sample point."""
     t = np.linspace(0, 1, 41)[1:-1]
     out = set()
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         p = class_points[c]
         c1, s1, c2, s2 = directions(p[:, 0], p[:, 1])
         x = c1[:, None] * t + c2[:, None] * (1 - t)
@@ -189,7 +189,7 @@ def cone(ctx) -> Finding:
     cone_any = cone_classes(ctx.class_points)
     listed = {14, 15, 24, 25, 33, 34, 35, 43}
     duals = {ctx.rows[c].dual for c in listed}
-    ii_any = {c for c in mechanics.ALL_CLASSES if 1 in ctx.ii_consistent_any(c)}
+    ii_any = {c for c in contact_modes.ALL_CLASSES if 1 in ctx.ii_consistent_any(c)}
     nec_bad = [c for c in ii_any if c not in cone_any]
     return Finding(
         "confirmed" if cone_any == listed | duals and not nec_bad else "refuted",
@@ -209,7 +209,7 @@ def cone(ctx) -> Finding:
     "elsewhere it is decided by the class.",
 )
 def ii_model_dependent(ctx) -> Finding:
-    mixed = {c for c in mechanics.ALL_CLASSES if len(ctx.ii_consistent_any(c)) > 1}
+    mixed = {c for c in contact_modes.ALL_CLASSES if len(ctx.ii_consistent_any(c)) > 1}
     return Finding(
         "confirmed" if mixed == {14, 24, 31, 36} else "refuted",
         f"Classes with both II verdicts (Q = 0, damped samples, random damped search): "
@@ -223,8 +223,8 @@ def ii_model_dependent(ctx) -> Finding:
     "The CC necessary condition (b11 > 0, b22 > 0) fails in 18 of the 24 classes.",
 )
 def cc_condition(ctx) -> Finding:
-    cc = [c for c in mechanics.ALL_CLASSES if ctx.rows[c].CC == "?"]
-    part = [c for c in mechanics.ALL_CLASSES if ctx.rows[c].CC == "(?)"]
+    cc = [c for c in contact_modes.ALL_CLASSES if ctx.rows[c].CC == "?"]
+    part = [c for c in contact_modes.ALL_CLASSES if ctx.rows[c].CC == "(?)"]
     return Finding(
         "confirmed" if len(cc) == 6 and not part else "refuted",
         f"Condition holds throughout classes {fmt_classes(cc)} ({len(cc)}), fails "

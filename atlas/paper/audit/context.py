@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass
 from functools import cached_property
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.paper import realisability
 from atlas.paper.audit import samples
 from atlas.paper.audit.samples import Points
@@ -165,7 +165,7 @@ class Context:
         """SS stability word per class over every search (``Q = 0``, damped, random damped)."""
         return {
             c: samples.ss_word(self.ss_q0[c] | self.ss_damped[c] | self.ss_random[c])
-            for c in mechanics.ALL_CLASSES
+            for c in contact_modes.ALL_CLASSES
         }
 
     @cached_property

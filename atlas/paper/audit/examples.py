@@ -6,7 +6,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.core.hurwitz import ss_margin
 from atlas.core.verdicts import Verdict
 from atlas.paper.audit.printed import MODES
@@ -81,7 +81,7 @@ def subclass_254(ctx) -> Finding:
 )
 def subclasses_261_262(ctx) -> Finding:
     rows, unique_unstable = ctx.rows, []
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         for kk in range(1, 7):
             m = consistent_in(rows, c, kk)
             if len(m) == 1 and rows[c].stability[m[0]] == "unstable":
@@ -122,7 +122,7 @@ def _nothing_stable_subclasses(ctx):
     points of 132/142 at kappa = 0.5."""
     G05, rows = ctx.q0_half, ctx.rows
     found0, foundd, cxs = set(), set(), []
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         for kk in range(1, 7):
             sel, ok = nothing_stable(G05, rows, c, kk)
             if ok.any():
@@ -174,9 +174,9 @@ def fig2_point(name: str):
     """Exact facts at a Fig. 2 panel: ``(subclass, consistent modes, verdicts, stable, text)``
     (neutral counted as stable, as in Fig. 1)."""
     b1, b2, al, kap, q = FIG2[name]
-    c1, s1 = (float(v) for v in mechanics.direction(b1 * PI))
-    c2, s2 = (float(v) for v in mechanics.direction(b2 * PI))
-    ca, sa = (float(v) for v in mechanics.direction(al * PI))
+    c1, s1 = (float(v) for v in contact_modes.direction(b1 * PI))
+    c2, s2 = (float(v) for v in contact_modes.direction(b2 * PI))
+    ca, sa = (float(v) for v in contact_modes.direction(al * PI))
     codes = exact.point_codes(c1, s1, c2, s2, ca, sa)
     r = exact.point_spectral(c1, s1, c2, s2, kap, q, q)
     verdict = {
@@ -256,8 +256,8 @@ def fig2(ctx) -> Finding:
 def ss_crossings(kap, qa, qb, beta1=0.1 * PI, n=4001):
     """Zero crossings of the SS margin along ``beta1`` [rad], ``beta2`` in ``(pi/2, pi)`` [rad]."""
     b2 = np.linspace(0.5 * PI + 1e-3, PI - 1e-3, n)
-    c1, s1 = mechanics.direction(np.full_like(b2, beta1))
-    c2, s2 = mechanics.direction(b2)
+    c1, s1 = contact_modes.direction(np.full_like(b2, beta1))
+    c2, s2 = contact_modes.direction(b2)
     args = [jnp.asarray(v) for v in (c1, s1, c2, s2, kap, qa, qb)]
     m = np.asarray(ss_margin(*args))
     return b2[np.flatnonzero(np.diff(np.sign(m)) != 0)]

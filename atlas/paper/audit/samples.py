@@ -17,7 +17,7 @@ from fractions import Fraction
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import expressions, mechanics
+from atlas.core import contact_modes, expressions
 from atlas.paper.audit.records import Counterexample, N, S, U
 from atlas.paper.figures import evaluate_points
 
@@ -26,13 +26,15 @@ PI = math.pi
 
 def directions(b1, b2):
     """``cos, sin`` of ``beta1`` and ``beta2`` [rad]: ``c1, s1, c2, s2``."""
-    c1, s1 = mechanics.direction(b1)
-    c2, s2 = mechanics.direction(b2)
+    c1, s1 = contact_modes.direction(b1)
+    c2, s2 = contact_modes.direction(b2)
     return c1, s1, c2, s2
 
 
 def _classes(c1, s1, c2, s2):
-    return np.asarray(mechanics.class_code(*(jnp.asarray(v) for v in (c1, s1, c2, s2)))).astype(int)
+    return np.asarray(contact_modes.class_code(*(jnp.asarray(v) for v in (c1, s1, c2, s2)))).astype(
+        int
+    )
 
 
 @dataclass
@@ -63,7 +65,7 @@ class Points:
         """``{class: set of values}`` over the points (optionally only where ``where``)."""
         where = np.ones(self.cls.shape, bool) if where is None else where
         out = {}
-        for c in mechanics.ALL_CLASSES:
+        for c in contact_modes.ALL_CLASSES:
             sel = (self.cls == c) & where
             out[c] = set(np.unique(np.asarray(values)[sel]).tolist())
         return out
@@ -95,7 +97,7 @@ def random_points(n, seed=1) -> Points:
 
 def class_grid(samples: dict, kq) -> Points:
     """Class samples (``{class: (n, 2) angles}``) x a list of ``(kappa, q1, q2)``."""
-    pts = np.concatenate([samples[c] for c in mechanics.ALL_CLASSES])
+    pts = np.concatenate([samples[c] for c in contact_modes.ALL_CLASSES])
     kq = np.asarray(kq, float)
     B1 = np.repeat(pts[:, 0], len(kq))
     B2 = np.repeat(pts[:, 1], len(kq))
@@ -121,10 +123,10 @@ def table1_points(n: int = 20000, seed: int = 7) -> Table1Points:
     rng = np.random.default_rng(seed)
     b1, b2, al = rng.uniform(0, 2 * PI, (3, n))
     c1, s1, c2, s2 = directions(b1, b2)
-    ca, sa = mechanics.direction(al)
+    ca, sa = contact_modes.direction(al)
     args = [jnp.asarray(v) for v in (c1, s1, c2, s2, ca, sa)]
-    cons = {k: np.asarray(v) for k, v in mechanics.consistent_modes(*args).items()}
-    sub = np.asarray(mechanics.subclass_code(*args))
+    cons = {k: np.asarray(v) for k, v in contact_modes.consistent_modes(*args).items()}
+    sub = np.asarray(contact_modes.subclass_code(*args))
     return Table1Points(c1, s1, c2, s2, ca, sa, cons, sub)
 
 
@@ -152,7 +154,7 @@ def matrix7_sample(n: int, seed: int = 11) -> Matrix7Sample:
     beta = rng.uniform(0, 2 * PI, n)
     kap = 10.0 ** rng.uniform(-6, 6, n)
     q = np.where(np.arange(n) % 2 == 0, 0.0, 10.0 ** rng.uniform(-4, 3, n))
-    c = np.asarray(mechanics.direction(beta)[0], float)
+    c = np.asarray(contact_modes.direction(beta)[0], float)
     counts = {"b>0, q>0": [0, 0], "b>0, q=0": [0, 0], "b<0": [0, 0]}
     failing = set()
     for b, k, qq in zip(c, kap, q, strict=True):
@@ -168,7 +170,7 @@ def matrix7_sample(n: int, seed: int = 11) -> Matrix7Sample:
             failing.add(key)
         counts[key][0] += 1
         counts[key][1] += int(ok)
-    kern = np.asarray(mechanics.stable_SF(jnp.asarray(c)))
+    kern = np.asarray(contact_modes.stable_SF(jnp.asarray(c)))
     n_kernel_bad = int(np.sum((kern == S) != (c > 0)))
     return Matrix7Sample(beta, kap, q, c, counts, failing, n_kernel_bad)
 

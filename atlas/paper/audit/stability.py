@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.paper.audit.context import KAPPAS_Q0
 from atlas.paper.audit.printed import SS_CURVED
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
@@ -115,7 +115,7 @@ def ss_model_dependent(ctx) -> Finding:
         f"Classes with both verdicts at Q = 0 (kappa in {KAPPAS_Q0}): {fmt_classes(mixed0)}. "
         f"Adding the damped samples and {int(RD.sum())} damped random points (q1 != q2, "
         f"ratios to 1e6, kappa 1e-6..1e6): {fmt_classes(mixed_all)}. Per-class words: "
-        + ", ".join(f"{c}: {ctx.ss_word_all[c]}" for c in mechanics.ALL_CLASSES)
+        + ", ".join(f"{c}: {ctx.ss_word_all[c]}" for c in contact_modes.ALL_CLASSES)
         + ".",
         counterexamples=cxs,
     )

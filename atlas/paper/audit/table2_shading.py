@@ -3,7 +3,7 @@ audit's wider search, and a class against its dual."""
 
 from __future__ import annotations
 
-from atlas.core import mechanics
+from atlas.core import contact_modes
 from atlas.paper.audit.appendix_c import issue_point
 from atlas.paper.audit.printed import DUAL_MODES, SS_CURVED
 from atlas.paper.audit.records import Counterexample, Finding, U
@@ -17,9 +17,9 @@ def paper_words() -> dict:
     return {
         "SS": {
             c: "model-dependent" if c in SS_CURVED else ("stable" if c in (12, 42) else "unstable")
-            for c in mechanics.ALL_CLASSES
+            for c in contact_modes.ALL_CLASSES
         },
-        "II": {c: "unstable" if c == 25 else "stable" for c in mechanics.ALL_CLASSES},
+        "II": {c: "unstable" if c == 25 else "stable" for c in contact_modes.ALL_CLASSES},
     }
 
 
@@ -27,17 +27,17 @@ def _search_words(ctx) -> dict:
     """The same words from the audit's samples (``-`` where II is never consistent)."""
     ii = {
         c: ctx.ii_stable_q0_consistent[c] | ctx.ii_stable_damped[c] | ctx.ii_stable_random[c]
-        for c in mechanics.ALL_CLASSES
+        for c in contact_modes.ALL_CLASSES
     }
     return {
         "SS": dict(ctx.ss_word_all),
-        "II": {c: ss_word(ii[c]) if ii[c] else "-" for c in mechanics.ALL_CLASSES},
+        "II": {c: ss_word(ii[c]) if ii[c] else "-" for c in contact_modes.ALL_CLASSES},
     }
 
 
 def _dual_mismatches(rows) -> list[str]:
     out = []
-    for c in mechanics.ALL_CLASSES:
+    for c in contact_modes.ALL_CLASSES:
         d = rows[rows[c].dual]
         for m, md in DUAL_MODES:
             if rows[c].stability[m] != d.stability[md]:
@@ -51,12 +51,12 @@ def compare_shading(ctx) -> tuple[list, list, list]:
     """Differences of the regenerated Table 2 words: from the paper, from the search, from the dual."""
     rows, paper, search = ctx.rows, paper_words(), _search_words(ctx)
     table = {
-        "SS": {c: rows[c].stability["SS"] for c in mechanics.ALL_CLASSES},
-        "II": {c: rows[c].II_stability for c in mechanics.ALL_CLASSES},
+        "SS": {c: rows[c].stability["SS"] for c in contact_modes.ALL_CLASSES},
+        "II": {c: rows[c].II_stability for c in contact_modes.ALL_CLASSES},
     }
     vs_paper, vs_search = [], []
     for m in ("SS", "II"):
-        for c in mechanics.ALL_CLASSES:
+        for c in contact_modes.ALL_CLASSES:
             t = table[m][c]
             if t != "-" and t != paper[m][c]:
                 vs_paper.append(f"{m} {c}: paper {paper[m][c]}, computed {t}")
@@ -68,7 +68,7 @@ def compare_shading(ctx) -> tuple[list, list, list]:
 def _issue_points() -> list[Counterexample]:
     """The issue's class-32 point and its dual (class 15)."""
     user = issue_point()
-    b1d, b2d = mechanics.dual_angles(user.beta1, user.beta2)
+    b1d, b2d = contact_modes.dual_angles(user.beta1, user.beta2)
     dual = Counterexample(
         float(b1d),
         float(b2d),

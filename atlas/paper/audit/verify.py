@@ -7,7 +7,7 @@ from fractions import Fraction
 
 import mpmath
 
-from atlas.core import exact, mechanics
+from atlas.core import contact_modes, exact
 from atlas.paper.audit.records import Counterexample, N, S, U
 
 
@@ -62,8 +62,8 @@ def mode_2x2_exact(b_jj, kappa_j, q_j, dps: int = 50) -> dict:
 
 
 def _verify_2x2(cx: Counterexample) -> bool:
-    c1, _ = (float(v) for v in mechanics.direction(cx.beta1))
-    _, s2 = (float(v) for v in mechanics.direction(cx.beta2))
+    c1, _ = (float(v) for v in contact_modes.direction(cx.beta1))
+    _, s2 = (float(v) for v in contact_modes.direction(cx.beta2))
     r = mode_2x2_exact(c1, cx.kappa, cx.q1) if cx.matrix == "SF" else mode_2x2_exact(s2, 1.0, cx.q2)
     cx.eigenvalues = sorted(r["roots"], key=lambda z: (-z.real, -z.imag))
     cx.verified = all(r[k] == v for k, v in cx.expect.items())
@@ -74,8 +74,8 @@ def verify_counterexample(cx: Counterexample) -> bool:
     """Re-verify ``cx`` with the exact reference; fills ``cx.eigenvalues`` and ``cx.verified``."""
     if cx.matrix in ("SF", "FS"):
         return _verify_2x2(cx)
-    c1, s1 = (float(v) for v in mechanics.direction(cx.beta1))
-    c2, s2 = (float(v) for v in mechanics.direction(cx.beta2))
+    c1, s1 = (float(v) for v in contact_modes.direction(cx.beta1))
+    c2, s2 = (float(v) for v in contact_modes.direction(cx.beta2))
     r = exact.point_spectral(c1, s1, c2, s2, cx.kappa, cx.q1, cx.q2)
     roots = r["roots"]
     cx.eigenvalues = sorted(roots, key=lambda z: (-z.real, -z.imag))

@@ -1,4 +1,4 @@
-"""atlas.core.mechanism: B and a of real bodies (closed forms by hand), scalings, verdicts, errors."""
+"""atlas.core.rigid_body: B and a of real bodies (closed forms by hand), scalings, verdicts, errors."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import pytest
 import sympy
 
 import atlas
-from atlas.core import mechanics
-from atlas.core.mechanism import CONTACT_KINDS, Mechanism, verdict_names, verdicts_at
+from atlas.core import contact_modes
+from atlas.core.rigid_body import CONTACT_KINDS, Mechanism, verdict_names, verdicts_at
 
 G = 9.81
 
@@ -205,7 +205,7 @@ def test_swapped_contacts_give_the_dual():
             speed=abs(b.sliding_speeds[1]),
         )  # fmt: skip
         inv, dual = b.invariants, sw.invariants
-        want = mechanics.dual_angles(inv["beta1"], inv["beta2"], inv["alpha"])
+        want = contact_modes.dual_angles(inv["beta1"], inv["beta2"], inv["alpha"])
         got = (dual["beta1"], dual["beta2"], dual["alpha"])
         np.testing.assert_allclose(np.cos(got), np.cos(want), atol=1e-12)
         np.testing.assert_allclose(np.sin(got), np.sin(want), atol=1e-12)
@@ -255,7 +255,7 @@ def test_paradox_of_the_ladder_is_seen():
 def test_invariants_match_the_data_layer_copy():
     """Physical (k, q, |b|) -> (kappa, q1, q2): the paper's Fig. 2 numbers."""
     args = dict(k1=100.0, k2=200.0, q1=20.0, q2=20.0, b1=1.0, b2=1.0)
-    got = mechanics.invariants(**args)
+    got = contact_modes.invariants(**args)
     assert got["kappa"] == 0.5 and got["q1"] == pytest.approx(math.sqrt(2))  # paper Fig. 2
 
 

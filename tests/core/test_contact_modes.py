@@ -4,8 +4,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import contact_modes as me
 from atlas.core import exact
-from atlas.core import mechanics as me
 from atlas.core.verdicts import Consistency, Verdict
 
 PI = np.pi

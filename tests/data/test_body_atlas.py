@@ -1,10 +1,10 @@
-"""Mechanism scenes (atlas.data.mechanisms): physical axes, derived invariants, verdicts."""
+"""Mechanism scenes (atlas.data.body_atlas): physical axes, derived invariants, verdicts."""
 
 import numpy as np
 import pytest
 
-from atlas.core.mechanism import Mechanism
-from atlas.data.mechanisms import MECHANISM_SCENES, mechanism_atlas
+from atlas.core.rigid_body import Mechanism
+from atlas.data.body_atlas import MECHANISM_SCENES, mechanism_atlas
 
 
 @pytest.fixture(scope="module")
@@ -137,7 +137,7 @@ def test_cli_bad_physical_values(tmp_path, capsys, argv, name):
 )
 def test_builtin_geometry_is_validated_on_every_path(body, kw, name):
     """The same one-line error from the geometry function, Mechanism and body_invariants."""
-    from atlas.core.mechanism import BODIES, body_invariants
+    from atlas.core.rigid_body import BODIES, body_invariants
 
     for build in (
         lambda: BODIES[body](**kw),

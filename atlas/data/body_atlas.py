@@ -1,20 +1,20 @@
 """Atlases of real mechanisms: built-in bodies over physical axes.
 
-A mechanism scene sweeps physical parameters of a built-in body of :mod:`atlas.core.mechanism`
+A mechanism scene sweeps physical parameters of a built-in body of :mod:`atlas.core.rigid_body`
 (e.g. the ladder's angle ``theta`` [rad] and friction coefficient ``mu`` [1]) and stores, on those
 physical coordinates (with units), the derived invariants ``beta1, beta2, alpha, kappa, q1, q2``,
 the entries of ``B`` [1/kg] and ``a`` [m/s^2] of eq. (1), and every verdict of the atlas at them,
 so ``ds.sel(mu=0.6, method="nearest")`` reads one body's verdicts.  One friction coefficient
 ``mu`` applies to both contacts.  The verdicts (every atlas output of the registry with a verdict
 kernel, :func:`atlas.data.outputs.verdict_outputs`) are those of
-:func:`atlas.core.mechanism.verdicts_at` (certified kernels, undecided points settled exactly).
+:func:`atlas.core.rigid_body.verdicts_at` (certified kernels, undecided points settled exactly).
 
 Every parameter that is not an axis is stored with its units (:data:`FIXED`): the body's own (e.g.
 the ladder's ``L`` [m], ``m`` [kg]), the derived ``I`` [kg m2], the contact model ``k1, k2`` [N/m],
 ``c1, c2`` [N s/m], gravity ``g`` [m s-2] (along ``-y``) and the state's ``speed`` [m/s] (contact 1's
 sliding speed; default 0, the zero-speed limit), the sliding signs ``s1, s2`` and, as attributes, the
 contact kinds.  ``fixed={"L": 3.0, "c1": 20.0}`` (CLI ``--fixed L=3,c1=20``) changes them; every value
-goes through the validation of :mod:`atlas.core.mechanism`.
+goes through the validation of :mod:`atlas.core.rigid_body`.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import checks, config
-from atlas.core.mechanism import BODIES, body_invariants, verdicts_at
+from atlas.core.rigid_body import BODIES, body_invariants, verdicts_at
 from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, storage_dtype, variable_attrs, verdict_outputs
@@ -157,7 +157,7 @@ def _axis_values(scene: MechanismScene, overrides: dict) -> dict:
 def _validated(scene: MechanismScene, build):
     """``build()``, its one-line ``ValueError`` naming a body parameter that an axis sets renamed to
     the axis (``mu_floor: must be >= 0`` -> ``mu: ...``): the checks are those of
-    :mod:`atlas.core.mechanism`, one validation for every path."""
+    :mod:`atlas.core.rigid_body`, one validation for every path."""
     try:
         return build()
     except ValueError as e:

@@ -44,7 +44,7 @@ tau]`` turns the two gap equations into eq. (1), ``d'' = B f - a``, with
 
 (``b_ij``: response of gap ``i`` to a unit normal force at contact ``j``, SPEC §1).  The contacts are
 Kelvin-Voigt springs, ``f_j = -k_j d_j - c_j d_j'`` [N] (eq. (6) unscaled), so the damping of eq. (8)
-is ``Q = diag(c)`` and the invariants are those of :func:`atlas.core.mechanics.invariants` with
+is ``Q = diag(c)`` and the invariants are those of :func:`atlas.core.contact_modes.invariants` with
 ``q_j = c_j``.
 
 **Scalings that keep every verdict** (SPEC §1: verdicts depend only on ``beta1, beta2, alpha``,
@@ -80,8 +80,8 @@ from functools import cached_property
 
 import numpy as np
 
+from atlas.core import contact_modes as mech
 from atlas.core import kernels
-from atlas.core import mechanics as mech
 
 __all__ = [
     "Mechanism",
@@ -726,7 +726,7 @@ def verdict_names() -> tuple[str, ...]:
 def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64", names=None) -> dict:
     """The verdicts ``names`` (default :func:`verdict_names`) at broadcastable invariants.
 
-    The angles [rad] enter through :func:`atlas.core.mechanics.direction` in ``dtype``, exactly as
+    The angles [rad] enter through :func:`atlas.core.contact_modes.direction` in ``dtype``, exactly as
     in :func:`atlas.generate`; each verdict comes from its kernel (:mod:`atlas.core.kernels`), and
     undecided codes are settled exactly.  Returns numpy arrays of the broadcast shape in the
     storage types of SPEC §2 (codes ``int8``/``int16``, flags with a ``true_code`` -- Table 1,
