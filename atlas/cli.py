@@ -518,9 +518,9 @@ def _dispatch_estimate(args):
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
         return limits.grid_estimate("boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES)
     if args.command == "simulate" and args.outcome_map:
-        from atlas.paper.simulate import map_dynamics, map_scene
+        from atlas.paper.simulate import map_dynamics, map_scene, scene_options
 
-        scene = map_scene(**vars(args))
+        scene = map_scene(**scene_options(vars(args)))
         dyn = map_dynamics(args.n_perturb, args.seed, args.engine, args.t_end)
         outs = [p for p in (args.out, args.store) if p]
         tile = None

@@ -46,6 +46,9 @@ def run_cli(case=None, t_end=None, out=None, outcome_map=False, k1=None, k2=None
     if outcome_map:
         if case:
             raise ValueError("case: --case and --map exclude each other")
+        for name, v in (("k1", k1), ("k2", k2)):
+            if v is not None:
+                raise ValueError(f"{name}: not an option of --map (its model is --kappa, --q)")
         return _run_map(t_end, out, argv=argv, **kw)
     for name in ("n", "kappa", "q", "n_perturb", "seed", "store", "slab", "resume", "no_theory",
                  "scheduler"):  # fmt: skip
@@ -121,8 +124,7 @@ def _events_csv(res) -> str:
     return "\n".join(rows) + "\n"
 
 
-def map_scene(n=None, beta1=None, beta2=None, alpha=None, kappa=None, q=None, q1=None, q2=None,
-              **_):  # fmt: skip
+def map_scene(n=None, beta1=None, beta2=None, alpha=None, kappa=None, q=None, q1=None, q2=None):
     """The scene of ``atlas simulate --map``: axes in the syntax of ``atlas generate``;
     ``beta1``/``beta2`` not given: :func:`atlas.dynamics.outcome_grid` ``(n)`` (default
     :data:`DEFAULT_MAP_N`), one sample per cell, offset from the degenerate directions; ``kappa``
@@ -137,6 +139,11 @@ def map_scene(n=None, beta1=None, beta2=None, alpha=None, kappa=None, q=None, q1
     )
 
 
+def scene_options(options: dict) -> dict:
+    """The options of :func:`map_scene` among the command's ``options``."""
+    return {k: options[k] for k in ("n", *_AXES) if k in options}
+
+
 def _advance(bar, done, total):
     """A progress callback ``(done, total)`` on a tqdm ``bar``."""
     bar.total = total
@@ -144,7 +151,7 @@ def _advance(bar, done, total):
     bar.refresh()
 
 
-def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None, **_) -> Dynamics:
+def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None) -> Dynamics:
     """The :class:`~atlas.dynamics.outcomes.Dynamics` of ``atlas simulate --map``."""
     kw = {"engine": engine}
     for name, v in (("n_perturb", n_perturb), ("seed", seed), ("t_end", t_end)):
@@ -155,7 +162,7 @@ def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None, **_) -> D
 
 def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, overwrite=False,
              no_theory=False, argv=None, scheduler=None, **kw) -> int:  # fmt: skip
-    scene = map_scene(**kw)
+    scene = map_scene(**scene_options(kw))
     dyn = map_dynamics(kw.get("n_perturb"), kw.get("seed"), engine, t_end)
     suffix = Path(out).suffix.lower() if out else ""
     if out and suffix not in (".nc", ".png", ".pdf"):

@@ -184,6 +184,7 @@ def test_cli_simulate_map_axes_of_generate(tmp_path, capsys):
         (["--kappa", "0"], "kappa"),
         (["--seed", "-1"], "seed"),
         (["--resume"], "resume"),
+        (["--k1", "3"], "k1"),
         (["--kappa", "0.5,2", "--out", str(tmp_path / "f.png")], "out"),
     ):
         out = tmp_path / "bad.nc"
