@@ -34,7 +34,7 @@ Early decisions (stated, checked)
 ---------------------------------
 On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
 (:func:`_may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
-for keeping its sign for all later times in the current configuration (:func:`_keeps_sign`: the
+for keeping its sign for all later times in the current configuration (:func:`eb.keeps_sign`: the
 modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
 x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
 
@@ -71,6 +71,7 @@ import math
 
 import numpy as np
 
+from atlas.dynamics import event_bounds as eb
 from atlas.dynamics.classification import (
     TrajectoryStats,
     impacts,
@@ -87,7 +88,6 @@ from atlas.dynamics.system import (
 __all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
-_NEUTRAL = 1e-9
 _XTOL = 1e-12
 _STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
 _ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
@@ -267,145 +267,6 @@ def _segments(lanes: Lanes, tables, ix, mask, g):
     return P, U, lam, valid, H, ok
 
 
-def _evaluate(P, U, lam, tau):
-    """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
-    polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
-    UE = U * np.exp(lam * tau[:, None])[:, None, :]
-    t1 = tau[:, None]
-    p = np.empty_like(P)
-    p[:, :, 2] = P[:, :, 2]
-    p[:, :, 1] = P[:, :, 1] + 2 * t1 * P[:, :, 2]
-    p[:, :, 0] = P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2])
-    lUE = UE * lam[:, None, :]
-    d = p[:, :, 0] + UE.sum(axis=2).real
-    v = p[:, :, 1] + lUE.sum(axis=2).real
-    acc = 2 * p[:, :, 2] + (lUE * lam[:, None, :]).sum(axis=2).real
-    return d, v, acc, p, UE
-
-
-def _event_functions(d, v, acc, k, q):
-    """``f = (d1, d2, phi1, phi2)`` and ``f'`` (n, 4), ``phi_i = -k_i d_i - q_i d_i'``."""
-    f = np.concatenate([d, -k * d - q * v], axis=1)
-    fp = np.concatenate([v, -k * v - q * acc], axis=1)
-    return f, fp
-
-
-def _curvature_bound(p, UE, lam, H, k, q):
-    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
-    lr = np.abs(lam)
-    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = np.abs(UE) * grow
-    m2 = 2 * np.abs(p[:, :, 2]) + (a * lr[:, None, :] ** 2).sum(axis=2)
-    m3 = (a * lr[:, None, :] ** 3).sum(axis=2)
-    return np.concatenate([m2, k * m2 + q * m3], axis=1)
-
-
-def _flat_step(s, p, UE, lam, H, k, q):
-    """``sigma_lo`` (n, 4) of functions with ``f = f' = 0``: ``s f >= C x^2 / 2 - M3 x^3 / 6``
-    with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
-    ``C > 0``)."""
-    lr = np.abs(lam)[:, None, :]
-    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = np.abs(UE) * grow
-    d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
-    d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
-    m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
-    C = s * np.concatenate([d2, -k * d2 - q * d3], axis=1)
-    M3 = np.maximum(np.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
-    return np.where(C > 0, 3 * C / M3, 0.0)
-
-
-def _safe_steps(A, Bd, M):
-    """Roots ``sigma_lo`` of ``A + Bd s - M s^2 / 2`` and ``sigma_hi`` of ``A + Bd s + M s^2 / 2``
-    (first positive; ``inf`` if none) for ``A >= 0``: no sign change of ``f`` before ``sigma_lo``,
-    one by ``sigma_hi``."""
-    M = np.maximum(M, 1e-300)
-    with np.errstate(all="ignore"):
-        root = np.sqrt(Bd * Bd + 2 * M * A)
-        lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
-        disc = Bd * Bd - 2 * M * A
-        hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))),
-                      np.inf)  # fmt: skip
-    lo = np.where(np.isnan(lo), 0.0, lo)
-    hi = np.where(np.isnan(hi), 0.0, hi)
-    return lo, hi
-
-
-# ----------------------------------------------------------------------------- certificates
-
-
-def _positive_quadratic(a0, a1, a2, horizon):
-    """``a0 + a1 s + a2 s^2 > 0`` for all ``s`` in ``[0, horizon]`` (``horizon`` may be inf)."""
-    at_end = np.where(
-        np.isinf(horizon),
-        (a2 > 0) | ((a2 == 0) & (a1 >= 0)),
-        a0 + a1 * horizon + a2 * horizon**2 > 0,
-    )
-    vertex = -a1 / (2 * np.where(a2 > 0, a2, 1.0))
-    inside = (a2 > 0) & (a1 < 0) & (vertex < horizon)
-    at_vertex = a0 - a1 * a1 / (4 * np.where(a2 > 0, a2, 1.0)) > 0
-    return (a0 > 0) & at_end & (~inside | at_vertex)
-
-
-def _keeps_sign(c, w, lam, valid, horizon):
-    """Certificate that ``c0 + c1 s + c2 s^2 + Re sum_m w_m exp(lam_m s) > 0`` on
-    ``[0, horizon]`` (arrays (..., 3), (..., M), (..., M), (..., M), (...)).
-
-    Terms with ``Re lam <= 1e-9 |lam|`` are bounded by ``|w| exp(max(Re lam, 0) horizon)``; if
-    some have ``Re lam`` above that, the largest such ``lam_1`` must be real with
-    ``G = Re w_1 - sum_{other growing} |w_m| > 0``, and ``G exp(lam_1 s) >= G (1 + lam_1 s +
-    lam_1^2 s^2 / 2)``; the resulting quadratic is tested by :func:`_positive_quadratic`.
-
-    Returns ``(ok, G, bounded, lam_1)`` (...) each: ``bounded`` the bound of the other terms.
-    """
-    with np.errstate(all="ignore"):
-        return _keeps_sign_bound(c, w, lam, valid, horizon)
-
-
-def _keeps_sign_bound(c, w, lam, valid, horizon):
-    re = lam.real
-    scale = np.abs(lam).max(axis=-1, keepdims=True)
-    grow = valid & (re > _NEUTRAL * scale)
-    any_grow = grow.any(axis=-1)
-    j1 = np.argmax(np.where(grow, re, -np.inf), axis=-1)[..., None]
-    lam1 = np.take_along_axis(lam, j1, axis=-1)[..., 0]
-    w1 = np.take_along_axis(w, j1, axis=-1)[..., 0]
-    l1 = np.where(any_grow, lam1.real, 0.0)
-    real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
-    aw = np.abs(w)
-    others = np.where(grow, aw, 0.0).sum(axis=-1) - np.where(any_grow, np.abs(w1), 0.0)
-    G = np.where(any_grow, w1.real - others, 0.0)
-    fac = np.where(re > 0, np.exp(re * horizon[..., None]), 1.0)
-    bounded = np.where(~grow & (aw > 0), aw * fac, 0.0).sum(axis=-1)
-    margin = 1e-12 * (np.abs(c[..., 0]) + aw.sum(axis=-1)) + 1e-300
-    a0 = c[..., 0] + G - bounded - margin
-    a1 = c[..., 1] + G * l1
-    a2 = c[..., 2] + 0.5 * G * l1 * l1
-    ok = (~any_grow | (real1 & (G > 0))) & _positive_quadratic(a0, a1, a2, horizon)
-    return ok, G, bounded, l1
-
-
-def _no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
-    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
-    in the current configuration (:func:`_keeps_sign`).  Returns ``(ok (n,), G (n, 4),
-    bounded (n, 4), lam_1 (n,))``."""
-    kk, qq = k[:, :, None], q[:, :, None]
-    c = np.concatenate([p, np.stack(
-        [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
-         -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
-         -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
-    w = np.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
-    sj = s[:, :, None]
-    ok, G, bounded, l1 = _keeps_sign(
-        sj * c, sj * w, lam[:, None, :], valid[:, None, :], np.repeat(horizon[:, None], 4, 1)
-    )
-    monitored = np.concatenate([np.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
-    return np.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
-
-
-# ----------------------------------------------------------------------------- batch
-
-
 _OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
 _RUNNING = -1
 _STATUS = (Status.T_END, Status.EVENT_CAP, Status.DIVERGED)
@@ -431,7 +292,7 @@ class _State:
     @classmethod
     def start(cls, lanes: Lanes, g0, t_end, nbins):
         n = g0.shape[0]
-        f, _ = _event_functions(g0[:, :2], g0[:, 2:], g0[:, :2] * 0, lanes.k, lanes.q)
+        f, _ = eb.event_functions(g0[:, :2], g0[:, 2:], g0[:, :2] * 0, lanes.k, lanes.q)
         bnorm = np.linalg.norm(lanes.B, axis=1)
         scale = np.maximum(
             np.abs(g0[:, :2]).max(axis=1),
@@ -499,7 +360,7 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         if ix.size == 0:
             return
         tau = t - tseg
-        d, v, acc, p, UE = _evaluate(P, U, lam, tau)
+        d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
         b = _bins(t, width, nbins)
         st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
@@ -518,13 +379,13 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         _leave(st, ix, t, g, s, keep, div, 2)
         _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
         # next step: certified brackets of the monitored event functions
-        f, fp = _event_functions(d, v, acc, k, q)
-        M = _curvature_bound(p, UE, lam, H, k, q)
+        f, fp = eb.event_functions(d, v, acc, k, q)
+        M = eb.curvature_bound(p, UE, lam, H, k, q)
         A, Bd = np.maximum(s * f, 0.0), s * fp
-        lo, hi = _safe_steps(A, Bd, M)
+        lo, hi = eb.safe_steps(A, Bd, M)
         flat = (A == 0) & (Bd == 0)
         if flat.any():  # a double zero (exactly zero state): the second derivative decides
-            lo = np.where(flat, _flat_step(s, p, UE, lam, H, k, q), lo)
+            lo = np.where(flat, eb.flat_step(s, p, UE, lam, H, k, q), lo)
         mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
         lo = np.minimum(lo, H[:, None])
         hi = np.where(hi <= H[:, None], hi, np.inf)
@@ -640,8 +501,8 @@ def _may_decide(lam, valid, s, p, act, mask, t, T):
     with a contact (IWC), or a non-growing one whose free gaps are open and accelerating away
     (settles; a neutral one at most half way through the horizon)."""
     lscale = np.abs(lam).max(axis=1, keepdims=True)
-    growing = (valid & (lam.real > _NEUTRAL * lscale)).any(axis=1)
-    neutral = (valid & (np.abs(lam.real) <= _NEUTRAL * lscale)).any(axis=1)
+    growing = (valid & (lam.real > eb.NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (np.abs(lam.real) <= eb.NEUTRAL * lscale)).any(axis=1)
     free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
     return np.where(growing, mask > 0, free_ok & (~neutral | (t <= 0.5 * T)))
 
@@ -651,11 +512,11 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     ``st.decided_by``)."""
     re = lam.real
     lscale = np.abs(lam).max(axis=1, keepdims=True)
-    growing = (valid & (re > _NEUTRAL * lscale)).any(axis=1)
-    neutral = (valid & (np.abs(re) <= _NEUTRAL * lscale)).any(axis=1)
+    growing = (valid & (re > eb.NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (np.abs(re) <= eb.NEUTRAL * lscale)).any(axis=1)
     horizon = np.where(neutral, t_max - t, np.inf)
     neutral &= ~growing
-    cert, G, Bn, l1 = _no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
+    cert, G, Bn, l1 = eb.no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
     free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
     settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
     settle &= _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H)
@@ -785,8 +646,8 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
 def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s, mask,
             k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
     """Switch the lanes ``r`` (rows) at their events and start their new segments (in place)."""
-    d, v, acc, _, _ = _evaluate(P[r], U[r], lam[r], t[r] - tseg[r])
-    f, fp = _event_functions(d, v, acc, k[r], q[r])
+    d, v, acc, _, _ = eb.evaluate(P[r], U[r], lam[r], t[r] - tseg[r])
+    f, fp = eb.event_functions(d, v, acc, k[r], q[r])
     tol = (h[r] + 1e3 * xtol[r])[:, None]
     cross = (hi[r] <= tol) & (lo[r] <= tol)
     sn, closing, n_ev = _switch(s[r], cross, f, fp, k[r], scale[r])

@@ -1,0 +1,168 @@
+"""Bounds on the event functions of one contact configuration (paper Sec. 4.1, eqs. 1, 6-8).
+
+On a segment of the modal form (:mod:`atlas.dynamics.fast_engine`) every gap is
+``p0 + p1 tau + p2 tau^2 + Re sum_m u_m exp(lambda_m tau)``; these functions evaluate the gaps and
+the event functions (gaps ``d_i``, forces ``phi_i = -k_i d_i - q_i d_i'``), bound their curvature
+over a step, bracket the first crossing, and test whether a function keeps its sign over a horizon.
+The bounds hold in exact arithmetic on the modal form; their floating-point evaluation is not
+bounded here.  Pure array-in, array-out functions on ``(n, ...)`` lanes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "NEUTRAL",
+    "evaluate",
+    "event_functions",
+    "curvature_bound",
+    "flat_step",
+    "safe_steps",
+    "positive_quadratic",
+    "keeps_sign_bound",
+    "keeps_sign",
+    "no_event_certificate",
+]
+
+#: relative size of a real part counted as zero (neutral), times the eigenvalue scale
+NEUTRAL = 1e-9
+
+
+def evaluate(P, U, lam, tau):
+    """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
+    polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
+    UE = U * np.exp(lam * tau[:, None])[:, None, :]
+    t1 = tau[:, None]
+    p = np.empty_like(P)
+    p[:, :, 2] = P[:, :, 2]
+    p[:, :, 1] = P[:, :, 1] + 2 * t1 * P[:, :, 2]
+    p[:, :, 0] = P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2])
+    lUE = UE * lam[:, None, :]
+    d = p[:, :, 0] + UE.sum(axis=2).real
+    v = p[:, :, 1] + lUE.sum(axis=2).real
+    acc = 2 * p[:, :, 2] + (lUE * lam[:, None, :]).sum(axis=2).real
+    return d, v, acc, p, UE
+
+
+def event_functions(d, v, acc, k, q):
+    """``f = (d1, d2, phi1, phi2)`` and ``f'`` (n, 4), ``phi_i = -k_i d_i - q_i d_i'``."""
+    f = np.concatenate([d, -k * d - q * v], axis=1)
+    fp = np.concatenate([v, -k * v - q * acc], axis=1)
+    return f, fp
+
+
+def curvature_bound(p, UE, lam, H, k, q):
+    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
+    lr = np.abs(lam)
+    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = np.abs(UE) * grow
+    m2 = 2 * np.abs(p[:, :, 2]) + (a * lr[:, None, :] ** 2).sum(axis=2)
+    m3 = (a * lr[:, None, :] ** 3).sum(axis=2)
+    return np.concatenate([m2, k * m2 + q * m3], axis=1)
+
+
+def flat_step(s, p, UE, lam, H, k, q):
+    """``sigma_lo`` (n, 4) of functions with ``f = f' = 0``: ``s f >= C x^2 / 2 - M3 x^3 / 6``
+    with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
+    ``C > 0``)."""
+    lr = np.abs(lam)[:, None, :]
+    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = np.abs(UE) * grow
+    d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
+    d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
+    m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
+    C = s * np.concatenate([d2, -k * d2 - q * d3], axis=1)
+    M3 = np.maximum(np.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
+    return np.where(C > 0, 3 * C / M3, 0.0)
+
+
+def safe_steps(A, Bd, M):
+    """Roots ``sigma_lo`` of ``A + Bd s - M s^2 / 2`` and ``sigma_hi`` of ``A + Bd s + M s^2 / 2``
+    (first positive; ``inf`` if none) for ``A >= 0``: no sign change of ``f`` before ``sigma_lo``,
+    one by ``sigma_hi``."""
+    M = np.maximum(M, 1e-300)
+    with np.errstate(all="ignore"):
+        root = np.sqrt(Bd * Bd + 2 * M * A)
+        lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
+        disc = Bd * Bd - 2 * M * A
+        hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))),
+                      np.inf)  # fmt: skip
+    lo = np.where(np.isnan(lo), 0.0, lo)
+    hi = np.where(np.isnan(hi), 0.0, hi)
+    return lo, hi
+
+
+# ----------------------------------------------------------------------------- certificates
+
+
+def positive_quadratic(a0, a1, a2, horizon):
+    """``a0 + a1 s + a2 s^2 > 0`` for all ``s`` in ``[0, horizon]`` (``horizon`` may be inf)."""
+    at_end = np.where(
+        np.isinf(horizon),
+        (a2 > 0) | ((a2 == 0) & (a1 >= 0)),
+        a0 + a1 * horizon + a2 * horizon**2 > 0,
+    )
+    vertex = -a1 / (2 * np.where(a2 > 0, a2, 1.0))
+    inside = (a2 > 0) & (a1 < 0) & (vertex < horizon)
+    at_vertex = a0 - a1 * a1 / (4 * np.where(a2 > 0, a2, 1.0)) > 0
+    return (a0 > 0) & at_end & (~inside | at_vertex)
+
+
+def keeps_sign(c, w, lam, valid, horizon):
+    """Certificate that ``c0 + c1 s + c2 s^2 + Re sum_m w_m exp(lam_m s) > 0`` on
+    ``[0, horizon]`` (arrays (..., 3), (..., M), (..., M), (..., M), (...)).
+
+    Terms with ``Re lam <= 1e-9 |lam|`` are bounded by ``|w| exp(max(Re lam, 0) horizon)``; if
+    some have ``Re lam`` above that, the largest such ``lam_1`` must be real with
+    ``G = Re w_1 - sum_{other growing} |w_m| > 0``, and ``G exp(lam_1 s) >= G (1 + lam_1 s +
+    lam_1^2 s^2 / 2)``; the resulting quadratic is tested by :func:`positive_quadratic`.
+
+    Returns ``(ok, G, bounded, lam_1)`` (...) each: ``bounded`` the bound of the other terms.
+    """
+    with np.errstate(all="ignore"):
+        return keeps_sign_bound(c, w, lam, valid, horizon)
+
+
+def keeps_sign_bound(c, w, lam, valid, horizon):
+    re = lam.real
+    scale = np.abs(lam).max(axis=-1, keepdims=True)
+    grow = valid & (re > NEUTRAL * scale)
+    any_grow = grow.any(axis=-1)
+    j1 = np.argmax(np.where(grow, re, -np.inf), axis=-1)[..., None]
+    lam1 = np.take_along_axis(lam, j1, axis=-1)[..., 0]
+    w1 = np.take_along_axis(w, j1, axis=-1)[..., 0]
+    l1 = np.where(any_grow, lam1.real, 0.0)
+    real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
+    aw = np.abs(w)
+    others = np.where(grow, aw, 0.0).sum(axis=-1) - np.where(any_grow, np.abs(w1), 0.0)
+    G = np.where(any_grow, w1.real - others, 0.0)
+    fac = np.where(re > 0, np.exp(re * horizon[..., None]), 1.0)
+    bounded = np.where(~grow & (aw > 0), aw * fac, 0.0).sum(axis=-1)
+    margin = 1e-12 * (np.abs(c[..., 0]) + aw.sum(axis=-1)) + 1e-300
+    a0 = c[..., 0] + G - bounded - margin
+    a1 = c[..., 1] + G * l1
+    a2 = c[..., 2] + 0.5 * G * l1 * l1
+    ok = (~any_grow | (real1 & (G > 0))) & positive_quadratic(a0, a1, a2, horizon)
+    return ok, G, bounded, l1
+
+
+def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
+    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
+    in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
+    bounded (n, 4), lam_1 (n,))``."""
+    kk, qq = k[:, :, None], q[:, :, None]
+    c = np.concatenate([p, np.stack(
+        [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
+         -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
+         -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
+    w = np.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+    sj = s[:, :, None]
+    ok, G, bounded, l1 = keeps_sign(
+        sj * c, sj * w, lam[:, None, :], valid[:, None, :], np.repeat(horizon[:, None], 4, 1)
+    )
+    monitored = np.concatenate([np.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
+    return np.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
+
+
+# ----------------------------------------------------------------------------- batch
