@@ -85,7 +85,7 @@ from atlas.dynamics.system import (
     iwc_aligned_many,
 )
 
-__all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
+__all__ = ["FastResult", "modal_tables", "run_batch", "run_lanes", "outcomes"]
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
 _XTOL = 1e-12
@@ -819,17 +819,52 @@ class FastResult:
     g_final: np.ndarray
     n_events: np.ndarray
 
+    @classmethod
+    def gather(cls, parts, n: int) -> FastResult:
+        """One result of ``n`` lanes from ``[(lane indices, FastResult), ...]``."""
+        fields = [f.name for f in dataclasses.fields(cls)]
+        out = {}
+        for name in fields:
+            first = getattr(parts[0][1], name)
+            out[name] = np.empty((n,) + first.shape[1:], dtype=first.dtype)
+            for idx, res in parts:
+                out[name][idx] = getattr(res, name)
+        return cls(**out)
+
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
-              reference=None) -> FastResult:  # fmt: skip
+              reference=None, pool=None) -> FastResult:  # fmt: skip
     """Outcomes of ``N`` trajectories (parameters broadcast to ``(N,)``, ``g0`` (N, 4)) with the
     classification and horizon extension of :func:`atlas.dynamics.simulate_outcome`.
 
     ``reference(beta1, beta2, alpha, k=, q=, g0=)`` runs one trajectory with the exact simulator
     for the fallback lanes: :func:`atlas.dynamics.simulate_outcome` with the same ``t_end``,
-    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).
+    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).  ``pool``: a
+    :class:`atlas.dynamics.lane_pool.LanePool` that runs the lanes on several processes (the same
+    result bit for bit; the fallback lanes run here).
     """
     g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
+    n = g0.shape[0]
+    b1, b2, al = (np.broadcast_to(np.asarray(x, dtype=float).ravel(), (n,)).copy()
+                  for x in (beta1, beta2, alpha))  # fmt: skip
+    kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
+    qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
+    opts = dict(t_end=t_end, horizon_cap=horizon_cap, max_events=max_events)
+    arrays = (b1, b2, al, kk, qq, g0)
+    if pool is None:
+        res = run_lanes(*arrays, **opts)
+    else:
+        res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
+    for i in np.flatnonzero(res.decided_by == 3):
+        out, _ = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
+        res.code[i] = int(out)
+    return res
+
+
+def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0,
+              max_events=2000) -> FastResult:  # fmt: skip
+    """:func:`run_batch` without the exact simulator: the lanes it would run have
+    ``decided_by`` ``fallback`` and ``code`` -1 (parameters ``(N,)``, ``k``, ``q`` (N, 2))."""
     lanes = Lanes.of(beta1, beta2, alpha, k, q)
     if lanes.a.shape[0] != g0.shape[0]:
         raise ValueError(f"g0 must have one row per trajectory, got {g0.shape[0]}")
@@ -851,15 +886,8 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         st.horizon[ix] *= 2
         st.status[ix] = _RUNNING
         st.code[ix] = -1
-    fb = np.flatnonzero(fallback)
-    if fb.size:
-        b1, b2, al = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)).ravel()
-                                           for x in (beta1, beta2, alpha)))  # fmt: skip
-        for n in fb:
-            out, _ = reference(b1[n], b2[n], al[n], k=tuple(lanes.k[n]), q=tuple(lanes.q[n]),
-                               g0=g0[n])  # fmt: skip
-            st.code[n] = int(out)
-            st.decided_by[n] = 3
+    st.code[fallback] = -1
+    st.decided_by[fallback] = 3
     return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
 
 
