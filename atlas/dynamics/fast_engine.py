@@ -50,6 +50,9 @@ Both are declared only where the reference's finite-horizon stops reach the same
 (:func:`_settles_first`, :func:`_aligned_at_stop`); otherwise the lane keeps stepping.
 
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
+Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
+a longer horizon (:func:`atlas.dynamics.needs_longer_run`) rejoin the running batch from where
+they stopped, so the horizon extensions of some lanes overlap the first runs of the others.
 Lanes the modal form cannot serve (eigenvector condition > ``1e4``, singular ``B_SS``, a zero
 eigenvalue) or whose root location stalls (a grazing contact) are run by the exact simulator
 instead (``fallback``).  The condition bound separates the near-defective configurations of
@@ -329,34 +332,65 @@ def _switch(s, cross, f, fp, k, scale):
 
 
 def _bins(t, width, nbins):
-    return np.clip(np.ceil(t / width).astype(int) - 1, 0, nbins - 1)
+    return np.minimum(np.maximum(np.ceil(t / width).astype(int) - 1, 0), nbins - 1)
 
 
-def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback):
-    """Step the lanes ``ix`` event to event until each is decided, stops (horizon
-    ``st.horizon``, event cap, divergence) or falls back; results written into ``st``."""
-    nbins = st.amp.shape[1]
+def _admit(lanes, tables, st: _State, ix, fallback):
+    """The per-lane arrays of :func:`_run_lanes` for the lanes ``ix`` starting from their state
+    in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = _mask_of(s)
     P, U, lam, valid, H, ok = _segments(lanes, tables, ix, mask, g)
-    tseg = t.copy()
-    T = st.horizon[ix].copy()
-    k, q, scale = lanes.k[ix], lanes.q[ix], st.scale[ix]
-    stall = np.zeros(ix.size, dtype=int)
-    since = np.zeros(ix.size, dtype=int)
-    rows = np.arange(ix.size)
     fallback[ix[~ok]] = True
-    keep = ok
+    cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
+            lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
+            np.zeros(ix.size, dtype=int))  # fmt: skip
+    return tuple(x[ok] for x in cols)
+
+
+def _classify_stopped(st: _State, tables, n, width, t_max):
+    """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
+    :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
+    returned."""
+    st.code[n] = _classify_many(st, tables, n, width)
+    again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
+              & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
+    st.horizon[again] *= 2
+    st.status[again] = _RUNNING
+    st.code[again] = -1
+    return again
+
+
+#: steps between the classifications of the lanes that stopped (those given a longer horizon
+#: rejoin the batch then)
+_READMIT = 8
+
+
+def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
+    """Step every lane event to event until it is decided, stops (horizon ``st.horizon``, event
+    cap, divergence) or falls back; a lane that stops undetermined with events rejoins the batch
+    with its horizon doubled (:func:`_classify_stopped`); results written into ``st``."""
+    nbins = st.amp.shape[1]
+    cols = _admit(lanes, tables, st, np.arange(st.t.size), fallback)
+    ix = cols[0]
+    keep = np.ones(ix.size, dtype=bool)
+    pending = []
+    it = 0
     while True:
         if not keep.all():
-            sel = keep
-            ix, t, g, s, mask, P, U, lam, valid, H = (
-                x[sel] for x in (ix, t, g, s, mask, P, U, lam, valid, H)
-            )
-            tseg, T, k, q, scale, stall, since = (
-                x[sel] for x in (tseg, T, k, q, scale, stall, since)
-            )
-            rows = np.arange(ix.size)
+            gone = ix[~keep]
+            pending.append(gone[(st.status[gone] != _RUNNING) & ~fallback[gone]])
+            cols = tuple(x[keep] for x in cols)
+            ix = cols[0]
+        if pending and (ix.size == 0 or it % _READMIT == 0):
+            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
+            pending = []
+            if again.size:
+                new = _admit(lanes, tables, st, again, fallback)
+                cols = tuple(np.concatenate([a, b]) for a, b in zip(cols, new, strict=True))
+        it += 1
+        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since = cols
+        rows = np.arange(ix.size)
         if ix.size == 0:
             return
         tau = t - tseg
@@ -376,8 +410,8 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
             lx, mk = ix[deep], mask[deep]
             div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
                                          g[deep], 1e-3)  # fmt: skip
-        _leave(st, ix, t, g, s, keep, div, 2)
-        _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
+        _leave(st, ix, t, g, s, keep, np.flatnonzero(div), 2)
+        _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
         M = eb.curvature_bound(p, UE, lam, H, k, q)
@@ -437,6 +471,7 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
 
 
 def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
@@ -490,7 +525,9 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
 
 
 def _leave(st, ix, t, g, s, keep, sel, status):
-    """Lanes ``sel`` leave the batch: their time, state, signs and status into ``st``."""
+    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``."""
+    if sel.size == 0:
+        return
     st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
     st.status[ix[sel]] = status
     keep[sel] = False
@@ -623,11 +660,11 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
     aw = np.abs(UE)
     grow = np.maximum(lam.real, 0.0)
+    a0, a1, a2 = (np.abs(p[:, :, i]) for i in range(3))
 
     def bound(x):
         e = np.exp(grow * x[:, None])[:, None, :]
-        b = (np.abs(p[:, :, 0]) + np.abs(p[:, :, 1]) * x[:, None] + np.abs(p[:, :, 2])
-             * x[:, None] ** 2 + (aw * e).sum(axis=2))  # fmt: skip
+        b = a0 + a1 * x[:, None] + a2 * x[:, None] ** 2 + (aw * e).sum(axis=2)
         return b.max(axis=1)
 
     lo, hi = np.zeros(c.shape[0]), rest.copy()
@@ -794,6 +831,7 @@ def _impacts_of(st: _State, n):
     if not st.imp:
         return np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0, int)
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
+    st.imp[:] = [(lane, t, v, c)]
     sel = np.isin(lane, n)
     return lane[sel], t[sel], v[sel], c[sel]
 
@@ -873,19 +911,8 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0,
     nbins = int(math.ceil(3 * horizon_cap)) + 1
     st = _State.start(lanes, g0, t_end, nbins)
     fallback = np.zeros(g0.shape[0], dtype=bool)
-    t_max = horizon_cap * t_end
-    ix = np.arange(g0.shape[0])
-    while ix.size:
-        with np.errstate(all="ignore"):
-            _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
-        n = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
-        st.code[n] = _classify_many(st, tables, n, width)
-        # the horizon extension of atlas.dynamics.needs_longer_run
-        ix = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
-               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
-        st.horizon[ix] *= 2
-        st.status[ix] = _RUNNING
-        st.code[ix] = -1
+    with np.errstate(all="ignore"):
+        _run_lanes(lanes, tables, st, horizon_cap * t_end, max_events, width, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
     return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
