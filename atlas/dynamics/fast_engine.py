@@ -380,7 +380,8 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         if not keep.all():
             gone = ix[~keep]
             pending.append(gone[(st.status[gone] != _RUNNING) & ~fallback[gone]])
-            cols = tuple(x[keep] for x in cols)
+            sel = np.flatnonzero(keep)
+            cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size == 0 or it % _READMIT == 0):
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
@@ -401,11 +402,13 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         keep = np.ones(ix.size, dtype=bool)
 
         # stops of the reference: divergence, horizon
-        div = ~np.isfinite(g).all(axis=1)
-        div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
+        div = ~_all_cols(np.isfinite(g))
+        div |= np.maximum(d[:, 0], d[:, 1]) > 1e4 * scale
+        div |= np.minimum(d[:, 0], d[:, 1]) < -1e6 * scale
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
+        pen = act & (d < -1e3 * scale[:, None])
+        deep = np.flatnonzero(sched & ~div & (pen[:, 0] | pen[:, 1]))
         if deep.size:
             lx, mk = ix[deep], mask[deep]
             div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
@@ -427,7 +430,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         hi = np.where(mon, hi, np.inf)
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = np.flatnonzero(keep & sched & np.all(hi > (t_max - t)[:, None], axis=1))
+        r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         r = r[_may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
@@ -435,9 +438,9 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
             dec = st.code[ix[r]] >= 0
             _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # the first crossing: smallest sigma_lo, ties to the tightest bracket
-        m = lo.min(axis=1)
+        m = _min_cols(lo)
         tie_hi = np.where(lo <= m[:, None], hi, np.inf)
-        first = np.where(np.isinf(tie_hi.min(axis=1)), np.argmin(lo, axis=1),
+        first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
                          np.argmin(tie_hi, axis=1))  # fmt: skip
         h = hi[rows, first]
         rem = T - t
@@ -445,7 +448,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
         # first crossing is in it, located on that function alone (:func:`_locate_root`)
-        other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
+        other = _min_cols(np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo))
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
@@ -474,6 +477,16 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
 
 
+def _all_cols(x):
+    """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
+    return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
+
+
+def _min_cols(x):
+    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
+    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
+
+
 def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
     ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
@@ -493,9 +506,9 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
         t = tau + x
         ue = Ui * np.exp(lam * t[:, None])
         lue = ue * lam
-        d = p0 + t * (p1 + t * p2) + ue.sum(axis=1).real
-        v = p1 + 2 * t * p2 + lue.sum(axis=1).real
-        acc = 2 * p2 + (lue * lam).sum(axis=1).real
+        d = p0 + t * (p1 + t * p2) + eb.re_sum4(ue)
+        v = p1 + 2 * t * p2 + eb.re_sum4(lue)
+        acc = 2 * p2 + eb.re_sum4(lue * lam)
         f = np.where(gap, d, -ki * d - qi * v)
         fp = np.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
@@ -590,7 +603,7 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     aw = np.abs(UE)
     amp = 1e4 * scale
     # upper bound of each free gap: |p0| + |p1| s + |p2| s^2 + sum |u|
-    reach = _first_reach(np.abs(p[:, :, 0]) + aw.sum(axis=2), np.abs(p[:, :, 1]),
+    reach = _first_reach(np.abs(p[:, :, 0]) + eb.sum4(aw), np.abs(p[:, :, 1]),
                          np.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
     t_amp = np.where(act, np.inf, reach).min(axis=1)
     omega = np.sqrt(k.max(axis=1))
@@ -664,7 +677,7 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
 
     def bound(x):
         e = np.exp(grow * x[:, None])[:, None, :]
-        b = a0 + a1 * x[:, None] + a2 * x[:, None] ** 2 + (aw * e).sum(axis=2)
+        b = a0 + a1 * x[:, None] + a2 * x[:, None] ** 2 + eb.sum4(aw * e)
         return b.max(axis=1)
 
     lo, hi = np.zeros(c.shape[0]), rest.copy()
