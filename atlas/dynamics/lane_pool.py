@@ -7,7 +7,8 @@ lane), so any split gives the same arrays, bit for bit.  One chunk per process k
 large: the engine's cost per step is mostly fixed (NumPy calls), so smaller batches cost more per
 trajectory.  The other processes are started with ``spawn`` once per :class:`LanePool` and reused
 by every batch; they import NumPy and the engine only (no JAX, no xarray), so starting one takes
-about half a second, which counts in the wall time of the batch that starts it.
+about half a second on a quiet machine, which counts in the wall time of the batch that
+starts it.
 """
 
 from __future__ import annotations

@@ -212,7 +212,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
     print(
         f"outcome map {shape}: {summary}; {ds.attrs['trajectories']} trajectories in "
         f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine}"
-        + (f", {workers} workers)" if engine == "fast" else ")")
+        + (f", {workers} worker{'s' * (workers > 1)})" if engine == "fast" else ")")
     )
     if out:
         if suffix == ".nc":
