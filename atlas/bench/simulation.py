@@ -12,6 +12,7 @@ import numpy as np
 
 from atlas import dynamics
 from atlas.bench.timing import log, timeit
+from atlas.dynamics.lane_pool import usable_cores
 
 __all__ = ["event_error", "gap_events", "outcome_maps", "simulation"]
 
@@ -106,15 +107,21 @@ def simulation(cfg) -> list[dict]:
 
 def outcome_maps(cfg) -> list[dict]:
     """Rows of the fast engine against the exact simulator on the outcome maps ``outcome_maps``
-    ``(n, kappa, q, alpha, sample)``: the whole ``n x n`` map with the fast engine (wall time,
-    trajectories per second, how the runs were decided), ``sample`` of its cells (seeded) with
-    :func:`atlas.dynamics.simulate_outcome` from the same initial states, the agreement and every
-    disagreement (``disagreements``: cell, both outcomes, the reference's stop)."""
+    ``(n, kappa, q, alpha, sample)``: the whole ``n x n`` map with the fast engine on the usable
+    cores (the default of ``atlas simulate --map``; wall time with the start of the processes,
+    trajectories per second) and on one core, whether the two maps are identical, how the runs
+    were decided; ``sample`` of its cells (seeded) with :func:`atlas.dynamics.simulate_outcome`
+    from the same initial states on one core, the speedup per core (one core each), the agreement
+    and every disagreement (``disagreements``: cell, both outcomes, the reference's stop)."""
     rows = []
+    workers = usable_cores()
     for n, kappa, q, alpha, sample in cfg.get("outcome_maps", ()):
         b1, b2 = dynamics.outcome_grid(n)
-        ds = dynamics.outcome_map(b1, b2, kappa=kappa, q=q, alpha=alpha, engine="fast")
+        kw = dict(kappa=kappa, q=q, alpha=alpha, engine="fast")
+        one = dynamics.outcome_map(b1, b2, workers=1, **kw)
+        ds = dynamics.outcome_map(b1, b2, workers=workers, **kw)
         fast = ds["outcome"].values
+        identical = bool(np.array_equal(ds["outcome_count"].values, one["outcome_count"].values))
         g0 = dynamics.perturbed_initial_states(b1, b2, alpha, kappa)
         cells = np.random.default_rng(n).choice(n * n, size=min(sample, n * n), replace=False)
         t0 = time.perf_counter()
@@ -133,16 +140,22 @@ def outcome_maps(cfg) -> list[dict]:
         ref_s = time.perf_counter() - t0
         a = ds.attrs
         fast_rate = a["trajectories"] / a["seconds"]
+        core_rate = one.attrs["trajectories"] / one.attrs["seconds"]
         ref_rate = cells.size / ref_s
         rows.append(dict(
             map=f"{n}x{n}, kappa={kappa:g}, q={q:g}, alpha={alpha / math.pi:.3g}pi",
-            trajectories=a["trajectories"], fast_seconds=a["seconds"], fast_per_s=fast_rate,
-            ref_cells=int(cells.size), ref_per_s=ref_rate, speedup=fast_rate / ref_rate,
+            trajectories=a["trajectories"], workers=workers, fast_seconds=a["seconds"],
+            fast_per_s=fast_rate, core_seconds=one.attrs["seconds"], core_per_s=core_rate,
+            identical=identical, ref_cells=int(cells.size), ref_per_s=ref_rate,
+            speedup=core_rate / ref_rate,
             early_settle=a["runs_early_settle"] / a["trajectories"],
             early_iwc=a["runs_early_iwc"] / a["trajectories"],
             stepped=a["runs_stepped"] / a["trajectories"],
             fallback=a["runs_fallback"] / a["trajectories"],
             agreement=1 - len(bad) / cells.size, disagreements="; ".join(bad),
         ))  # fmt: skip
-        log(f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s fast, {ref_rate:.1f}/s exact")
+        log(
+            f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s on {workers} cores, "
+            f"{core_rate:.0f}/s on one, {ref_rate:.1f}/s exact"
+        )
     return rows

@@ -14,6 +14,8 @@ import numpy as np
 
 __all__ = [
     "NEUTRAL",
+    "sum4",
+    "re_sum4",
     "evaluate",
     "event_functions",
     "curvature_bound",
@@ -29,6 +31,24 @@ __all__ = [
 NEUTRAL = 1e-9
 
 
+def sum4(x):
+    """``x.sum(axis=-1)`` of a real array, for a last axis of length 4 as elementwise additions
+    in NumPy's order (``((x0 + x1) + x2) + x3``): the same values without the cost of a reduction
+    over a short axis."""
+    if x.shape[-1] != 4:
+        return x.sum(axis=-1)
+    return ((x[..., 0] + x[..., 1]) + x[..., 2]) + x[..., 3]
+
+
+def re_sum4(z):
+    """``z.sum(axis=-1).real`` of a complex array, for a last axis of length 4 in NumPy's order of
+    a complex sum (``(z0 + z1) + (z2 + z3)``), on the real parts only."""
+    if z.shape[-1] != 4:
+        return z.sum(axis=-1).real
+    r = z.real
+    return (r[..., 0] + r[..., 1]) + (r[..., 2] + r[..., 3])
+
+
 def evaluate(P, U, lam, tau):
     """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
     polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
@@ -39,9 +59,9 @@ def evaluate(P, U, lam, tau):
     p[:, :, 1] = P[:, :, 1] + 2 * t1 * P[:, :, 2]
     p[:, :, 0] = P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2])
     lUE = UE * lam[:, None, :]
-    d = p[:, :, 0] + UE.sum(axis=2).real
-    v = p[:, :, 1] + lUE.sum(axis=2).real
-    acc = 2 * p[:, :, 2] + (lUE * lam[:, None, :]).sum(axis=2).real
+    d = p[:, :, 0] + re_sum4(UE)
+    v = p[:, :, 1] + re_sum4(lUE)
+    acc = 2 * p[:, :, 2] + re_sum4(lUE * lam[:, None, :])
     return d, v, acc, p, UE
 
 
@@ -57,8 +77,8 @@ def curvature_bound(p, UE, lam, H, k, q):
     lr = np.abs(lam)
     grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
     a = np.abs(UE) * grow
-    m2 = 2 * np.abs(p[:, :, 2]) + (a * lr[:, None, :] ** 2).sum(axis=2)
-    m3 = (a * lr[:, None, :] ** 3).sum(axis=2)
+    m2 = 2 * np.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
+    m3 = sum4(a * lr[:, None, :] ** 3)
     return np.concatenate([m2, k * m2 + q * m3], axis=1)
 
 
@@ -135,11 +155,11 @@ def keeps_sign_bound(c, w, lam, valid, horizon):
     l1 = np.where(any_grow, lam1.real, 0.0)
     real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
     aw = np.abs(w)
-    others = np.where(grow, aw, 0.0).sum(axis=-1) - np.where(any_grow, np.abs(w1), 0.0)
+    others = sum4(np.where(grow, aw, 0.0)) - np.where(any_grow, np.abs(w1), 0.0)
     G = np.where(any_grow, w1.real - others, 0.0)
     fac = np.where(re > 0, np.exp(re * horizon[..., None]), 1.0)
-    bounded = np.where(~grow & (aw > 0), aw * fac, 0.0).sum(axis=-1)
-    margin = 1e-12 * (np.abs(c[..., 0]) + aw.sum(axis=-1)) + 1e-300
+    bounded = sum4(np.where(~grow & (aw > 0), aw * fac, 0.0))
+    margin = 1e-12 * (np.abs(c[..., 0]) + sum4(aw)) + 1e-300
     a0 = c[..., 0] + G - bounded - margin
     a1 = c[..., 1] + G * l1
     a2 = c[..., 2] + 0.5 * G * l1 * l1
