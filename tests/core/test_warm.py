@@ -2,6 +2,7 @@
 by a later process, and never reused across a change of the kernels' code."""
 
 import functools
+import os
 import re
 import subprocess
 import sys
@@ -21,6 +22,7 @@ def _suite():
 
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # the exported programs alone
     args = _suite()
     want = np.asarray(enclosures.abscissa(*args))
     with warm.kernel_cache(str(tmp_path)):
@@ -42,8 +44,10 @@ def test_exported_first_pass_is_one_loop_fusion(tmp_path):
     point) holds for the exported program too: its compiled form has one per-point fusion."""
     x = np.ones(64)
     kern = warm.Kernel(functools.partial(rootfree.codes, damped=None))
-    call = kern._load(Path(tmp_path), ("key",), (x,) * 7, {})
-    text = call.lower(*(x,) * 7).compile().as_text()
+    exp = kern._export(
+        Path(tmp_path) / "codes.jaxexport", [jax.ShapeDtypeStruct(x.shape, x.dtype)] * 7, {}
+    )
+    text = jax.jit(exp.call).lower(*(x,) * 7).compile().as_text()
     entry = text[text.index("ENTRY") :]
     fusions = re.findall(r"^\s*(?:ROOT )?%\S+ = (\S+) fusion\(", entry, re.M)
     assert len([f for f in fusions if not f.endswith("[]")]) == 1, fusions
@@ -83,3 +87,110 @@ def test_digest_is_the_same_in_every_process():
         for _ in range(2)
     }
     assert len(got) == 1, got
+
+
+def _dominance_args(n=64, seed=0):
+    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile)."""
+    rng = np.random.default_rng(seed)
+    geometry = [rng.uniform(-1, 1, n) for _ in range(4)]
+    model = [rng.uniform(0.1, 10, n), rng.uniform(0, 1, n), rng.uniform(0, 1, n)]
+    flags = [rng.integers(0, 2, n).astype(bool) for _ in range(3)]
+    shifts = [rng.integers(-1, 2, n).astype(np.int8), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
+    return geometry + model + flags + shifts
+
+
+STORED = """
+import os, sys, jax, numpy as np
+from atlas.core import config, rootfree, warm
+from tests.core.test_warm import _dominance_args
+config.use_compile_cache(sys.argv[1] + "/xla", min_compile_seconds=0)
+if sys.argv[2] == "load":  # the stored executable serves: no program is read or exported
+    jax.export.deserialize = jax.export.export = None
+with warm.kernel_cache(sys.argv[1] + "/kernels"):
+    out = rootfree._tier2_dominance(*_dominance_args())
+print(warm._result_digest(out))
+"""
+
+
+def _in_fresh_process(where, mode, **env):
+    root = Path(__file__).resolve().parents[2]
+    p = subprocess.run(
+        [sys.executable, "-c", STORED, str(where), mode],
+        capture_output=True,
+        text=True,
+        cwd=root,
+        timeout=300,
+        env={**os.environ, **env},
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    return p.stdout.strip()
+
+
+@pytest.mark.e2e
+def test_stored_executable_gives_the_jit_results_in_a_fresh_process(tmp_path):
+    """A first process leaves the program in the compilation cache (whose executables serialize
+    incompletely: module docstring), a second stores the executable, a third runs it alone;
+    each gives the bits of plain ``jax.jit`` (this process)."""
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*_dominance_args()))
+    assert _in_fresh_process(tmp_path, "fill", **{warm.EXECUTABLE_ENV: "0"}) == want
+    assert not list(tmp_path.glob("kernels/*.xlaexec"))
+    assert _in_fresh_process(tmp_path, "store") == want
+    assert len(list(tmp_path.glob("kernels/*.xlaexec"))) == 1
+    assert _in_fresh_process(tmp_path, "load") == want
+
+
+@pytest.fixture(scope="module")
+def stored_dominance(tmp_path_factory):
+    """A kernel directory holding ``_tier2_dominance``'s program and executable."""
+    where = tmp_path_factory.mktemp("stored")
+    with warm.kernel_cache(str(where)):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
+    return where
+
+
+@pytest.mark.parametrize("damage", ["garbage", "digest", "blob"])
+def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path, damage):
+    """A stored executable that does not load, or whose canary result differs from the one
+    recorded, is refused; the exported program gives the right result (and a good executable
+    is stored again)."""
+    import pickle
+    import shutil
+
+    from jax.experimental import serialize_executable
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    args = _dominance_args()
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    (xpath,) = tmp_path.glob("*.xlaexec")
+    assert warm._load_executable(xpath) is not None
+    record = pickle.loads(xpath.read_bytes())
+    if damage == "garbage":
+        xpath.write_bytes(b"not an executable")
+    elif damage == "digest":
+        record["digest"] = "0" * 64
+        xpath.write_bytes(pickle.dumps(record))
+    else:  # the executable of another program with the same argument shapes
+        other = jax.jit(lambda *a: rootfree._tier2_dominance.fn(*a)[::-1])
+        record["executable"] = serialize_executable.serialize(other.lower(*args).compile())
+        xpath.write_bytes(pickle.dumps(record))
+    assert warm._load_executable(xpath) is None
+    with warm.kernel_cache(str(tmp_path)):
+        got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    assert warm._result_digest(got) == want
+    assert warm._load_executable(xpath) is not None  # stored again, valid
+
+
+def test_an_executable_that_fails_on_a_call_falls_back():
+    """A loaded executable that raises when its results are read hands the call (and every
+    later one) to the exported program."""
+
+    def broken(*args):
+        raise RuntimeError("NOT_FOUND: Function maximum_log_fusion not found")
+
+    args = _dominance_args()
+    guarded = warm._Guarded(broken, lambda: rootfree._tier2_dominance.jitted)
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    assert warm._result_digest(guarded(*args)) == want
+    assert guarded.compiled is None
+    assert warm._result_digest(guarded(*args)) == want
