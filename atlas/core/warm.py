@@ -167,16 +167,22 @@ class Kernel:
 
 
 class _Guarded:
-    """A loaded executable whose every call is checked: an error (raised when the results are
-    read) switches this kernel to the exported program for the call and every later one."""
+    """A loaded executable whose first call is checked: an error (raised when the results are
+    read) hands that call and every later one to the exported program.  Later calls dispatch
+    asynchronously (the same executable, already run on the canary and on the first call)."""
 
     def __init__(self, compiled, exported):
         self.compiled, self.exported, self.fallback = compiled, exported, None
+        self.checked = False
 
     def __call__(self, *args):
         if self.compiled is not None:
+            if self.checked:
+                return self.compiled(*args)
             try:
-                return jax.block_until_ready(self.compiled(*args))
+                out = jax.block_until_ready(self.compiled(*args))
+                self.checked = True
+                return out
             except Exception:  # noqa: BLE001 - any failure: the exported program decides
                 self.compiled = None
         if self.fallback is None:

@@ -181,7 +181,7 @@ def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path, damage):
     assert warm._load_executable(xpath) is not None  # stored again, valid
 
 
-def test_an_executable_that_fails_on_a_call_falls_back():
+def test_an_executable_that_fails_on_its_first_call_falls_back():
     """A loaded executable that raises when its results are read hands the call (and every
     later one) to the exported program."""
 
