@@ -77,25 +77,56 @@ KERNEL_ENV = "ATLAS_KERNEL_CACHE"
 EXECUTABLE_ENV = "ATLAS_KERNEL_EXECUTABLES"
 #: values of each argument kept as the canary input of a stored executable
 CANARY = 256
-_STATE: dict = {"dir": None, "digests": {}}
+_STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}}
 #: held while the compilation cache is switched off for a fresh compilation
 _FRESH = threading.Lock()
 
 
 @contextlib.contextmanager
-def kernel_cache(where: str | None = None):
+def kernel_cache(where: str | None = None, run: str | None = None):
     """Within the block, :class:`Kernel` calls use (and fill) the exported programs in ``where``
     (default ``<compilation cache>/kernels``; nothing if the compilation cache is off or
-    ``$ATLAS_KERNEL_CACHE`` is ``0``)."""
+    ``$ATLAS_KERNEL_CACHE`` is ``0``).  ``run`` names this kind of run (the CLI: the command line
+    without its output paths): the executables the last run of that name used are loaded in
+    background threads from the start of the block (each still checked on its canary)."""
     before = dict(_STATE)
     if where is None and os.environ.get(KERNEL_ENV, "") != "0":
         base = config.compile_cache_dir()
         where = None if base is None else os.path.join(base, "kernels")
-    _STATE.update(dir=where, digests={})
+    manifest = None
+    if where is not None and run is not None and os.environ.get(EXECUTABLE_ENV, "") != "0":
+        manifest = Path(where) / f"run-{hashlib.sha256(run.encode()).hexdigest()[:24]}.txt"
+    _STATE.update(dir=where, digests={}, used=[], prefetch=_prefetch(manifest))
     try:
         yield where
     finally:
+        for future in _STATE["prefetch"].values():
+            future.cancel()
+        used = "\n".join(_STATE["used"])
+        if manifest is not None and used and _read_text(manifest) != used:
+            _write(manifest, used.encode())
         _STATE.update(before)
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text()
+    except (OSError, ValueError):
+        return ""
+
+
+def _prefetch(manifest: Path | None) -> dict:
+    """``{file name: future}`` of the executables listed in ``manifest``, loading in the
+    background (:func:`_load_executable`)."""
+    names = _read_text(manifest).split() if manifest is not None else []
+    if not names:
+        return {}
+    from concurrent.futures import ThreadPoolExecutor  # noqa: PLC0415
+
+    pool = ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1), thread_name_prefix="warm")
+    futures = {n: pool.submit(_load_executable, manifest.parent / n) for n in names}
+    pool.shutdown(wait=False)
+    return futures
 
 
 class Kernel:
@@ -141,11 +172,17 @@ class Kernel:
         xpath = where / f"{self.name}-{host}.xlaexec"
         specs = [jax.ShapeDtypeStruct(a.shape, a.dtype) for a in args]
         executables = os.environ.get(EXECUTABLE_ENV, "") != "0"
-        call = _load_executable(xpath) if executables else None
+        future = _STATE["prefetch"].pop(xpath.name, None)
+        call = None
+        if executables:
+            call = future.result() if future is not None else _load_executable(xpath)
         if call is not None:
+            _STATE["used"].append(xpath.name)
             return _Guarded(call, lambda: jax.jit(self._export(path, specs, static).call))
         exp = self._export(path, specs, static)
         compiled = _store_executable(xpath, exp, args) if executables else None
+        if compiled is not None:
+            _STATE["used"].append(xpath.name)
         return jax.jit(exp.call) if compiled is None else compiled
 
     def _export(self, path: Path, specs, static):

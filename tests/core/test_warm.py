@@ -6,6 +6,7 @@ import os
 import re
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import jax
@@ -194,3 +195,31 @@ def test_an_executable_that_fails_on_its_first_call_falls_back():
     assert warm._result_digest(guarded(*args)) == want
     assert guarded.compiled is None
     assert warm._result_digest(guarded(*args)) == want
+
+
+def test_the_executables_of_the_last_run_load_in_the_background(
+    stored_dominance, tmp_path, monkeypatch
+):
+    """A run named like an earlier one loads the executables that run used in background threads
+    from its start, and uses them (same results)."""
+    import shutil
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    args = _dominance_args()
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    with warm.kernel_cache(str(tmp_path), run="a run"):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    (manifest,) = tmp_path.glob("run-*.txt")
+    assert manifest.read_text() == next(tmp_path.glob("*.xlaexec")).name
+    threads = []
+    load = warm._load_executable
+    monkeypatch.setattr(
+        warm,
+        "_load_executable",
+        lambda p: threads.append(threading.current_thread().name) or load(p),
+    )
+    with warm.kernel_cache(str(tmp_path), run="a run"):
+        got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    assert warm._result_digest(got) == want
+    assert len(threads) == 1 and threads[0].startswith("warm"), threads
