@@ -55,7 +55,8 @@ def test_exported_first_pass_is_one_loop_fusion(tmp_path):
 
 
 @pytest.mark.e2e
-def test_driver_under_the_kernel_cache_is_unchanged(tmp_path):
+def test_driver_under_the_kernel_cache_is_unchanged(tmp_path, monkeypatch):
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # the programs (executables: a fresh compile each)
     args = _suite()
     want = points.spectral_points(*args, resolve=False)
     with warm.kernel_cache(str(tmp_path)):
@@ -149,11 +150,10 @@ def stored_dominance(tmp_path_factory):
     return where
 
 
-@pytest.mark.parametrize("damage", ["garbage", "digest", "blob"])
-def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path, damage):
-    """A stored executable that does not load, or whose canary result differs from the one
-    recorded, is refused; the exported program gives the right result (and a good executable
-    is stored again)."""
+def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
+    """A stored executable that does not load, whose canary result differs from the one
+    recorded, or that is another program's, is refused; the exported program then gives the
+    right result (and a good executable is stored again)."""
     import pickle
     import shutil
 
@@ -165,17 +165,18 @@ def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path, damage):
     want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
     (xpath,) = tmp_path.glob("*.xlaexec")
     assert warm._load_executable(xpath) is not None
-    record = pickle.loads(xpath.read_bytes())
-    if damage == "garbage":
-        xpath.write_bytes(b"not an executable")
-    elif damage == "digest":
-        record["digest"] = "0" * 64
-        xpath.write_bytes(pickle.dumps(record))
-    else:  # the executable of another program with the same argument shapes
-        other = jax.jit(lambda *a: rootfree._tier2_dominance.fn(*a)[::-1])
-        record["executable"] = serialize_executable.serialize(other.lower(*args).compile())
-        xpath.write_bytes(pickle.dumps(record))
-    assert warm._load_executable(xpath) is None
+    good = pickle.loads(xpath.read_bytes())
+    other = jax.jit(lambda *a: rootfree._tier2_dominance.fn(*a)[::-1])  # same argument shapes
+    damaged = {
+        "garbage": b"not an executable",
+        "digest": pickle.dumps({**good, "digest": "0" * 64}),
+        "blob": pickle.dumps(
+            {**good, "executable": serialize_executable.serialize(other.lower(*args).compile())}
+        ),
+    }
+    for damage, data in damaged.items():
+        xpath.write_bytes(data)
+        assert warm._load_executable(xpath) is None, damage
     with warm.kernel_cache(str(tmp_path)):
         got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
     assert warm._result_digest(got) == want
