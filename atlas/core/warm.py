@@ -29,7 +29,8 @@ stored only if its serialized form, loaded again, passes too); a loaded executab
 stored executable is XLA's compilation of the same program with the same options as the
 exported program's ``jax.jit``: the same results (the tests compare the two in fresh processes).
 Programs with custom calls (LAPACK) keep no executable.  Executables are machine code for this
-host: their names also hold the host's CPU flags.  ``$ATLAS_KERNEL_EXECUTABLES=0`` keeps none.
+host and these compiler flags: their names also hold the host's CPU flags and ``$XLA_FLAGS``.
+``$ATLAS_KERNEL_EXECUTABLES=0`` keeps none.
 
 Without :func:`kernel_cache` (the library's default; the CLI turns it on for the command it runs)
 or with the compilation cache off, a :class:`Kernel` is exactly ``jax.jit``.
@@ -239,14 +240,19 @@ def _write(path: Path, data: bytes) -> None:
 
 
 def _host() -> str:
-    """The machine an executable is compiled for: architecture and CPU flags."""
+    """What an executable is compiled for besides its program: the machine (architecture, CPU
+    flags) and the compiler's flags (``$XLA_FLAGS``, JAX's default matmul precision)."""
     flags = ""
     try:
         with open("/proc/cpuinfo") as f:
             flags = next((line for line in f if line.startswith(("flags", "Features"))), "")
     except OSError:
         pass
-    return f"{platform.machine()} {platform.processor()} {flags.strip()}"
+    precision = jax.config.jax_default_matmul_precision
+    return (
+        f"{platform.machine()} {platform.processor()} {flags.strip()} "
+        f"XLA_FLAGS={os.environ.get('XLA_FLAGS', '')} precision={precision}"
+    )
 
 
 def _canary(sample, shape, dtype):

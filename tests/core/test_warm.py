@@ -224,3 +224,15 @@ def test_the_executables_of_the_last_run_load_in_the_background(
         got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
     assert warm._result_digest(got) == want
     assert len(threads) == 1 and threads[0].startswith("warm"), threads
+
+
+def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, monkeypatch):
+    """An executable compiled under other ``$XLA_FLAGS`` is never served: its file differs."""
+    import shutil
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_enable_fast_math=true")
+    with warm.kernel_cache(str(tmp_path)):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
+    assert len(list(tmp_path.glob("*.xlaexec"))) == 2
