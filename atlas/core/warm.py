@@ -182,9 +182,10 @@ class Kernel:
             return _Guarded(call, lambda: jax.jit(self._export(path, specs, static).call))
         exp = self._export(path, specs, static)
         compiled = _store_executable(xpath, exp, args) if executables else None
-        if compiled is not None:
-            _STATE["used"].append(xpath.name)
-        return jax.jit(exp.call) if compiled is None else compiled
+        if compiled is None:
+            return jax.jit(exp.call)
+        _STATE["used"].append(xpath.name)
+        return _Guarded(compiled, lambda: jax.jit(exp.call))
 
     def _export(self, path: Path, specs, static):
         """The ``jax.export`` program of this kernel for the argument ``specs``: read from
@@ -205,9 +206,10 @@ class Kernel:
 
 
 class _Guarded:
-    """A loaded executable whose first call is checked: an error (raised when the results are
-    read) hands that call and every later one to the exported program.  Later calls dispatch
-    asynchronously (the same executable, already run on the canary and on the first call)."""
+    """An executable whose calls fall back to the exported program: on an error when it is
+    called (e.g. arguments it was not compiled for) or, on its first call, when the results are
+    read.  Later calls dispatch asynchronously (the same executable, already run on the canary
+    and on the first call)."""
 
     def __init__(self, compiled, exported):
         self.compiled, self.exported, self.fallback = compiled, exported, None
@@ -215,11 +217,11 @@ class _Guarded:
 
     def __call__(self, *args):
         if self.compiled is not None:
-            if self.checked:
-                return self.compiled(*args)
             try:
-                out = jax.block_until_ready(self.compiled(*args))
-                self.checked = True
+                out = self.compiled(*args)
+                if not self.checked:
+                    out = jax.block_until_ready(out)
+                    self.checked = True
                 return out
             except Exception:  # noqa: BLE001 - any failure: the exported program decides
                 self.compiled = None

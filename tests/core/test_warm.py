@@ -236,3 +236,16 @@ def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, 
     with warm.kernel_cache(str(tmp_path)):
         warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
     assert len(list(tmp_path.glob("*.xlaexec"))) == 2
+
+
+def test_an_executable_given_other_arguments_falls_back():
+    """Arguments an executable was not compiled for (here float32 for float64) go to the
+    exported program, which gives its results for them."""
+    args = _dominance_args()
+    compiled = jax.jit(rootfree._tier2_dominance.fn).lower(*args).compile()
+    guarded = warm._Guarded(compiled, lambda: rootfree._tier2_dominance.jitted)
+    guarded(*args)
+    other = [a.astype(np.float32) if a.dtype == np.float64 else a for a in args]
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*other))
+    assert warm._result_digest(guarded(*other)) == want
+    assert guarded.compiled is None
