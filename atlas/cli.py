@@ -636,13 +636,23 @@ def _interrupted(e) -> int:
     return 128 + (interrupts.requested() or signal.SIGINT)
 
 
+#: options that name where a run writes, not what it computes
+_WHERE = ("out", "store", "csv", "geojson", "overwrite", "resume", "progress", "no_progress")
+
+
+def _run_name(args) -> str:
+    """What a run computes (its options but the output paths): runs of one name use the same
+    kernels, which :func:`atlas.core.warm.kernel_cache` then loads in the background."""
+    return repr(sorted((k, repr(v)) for k, v in vars(args).items() if k not in _WHERE))
+
+
 def _main(argv) -> int:
     try:
         args = build_parser(_command(argv)).parse_args(argv)
         _output_rules(args)
         from atlas.core.warm import kernel_cache
 
-        with kernel_cache():  # traced kernels kept on disk: the next run starts warm
+        with kernel_cache(run=_run_name(args)):  # kernels kept on disk: the next run starts warm
             if args.command == "generate":
                 return _cmd_generate(args, argv)
             return _cmd_dispatch(args, argv)

@@ -13,6 +13,25 @@ the *live* code of the kernel modules (the code objects, defaults, closures and 
 every module-level name of :data:`MODULES` and of the kernel's own module, as loaded in this
 process): an edited or monkeypatched kernel function gets new files, never an old program.
 
+Compiled executables.  Beside each program the first process also keeps its compiled executable
+(``.xlaexec``, :mod:`jax.experimental.serialize_executable`), so that a later process skips the
+lowering and the compilation-cache look-up as well.  XLA's CPU client serializes an executable
+completely only when it was compiled in the process: one it loaded from the persistent compilation
+cache serializes without the code of its fusions, and loading it elsewhere fails with
+``NOT_FOUND: Function ..._fusion`` when a result is read.  So an executable is stored only after
+its serialized form has been loaded and checked in the process; one the cache served fails that
+check, and the program is compiled afresh for it (the caches bypassed, once).  Every executable is
+validated before use: a canary input (the first call's own arguments, their first
+:data:`CANARY` values repeated to the shape) must give results whose SHA-256 equals that of the
+compiled program's results on it in the process that compiled it (where the executable is
+stored only if its serialized form, loaded again, passes too); a loaded executable that fails
+(or raises, on the canary or on a call) is never used, the exported program runs instead.  The
+stored executable is XLA's compilation of the same program with the same options as the
+exported program's ``jax.jit``: the same results (the tests compare the two in fresh processes).
+Programs with custom calls (LAPACK) keep no executable.  Executables are machine code for this
+host and these compiler flags: their names also hold the host's CPU flags and ``$XLA_FLAGS``.
+``$ATLAS_KERNEL_EXECUTABLES=0`` keeps none.
+
 Without :func:`kernel_cache` (the library's default; the CLI turns it on for the command it runs)
 or with the compilation cache off, a :class:`Kernel` is exactly ``jax.jit``.
 """
@@ -23,7 +42,10 @@ import contextlib
 import functools
 import hashlib
 import os
+import pickle
+import platform
 import sys
+import threading
 import types
 from pathlib import Path
 
@@ -33,7 +55,7 @@ import numpy as np
 
 from atlas.core import config
 
-__all__ = ["Kernel", "jit", "kernel_cache", "MODULES", "KERNEL_ENV"]
+__all__ = ["Kernel", "jit", "kernel_cache", "MODULES", "KERNEL_ENV", "EXECUTABLE_ENV"]
 
 #: modules whose live code every kernel's digest covers (the kernels and what they call)
 MODULES = (
@@ -52,23 +74,60 @@ MODULES = (
 )
 #: environment variable: ``0`` keeps :func:`kernel_cache` off
 KERNEL_ENV = "ATLAS_KERNEL_CACHE"
-_STATE: dict = {"dir": None, "digests": {}}
+#: environment variable: ``0`` keeps no compiled executables (the exported programs only)
+EXECUTABLE_ENV = "ATLAS_KERNEL_EXECUTABLES"
+#: values of each argument kept as the canary input of a stored executable
+CANARY = 256
+_STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}}
+#: held while the compilation cache is switched off for a fresh compilation
+_FRESH = threading.Lock()
 
 
 @contextlib.contextmanager
-def kernel_cache(where: str | None = None):
+def kernel_cache(where: str | None = None, run: str | None = None):
     """Within the block, :class:`Kernel` calls use (and fill) the exported programs in ``where``
     (default ``<compilation cache>/kernels``; nothing if the compilation cache is off or
-    ``$ATLAS_KERNEL_CACHE`` is ``0``)."""
+    ``$ATLAS_KERNEL_CACHE`` is ``0``).  ``run`` names this kind of run (the CLI: the command line
+    without its output paths): the executables the last run of that name used are loaded in
+    background threads from the start of the block (each still checked on its canary)."""
     before = dict(_STATE)
     if where is None and os.environ.get(KERNEL_ENV, "") != "0":
         base = config.compile_cache_dir()
         where = None if base is None else os.path.join(base, "kernels")
-    _STATE.update(dir=where, digests={})
+    manifest = None
+    if where is not None and run is not None and os.environ.get(EXECUTABLE_ENV, "") != "0":
+        manifest = Path(where) / f"run-{hashlib.sha256(run.encode()).hexdigest()[:24]}.txt"
+    _STATE.update(dir=where, digests={}, used=[], prefetch=_prefetch(manifest))
     try:
         yield where
     finally:
+        for future in _STATE["prefetch"].values():
+            future.cancel()
+        used = "\n".join(_STATE["used"])
+        if manifest is not None and used and _read_text(manifest) != used:
+            _write(manifest, used.encode())
         _STATE.update(before)
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text()
+    except (OSError, ValueError):
+        return ""
+
+
+def _prefetch(manifest: Path | None) -> dict:
+    """``{file name: future}`` of the executables listed in ``manifest``, loading in the
+    background (:func:`_load_executable`)."""
+    names = _read_text(manifest).split() if manifest is not None else []
+    if not names:
+        return {}
+    from concurrent.futures import ThreadPoolExecutor  # noqa: PLC0415
+
+    pool = ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1), thread_name_prefix="warm")
+    futures = {n: pool.submit(_load_executable, manifest.parent / n) for n in names}
+    pool.shutdown(wait=False)
+    return futures
 
 
 class Kernel:
@@ -107,11 +166,32 @@ class Kernel:
 
     def _load(self, where: Path, key, args, static):
         """``jax.jit`` of the exported program of ``key``: read from ``where``, or exported and
-        written there (atomically) first."""
-        from jax import export  # noqa: PLC0415 - jax.export loads on first use only
-
+        written there (atomically) first; its compiled executable too, when it can be kept."""
         text = repr((self.name, key[1:]))
         path = where / f"{self.name}-{hashlib.sha256(text.encode()).hexdigest()[:24]}.jaxexport"
+        host = hashlib.sha256(f"{text} {_host()}".encode()).hexdigest()[:24]
+        xpath = where / f"{self.name}-{host}.xlaexec"
+        specs = [jax.ShapeDtypeStruct(a.shape, a.dtype) for a in args]
+        executables = os.environ.get(EXECUTABLE_ENV, "") != "0"
+        future = _STATE["prefetch"].pop(xpath.name, None)
+        call = None
+        if executables:
+            call = future.result() if future is not None else _load_executable(xpath)
+        if call is not None:
+            _STATE["used"].append(xpath.name)
+            return _Guarded(call, lambda: jax.jit(self._export(path, specs, static).call))
+        exp = self._export(path, specs, static)
+        compiled = _store_executable(xpath, exp, args) if executables else None
+        if compiled is None:
+            return jax.jit(exp.call)
+        _STATE["used"].append(xpath.name)
+        return _Guarded(compiled, lambda: jax.jit(exp.call))
+
+    def _export(self, path: Path, specs, static):
+        """The ``jax.export`` program of this kernel for the argument ``specs``: read from
+        ``path``, or exported and written there (atomically) first."""
+        from jax import export  # noqa: PLC0415 - jax.export loads on first use only
+
         exp = None
         if path.exists():
             try:
@@ -120,16 +200,148 @@ class Kernel:
                 exp = None
         if exp is None:
             fn = functools.partial(self.fn, **static) if static else self.fn
-            specs = [jax.ShapeDtypeStruct(a.shape, a.dtype) for a in args]
             exp = export.export(jax.jit(fn))(*specs)
+            _write(path, exp.serialize())
+        return exp
+
+
+class _Guarded:
+    """An executable whose calls fall back to the exported program: on an error when it is
+    called (e.g. arguments it was not compiled for) or, on its first call, when the results are
+    read.  Later calls dispatch asynchronously (the same executable, already run on the canary
+    and on the first call)."""
+
+    def __init__(self, compiled, exported):
+        self.compiled, self.exported, self.fallback = compiled, exported, None
+        self.checked = False
+
+    def __call__(self, *args):
+        if self.compiled is not None:
             try:
-                where.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-                tmp.write_bytes(exp.serialize())
-                os.replace(tmp, path)
-            except OSError:  # a read-only cache: just use the program
-                pass
-        return jax.jit(exp.call)
+                out = self.compiled(*args)
+                if not self.checked:
+                    out = jax.block_until_ready(out)
+                    self.checked = True
+                return out
+            except Exception:  # noqa: BLE001 - any failure: the exported program decides
+                self.compiled = None
+        if self.fallback is None:
+            self.fallback = self.exported()
+        return self.fallback(*args)
+
+
+def _write(path: Path, data: bytes) -> None:
+    """``data`` into ``path`` atomically (nothing if the cache is read-only)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    except OSError:  # a read-only cache: just use the program
+        pass
+
+
+def _host() -> str:
+    """What an executable is compiled for besides its program: the machine (architecture, CPU
+    flags) and the compiler's flags (``$XLA_FLAGS``, JAX's default matmul precision)."""
+    flags = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((line for line in f if line.startswith(("flags", "Features"))), "")
+    except OSError:
+        pass
+    precision = jax.config.jax_default_matmul_precision
+    return (
+        f"{platform.machine()} {platform.processor()} {flags.strip()} "
+        f"XLA_FLAGS={os.environ.get('XLA_FLAGS', '')} precision={precision}"
+    )
+
+
+def _canary(sample, shape, dtype):
+    return np.resize(np.asarray(sample, dtype), shape)
+
+
+def _result_digest(out) -> str:
+    h = hashlib.sha256()
+    for leaf in jax.tree_util.tree_leaves(out):
+        a = np.asarray(leaf)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _store_executable(xpath: Path, exp, args):
+    """``exp`` compiled, kept in ``xpath`` once its serialized form, loaded again, gives the
+    canary's results bit for bit; returns the compiled program (``None`` on any failure: nothing
+    is kept).  An executable the compilation cache served does not serialize completely (module
+    docstring): then the program is compiled afresh, the caches bypassed."""
+    from jax.experimental import serialize_executable  # noqa: PLC0415
+
+    try:
+        if "custom_call" in exp.mlir_module():
+            return None
+        specs = [jax.ShapeDtypeStruct(a.shape, a.dtype) for a in args]
+        samples = [np.asarray(a).reshape(-1)[:CANARY].copy() for a in args]
+        canary = [_canary(c, a.shape, a.dtype) for c, a in zip(samples, args)]
+        for fresh in (False, True):
+            if fresh:
+                compiled = _compile_afresh(exp, specs)
+            else:
+                compiled = jax.jit(exp.call).lower(*specs).compile()
+            want = _result_digest(compiled(*canary))
+            blob, in_tree, out_tree = serialize_executable.serialize(compiled)
+            try:
+                again = serialize_executable.deserialize_and_load(blob, in_tree, out_tree)
+                ok = _result_digest(again(*canary)) == want
+            except Exception:  # noqa: BLE001 - incomplete: NOT_FOUND when read
+                ok = False
+            if ok:
+                record = {
+                    "executable": (blob, in_tree, out_tree),
+                    "canary": samples,
+                    "digest": want,
+                }
+                _write(xpath, pickle.dumps(record, protocol=pickle.HIGHEST_PROTOCOL))
+                return compiled
+    except Exception:  # noqa: BLE001 - no executable: the exported program serves
+        pass
+    return None
+
+
+def _compile_afresh(exp, specs):
+    """``exp`` compiled in this process: the in-memory and persistent compilation caches bypassed
+    (the other kernels of the process are compiled or loaded again when next used)."""
+    from jax.experimental.compilation_cache import compilation_cache  # noqa: PLC0415
+
+    with _FRESH:
+        cached = jax.config.jax_enable_compilation_cache
+        try:
+            jax.clear_caches()
+            jax.config.update("jax_enable_compilation_cache", False)
+            compilation_cache.reset_cache()
+            return jax.jit(exp.call).lower(*specs).compile()
+        finally:
+            jax.config.update("jax_enable_compilation_cache", cached)
+            compilation_cache.reset_cache()
+
+
+def _load_executable(xpath: Path):
+    """The executable in ``xpath`` if it exists, loads, and reproduces its canary digest; else
+    ``None``."""
+    if not xpath.exists():
+        return None
+    from jax.experimental import serialize_executable  # noqa: PLC0415
+
+    try:
+        record = pickle.loads(xpath.read_bytes())
+        compiled = serialize_executable.deserialize_and_load(*record["executable"])
+        avals = jax.tree_util.tree_leaves(compiled.in_avals)
+        canary = [_canary(c, a.shape, a.dtype) for c, a in zip(record["canary"], avals)]
+        if len(canary) == len(avals) and _result_digest(compiled(*canary)) == record["digest"]:
+            return compiled
+    except Exception:  # noqa: BLE001 - damaged, foreign or failing: not used
+        pass
+    return None
 
 
 def jit(fn=None, *, static_argnames=()):

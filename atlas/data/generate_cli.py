@@ -16,7 +16,6 @@ import os
 import sys
 
 from atlas.core.config import use_compile_cache
-from atlas.data.distributed import generate_distributed
 from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions
 from atlas.data.io import check_output_path, generate_to_file, write_error
 from atlas.data.limits import generate_estimate
@@ -155,6 +154,8 @@ def _run_store(sc, opts, out, overwrite, screen, *, scheduler, store, resume, sl
     if estimate.screen(*screen):
         return 0
     use_compile_cache()
+    from atlas.data.distributed import generate_distributed  # noqa: PLC0415 - xarray, dask: only here
+
     try:
         s = generate_distributed(
             sc,

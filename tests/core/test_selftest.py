@@ -17,6 +17,7 @@ from atlas.core import (
     signs,
     spectral,
     undamped,
+    warm,
 )
 from atlas.core.config import CACHE_ENV
 
@@ -26,6 +27,7 @@ ONE_POINT = (1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # B = I, kappa = 1, undamped
 @pytest.mark.e2e
 def test_selftest_passes_on_cpu(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))  # the record goes here
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # no executables compiled for a throw-away cache
     assert cli.main(["selftest"]) == 0
     out = capsys.readouterr().out
     assert "PASSED: 0 disagreements" in out and "ns/point" in out
@@ -44,6 +46,7 @@ def _flipped(real):
 @pytest.mark.e2e
 def test_a_broken_sign_fails_and_the_backend_is_refused(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")
     args = ["selftest", "--suites", "near_detB,class_boundaries", "--dtypes", "float64"]
     with pytest.MonkeyPatch.context() as mp:
         for mod in (contact_modes, rootfree, spectral, hurwitz, enclosures, undamped):

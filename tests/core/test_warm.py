@@ -2,9 +2,11 @@
 by a later process, and never reused across a change of the kernels' code."""
 
 import functools
+import os
 import re
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import jax
@@ -21,6 +23,7 @@ def _suite():
 
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # the exported programs alone
     args = _suite()
     want = np.asarray(enclosures.abscissa(*args))
     with warm.kernel_cache(str(tmp_path)):
@@ -42,15 +45,18 @@ def test_exported_first_pass_is_one_loop_fusion(tmp_path):
     point) holds for the exported program too: its compiled form has one per-point fusion."""
     x = np.ones(64)
     kern = warm.Kernel(functools.partial(rootfree.codes, damped=None))
-    call = kern._load(Path(tmp_path), ("key",), (x,) * 7, {})
-    text = call.lower(*(x,) * 7).compile().as_text()
+    exp = kern._export(
+        Path(tmp_path) / "codes.jaxexport", [jax.ShapeDtypeStruct(x.shape, x.dtype)] * 7, {}
+    )
+    text = jax.jit(exp.call).lower(*(x,) * 7).compile().as_text()
     entry = text[text.index("ENTRY") :]
     fusions = re.findall(r"^\s*(?:ROOT )?%\S+ = (\S+) fusion\(", entry, re.M)
     assert len([f for f in fusions if not f.endswith("[]")]) == 1, fusions
 
 
 @pytest.mark.e2e
-def test_driver_under_the_kernel_cache_is_unchanged(tmp_path):
+def test_driver_under_the_kernel_cache_is_unchanged(tmp_path, monkeypatch):
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # the programs (executables: a fresh compile each)
     args = _suite()
     want = points.spectral_points(*args, resolve=False)
     with warm.kernel_cache(str(tmp_path)):
@@ -83,3 +89,163 @@ def test_digest_is_the_same_in_every_process():
         for _ in range(2)
     }
     assert len(got) == 1, got
+
+
+def _dominance_args(n=64, seed=0):
+    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile)."""
+    rng = np.random.default_rng(seed)
+    geometry = [rng.uniform(-1, 1, n) for _ in range(4)]
+    model = [rng.uniform(0.1, 10, n), rng.uniform(0, 1, n), rng.uniform(0, 1, n)]
+    flags = [rng.integers(0, 2, n).astype(bool) for _ in range(3)]
+    shifts = [rng.integers(-1, 2, n).astype(np.int8), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
+    return geometry + model + flags + shifts
+
+
+STORED = """
+import os, sys, jax, numpy as np
+from atlas.core import config, rootfree, warm
+from tests.core.test_warm import _dominance_args
+config.use_compile_cache(sys.argv[1] + "/xla", min_compile_seconds=0)
+if sys.argv[2] == "load":  # the stored executable serves: no program is read or exported
+    jax.export.deserialize = jax.export.export = None
+with warm.kernel_cache(sys.argv[1] + "/kernels"):
+    out = rootfree._tier2_dominance(*_dominance_args())
+print(warm._result_digest(out))
+"""
+
+
+def _in_fresh_process(where, mode, **env):
+    root = Path(__file__).resolve().parents[2]
+    p = subprocess.run(
+        [sys.executable, "-c", STORED, str(where), mode],
+        capture_output=True,
+        text=True,
+        cwd=root,
+        timeout=300,
+        env={**os.environ, **env},
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    return p.stdout.strip()
+
+
+@pytest.mark.e2e
+def test_stored_executable_gives_the_jit_results_in_a_fresh_process(tmp_path):
+    """A first process leaves the program in the compilation cache (whose executables serialize
+    incompletely: module docstring), a second stores the executable, a third runs it alone;
+    each gives the bits of plain ``jax.jit`` (this process)."""
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*_dominance_args()))
+    assert _in_fresh_process(tmp_path, "fill", **{warm.EXECUTABLE_ENV: "0"}) == want
+    assert not list(tmp_path.glob("kernels/*.xlaexec"))
+    assert _in_fresh_process(tmp_path, "store") == want
+    assert len(list(tmp_path.glob("kernels/*.xlaexec"))) == 1
+    assert _in_fresh_process(tmp_path, "load") == want
+
+
+@pytest.fixture(scope="module")
+def stored_dominance(tmp_path_factory):
+    """A kernel directory holding ``_tier2_dominance``'s program and executable."""
+    where = tmp_path_factory.mktemp("stored")
+    with warm.kernel_cache(str(where)):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
+    return where
+
+
+def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
+    """A stored executable that does not load, whose canary result differs from the one
+    recorded, or that is another program's, is refused; the exported program then gives the
+    right result (and a good executable is stored again)."""
+    import pickle
+    import shutil
+
+    from jax.experimental import serialize_executable
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    args = _dominance_args()
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    (xpath,) = tmp_path.glob("*.xlaexec")
+    assert warm._load_executable(xpath) is not None
+    good = pickle.loads(xpath.read_bytes())
+    other = jax.jit(lambda *a: rootfree._tier2_dominance.fn(*a)[::-1])  # same argument shapes
+    damaged = {
+        "garbage": b"not an executable",
+        "digest": pickle.dumps({**good, "digest": "0" * 64}),
+        "blob": pickle.dumps(
+            {**good, "executable": serialize_executable.serialize(other.lower(*args).compile())}
+        ),
+    }
+    for damage, data in damaged.items():
+        xpath.write_bytes(data)
+        assert warm._load_executable(xpath) is None, damage
+    with warm.kernel_cache(str(tmp_path)):
+        got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    assert warm._result_digest(got) == want
+    assert warm._load_executable(xpath) is not None  # stored again, valid
+
+
+def test_an_executable_that_fails_on_its_first_call_falls_back():
+    """A loaded executable that raises when its results are read hands the call (and every
+    later one) to the exported program."""
+
+    def broken(*args):
+        raise RuntimeError("NOT_FOUND: Function maximum_log_fusion not found")
+
+    args = _dominance_args()
+    guarded = warm._Guarded(broken, lambda: rootfree._tier2_dominance.jitted)
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    assert warm._result_digest(guarded(*args)) == want
+    assert guarded.compiled is None
+    assert warm._result_digest(guarded(*args)) == want
+
+
+def test_the_executables_of_the_last_run_load_in_the_background(
+    stored_dominance, tmp_path, monkeypatch
+):
+    """A run named like an earlier one loads the executables that run used in background threads
+    from its start, and uses them (same results)."""
+    import shutil
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    args = _dominance_args()
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*args))
+    with warm.kernel_cache(str(tmp_path), run="a run"):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    (manifest,) = tmp_path.glob("run-*.txt")
+    assert manifest.read_text() == next(tmp_path.glob("*.xlaexec")).name
+    threads = []
+    load = warm._load_executable
+    monkeypatch.setattr(
+        warm,
+        "_load_executable",
+        lambda p: threads.append(threading.current_thread().name) or load(p),
+    )
+    with warm.kernel_cache(str(tmp_path), run="a run"):
+        got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
+    assert warm._result_digest(got) == want
+    assert len(threads) == 1 and threads[0].startswith("warm"), threads
+
+
+def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, monkeypatch):
+    """An executable compiled under other ``$XLA_FLAGS`` is never served: its file differs."""
+    import shutil
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_enable_fast_math=true")
+    with warm.kernel_cache(str(tmp_path)):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
+    assert len(list(tmp_path.glob("*.xlaexec"))) == 2
+
+
+def test_an_executable_given_other_arguments_falls_back():
+    """Arguments an executable was not compiled for (here float32 for float64) go to the
+    exported program, which gives its results for them."""
+    args = _dominance_args()
+    compiled = jax.jit(rootfree._tier2_dominance.fn).lower(*args).compile()
+    guarded = warm._Guarded(compiled, lambda: rootfree._tier2_dominance.jitted)
+    guarded(*args)
+    other = [a.astype(np.float32) if a.dtype == np.float64 else a for a in args]
+    want = warm._result_digest(rootfree._tier2_dominance.jitted(*other))
+    assert warm._result_digest(guarded(*other)) == want
+    assert guarded.compiled is None
