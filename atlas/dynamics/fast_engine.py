@@ -511,13 +511,9 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
         fp = xp.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
 
-    x, (gx, gpx) = a, g(a)
-    dx = 2 * (b - a)  # the last step
-    failed = xp.zeros(j.size, dtype=bool)  # the last push did not cross
-    for _ in range(max_iter):
+    def newton(_, carry):
+        x, gx, gpx, a, b, dx, failed = carry
         act = (b - a) > xtol
-        if xp is np and not act.any():
-            break
         with np.errstate(all="ignore"):
             step = -gx / gpx
         toward = xp.where(gx > 0, 0.5, -0.5) * xtol
@@ -532,6 +528,11 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
         a = xp.where(act & left, xn, a)
         b = xp.where(act & ~left, xn, b)
         x, gx, gpx = (xp.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+        return x, gx, gpx, a, b, dx, failed
+
+    # dx: the last step; failed: the last push did not cross
+    carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
+    a, b = _fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
     return a, b
 
 
@@ -591,11 +592,14 @@ def _decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H):
     return settle, iwc, l1
 
 
-def _fori(n, body, carry):
+def _fori(n, body, carry, until=None):
     """``carry = body(i, carry)`` for ``i < n`` (``carry`` a tuple of arrays): a Python loop on
-    NumPy arrays, a :func:`jax.lax.fori_loop` on JAX arrays."""
+    NumPy arrays (left as soon as ``until(carry)``, where given), a :func:`jax.lax.fori_loop` on
+    JAX arrays (all ``n`` iterations; ``body`` must leave a finished carry unchanged)."""
     if eb.xp_of(*carry) is np:
         for i in range(n):
+            if until is not None and until(carry):
+                break
             carry = body(i, carry)
         return carry
     import jax  # noqa: PLC0415 - NumPy callers load no JAX
