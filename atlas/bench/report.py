@@ -174,7 +174,8 @@ KERNEL_SPEED_COLUMNS = ("case", "dtype", "ns_per_point", "eig_over_method", "met
 SIMULATION_COLUMNS = ("case", "method", "rtol", "seconds", "events", "error", "nfev")
 OUTCOME_MAP_COLUMNS = (
     "map", "trajectories", "fast_seconds", "fast_per_s", "ref_cells", "ref_per_s", "speedup",
-    "early_settle", "early_iwc", "stepped", "fallback", "agreement",
+    "early_settle", "early_iwc", "stepped", "fallback", "agreement", "jax_per_s",
+    "fast_per_s_again", "jax_same", "jax_compile_s",
 )  # fmt: skip
 
 # --------------------------------------------------------------------------- sections
@@ -515,7 +516,10 @@ def outcome_maps_section(maps) -> list[str]:
         "from the same initial states, in the same run (`ref_per_s`; `speedup` = the ratio). "
         "`early_settle` / `early_iwc`: fraction of runs decided by a certificate that no event can "
         "follow; `stepped`: run to a stop and classified; `fallback`: run by the exact simulator. "
-        "`agreement`: same outcome on the sampled cells; every disagreement listed below.\n",
+        "`agreement`: same outcome on the sampled cells; every disagreement listed below. "
+        "`jax_per_s`: the same engine as a JAX kernel (`atlas.dynamics.jax_engine`, compiled; "
+        "`jax_compile_s` its first call) beside the NumPy engine rerun (`fast_per_s_again`); "
+        "`jax_same`: fraction of cells with the same outcome (full runs only).\n",
         table(maps, OUTCOME_MAP_COLUMNS),
         "",
     ]

@@ -13,7 +13,7 @@ import numpy as np
 from atlas import dynamics
 from atlas.bench.timing import log, timeit
 
-__all__ = ["event_error", "gap_events", "outcome_maps", "simulation"]
+__all__ = ["event_error", "gap_events", "jax_outcome_columns", "outcome_maps", "simulation"]
 
 #: the reference of ``simulate``: ``solve_ivp`` at tight tolerances
 _TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-16)
@@ -146,3 +146,39 @@ def outcome_maps(cfg) -> list[dict]:
         ))  # fmt: skip
         log(f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s fast, {ref_rate:.1f}/s exact")
     return rows
+
+
+def _engine_codes(engine, n, kappa, q, alpha):
+    """Outcome codes (n * n,) of ``engine.run_batch`` on the ``n x n`` outcome map (one initial
+    state per cell) and its wall time [s]."""
+    b1, b2 = dynamics.outcome_grid(n)
+    g0 = dynamics.perturbed_initial_states(b1, b2, alpha, kappa)[:, :, 0].reshape(-1, 4)
+
+    def reference(x1, x2, alpha, k, q, g0):
+        return dynamics.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
+
+    t0 = time.perf_counter()
+    res = engine.run_batch(np.repeat(b1, n), np.tile(b2, n), alpha, (kappa, 1.0), (q, q), g0,
+                           reference=reference)  # fmt: skip
+    return res.code, time.perf_counter() - t0
+
+
+def jax_outcome_columns(rows, cfg) -> None:
+    """With ``cfg["jax_outcome_maps"]``: the JAX kernel of the same engine
+    (:mod:`atlas.dynamics.jax_engine`) on each map of :func:`outcome_maps`, in the same run, as
+    columns of its ``rows``: ``jax_per_s`` (compiled), ``fast_per_s_again`` (the NumPy engine
+    rerun beside it), ``jax_same`` (fraction of cells with the NumPy engine's outcome) and
+    ``jax_compile_s`` (the first call, on a 24 x 24 map: compiles its three batch sizes)."""
+    if not cfg.get("jax_outcome_maps") or not rows:
+        return
+    from atlas.dynamics import fast_engine, jax_engine  # noqa: PLC0415 - only with the option
+
+    maps = cfg.get("outcome_maps", ())
+    _, compile_s = _engine_codes(jax_engine, 24, *maps[0][1:4])
+    for row, (n, kappa, q, alpha, _) in zip(rows, maps, strict=True):
+        fast, fast_s = _engine_codes(fast_engine, n, kappa, q, alpha)
+        jx, jax_s = _engine_codes(jax_engine, n, kappa, q, alpha)
+        row.update(jax_per_s=n * n / jax_s, fast_per_s_again=n * n / fast_s,
+                   jax_same=float(np.mean(jx == fast)), jax_compile_s=compile_s)  # fmt: skip
+        rates = f"jax kernel {n * n / jax_s:.0f}/s, numpy {n * n / fast_s:.0f}/s"
+        log(f"outcome map {row['map']}: {rates}")

@@ -14,6 +14,7 @@ import numpy as np
 
 __all__ = [
     "xp_of",
+    "take",
     "NEUTRAL",
     "evaluate",
     "event_functions",
@@ -39,6 +40,13 @@ def xp_of(*arrays):
 
             return jnp
     return np
+
+
+def take(x, j):
+    """``x[..., j]`` for the indices ``j`` (...) of the last axis, as a masked sum (exact: the
+    other terms are zeros), which compiles lean under ``jax.vmap``."""
+    xp = xp_of(x, j)
+    return xp.where(xp.arange(x.shape[-1]) == j[..., None], x, 0).sum(axis=-1)
 
 
 def evaluate(P, U, lam, tau):
@@ -146,9 +154,8 @@ def keeps_sign_bound(c, w, lam, valid, horizon):
     scale = xp.abs(lam).max(axis=-1, keepdims=True)
     grow = valid & (re > NEUTRAL * scale)
     any_grow = grow.any(axis=-1)
-    j1 = xp.argmax(xp.where(grow, re, -np.inf), axis=-1)[..., None]
-    lam1 = xp.take_along_axis(lam, j1, axis=-1)[..., 0]
-    w1 = xp.take_along_axis(w, j1, axis=-1)[..., 0]
+    j1 = xp.argmax(xp.where(grow, re, -np.inf), axis=-1)
+    lam1, w1 = take(lam, j1), take(w, j1)
     l1 = xp.where(any_grow, lam1.real, 0.0)
     real1 = xp.abs(lam1.imag) <= 1e-12 * xp.abs(lam1)
     aw = xp.abs(w)

@@ -696,7 +696,7 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     xp = eb.xp_of(c, p, UE, lam)
     re = xp.where(valid, lam.real, -np.inf)
     j1 = xp.argmax(re, axis=1)
-    dom = xp.abs(xp.take_along_axis(c, j1[:, None], axis=1)[:, 0])
+    dom = xp.abs(eb.take(c, j1))
     others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
     strict = xp.all(~others | (re < l1[:, None]), axis=1)
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)

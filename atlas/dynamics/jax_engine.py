@@ -53,7 +53,7 @@ __all__ = ["run_batch", "kernel", "STEPS", "CHUNK", "NBINS"]
 STEPS = 64
 #: bins of the impact and amplitude statistics in a kernel call (at least; ``horizon_cap <= 10``)
 NBINS = 32
-#: largest batch of one kernel call (smaller batches are padded to a power of two >= 64)
+#: largest batch of one kernel call (smaller batches are padded to 64 or 512 lanes)
 CHUNK = 4096
 
 _OUTCOME_OF_MASK = np.array([fe._OUTCOME_OF_MASK[m] for m in range(4)], dtype=np.int8)
@@ -286,8 +286,9 @@ class _BinnedState(fe._State):
 
 
 def _bucket(n):
-    """Batch size of a kernel call for ``n`` lanes: a power of two >= 64, at most :data:`CHUNK`."""
-    return min(CHUNK, max(64, 1 << int(n - 1).bit_length()))
+    """Batch size of a kernel call for ``n`` lanes: 64, 512 or :data:`CHUNK` (one compilation
+    each, ~20-30 s on a loaded 2-core machine)."""
+    return next((b for b in (64, 512) if n <= b), CHUNK)
 
 
 def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):

@@ -12,8 +12,8 @@ constant forcing, ``g' = A_S g + c_S`` (paper eqs. 7, 8): with ``z = (g, 1)``, `
 the augmented matrix ``E_S = [[A_S, c_S], [0, 0]]``, advanced exactly with its matrix exponential
 (scaling and squaring of its degree-30 Taylor polynomial, :func:`expm`).
 
-This module holds what both simulators (:mod:`atlas.dynamics.simulator`,
-:mod:`atlas.dynamics.jax_engine`) and the classification share: the per-mode matrices
+This module holds what the simulators (:mod:`atlas.dynamics.simulator`, the outcome engines
+:mod:`atlas.dynamics.fast_engine`, :mod:`atlas.dynamics.jax_engine`) and the classification share: the per-mode matrices
 (:func:`build_system`), the outcome and status enumerations, the event kinds and the test for an
 impact without collision (:func:`iwc_aligned`).
 
@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from atlas.core import checks
-from atlas.dynamics.event_bounds import xp_of
+from atlas.dynamics.event_bounds import take, xp_of
 
 __all__ = [
     "Outcome",
@@ -318,10 +318,8 @@ def aligned_in_basis(w, V, c, dev, n_active, tol):
     norm = xp.linalg.norm(dev, axis=1)[:, None]
     parts = xp.abs(c) * xp.linalg.norm(V, axis=1)
     dom = xp.argmax(xp.where(real_pos, w.real, -np.inf), axis=1)
-    c_dom = xp.take_along_axis(c, dom[:, None], axis=1)
-    v_dom = xp.take_along_axis(V, dom[:, None, None], axis=2)[:, :, 0]
-    direction = (c_dom * v_dom).real
-    p_dom = xp.take_along_axis(parts, dom[:, None], axis=1)[:, 0]
+    direction = (take(c, dom)[:, None] * take(V, dom[:, None])).real
+    p_dom = take(parts, dom)
     ok = real_pos.any(axis=1) & xp.isfinite(c).all(axis=1)
     ok &= ~xp.any(~real_pos & (parts > tol * norm), axis=1)
     ok &= p_dom > tol * norm[:, 0]
