@@ -518,7 +518,7 @@ def outcome_maps_section(maps) -> list[str]:
         "follow; `stepped`: run to a stop and classified; `fallback`: run by the exact simulator. "
         "`agreement`: same outcome on the sampled cells; every disagreement listed below. "
         "`jax_per_s`: the same engine as a JAX kernel (`atlas.dynamics.jax_engine`, compiled; "
-        "`jax_compile_s` its first call) beside the NumPy engine rerun (`fast_per_s_again`); "
+        "`jax_compile_s` its first call: compilation or the persistent cache) beside the NumPy engine rerun (`fast_per_s_again`); "
         "`jax_same`: fraction of cells with the same outcome (full runs only).\n",
         table(maps, OUTCOME_MAP_COLUMNS),
         "",

@@ -168,7 +168,8 @@ def jax_outcome_columns(rows, cfg) -> None:
     (:mod:`atlas.dynamics.jax_engine`) on each map of :func:`outcome_maps`, in the same run, as
     columns of its ``rows``: ``jax_per_s`` (compiled), ``fast_per_s_again`` (the NumPy engine
     rerun beside it), ``jax_same`` (fraction of cells with the NumPy engine's outcome) and
-    ``jax_compile_s`` (the first call, on a 24 x 24 map: compiles its three batch sizes)."""
+    ``jax_compile_s`` (the first call, on a 24 x 24 map: compiles its three batch sizes or loads
+    them from the persistent compilation cache)."""
     if not cfg.get("jax_outcome_maps") or not rows:
         return
     from atlas.dynamics import fast_engine, jax_engine  # noqa: PLC0415 - only with the option

@@ -143,3 +143,12 @@ def test_bad_input_is_one_line():
         J.run_batch(np.zeros(3), 1.0, 0.3, (0.5, 1.0), 0.0, np.zeros((2, 4)))
     with pytest.raises(ValueError, match="^engine: must be one of fast, numpy, jax, got 'gpu'$"):
         Dynamics(engine="gpu")
+
+
+@pytest.mark.slow
+def test_outcome_map_with_the_jax_engine_equals_the_exact_simulator():
+    b1, b2 = S.outcome_grid(3)
+    a = S.outcome_map(b1, b2, engine="numpy")
+    b = S.outcome_map(b1, b2, engine="jax")
+    np.testing.assert_array_equal(a["outcome"].values, b["outcome"].values)
+    assert b.attrs["engine"] == "jax" and math.isfinite(b.attrs["trajectories_per_second"])
