@@ -37,6 +37,9 @@ the amplitude-limit stop coincide within ``2e-12``.  On a 2-core CPU the NumPy e
 default (``--engine fast``): after 75-85 s of compilation (three batch sizes) the kernel ran 2.8x
 (64^2) to 6.8x (128^2) slower in the same run, since every lane of a batch does each step's whole
 work where NumPy does each piece only for the lanes that need it; the kernel is for accelerators.
+Measured on one call of 64 steps x 512 lanes (CPU, ~23 us per lane and step): the early-decision
+tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %, the
+root location ~4 %.
 """
 
 from __future__ import annotations
