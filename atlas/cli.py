@@ -368,6 +368,12 @@ def _add_simulate(sub) -> None:
     ps.add_argument("--resume", action="store_true", help="map: continue the tiles in --store")
     ps.add_argument("--slab", type=int, metavar="N", help="map: beta1 values per tile")
     ps.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="map, fast engine: processes (default: the usable cores; 1 = this process only)",
+    )
+    ps.add_argument(
         "--scheduler",
         metavar="WHERE",
         help="map with --store: local, local:N (dask workers) or tcp://HOST:PORT (default: here)",

@@ -173,9 +173,10 @@ ATLAS_COLUMNS = (
 KERNEL_SPEED_COLUMNS = ("case", "dtype", "ns_per_point", "eig_over_method", "method_over_floor")
 SIMULATION_COLUMNS = ("case", "method", "rtol", "seconds", "events", "error", "nfev")
 OUTCOME_MAP_COLUMNS = (
-    "map", "trajectories", "fast_seconds", "fast_per_s", "ref_cells", "ref_per_s", "speedup",
-    "early_settle", "early_iwc", "stepped", "fallback", "agreement", "jax_per_s",
-    "fast_per_s_again", "jax_same", "jax_compile_s",
+    "map", "trajectories", "workers", "fast_seconds", "fast_per_s", "core_seconds", "core_per_s",
+    "identical", "ref_cells", "ref_per_s", "speedup", "early_settle", "early_iwc", "stepped",
+    "fallback", "agreement", "jax_map", "jax_compile_s", "jax_per_s", "fast_per_s_again",
+    "jax_same",
 )  # fmt: skip
 
 # --------------------------------------------------------------------------- sections
@@ -511,15 +512,21 @@ def outcome_maps_section(maps) -> list[str]:
         "## Outcome maps: fast engine against the exact simulator\n",
         "`atlas simulate --map` with the fast engine (`atlas.dynamics.fast_engine`: event to event "
         "in the modal form of each contact configuration, certified early decisions) over the whole "
-        "map (`fast_seconds`: wall time including the initial states; `fast_per_s`), and "
-        "`simulate_outcome` (exact event-driven simulator) on a seeded sample of the same cells "
-        "from the same initial states, in the same run (`ref_per_s`; `speedup` = the ratio). "
+        "map on the machine's usable cores (`workers` processes, the default of the command; "
+        "`fast_seconds`: wall time of the simulation, the start of the processes included; "
+        "`fast_per_s`: trajectories per second of the machine) and on one core (`core_seconds`, "
+        "`core_per_s`); `identical`: the two maps are equal cell by cell. `simulate_outcome` "
+        "(exact event-driven simulator, one core) on a seeded sample of the same cells from the "
+        "same initial states, in the same run (`ref_per_s`); `speedup` = `core_per_s` / "
+        "`ref_per_s`, one core against one core. "
         "`early_settle` / `early_iwc`: fraction of runs decided by a certificate that no event can "
         "follow; `stepped`: run to a stop and classified; `fallback`: run by the exact simulator. "
         "`agreement`: same outcome on the sampled cells; every disagreement listed below. "
-        "`jax_per_s`: the same engine as a JAX kernel (`atlas.dynamics.jax_engine`, compiled; "
-        "`jax_compile_s` its first call: compilation or the persistent cache) beside the NumPy engine rerun (`fast_per_s_again`); "
-        "`jax_same`: fraction of cells with the same outcome (full runs only).\n",
+        "The same engine as a JAX kernel (`atlas.dynamics.jax_engine`; full runs only), on a "
+        "smaller map (`jax_map`) with the first map's parameters, one initial state per cell: "
+        "`jax_compile_s`: its first call less its second (compilation, or the persistent cache), "
+        "`jax_per_s`: the second call, `fast_per_s_again`: the NumPy engine on that map (one core), "
+        "`jax_same`: fraction of its cells with the NumPy engine's outcome.\n",
         table(maps, OUTCOME_MAP_COLUMNS),
         "",
     ]

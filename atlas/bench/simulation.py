@@ -12,6 +12,7 @@ import numpy as np
 
 from atlas import dynamics
 from atlas.bench.timing import log, timeit
+from atlas.dynamics.lane_pool import usable_cores
 
 __all__ = ["event_error", "gap_events", "jax_outcome_columns", "outcome_maps", "simulation"]
 
@@ -106,15 +107,21 @@ def simulation(cfg) -> list[dict]:
 
 def outcome_maps(cfg) -> list[dict]:
     """Rows of the fast engine against the exact simulator on the outcome maps ``outcome_maps``
-    ``(n, kappa, q, alpha, sample)``: the whole ``n x n`` map with the fast engine (wall time,
-    trajectories per second, how the runs were decided), ``sample`` of its cells (seeded) with
-    :func:`atlas.dynamics.simulate_outcome` from the same initial states, the agreement and every
-    disagreement (``disagreements``: cell, both outcomes, the reference's stop)."""
+    ``(n, kappa, q, alpha, sample)``: the whole ``n x n`` map with the fast engine on the usable
+    cores (the default of ``atlas simulate --map``; wall time with the start of the processes,
+    trajectories per second) and on one core, whether the two maps are identical, how the runs
+    were decided; ``sample`` of its cells (seeded) with :func:`atlas.dynamics.simulate_outcome`
+    from the same initial states on one core, the speedup per core (one core each), the agreement
+    and every disagreement (``disagreements``: cell, both outcomes, the reference's stop)."""
     rows = []
+    workers = usable_cores()
     for n, kappa, q, alpha, sample in cfg.get("outcome_maps", ()):
         b1, b2 = dynamics.outcome_grid(n)
-        ds = dynamics.outcome_map(b1, b2, kappa=kappa, q=q, alpha=alpha, engine="fast")
+        kw = dict(kappa=kappa, q=q, alpha=alpha, engine="fast")
+        one = dynamics.outcome_map(b1, b2, workers=1, **kw)
+        ds = dynamics.outcome_map(b1, b2, workers=workers, **kw)
         fast = ds["outcome"].values
+        identical = bool(np.array_equal(ds["outcome_count"].values, one["outcome_count"].values))
         g0 = dynamics.perturbed_initial_states(b1, b2, alpha, kappa)
         cells = np.random.default_rng(n).choice(n * n, size=min(sample, n * n), replace=False)
         t0 = time.perf_counter()
@@ -133,18 +140,24 @@ def outcome_maps(cfg) -> list[dict]:
         ref_s = time.perf_counter() - t0
         a = ds.attrs
         fast_rate = a["trajectories"] / a["seconds"]
+        core_rate = one.attrs["trajectories"] / one.attrs["seconds"]
         ref_rate = cells.size / ref_s
         rows.append(dict(
             map=f"{n}x{n}, kappa={kappa:g}, q={q:g}, alpha={alpha / math.pi:.3g}pi",
-            trajectories=a["trajectories"], fast_seconds=a["seconds"], fast_per_s=fast_rate,
-            ref_cells=int(cells.size), ref_per_s=ref_rate, speedup=fast_rate / ref_rate,
+            trajectories=a["trajectories"], workers=workers, fast_seconds=a["seconds"],
+            fast_per_s=fast_rate, core_seconds=one.attrs["seconds"], core_per_s=core_rate,
+            identical=identical, ref_cells=int(cells.size), ref_per_s=ref_rate,
+            speedup=core_rate / ref_rate,
             early_settle=a["runs_early_settle"] / a["trajectories"],
             early_iwc=a["runs_early_iwc"] / a["trajectories"],
             stepped=a["runs_stepped"] / a["trajectories"],
             fallback=a["runs_fallback"] / a["trajectories"],
             agreement=1 - len(bad) / cells.size, disagreements="; ".join(bad),
         ))  # fmt: skip
-        log(f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s fast, {ref_rate:.1f}/s exact")
+        log(
+            f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s on {workers} cores, "
+            f"{core_rate:.0f}/s on one, {ref_rate:.1f}/s exact"
+        )
     return rows
 
 
@@ -164,22 +177,24 @@ def _engine_codes(engine, n, kappa, q, alpha):
 
 
 def jax_outcome_columns(rows, cfg) -> None:
-    """With ``cfg["jax_outcome_maps"]``: the JAX kernel of the same engine
-    (:mod:`atlas.dynamics.jax_engine`) on each map of :func:`outcome_maps`, in the same run, as
-    columns of its ``rows``: ``jax_per_s`` (compiled), ``fast_per_s_again`` (the NumPy engine
-    rerun beside it), ``jax_same`` (fraction of cells with the NumPy engine's outcome) and
-    ``jax_compile_s`` (the first call, on a 24 x 24 map: compiles its three batch sizes or loads
-    them from the persistent compilation cache)."""
-    if not cfg.get("jax_outcome_maps") or not rows:
+    """With ``cfg["jax_outcome_n"] = n``: the JAX kernel of the same engine
+    (:mod:`atlas.dynamics.jax_engine`) on an ``n x n`` map with the parameters of the first map of
+    :func:`outcome_maps`, in the same run, as columns of that map's row: ``jax_map`` (``n x n``),
+    ``jax_compile_s`` (the first call's wall time less the second's: compiling the batch sizes the
+    map needs, or loading them from the persistent compilation cache), ``jax_per_s`` (the second
+    call), ``fast_per_s_again`` (the NumPy engine on the same map, one core) and ``jax_same``
+    (fraction of cells with the NumPy engine's outcome)."""
+    n = cfg.get("jax_outcome_n")
+    if not n or not rows:
         return
     from atlas.dynamics import fast_engine, jax_engine  # noqa: PLC0415 - only with the option
 
-    maps = cfg.get("outcome_maps", ())
-    _, compile_s = _engine_codes(jax_engine, 24, *maps[0][1:4])
-    for row, (n, kappa, q, alpha, _) in zip(rows, maps, strict=True):
-        fast, fast_s = _engine_codes(fast_engine, n, kappa, q, alpha)
-        jx, jax_s = _engine_codes(jax_engine, n, kappa, q, alpha)
-        row.update(jax_per_s=n * n / jax_s, fast_per_s_again=n * n / fast_s,
-                   jax_same=float(np.mean(jx == fast)), jax_compile_s=compile_s)  # fmt: skip
-        rates = f"jax kernel {n * n / jax_s:.0f}/s, numpy {n * n / fast_s:.0f}/s"
-        log(f"outcome map {row['map']}: {rates}")
+    _, kappa, q, alpha, _ = cfg["outcome_maps"][0]
+    _, first_s = _engine_codes(jax_engine, n, kappa, q, alpha)
+    jx, jax_s = _engine_codes(jax_engine, n, kappa, q, alpha)
+    fast, fast_s = _engine_codes(fast_engine, n, kappa, q, alpha)
+    rows[0].update(jax_map=f"{n}x{n}", jax_compile_s=max(first_s - jax_s, 0.0),
+                   jax_per_s=n * n / jax_s, fast_per_s_again=n * n / fast_s,
+                   jax_same=float(np.mean(jx == fast)))  # fmt: skip
+    log(f"outcome map {rows[0]['map']} at {n}x{n}: jax kernel {n * n / jax_s:.0f}/s "
+        f"(compiled in {first_s - jax_s:.0f} s), numpy {n * n / fast_s:.0f}/s")  # fmt: skip

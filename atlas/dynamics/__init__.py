@@ -7,41 +7,56 @@ Modules: :mod:`~atlas.dynamics.system` (modes, matrices, enumerations), :mod:`~a
 :mod:`~atlas.dynamics.classification`, :mod:`~atlas.dynamics.reference` (solve_ivp cross-check),
 :mod:`~atlas.dynamics.outcome` (Fig. 2 cases, subclasses, initial states),
 :mod:`~atlas.dynamics.outcomes` (outcome atlases beside the theory verdicts; chooses the engine),
-:mod:`~atlas.dynamics.outcome_tiles` (the same tile by tile, resumable)."""
+:mod:`~atlas.dynamics.outcome_tiles` (the same tile by tile, resumable).
 
-from atlas.dynamics.classification import (
-    TrajectoryStats,
-    classify,
-    classify_stats,
-    trajectory_stats,
-)
-from atlas.dynamics.outcome import (
-    NO_STABLE_SUBCLASSES,
-    fig2_cases,
-    initial_states,
-    no_stable_subclass,
-    outcome_grid,
-    perturbed_initial_states,
-    simulate_outcome,
-    standard_normals,
-    subclass_codes,
-)
-from atlas.dynamics.outcomes import (
-    Dynamics,
-    outcome_atlas,
-    outcome_map,
-    outcome_scene,
-)
-from atlas.dynamics.reference import simulate_solve_ivp
-from atlas.dynamics.simulator import SimulationResult, simulate
-from atlas.dynamics.system import (
-    FORCE_OFF,
-    FORCE_ON,
-    IMPACT,
-    LIFTOFF,
-    Outcome,
-    Status,
-    ss_equilibrium,
+The names below load lazily (PEP 562, as :mod:`atlas`): importing one module of the package
+(e.g. :mod:`~atlas.dynamics.fast_engine` in a worker process) does not load JAX or xarray."""
+
+import lazy_loader
+
+__getattr__, __dir__, _ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "classification": [
+            "TrajectoryStats",
+            "classify",
+            "classify_stats",
+            "trajectory_stats",
+        ],
+        "outcome": [
+            "NO_STABLE_SUBCLASSES",
+            "fig2_cases",
+            "initial_states",
+            "no_stable_subclass",
+            "outcome_grid",
+            "perturbed_initial_states",
+            "simulate_outcome",
+            "standard_normals",
+            "subclass_codes",
+        ],
+        "outcomes": [
+            "Dynamics",
+            "outcome_atlas",
+            "outcome_map",
+            "outcome_scene",
+        ],
+        "simulator": [
+            "SimulationResult",
+            "simulate",
+        ],
+        "system": [
+            "FORCE_OFF",
+            "FORCE_ON",
+            "IMPACT",
+            "LIFTOFF",
+            "Outcome",
+            "Status",
+            "ss_equilibrium",
+        ],
+        "reference": [
+            "simulate_solve_ivp",
+        ],
+    },
 )
 
 __all__ = [

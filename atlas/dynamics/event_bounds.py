@@ -16,6 +16,8 @@ __all__ = [
     "xp_of",
     "take",
     "NEUTRAL",
+    "sum4",
+    "re_sum4",
     "evaluate",
     "event_functions",
     "curvature_bound",
@@ -35,7 +37,7 @@ def xp_of(*arrays):
     """The array namespace of ``arrays``: :mod:`jax.numpy` if any is a JAX array (or tracer),
     else :mod:`numpy`; every function here serves both."""
     for x in arrays:
-        if type(x).__module__.startswith(("jax", "jaxlib")):
+        if type(x) is not np.ndarray and type(x).__module__.startswith(("jax", "jaxlib")):
             import jax.numpy as jnp  # noqa: PLC0415 - NumPy callers load no JAX
 
             return jnp
@@ -43,10 +45,30 @@ def xp_of(*arrays):
 
 
 def take(x, j):
-    """``x[..., j]`` for the indices ``j`` (...) of the last axis, as a masked sum (exact: the
-    other terms are zeros), which compiles lean under ``jax.vmap``."""
+    """``x[..., j]`` for the indices ``j`` (...) of the last axis; on JAX arrays as a masked sum
+    (exact: the other terms are zeros), which compiles lean under ``jax.vmap``."""
     xp = xp_of(x, j)
+    if xp is np:
+        return np.take_along_axis(x, j[..., None], axis=-1)[..., 0]
     return xp.where(xp.arange(x.shape[-1]) == j[..., None], x, 0).sum(axis=-1)
+
+
+def sum4(x):
+    """``x.sum(axis=-1)`` of a real array, for a last axis of length 4 as elementwise additions
+    in NumPy's order (``((x0 + x1) + x2) + x3``): the same values without the cost of a reduction
+    over a short axis (NumPy or JAX arrays)."""
+    if x.shape[-1] != 4:
+        return x.sum(axis=-1)
+    return ((x[..., 0] + x[..., 1]) + x[..., 2]) + x[..., 3]
+
+
+def re_sum4(z):
+    """``z.sum(axis=-1).real`` of a complex array, for a last axis of length 4 in NumPy's order of
+    a complex sum (``(z0 + z1) + (z2 + z3)``), on the real parts only (NumPy or JAX arrays)."""
+    if z.shape[-1] != 4:
+        return z.sum(axis=-1).real
+    r = z.real
+    return (r[..., 0] + r[..., 1]) + (r[..., 2] + r[..., 3])
 
 
 def evaluate(P, U, lam, tau):
@@ -58,9 +80,9 @@ def evaluate(P, U, lam, tau):
     p = xp.stack([P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]),
                   P[:, :, 1] + 2 * t1 * P[:, :, 2], P[:, :, 2]], axis=2)  # fmt: skip
     lUE = UE * lam[:, None, :]
-    d = p[:, :, 0] + UE.sum(axis=2).real
-    v = p[:, :, 1] + lUE.sum(axis=2).real
-    acc = 2 * p[:, :, 2] + (lUE * lam[:, None, :]).sum(axis=2).real
+    d = p[:, :, 0] + re_sum4(UE)
+    v = p[:, :, 1] + re_sum4(lUE)
+    acc = 2 * p[:, :, 2] + re_sum4(lUE * lam[:, None, :])
     return d, v, acc, p, UE
 
 
@@ -78,8 +100,8 @@ def curvature_bound(p, UE, lam, H, k, q):
     lr = xp.abs(lam)
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
     a = xp.abs(UE) * grow
-    m2 = 2 * xp.abs(p[:, :, 2]) + (a * lr[:, None, :] ** 2).sum(axis=2)
-    m3 = (a * lr[:, None, :] ** 3).sum(axis=2)
+    m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
+    m3 = sum4(a * lr[:, None, :] ** 3)
     return xp.concatenate([m2, k * m2 + q * m3], axis=1)
 
 
@@ -159,11 +181,11 @@ def keeps_sign_bound(c, w, lam, valid, horizon):
     l1 = xp.where(any_grow, lam1.real, 0.0)
     real1 = xp.abs(lam1.imag) <= 1e-12 * xp.abs(lam1)
     aw = xp.abs(w)
-    others = xp.where(grow, aw, 0.0).sum(axis=-1) - xp.where(any_grow, xp.abs(w1), 0.0)
+    others = sum4(xp.where(grow, aw, 0.0)) - xp.where(any_grow, xp.abs(w1), 0.0)
     G = xp.where(any_grow, w1.real - others, 0.0)
     fac = xp.where(re > 0, xp.exp(re * horizon[..., None]), 1.0)
-    bounded = xp.where(~grow & (aw > 0), aw * fac, 0.0).sum(axis=-1)
-    margin = 1e-12 * (xp.abs(c[..., 0]) + aw.sum(axis=-1)) + 1e-300
+    bounded = sum4(xp.where(~grow & (aw > 0), aw * fac, 0.0))
+    margin = 1e-12 * (xp.abs(c[..., 0]) + sum4(aw)) + 1e-300
     a0 = c[..., 0] + G - bounded - margin
     a1 = c[..., 1] + G * l1
     a2 = c[..., 2] + 0.5 * G * l1 * l1

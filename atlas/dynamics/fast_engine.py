@@ -50,6 +50,9 @@ Both are declared only where the reference's finite-horizon stops reach the same
 (:func:`_settles_first`, :func:`_aligned_at_stop`); otherwise the lane keeps stepping.
 
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
+Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
+a longer horizon (:func:`atlas.dynamics.needs_longer_run`) rejoin the running batch from where
+they stopped, so the horizon extensions of some lanes overlap the first runs of the others.
 Lanes the modal form cannot serve (eigenvector condition > ``1e4``, singular ``B_SS``, a zero
 eigenvalue) or whose root location stalls (a grazing contact) are run by the exact simulator
 instead (``fallback``).  The condition bound separates the near-defective configurations of
@@ -85,7 +88,7 @@ from atlas.dynamics.system import (
     iwc_aligned_many,
 )
 
-__all__ = ["FastResult", "modal_tables", "run_batch", "outcomes"]
+__all__ = ["FastResult", "modal_tables", "run_batch", "run_lanes", "outcomes"]
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
 _XTOL = 1e-12
@@ -252,28 +255,29 @@ def _segment(m, g, d_eq, V, W, lam, B, a, k, q):
     xp = eb.xp_of(g, d_eq, lam, B)
     idx = [i for i in range(2) if m >> i & 1]
     n = g.shape[0]
-    zero = xp.zeros((n,))
     if not idx:  # FF: d'' = -a
         P = xp.stack([g[:, :2], g[:, 2:], -0.5 * a], axis=2)
         return P, xp.zeros((n, 2, 4), dtype=complex)
-    na = 2 * len(idx)
     c = _modal_coords(m, g, d_eq, W)[1]
-    pad = xp.zeros((n, 4 - na), dtype=complex)
-    Pc, Uc = {}, {}
-    for r, i in enumerate(idx):
-        Pc[i] = xp.stack([d_eq[:, i], zero, zero], axis=1)
-        Uc[i] = xp.concatenate([V[:, r, :] * c, pad], axis=1)
-    for j in (i for i in range(2) if not m >> i & 1):  # one active contact i: d_j'' = B_ji
-        i = idx[0]  # phi_i - a_j, integrated twice
-        w = -(k[:, i, None] * V[:, 0, :] + q[:, i, None] * V[:, 1, :]) * c  # phi_i modal terms
-        Bji = B[:, j, i]
-        Wm = Bji[:, None] * w
-        lm = lam[:, :na]
-        acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
-        Pc[j] = xp.stack([g[:, j] - xp.sum(Wm / lm**2, axis=1).real,
-                          g[:, j + 2] - xp.sum(Wm / lm, axis=1).real, 0.5 * acc0], axis=1)  # fmt: skip
-        Uc[j] = xp.concatenate([Wm / lm**2, pad], axis=1)
-    return xp.stack([Pc[0], Pc[1]], axis=1), xp.stack([Uc[0], Uc[1]], axis=1)
+    Ua = V[:, : len(idx), :] * c[:, None, :]  # the active gaps' modal terms (n, len(idx), na)
+    if len(idx) == 2:
+        zero = xp.zeros_like(d_eq)
+        return xp.stack([d_eq, zero, zero], axis=2), Ua
+    # one active contact i, a free gap j: d_j'' = B_ji phi_i - a_j, integrated twice
+    i, j = idx[0], 1 - idx[0]
+    w = -(k[:, i, None] * V[:, 0, :] + q[:, i, None] * V[:, 1, :]) * c  # phi_i modal terms
+    Bji = B[:, j, i]
+    Wm = Bji[:, None] * w
+    lm = lam[:, :2]
+    Uj = Wm / lm**2
+    acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
+    zero = xp.zeros((n,))
+    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
+    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
+                   0.5 * acc0], axis=1)  # fmt: skip
+    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
+    U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
+    return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
 
 
 _OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
@@ -374,34 +378,66 @@ def _switch(s, cross, f, fp, k, scale):
 
 def _bins(t, width, nbins):
     xp = eb.xp_of(t)
-    return xp.clip(xp.ceil(t / width).astype(int) - 1, 0, nbins - 1)
+    return xp.minimum(xp.maximum(xp.ceil(t / width).astype(int) - 1, 0), nbins - 1)
 
 
-def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback):
-    """Step the lanes ``ix`` event to event until each is decided, stops (horizon
-    ``st.horizon``, event cap, divergence) or falls back; results written into ``st``."""
-    nbins = st.amp.shape[1]
+def _admit(lanes, tables, st: _State, ix, fallback):
+    """The per-lane arrays of :func:`_run_lanes` for the lanes ``ix`` starting from their state
+    in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = _mask_of(s)
     P, U, lam, valid, H, ok = _segments(lanes, tables, ix, mask, g)
-    tseg = t.copy()
-    T = st.horizon[ix].copy()
-    k, q, scale = lanes.k[ix], lanes.q[ix], st.scale[ix]
-    stall = np.zeros(ix.size, dtype=int)
-    since = np.zeros(ix.size, dtype=int)
-    rows = np.arange(ix.size)
     fallback[ix[~ok]] = True
-    keep = ok
+    cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
+            lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
+            np.zeros(ix.size, dtype=int))  # fmt: skip
+    return tuple(x[ok] for x in cols)
+
+
+def _classify_stopped(st: _State, tables, n, width, t_max):
+    """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
+    :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
+    returned."""
+    st.code[n] = _classify_many(st, tables, n, width)
+    again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
+              & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
+    st.horizon[again] *= 2
+    st.status[again] = _RUNNING
+    st.code[again] = -1
+    return again
+
+
+#: steps between the classifications of the lanes that stopped (those given a longer horizon
+#: rejoin the batch then)
+_READMIT = 8
+
+
+def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
+    """Step every lane event to event until it is decided, stops (horizon ``st.horizon``, event
+    cap, divergence) or falls back; a lane that stops undetermined with events rejoins the batch
+    with its horizon doubled (:func:`_classify_stopped`); results written into ``st``."""
+    nbins = st.amp.shape[1]
+    cols = _admit(lanes, tables, st, np.arange(st.t.size), fallback)
+    ix = cols[0]
+    keep = np.ones(ix.size, dtype=bool)
+    pending = []
+    it = 0
     while True:
         if not keep.all():
-            sel = keep
-            ix, t, g, s, mask, P, U, lam, valid, H = (
-                x[sel] for x in (ix, t, g, s, mask, P, U, lam, valid, H)
-            )
-            tseg, T, k, q, scale, stall, since = (
-                x[sel] for x in (tseg, T, k, q, scale, stall, since)
-            )
-            rows = np.arange(ix.size)
+            gone = ix[~keep]
+            pending.append(gone[(st.status[gone] != _RUNNING) & ~fallback[gone]])
+            sel = np.flatnonzero(keep)
+            cols = tuple(x.take(sel, axis=0) for x in cols)
+            ix = cols[0]
+        if pending and (ix.size == 0 or it % _READMIT == 0):
+            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
+            pending = []
+            if again.size:
+                new = _admit(lanes, tables, st, again, fallback)
+                cols = tuple(np.concatenate([a, b]) for a, b in zip(cols, new, strict=True))
+        it += 1
+        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since = cols
+        rows = np.arange(ix.size)
         if ix.size == 0:
             return
         tau = t - tseg
@@ -412,17 +448,19 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         keep = np.ones(ix.size, dtype=bool)
 
         # stops of the reference: divergence, horizon
-        div = ~np.isfinite(g).all(axis=1)
-        div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
+        div = ~_all_cols(np.isfinite(g))
+        div |= np.maximum(d[:, 0], d[:, 1]) > 1e4 * scale
+        div |= np.minimum(d[:, 0], d[:, 1]) < -1e6 * scale
         act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        deep = np.flatnonzero(sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1))
+        pen = act & (d < -1e3 * scale[:, None])
+        deep = np.flatnonzero(sched & ~div & (pen[:, 0] | pen[:, 1]))
         if deep.size:
             lx, mk = ix[deep], mask[deep]
             div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
                                          g[deep], 1e-3)  # fmt: skip
-        _leave(st, ix, t, g, s, keep, div, 2)
-        _leave(st, ix, t, g, s, keep, keep & (t >= T), 0)
+        _leave(st, ix, t, g, s, keep, np.flatnonzero(div), 2)
+        _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
         M = eb.curvature_bound(p, UE, lam, H, k, q)
@@ -438,7 +476,7 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         hi = np.where(mon, hi, np.inf)
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = np.flatnonzero(keep & sched & np.all(hi > (t_max - t)[:, None], axis=1))
+        r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         r = r[_may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
@@ -446,9 +484,9 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
             dec = st.code[ix[r]] >= 0
             _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
         # the first crossing: smallest sigma_lo, ties to the tightest bracket
-        m = lo.min(axis=1)
+        m = _min_cols(lo)
         tie_hi = np.where(lo <= m[:, None], hi, np.inf)
-        first = np.where(np.isinf(tie_hi.min(axis=1)), np.argmin(lo, axis=1),
+        first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
                          np.argmin(tie_hi, axis=1))  # fmt: skip
         h = hi[rows, first]
         rem = T - t
@@ -456,7 +494,7 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
         # first crossing is in it, located on that function alone (:func:`_locate_root`)
-        other = np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo).min(axis=1)
+        other = _min_cols(np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo))
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
@@ -482,6 +520,17 @@ def _run_round(lanes, tables, st: _State, ix, t_max, max_events, width, fallback
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
+
+
+def _all_cols(x):
+    """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
+    return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
+
+
+def _min_cols(x):
+    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
+    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
 
 
 def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
@@ -504,9 +553,9 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
         t = tau + x
         ue = Ui * xp.exp(lam * t[:, None])
         lue = ue * lam
-        d = p0 + t * (p1 + t * p2) + ue.sum(axis=1).real
-        v = p1 + 2 * t * p2 + lue.sum(axis=1).real
-        acc = 2 * p2 + (lue * lam).sum(axis=1).real
+        d = p0 + t * (p1 + t * p2) + eb.re_sum4(ue)
+        v = p1 + 2 * t * p2 + eb.re_sum4(lue)
+        acc = 2 * p2 + eb.re_sum4(lue * lam)
         f = xp.where(gap, d, -ki * d - qi * v)
         fp = xp.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
@@ -537,7 +586,9 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
 
 
 def _leave(st, ix, t, g, s, keep, sel, status):
-    """Lanes ``sel`` leave the batch: their time, state, signs and status into ``st``."""
+    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``."""
+    if sel.size == 0:
+        return
     st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
     st.status[ix[sel]] = status
     keep[sel] = False
@@ -627,7 +678,7 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     aw = xp.abs(UE)
     amp = 1e4 * scale
     # upper bound of each free gap: |p0| + |p1| s + |p2| s^2 + sum |u|
-    reach = _first_reach(xp.abs(p[:, :, 0]) + aw.sum(axis=2), xp.abs(p[:, :, 1]),
+    reach = _first_reach(xp.abs(p[:, :, 0]) + eb.sum4(aw), xp.abs(p[:, :, 1]),
                          xp.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
     t_amp = xp.where(act, np.inf, reach).min(axis=1)
     omega = xp.sqrt(k.max(axis=1))
@@ -702,11 +753,11 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
     aw = xp.abs(UE)
     grow = xp.maximum(lam.real, 0.0)
+    a0, a1, a2 = (xp.abs(p[:, :, i]) for i in range(3))
 
     def bound(x):
         e = xp.exp(grow * x[:, None])[:, None, :]
-        b = (xp.abs(p[:, :, 0]) + xp.abs(p[:, :, 1]) * x[:, None] + xp.abs(p[:, :, 2])
-             * x[:, None] ** 2 + (aw * e).sum(axis=2))  # fmt: skip
+        b = a0 + a1 * x[:, None] + a2 * x[:, None] ** 2 + eb.sum4(aw * e)
         return b.max(axis=1)
 
     lim = 1e4 * scale
@@ -856,6 +907,7 @@ def _impacts_of(st: _State, n):
     if not st.imp:
         return np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0, int)
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
+    st.imp[:] = [(lane, t, v, c)]
     sel = np.isin(lane, n)
     return lane[sel], t[sel], v[sel], c[sel]
 
@@ -881,50 +933,82 @@ class FastResult:
     g_final: np.ndarray
     n_events: np.ndarray
 
+    @classmethod
+    def gather(cls, parts, n: int) -> FastResult:
+        """One result of ``n`` lanes from ``[(lane indices, FastResult), ...]``."""
+        fields = [f.name for f in dataclasses.fields(cls)]
+        out = {}
+        for name in fields:
+            first = getattr(parts[0][1], name)
+            out[name] = np.empty((n,) + first.shape[1:], dtype=first.dtype)
+            for idx, res in parts:
+                out[name][idx] = getattr(res, name)
+        return cls(**out)
+
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
-              reference=None, rounds=None) -> FastResult:  # fmt: skip
+              reference=None, pool=None, rounds=None) -> FastResult:  # fmt: skip
     """Outcomes of ``N`` trajectories (parameters broadcast to ``(N,)``, ``g0`` (N, 4)) with the
     classification and horizon extension of :func:`atlas.dynamics.simulate_outcome`.
 
     ``reference(beta1, beta2, alpha, k=, q=, g0=)`` runs one trajectory with the exact simulator
     for the fallback lanes: :func:`atlas.dynamics.simulate_outcome` with the same ``t_end``,
-    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).  ``rounds`` (the state's
-    ``start`` and the stepper of one round, default this module's) is how
-    :mod:`atlas.dynamics.jax_engine` runs the same driver with its kernel.
+    ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).  ``pool``: a
+    :class:`atlas.dynamics.lane_pool.LanePool` that runs the lanes on several processes (the same
+    result bit for bit; the fallback lanes run here).  ``rounds``: see :func:`run_lanes`.
     """
     g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
+    n = g0.shape[0]
+    if any(np.size(x) not in (1, n) for x in (beta1, beta2, alpha)):
+        raise ValueError(f"g0 must have one row per trajectory, got {n}")
+    b1, b2, al = (np.broadcast_to(np.asarray(x, dtype=float).ravel(), (n,)).copy()
+                  for x in (beta1, beta2, alpha))  # fmt: skip
+    kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
+    qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
+    opts = dict(t_end=t_end, horizon_cap=horizon_cap, max_events=max_events, rounds=rounds)
+    arrays = (b1, b2, al, kk, qq, g0)
+    if pool is None:
+        res = run_lanes(*arrays, **opts)
+    else:
+        res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
+    for i in np.flatnonzero(res.decided_by == 3):
+        out, _ = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
+        res.code[i] = int(out)
+    return res
+
+
+def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
+              rounds=None) -> FastResult:  # fmt: skip
+    """:func:`run_batch` without the exact simulator: the lanes it would run have
+    ``decided_by`` ``fallback`` and ``code`` -1 (parameters ``(N,)``, ``k``, ``q`` (N, 2)).
+
+    ``rounds``: ``(start, run_round)``, the state's constructor and a stepper run on the lanes
+    ``ix`` until each stops (``run_round(lanes, tables, st, ix, t_max, max_events, width,
+    fallback)``), after which the stopped lanes are classified and those given a longer horizon
+    run again (:func:`_classify_stopped`); how :mod:`atlas.dynamics.jax_engine` runs its kernel.
+    Default: this module's stepping, where those lanes rejoin the running batch
+    (:func:`_run_lanes`)."""
     lanes = Lanes.of(beta1, beta2, alpha, k, q)
     if lanes.a.shape[0] != g0.shape[0]:
         raise ValueError(f"g0 must have one row per trajectory, got {g0.shape[0]}")
     tables = modal_tables(lanes)
     width = t_end / 3.0
     nbins = int(math.ceil(3 * horizon_cap)) + 1
-    start, run_round = rounds or (_State.start, _run_round)
+    start, run_round = rounds or (_State.start, None)
     st = start(lanes, g0, t_end, nbins)
     fallback = np.zeros(g0.shape[0], dtype=bool)
     t_max = horizon_cap * t_end
-    ix = np.arange(g0.shape[0])
-    while ix.size:
-        with np.errstate(all="ignore"):
-            run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
-        n = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
-        st.code[n] = _classify_many(st, tables, n, width)
-        # the horizon extension of atlas.dynamics.needs_longer_run
-        ix = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
-               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
-        st.horizon[ix] *= 2
-        st.status[ix] = _RUNNING
-        st.code[ix] = -1
-    fb = np.flatnonzero(fallback)
-    if fb.size:
-        b1, b2, al = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)).ravel()
-                                           for x in (beta1, beta2, alpha)))  # fmt: skip
-        for n in fb:
-            out, _ = reference(b1[n], b2[n], al[n], k=tuple(lanes.k[n]), q=tuple(lanes.q[n]),
-                               g0=g0[n])  # fmt: skip
-            st.code[n] = int(out)
-            st.decided_by[n] = 3
+    with np.errstate(all="ignore"):
+        if rounds is None:
+            _run_lanes(lanes, tables, st, t_max, max_events, width, fallback)
+        else:
+            ix = np.arange(g0.shape[0])
+            while ix.size:
+                run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
+                ix = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
+                ix = _classify_stopped(st, tables, ix, width, t_max)
+    st.code[fallback] = -1
+    st.decided_by[fallback] = 3
     return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
 
 

@@ -121,7 +121,7 @@ def _bin_max(arr, b, value, on):
 
 
 def _step(c, prm):
-    """One step of :func:`atlas.dynamics.fast_engine._run_round` for the running lanes of
+    """One step of :func:`atlas.dynamics.fast_engine._run_lanes` for the running lanes of
     ``c`` (the same tests in the same order)."""
     run, t, s, since, T = c["run"], c["t"], c["s"], c["since"], prm["T"]
     t_max, max_events, width, nbins = (prm[x] for x in ("t_max", "max_events", "width", "nbins"))
@@ -300,8 +300,9 @@ def _bucket(n):
 
 
 def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
-    """:func:`atlas.dynamics.fast_engine._run_round` with :func:`kernel`: the lanes ``ix`` step
-    until each is decided, stops or falls back; results written into ``st``."""
+    """The stepping of :func:`atlas.dynamics.fast_engine._run_lanes` in :func:`kernel`: the
+    lanes ``ix`` step until each is decided, stops or falls back; results written into ``st``
+    (one round of :func:`atlas.dynamics.fast_engine.run_lanes`)."""
     nbins = st.amp.shape[1]
     mask = fe._mask_of(st.s[ix])
     P, U, _, _, _, ok = fe._segments(lanes, tables, ix, mask, st.g[ix])

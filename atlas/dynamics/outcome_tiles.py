@@ -35,6 +35,7 @@ from atlas.data.cluster import check_scheduler, executor
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.scene import Scene
 from atlas.data.tiles import tile_plan
+from atlas.dynamics.lane_pool import LanePool, check_workers
 from atlas.dynamics.outcomes import (
     Dynamics,
     check_scene,
@@ -107,9 +108,10 @@ def _write(path: str, data: bytes) -> None:
         raise
 
 
-def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile) -> dict:
-    """Compute tile ``i``, write its counts, then its record."""
-    counts, info = outcome_slab(scene, range(*tile), dyn)
+def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile, pool=None) -> dict:
+    """Compute tile ``i`` (on the processes of ``pool``, if given), write its counts, then its
+    record."""
+    counts, info = outcome_slab(scene, range(*tile), dyn, pool)
     buf = io.BytesIO()
     np.save(buf, counts, allow_pickle=False)
     data = buf.getvalue()
@@ -167,6 +169,7 @@ def outcome_atlas_tiles(
     progress=None,
     history: str | None = None,
     scheduler=None,
+    workers: int | None = 1,
 ) -> dict:
     """An outcome atlas tile by tile into the store directory ``store`` (see the module
     docstring), then, with ``to_netcdf``, the netCDF file of
@@ -196,6 +199,10 @@ def outcome_atlas_tiles(
         Where the tiles run (:func:`atlas.data.cluster.executor`): in this process, on a dask
         LocalCluster of N single-thread workers, or on a running cluster whose workers see
         ``store``.
+    workers : int or None
+        Processes of the fast engine per tile in this process
+        (:class:`atlas.dynamics.lane_pool.LanePool`; ``None``: the usable cores); 1 with a
+        ``scheduler``.
 
     Returns
     -------
@@ -208,6 +215,11 @@ def outcome_atlas_tiles(
     if not isinstance(dyn, Dynamics):
         raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
     check_scheduler(scheduler)
+    workers = check_workers(workers)
+    if scheduler is not None and workers > 1:
+        raise ValueError(
+            f"workers: the tiles run on the scheduler's workers, give 1, got {workers}"
+        )
     store = os.path.abspath(os.fspath(store))
     slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
     tiles = tile_plan(scene, slab=slab)
@@ -229,8 +241,10 @@ def outcome_atlas_tiles(
             progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
 
     report()
-    todo = [(i, (store, scene, dyn, i, tile)) for i, tile in enumerate(tiles) if i not in recs]
     ex = executor(scheduler)
+    pool = LanePool(workers) if scheduler is None else None
+    todo = [(i, (store, scene, dyn, i, tile, pool)) for i, tile in enumerate(tiles)
+            if i not in recs]  # fmt: skip
     try:
         for i, rec in ex.map(_run_tile, todo):
             recs[i] = rec
@@ -238,6 +252,8 @@ def outcome_atlas_tiles(
             report()
     finally:
         ex.close()
+        if pool is not None:
+            pool.close()
     counts = np.concatenate(
         [np.load(os.path.join(store, _name(i, "npy"))) for i in range(len(tiles))]
     )

@@ -34,6 +34,7 @@ from atlas.data.engine import REFERENCES, generate
 from atlas.data.outputs import coord_attrs
 from atlas.data.scene import Scene
 from atlas.dynamics import fast_engine, jax_engine
+from atlas.dynamics.lane_pool import LanePool
 from atlas.dynamics.outcome import (
     initial_states,
     no_stable_subclass,
@@ -149,8 +150,11 @@ def _grid(scene: Scene, rows: range) -> dict:
     return grids
 
 
-def outcome_slab(scene: Scene, rows: range, dyn: Dynamics) -> tuple[np.ndarray, dict]:
-    """Outcome counts of the ``beta1`` rows ``rows`` of an outcome atlas.
+def outcome_slab(
+    scene: Scene, rows: range, dyn: Dynamics, pool: LanePool | None = None
+) -> tuple[np.ndarray, dict]:
+    """Outcome counts of the ``beta1`` rows ``rows`` of an outcome atlas (fast engine: on the
+    processes of ``pool``, :class:`atlas.dynamics.lane_pool.LanePool`, if given).
 
     Returns
     -------
@@ -158,7 +162,7 @@ def outcome_slab(scene: Scene, rows: range, dyn: Dynamics) -> tuple[np.ndarray, 
         int16, shape ``(len(rows), n_beta2, ...model sizes..., len(Outcome))``: the full grid of
         the scene's parameters in canonical order (scalars as axes of length 1), runs per class.
     info : dict
-        ``trajectories``, ``seconds`` and, with the fast engine, ``runs_stepped``,
+        ``trajectories``, ``seconds`` (wall time, a pool's start included) and, with the fast engine, ``runs_stepped``,
         ``runs_early_settle``, ``runs_early_iwc``, ``runs_fallback`` (how each run was decided).
     """
     scene = check_scene(scene)
@@ -168,13 +172,13 @@ def outcome_slab(scene: Scene, rows: range, dyn: Dynamics) -> tuple[np.ndarray, 
     xi = xi.reshape(shape[:2] + (1,) * (len(shape) - 2) + xi.shape[2:])
     g0 = initial_states(g["beta1"], g["beta2"], g["alpha"], g["kappa"], xi, dyn.perturbation)
     t0 = time.perf_counter()
-    codes, how = _codes(g, g0, dyn)
+    codes, how = _codes(g, g0, dyn, pool)
     seconds = time.perf_counter() - t0
     counts = np.stack([(codes == c).sum(axis=-1) for c in CLASSES], axis=-1).astype(np.int16)
     return counts, {"trajectories": int(codes.size), "seconds": seconds, **how}
 
 
-def _codes(g: dict, g0: np.ndarray, dyn: Dynamics) -> tuple[np.ndarray, dict]:
+def _codes(g: dict, g0: np.ndarray, dyn: Dynamics, pool=None) -> tuple[np.ndarray, dict]:
     """Outcome codes, shape ``grid + (n_perturb,)``, from the chosen engine."""
     shape = g0.shape[:-1]
     lane = {k: np.broadcast_to(v[..., None], shape).ravel() for k, v in g.items()}
@@ -183,7 +187,10 @@ def _codes(g: dict, g0: np.ndarray, dyn: Dynamics) -> tuple[np.ndarray, dict]:
     flat = g0.reshape(-1, 4)
     opts = dict(t_end=dyn.t_end, horizon_cap=dyn.horizon_cap, max_events=dyn.max_events)
     if dyn.engine in ("fast", "jax"):
-        run = fast_engine.run_batch if dyn.engine == "fast" else jax_engine.run_batch
+        if dyn.engine == "fast":
+            run = functools.partial(fast_engine.run_batch, pool=pool)
+        else:
+            run = jax_engine.run_batch
         res = run(lane["beta1"], lane["beta2"], lane["alpha"], k, q, flat,
                   reference=dyn.reference(), **opts)  # fmt: skip
         how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
@@ -289,7 +296,7 @@ def outcome_dataset(
         "trajectories": trajectories,
         "seconds": seconds,
         "trajectories_per_second": trajectories / seconds if seconds > 0 else float("nan"),
-        **{k: v for k, v in info.items() if k.startswith("runs_")},
+        **{k: v for k, v in info.items() if k.startswith("runs_") or k == "workers"},
     }
     if "q" in scene.axes and not scene.axes["q"].is_dim:
         attrs["q1"] = attrs["q2"] = float(scene.axes["q"].values)
@@ -321,6 +328,7 @@ def outcome_atlas(
     engine: str = "fast",
     theory: bool = True,
     slab: int | None = None,
+    workers: int | None = 1,
     progress=None,
     history: str | None = None,
 ) -> xr.Dataset:
@@ -336,6 +344,10 @@ def outcome_atlas(
         Add the certified theory verdicts of the same cells.
     slab : int, optional
         ``beta1`` values per batch (default: all at once).
+    workers : int or None
+        Processes of the fast engine (:class:`atlas.dynamics.lane_pool.LanePool`; ``None``: the
+        usable cores); 1 runs in this process.  The result does not depend on it.  More than 1
+        spawns processes: a script calling this needs ``if __name__ == "__main__":``.
     progress : callable, optional
         Called with ``(done, total)`` trajectories after each slab.
     history : str, optional
@@ -353,13 +365,16 @@ def outcome_atlas(
     step = n1 if slab is None else integer("slab", slab)
     parts, infos = [], []
     total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
-    for a in range(0, n1, step):
-        counts, info = outcome_slab(scene, range(a, min(a + step, n1)), dyn)
-        parts.append(counts)
-        infos.append(info)
-        if progress is not None:
-            progress(sum(i["trajectories"] for i in infos), total)
+    with LanePool(workers) as pool:
+        for a in range(0, n1, step):
+            counts, info = outcome_slab(scene, range(a, min(a + step, n1)), dyn, pool)
+            parts.append(counts)
+            infos.append(info)
+            if progress is not None:
+                progress(sum(i["trajectories"] for i in infos), total)
     info = sum_info(infos)
+    if dyn.engine == "fast":
+        info["workers"] = pool.workers
     return outcome_dataset(scene, np.concatenate(parts), dyn, info, theory=theory, history=history)
 
 

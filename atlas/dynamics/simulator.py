@@ -25,7 +25,6 @@ import time as _time
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.optimize
 
 from atlas.dynamics.system import (
     FORCE_OFF,
@@ -165,6 +164,8 @@ def _root(coef, s, hi, xtol):
         # the bracket came from expm(E h) z, whose sign at hi differs only by rounding from the
         # Taylor polynomial's: the sign change is at the end of the sub-step
         return hi
+    import scipy.optimize  # noqa: PLC0415 - the fast engine's worker processes need no scipy
+
     return scipy.optimize.brentq(F, 0.0, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
 
 

@@ -16,6 +16,7 @@ from atlas.data.engine import progress_bar
 from atlas.data.io import atomic_write_text, savefig
 from atlas.data.scene import parse_values
 from atlas.dynamics import Outcome, classify, fig2_cases, outcome_grid, simulate
+from atlas.dynamics.lane_pool import check_workers, usable_cores
 from atlas.dynamics.outcome_tiles import default_slab, outcome_atlas_tiles
 from atlas.dynamics.outcomes import Dynamics, outcome_atlas, outcome_scene
 from atlas.paper import drawing
@@ -43,7 +44,8 @@ def run_cli(case=None, t_end=None, out=None, outcome_map=False, k1=None, k2=None
     ``--n-perturb`` runs per cell, default 1), the outcome counts printed; ``--out`` writes it as
     netCDF (``.nc``) or as the figure beside the Fig. 1 theory map (``.png``/``.pdf``; one
     ``(kappa, q, alpha)``); ``--store DIR`` computes it tile by tile into a resumable store
-    (``--resume``, ``--slab N``)."""
+    (``--resume``, ``--slab N``).  ``--workers N``: processes of the fast engine (default the
+    usable cores, 1 with ``--scheduler``; the map does not depend on it)."""
     if outcome_map:
         if case:
             raise ValueError("case: --case and --map exclude each other")
@@ -52,7 +54,7 @@ def run_cli(case=None, t_end=None, out=None, outcome_map=False, k1=None, k2=None
                 raise ValueError(f"{name}: not an option of --map (its model is --kappa, --q)")
         return _run_map(t_end, out, argv=argv, **kw)
     for name in ("n", "kappa", "q", "n_perturb", "seed", "store", "slab", "resume", "no_theory",
-                 "scheduler"):  # fmt: skip
+                 "scheduler", "workers"):  # fmt: skip
         if kw.get(name) not in (None, False):
             raise ValueError(f"{name.replace('_', '-')}: only with --map")
     case = case[len("fig2") :] if case and case.startswith("fig2") else case
@@ -162,7 +164,10 @@ def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None) -> Dynami
 
 
 def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, overwrite=False,
-             no_theory=False, argv=None, scheduler=None, **kw) -> int:  # fmt: skip
+             no_theory=False, argv=None, scheduler=None, workers=None, **kw) -> int:  # fmt: skip
+    if workers is None:
+        workers = 1 if scheduler is not None else usable_cores()
+    workers = check_workers(workers)
     scene = map_scene(**scene_options(kw))
     dyn = map_dynamics(kw.get("n_perturb"), kw.get("seed"), engine, t_end)
     suffix = Path(out).suffix.lower() if out else ""
@@ -186,6 +191,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
             s = outcome_atlas_tiles(
                 scene, store, dynamics=dyn, slab=slab, resume=resume, overwrite=overwrite,
                 theory=theory, history=history, scheduler=scheduler, progress=progress,
+                workers=workers,
             )  # fmt: skip
             ds = s["dataset"]
             print(
@@ -197,7 +203,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
             slab = default_slab(scene, dyn.n_perturb) if slab is None else slab
             ds = outcome_atlas(
                 scene, theory=theory, slab=slab, history=history, progress=progress,
-                **dyn.attrs(),
+                workers=workers, **dyn.attrs(),
             )  # fmt: skip
     finally:
         if bar is not None:
@@ -207,7 +213,8 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
     shape = "x".join(str(ds.sizes[d]) for d in scene.dims)
     print(
         f"outcome map {shape}: {summary}; {ds.attrs['trajectories']} trajectories in "
-        f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine})"
+        f"{ds.attrs['seconds']:.1f} s ({ds.attrs['trajectories_per_second']:.0f}/s, {engine}"
+        + (f", {workers} worker{'s' * (workers > 1)})" if engine == "fast" else ")")
     )
     if out:
         if suffix == ".nc":

@@ -75,8 +75,9 @@ def fake_results(mode="full") -> Results:
         for n in cfg["curve_res"] for f in ("SS", "II")
     ]  # fmt: skip
     maps = [
-        dict(map="256x256, kappa=0.5, q=0, alpha=0.35pi", trajectories=65536, fast_seconds=50.0,
-             fast_per_s=1300.0, ref_cells=500, ref_per_s=50.0, speedup=26.0, early_settle=0.13,
+        dict(map="256x256, kappa=0.5, q=0, alpha=0.35pi", trajectories=65536, workers=2,
+             fast_seconds=50.0, fast_per_s=1300.0, core_seconds=90.0, core_per_s=730.0,
+             identical=True, ref_cells=500, ref_per_s=50.0, speedup=14.6, early_settle=0.13,
              early_iwc=0.62, stepped=0.25, fallback=0.0, agreement=1.0, disagreements="")
     ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}

@@ -126,8 +126,9 @@ def test_write_csv_columns_in_order_of_appearance(tmp_path):
 
 def test_outcome_maps_section_lists_every_disagreement(results):
     """The fast-engine section: its table, and each disagreement of a map on its own line."""
-    row = dict(map="8x8, kappa=0.5, q=0, alpha=0.35pi", trajectories=64, fast_seconds=1.5,
-               fast_per_s=42.0, ref_cells=8, ref_per_s=30.0, speedup=1.4, early_settle=0.25,
+    row = dict(map="8x8, kappa=0.5, q=0, alpha=0.35pi", trajectories=64, workers=2,
+               fast_seconds=1.5, fast_per_s=42.0, core_seconds=2.0, core_per_s=32.0,
+               identical=True, ref_cells=8, ref_per_s=30.0, speedup=1.1, early_settle=0.25,
                early_iwc=0.5, stepped=0.25, fallback=0.0, agreement=0.875,
                disagreements="(1,2): reference IWC (diverged at t = 17, 2 events), fast undetermined")  # fmt: skip
     results.maps = [row, dict(row, map="other", agreement=1.0, disagreements="")]
@@ -135,6 +136,6 @@ def test_outcome_maps_section_lists_every_disagreement(results):
     heads = [ln for ln in md.splitlines() if ln.startswith("#")]
     assert heads[-2:] == ["## Outcome maps: fast engine against the exact simulator",
                           "## Notes, omissions"]  # fmt: skip
-    assert "| map | trajectories | fast_seconds | fast_per_s | ref_cells | ref_per_s |" in md
+    assert "| map | trajectories | workers | fast_seconds | fast_per_s | core_seconds |" in md
     assert "* 8x8, kappa=0.5, q=0, alpha=0.35pi: (1,2): reference IWC" in md
     assert "* other:" not in md

@@ -186,6 +186,8 @@ def test_cli_simulate_map_axes_of_generate(tmp_path, capsys):
         (["--resume"], "resume"),
         (["--k1", "3"], "k1"),
         (["--kappa", "0.5,2", "--out", str(tmp_path / "f.png")], "out"),
+        (["--workers", "0"], "workers"),
+        (["--workers", "2", "--store", str(tmp_path / "s"), "--scheduler", "local:1"], "workers"),
     ):
         out = tmp_path / "bad.nc"
         rc = main(["simulate", "--map", "--n", "2", "--out", str(out), *bad])

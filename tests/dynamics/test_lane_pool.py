@@ -1,0 +1,58 @@
+"""Lanes on several processes (atlas.dynamics.lane_pool): the fast engine's result is the same
+bit for bit for any number of processes; bad ``workers``: one line naming it."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from atlas import dynamics as S
+from atlas.dynamics import fast_engine as F
+from atlas.dynamics.lane_pool import LanePool, check_workers, usable_cores
+
+PI = math.pi
+
+
+def _reference(x1, x2, alpha, k, q, g0):
+    return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
+
+
+def test_any_number_of_processes_gives_the_same_result_bit_for_bit():
+    """7 x 7 map (49 lanes: the chunks differ in size) plus a degenerate direction that falls
+    back to the exact simulator (``beta2 = pi``); 1 process against 2 and 3."""
+    alpha, kappa, q = 0.35 * PI, 0.5, 0.3
+    b1, b2 = S.outcome_grid(7)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)[:, :, 0].reshape(-1, 4)
+    B1, B2 = (x.ravel() for x in np.meshgrid(b1, b2, indexing="ij"))
+    b = np.linspace(0, 2 * PI, 32, endpoint=False)
+    B1, B2 = np.append(B1, b[4]), np.append(B2, b[16])
+    g0 = np.vstack([g0, S.perturbed_initial_states(b, b, alpha, kappa)[4, 16, 0]])
+    args = (B1, B2, alpha, (kappa, 1.0), (q, q), g0)
+    one = F.run_batch(*args, reference=_reference)
+    assert one.decided_by[-1] == F.DECIDED_BY.index("fallback")
+    with LanePool(3, min_lanes=1) as pool:
+        for workers in (2, 3):
+            pool.workers = workers
+            res = F.run_batch(*args, reference=_reference, pool=pool)
+            for field in dataclasses.fields(F.FastResult):
+                a, b = getattr(one, field.name), getattr(res, field.name)
+                assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True), field.name
+
+
+def test_small_batches_stay_in_this_process():
+    pool = LanePool(2, min_lanes=10)
+    calls = pool.map(lambda x: x * 2, (np.arange(19),), {})
+    assert len(calls) == 1 and pool._executor is None
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, "2", True])
+def test_bad_workers_one_line(bad):
+    with pytest.raises(ValueError, match="^workers: ") as e:
+        check_workers(bad)
+    assert "\n" not in str(e.value)
+
+
+def test_default_is_the_usable_cores():
+    assert check_workers(None) == usable_cores() >= 1
+    assert check_workers(np.int64(2)) == 2
