@@ -356,7 +356,8 @@ def _add_simulate(sub) -> None:
         "--engine",
         choices=["fast", "numpy", "jax"],
         default="fast",
-        help="map engine: fast (batched, certified early stops), numpy (exact reference), jax",
+        help="map engine: fast (batched, certified early stops), numpy (exact reference), jax (the "
+        "fast engine as a JAX kernel, for accelerators)",
     )
     ps.add_argument(
         "--no-theory", action="store_true", help="map: without the theory verdicts of the cells"

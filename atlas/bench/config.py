@@ -91,6 +91,7 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-3, 1e-6, 1e-9, 1e-12)), ("Radau", (1e-3, 1e-6, 1e-9))),
         sim_repeats=3,
         outcome_maps=((256, 0.5, 0.0, 0.35 * math.pi, 400), (256, 2.0, 0.5, 0.2 * math.pi, 300)),
+        jax_outcome_n=64,  # the JAX kernel of the outcome engine, first map's parameters (~2 min)
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
         curve_cases=3,
@@ -124,6 +125,7 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-4, 1e-8)), ("Radau", (1e-4,))),
         sim_repeats=1,
         outcome_maps=((48, 0.5, 0.0, 0.35 * math.pi, 64),),
+        jax_outcome_n=None,
         large_n=0,
         large_check=10,
         curve_res=(16,),
@@ -155,6 +157,7 @@ CONFIG["tiny"] = dict(
     scale_undamped=(1 << 18,),
     sim_methods=(("DOP853", (1e-4,)), ("Radau", (1e-4,))),
     outcome_maps=((8, 0.5, 0.0, 0.35 * math.pi, 8),),
+    jax_outcome_n=None,
     atlases=(
         (
             "tiny 4-D",

@@ -175,7 +175,8 @@ SIMULATION_COLUMNS = ("case", "method", "rtol", "seconds", "events", "error", "n
 OUTCOME_MAP_COLUMNS = (
     "map", "trajectories", "workers", "fast_seconds", "fast_per_s", "core_seconds", "core_per_s",
     "identical", "ref_cells", "ref_per_s", "speedup", "early_settle", "early_iwc", "stepped",
-    "fallback", "agreement",
+    "fallback", "agreement", "jax_map", "jax_compile_s", "jax_per_s", "fast_per_s_again",
+    "jax_same",
 )  # fmt: skip
 
 # --------------------------------------------------------------------------- sections
@@ -520,7 +521,12 @@ def outcome_maps_section(maps) -> list[str]:
         "`ref_per_s`, one core against one core. "
         "`early_settle` / `early_iwc`: fraction of runs decided by a certificate that no event can "
         "follow; `stepped`: run to a stop and classified; `fallback`: run by the exact simulator. "
-        "`agreement`: same outcome on the sampled cells; every disagreement listed below.\n",
+        "`agreement`: same outcome on the sampled cells; every disagreement listed below. "
+        "The same engine as a JAX kernel (`atlas.dynamics.jax_engine`; full runs only), on a "
+        "smaller map (`jax_map`) with the first map's parameters, one initial state per cell: "
+        "`jax_compile_s`: its first call less its second (compilation, or the persistent cache), "
+        "`jax_per_s`: the second call, `fast_per_s_again`: the NumPy engine on that map (one core), "
+        "`jax_same`: fraction of its cells with the NumPy engine's outcome.\n",
         table(maps, OUTCOME_MAP_COLUMNS),
         "",
     ]

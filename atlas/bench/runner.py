@@ -32,7 +32,7 @@ from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
 from atlas.bench.report import Results, build_report, write_csv
-from atlas.bench.simulation import outcome_maps, simulation
+from atlas.bench.simulation import jax_outcome_columns, outcome_maps, simulation
 from atlas.bench.timing import log, machine
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_write_text
@@ -88,6 +88,7 @@ def _measure(cfg, meta) -> Results:
         atlases = suites.atlases(cfg)
         sim = simulation(cfg)
         maps = outcome_maps(cfg)
+        jax_outcome_columns(maps, cfg)
         curve_rows = curves(cfg)
     exact = dict(points=len(cache.store), seconds=cache.seconds, failures=cache.failures)
     return Results(

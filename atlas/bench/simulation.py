@@ -14,7 +14,7 @@ from atlas import dynamics
 from atlas.bench.timing import log, timeit
 from atlas.dynamics.lane_pool import usable_cores
 
-__all__ = ["event_error", "gap_events", "outcome_maps", "simulation"]
+__all__ = ["event_error", "gap_events", "jax_outcome_columns", "outcome_maps", "simulation"]
 
 #: the reference of ``simulate``: ``solve_ivp`` at tight tolerances
 _TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-16)
@@ -159,3 +159,42 @@ def outcome_maps(cfg) -> list[dict]:
             f"{core_rate:.0f}/s on one, {ref_rate:.1f}/s exact"
         )
     return rows
+
+
+def _engine_codes(engine, n, kappa, q, alpha):
+    """Outcome codes (n * n,) of ``engine.run_batch`` on the ``n x n`` outcome map (one initial
+    state per cell) and its wall time [s]."""
+    b1, b2 = dynamics.outcome_grid(n)
+    g0 = dynamics.perturbed_initial_states(b1, b2, alpha, kappa)[:, :, 0].reshape(-1, 4)
+
+    def reference(x1, x2, alpha, k, q, g0):
+        return dynamics.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
+
+    t0 = time.perf_counter()
+    res = engine.run_batch(np.repeat(b1, n), np.tile(b2, n), alpha, (kappa, 1.0), (q, q), g0,
+                           reference=reference)  # fmt: skip
+    return res.code, time.perf_counter() - t0
+
+
+def jax_outcome_columns(rows, cfg) -> None:
+    """With ``cfg["jax_outcome_n"] = n``: the JAX kernel of the same engine
+    (:mod:`atlas.dynamics.jax_engine`) on an ``n x n`` map with the parameters of the first map of
+    :func:`outcome_maps`, in the same run, as columns of that map's row: ``jax_map`` (``n x n``),
+    ``jax_compile_s`` (the first call's wall time less the second's: compiling the batch sizes the
+    map needs, or loading them from the persistent compilation cache), ``jax_per_s`` (the second
+    call), ``fast_per_s_again`` (the NumPy engine on the same map, one core) and ``jax_same``
+    (fraction of cells with the NumPy engine's outcome)."""
+    n = cfg.get("jax_outcome_n")
+    if not n or not rows:
+        return
+    from atlas.dynamics import fast_engine, jax_engine  # noqa: PLC0415 - only with the option
+
+    _, kappa, q, alpha, _ = cfg["outcome_maps"][0]
+    _, first_s = _engine_codes(jax_engine, n, kappa, q, alpha)
+    jx, jax_s = _engine_codes(jax_engine, n, kappa, q, alpha)
+    fast, fast_s = _engine_codes(fast_engine, n, kappa, q, alpha)
+    rows[0].update(jax_map=f"{n}x{n}", jax_compile_s=max(first_s - jax_s, 0.0),
+                   jax_per_s=n * n / jax_s, fast_per_s_again=n * n / fast_s,
+                   jax_same=float(np.mean(jx == fast)))  # fmt: skip
+    log(f"outcome map {rows[0]['map']} at {n}x{n}: jax kernel {n * n / jax_s:.0f}/s "
+        f"(compiled in {first_s - jax_s:.0f} s), numpy {n * n / fast_s:.0f}/s")  # fmt: skip

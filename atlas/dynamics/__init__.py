@@ -2,7 +2,8 @@
 batched JAX engine, outcome classification and outcome maps (paper Sec. 5, Fig. 2).
 
 Modules: :mod:`~atlas.dynamics.system` (modes, matrices, enumerations), :mod:`~atlas.dynamics.simulator`
-(NumPy engine), :mod:`~atlas.dynamics.jax_engine` (batched JAX engine),
+(NumPy engine), :mod:`~atlas.dynamics.fast_engine` (batched event-to-event outcome engine) and
+:mod:`~atlas.dynamics.jax_engine` (the same as a JAX kernel),
 :mod:`~atlas.dynamics.classification`, :mod:`~atlas.dynamics.reference` (solve_ivp cross-check),
 :mod:`~atlas.dynamics.outcome` (Fig. 2 cases, subclasses, initial states),
 :mod:`~atlas.dynamics.outcomes` (outcome atlases beside the theory verdicts; chooses the engine),

@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "xp_of",
+    "take",
     "NEUTRAL",
     "sum4",
     "re_sum4",
@@ -31,10 +33,30 @@ __all__ = [
 NEUTRAL = 1e-9
 
 
+def xp_of(*arrays):
+    """The array namespace of ``arrays``: :mod:`jax.numpy` if any is a JAX array (or tracer),
+    else :mod:`numpy`; every function here serves both."""
+    for x in arrays:
+        if type(x) is not np.ndarray and type(x).__module__.startswith(("jax", "jaxlib")):
+            import jax.numpy as jnp  # noqa: PLC0415 - NumPy callers load no JAX
+
+            return jnp
+    return np
+
+
+def take(x, j):
+    """``x[..., j]`` for the indices ``j`` (...) of the last axis; on JAX arrays as a masked sum
+    (exact: the other terms are zeros), which compiles lean under ``jax.vmap``."""
+    xp = xp_of(x, j)
+    if xp is np:
+        return np.take_along_axis(x, j[..., None], axis=-1)[..., 0]
+    return xp.where(xp.arange(x.shape[-1]) == j[..., None], x, 0).sum(axis=-1)
+
+
 def sum4(x):
     """``x.sum(axis=-1)`` of a real array, for a last axis of length 4 as elementwise additions
     in NumPy's order (``((x0 + x1) + x2) + x3``): the same values without the cost of a reduction
-    over a short axis."""
+    over a short axis (NumPy or JAX arrays)."""
     if x.shape[-1] != 4:
         return x.sum(axis=-1)
     return ((x[..., 0] + x[..., 1]) + x[..., 2]) + x[..., 3]
@@ -42,7 +64,7 @@ def sum4(x):
 
 def re_sum4(z):
     """``z.sum(axis=-1).real`` of a complex array, for a last axis of length 4 in NumPy's order of
-    a complex sum (``(z0 + z1) + (z2 + z3)``), on the real parts only."""
+    a complex sum (``(z0 + z1) + (z2 + z3)``), on the real parts only (NumPy or JAX arrays)."""
     if z.shape[-1] != 4:
         return z.sum(axis=-1).real
     r = z.real
@@ -52,12 +74,11 @@ def re_sum4(z):
 def evaluate(P, U, lam, tau):
     """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
     polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
-    UE = U * np.exp(lam * tau[:, None])[:, None, :]
+    xp = xp_of(P, U, lam, tau)
+    UE = U * xp.exp(lam * tau[:, None])[:, None, :]
     t1 = tau[:, None]
-    p = np.empty_like(P)
-    p[:, :, 2] = P[:, :, 2]
-    p[:, :, 1] = P[:, :, 1] + 2 * t1 * P[:, :, 2]
-    p[:, :, 0] = P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2])
+    p = xp.stack([P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]),
+                  P[:, :, 1] + 2 * t1 * P[:, :, 2], P[:, :, 2]], axis=2)  # fmt: skip
     lUE = UE * lam[:, None, :]
     d = p[:, :, 0] + re_sum4(UE)
     v = p[:, :, 1] + re_sum4(lUE)
@@ -67,49 +88,53 @@ def evaluate(P, U, lam, tau):
 
 def event_functions(d, v, acc, k, q):
     """``f = (d1, d2, phi1, phi2)`` and ``f'`` (n, 4), ``phi_i = -k_i d_i - q_i d_i'``."""
-    f = np.concatenate([d, -k * d - q * v], axis=1)
-    fp = np.concatenate([v, -k * v - q * acc], axis=1)
+    xp = xp_of(d, v, k, q)
+    f = xp.concatenate([d, -k * d - q * v], axis=1)
+    fp = xp.concatenate([v, -k * v - q * acc], axis=1)
     return f, fp
 
 
 def curvature_bound(p, UE, lam, H, k, q):
     """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
-    lr = np.abs(lam)
-    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = np.abs(UE) * grow
-    m2 = 2 * np.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
+    xp = xp_of(p, UE, lam, H)
+    lr = xp.abs(lam)
+    grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = xp.abs(UE) * grow
+    m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
     m3 = sum4(a * lr[:, None, :] ** 3)
-    return np.concatenate([m2, k * m2 + q * m3], axis=1)
+    return xp.concatenate([m2, k * m2 + q * m3], axis=1)
 
 
 def flat_step(s, p, UE, lam, H, k, q):
     """``sigma_lo`` (n, 4) of functions with ``f = f' = 0``: ``s f >= C x^2 / 2 - M3 x^3 / 6``
     with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
     ``C > 0``)."""
-    lr = np.abs(lam)[:, None, :]
-    grow = np.exp(np.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = np.abs(UE) * grow
+    xp = xp_of(s, p, UE, lam)
+    lr = xp.abs(lam)[:, None, :]
+    grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
+    a = xp.abs(UE) * grow
     d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
     d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
     m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
-    C = s * np.concatenate([d2, -k * d2 - q * d3], axis=1)
-    M3 = np.maximum(np.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
-    return np.where(C > 0, 3 * C / M3, 0.0)
+    C = s * xp.concatenate([d2, -k * d2 - q * d3], axis=1)
+    M3 = xp.maximum(xp.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
+    return xp.where(C > 0, 3 * C / M3, 0.0)
 
 
 def safe_steps(A, Bd, M):
     """Roots ``sigma_lo`` of ``A + Bd s - M s^2 / 2`` and ``sigma_hi`` of ``A + Bd s + M s^2 / 2``
     (first positive; ``inf`` if none) for ``A >= 0``: no sign change of ``f`` before ``sigma_lo``,
     one by ``sigma_hi``."""
-    M = np.maximum(M, 1e-300)
+    xp = xp_of(A, Bd, M)
+    M = xp.maximum(M, 1e-300)
     with np.errstate(all="ignore"):
-        root = np.sqrt(Bd * Bd + 2 * M * A)
-        lo = np.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
+        root = xp.sqrt(Bd * Bd + 2 * M * A)
+        lo = xp.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
         disc = Bd * Bd - 2 * M * A
-        hi = np.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + np.sqrt(np.maximum(disc, 0.0))),
+        hi = xp.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + xp.sqrt(xp.maximum(disc, 0.0))),
                       np.inf)  # fmt: skip
-    lo = np.where(np.isnan(lo), 0.0, lo)
-    hi = np.where(np.isnan(hi), 0.0, hi)
+    lo = xp.where(xp.isnan(lo), 0.0, lo)
+    hi = xp.where(xp.isnan(hi), 0.0, hi)
     return lo, hi
 
 
@@ -118,14 +143,15 @@ def safe_steps(A, Bd, M):
 
 def positive_quadratic(a0, a1, a2, horizon):
     """``a0 + a1 s + a2 s^2 > 0`` for all ``s`` in ``[0, horizon]`` (``horizon`` may be inf)."""
-    at_end = np.where(
-        np.isinf(horizon),
+    xp = xp_of(a0, a1, a2, horizon)
+    at_end = xp.where(
+        xp.isinf(horizon),
         (a2 > 0) | ((a2 == 0) & (a1 >= 0)),
         a0 + a1 * horizon + a2 * horizon**2 > 0,
     )
-    vertex = -a1 / (2 * np.where(a2 > 0, a2, 1.0))
+    vertex = -a1 / (2 * xp.where(a2 > 0, a2, 1.0))
     inside = (a2 > 0) & (a1 < 0) & (vertex < horizon)
-    at_vertex = a0 - a1 * a1 / (4 * np.where(a2 > 0, a2, 1.0)) > 0
+    at_vertex = a0 - a1 * a1 / (4 * xp.where(a2 > 0, a2, 1.0)) > 0
     return (a0 > 0) & at_end & (~inside | at_vertex)
 
 
@@ -145,21 +171,21 @@ def keeps_sign(c, w, lam, valid, horizon):
 
 
 def keeps_sign_bound(c, w, lam, valid, horizon):
+    xp = xp_of(c, w, lam, horizon)
     re = lam.real
-    scale = np.abs(lam).max(axis=-1, keepdims=True)
+    scale = xp.abs(lam).max(axis=-1, keepdims=True)
     grow = valid & (re > NEUTRAL * scale)
     any_grow = grow.any(axis=-1)
-    j1 = np.argmax(np.where(grow, re, -np.inf), axis=-1)[..., None]
-    lam1 = np.take_along_axis(lam, j1, axis=-1)[..., 0]
-    w1 = np.take_along_axis(w, j1, axis=-1)[..., 0]
-    l1 = np.where(any_grow, lam1.real, 0.0)
-    real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
-    aw = np.abs(w)
-    others = sum4(np.where(grow, aw, 0.0)) - np.where(any_grow, np.abs(w1), 0.0)
-    G = np.where(any_grow, w1.real - others, 0.0)
-    fac = np.where(re > 0, np.exp(re * horizon[..., None]), 1.0)
-    bounded = sum4(np.where(~grow & (aw > 0), aw * fac, 0.0))
-    margin = 1e-12 * (np.abs(c[..., 0]) + sum4(aw)) + 1e-300
+    j1 = xp.argmax(xp.where(grow, re, -np.inf), axis=-1)
+    lam1, w1 = take(lam, j1), take(w, j1)
+    l1 = xp.where(any_grow, lam1.real, 0.0)
+    real1 = xp.abs(lam1.imag) <= 1e-12 * xp.abs(lam1)
+    aw = xp.abs(w)
+    others = sum4(xp.where(grow, aw, 0.0)) - xp.where(any_grow, xp.abs(w1), 0.0)
+    G = xp.where(any_grow, w1.real - others, 0.0)
+    fac = xp.where(re > 0, xp.exp(re * horizon[..., None]), 1.0)
+    bounded = sum4(xp.where(~grow & (aw > 0), aw * fac, 0.0))
+    margin = 1e-12 * (xp.abs(c[..., 0]) + sum4(aw)) + 1e-300
     a0 = c[..., 0] + G - bounded - margin
     a1 = c[..., 1] + G * l1
     a2 = c[..., 2] + 0.5 * G * l1 * l1
@@ -171,18 +197,19 @@ def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
     """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
     in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
     bounded (n, 4), lam_1 (n,))``."""
+    xp = xp_of(s, p, UE, lam)
     kk, qq = k[:, :, None], q[:, :, None]
-    c = np.concatenate([p, np.stack(
+    c = xp.concatenate([p, xp.stack(
         [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
          -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
          -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
-    w = np.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+    w = xp.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
     sj = s[:, :, None]
     ok, G, bounded, l1 = keeps_sign(
-        sj * c, sj * w, lam[:, None, :], valid[:, None, :], np.repeat(horizon[:, None], 4, 1)
+        sj * c, sj * w, lam[:, None, :], valid[:, None, :], xp.repeat(horizon[:, None], 4, 1)
     )
-    monitored = np.concatenate([np.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
-    return np.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
+    monitored = xp.concatenate([xp.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
+    return xp.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
 
 
 # ----------------------------------------------------------------------------- batch

@@ -242,32 +242,42 @@ def _segments(lanes: Lanes, tables, ix, mask, g):
         lx = ix[sel]
         gs = g[sel]
         lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
-        idx = [i for i in range(2) if m >> i & 1]
-        free = [i for i in range(2) if not m >> i & 1]
-        if not idx:  # FF: d'' = -a
-            P[sel, :, 0], P[sel, :, 1], P[sel, :, 2] = gs[:, :2], gs[:, 2:], -0.5 * lanes.a[lx]
-            continue
-        na = 2 * len(idx)
-        d_eq = tab.d_eq[lx]
-        x0 = np.concatenate([gs[:, idx] - d_eq[:, idx], gs[:, [i + 2 for i in idx]]], axis=1)
-        c = np.einsum("nij,nj->ni", tab.W[lx], x0)
-        V = tab.V[lx]
-        for r, i in enumerate(idx):
-            P[sel, i, 0] = d_eq[:, i]
-            U[sel, i, :na] = V[:, r, :] * c
-        for j in free:  # one active contact i: d_j'' = B_ji phi_i - a_j, integrated twice
-            i = idx[0]
-            k, q = lanes.k[lx, i], lanes.q[lx, i]
-            w = -(k[:, None] * V[:, 0, :] + q[:, None] * V[:, 1, :]) * c  # phi_i modal terms
-            Bji = lanes.B[lx, j, i]
-            Wm = Bji[:, None] * w
-            lm = tab.lam[lx, :na]
-            acc0 = -Bji * k * d_eq[:, i] - lanes.a[lx, j]
-            P[sel, j, 0] = gs[:, j] - np.sum(Wm / lm**2, axis=1).real
-            P[sel, j, 1] = gs[:, j + 2] - np.sum(Wm / lm, axis=1).real
-            P[sel, j, 2] = 0.5 * acc0
-            U[sel, j, :na] = Wm / lm**2
+        V, W = (tab.V[lx], tab.W[lx]) if m else (None, None)
+        P[sel], U[sel] = _segment(m, gs, tab.d_eq[lx], V, W, tab.lam[lx], lanes.B[lx],
+                                  lanes.a[lx], lanes.k[lx], lanes.q[lx])  # fmt: skip
     return P, U, lam, valid, H, ok
+
+
+def _segment(m, g, d_eq, V, W, lam, B, a, k, q):
+    """Closed form (``P`` (n, 2, 3), ``U`` (n, 2, 4)) of segments in configuration ``m`` (an
+    int) from the states ``g`` (n, 4): equilibria ``d_eq`` (n, 2), eigenvectors ``V`` and their
+    inverse ``W`` (n, na, na), eigenvalues ``lam`` (n, 4); NumPy or JAX arrays."""
+    xp = eb.xp_of(g, d_eq, lam, B)
+    idx = [i for i in range(2) if m >> i & 1]
+    n = g.shape[0]
+    if not idx:  # FF: d'' = -a
+        P = xp.stack([g[:, :2], g[:, 2:], -0.5 * a], axis=2)
+        return P, xp.zeros((n, 2, 4), dtype=complex)
+    c = _modal_coords(m, g, d_eq, W)[1]
+    Ua = V[:, : len(idx), :] * c[:, None, :]  # the active gaps' modal terms (n, len(idx), na)
+    if len(idx) == 2:
+        zero = xp.zeros_like(d_eq)
+        return xp.stack([d_eq, zero, zero], axis=2), Ua
+    # one active contact i, a free gap j: d_j'' = B_ji phi_i - a_j, integrated twice
+    i, j = idx[0], 1 - idx[0]
+    w = -(k[:, i, None] * V[:, 0, :] + q[:, i, None] * V[:, 1, :]) * c  # phi_i modal terms
+    Bji = B[:, j, i]
+    Wm = Bji[:, None] * w
+    lm = lam[:, :2]
+    Uj = Wm / lm**2
+    acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
+    zero = xp.zeros((n,))
+    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
+    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
+                   0.5 * acc0], axis=1)  # fmt: skip
+    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
+    U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
+    return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
 
 
 _OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
@@ -308,6 +318,40 @@ class _State:
             scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)), imp=[],
         )  # fmt: skip
 
+    def impact_stats(self, n, fr, fc, v_fly):
+        """:func:`_impact_stats` of the stopped lanes ``n`` from the logged impacts and the
+        gaps in free flight falling back (rows ``fr``, contacts ``fc``, speeds ``v_fly``),
+        dated at the stop."""
+        lane, t_i, v_i, c_i = _impacts_of(self, n)
+        pos = np.full(self.t.size, -1)
+        pos[n] = np.arange(n.size)
+        T = self.t[n]
+        row = np.concatenate([pos[lane], fr])
+        t_i = np.concatenate([t_i, T[fr]])
+        return _impact_stats(
+            row, t_i, np.concatenate([v_i, v_fly]), np.concatenate([c_i, fc + 1]), T
+        )
+
+
+def _impact_stats(row, t_i, v_i, c_i, T):
+    """Impact statistics of :func:`_classify_many` for ``m = T.size`` lanes from impacts at
+    rows ``row`` (times ``t_i``, speeds ``v_i``, contacts ``c_i`` 1 or 2): ``count``, ``n_mid``,
+    ``n_late`` (in ``[T/3, 2T/3)``, ``[2T/3, T]``), the largest speeds ``m2``, ``m3`` there,
+    ``t_first``, ``t_last`` and ``bouncing`` (m, 2) (a contact with a late impact)."""
+    m = T.size
+    Tr = T[row]
+    mid, late = (t_i >= Tr / 3) & (t_i < 2 * Tr / 3), t_i >= 2 * Tr / 3
+    m2, m3, t_last = np.full(m, -np.inf), np.full(m, -np.inf), np.full(m, -np.inf)
+    t_first = np.full(m, np.inf)
+    np.maximum.at(m2, row[mid], v_i[mid])
+    np.maximum.at(m3, row[late], v_i[late])
+    np.maximum.at(t_last, row, t_i)
+    np.minimum.at(t_first, row, t_i)
+    bouncing = np.zeros((m, 2), dtype=bool)
+    bouncing[row[late], c_i[late] - 1] = True
+    n_mid, n_late = np.bincount(row[mid], minlength=m), np.bincount(row[late], minlength=m)
+    return np.bincount(row, minlength=m), n_mid, n_late, m2, m3, t_first, t_last, bouncing
+
 
 def _mask_of(s):
     return ((s[:, 0] < 0) & (s[:, 2] > 0)).astype(int) | (
@@ -319,12 +363,13 @@ def _switch(s, cross, f, fp, k, scale):
     """New signs after the crossings ``cross`` (n, 4) at the event values ``f``, derivatives
     ``fp`` (pre-event configuration), as :func:`atlas.dynamics.simulate`; returns
     ``(s_new, closing (n, 2), n_events (n,))``."""
-    sn = np.where(cross, -s, s)
+    xp = eb.xp_of(s, cross, f)
+    sn = xp.where(cross, -s, s)
     closing = cross[:, :2] & (sn[:, :2] < 0)
     opening = cross[:, :2] & (sn[:, :2] > 0)
-    force = np.where(np.abs(f[:, 2:]) > 1e-9 * np.abs(k * scale[:, None]), f[:, 2:], fp[:, 2:])
-    sn[:, 2:] = np.where(closing, np.where(force > 0, 1.0, -1.0), sn[:, 2:])
-    sn[:, 2:] = np.where(opening, -1.0, sn[:, 2:])
+    force = xp.where(xp.abs(f[:, 2:]) > 1e-9 * xp.abs(k * scale[:, None]), f[:, 2:], fp[:, 2:])
+    sf = xp.where(opening, -1.0, xp.where(closing, xp.where(force > 0, 1.0, -1.0), sn[:, 2:]))
+    sn = xp.concatenate([sn[:, :2], sf], axis=1)
     # a force crossing while its gap stays open is no event (as in the reference)
     force_ev = cross[:, 2:] & ~((sn[:, :2] > 0) & ~closing & ~opening)
     n_ev = closing.sum(axis=1) + opening.sum(axis=1) + force_ev.sum(axis=1)
@@ -332,7 +377,8 @@ def _switch(s, cross, f, fp, k, scale):
 
 
 def _bins(t, width, nbins):
-    return np.minimum(np.maximum(np.ceil(t / width).astype(int) - 1, 0), nbins - 1)
+    xp = eb.xp_of(t)
+    return xp.minimum(xp.maximum(xp.ceil(t / width).astype(int) - 1, 0), nbins - 1)
 
 
 def _admit(lanes, tables, st: _State, ix, fallback):
@@ -495,7 +541,8 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     root, so the far end of the bracket closes in too, and a push that does not cross is followed
     by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
     the bracket ``(a, b)`` (relative to ``tau``)."""
-    rows = np.arange(j.size)
+    xp = eb.xp_of(P, U, lam, tau, a)
+    rows = xp.arange(j.size)
     i = j % 2
     gap = j < 2
     Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
@@ -504,36 +551,37 @@ def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
 
     def g(x):
         t = tau + x
-        ue = Ui * np.exp(lam * t[:, None])
+        ue = Ui * xp.exp(lam * t[:, None])
         lue = ue * lam
         d = p0 + t * (p1 + t * p2) + eb.re_sum4(ue)
         v = p1 + 2 * t * p2 + eb.re_sum4(lue)
         acc = 2 * p2 + eb.re_sum4(lue * lam)
-        f = np.where(gap, d, -ki * d - qi * v)
-        fp = np.where(gap, v, -ki * v - qi * acc)
+        f = xp.where(gap, d, -ki * d - qi * v)
+        fp = xp.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
 
-    x, (gx, gpx) = a, g(a)
-    dx = 2 * (b - a)  # the last step
-    failed = np.zeros(j.size, dtype=bool)  # the last push did not cross
-    for _ in range(max_iter):
+    def newton(_, carry):
+        x, gx, gpx, a, b, dx, failed = carry
         act = (b - a) > xtol
-        if not act.any():
-            break
         with np.errstate(all="ignore"):
             step = -gx / gpx
-        toward = np.where(gx > 0, 0.5, -0.5) * xtol
-        push = np.abs(step) < 0.5 * xtol
-        xn = np.where(push, x + toward, x + step)
-        bad = ~np.isfinite(xn) | (xn <= a) | (xn >= b) | (np.abs(step) > 0.5 * np.abs(dx)) | failed
-        xn = np.where(bad, 0.5 * (a + b), xn)
+        toward = xp.where(gx > 0, 0.5, -0.5) * xtol
+        push = xp.abs(step) < 0.5 * xtol
+        xn = xp.where(push, x + toward, x + step)
+        bad = ~xp.isfinite(xn) | (xn <= a) | (xn >= b) | (xp.abs(step) > 0.5 * xp.abs(dx)) | failed
+        xn = xp.where(bad, 0.5 * (a + b), xn)
         gn, gpn = g(xn)
         left = gn > 0
         failed = act & push & ~bad & (left == (gx > 0))
-        dx = np.where(act, xn - x, dx)
-        a = np.where(act & left, xn, a)
-        b = np.where(act & ~left, xn, b)
-        x, gx, gpx = (np.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+        dx = xp.where(act, xn - x, dx)
+        a = xp.where(act & left, xn, a)
+        b = xp.where(act & ~left, xn, b)
+        x, gx, gpx = (xp.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+        return x, gx, gpx, a, b, dx, failed
+
+    # dx: the last step; failed: the last push did not cross
+    carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
+    a, b = _fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
     return a, b
 
 
@@ -550,33 +598,20 @@ def _may_decide(lam, valid, s, p, act, mask, t, T):
     """The conditions of :func:`_decide` other than the certificate: a growing configuration
     with a contact (IWC), or a non-growing one whose free gaps are open and accelerating away
     (settles; a neutral one at most half way through the horizon)."""
-    lscale = np.abs(lam).max(axis=1, keepdims=True)
+    xp = eb.xp_of(lam, s, p)
+    lscale = xp.abs(lam).max(axis=1, keepdims=True)
     growing = (valid & (lam.real > eb.NEUTRAL * lscale)).any(axis=1)
-    neutral = (valid & (np.abs(lam.real) <= eb.NEUTRAL * lscale)).any(axis=1)
-    free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
-    return np.where(growing, mask > 0, free_ok & (~neutral | (t <= 0.5 * T)))
+    neutral = (valid & (xp.abs(lam.real) <= eb.NEUTRAL * lscale)).any(axis=1)
+    free_ok = xp.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
+    return xp.where(growing, mask > 0, free_ok & (~neutral | (t <= 0.5 * T)))
 
 
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
     """The early decisions of the module docstring for lanes ``ix`` (written into ``st.code``,
     ``st.decided_by``)."""
-    re = lam.real
-    lscale = np.abs(lam).max(axis=1, keepdims=True)
-    growing = (valid & (re > eb.NEUTRAL * lscale)).any(axis=1)
-    neutral = (valid & (np.abs(re) <= eb.NEUTRAL * lscale)).any(axis=1)
-    horizon = np.where(neutral, t_max - t, np.inf)
-    neutral &= ~growing
-    cert, G, Bn, l1 = eb.no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
-    free_ok = np.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
-    settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
-    settle &= _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H)
+    settle, iwc, l1 = _decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
     st.code[ix[settle]] = np.array([_OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
-    # time by which -d_i >= G exp(lam_1 s) + (-d_eq_i - bounded) passes 1e3 penetration_limit
-    X = 1e6 * scale[:, None]
-    sig = np.log(np.maximum((X + p[:, :, 0] + Bn[:, :2]) / G[:, :2], 1.0))
-    sig = np.where(act & (G[:, :2] > 0), sig / l1[:, None], np.inf).min(axis=1)
-    iwc = cert & growing & (mask > 0) & (t + sig <= T)
     r = np.flatnonzero(iwc)
     if r.size:
         c = _modal_coordinates(tables, ix[r], mask[r], g[r])
@@ -585,14 +620,53 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     st.decided_by[ix[iwc]] = 2
 
 
+def _decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H):
+    """``(settle, iwc, lam_1)`` (n,): the lanes that settle now, those that are IWC now if also
+    :func:`_aligned_at_stop` (with the dominant real part ``lam_1``); NumPy or JAX arrays."""
+    xp = eb.xp_of(t, p, UE, lam)
+    re = lam.real
+    lscale = xp.abs(lam).max(axis=1, keepdims=True)
+    growing = (valid & (re > eb.NEUTRAL * lscale)).any(axis=1)
+    neutral = (valid & (xp.abs(re) <= eb.NEUTRAL * lscale)).any(axis=1)
+    horizon = xp.where(neutral, t_max - t, np.inf)
+    neutral &= ~growing
+    cert, G, Bn, l1 = eb.no_event_certificate(s, p, UE, lam, valid, k, q, horizon)
+    free_ok = xp.all(act | ((s[:, :2] > 0) & (p[:, :, 2] > 0)), axis=1)
+    settle = cert & ~growing & free_ok & (~neutral | (t <= 0.5 * T))
+    settle &= _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H)
+    # time by which -d_i >= G exp(lam_1 s) + (-d_eq_i - bounded) passes 1e3 penetration_limit
+    X = 1e6 * scale[:, None]
+    with np.errstate(all="ignore"):
+        sig = xp.log(xp.maximum((X + p[:, :, 0] + Bn[:, :2]) / G[:, :2], 1.0))
+        sig = xp.where(act & (G[:, :2] > 0), sig / l1[:, None], np.inf).min(axis=1)
+    iwc = cert & growing & (mask > 0) & (t + sig <= T)
+    return settle, iwc, l1
+
+
+def _fori(n, body, carry, until=None):
+    """``carry = body(i, carry)`` for ``i < n`` (``carry`` a tuple of arrays): a Python loop on
+    NumPy arrays (left as soon as ``until(carry)``, where given), a :func:`jax.lax.fori_loop` on
+    JAX arrays (all ``n`` iterations; ``body`` must leave a finished carry unchanged)."""
+    if eb.xp_of(*carry) is np:
+        for i in range(n):
+            if until is not None and until(carry):
+                break
+            carry = body(i, carry)
+        return carry
+    import jax  # noqa: PLC0415 - NumPy callers load no JAX
+
+    return jax.lax.fori_loop(0, n, body, carry)
+
+
 def _first_reach(c0, c1, c2, limit):
     """First ``s >= 0`` with ``c0 + c1 s + c2 s^2 >= limit`` (``c1, c2 >= 0``; inf if never)."""
+    xp = eb.xp_of(c0, c1, c2, limit)
     c0 = c0 - limit
     with np.errstate(all="ignore"):
-        lin = np.where(c1 > 0, -c0 / c1, np.inf)
-        quad = (-c1 + np.sqrt(c1 * c1 - 4 * c2 * c0)) / (2 * c2)
-        out = np.where(c2 > 0, quad, lin)
-    return np.where(c0 >= 0, 0.0, out)
+        lin = xp.where(c1 > 0, -c0 / c1, np.inf)
+        quad = (-c1 + xp.sqrt(c1 * c1 - 4 * c2 * c0)) / (2 * c2)
+        out = xp.where(c2 > 0, quad, lin)
+    return xp.where(c0 >= 0, 0.0, out)
 
 
 def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
@@ -600,22 +674,23 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     settling test (:func:`atlas.dynamics.simulate`, ``settle_rtol = 1e-6``) provably passes
     within the horizon ``T`` and before a free gap can pass the amplitude limit ``1e4 scale``;
     for a neutral one no free gap can pass that limit within ``T``; in FF no gap is falling."""
-    aw = np.abs(UE)
+    xp = eb.xp_of(p, UE, lam, t)
+    aw = xp.abs(UE)
     amp = 1e4 * scale
     # upper bound of each free gap: |p0| + |p1| s + |p2| s^2 + sum |u|
-    reach = _first_reach(np.abs(p[:, :, 0]) + eb.sum4(aw), np.abs(p[:, :, 1]),
-                         np.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
-    t_amp = np.where(act, np.inf, reach).min(axis=1)
-    omega = np.sqrt(k.max(axis=1))
-    decay = np.where(valid, -lam.real, np.inf).min(axis=1)
-    d_eq = np.where(act, np.abs(p[:, :, 0]), 0.0).max(axis=1)
-    size = (aw * (1 + np.abs(lam) / omega[:, None])[:, None, :]).sum(axis=(1, 2))
+    reach = _first_reach(xp.abs(p[:, :, 0]) + eb.sum4(aw), xp.abs(p[:, :, 1]),
+                         xp.abs(p[:, :, 2]), amp[:, None])  # fmt: skip
+    t_amp = xp.where(act, np.inf, reach).min(axis=1)
+    omega = xp.sqrt(k.max(axis=1))
+    decay = xp.where(valid, -lam.real, np.inf).min(axis=1)
+    d_eq = xp.where(act, xp.abs(p[:, :, 0]), 0.0).max(axis=1)
+    size = (aw * (1 + xp.abs(lam) / omega[:, None])[:, None, :]).sum(axis=(1, 2))
     with np.errstate(all="ignore"):
-        t_set = np.maximum(np.log(size / (1e-6 * d_eq)), 0.0) / decay + 2 * H
-    t_set = np.where(act.any(axis=1), t_set, 0.0)
+        t_set = xp.maximum(xp.log(size / (1e-6 * d_eq)), 0.0) / decay + 2 * H
+    t_set = xp.where(act.any(axis=1), t_set, 0.0)
     ff_falling = (~act & (p[:, :, 1] < 0)).any(axis=1)
     decaying = ~neutral & (t_set < t_amp) & (t + t_set <= T) & ~ff_falling
-    return np.where(neutral, t_amp > T - t, decaying)
+    return xp.where(neutral, t_amp > T - t, decaying)
 
 
 def _stack(tables, name, ix, mask):
@@ -649,11 +724,17 @@ def _modal_coordinates(tables, ix, mask, g):
         if sel.size == 0:
             continue
         tab, lx = tables[m], ix[sel]
-        idx = [i for i in range(2) if m >> i & 1]
-        x = np.concatenate([g[sel][:, idx] - tab.d_eq[lx][:, idx],
-                            g[sel][:, [i + 2 for i in idx]]], axis=1)  # fmt: skip
-        c[sel, : 2 * len(idx)] = np.einsum("nij,nj->ni", tab.W[lx], x)
+        c[sel, : 2 * (1 + (m == 3))] = _modal_coords(m, g[sel], tab.d_eq[lx], tab.W[lx])[1]
     return c
+
+
+def _modal_coords(m, g, d_eq, W):
+    """Deviation ``x`` of the active gaps and velocities from the equilibrium and its
+    coordinates ``c = W x`` (n, na) in configuration ``m`` (1, 2, 3); NumPy or JAX arrays."""
+    xp = eb.xp_of(g, d_eq, W)
+    idx = [i for i in range(2) if m >> i & 1]
+    x = xp.concatenate([g[:, idx] - d_eq[:, idx], g[:, [i + 2 for i in idx]]], axis=1)
+    return x, xp.einsum("nij,nj->ni", W, x)
 
 
 def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
@@ -663,33 +744,33 @@ def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     deviation (:func:`atlas.dynamics.classify`'s ``align_tol``): ``sum_other |c_m| exp(Re lam_m
     s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
     largest real part."""
-    re = np.where(valid, lam.real, -np.inf)
-    j1 = np.argmax(re, axis=1)
-    rows = np.arange(c.shape[0])
-    dom = np.abs(c[rows, j1])
-    others = valid.copy()
-    others[rows, j1] = False
-    strict = np.all(~others | (re < l1[:, None]), axis=1)
+    xp = eb.xp_of(c, p, UE, lam)
+    re = xp.where(valid, lam.real, -np.inf)
+    j1 = xp.argmax(re, axis=1)
+    dom = xp.abs(eb.take(c, j1))
+    others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
+    strict = xp.all(~others | (re < l1[:, None]), axis=1)
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
-    aw = np.abs(UE)
-    grow = np.maximum(lam.real, 0.0)
-    a0, a1, a2 = (np.abs(p[:, :, i]) for i in range(3))
+    aw = xp.abs(UE)
+    grow = xp.maximum(lam.real, 0.0)
+    a0, a1, a2 = (xp.abs(p[:, :, i]) for i in range(3))
 
     def bound(x):
-        e = np.exp(grow * x[:, None])[:, None, :]
+        e = xp.exp(grow * x[:, None])[:, None, :]
         b = a0 + a1 * x[:, None] + a2 * x[:, None] ** 2 + eb.sum4(aw * e)
         return b.max(axis=1)
 
-    lo, hi = np.zeros(c.shape[0]), rest.copy()
     lim = 1e4 * scale
-    for _ in range(64):
+
+    def halve(_, lohi):
+        lo, hi = lohi
         mid = 0.5 * (lo + hi)
         above = bound(mid) >= lim
-        hi = np.where(above, mid, hi)
-        lo = np.where(above, lo, mid)
-    s0 = lo
+        return xp.where(above, lo, mid), xp.where(above, mid, hi)
+
+    s0, _ = _fori(64, halve, (xp.zeros(c.shape[0]), rest + 0.0))
     with np.errstate(all="ignore"):
-        off = np.where(others, np.abs(c) * np.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
+        off = xp.where(others, xp.abs(c) * xp.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
     return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
 
 
@@ -803,32 +884,14 @@ def _classify_many(st: _State, tables, n, width) -> np.ndarray:
     settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
     decide(settle, np.array([_OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
     # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T
-    lane, t_i, v_i, c_i = _impacts_of(st, n)
-    pos = np.full(st.t.size, -1)
-    pos[n] = np.arange(m)
-    row = pos[lane]
     fly = (mask == 0)[:, None] & (g[:, :2] > 0) & (acc < 0)
     fr, fc = np.nonzero(fly)
-    row = np.concatenate([row, fr])
-    t_i = np.concatenate([t_i, T[fr]])
-    c_i = np.concatenate([c_i, fc + 1])
-    v_i = np.concatenate([v_i, np.sqrt(g[fr, fc + 2] ** 2 + 2 * np.abs(acc[fr, fc]) * g[fr, fc])])
-    count = np.bincount(row, minlength=m)
+    v_fly = np.sqrt(g[fr, fc + 2] ** 2 + 2 * np.abs(acc[fr, fc]) * g[fr, fc])
+    count, n_mid, n_late, m2, m3, t_first, t_last, bouncing = st.impact_stats(n, fr, fc, v_fly)
     in_flight = np.any(~act & (acc < 0), axis=1)
     decide(diverged & (count >= 3) & ((last >= 0.8 * T) | in_flight),
            int(Outcome.GROWING_BOUNCING))  # fmt: skip
     decide(diverged | (count < 6), int(Outcome.UNDETERMINED))
-    Tr = T[row]
-    mid, late = (t_i >= Tr / 3) & (t_i < 2 * Tr / 3), t_i >= 2 * Tr / 3
-    m2, m3, t_last = np.full(m, -np.inf), np.full(m, -np.inf), np.full(m, -np.inf)
-    t_first = np.full(m, np.inf)
-    np.maximum.at(m2, row[mid], v_i[mid])
-    np.maximum.at(m3, row[late], v_i[late])
-    np.maximum.at(t_last, row, t_i)
-    np.minimum.at(t_first, row, t_i)
-    bouncing = np.zeros((m, 2), dtype=bool)
-    bouncing[row[late], c_i[late] - 1] = True
-    n_mid, n_late = np.bincount(row[mid], minlength=m), np.bincount(row[late], minlength=m)
     decide((n_mid == 0) | (n_late == 0), int(Outcome.UNDETERMINED))
     decide(m3 > 1.25 * m2, int(Outcome.GROWING_BOUNCING))
     amp = _late_amplitude(st, n, width)
@@ -884,7 +947,7 @@ class FastResult:
 
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
-              reference=None, pool=None) -> FastResult:  # fmt: skip
+              reference=None, pool=None, rounds=None) -> FastResult:  # fmt: skip
     """Outcomes of ``N`` trajectories (parameters broadcast to ``(N,)``, ``g0`` (N, 4)) with the
     classification and horizon extension of :func:`atlas.dynamics.simulate_outcome`.
 
@@ -892,15 +955,17 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     for the fallback lanes: :func:`atlas.dynamics.simulate_outcome` with the same ``t_end``,
     ``horizon_cap`` and ``max_events`` (returns ``(Outcome, result)``).  ``pool``: a
     :class:`atlas.dynamics.lane_pool.LanePool` that runs the lanes on several processes (the same
-    result bit for bit; the fallback lanes run here).
+    result bit for bit; the fallback lanes run here).  ``rounds``: see :func:`run_lanes`.
     """
     g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
     n = g0.shape[0]
+    if any(np.size(x) not in (1, n) for x in (beta1, beta2, alpha)):
+        raise ValueError(f"g0 must have one row per trajectory, got {n}")
     b1, b2, al = (np.broadcast_to(np.asarray(x, dtype=float).ravel(), (n,)).copy()
                   for x in (beta1, beta2, alpha))  # fmt: skip
     kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
     qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
-    opts = dict(t_end=t_end, horizon_cap=horizon_cap, max_events=max_events)
+    opts = dict(t_end=t_end, horizon_cap=horizon_cap, max_events=max_events, rounds=rounds)
     arrays = (b1, b2, al, kk, qq, g0)
     if pool is None:
         res = run_lanes(*arrays, **opts)
@@ -912,20 +977,36 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     return res
 
 
-def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0,
-              max_events=2000) -> FastResult:  # fmt: skip
+def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
+              rounds=None) -> FastResult:  # fmt: skip
     """:func:`run_batch` without the exact simulator: the lanes it would run have
-    ``decided_by`` ``fallback`` and ``code`` -1 (parameters ``(N,)``, ``k``, ``q`` (N, 2))."""
+    ``decided_by`` ``fallback`` and ``code`` -1 (parameters ``(N,)``, ``k``, ``q`` (N, 2)).
+
+    ``rounds``: ``(start, run_round)``, the state's constructor and a stepper run on the lanes
+    ``ix`` until each stops (``run_round(lanes, tables, st, ix, t_max, max_events, width,
+    fallback)``), after which the stopped lanes are classified and those given a longer horizon
+    run again (:func:`_classify_stopped`); how :mod:`atlas.dynamics.jax_engine` runs its kernel.
+    Default: this module's stepping, where those lanes rejoin the running batch
+    (:func:`_run_lanes`)."""
     lanes = Lanes.of(beta1, beta2, alpha, k, q)
     if lanes.a.shape[0] != g0.shape[0]:
         raise ValueError(f"g0 must have one row per trajectory, got {g0.shape[0]}")
     tables = modal_tables(lanes)
     width = t_end / 3.0
     nbins = int(math.ceil(3 * horizon_cap)) + 1
-    st = _State.start(lanes, g0, t_end, nbins)
+    start, run_round = rounds or (_State.start, None)
+    st = start(lanes, g0, t_end, nbins)
     fallback = np.zeros(g0.shape[0], dtype=bool)
+    t_max = horizon_cap * t_end
     with np.errstate(all="ignore"):
-        _run_lanes(lanes, tables, st, horizon_cap * t_end, max_events, width, fallback)
+        if rounds is None:
+            _run_lanes(lanes, tables, st, t_max, max_events, width, fallback)
+        else:
+            ix = np.arange(g0.shape[0])
+            while ix.size:
+                run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
+                ix = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
+                ix = _classify_stopped(st, tables, ix, width, t_max)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
     return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)

@@ -1,385 +1,368 @@
-"""Batched event-driven simulator in JAX: the stepper of :func:`atlas.dynamics.simulate` as a pure
-``lax.while_loop``, ``jit``-compiled and ``vmap``-ped over parameters and initial conditions.
+"""The event-to-event outcome engine of :mod:`atlas.dynamics.fast_engine` as a JAX kernel (paper
+Sec. 4.1, eqs. 1, 6-8), ready for an accelerator.
 
-Same arithmetic as the NumPy simulator (paper eqs. 1, 6-8; :mod:`atlas.dynamics`): per contact
-configuration ``S`` the state ``z = (d1, d2, d1', d2', 1)`` obeys ``z' = E_S z``; sub-steps
-``h_S = theta / rho_S`` advance it exactly with ``expm(E_S h_S)`` (precomputed on the host, one per
-mode and trajectory); the last partial step and all event locations use the degree-30 Taylor
-polynomial of ``expm(E_S tau) z``.  Event detection per sub-step, for the gaps ``d_i`` and (while
-``d_i <= 0``) the forces ``phi_i = -k_i d_i - q_i d_i'``:
+The algorithm is :mod:`atlas.dynamics.fast_engine`'s, step for step, written with the same
+functions: every piece that acts on arrays (segments in closed form, certified brackets
+:mod:`atlas.dynamics.event_bounds`, the safeguarded Newton root location, the early-decision
+certificates and the reference's stops, the sign switch at an event) serves both engines (NumPy or
+JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only the batching:
 
-* a sign change between the ends of the sub-step, or a sign change of the derivative with the
-  function's value at the extremum (located by bisection of the derivative polynomial) of the
-  opposite sign -- the double crossing inside one sub-step;
-* the crossing is then located by *bisection* on the bracket (64 halvings: the bracket shrinks to
-  ``h 2^-64``, below the NumPy simulator's Brent tolerance ``1e-13 h``), so no crossing is skipped
-  and the located root is certified to lie in the final bracket.
+* Per lane a :func:`jax.lax.while_loop` from event to event (:func:`_step`), ``vmap``-ped over the
+  lanes and ``jit``-compiled once per batch size.  Everything inside is fixed-size: the root
+  location takes its ``_ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
+  closed form of a new segment is evaluated in all four configurations and selected.
+* The modal forms (``numpy.linalg.eig`` of each configuration, its inverse, equilibria, step caps;
+  :func:`atlas.dynamics.fast_engine.modal_tables`) are computed on the host once per trajectory
+  and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The early IWC stop of the
+  reference (an active gap past ``1e3`` penetration limits, aligned with an unstable eigenvector)
+  expands the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the
+  same test on the same basis, rounding aside).
+* Lanes that finish leave the batch between kernel calls of at most ``steps`` steps each (the host
+  gathers the running lanes into the next call), so the slowest trajectory does not set the cost
+  of all.
+* Impacts are kept as per-bin statistics (bins of ``t_end / 3``: count, largest speed, contacts),
+  which give :func:`atlas.dynamics.classify`'s thirds exactly for runs stopped at their horizon
+  (``t_end 2^j``, always a bin boundary).  Runs that reach the event cap stop at an arbitrary time:
+  they are run by the exact simulator on the host, as are the fallback lanes of the NumPy engine
+  (near-singular modal forms, a stalled root location).
 
-Differences from :func:`atlas.dynamics.simulate` (documented, tested): the ``"diverged"`` stop uses
-the amplitude bounds only (``d_i > amplitude_limit`` or ``d_i < -1e3 penetration_limit``; the
-NumPy simulator also stops earlier when an active gap passes ``-penetration_limit`` along an
-impact-without-collision eigenvector, which :func:`atlas.dynamics.classify` tests on the final
-state either way); the event log is a fixed buffer of ``max_events + 4`` rows.
+Classification of the stopped runs and the horizon extension are the NumPy engine's
+(:func:`atlas.dynamics.fast_engine.run_batch`, on the host).
+
+Behind ``atlas simulate --engine jax`` (it replaces the engine of degree-30 Taylor sub-steps: the
+same outcomes, far faster).  Outcomes equal the NumPy engine's cell by cell up to rounding: the
+floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
+across the ``1e-12 H`` tolerance; on a 128^2 map one cell of 16384 differed, where an impact and
+the amplitude-limit stop coincide within ``2e-12``.  On a 2-core CPU the NumPy engine stays the
+default (``--engine fast``): after 75-85 s of compilation (three batch sizes) the kernel ran 2.8x
+(64^2) to 6.8x (128^2) slower in the same run, since every lane of a batch does each step's whole
+work where NumPy does each piece only for the lanes that need it; the kernel is for accelerators.
+Measured on one call of 64 steps x 512 lanes (CPU, ~23 us per lane and step): the early-decision
+tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %, the
+root location ~4 %.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.dynamics.classification import (
-    TrajectoryStats,
-    classify_stats,
-    impacts,
-    needs_longer_run,
-)
-from atlas.dynamics.system import (
-    FORCE_OFF,
-    FORCE_ON,
-    IMPACT,
-    LIFTOFF,
-    Status,
-    build_system,
-    mask_from_signs,
-    mode_name,
-    run_scale,
-)
+from atlas.dynamics import event_bounds as eb
+from atlas.dynamics import fast_engine as fe
+from atlas.dynamics.system import Outcome, aligned_in_basis
 
-__all__ = ["simulate_batch", "outcomes", "KIND_CODES"]
+__all__ = ["run_batch", "kernel", "STEPS", "CHUNK", "NBINS"]
 
-#: event kind codes in the buffer
-KIND_CODES = {IMPACT: 0, LIFTOFF: 1, FORCE_ON: 2, FORCE_OFF: 3}
-_RUNNING = -1
-_STATUS = [Status.T_END, Status.EVENT_CAP, Status.DIVERGED, Status.SETTLED, Status.STEP_CAP]
-_N_BISECT = 64
+#: kernel steps per call; lanes that finish leave the batch between calls
+STEPS = 64
+#: bins of the impact and amplitude statistics in a kernel call (at least; ``horizon_cap <= 10``)
+NBINS = 32
+#: largest batch of one kernel call (fewer running lanes go in batches of 512 or 64)
+CHUNK = 4096
+
+_OUTCOME_OF_MASK = np.array([fe._OUTCOME_OF_MASK[m] for m in range(4)], dtype=np.int8)
 
 
-def _system_arrays(sysm) -> dict:
-    """Per-trajectory constant arrays of a :class:`atlas.dynamics.system.System`."""
-    modes = sysm.modes
-    z_eq = np.stack([np.nan_to_num(m.z_eq, nan=0.0) if m.z_eq is not None else np.zeros(5)
-                     for m in modes])  # fmt: skip
-    has_eq = np.array([m.z_eq is not None for m in modes])
-    return {
-        "Phi": np.stack([m.Phi for m in modes]),
-        "P": np.stack([m.P for m in modes]),
-        "h": np.array([m.h for m in modes]),
-        "E": np.stack([m.E for m in modes]),
-        "L": sysm.L,
-        "stable": np.array([m.stable for m in modes]),
-        "z_eq": z_eq,
-        "has_eq": has_eq,
-        "k": sysm.k,
-        "omega": np.float64(sysm.omega),
-    }
+def _pick(table, mask):
+    """Entry ``mask`` (n,) of a per-configuration ``table`` (n, 4, ...)."""
+    return table[jnp.arange(mask.shape[0]), mask]
 
 
-def _horner(W, tau):
-    """``sum_n W[n] tau^n`` for ``W`` of shape (N+1, ...)."""
-
-    acc = W[-1]
-    for n in range(W.shape[0] - 2, -1, -1):  # unrolled: one fused kernel
-        acc = acc * tau + W[n]
-    return acc
+def _select(values, mask):
+    """``values[mask]`` of four per-configuration arrays (n, ...)."""
+    return _pick(jnp.stack(values, axis=1), mask)
 
 
-def _bisect(coef, sign0, hi):
-    """First sign change in (0, hi] of the polynomials ``coef`` (4, N+1) with sign ``sign0`` at 0.
-
-    Bisection keeps ``sign0 * p(lo) > 0 >= sign0 * p(hi)``; returns the upper end.
-    """
-
-    def body(_, lohi):
-        lo, up = lohi
-        mid = 0.5 * (lo + up)
-        val = jax.vmap(_horner)(coef, mid)
-        left = sign0 * val <= 0
-        return jnp.where(left, lo, mid), jnp.where(left, mid, up)
-
-    lo = jnp.zeros_like(hi)
-    return jax.lax.fori_loop(0, _N_BISECT, body, (lo, hi), unroll=8)[1]
-
-
-def _mask_of(s):
-    """Mode mask from the recorded signs of ``(d1, d2, phi1, phi2)`` (as ``mask_from_signs``)."""
-    a1 = (s[0] < 0) & (s[2] > 0)
-    a2 = (s[1] < 0) & (s[3] > 0)
-    return a1.astype(jnp.int32) + 2 * a2.astype(jnp.int32)
-
-
-def _settled(arr, settle_rtol, mask, z):
-    """No event can follow (the NumPy simulator's settling test, branch-free)."""
-    E = arr["E"][mask]
-    act = jnp.array([mask & 1, (mask >> 1) & 1]) > 0
-    acc = E[2:4] @ z
-    free_ok = jnp.all(act | ((z[:2] > 0) & (z[2:4] >= 0) & (acc > 0)))
-    zeq = arr["z_eq"][mask]
-    deq = zeq[:2]
-    dev = (
-        jnp.max(jnp.where(act, jnp.abs(z[:2] - deq), 0.0))
-        + jnp.max(jnp.where(act, jnp.abs(z[2:4]), 0.0)) / arr["omega"]
-    )
-    dmax = jnp.max(jnp.where(act, jnp.abs(deq), 0.0))
-    eq_ok = jnp.all(jnp.where(act, deq < 0, True)) & (dev <= settle_rtol * dmax)
-    zs = jnp.where(jnp.concatenate([act, act, jnp.array([False])]),
-                   jnp.concatenate([deq, jnp.zeros(3)]), z)  # fmt: skip
-    acc_s = E[2:4] @ zs
-    free_star = jnp.all(act | (acc_s > 0))
-    ok_eq = (mask == 0) | (arr["has_eq"][mask] & eq_ok & free_star)
-    return arr["stable"][mask] & free_ok & ok_eq
-
-
-def _diverged(z, amp_lim, pen_lim):
-    """The amplitude bounds only (see the module docstring)."""
-    return (
-        (~jnp.all(jnp.isfinite(z))) | (jnp.max(z[:2]) > amp_lim) | (jnp.min(z[:2]) < -1e3 * pen_lim)
-    )
-
-
-def _locate(arr, s, z, t, t_end, mask):
-    """One sub-step from ``(t, z)``: its length ``h``, end state ``z1``, Taylor coefficients ``W``,
-    the event-functional derivatives ``LE``, the first crossing time ``r``, whether there is one
-    and which event functions cross there."""
-    L = arr["L"]
-    h_mode = arr["h"][mask]
-    full = t_end - t >= h_mode
-    h = jnp.where(full, h_mode, t_end - t)
-    W = jnp.einsum("nij,j->ni", arr["P"][mask], z)  # Taylor coefficients of z(tau)
-    z1 = jnp.where(full, arr["Phi"][mask] @ z, _horner(W, h))
-    z1 = z1.at[4].set(1.0)
-    LE = L @ arr["E"][mask]
-    f1 = L @ z1
-    fp0 = LE @ z
-    fp1 = LE @ z1
-    monitored = jnp.array([True, True, s[0] < 0, s[1] < 0])
-    cj = W @ L.T  # (N+1, 4) value polynomials
-    cj = cj.T  # (4, N+1)
-    dcj = cj[:, 1:] * jnp.arange(1, cj.shape[1])  # derivative polynomials
-    dcj = jnp.concatenate([dcj, jnp.zeros((4, 1))], axis=1)
-    end_cross = s * f1 < 0
-    ext = (s * fp0 < 0) & (s * fp1 > 0) & ~end_cross
-    hv = jnp.full(4, h)
-    tau_e = _bisect(dcj, jnp.sign(fp0), hv)
-    val_e = jax.vmap(_horner)(cj, tau_e)
-    dip = ext & (s * val_e < 0)
-    bracket = monitored & (end_cross | dip)
-    hi = jnp.where(end_cross, h, tau_e)
-    roots = _bisect(cj, s, jnp.where(bracket, hi, h))
-    roots = jnp.where(bracket, roots, jnp.inf)
-    r = jnp.min(roots)
-    any_ev = jnp.any(bracket)
-    xtol = 1e-13 * h_mode
-    crossing = bracket & (roots <= r + 1e3 * xtol)
-    return h, z1, W, LE, r, any_ev, crossing
-
-
-def _switch(arr, LE, z_e, s, crossing, scale):
-    """New signs after the crossings at the event state ``z_e`` and the event rows
-    ``[(recorded, kind code, contact)]`` (the NumPy simulator's rule)."""
-    k = arr["k"]
-    dphi = LE @ z_e
-    vals = arr["L"] @ z_e
-    s_new = jnp.where(crossing, -s, s)
-    rows = []
-    for j in range(4):
-        i = j % 2
-        if j < 2:
-            imp = s_new[j] < 0
-            big = jnp.abs(vals[2 + i]) > 1e-9 * jnp.abs(k[i] * scale)
-            fs = jnp.where(big, jnp.sign(vals[2 + i]), jnp.sign(dphi[2 + i]))
-            fs = jnp.where(fs > 0, 1.0, -1.0)
-            s_new = s_new.at[2 + i].set(
-                jnp.where(crossing[j], jnp.where(imp, fs, -1.0), s_new[2 + i])
-            )
-            kind = jnp.where(imp, 0, 1)
-            rec = crossing[j]
-        else:
-            rec = crossing[j] & ~((s_new[i] > 0) & ~crossing[i])
-            kind = jnp.where(s_new[j] > 0, 2, 3)
-        rows.append((rec, kind, i + 1))
-    return s_new, rows
-
-
-def _record(buf, n_ev, rows, t_e, z_e, any_ev):
-    """Scatter the recorded event rows ``(t, kind, contact, g)`` into the buffer."""
-    for rec, kind, cnum in rows:
-        row = jnp.concatenate([jnp.array([t_e, kind, cnum], dtype=z_e.dtype), z_e[:4]])
-        rec = rec & any_ev
-        # scatter one row in place; rows not recorded go out of bounds and are dropped
-        idx = jnp.where(rec & (n_ev < buf.shape[0]), n_ev, buf.shape[0])
-        buf = buf.at[idx].set(row, mode="drop")
-        n_ev = n_ev + rec.astype(jnp.int32)
-    return buf, n_ev
-
-
-def _step_fn(arr, t_end, max_events, max_steps, amp_lim, pen_lim, settle_rtol, scale, nbins):
-    """The ``lax.while_loop`` body: one sub-step, or up to the first event in it."""
-
-    def body(c):
-        t, z, s, n_ev, n_steps, status, buf, amp = c
-        h, z1, W, LE, r, any_ev, crossing = _locate(arr, s, z, t, t_end, _mask_of(s))
-        z_e = _horner(W, jnp.where(any_ev, r, 0.0)).at[4].set(1.0)
-        s_new, rows = _switch(arr, LE, z_e, s, crossing, scale)
-        buf2, n2 = _record(buf, n_ev, rows, t + r, z_e, any_ev)
-        t2 = jnp.where(any_ev, t + r, t + h)
-        z2 = jnp.where(any_ev, z_e, z1)
-        s2 = jnp.where(any_ev, s_new, s)
-        b = jnp.clip(jnp.floor(t2 / t_end * nbins).astype(jnp.int32), 0, nbins - 1)
-        amp2 = amp.at[b].max(jnp.abs(z2[:2]))
-        st = jnp.where(
-            any_ev & (n2 >= max_events),
-            1,
-            jnp.where(
-                _diverged(z2, amp_lim, pen_lim),
-                2,
-                jnp.where(
-                    ~any_ev & _settled(arr, settle_rtol, _mask_of(s2), z2),
-                    3,
-                    jnp.where(t2 >= t_end, 0, jnp.where(n_steps + 1 >= max_steps, 4, _RUNNING)),
-                ),
-            ),
-        )
-        return (t2, z2, s2, n2, n_steps + 1, st, buf2, amp2)
-
-    return body
-
-
-@functools.partial(jax.jit, static_argnames=("max_events", "nbins"))
-def _run(arr, g0, t_end, amp_lim, pen_lim, scale, max_events, max_steps, settle_rtol, nbins):
-    def one(arr, g0, t_end, amp_lim, pen_lim, scale):
-        z0 = jnp.concatenate([g0, jnp.ones(1)])
-        s0 = jnp.where(arr["L"] @ z0 > 0, 1.0, -1.0)
-        buf = jnp.zeros((max_events + 4, 7))
-        amp = jnp.zeros((nbins, 2)).at[0].set(jnp.abs(g0[:2]))
-        body = _step_fn(arr, t_end, max_events, max_steps, amp_lim, pen_lim, settle_rtol, scale,
-                        nbins)  # fmt: skip
-        c0 = (jnp.zeros(()), z0, s0, jnp.zeros((), jnp.int32), jnp.zeros((), jnp.int32),
-              jnp.array(_RUNNING), buf, amp)  # fmt: skip
-        return jax.lax.while_loop(lambda c: c[5] == _RUNNING, body, c0)
-
-    return jax.vmap(one)(arr, g0, t_end, amp_lim, pen_lim, scale)
-
-
-def simulate_batch(params, g0, t_end, *, max_events=2000, max_steps=10_000_000, theta=0.5,
-                   settle_rtol=1e-6, nbins=48, chunk=256):  # fmt: skip
-    """Simulate a batch of trajectories with one compiled, ``vmap``-ped ``lax.while_loop``.
-
-    Parameters
-    ----------
-    params : list of dict
-        Keyword arguments of :func:`atlas.dynamics.simulate` per trajectory (``beta1``, ``beta2``,
-        ``alpha``, ``k``, ``q``, optional ``b_norm``, ``a_norm``).
-    g0 : array_like (n, 4)
-        Initial states [1].
-    t_end : float or array_like (n,)
-        Horizons [time].
-    max_events, max_steps, theta, settle_rtol
-        As in :func:`atlas.dynamics.simulate` (status codes in :data:`_STATUS` order).
-    nbins : int
-        Time bins over ``[0, t_end]`` of the recorded ``max |d_i|`` (for :func:`outcomes`).
-    chunk : int
-        Trajectories per compiled call (memory: ``chunk * (max_events + 4) * 7`` floats).
-
-    Returns
-    -------
-    list of dict
-        Per trajectory: ``t_final``, ``g_final``, ``status`` (:class:`atlas.dynamics.Status`),
-        ``t_events``, ``kinds``, ``contacts``, ``states``, ``n_steps``, ``amp_bins`` (nbins, 2),
-        ``system`` (host :class:`atlas.dynamics.system.System`), ``scale``.
-    """
-    g0 = np.asarray(g0, dtype=float).reshape(-1, 4)
-    n = g0.shape[0]
-    t_end = np.broadcast_to(np.asarray(t_end, dtype=float), (n,)).copy()
-    systems = [
-        build_system(p["beta1"], p["beta2"], p["alpha"], p.get("k", (1.0, 1.0)),
-                     p.get("q", (0.0, 0.0)), p.get("b_norm", (1.0, 1.0)), p.get("a_norm", 1.0),
-                     theta)
-        for p in params
-    ]  # fmt: skip
-    arrs = [_system_arrays(sysm) for sysm in systems]
-    scales = np.array([run_scale(systems[m], g0[m]) for m in range(n)])
+def _aligned_now(mask, g, prm, tol):
+    """:func:`atlas.dynamics.system.iwc_aligned_many` of the states ``g`` (n, 4) on the modal
+    tables (n,)."""
     out = []
-    size = min(chunk, n)
-    for a in range(0, n, size):
-        sl = slice(a, min(a + size, n))
-        pad = size - (sl.stop - sl.start)  # pad with copies of the first run: one compiled shape
-        idx = list(range(sl.start, sl.stop)) + [sl.start] * pad
-        arr = {key: jnp.asarray(np.stack([arrs[i][key] for i in idx])) for key in arrs[0]}
-        res = _run(arr, jnp.asarray(g0[idx]), jnp.asarray(t_end[idx]),
-                   jnp.asarray(1e4 * scales[idx]), jnp.asarray(1e3 * scales[idx]),
-                   jnp.asarray(scales[idx]), max_events, max_steps, settle_rtol, nbins)  # fmt: skip
-        res = [np.asarray(x) for x in res]
-        for r, m in enumerate(range(sl.start, sl.stop)):
-            out.append(_unpack(res, r, t_end[m] / nbins, systems[m], scales[m]))
-    return out
+    for m in (1, 2, 3):
+        idx = [i for i in range(2) if m >> i & 1]
+        sub = idx + [i + 2 for i in idx]
+        signs = jnp.all(g[:, sub] < 0, axis=1)
+        for i in (i for i in range(2) if not m >> i & 1):
+            signs &= (g[:, i] >= 0) & (g[:, i + 2] >= 0)
+        x, c = fe._modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])
+        lam = prm["lam"][:, m, : 2 * len(idx)]
+        out.append(signs & aligned_in_basis(lam, prm[f"V{m}"], c, x, len(idx), tol))
+    return _select([jnp.zeros_like(out[0])] + out, mask)
 
 
-_KIND_OF_CODE = {v: kk for kk, v in KIND_CODES.items()}
+def _coords(mask, g, prm):
+    """:func:`atlas.dynamics.fast_engine._modal_coordinates` (n, 4) on the modal tables."""
+    out = [jnp.zeros((g.shape[0], 4), dtype=complex)]
+    for m in (1, 2, 3):
+        c = fe._modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])[1]
+        out.append(jnp.concatenate([c, jnp.zeros((g.shape[0], 4 - c.shape[1]), complex)], 1))
+    return _select(out, mask)
 
 
-def _unpack(res, r, bin_width, sysm, scale) -> dict:
-    """Row ``r`` of a :func:`_run` result as the dict of :func:`simulate_batch`."""
-    t, z, sg, n_ev, n_steps, status, buf, amp = res
-    b = buf[r, : min(int(n_ev[r]), buf.shape[1])]
+def _segments(g, prm):
+    """Closed form ``(P, U)`` of segments from ``g`` (n, 4) in each of the four configurations."""
+    out = []
+    for m in range(4):
+        V, W = (prm[f"V{m}"], prm[f"W{m}"]) if m else (None, None)
+        out.append(fe._segment(m, g, prm["d_eq"][:, m], V, W, prm["lam"][:, m], prm["B"],
+                               prm["a"], prm["k"], prm["q"]))  # fmt: skip
+    return [o[0] for o in out], [o[1] for o in out]
+
+
+def _bin_max(arr, b, value, on):
+    """``arr[:, b] = max(arr[:, b], value)`` where ``on`` (n,)."""
+    rows = jnp.arange(arr.shape[0])
+    cur = arr[rows, b]
+    on = on.reshape(on.shape + (1,) * (cur.ndim - 1))
+    return arr.at[rows, b].set(jnp.where(on, jnp.maximum(cur, value), cur))
+
+
+def _step(c, prm):
+    """One step of :func:`atlas.dynamics.fast_engine._run_lanes` for the running lanes of
+    ``c`` (the same tests in the same order)."""
+    run, t, s, since, T = c["run"], c["t"], c["s"], c["since"], prm["T"]
+    t_max, max_events, width, nbins = (prm[x] for x in ("t_max", "max_events", "width", "nbins"))
+    k, q, scale = prm["k"], prm["q"], prm["scale"]
+    mask = fe._mask_of(s)
+    lam, valid, H = _pick(prm["lam"], mask), _pick(prm["valid"], mask), _pick(prm["H"], mask)
+    P, U, tseg = c["P"], c["U"], c["tseg"]
+    d, v, acc, p, UE = eb.evaluate(P, U, lam, t - tseg)
+    g = jnp.concatenate([d, v], axis=1)
+    amp = _bin_max(c["amp"], fe._bins(t, width, nbins), jnp.abs(d), run)
+    # stops of the reference: divergence, horizon
+    div = ~jnp.isfinite(g).all(axis=1)
+    div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
+    act = jnp.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    sched = ((since & (since - 1)) == 0) & (since > 0)
+    deep = sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1)
+    div |= deep & _aligned_now(mask, g, prm, 1e-3)
+    status = jnp.where(run & div, 2, jnp.where(run & (t >= T), 0, c["status"]))
+    keep = run & ~div & (t < T)
+    # certified brackets of the monitored event functions
+    f, fp = eb.event_functions(d, v, acc, k, q)
+    M = eb.curvature_bound(p, UE, lam, H, k, q)
+    A, Bd = jnp.maximum(s * f, 0.0), s * fp
+    lo, hi = eb.safe_steps(A, Bd, M)
+    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, H, k, q), lo)
+    mon = jnp.concatenate([jnp.ones_like(act), s[:, :2] < 0], axis=1)
+    lo = jnp.where(mon, jnp.minimum(lo, H[:, None]), np.inf)
+    hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
+    # early decisions
+    tryd = keep & sched & jnp.all(hi > (t_max - t)[:, None], axis=1)
+    tryd &= fe._may_decide(lam, valid, s, p, act, mask, t, T)
+    settle, iwc, l1 = fe._decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
+    iwc &= fe._aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
+    settle &= tryd
+    iwc &= tryd & ~settle
+    code = jnp.where(settle, jnp.asarray(_OUTCOME_OF_MASK)[mask], c["code"])
+    code = jnp.where(iwc, np.int8(Outcome.IWC), code)
+    decided_by = jnp.where(settle, 1, jnp.where(iwc, 2, c["decided_by"])).astype(np.int8)
+    keep &= ~(settle | iwc)
+    # the first crossing: smallest sigma_lo, ties to the tightest bracket
+    m = lo.min(axis=1)
+    tie_hi = jnp.where(lo <= m[:, None], hi, np.inf)
+    first = jnp.where(jnp.isinf(tie_hi.min(axis=1)), jnp.argmin(lo, axis=1),
+                      jnp.argmin(tie_hi, axis=1))  # fmt: skip
+    one = jnp.arange(4)[None, :] == first[:, None]
+    h = jnp.where(one, hi, 0.0).sum(axis=1)
+    rem = T - t
+    xtol = fe._XTOL * H
+    ev = keep & (h - m <= xtol) & (h <= rem)
+    other = jnp.where(one, np.inf, lo).min(axis=1)
+    r = keep & ~ev & (h <= rem) & (other > h)
+    lo_f, s_f = jnp.where(one, lo, 0.0).sum(axis=1), jnp.where(one, s, 0.0).sum(axis=1)
+    a_r, b_r = fe._locate_root(P, U, lam, t - tseg, jnp.where(r, lo_f, 0.0),
+                               jnp.where(r, h, 1.0), first, s_f, k, q, xtol, fe._ROOT_ITER)  # fmt: skip
+    done = r & (b_r - a_r <= xtol)
+    h = jnp.where(done, b_r, h)
+    m = jnp.where(r & ~done, a_r, m)
+    lo = jnp.where(done[:, None] & one, h[:, None], lo)
+    hi = jnp.where(done[:, None] & one, h[:, None], hi)
+    ev |= done
+    step = jnp.where(ev, h, jnp.minimum(jnp.minimum(m, H), rem))
+    t_new = jnp.where(keep, t + step, t)
+    since = since + 1
+    # stalled root location (a grazing contact): the exact simulator takes over
+    stall = jnp.where(step < 1e-9 * H, c["stall"] + 1, 0)
+    fallback = c["fallback"] | (keep & (stall > fe._STALL))
+    keep &= ~fallback
+    ev &= keep
+    # events: switch, log, new segment
+    d2, v2, acc2, _, _ = eb.evaluate(P, U, lam, t_new - tseg)
+    f2, fp2 = eb.event_functions(d2, v2, acc2, k, q)
+    tol = (h + 1e3 * xtol)[:, None]
+    sn, closing, n_ev = fe._switch(s, (hi <= tol) & (lo <= tol), f2, fp2, k, scale)
+    closing &= ev[:, None]
+    hit = closing.any(axis=1)
+    ib = jnp.clip(jnp.floor(t_new / width).astype(int), 0, nbins - 1)
+    rows = jnp.arange(t.shape[0])
+    n_imp = c["n_imp"].at[rows, ib].add(closing.sum(axis=1))
+    v_imp = _bin_max(c["v_imp"], ib, jnp.where(closing, jnp.abs(v2), -np.inf).max(axis=1), hit)
+    c_imp = c["c_imp"].at[rows, ib].set(c["c_imp"][rows, ib] | closing)
+    n_events = c["n_events"] + jnp.where(ev, n_ev, 0)
+    last_event = jnp.where(ev & (n_ev > 0), t_new, c["last_event"])
+    amp = _bin_max(amp, fe._bins(t_new, width, nbins), jnp.abs(d2), ev)
+    s_new = jnp.where(ev[:, None], sn, s)
+    mask_new = fe._mask_of(s_new)
+    Ps, Us = _segments(jnp.concatenate([d2, v2], axis=1), prm)
+    ok = _pick(prm["ok"], mask_new)
+    fallback |= ev & ~ok
+    # event-cap runs stop at an arbitrary time (not a bin boundary): the exact simulator
+    fallback |= ev & ok & (n_events >= max_events)
+    keep &= ~fallback
     return {
-        "t_final": float(t[r]),
-        "g_final": z[r, :4].copy(),
-        "status": _STATUS[int(status[r])],
-        "mode_final": mode_name(mask_from_signs(sg[r])),
-        "t_events": b[:, 0].copy(),
-        "kinds": [_KIND_OF_CODE[int(x)] for x in b[:, 1]],
-        "contacts": b[:, 2].astype(int),
-        "states": b[:, 3:7].copy(),
-        "n_steps": int(n_steps[r]),
-        "amp_bins": amp[r].copy(),
-        "bin_width": bin_width,
-        "system": sysm,
-        "scale": float(scale),
-    }
+        "run": keep, "t": t_new, "g": jnp.where(run[:, None], g, c["g"]), "s": s_new,
+        "P": jnp.where(ev[:, None, None], _select(Ps, mask_new), P),
+        "U": jnp.where(ev[:, None, None], _select(Us, mask_new), U),
+        "tseg": jnp.where(ev, t_new, tseg), "since": jnp.where(ev, 0, since), "stall": stall,
+        "n_events": n_events, "last_event": last_event, "amp": amp, "n_imp": n_imp,
+        "v_imp": v_imp, "c_imp": c_imp,
+        "t_first": jnp.where(hit, jnp.minimum(c["t_first"], t_new), c["t_first"]),
+        "t_last": jnp.where(hit, jnp.maximum(c["t_last"], t_new), c["t_last"]),
+        "status": status, "code": code, "decided_by": decided_by, "fallback": fallback,
+    }  # fmt: skip
 
 
-def stats_of(r) -> TrajectoryStats:
-    """:class:`atlas.dynamics.TrajectoryStats` of one :func:`simulate_batch` result."""
-    T = r["t_final"]
-    g = r["g_final"]
-    t_imp, v_imp, c_imp = impacts(
-        r["system"], r["mode_final"], g, T, r["kinds"], r["t_events"], r["contacts"], r["states"]
-    )
-    w = r["bin_width"]
-    nb = r["amp_bins"].shape[0]
-    starts = np.arange(nb) * w
-    late = (starts + w > 2 * T / 3) & (starts <= T)
-    amp = r["amp_bins"][late].max(axis=0) if late.any() else np.abs(g[:2])
-    return TrajectoryStats(
-        t_final=T, status=r["status"], mode_final=r["mode_final"], g_final=g, scale=r["scale"],
-        last_event=float(r["t_events"][-1]) if len(r["t_events"]) else 0.0,
-        t_imp=t_imp, v_imp=v_imp, c_imp=c_imp, late_amplitude=amp,
-    )  # fmt: skip
+def _lane(c, prm, steps):
+    """Up to ``steps`` steps of one lane (arrays with a leading axis of 1)."""
+
+    def cond(x):
+        return x[0]["run"][0] & (x[1] < steps)
+
+    def body(x):
+        return _step(x[0], prm), x[1] + 1
+
+    return jax.lax.while_loop(cond, body, (c, 0))[0]
 
 
-def outcomes(b1, b2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000):
-    """Outcome codes ``(n1, n2, n_perturb)`` of :func:`atlas.dynamics.outcome_map` (jax engine):
-    one batch, then batched re-runs with doubled horizon for the runs
-    :func:`atlas.dynamics.simulate_outcome` would extend."""
-    n1, n2, npert = g0.shape[:3]
-    where = [(i, j, m) for i in range(n1) for j in range(n2) for m in range(npert)]
-    params = [{"beta1": b1[i], "beta2": b2[j], "alpha": alpha, "k": k, "q": q} for i, j, _ in where]
-    codes = np.zeros((n1, n2, npert), dtype=np.int8)
-    todo = list(range(len(params)))
-    T = float(t_end)
-    t_max = horizon_cap * T
-    while todo:
-        res = simulate_batch([params[x] for x in todo], np.array([g0[where[x]] for x in todo]), T,
-                             max_events=max_events)  # fmt: skip
-        again = []
-        for x, r in zip(todo, res, strict=True):
-            out = classify_stats(stats_of(r), r["system"])
-            codes[where[x]] = int(out)
-            if needs_longer_run(out, r["status"], len(r["t_events"]), T, t_max):
-                again.append(x)
-        todo = again
-        T *= 2
-    return codes
+@functools.partial(jax.jit, static_argnames=("steps",))
+def kernel(c, prm, *, steps):
+    """``steps`` steps of every lane of the batch ``c`` (dict of (n, 1, ...) arrays) with the
+    per-lane parameters and modal tables ``prm`` (horizons, event cap and bins included, so one
+    compilation serves every map of a batch size): :func:`_lane` ``vmap``-ped."""
+    return jax.vmap(functools.partial(_lane, steps=steps))(c, prm)
+
+
+@dataclasses.dataclass
+class _BinnedState(fe._State):
+    """:class:`atlas.dynamics.fast_engine._State` with the impacts per time bin of ``t_end / 3``:
+    count ``n_imp``, largest speed ``v_imp`` (N, nbins), contacts ``c_imp`` (N, nbins, 2), first
+    and last impact times."""
+
+    n_imp: np.ndarray = None
+    v_imp: np.ndarray = None
+    c_imp: np.ndarray = None
+    t_first: np.ndarray = None
+    t_last: np.ndarray = None
+
+    @classmethod
+    def start(cls, lanes, g0, t_end, nbins):
+        st = super().start(lanes, g0, t_end, nbins)
+        n = g0.shape[0]
+        st.n_imp, st.v_imp = np.zeros((n, nbins), int), np.full((n, nbins), -np.inf)
+        st.c_imp = np.zeros((n, nbins, 2), dtype=bool)
+        st.t_first, st.t_last = np.full(n, np.inf), np.full(n, -np.inf)
+        st.width = t_end / 3.0
+        return st
+
+    def impact_stats(self, n, fr, fc, v_fly):
+        """:func:`atlas.dynamics.fast_engine._impact_stats` from the bins: the thirds of ``T``
+        are bins ``[j, 2j)`` and ``[2j, 3j]`` with ``j = T / t_end`` (a run stopped at its
+        horizon; the other statistics are read only for diverged runs: the count)."""
+        T = self.t[n]
+        nb = self.n_imp.shape[1]
+        j = np.rint(T / (3 * self.width)).astype(int)[:, None]
+        col = np.arange(nb)[None, :]
+        mid, late = (col >= j) & (col < 2 * j), (col >= 2 * j) & (col <= 3 * j)
+        cnt, vmax, con = self.n_imp[n], self.v_imp[n], self.c_imp[n]
+        n_mid, n_late = np.where(mid, cnt, 0).sum(1), np.where(late, cnt, 0).sum(1)
+        m2 = np.where(mid, vmax, -np.inf).max(1)
+        m3 = np.where(late, vmax, -np.inf).max(1)
+        bouncing = (con & late[:, :, None]).any(axis=1)
+        t_first, t_last, count = self.t_first[n].copy(), self.t_last[n].copy(), cnt.sum(1)
+        # a gap in free flight falling back, dated T (in the last third)
+        np.add.at(count, fr, 1)
+        np.add.at(n_late, fr, 1)
+        np.maximum.at(m3, fr, v_fly)
+        np.minimum.at(t_first, fr, T[fr])
+        np.maximum.at(t_last, fr, T[fr])
+        bouncing[fr, fc] = True
+        return count, n_mid, n_late, m2, m3, t_first, t_last, bouncing
+
+
+def _bucket(n):
+    """Batch size of the kernel calls for ``n`` running lanes: 64, 512 or :data:`CHUNK` (one
+    compilation each, 20-30 s on a loaded 2-core machine); ``n`` is cut into batches of it."""
+    return 64 if n <= 64 else 512 if n < CHUNK else CHUNK
+
+
+def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
+    """The stepping of :func:`atlas.dynamics.fast_engine._run_lanes` in :func:`kernel`: the
+    lanes ``ix`` step until each is decided, stops or falls back; results written into ``st``
+    (one round of :func:`atlas.dynamics.fast_engine.run_lanes`)."""
+    nbins = st.amp.shape[1]
+    mask = fe._mask_of(st.s[ix])
+    P, U, _, _, _, ok = fe._segments(lanes, tables, ix, mask, st.g[ix])
+    fallback[ix[~ok]] = True
+    ix, P, U = ix[ok], P[ok], U[ok]
+    n = ix.size
+    if n == 0:
+        return
+    c = {
+        "run": np.ones(n, bool), "t": st.t[ix], "g": st.g[ix], "s": st.s[ix], "P": P, "U": U,
+        "tseg": st.t[ix], "since": np.zeros(n, int), "stall": np.zeros(n, int),
+        "n_events": st.n_events[ix], "last_event": st.last_event[ix], "amp": st.amp[ix],
+        "n_imp": st.n_imp[ix], "v_imp": st.v_imp[ix], "c_imp": st.c_imp[ix],
+        "t_first": st.t_first[ix], "t_last": st.t_last[ix], "status": np.full(n, fe._RUNNING),
+        "code": st.code[ix], "decided_by": st.decided_by[ix], "fallback": np.zeros(n, bool),
+    }  # fmt: skip
+    prm = {
+        "T": st.horizon[ix], "k": lanes.k[ix], "q": lanes.q[ix], "scale": st.scale[ix],
+        "B": lanes.B[ix], "a": lanes.a[ix],
+        "lam": np.stack([tab.lam[ix] for tab in tables], 1),
+        "valid": np.stack([tab.valid[ix] for tab in tables], 1),
+        "H": np.stack([tab.H[ix] for tab in tables], 1),
+        "ok": np.stack([tab.ok[ix] for tab in tables], 1),
+        "d_eq": np.nan_to_num(np.stack([tab.d_eq[ix] for tab in tables], 1)),
+        **{f"{x}{m}": getattr(tables[m], x)[ix] for m in (1, 2, 3) for x in "VW"},
+    }  # fmt: skip
+    prm.update(t_max=np.full(n, float(t_max)), max_events=np.full(n, int(max_events)),
+               width=np.full(n, float(width)), nbins=np.full(n, int(nbins)))  # fmt: skip
+    # bin arrays padded to NBINS columns (the kernel clips to nbins): one compiled shape
+    nb = max(NBINS, nbins)
+    for key in ("amp", "n_imp", "v_imp", "c_imp"):
+        x = c[key]
+        fill = {"amp": 0.0, "n_imp": 0, "v_imp": -np.inf, "c_imp": False}[key]
+        extra = np.full((n, nb - nbins) + x.shape[2:], fill, dtype=x.dtype)
+        c[key] = np.concatenate([x, extra], axis=1)
+    live = np.arange(n)
+    while live.size:
+        size = _bucket(live.size)
+        for a in range(0, live.size, size):
+            sel = live[a : a + size]
+            pad = np.concatenate([sel, np.full(size - sel.size, sel[0])])
+            ci = {key: x[pad][:, None] for key, x in c.items()}
+            ci["run"][sel.size :] = False
+            out = kernel(ci, {key: x[pad][:, None] for key, x in prm.items()}, steps=STEPS)
+            for key, x in out.items():
+                c[key][sel] = np.asarray(x)[: sel.size, 0]
+        live = live[c["run"][live]]
+    st.t[ix], st.g[ix], st.s[ix], st.status[ix] = c["t"], c["g"], c["s"], c["status"]
+    st.code[ix], st.decided_by[ix] = c["code"], c["decided_by"]
+    for key in ("n_events", "last_event", "t_first", "t_last"):
+        getattr(st, key)[ix] = c[key]
+    for key in ("amp", "n_imp", "v_imp", "c_imp"):
+        getattr(st, key)[ix] = c[key][:, :nbins]
+    fallback[ix[c["fallback"]]] = True
+
+
+def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
+              reference=None) -> fe.FastResult:  # fmt: skip
+    """:func:`atlas.dynamics.fast_engine.run_batch` with the stepping in :func:`kernel` (the
+    same arguments, result and classification)."""
+    return fe.run_batch(beta1, beta2, alpha, k, q, g0, t_end=t_end, horizon_cap=horizon_cap,
+                        max_events=max_events, reference=reference,
+                        rounds=(_BinnedState.start, _run_round))  # fmt: skip

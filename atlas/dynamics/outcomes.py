@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import itertools
 import math
 import time
 
@@ -71,7 +70,8 @@ class Dynamics:
     ``perturbation`` [1]), horizon ``t_end`` [scaled time] extended up to ``horizon_cap`` times
     while undetermined, ``max_events`` per run, and the ``engine`` (``"fast"``: the batched
     event-to-event engine :mod:`atlas.dynamics.fast_engine`; ``"numpy"``: the exact simulator run
-    by run, the reference; ``"jax"``: :mod:`atlas.dynamics.jax_engine`).  Checked on creation
+    by run, the reference; ``"jax"``: the fast engine's algorithm as a JAX kernel,
+    :mod:`atlas.dynamics.jax_engine`).  Checked on creation
     (one-line ``ValueError`` naming the parameter)."""
 
     n_perturb: int = 1
@@ -186,43 +186,34 @@ def _codes(g: dict, g0: np.ndarray, dyn: Dynamics, pool=None) -> tuple[np.ndarra
     q = np.stack([lane["q1"], lane["q2"]], axis=1)
     flat = g0.reshape(-1, 4)
     opts = dict(t_end=dyn.t_end, horizon_cap=dyn.horizon_cap, max_events=dyn.max_events)
-    if dyn.engine == "fast":
-        res = fast_engine.run_batch(
-            lane["beta1"], lane["beta2"], lane["alpha"], k, q, flat, reference=dyn.reference(),
-            pool=pool, **opts,
-        )  # fmt: skip
+    if dyn.engine in ("fast", "jax"):
+        if dyn.engine == "fast":
+            run = functools.partial(fast_engine.run_batch, pool=pool)
+        else:
+            run = jax_engine.run_batch
+        res = run(lane["beta1"], lane["beta2"], lane["alpha"], k, q, flat,
+                  reference=dyn.reference(), **opts)  # fmt: skip
         how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
         info = {f"runs_{n}": int(c) for n, c in zip(fast_engine.DECIDED_BY, how, strict=True)}
         return np.asarray(res.code, dtype=np.int8).reshape(shape), info
-    if dyn.engine == "numpy":
-        ref = dyn.reference()
-        codes = np.array(
-            [
-                int(
-                    ref(
-                        lane["beta1"][n],
-                        lane["beta2"][n],
-                        lane["alpha"][n],
-                        k=tuple(k[n]),
-                        q=tuple(q[n]),
-                        g0=flat[n],
-                    )[0]
-                )  # fmt: skip
-                for n in range(flat.shape[0])
-            ],
-            dtype=np.int8,
-        )
-        return codes.reshape(shape), {}
-    codes = np.zeros(shape, dtype=np.int8)  # jax: one (beta1, beta2) batch per model cell
-    for idx in itertools.product(*(range(n) for n in shape[2:-1])):
-        at = (slice(None), slice(None), *idx)
-        first = tuple(0 for _ in idx)
-        p = {n: float(g[n][(0, 0, *idx)]) for n in ("alpha", "kappa", "q1", "q2")}
-        codes[at] = jax_engine.outcomes(
-            g["beta1"][(slice(None), 0, *first)], g["beta2"][(0, slice(None), *first)],
-            p["alpha"], (p["kappa"], 1.0), (p["q1"], p["q2"]), g0[at], **opts,
-        )  # fmt: skip
-    return codes, {}
+    ref = dyn.reference()
+    codes = np.array(
+        [
+            int(
+                ref(
+                    lane["beta1"][n],
+                    lane["beta2"][n],
+                    lane["alpha"][n],
+                    k=tuple(k[n]),
+                    q=tuple(q[n]),
+                    g0=flat[n],
+                )[0]
+            )  # fmt: skip
+            for n in range(flat.shape[0])
+        ],
+        dtype=np.int8,
+    )
+    return codes.reshape(shape), {}
 
 
 def sum_info(infos) -> dict:

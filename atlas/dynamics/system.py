@@ -12,8 +12,8 @@ constant forcing, ``g' = A_S g + c_S`` (paper eqs. 7, 8): with ``z = (g, 1)``, `
 the augmented matrix ``E_S = [[A_S, c_S], [0, 0]]``, advanced exactly with its matrix exponential
 (scaling and squaring of its degree-30 Taylor polynomial, :func:`expm`).
 
-This module holds what both simulators (:mod:`atlas.dynamics.simulator`,
-:mod:`atlas.dynamics.jax_engine`) and the classification share: the per-mode matrices
+This module holds what the simulators (:mod:`atlas.dynamics.simulator`, the outcome engines
+:mod:`atlas.dynamics.fast_engine`, :mod:`atlas.dynamics.jax_engine`) and the classification share: the per-mode matrices
 (:func:`build_system`), the outcome and status enumerations, the event kinds and the test for an
 impact without collision (:func:`iwc_aligned`).
 
@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from atlas.core import checks
+from atlas.dynamics.event_bounds import take, xp_of
 
 __all__ = [
     "Outcome",
@@ -47,6 +48,7 @@ __all__ = [
     "expm",
     "iwc_aligned",
     "iwc_aligned_many",
+    "aligned_in_basis",
     "mask_from_signs",
     "mode_name",
     "run_scale",
@@ -305,6 +307,26 @@ def iwc_aligned(sysm: System, mask: int, g, tol) -> bool:
     return bool(iwc_aligned_many(mode.E[None], mode.z_eq[None], np.array([mask]), g, tol)[0])
 
 
+def aligned_in_basis(w, V, c, dev, n_active, tol):
+    """The test of :func:`iwc_aligned` on the expansion ``dev = V c`` (n, na) of the active
+    deviations in the eigenvectors ``V`` (n, na, na) with eigenvalues ``w`` (n, na): a real,
+    positive dominant eigenvalue carries the deviation (each other part ``|c_m| |v_m| <= tol
+    |dev|``) along a direction in which every active gap (the first ``n_active`` components)
+    decreases.  NumPy or JAX arrays (:func:`atlas.dynamics.event_bounds.xp_of`); bool (n,)."""
+    xp = xp_of(w, V, c, dev)
+    real_pos = (xp.abs(w.imag) <= 1e-9 * xp.abs(w).max(axis=1, keepdims=True)) & (w.real > 0)
+    norm = xp.linalg.norm(dev, axis=1)[:, None]
+    parts = xp.abs(c) * xp.linalg.norm(V, axis=1)
+    dom = xp.argmax(xp.where(real_pos, w.real, -np.inf), axis=1)
+    direction = (take(c, dom)[:, None] * take(V, dom[:, None])).real
+    p_dom = take(parts, dom)
+    ok = real_pos.any(axis=1) & xp.isfinite(c).all(axis=1)
+    ok &= ~xp.any(~real_pos & (parts > tol * norm), axis=1)
+    ok &= p_dom > tol * norm[:, 0]
+    ok &= xp.all(direction[:, :n_active] < 0, axis=1)
+    return ok
+
+
 def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
     """:func:`iwc_aligned` of ``n`` states ``g`` (n, 4) in the modes ``mask`` (n,) with augmented
     matrices ``E`` (n, 5, 5) and equilibria ``z_eq`` (n, 5); the same arithmetic per state
@@ -337,15 +359,5 @@ def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
                     c[r] = np.linalg.solve(V[r], dev[r])
                 except np.linalg.LinAlgError:
                     pass
-        real_pos = (np.abs(w.imag) <= 1e-9 * np.abs(w).max(axis=1, keepdims=True)) & (w.real > 0)
-        norm = np.linalg.norm(dev, axis=1)[:, None]
-        parts = np.abs(c) * np.linalg.norm(V, axis=1)
-        rows = np.arange(sel.size)
-        dom = np.argmax(np.where(real_pos, w.real, -np.inf), axis=1)
-        direction = (c[rows, dom][:, None] * V[rows, :, dom]).real
-        ok = real_pos.any(axis=1) & np.isfinite(c).all(axis=1)
-        ok &= ~np.any(~real_pos & (parts > tol * norm), axis=1)
-        ok &= parts[rows, dom] > tol * norm[:, 0]
-        ok &= np.all(direction[:, : len(idx)] < 0, axis=1)
-        out[sel] = ok
+        out[sel] = aligned_in_basis(w, V, c, dev, len(idx), tol)
     return out

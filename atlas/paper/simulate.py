@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from atlas.core.config import use_compile_cache
 from atlas.data.engine import progress_bar
 from atlas.data.io import atomic_write_text, savefig
 from atlas.data.scene import parse_values
@@ -182,6 +183,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
             raise ValueError(f"{name}: needs --store")
     history = "atlas " + " ".join(shlex.quote(a) for a in argv) if argv else None
     theory = not no_theory or suffix in (".png", ".pdf")
+    use_compile_cache()  # the theory kernels and --engine jax's kernel compile once per machine
     bar = progress_bar(sys.stderr.isatty(), 1, "outcome atlas", unit="run")
     try:
         progress = None if bar is None else functools.partial(_advance, bar)

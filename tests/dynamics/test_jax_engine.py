@@ -1,59 +1,154 @@
-"""The batched JAX stepper (atlas.dynamics.jax_engine) against the NumPy simulator (atlas.dynamics), which
-is itself checked against closed forms and scipy solve_ivp in test_simulator.py and test_reference.py."""
+"""The JAX kernel of the event-to-event engine (atlas.dynamics.jax_engine) against the exact
+simulator (atlas.dynamics.simulate_outcome) and the NumPy engine (atlas.dynamics.fast_engine),
+cell by cell; its binned impact statistics against the logged ones; bad input."""
 
+import functools
 import math
 
 import numpy as np
 import pytest
 
-from atlas import dynamics as D
+from atlas import dynamics as S
+from atlas.dynamics import fast_engine as F
 from atlas.dynamics import jax_engine as J
+from atlas.dynamics.outcomes import Dynamics
 
-CASES = D.fig2_cases()
-
-
-@pytest.fixture(scope="module")
-def batch():
-    """Fig. 2 a-e over t <= 10 and the stress case (Fig. 2d, t <= 60, ~145 rapid events), one
-    vmapped call (one compilation)."""
-    runs = [dict(CASES[n], t_end=10.0) for n in "abcde"] + [dict(CASES["d"], t_end=60.0)]
-    params = [{k: p[k] for k in ("beta1", "beta2", "alpha", "k", "q")} for p in runs]
-    res = J.simulate_batch(params, [p["g0"] for p in runs], [p["t_end"] for p in runs])
-    return runs, res
+PI = math.pi
+#: (n, kappa, q, alpha) of the small maps; the first at the Fig. 2 a-c parameters (k1 / k2 = 1/2,
+#: q = 0, alpha = 0.35 pi), the last at Fig. 2 d-e's alpha = 0.2 pi with damping
+MAPS = [(7, 0.5, 0.0, 0.35 * PI), (6, 2.0, 0.5, 0.2 * PI), (6, 0.5, 0.2, 0.2 * PI)]
 
 
-@pytest.mark.parametrize("n", range(6))
-def test_events_agree_with_numpy(batch, n):
-    """Same event sequence; event times agree to 1e-12 and states to 1e-10 (bisection to
-    h 2^-64 vs Brent to 1e-13 h)."""
-    runs, res = batch
-    ref = D.simulate(**runs[n])
-    got = res[n]
-    assert got["kinds"] == ref.kinds
-    np.testing.assert_array_equal(got["contacts"], ref.contacts)
-    np.testing.assert_allclose(got["t_events"], ref.t_events, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(got["states"], ref.states.reshape(-1, 4), rtol=0, atol=1e-10)
-    np.testing.assert_allclose(got["g_final"], ref.g_final, rtol=0, atol=1e-10)
-    assert got["status"] == ref.status and got["mode_final"] == ref.mode_final
+def _reference(x1, x2, alpha, k, q, g0):
+    return S.simulate_outcome(x1, x2, alpha, k=k, q=q, g0=g0, max_events=2000)
 
 
-def test_stress_case_many_events(batch):
-    _, res = batch
-    assert len(res[5]["kinds"]) > 100  # the no-skip scan of this case is in test_simulator.py
+def _lanes(n, kappa, q, alpha):
+    b1, b2 = S.outcome_grid(n)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)[:, :, 0].reshape(-1, 4)
+    return np.repeat(b1, n), np.tile(b2, n), alpha, (kappa, 1.0), (q, q), g0
 
 
-def test_event_cap_status():
-    p = dict(CASES["d"])
-    params = [{k: p[k] for k in ("beta1", "beta2", "alpha", "k", "q")}]
-    (r,) = J.simulate_batch(params, [p["g0"]], 1e6, max_events=20)
-    assert r["status"] == D.Status.EVENT_CAP
-    assert 20 <= len(r["kinds"]) <= 24 and r["t_final"] < 1e6
+@functools.lru_cache(maxsize=1)
+def _runs():
+    """Every small map through both engines; the JAX runs in one batch (one compilation)."""
+    lanes = [_lanes(*m) for m in MAPS]
+    size = [ln[5].shape[0] for ln in lanes]
+    flat = [np.concatenate([ln[c] for ln in lanes]) for c in (0, 1)]
+    per = [np.concatenate([np.broadcast_to(np.asarray(ln[c], dtype=float), (n,) + np.shape(ln[c]))
+                           for ln, n in zip(lanes, size, strict=True)]) for c in (2, 3, 4)]  # fmt: skip
+    jax_res = J.run_batch(*flat, *per, np.concatenate([ln[5] for ln in lanes]),
+                          reference=_reference)  # fmt: skip
+    np_res = [F.run_batch(*ln, reference=_reference) for ln in lanes]
+    return lanes, jax_res, np_res
 
 
 @pytest.mark.slow
-def test_map_outcomes_equal_numpy_engine():
-    b1, b2 = D.outcome_grid(3)
-    a = D.outcome_map(b1, b2, engine="numpy")
-    b = D.outcome_map(b1, b2, engine="jax")
+def test_outcomes_equal_the_numpy_engine_cell_by_cell():
+    lanes, jr, nr = _runs()
+    code = np.concatenate([r.code for r in nr])
+    by = np.concatenate([r.decided_by for r in nr])
+    np.testing.assert_array_equal(jr.code, code)
+    np.testing.assert_array_equal(jr.decided_by, by)
+
+
+@pytest.mark.slow
+def test_outcomes_equal_the_exact_simulator_on_a_seeded_sample():
+    lanes, jr, _ = _runs()
+    rows = np.concatenate([np.full(ln[5].shape[0], i) for i, ln in enumerate(lanes)])
+    start = np.concatenate([[0], np.cumsum([ln[5].shape[0] for ln in lanes])])
+    rng = np.random.default_rng(29)
+    for x in rng.choice(jr.code.size, 24, replace=False):
+        i = rows[x]
+        b1, b2, alpha, k, q, g0 = lanes[i]
+        j = x - start[i]
+        assert int(_reference(b1[j], b2[j], alpha, k, q, g0[j])[0]) == jr.code[x], (MAPS[i], j)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["stepped", "early_settle", "early_iwc"])
+def test_each_way_of_deciding_fires_and_agrees_with_the_exact_simulator(how):
+    """Runs decided by each rule (stepped to a stop, settled early, IWC early): the exact
+    simulator from the same initial state gives the same outcome."""
+    lanes, jr, _ = _runs()
+    g0 = np.concatenate([ln[5] for ln in lanes])
+    b1 = np.concatenate([ln[0] for ln in lanes])
+    b2 = np.concatenate([ln[1] for ln in lanes])
+    model = np.concatenate([np.full(ln[5].shape[0], i) for i, ln in enumerate(lanes)])
+    sel = np.flatnonzero(jr.decided_by == F.DECIDED_BY.index(how))
+    assert sel.size >= 3
+    for x in sel[:: max(1, sel.size // 6)]:
+        _, _, alpha, k, q, _ = lanes[model[x]]
+        assert int(_reference(b1[x], b2[x], alpha, k, q, g0[x])[0]) == jr.code[x]
+
+
+@pytest.mark.slow
+def test_degenerate_directions_and_fig2_cases():
+    """Lanes the modal form cannot serve go to the exact simulator (as in the NumPy engine); the
+    Fig. 2 panels give the paper's outcomes."""
+    from atlas.paper.figures_dynamics import FIG2_T_END
+
+    b = np.linspace(0, 2 * PI, 32, endpoint=False)
+    alpha, k, q = 0.35 * PI, (0.5, 1.0), (0.0, 0.0)
+    cells = [(4, 16), (4, 20), (8, 0)]
+    g0 = np.array([S.perturbed_initial_states(b, b, alpha, 0.5)[c][0] for c in cells])
+    b1, b2 = (b[list(c)] for c in zip(*cells, strict=True))
+    res = J.run_batch(b1, b2, alpha, k, q, g0, reference=_reference)
+    ref = [int(_reference(x1, x2, alpha, k, q, g)[0]) for x1, x2, g in zip(b1, b2, g0, strict=True)]
+    assert res.code.tolist() == ref
+    assert F.DECIDED_BY[res.decided_by[0]] == "fallback"
+    expected = {"a": "GROWING_BOUNCING", "b": "SETTLES_SS", "c": "GROWING_BOUNCING",
+                "d": "SUSTAINED_OSCILLATION", "e": "GROWING_BOUNCING"}  # fmt: skip
+    for name, want in expected.items():
+        p = S.fig2_cases()[name]
+        r = J.run_batch(p["beta1"], p["beta2"], p["alpha"], p["k"], p["q"], np.array([p["g0"]]),
+                        t_end=FIG2_T_END[name], horizon_cap=1.0, max_events=100_000,
+                        reference=_reference)  # fmt: skip
+        assert S.Outcome(int(r.code[0])) == S.Outcome[want], name
+        assert F.DECIDED_BY[r.decided_by[0]] != "fallback", name
+
+
+@pytest.mark.parametrize("doublings", [0, 1, 3])
+def test_binned_impact_statistics_equal_the_logged_ones(doublings):
+    """Impacts at random times of a run stopped at its horizon ``t_end 2^j``: the per-bin
+    statistics give :func:`fast_engine._impact_stats` of the full log, with the gaps in free
+    flight falling back dated ``T``."""
+    rng = np.random.default_rng(doublings)
+    t_end, nbins, m = 150.0, 25, 6
+    T = np.full(m, t_end * 2**doublings)
+    T[0] = t_end  # lanes at different horizons
+    st = J._BinnedState.start(F.Lanes.of(0.3, 2.0, 1.0, (0.5, 1.0), 0.0), np.ones((m, 4)),
+                              t_end, nbins)  # fmt: skip
+    st.t[:] = T
+    row = rng.integers(0, m, 200)
+    t_i = rng.uniform(0, 1, 200) * T[row]
+    v_i, c_i = rng.uniform(0, 3, 200), rng.integers(1, 3, 200)
+    row, t_i, v_i, c_i = row[row != 3], t_i[row != 3], v_i[row != 3], c_i[row != 3]  # no impact
+    b = np.floor(t_i / (t_end / 3)).astype(int)
+    np.add.at(st.n_imp, (row, b), 1)
+    np.maximum.at(st.v_imp, (row, b), v_i)
+    st.c_imp[row, b, c_i - 1] = True
+    np.minimum.at(st.t_first, row, t_i)
+    np.maximum.at(st.t_last, row, t_i)
+    fr, fc, v_fly = np.array([1, 3]), np.array([0, 1]), np.array([0.5, 9.0])
+    got = st.impact_stats(np.arange(m), fr, fc, v_fly)
+    want = F._impact_stats(np.concatenate([row, fr]), np.concatenate([t_i, T[fr]]),
+                           np.concatenate([v_i, v_fly]), np.concatenate([c_i, fc + 1]), T)  # fmt: skip
+    for g, w in zip(got, want, strict=True):
+        np.testing.assert_array_equal(g, w)
+
+
+def test_bad_input_is_one_line():
+    with pytest.raises(ValueError, match="^g0 must have one row per trajectory, got 2$"):
+        J.run_batch(np.zeros(3), 1.0, 0.3, (0.5, 1.0), 0.0, np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="^engine: must be one of fast, numpy, jax, got 'gpu'$"):
+        Dynamics(engine="gpu")
+
+
+@pytest.mark.slow
+def test_outcome_map_with_the_jax_engine_equals_the_exact_simulator():
+    b1, b2 = S.outcome_grid(3)
+    a = S.outcome_map(b1, b2, engine="numpy")
+    b = S.outcome_map(b1, b2, engine="jax")
     np.testing.assert_array_equal(a["outcome"].values, b["outcome"].values)
     assert b.attrs["engine"] == "jax" and math.isfinite(b.attrs["trajectories_per_second"])
