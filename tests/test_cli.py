@@ -14,8 +14,16 @@ import pytest
 import xarray as xr
 
 from atlas import cli
+from atlas.core.warm import KERNEL_ENV
 
 TINY = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8"]
+
+
+@pytest.fixture(autouse=True)
+def exported_kernels(monkeypatch):
+    """The CLI's own tests run its kernels as exported programs kept on disk, as a user's run
+    does (conftest.py switches that off for the other in-process CLI calls)."""
+    monkeypatch.delenv(KERNEL_ENV, raising=False)
 
 
 def _env():

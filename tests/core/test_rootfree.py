@@ -23,20 +23,29 @@ _tier2 = rootfree.tier2  # two compiled programs inside (not to be jitted as one
 def kernel_verdicts(pts, dtype):
     """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier)."""
     cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
-    first = [a[: cols[0].size] for a in rootfree.unpack(_codes(*_padded(cols)))]
+    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols)[0]))
     idx = np.flatnonzero(first[3])
     if idx.size:
-        second = _tier2(*_padded([c[idx] for c in cols]))
+        second = _chunked(_tier2, [c[idx] for c in cols])
         for a, b in zip(first[:3], second):
-            a[idx] = np.where(a[idx] == 3, np.asarray(b)[: idx.size], a[idx])
+            a[idx] = np.where(a[idx] == 3, b, a[idx])
     return dict(zip(NAMES, first[:3])), cols
 
 
-def _padded(cols):
-    """Pad to a power of two >= 1024 (repeating the first point): few compilations."""
-    n = cols[0].size
-    m = max(1024, 1 << (n - 1).bit_length())
-    return [jnp.asarray(np.concatenate([c, np.full(m - n, c[0], c.dtype)])) for c in cols]
+#: the one padded length of every kernel call here: one compilation per kernel and dtype
+PAD = 1024
+
+
+def _chunked(kernel, cols):
+    """``kernel`` (returning a tuple of per-point arrays) on the columns in batches of
+    :data:`PAD` points, the last one padded by repeating its first point."""
+    outs = []
+    for start in range(0, cols[0].size, PAD):
+        part = [c[start : start + PAD] for c in cols]
+        n = part[0].size
+        args = [jnp.asarray(np.concatenate([c, np.full(PAD - n, c[0], c.dtype)])) for c in part]
+        outs.append([np.asarray(r)[:n] for r in kernel(*args)])
+    return [np.concatenate(parts) for parts in zip(*outs)]
 
 
 def assert_agrees_with_exact(pts, dtype, label, min_decided=0.5):
