@@ -27,6 +27,13 @@ use_compile_cache(min_compile_seconds=0.2)
 os.environ.setdefault(KERNEL_ENV, "0")
 
 
+def pytest_collection_modifyitems(items):
+    """The tests that clear every jit cache (:func:`bounded_det_b`) run last, so that the kernels
+    the other tests compiled stay compiled for the rest of the run (a cleared kernel is traced,
+    lowered and loaded again by the next test that calls it)."""
+    items.sort(key=lambda item: "bounded_det_b" in getattr(item, "fixturenames", ()))
+
+
 @pytest.fixture(scope="session")
 def paper_run(tmp_path_factory):
     """One ``atlas paper`` run at the CI size per test session (``atlas.paper.run(ci=True)``): its
