@@ -183,10 +183,12 @@ def test_first_pass_computes_every_sign_once(dtype):
     (flat columns and the grid layout), so each sign code exists once per point and every
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
-    x = jnp.ones(64, dtype)
+    x = jnp.ones(PAD, dtype)  # the flat program of kernel_verdicts: compiled once for both
     row, col, one = jnp.ones((64, 1), dtype), jnp.ones((1, 64), dtype), jnp.ones((), dtype)
     for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
-        kern = jax.jit(functools.partial(rootfree.codes, damped=damped))
+        kern = (
+            _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
+        )
         per_point = [f for f in _fusions(kern, *args) if not f.endswith("[]")]
         assert len(per_point) == 1, per_point
 
