@@ -9,6 +9,7 @@ import jax  # noqa: E402
 
 import atlas  # noqa: E402,F401  (turns on float64 in JAX)
 from atlas.core.config import CACHE_ENV, use_compile_cache  # noqa: E402
+from atlas.core.warm import KERNEL_ENV  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
@@ -18,6 +19,19 @@ jax.config.update("jax_enable_x64", True)
 # Under .pytest_cache (git-ignored); ATLAS_JAX_CACHE=0 switches it off.
 os.environ.setdefault(CACHE_ENV, str(Path(__file__).resolve().parents[1] / ".pytest_cache" / "jax"))
 use_compile_cache(min_compile_seconds=0.2)
+
+# In-process `cli.main` calls compile the plain jitted kernels the library tests compile (one
+# compilation per kernel and shape in a worker), not their exported programs (a second trace,
+# export and compilation of each): the exported path has its own tests (tests/core/test_warm.py,
+# tests/test_cli.py, which switches it back on, and the subprocess runs).
+os.environ.setdefault(KERNEL_ENV, "0")
+
+
+def pytest_collection_modifyitems(items):
+    """The tests that clear every jit cache (:func:`bounded_det_b`) run last, so that the kernels
+    the other tests compiled stay compiled for the rest of the run (a cleared kernel is traced,
+    lowered and loaded again by the next test that calls it)."""
+    items.sort(key=lambda item: "bounded_det_b" in getattr(item, "fixturenames", ()))
 
 
 @pytest.fixture(scope="session")

@@ -14,13 +14,22 @@ import pytest
 import xarray as xr
 
 from atlas import cli
+from atlas.core.warm import KERNEL_ENV
 
 TINY = ["--beta1", "0:2pi:8", "--beta2", "0:2pi:8"]
+
+
+@pytest.fixture
+def exported_kernels(monkeypatch):
+    """The kernels run as exported programs kept on disk, as in a user's run (conftest.py
+    switches that off for the other in-process CLI calls)."""
+    monkeypatch.delenv(KERNEL_ENV, raising=False)
 
 
 def _env():
     env = dict(os.environ)  # ATLAS_JAX_CACHE: the run's shared compilation cache (conftest.py)
     env.pop("ATLAS_PROGRESS", None)
+    env.pop(KERNEL_ENV, None)  # a user's run: exported kernels
     return env
 
 
@@ -96,6 +105,7 @@ def test_bad_inputs_with_overwrite(extra, name, tmp_path, capsys):
     assert sorted(os.listdir(tmp_path)) == ["existing.nc"]
 
 
+@pytest.mark.usefixtures("exported_kernels")
 def test_generate_end_to_end(tmp_path, capsys):
     out = tmp_path / "tiny.nc"
     args = ["generate", *TINY, "--kappa", "0.5,2", "--q", "0,0.5", "--alpha", "0:2pi:4"]

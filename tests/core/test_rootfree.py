@@ -23,20 +23,29 @@ _tier2 = rootfree.tier2  # two compiled programs inside (not to be jitted as one
 def kernel_verdicts(pts, dtype):
     """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier)."""
     cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
-    first = [a[: cols[0].size] for a in rootfree.unpack(_codes(*_padded(cols)))]
+    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols)[0]))
     idx = np.flatnonzero(first[3])
     if idx.size:
-        second = _tier2(*_padded([c[idx] for c in cols]))
+        second = _chunked(_tier2, [c[idx] for c in cols])
         for a, b in zip(first[:3], second):
-            a[idx] = np.where(a[idx] == 3, np.asarray(b)[: idx.size], a[idx])
+            a[idx] = np.where(a[idx] == 3, b, a[idx])
     return dict(zip(NAMES, first[:3])), cols
 
 
-def _padded(cols):
-    """Pad to a power of two >= 1024 (repeating the first point): few compilations."""
-    n = cols[0].size
-    m = max(1024, 1 << (n - 1).bit_length())
-    return [jnp.asarray(np.concatenate([c, np.full(m - n, c[0], c.dtype)])) for c in cols]
+#: the one padded length of every kernel call here: one compilation per kernel and dtype
+PAD = 1024
+
+
+def _chunked(kernel, cols):
+    """``kernel`` (returning a tuple of per-point arrays) on the columns in batches of
+    :data:`PAD` points, the last one padded by repeating its first point."""
+    outs = []
+    for start in range(0, cols[0].size, PAD):
+        part = [c[start : start + PAD] for c in cols]
+        n = part[0].size
+        args = [jnp.asarray(np.concatenate([c, np.full(PAD - n, c[0], c.dtype)])) for c in part]
+        outs.append([np.asarray(r)[:n] for r in kernel(*args)])
+    return [np.concatenate(parts) for parts in zip(*outs)]
 
 
 def assert_agrees_with_exact(pts, dtype, label, min_decided=0.5):
@@ -174,10 +183,12 @@ def test_first_pass_computes_every_sign_once(dtype):
     (flat columns and the grid layout), so each sign code exists once per point and every
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
-    x = jnp.ones(64, dtype)
+    x = jnp.ones(PAD, dtype)  # the flat program of kernel_verdicts: compiled once for both
     row, col, one = jnp.ones((64, 1), dtype), jnp.ones((1, 64), dtype), jnp.ones((), dtype)
     for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
-        kern = jax.jit(functools.partial(rootfree.codes, damped=damped))
+        kern = (
+            _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
+        )
         per_point = [f for f in _fusions(kern, *args) if not f.endswith("[]")]
         assert len(per_point) == 1, per_point
 
