@@ -115,7 +115,18 @@ def restore(saved) -> None:
 
 
 def hard_exit(code: int):  # pragma: no cover - ends the process
+    """End the process with ``code`` (no interpreter teardown).  The main thread first blocks the
+    stop signals; one already delivered (its handler pending in Python, or the signal pending in
+    the kernel) turns ``code`` into 128 + its number.  A signal that comes after the block cannot
+    change the exit code any more: it came after the run had ended."""
     arm(0)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+        late = signal.sigpending() & set(_STOP_SIGNALS)
+        if late and code == 0:
+            code = 128 + min(late)
+    if code == 0 and interrupts.requested() is not None:
+        code = 128 + interrupts.requested()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
