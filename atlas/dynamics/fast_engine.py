@@ -25,7 +25,7 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
 bracket of the first function that every other function's ``sigma_lo`` lies beyond is closed by
-:func:`_locate_root` (safeguarded Newton, at most ``_ROOT_ITER`` evaluations per step; an
+:func:`locate_root` (safeguarded Newton, at most ``ROOT_ITER`` evaluations per step; an
 unfinished bracket resumes from its lower end at the next step).  The bounds hold in
 exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
 ``1e-13`` of the function's scale count as zero).
@@ -33,7 +33,7 @@ exact arithmetic on the modal form; its floating-point evaluation is not bounded
 Early decisions (stated, checked)
 ---------------------------------
 On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
-(:func:`_may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
+(:func:`may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
 for keeping its sign for all later times in the current configuration (:func:`eb.keeps_sign`: the
 modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
 x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
@@ -47,7 +47,7 @@ x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their si
   (``1e3 penetration_limit``) is provably passed within the current horizon.
 
 Both are declared only where the reference's finite-horizon stops reach the same verdict
-(:func:`_settles_first`, :func:`_aligned_at_stop`); otherwise the lane keeps stepping.
+(:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
 
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
@@ -64,7 +64,7 @@ evaluation keeps no digit, and root location crawls (minutes for one run).  Else
 ``1e2`` (``0:2pi:32`` grids, ``kappa = 0.5``, ``q = 0`` and ``0.3``).
 Trajectories that end without an early decision are classified as
 :func:`atlas.dynamics.classify_stats` classifies the reference's runs, on arrays
-(:func:`_classify_many`; :func:`_stats` and :func:`light_system` are the per-run form it is
+(:func:`_classify_many`; :func:`_stats` and :func:`atlas.dynamics.modal_form.light_system` are the per-run form it is
 tested against)."""
 
 from __future__ import annotations
@@ -79,214 +79,38 @@ from atlas.dynamics.classification import (
     TrajectoryStats,
     impacts,
 )
+from atlas.dynamics.modal_form import (
+    Lanes,
+    modal_coordinates,
+    modal_tables,
+    segments,
+    stack_table,
+    z_eq,
+)
 from atlas.dynamics.system import (
     MODE_NAMES,
-    Mode,
     Outcome,
     Status,
-    System,
     iwc_aligned_many,
 )
 
-__all__ = ["FastResult", "modal_tables", "run_batch", "run_lanes", "outcomes"]
+__all__ = ["FastResult", "run_batch", "run_lanes", "outcomes"]
 
-_COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
-_XTOL = 1e-12
-_STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
-_ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
+XTOL = 1e-12
+STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
+ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
 
 #: how a trajectory of :func:`outcomes` was decided
 DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
 
 
-# ----------------------------------------------------------------------------- per-lane system
-
-
-@dataclasses.dataclass
-class Lanes:
-    """Parameters of ``N`` trajectories: ``B`` (N, 2, 2), ``a`` (N, 2), ``k``, ``q`` (N, 2)."""
-
-    B: np.ndarray
-    a: np.ndarray
-    k: np.ndarray
-    q: np.ndarray
-
-    @classmethod
-    def of(cls, beta1, beta2, alpha, k, q):
-        """Unit ``|b_j|``, ``|a|`` (SPEC §1); inputs broadcast to ``(N,)``."""
-        beta1, beta2, alpha = np.broadcast_arrays(
-            *(np.atleast_1d(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha))
-        )
-        n = beta1.size
-        B = np.empty((n, 2, 2))
-        B[:, 0, 0], B[:, 1, 0] = np.cos(beta1.ravel()), np.sin(beta1.ravel())
-        B[:, 0, 1], B[:, 1, 1] = np.cos(beta2.ravel()), np.sin(beta2.ravel())
-        a = np.stack([np.cos(alpha.ravel()), np.sin(alpha.ravel())], axis=1)
-        kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
-        qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
-        return cls(B, a, kk, qq)
-
-    def E(self, mask: int) -> np.ndarray:
-        """Augmented matrices ``[[A_S, c_S], [0, 0]]`` (N, 5, 5) of configuration ``mask``."""
-        return _augmented(self.B, self.a, self.k, self.q, mask)
-
-
-@dataclasses.dataclass
-class ModalTable:
-    """Modal form of one configuration for ``N`` lanes: eigenvalues ``lam`` (N, 4; unused
-    entries 0 with ``valid`` False), right/left eigenvector blocks ``V``, ``W`` (N, na, na) of
-    the active subsystem, equilibrium ``d_eq`` (N, 2; NaN for free gaps), ``H`` step cap,
-    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5)."""
-
-    mask: int
-    lam: np.ndarray
-    valid: np.ndarray
-    V: np.ndarray
-    W: np.ndarray
-    d_eq: np.ndarray
-    H: np.ndarray
-    ok: np.ndarray
-    E: np.ndarray
-
-
-def modal_tables(lanes: Lanes) -> list[ModalTable]:
-    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS)."""
-    n = lanes.a.shape[0]
-    omega = np.sqrt(np.max(lanes.k, axis=1))
-    out = []
-    for mask in range(4):
-        idx = [i for i in range(2) if mask >> i & 1]
-        na = 2 * len(idx)
-        lam = np.zeros((n, 4), dtype=complex)
-        valid = np.zeros((n, 4), dtype=bool)
-        d_eq = np.full((n, 2), np.nan)
-        V = np.zeros((n, na, na), dtype=complex)
-        W = np.zeros((n, na, na), dtype=complex)
-        ok = np.ones(n, dtype=bool)
-        E = lanes.E(mask)
-        if idx:
-            sub = idx + [i + 2 for i in idx]
-            A = E[:, sub][:, :, sub]
-            w, V = np.linalg.eig(A)
-            cond = np.linalg.cond(V)
-            ok = np.isfinite(cond) & (cond < _COND_MAX)
-            V = np.where(ok[:, None, None], V, np.eye(na))
-            W = np.linalg.inv(V)
-            lam[:, :na] = w
-            valid[:, :na] = True
-            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
-            det = np.linalg.det(BS)
-            ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(n, -1).max(axis=1) ** len(idx)
-            BS = np.where(ok[:, None, None], BS, np.eye(len(idx)))
-            d_eq[:, idx] = np.linalg.solve(BS, -lanes.a[:, idx][:, :, None])[:, :, 0]
-            ok &= np.all(np.abs(w) > 0, axis=1)
-        rho = np.abs(lam).max(axis=1)
-        H = 1.0 / np.maximum(rho, 0.25 * omega)
-        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
-    return out
-
-
-def light_system(lanes: Lanes, tables, n: int) -> System:
-    """The :class:`atlas.dynamics.system.System` of lane ``n`` with what
-    :func:`atlas.dynamics.classify_stats` and :func:`atlas.dynamics.system.iwc_aligned` read
-    (``E``, ``eig``, ``stable``, ``z_eq``; no sub-step matrices)."""
-    k = lanes.k[n]
-    modes = []
-    for tab in tables:
-        na = int(tab.valid[n].sum())
-        eig = tab.lam[n, :na]
-        z_eq = None
-        if tab.mask:
-            z_eq = np.full(5, np.nan)
-            idx = [i for i in range(2) if tab.mask >> i & 1]
-            z_eq[idx] = tab.d_eq[n, idx]
-            z_eq[[i + 2 for i in idx]] = 0.0
-            z_eq[4] = 1.0
-        stable = bool(np.all(eig.real < 0)) if na else True
-        modes.append(Mode(tab.mask, tab.E[n], math.nan, None, None, None, eig, stable, z_eq))
-    return System(B=lanes.B[n], a=lanes.a[n], k=k, q=lanes.q[n], L=None, modes=tuple(modes),
-                  omega=math.sqrt(k.max()))  # fmt: skip
-
-
-def _augmented(B, a, k, q, mask):
-    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (paper eqs. 7, 8;
-    as :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
-    act = np.array([mask & 1, (mask >> 1) & 1], dtype=float)
-    E = np.zeros(a.shape[:-1] + (5, 5))
-    E[..., 0, 2] = E[..., 1, 3] = 1.0
-    E[..., 2:4, 0:2] = -B * (k * act)[..., None, :]
-    E[..., 2:4, 2:4] = -B * (q * act)[..., None, :]
-    E[..., 2:4, 4] = -a
-    return E
-
-
-# ----------------------------------------------------------------------------- segments
-
-
-def _segments(lanes: Lanes, tables, ix, mask, g):
-    """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
-    configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
-    (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
-    n = ix.size
-    P = np.zeros((n, 2, 3))
-    U = np.zeros((n, 2, 4), dtype=complex)
-    lam = np.zeros((n, 4), dtype=complex)
-    valid = np.zeros((n, 4), dtype=bool)
-    H = np.empty(n)
-    ok = np.ones(n, dtype=bool)
-    for m in range(4):
-        sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab = tables[m]
-        lx = ix[sel]
-        gs = g[sel]
-        lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
-        V, W = (tab.V[lx], tab.W[lx]) if m else (None, None)
-        P[sel], U[sel] = _segment(m, gs, tab.d_eq[lx], V, W, tab.lam[lx], lanes.B[lx],
-                                  lanes.a[lx], lanes.k[lx], lanes.q[lx])  # fmt: skip
-    return P, U, lam, valid, H, ok
-
-
-def _segment(m, g, d_eq, V, W, lam, B, a, k, q):
-    """Closed form (``P`` (n, 2, 3), ``U`` (n, 2, 4)) of segments in configuration ``m`` (an
-    int) from the states ``g`` (n, 4): equilibria ``d_eq`` (n, 2), eigenvectors ``V`` and their
-    inverse ``W`` (n, na, na), eigenvalues ``lam`` (n, 4); NumPy or JAX arrays."""
-    xp = eb.xp_of(g, d_eq, lam, B)
-    idx = [i for i in range(2) if m >> i & 1]
-    n = g.shape[0]
-    if not idx:  # FF: d'' = -a
-        P = xp.stack([g[:, :2], g[:, 2:], -0.5 * a], axis=2)
-        return P, xp.zeros((n, 2, 4), dtype=complex)
-    c = _modal_coords(m, g, d_eq, W)[1]
-    Ua = V[:, : len(idx), :] * c[:, None, :]  # the active gaps' modal terms (n, len(idx), na)
-    if len(idx) == 2:
-        zero = xp.zeros_like(d_eq)
-        return xp.stack([d_eq, zero, zero], axis=2), Ua
-    # one active contact i, a free gap j: d_j'' = B_ji phi_i - a_j, integrated twice
-    i, j = idx[0], 1 - idx[0]
-    w = -(k[:, i, None] * V[:, 0, :] + q[:, i, None] * V[:, 1, :]) * c  # phi_i modal terms
-    Bji = B[:, j, i]
-    Wm = Bji[:, None] * w
-    lm = lam[:, :2]
-    Uj = Wm / lm**2
-    acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
-    zero = xp.zeros((n,))
-    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
-    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
-                   0.5 * acc0], axis=1)  # fmt: skip
-    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
-    U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
-    return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
-
-
-_OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
-_RUNNING = -1
+OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
+RUNNING = -1
 _STATUS = (Status.T_END, Status.EVENT_CAP, Status.DIVERGED)
 
 
 @dataclasses.dataclass
-class _State:
+class State:
     """Per-lane state of a batch (arrays over all ``N`` lanes)."""
 
     t: np.ndarray
@@ -313,7 +137,7 @@ class _State:
         )
         return cls(
             t=np.zeros(n), g=g0.copy(), s=np.where(f > 0, 1.0, -1.0), n_events=np.zeros(n, int),
-            last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, _RUNNING),
+            last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, RUNNING),
             code=np.full(n, -1, dtype=np.int8), decided_by=np.zeros(n, dtype=np.int8),
             scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)), imp=[],
         )  # fmt: skip
@@ -353,13 +177,13 @@ def _impact_stats(row, t_i, v_i, c_i, T):
     return np.bincount(row, minlength=m), n_mid, n_late, m2, m3, t_first, t_last, bouncing
 
 
-def _mask_of(s):
+def mask_of(s):
     return ((s[:, 0] < 0) & (s[:, 2] > 0)).astype(int) | (
         ((s[:, 1] < 0) & (s[:, 3] > 0)).astype(int) << 1
     )
 
 
-def _switch(s, cross, f, fp, k, scale):
+def switch(s, cross, f, fp, k, scale):
     """New signs after the crossings ``cross`` (n, 4) at the event values ``f``, derivatives
     ``fp`` (pre-event configuration), as :func:`atlas.dynamics.simulate`; returns
     ``(s_new, closing (n, 2), n_events (n,))``."""
@@ -376,17 +200,17 @@ def _switch(s, cross, f, fp, k, scale):
     return sn, closing, n_ev
 
 
-def _bins(t, width, nbins):
+def bins(t, width, nbins):
     xp = eb.xp_of(t)
     return xp.minimum(xp.maximum(xp.ceil(t / width).astype(int) - 1, 0), nbins - 1)
 
 
-def _admit(lanes, tables, st: _State, ix, fallback):
+def _admit(lanes, tables, st: State, ix, fallback):
     """The per-lane arrays of :func:`_run_lanes` for the lanes ``ix`` starting from their state
     in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
-    mask = _mask_of(s)
-    P, U, lam, valid, H, ok = _segments(lanes, tables, ix, mask, g)
+    mask = mask_of(s)
+    P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g)
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
             lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
@@ -394,7 +218,7 @@ def _admit(lanes, tables, st: _State, ix, fallback):
     return tuple(x[ok] for x in cols)
 
 
-def _classify_stopped(st: _State, tables, n, width, t_max):
+def _classify_stopped(st: State, tables, n, width, t_max):
     """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
     :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
     returned."""
@@ -402,7 +226,7 @@ def _classify_stopped(st: _State, tables, n, width, t_max):
     again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
     st.horizon[again] *= 2
-    st.status[again] = _RUNNING
+    st.status[again] = RUNNING
     st.code[again] = -1
     return again
 
@@ -412,7 +236,7 @@ def _classify_stopped(st: _State, tables, n, width, t_max):
 _READMIT = 8
 
 
-def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
+def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
     """Step every lane event to event until it is decided, stops (horizon ``st.horizon``, event
     cap, divergence) or falls back; a lane that stops undetermined with events rejoins the batch
     with its horizon doubled (:func:`_classify_stopped`); results written into ``st``."""
@@ -425,7 +249,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
     while True:
         if not keep.all():
             gone = ix[~keep]
-            pending.append(gone[(st.status[gone] != _RUNNING) & ~fallback[gone]])
+            pending.append(gone[(st.status[gone] != RUNNING) & ~fallback[gone]])
             sel = np.flatnonzero(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
@@ -443,7 +267,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
-        b = _bins(t, width, nbins)
+        b = bins(t, width, nbins)
         st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
         keep = np.ones(ix.size, dtype=bool)
 
@@ -457,7 +281,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         deep = np.flatnonzero(sched & ~div & (pen[:, 0] | pen[:, 1]))
         if deep.size:
             lx, mk = ix[deep], mask[deep]
-            div[deep] = iwc_aligned_many(_stack(tables, "E", lx, mk), _z_eq(tables, lx, mk), mk,
+            div[deep] = iwc_aligned_many(stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk), mk,
                                          g[deep], 1e-3)  # fmt: skip
         _leave(st, ix, t, g, s, keep, np.flatnonzero(div), 2)
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
@@ -477,12 +301,12 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
-        r = r[_may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
                     lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
             dec = st.code[ix[r]] >= 0
-            _leave(st, ix, t, g, s, keep, r[dec], _RUNNING)
+            _leave(st, ix, t, g, s, keep, r[dec], RUNNING)
         # the first crossing: smallest sigma_lo, ties to the tightest bracket
         m = _min_cols(lo)
         tie_hi = np.where(lo <= m[:, None], hi, np.inf)
@@ -490,16 +314,16 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
                          np.argmin(tie_hi, axis=1))  # fmt: skip
         h = hi[rows, first]
         rem = T - t
-        xtol = _XTOL * H
+        xtol = XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
-        # first crossing is in it, located on that function alone (:func:`_locate_root`)
+        # first crossing is in it, located on that function alone (:func:`locate_root`)
         other = _min_cols(np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo))
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
-            a_r, b_r = _locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
-                                    s[r, fr], k[r], q[r], xtol[r], _ROOT_ITER)  # fmt: skip
+            a_r, b_r = locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
+                                    s[r, fr], k[r], q[r], xtol[r], ROOT_ITER)  # fmt: skip
             # located: the event at the upper end; not yet: step to the lower end, no crossing
             # of any function before it
             done = b_r - a_r <= xtol[r]
@@ -512,7 +336,7 @@ def _run_lanes(lanes, tables, st: _State, t_max, max_events, width, fallback):
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
         stall = np.where(step < 1e-9 * H, stall + 1, 0)
-        st_lane = keep & (stall > _STALL)
+        st_lane = keep & (stall > STALL)
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
@@ -533,7 +357,7 @@ def _min_cols(x):
     return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
 
 
-def _locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
+def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
     ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
     ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
@@ -594,7 +418,7 @@ def _leave(st, ix, t, g, s, keep, sel, status):
     keep[sel] = False
 
 
-def _may_decide(lam, valid, s, p, act, mask, t, T):
+def may_decide(lam, valid, s, p, act, mask, t, T):
     """The conditions of :func:`_decide` other than the certificate: a growing configuration
     with a contact (IWC), or a non-growing one whose free gaps are open and accelerating away
     (settles; a neutral one at most half way through the horizon)."""
@@ -609,20 +433,20 @@ def _may_decide(lam, valid, s, p, act, mask, t, T):
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
     """The early decisions of the module docstring for lanes ``ix`` (written into ``st.code``,
     ``st.decided_by``)."""
-    settle, iwc, l1 = _decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
-    st.code[ix[settle]] = np.array([_OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
+    settle, iwc, l1 = decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
+    st.code[ix[settle]] = np.array([OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
     r = np.flatnonzero(iwc)
     if r.size:
-        c = _modal_coordinates(tables, ix[r], mask[r], g[r])
-        iwc[r] &= _aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
+        c = modal_coordinates(tables, ix[r], mask[r], g[r])
+        iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
 
 
-def _decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H):
+def decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H):
     """``(settle, iwc, lam_1)`` (n,): the lanes that settle now, those that are IWC now if also
-    :func:`_aligned_at_stop` (with the dominant real part ``lam_1``); NumPy or JAX arrays."""
+    :func:`aligned_at_stop` (with the dominant real part ``lam_1``); NumPy or JAX arrays."""
     xp = eb.xp_of(t, p, UE, lam)
     re = lam.real
     lscale = xp.abs(lam).max(axis=1, keepdims=True)
@@ -693,51 +517,7 @@ def _settles_first(p, UE, lam, valid, act, neutral, t, T, k, scale, H):
     return xp.where(neutral, t_amp > T - t, decaying)
 
 
-def _stack(tables, name, ix, mask):
-    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
-    arrays = [getattr(tab, name) for tab in tables]
-    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
-    for m in range(4):
-        sel = mask == m
-        out[sel] = arrays[m][ix[sel]]
-    return out
-
-
-def _z_eq(tables, ix, mask):
-    """Equilibria ``z_eq`` (n, 5) of :func:`light_system`'s modes: ``d_eq`` of the active gaps,
-    zero velocities, NaN for free gaps, 1 last."""
-    z = np.full((ix.size, 5), np.nan)
-    d_eq = _stack(tables, "d_eq", ix, mask)
-    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
-    z[:, :2] = np.where(act, d_eq, np.nan)
-    z[:, 2:4] = np.where(act, 0.0, np.nan)
-    z[:, 4] = 1.0
-    return z
-
-
-def _modal_coordinates(tables, ix, mask, g):
-    """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
-    the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
-    c = np.zeros((ix.size, 4), dtype=complex)
-    for m in (1, 2, 3):
-        sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab, lx = tables[m], ix[sel]
-        c[sel, : 2 * (1 + (m == 3))] = _modal_coords(m, g[sel], tab.d_eq[lx], tab.W[lx])[1]
-    return c
-
-
-def _modal_coords(m, g, d_eq, W):
-    """Deviation ``x`` of the active gaps and velocities from the equilibrium and its
-    coordinates ``c = W x`` (n, na) in configuration ``m`` (1, 2, 3); NumPy or JAX arrays."""
-    xp = eb.xp_of(g, d_eq, W)
-    idx = [i for i in range(2) if m >> i & 1]
-    x = xp.concatenate([g[:, idx] - d_eq[:, idx], g[:, [i + 2 for i in idx]]], axis=1)
-    return x, xp.einsum("nij,nj->ni", W, x)
-
-
-def _aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
+def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     """The reference classifies the divergence as IWC: from the earliest time any gap can reach
     the reference's divergence limits (``1e4 scale``; bound ``|p0| + |p1| s + |p2| s^2 + sum |u|
     exp(max(Re lam, 0) s)``), the components off the dominant eigenvector stay below 1e-2 of the
@@ -781,7 +561,7 @@ def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid
     f, fp = eb.event_functions(d, v, acc, k[r], q[r])
     tol = (h[r] + 1e3 * xtol[r])[:, None]
     cross = (hi[r] <= tol) & (lo[r] <= tol)
-    sn, closing, n_ev = _switch(s[r], cross, f, fp, k[r], scale[r])
+    sn, closing, n_ev = switch(s[r], cross, f, fp, k[r], scale[r])
     lanes_r = ix[r]
     ci, cc = np.nonzero(closing)
     if ci.size:
@@ -789,12 +569,12 @@ def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid
     st.n_events[lanes_r] += n_ev
     has = n_ev > 0
     st.last_event[lanes_r[has]] = t[r][has]
-    b = _bins(t[r], width, st.amp.shape[1])
+    b = bins(t[r], width, st.amp.shape[1])
     st.amp[lanes_r, b] = np.maximum(st.amp[lanes_r, b], np.abs(d))
     s[r] = sn
-    mask[r] = _mask_of(sn)
+    mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
-    P[r], U[r], lam[r], valid[r], H[r], ok = _segments(lanes, tables, lanes_r, mask[r], g)
+    P[r], U[r], lam[r], valid[r], H[r], ok = segments(lanes, tables, lanes_r, mask[r], g)
     tseg[r] = t[r]
     since[r] = 0
     fallback[lanes_r[~ok]] = True
@@ -809,7 +589,7 @@ def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid
 # ----------------------------------------------------------------------------- outcomes
 
 
-def _impact_log(st: _State):
+def _impact_log(st: State):
     """Impacts per lane: ``{lane: (t, speed, contact)}`` in time order."""
     if not st.imp:
         return {}
@@ -822,14 +602,14 @@ def _impact_log(st: _State):
             for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
 
 
-def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
+def _stats(st: State, n, sysm, log, width) -> TrajectoryStats:
     """:class:`atlas.dynamics.TrajectoryStats` of lane ``n`` (a run that stopped undecided)."""
     T = float(st.t[n])
     g = st.g[n]
     t_ev, v_ev, c_ev = log.get(n, (np.zeros(0), np.zeros(0), np.zeros(0, int)))
     states = np.zeros((t_ev.size, 4))
     states[np.arange(t_ev.size), c_ev + 1] = v_ev
-    mode = MODE_NAMES[int(_mask_of(st.s[n : n + 1])[0])]
+    mode = MODE_NAMES[int(mask_of(st.s[n : n + 1])[0])]
     t_imp, v_imp, c_imp = impacts(sysm, mode, g, T, ["impact"] * t_ev.size, t_ev, c_ev, states)
     nb = st.amp.shape[1]
     starts = np.arange(nb) * width
@@ -842,18 +622,18 @@ def _stats(st: _State, n, sysm, log, width) -> TrajectoryStats:
     )  # fmt: skip
 
 
-def _classify_many(st: _State, tables, n, width) -> np.ndarray:
+def _classify_many(st: State, tables, n, width) -> np.ndarray:
     """:func:`atlas.dynamics.classify_stats` (default thresholds) of the stopped lanes ``n``
     (statuses ``t_end``, ``event_cap``, ``diverged``), the same tests in the same order on arrays:
-    :func:`_stats` and :func:`light_system` give the per-lane form of the same inputs."""
+    :func:`_stats` and :func:`atlas.dynamics.modal_form.light_system` give the per-lane form of the same inputs."""
     m = n.size
     out = np.full(m, int(Outcome.UNDETERMINED), dtype=np.int8)
     if m == 0:
         return out
     T, g, status, scale = st.t[n], st.g[n], st.status[n], st.scale[n]
     last = st.last_event[n]
-    mask = _mask_of(st.s[n])
-    E = _stack(tables, "E", n, mask)
+    mask = mask_of(st.s[n])
+    E = stack_table(tables, "E", n, mask)
     z1 = np.concatenate([g, np.ones((m, 1))], axis=1)
     acc = np.einsum("nij,nj->ni", E[:, 2:4], z1)
     act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
@@ -867,22 +647,22 @@ def _classify_many(st: _State, tables, n, width) -> np.ndarray:
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
     r = np.flatnonzero(iwc)
-    iwc[r] = iwc_aligned_many(E[r], _z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
+    iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
     # free gaps leaving (classification._free_gaps_leaving)
-    lam = _stack(tables, "lam", n, mask)
-    valid = _stack(tables, "valid", n, mask)
+    lam = stack_table(tables, "lam", n, mask)
+    valid = stack_table(tables, "valid", n, mask)
     lmax = np.where(valid, np.abs(lam), 0.0).max(axis=1)
     neutral_or_stable = np.all(~valid | (lam.real <= 1e-9 * lmax[:, None]), axis=1)
-    d_eq = _stack(tables, "d_eq", n, mask)
+    d_eq = stack_table(tables, "d_eq", n, mask)
     z = z1.copy()
     z[:, :2] = np.where(act, d_eq, z[:, :2])
     z[:, 2:4] = np.where(act, 0.0, z[:, 2:4])
     acc_eq = np.einsum("nij,nj->ni", E[:, 2:4], z)
     leaving = np.all(act | ((g[:, :2] > 0) & (g[:, 2:] >= 0) & (acc_eq > 0)), axis=1)
     settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
-    decide(settle, np.array([_OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
+    decide(settle, np.array([OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
     # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T
     fly = (mask == 0)[:, None] & (g[:, :2] > 0) & (acc < 0)
     fr, fc = np.nonzero(fly)
@@ -902,7 +682,7 @@ def _classify_many(st: _State, tables, n, width) -> np.ndarray:
     return out
 
 
-def _impacts_of(st: _State, n):
+def _impacts_of(st: State, n):
     """Logged impacts ``(lane, t, speed, contact)`` of the lanes ``n``."""
     if not st.imp:
         return np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0, int)
@@ -912,7 +692,7 @@ def _impacts_of(st: _State, n):
     return lane[sel], t[sel], v[sel], c[sel]
 
 
-def _late_amplitude(st: _State, n, width):
+def _late_amplitude(st: State, n, width):
     """``max |d_i|`` (n, 2) over the bins overlapping ``[2T/3, T]`` (``|d(T)|`` if none)."""
     T = st.t[n][:, None]
     starts = np.arange(st.amp.shape[1])[None, :] * width
@@ -994,7 +774,7 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     tables = modal_tables(lanes)
     width = t_end / 3.0
     nbins = int(math.ceil(3 * horizon_cap)) + 1
-    start, run_round = rounds or (_State.start, None)
+    start, run_round = rounds or (State.start, None)
     st = start(lanes, g0, t_end, nbins)
     fallback = np.zeros(g0.shape[0], dtype=bool)
     t_max = horizon_cap * t_end
@@ -1005,7 +785,7 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
             ix = np.arange(g0.shape[0])
             while ix.size:
                 run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
-                ix = ix[(st.status[ix] != _RUNNING) & ~fallback[ix]]
+                ix = ix[(st.status[ix] != RUNNING) & ~fallback[ix]]
                 ix = _classify_stopped(st, tables, ix, width, t_max)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3

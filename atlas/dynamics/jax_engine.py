@@ -12,7 +12,7 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   location takes its ``_ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
   closed form of a new segment is evaluated in all four configurations and selected.
 * The modal forms (``numpy.linalg.eig`` of each configuration, its inverse, equilibria, step caps;
-  :func:`atlas.dynamics.fast_engine.modal_tables`) are computed on the host once per trajectory
+  :func:`atlas.dynamics.modal_form.modal_tables`) are computed on the host once per trajectory
   and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The early IWC stop of the
   reference (an active gap past ``1e3`` penetration limits, aligned with an unstable eigenvector)
   expands the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the
@@ -53,6 +53,7 @@ import numpy as np
 
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import fast_engine as fe
+from atlas.dynamics import modal_form as mf
 from atlas.dynamics.system import Outcome, aligned_in_basis
 
 __all__ = ["run_batch", "kernel", "STEPS", "CHUNK", "NBINS"]
@@ -64,7 +65,7 @@ NBINS = 32
 #: largest batch of one kernel call (fewer running lanes go in batches of 512 or 64)
 CHUNK = 4096
 
-_OUTCOME_OF_MASK = np.array([fe._OUTCOME_OF_MASK[m] for m in range(4)], dtype=np.int8)
+_OUTCOME_OF_MASK = np.array([fe.OUTCOME_OF_MASK[m] for m in range(4)], dtype=np.int8)
 
 
 def _pick(table, mask):
@@ -87,17 +88,17 @@ def _aligned_now(mask, g, prm, tol):
         signs = jnp.all(g[:, sub] < 0, axis=1)
         for i in (i for i in range(2) if not m >> i & 1):
             signs &= (g[:, i] >= 0) & (g[:, i + 2] >= 0)
-        x, c = fe._modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])
+        x, c = mf.modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])
         lam = prm["lam"][:, m, : 2 * len(idx)]
         out.append(signs & aligned_in_basis(lam, prm[f"V{m}"], c, x, len(idx), tol))
     return _select([jnp.zeros_like(out[0])] + out, mask)
 
 
 def _coords(mask, g, prm):
-    """:func:`atlas.dynamics.fast_engine._modal_coordinates` (n, 4) on the modal tables."""
+    """:func:`atlas.dynamics.modal_form.modal_coordinates` (n, 4) on the modal tables."""
     out = [jnp.zeros((g.shape[0], 4), dtype=complex)]
     for m in (1, 2, 3):
-        c = fe._modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])[1]
+        c = mf.modal_coords(m, g, prm["d_eq"][:, m], prm[f"W{m}"])[1]
         out.append(jnp.concatenate([c, jnp.zeros((g.shape[0], 4 - c.shape[1]), complex)], 1))
     return _select(out, mask)
 
@@ -107,7 +108,7 @@ def _segments(g, prm):
     out = []
     for m in range(4):
         V, W = (prm[f"V{m}"], prm[f"W{m}"]) if m else (None, None)
-        out.append(fe._segment(m, g, prm["d_eq"][:, m], V, W, prm["lam"][:, m], prm["B"],
+        out.append(mf.segment(m, g, prm["d_eq"][:, m], V, W, prm["lam"][:, m], prm["B"],
                                prm["a"], prm["k"], prm["q"]))  # fmt: skip
     return [o[0] for o in out], [o[1] for o in out]
 
@@ -126,12 +127,12 @@ def _step(c, prm):
     run, t, s, since, T = c["run"], c["t"], c["s"], c["since"], prm["T"]
     t_max, max_events, width, nbins = (prm[x] for x in ("t_max", "max_events", "width", "nbins"))
     k, q, scale = prm["k"], prm["q"], prm["scale"]
-    mask = fe._mask_of(s)
+    mask = fe.mask_of(s)
     lam, valid, H = _pick(prm["lam"], mask), _pick(prm["valid"], mask), _pick(prm["H"], mask)
     P, U, tseg = c["P"], c["U"], c["tseg"]
     d, v, acc, p, UE = eb.evaluate(P, U, lam, t - tseg)
     g = jnp.concatenate([d, v], axis=1)
-    amp = _bin_max(c["amp"], fe._bins(t, width, nbins), jnp.abs(d), run)
+    amp = _bin_max(c["amp"], fe.bins(t, width, nbins), jnp.abs(d), run)
     # stops of the reference: divergence, horizon
     div = ~jnp.isfinite(g).all(axis=1)
     div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
@@ -152,9 +153,9 @@ def _step(c, prm):
     hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
     # early decisions
     tryd = keep & sched & jnp.all(hi > (t_max - t)[:, None], axis=1)
-    tryd &= fe._may_decide(lam, valid, s, p, act, mask, t, T)
-    settle, iwc, l1 = fe._decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
-    iwc &= fe._aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
+    tryd &= fe.may_decide(lam, valid, s, p, act, mask, t, T)
+    settle, iwc, l1 = fe.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
+    iwc &= fe.aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
     settle &= tryd
     iwc &= tryd & ~settle
     code = jnp.where(settle, jnp.asarray(_OUTCOME_OF_MASK)[mask], c["code"])
@@ -169,13 +170,13 @@ def _step(c, prm):
     one = jnp.arange(4)[None, :] == first[:, None]
     h = jnp.where(one, hi, 0.0).sum(axis=1)
     rem = T - t
-    xtol = fe._XTOL * H
+    xtol = fe.XTOL * H
     ev = keep & (h - m <= xtol) & (h <= rem)
     other = jnp.where(one, np.inf, lo).min(axis=1)
     r = keep & ~ev & (h <= rem) & (other > h)
     lo_f, s_f = jnp.where(one, lo, 0.0).sum(axis=1), jnp.where(one, s, 0.0).sum(axis=1)
-    a_r, b_r = fe._locate_root(P, U, lam, t - tseg, jnp.where(r, lo_f, 0.0),
-                               jnp.where(r, h, 1.0), first, s_f, k, q, xtol, fe._ROOT_ITER)  # fmt: skip
+    a_r, b_r = fe.locate_root(P, U, lam, t - tseg, jnp.where(r, lo_f, 0.0),
+                               jnp.where(r, h, 1.0), first, s_f, k, q, xtol, fe.ROOT_ITER)  # fmt: skip
     done = r & (b_r - a_r <= xtol)
     h = jnp.where(done, b_r, h)
     m = jnp.where(r & ~done, a_r, m)
@@ -187,14 +188,14 @@ def _step(c, prm):
     since = since + 1
     # stalled root location (a grazing contact): the exact simulator takes over
     stall = jnp.where(step < 1e-9 * H, c["stall"] + 1, 0)
-    fallback = c["fallback"] | (keep & (stall > fe._STALL))
+    fallback = c["fallback"] | (keep & (stall > fe.STALL))
     keep &= ~fallback
     ev &= keep
     # events: switch, log, new segment
     d2, v2, acc2, _, _ = eb.evaluate(P, U, lam, t_new - tseg)
     f2, fp2 = eb.event_functions(d2, v2, acc2, k, q)
     tol = (h + 1e3 * xtol)[:, None]
-    sn, closing, n_ev = fe._switch(s, (hi <= tol) & (lo <= tol), f2, fp2, k, scale)
+    sn, closing, n_ev = fe.switch(s, (hi <= tol) & (lo <= tol), f2, fp2, k, scale)
     closing &= ev[:, None]
     hit = closing.any(axis=1)
     ib = jnp.clip(jnp.floor(t_new / width).astype(int), 0, nbins - 1)
@@ -204,9 +205,9 @@ def _step(c, prm):
     c_imp = c["c_imp"].at[rows, ib].set(c["c_imp"][rows, ib] | closing)
     n_events = c["n_events"] + jnp.where(ev, n_ev, 0)
     last_event = jnp.where(ev & (n_ev > 0), t_new, c["last_event"])
-    amp = _bin_max(amp, fe._bins(t_new, width, nbins), jnp.abs(d2), ev)
+    amp = _bin_max(amp, fe.bins(t_new, width, nbins), jnp.abs(d2), ev)
     s_new = jnp.where(ev[:, None], sn, s)
-    mask_new = fe._mask_of(s_new)
+    mask_new = fe.mask_of(s_new)
     Ps, Us = _segments(jnp.concatenate([d2, v2], axis=1), prm)
     ok = _pick(prm["ok"], mask_new)
     fallback |= ev & ~ok
@@ -247,8 +248,8 @@ def kernel(c, prm, *, steps):
 
 
 @dataclasses.dataclass
-class _BinnedState(fe._State):
-    """:class:`atlas.dynamics.fast_engine._State` with the impacts per time bin of ``t_end / 3``:
+class _BinnedState(fe.State):
+    """:class:`atlas.dynamics.fast_engine.State` with the impacts per time bin of ``t_end / 3``:
     count ``n_imp``, largest speed ``v_imp`` (N, nbins), contacts ``c_imp`` (N, nbins, 2), first
     and last impact times."""
 
@@ -304,8 +305,8 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
     lanes ``ix`` step until each is decided, stops or falls back; results written into ``st``
     (one round of :func:`atlas.dynamics.fast_engine.run_lanes`)."""
     nbins = st.amp.shape[1]
-    mask = fe._mask_of(st.s[ix])
-    P, U, _, _, _, ok = fe._segments(lanes, tables, ix, mask, st.g[ix])
+    mask = fe.mask_of(st.s[ix])
+    P, U, _, _, _, ok = mf.segments(lanes, tables, ix, mask, st.g[ix])
     fallback[ix[~ok]] = True
     ix, P, U = ix[ok], P[ok], U[ok]
     n = ix.size
@@ -316,7 +317,7 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
         "tseg": st.t[ix], "since": np.zeros(n, int), "stall": np.zeros(n, int),
         "n_events": st.n_events[ix], "last_event": st.last_event[ix], "amp": st.amp[ix],
         "n_imp": st.n_imp[ix], "v_imp": st.v_imp[ix], "c_imp": st.c_imp[ix],
-        "t_first": st.t_first[ix], "t_last": st.t_last[ix], "status": np.full(n, fe._RUNNING),
+        "t_first": st.t_first[ix], "t_last": st.t_last[ix], "status": np.full(n, fe.RUNNING),
         "code": st.code[ix], "decided_by": st.decided_by[ix], "fallback": np.zeros(n, bool),
     }  # fmt: skip
     prm = {

@@ -10,6 +10,7 @@ import pytest
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
+from atlas.dynamics import modal_form as mf
 from atlas.dynamics import system as SY
 
 PI = math.pi
@@ -46,7 +47,7 @@ def test_degenerate_directions_fall_back_to_the_exact_simulator():
     alpha, k, q = 0.35 * PI, (0.5, 1.0), (0.0, 0.0)
     g0 = np.array([S.perturbed_initial_states(b, b, alpha, 0.5)[c][0] for c in cells])
     b1, b2 = (b[list(c)] for c in zip(*cells, strict=True))
-    tables = F.modal_tables(F.Lanes.of(b1, b2, alpha, k, q))
+    tables = mf.modal_tables(mf.Lanes.of(b1, b2, alpha, k, q))
     assert not tables[2].ok[0]  # FS at beta2 = pi: s2 = 1.2e-16
     assert not tables[3].ok[1]  # SS at beta2 = beta1 + pi: det B ~ 1e-17
     res = F.run_batch(b1, b2, alpha, k, q, g0, reference=_reference)
@@ -127,13 +128,13 @@ def test_locate_root_closes_a_certified_bracket_on_the_root():
     j = np.array([0, 1, 0, 2, 3, 2])
     sj = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])  # the force is negative before its root
     xtol = np.full(n, 1e-12)
-    lo, got = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol)
+    lo, got = F.locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol)
     want = np.where(j < 2, root, root_f)
     assert np.all(got - lo <= xtol)
     assert np.all(got >= want - 1e-15)
     assert np.all(lo <= want + 1e-15)
     # cut short: a bracket of the root all the same
-    lo, hi = F._locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol, 2)
+    lo, hi = F.locate_root(P, U, lam, np.zeros(n), a, b, j, sj, k, q, xtol, 2)
     assert np.all((lo <= want + 1e-15) & (hi >= want - 1e-15) & (lo >= a) & (hi <= b))
 
 
@@ -179,7 +180,7 @@ def test_classify_many_matches_classify_stats(monkeypatch, n, kappa, q, alpha):
         codes = classify(st, tabs, ix, width)
         log = F._impact_log(st)
         for lane, code in zip(ix, codes, strict=True):
-            sysm = F.light_system(lanes_of[id(tabs)], tabs, lane)
+            sysm = mf.light_system(lanes_of[id(tabs)], tabs, lane)
             seen.append((int(code), int(S.classify_stats(F._stats(st, lane, sysm, log, width),
                                                          sysm))))  # fmt: skip
         return codes

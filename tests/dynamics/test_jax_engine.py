@@ -11,6 +11,7 @@ import pytest
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
 from atlas.dynamics import jax_engine as J
+from atlas.dynamics import modal_form as mf
 from atlas.dynamics.outcomes import Dynamics
 
 PI = math.pi
@@ -117,7 +118,7 @@ def test_binned_impact_statistics_equal_the_logged_ones(doublings):
     t_end, nbins, m = 150.0, 25, 6
     T = np.full(m, t_end * 2**doublings)
     T[0] = t_end  # lanes at different horizons
-    st = J._BinnedState.start(F.Lanes.of(0.3, 2.0, 1.0, (0.5, 1.0), 0.0), np.ones((m, 4)),
+    st = J._BinnedState.start(mf.Lanes.of(0.3, 2.0, 1.0, (0.5, 1.0), 0.0), np.ones((m, 4)),
                               t_end, nbins)  # fmt: skip
     st.t[:] = T
     row = rng.integers(0, m, 200)

@@ -1,0 +1,250 @@
+"""The modal form of each contact configuration of a trajectory (paper eqs. 1, 6-8), precomputed
+once per trajectory and shared by the outcome engines (:mod:`atlas.dynamics.fast_engine` on NumPy,
+:mod:`atlas.dynamics.jax_engine` on JAX).
+
+Per configuration ``S`` (mask: bit ``i`` set when contact ``i + 1`` is closed) the active gaps and
+velocities obey ``x' = A_S x`` about the equilibrium ``d_eq``; with ``A_S = V diag(lambda) W`` a
+segment from the state ``g`` is, for every gap, ``d(t) = p0 + p1 t + p2 t^2 + sum_m U_m
+exp(lambda_m t)`` (:func:`segments`, :func:`segment`).  A configuration whose eigenvector matrix
+``V`` has condition number ``>= 1e4`` (or whose equilibrium is ill-posed) is marked not ``ok``: its
+lanes fall back to the exact simulator (see the fast engine's docstring for why).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from atlas.dynamics import event_bounds as eb
+from atlas.dynamics.system import Mode, System
+
+__all__ = [
+    "Lanes", "ModalTable", "modal_tables", "light_system", "segments", "segment",
+    "stack_table", "z_eq", "modal_coordinates", "modal_coords",
+]  # fmt: skip
+
+_COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
+
+
+@dataclasses.dataclass
+class Lanes:
+    """Parameters of ``N`` trajectories: ``B`` (N, 2, 2), ``a`` (N, 2), ``k``, ``q`` (N, 2)."""
+
+    B: np.ndarray
+    a: np.ndarray
+    k: np.ndarray
+    q: np.ndarray
+
+    @classmethod
+    def of(cls, beta1, beta2, alpha, k, q):
+        """Unit ``|b_j|``, ``|a|`` (SPEC §1); inputs broadcast to ``(N,)``."""
+        beta1, beta2, alpha = np.broadcast_arrays(
+            *(np.atleast_1d(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha))
+        )
+        n = beta1.size
+        B = np.empty((n, 2, 2))
+        B[:, 0, 0], B[:, 1, 0] = np.cos(beta1.ravel()), np.sin(beta1.ravel())
+        B[:, 0, 1], B[:, 1, 1] = np.cos(beta2.ravel()), np.sin(beta2.ravel())
+        a = np.stack([np.cos(alpha.ravel()), np.sin(alpha.ravel())], axis=1)
+        kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
+        qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
+        return cls(B, a, kk, qq)
+
+    def E(self, mask: int) -> np.ndarray:
+        """Augmented matrices ``[[A_S, c_S], [0, 0]]`` (N, 5, 5) of configuration ``mask``."""
+        return _augmented(self.B, self.a, self.k, self.q, mask)
+
+
+@dataclasses.dataclass
+class ModalTable:
+    """Modal form of one configuration for ``N`` lanes: eigenvalues ``lam`` (N, 4; unused
+    entries 0 with ``valid`` False), right/left eigenvector blocks ``V``, ``W`` (N, na, na) of
+    the active subsystem, equilibrium ``d_eq`` (N, 2; NaN for free gaps), ``H`` step cap,
+    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5)."""
+
+    mask: int
+    lam: np.ndarray
+    valid: np.ndarray
+    V: np.ndarray
+    W: np.ndarray
+    d_eq: np.ndarray
+    H: np.ndarray
+    ok: np.ndarray
+    E: np.ndarray
+
+
+def modal_tables(lanes: Lanes) -> list[ModalTable]:
+    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS)."""
+    n = lanes.a.shape[0]
+    omega = np.sqrt(np.max(lanes.k, axis=1))
+    out = []
+    for mask in range(4):
+        idx = [i for i in range(2) if mask >> i & 1]
+        na = 2 * len(idx)
+        lam = np.zeros((n, 4), dtype=complex)
+        valid = np.zeros((n, 4), dtype=bool)
+        d_eq = np.full((n, 2), np.nan)
+        V = np.zeros((n, na, na), dtype=complex)
+        W = np.zeros((n, na, na), dtype=complex)
+        ok = np.ones(n, dtype=bool)
+        E = lanes.E(mask)
+        if idx:
+            sub = idx + [i + 2 for i in idx]
+            A = E[:, sub][:, :, sub]
+            w, V = np.linalg.eig(A)
+            cond = np.linalg.cond(V)
+            ok = np.isfinite(cond) & (cond < _COND_MAX)
+            V = np.where(ok[:, None, None], V, np.eye(na))
+            W = np.linalg.inv(V)
+            lam[:, :na] = w
+            valid[:, :na] = True
+            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
+            det = np.linalg.det(BS)
+            ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(n, -1).max(axis=1) ** len(idx)
+            BS = np.where(ok[:, None, None], BS, np.eye(len(idx)))
+            d_eq[:, idx] = np.linalg.solve(BS, -lanes.a[:, idx][:, :, None])[:, :, 0]
+            ok &= np.all(np.abs(w) > 0, axis=1)
+        rho = np.abs(lam).max(axis=1)
+        H = 1.0 / np.maximum(rho, 0.25 * omega)
+        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
+    return out
+
+
+def light_system(lanes: Lanes, tables, n: int) -> System:
+    """The :class:`atlas.dynamics.system.System` of lane ``n`` with what
+    :func:`atlas.dynamics.classify_stats` and :func:`atlas.dynamics.system.iwc_aligned` read
+    (``E``, ``eig``, ``stable``, ``z_eq``; no sub-step matrices)."""
+    k = lanes.k[n]
+    modes = []
+    for tab in tables:
+        na = int(tab.valid[n].sum())
+        eig = tab.lam[n, :na]
+        z_eq = None
+        if tab.mask:
+            z_eq = np.full(5, np.nan)
+            idx = [i for i in range(2) if tab.mask >> i & 1]
+            z_eq[idx] = tab.d_eq[n, idx]
+            z_eq[[i + 2 for i in idx]] = 0.0
+            z_eq[4] = 1.0
+        stable = bool(np.all(eig.real < 0)) if na else True
+        modes.append(Mode(tab.mask, tab.E[n], math.nan, None, None, None, eig, stable, z_eq))
+    return System(B=lanes.B[n], a=lanes.a[n], k=k, q=lanes.q[n], L=None, modes=tuple(modes),
+                  omega=math.sqrt(k.max()))  # fmt: skip
+
+
+def _augmented(B, a, k, q, mask):
+    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (paper eqs. 7, 8;
+    as :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
+    act = np.array([mask & 1, (mask >> 1) & 1], dtype=float)
+    E = np.zeros(a.shape[:-1] + (5, 5))
+    E[..., 0, 2] = E[..., 1, 3] = 1.0
+    E[..., 2:4, 0:2] = -B * (k * act)[..., None, :]
+    E[..., 2:4, 2:4] = -B * (q * act)[..., None, :]
+    E[..., 2:4, 4] = -a
+    return E
+
+
+# ----------------------------------------------------------------------------- segments
+
+
+def segments(lanes: Lanes, tables, ix, mask, g):
+    """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
+    configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
+    (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
+    n = ix.size
+    P = np.zeros((n, 2, 3))
+    U = np.zeros((n, 2, 4), dtype=complex)
+    lam = np.zeros((n, 4), dtype=complex)
+    valid = np.zeros((n, 4), dtype=bool)
+    H = np.empty(n)
+    ok = np.ones(n, dtype=bool)
+    for m in range(4):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        tab = tables[m]
+        lx = ix[sel]
+        gs = g[sel]
+        lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
+        V, W = (tab.V[lx], tab.W[lx]) if m else (None, None)
+        P[sel], U[sel] = segment(m, gs, tab.d_eq[lx], V, W, tab.lam[lx], lanes.B[lx],
+                                  lanes.a[lx], lanes.k[lx], lanes.q[lx])  # fmt: skip
+    return P, U, lam, valid, H, ok
+
+
+def segment(m, g, d_eq, V, W, lam, B, a, k, q):
+    """Closed form (``P`` (n, 2, 3), ``U`` (n, 2, 4)) of segments in configuration ``m`` (an
+    int) from the states ``g`` (n, 4): equilibria ``d_eq`` (n, 2), eigenvectors ``V`` and their
+    inverse ``W`` (n, na, na), eigenvalues ``lam`` (n, 4); NumPy or JAX arrays."""
+    xp = eb.xp_of(g, d_eq, lam, B)
+    idx = [i for i in range(2) if m >> i & 1]
+    n = g.shape[0]
+    if not idx:  # FF: d'' = -a
+        P = xp.stack([g[:, :2], g[:, 2:], -0.5 * a], axis=2)
+        return P, xp.zeros((n, 2, 4), dtype=complex)
+    c = modal_coords(m, g, d_eq, W)[1]
+    Ua = V[:, : len(idx), :] * c[:, None, :]  # the active gaps' modal terms (n, len(idx), na)
+    if len(idx) == 2:
+        zero = xp.zeros_like(d_eq)
+        return xp.stack([d_eq, zero, zero], axis=2), Ua
+    # one active contact i, a free gap j: d_j'' = B_ji phi_i - a_j, integrated twice
+    i, j = idx[0], 1 - idx[0]
+    w = -(k[:, i, None] * V[:, 0, :] + q[:, i, None] * V[:, 1, :]) * c  # phi_i modal terms
+    Bji = B[:, j, i]
+    Wm = Bji[:, None] * w
+    lm = lam[:, :2]
+    Uj = Wm / lm**2
+    acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
+    zero = xp.zeros((n,))
+    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
+    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
+                   0.5 * acc0], axis=1)  # fmt: skip
+    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
+    U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
+    return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
+
+
+def stack_table(tables, name, ix, mask):
+    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
+    arrays = [getattr(tab, name) for tab in tables]
+    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
+    for m in range(4):
+        sel = mask == m
+        out[sel] = arrays[m][ix[sel]]
+    return out
+
+
+def z_eq(tables, ix, mask):
+    """Equilibria ``z_eq`` (n, 5) of :func:`light_system`'s modes: ``d_eq`` of the active gaps,
+    zero velocities, NaN for free gaps, 1 last."""
+    z = np.full((ix.size, 5), np.nan)
+    d_eq = stack_table(tables, "d_eq", ix, mask)
+    act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    z[:, :2] = np.where(act, d_eq, np.nan)
+    z[:, 2:4] = np.where(act, 0.0, np.nan)
+    z[:, 4] = 1.0
+    return z
+
+
+def modal_coordinates(tables, ix, mask, g):
+    """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
+    the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
+    c = np.zeros((ix.size, 4), dtype=complex)
+    for m in (1, 2, 3):
+        sel = np.flatnonzero(mask == m)
+        if sel.size == 0:
+            continue
+        tab, lx = tables[m], ix[sel]
+        c[sel, : 2 * (1 + (m == 3))] = modal_coords(m, g[sel], tab.d_eq[lx], tab.W[lx])[1]
+    return c
+
+
+def modal_coords(m, g, d_eq, W):
+    """Deviation ``x`` of the active gaps and velocities from the equilibrium and its
+    coordinates ``c = W x`` (n, na) in configuration ``m`` (1, 2, 3); NumPy or JAX arrays."""
+    xp = eb.xp_of(g, d_eq, W)
+    idx = [i for i in range(2) if m >> i & 1]
+    x = xp.concatenate([g[:, idx] - d_eq[:, idx], g[:, [i + 2 for i in idx]]], axis=1)
+    return x, xp.einsum("nij,nj->ni", W, x)
