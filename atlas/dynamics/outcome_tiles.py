@@ -108,6 +108,16 @@ def _write(path: str, data: bytes) -> None:
         raise
 
 
+def _verified_records(store: str, tiles) -> dict:
+    """``{tile index: record}`` of the tiles of ``store`` whose files check (:func:`_record`)."""
+    recs = {}
+    for i, tile in enumerate(tiles):
+        rec = _record(store, i, tile)
+        if rec is not None:
+            recs[i] = rec
+    return recs
+
+
 def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile, pool=None) -> dict:
     """Compute tile ``i`` (on the processes of ``pool``, if given), write its counts, then its
     record."""
@@ -227,12 +237,7 @@ def outcome_atlas_tiles(
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
     resumed = _prepare(store, plan, resume, overwrite)
-    recs = {}
-    if resumed:
-        for i, tile in enumerate(tiles):
-            rec = _record(store, i, tile)
-            if rec is not None:
-                recs[i] = rec
+    recs = _verified_records(store, tiles) if resumed else {}
     verified = sorted(recs)
     total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
 
