@@ -125,8 +125,6 @@ def hard_exit(code: int):  # pragma: no cover - ends the process
         late = signal.sigpending() & set(_STOP_SIGNALS)
         if late and code == 0:
             code = 128 + min(late)
-    if code == 0 and interrupts.requested() is not None:
-        code = 128 + interrupts.requested()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()

@@ -29,8 +29,7 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
 Classification of the stopped runs and the horizon extension are the NumPy engine's
 (:func:`atlas.dynamics.fast_engine.run_batch`, on the host).
 
-Behind ``atlas simulate --engine jax`` (it replaces the engine of degree-30 Taylor sub-steps: the
-same outcomes, far faster).  Outcomes equal the NumPy engine's cell by cell up to rounding: the
+Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
 floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
 across the ``1e-12 H`` tolerance; on a 128^2 map one cell of 16384 differed, where an impact and
 the amplitude-limit stop coincide within ``2e-12``.  On a 2-core CPU the NumPy engine stays the
