@@ -6,8 +6,9 @@ Per configuration ``S`` (mask: bit ``i`` set when contact ``i + 1`` is closed) t
 velocities obey ``x' = A_S x`` about the equilibrium ``d_eq``; with ``A_S = V diag(lambda) W`` a
 segment from the state ``g`` is, for every gap, ``d(t) = p0 + p1 t + p2 t^2 + sum_m U_m
 exp(lambda_m t)`` (:func:`segments`, :func:`segment`).  A configuration whose eigenvector matrix
-``V`` has condition number ``>= 1e4`` (or whose equilibrium is ill-posed) is marked not ``ok``: its
-lanes fall back to the exact simulator (see the fast engine's docstring for why).
+``V`` may have a condition number ``>= 1e4`` (:func:`cond_bound` reaches it; or whose equilibrium is
+ill-posed) is marked not ``ok``: its lanes fall back to the exact simulator (see the fast engine's
+docstring for why).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from atlas.dynamics.system import Mode, System
 
 __all__ = [
     "Lanes", "ModalTable", "modal_tables", "light_system", "segments", "segment",
-    "stack_table", "z_eq", "modal_coordinates", "modal_coords",
+    "stack_table", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
 ]  # fmt: skip
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
@@ -76,7 +77,9 @@ class ModalTable:
 
 
 def modal_tables(lanes: Lanes) -> list[ModalTable]:
-    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS)."""
+    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS).  Each distinct active
+    subsystem is solved once (:func:`_distinct`; on a ``(beta1, beta2)`` grid ``SF`` depends on
+    ``beta1`` only, ``FS`` on ``beta2``, and the perturbations of a cell share all four)."""
     n = lanes.a.shape[0]
     omega = np.sqrt(np.max(lanes.k, axis=1))
     out = []
@@ -86,30 +89,92 @@ def modal_tables(lanes: Lanes) -> list[ModalTable]:
         lam = np.zeros((n, 4), dtype=complex)
         valid = np.zeros((n, 4), dtype=bool)
         d_eq = np.full((n, 2), np.nan)
-        V = np.zeros((n, na, na), dtype=complex)
-        W = np.zeros((n, na, na), dtype=complex)
+        V = W = np.zeros((n, na, na), dtype=complex)
         ok = np.ones(n, dtype=bool)
         E = lanes.E(mask)
         if idx:
             sub = idx + [i + 2 for i in idx]
             A = E[:, sub][:, :, sub]
-            w, V = np.linalg.eig(A)
-            cond = np.linalg.cond(V)
-            ok = np.isfinite(cond) & (cond < _COND_MAX)
-            V = np.where(ok[:, None, None], V, np.eye(na))
-            W = np.linalg.inv(V)
+            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
+            a_S = lanes.a[:, idx]
+            first, inv = _distinct(A, BS, a_S)
+            w, V, W, d_S, ok = (x[inv] for x in _active_modes(A[first], BS[first], a_S[first]))
             lam[:, :na] = w
             valid[:, :na] = True
-            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
-            det = np.linalg.det(BS)
-            ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(n, -1).max(axis=1) ** len(idx)
-            BS = np.where(ok[:, None, None], BS, np.eye(len(idx)))
-            d_eq[:, idx] = np.linalg.solve(BS, -lanes.a[:, idx][:, :, None])[:, :, 0]
-            ok &= np.all(np.abs(w) > 0, axis=1)
+            d_eq[:, idx] = d_S
         rho = np.abs(lam).max(axis=1)
         H = 1.0 / np.maximum(rho, 0.25 * omega)
         out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
     return out
+
+
+def _distinct(*arrays):
+    """Rows ``first`` of the distinct lanes (bitwise equal in every array, ``(n, ...)``) and
+    ``inv`` (n,) with lane ``r`` equal to lane ``first[inv[r]]``."""
+    n = arrays[0].shape[0]
+    key = np.ascontiguousarray(np.concatenate([x.reshape(n, -1) for x in arrays], axis=1))
+    rows = key.view(np.dtype((np.void, key.dtype.itemsize * key.shape[1]))).ravel()
+    _, first, inv = np.unique(rows, return_index=True, return_inverse=True)
+    return first, inv.ravel()
+
+
+def _active_modes(A, BS, a_S):
+    """Eigenvalues ``w`` (n, na), eigenvectors ``V`` and inverse ``W`` (n, na, na) of the active
+    subsystems ``A`` (n, na, na) (LAPACK ``geev``, ``gesv`` per matrix; the identity where not
+    ``ok``), the equilibria ``d_S`` (n, na / 2) of ``BS d_S = -a_S`` (paper eq. 8 with ``g' =
+    0``) and ``ok`` (n,): the condition of ``V`` below ``1e4`` (:func:`cond_bound`), ``BS``
+    not singular, no zero eigenvalue."""
+    m, na = A.shape[:2]
+    w, V = np.linalg.eig(A)  # real arrays if every eigenvalue of the batch is real
+    V = V.astype(complex)  # each lane's ``W`` by complex arithmetic, whatever the batch
+    W = _inverse(V)
+    ok = cond_bound(V, W) < _COND_MAX
+    V = np.where(ok[:, None, None], V, np.eye(na))
+    W = np.where(ok[:, None, None], W, np.eye(na))
+    det = np.linalg.det(BS)
+    ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(m, -1).max(axis=1) ** (na // 2)
+    BS = np.where(ok[:, None, None], BS, np.eye(na // 2))
+    d_S = np.linalg.solve(BS, -a_S[:, :, None])[:, :, 0]
+    ok &= np.all(np.abs(w) > 0, axis=1)
+    return w, V, W, d_S, ok
+
+
+def _inverse(V):
+    """``V^-1`` (n, na, na) by LAPACK ``gesv`` per matrix; an exactly singular matrix gets NaN."""
+    try:
+        return np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        W = np.full_like(V, np.nan)
+        for r in range(V.shape[0]):  # only when some matrix is exactly singular
+            try:
+                W[r] = np.linalg.inv(V[r])
+            except np.linalg.LinAlgError:
+                pass
+        return W
+
+
+def cond_bound(V, W):
+    """Upper bound (n,) of the 2-norm condition number ``cond(V) = |V|_2 |V^-1|_2`` of the
+    matrices ``V`` (n, na, na) from a computed inverse ``W`` (any ``W``: its error is bounded
+    here); ``inf`` where no bound follows (also for NaN or overflow).
+
+    With ``R = W V - I`` and ``|R|_2 < 1``, ``V^-1 = (I + R)^-1 W`` gives ``|V^-1|_2 <= |W|_2 /
+    (1 - |R|_2)``, so ``cond(V) <= |V|_F |W|_F / (1 - |R|_F)``.  The floating-point product
+    ``fl(W V)`` differs from ``W V`` by at most ``gamma |W| |V|`` entrywise (``gamma = na u`` real,
+    ``< 2 na u`` complex; ``u = 2^-53``, Higham 2002, Sec. 3.5-3.6), whose Frobenius norm is at most
+    ``gamma |W|_F |V|_F``: the computed residual is raised by ``4 na u |W|_F |V|_F``, and the
+    result by ``1e-12`` relative for the rounding of the norms.  The bound exceeds ``cond(V)`` by
+    at most ``na / (1 - r)`` (``|M|_F <= sqrt(na) |M|_2``)."""
+    na = V.shape[-1]
+    with np.errstate(all="ignore"):
+        fv = np.sqrt(np.sum(V.real**2 + V.imag**2, axis=(1, 2)))
+        fw = np.sqrt(np.sum(W.real**2 + W.imag**2, axis=(1, 2)))
+        R = W @ V
+        R[:, np.arange(na), np.arange(na)] -= 1.0
+        prod = fv * fw
+        r = np.sqrt(np.sum(R.real**2 + R.imag**2, axis=(1, 2))) + 4 * na * 2.0**-53 * prod
+        bound = (1 + 1e-12) * prod / (1 - r)
+    return np.where((r < 1) & np.isfinite(bound), bound, np.inf)
 
 
 def light_system(lanes: Lanes, tables, n: int) -> System:
