@@ -22,7 +22,7 @@ from atlas.dynamics import event_bounds as eb
 from atlas.dynamics.system import Mode, System
 
 __all__ = [
-    "Lanes", "ModalTable", "modal_tables", "light_system", "segments", "segment",
+    "Lanes", "ModalTable", "ModalTables", "modal_tables", "light_system", "segments", "segment",
     "stack_table", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
 ]  # fmt: skip
 
@@ -76,36 +76,50 @@ class ModalTable:
     E: np.ndarray
 
 
-def modal_tables(lanes: Lanes) -> list[ModalTable]:
+class ModalTables(list):
+    """The four :class:`ModalTable` of the lanes (``tables[mask]``) and their entries ``lam``,
+    ``valid``, ``d_eq``, ``H``, ``ok``, ``E`` stacked by configuration (4, N, ...) as attributes
+    (each table's entry is a view of one slice), for one gather ``x[mask, ix]`` over mixed
+    configurations (:func:`stack_table`)."""
+
+    def __init__(self, tables, stacked):
+        super().__init__(tables)
+        self.__dict__.update(stacked)
+
+
+def modal_tables(lanes: Lanes) -> ModalTables:
     """The four :class:`ModalTable` of every lane (FF, SF, FS, SS).  Each distinct active
     subsystem is solved once (:func:`_distinct`; on a ``(beta1, beta2)`` grid ``SF`` depends on
     ``beta1`` only, ``FS`` on ``beta2``, and the perturbations of a cell share all four)."""
     n = lanes.a.shape[0]
     omega = np.sqrt(np.max(lanes.k, axis=1))
+    st = {
+        "lam": np.zeros((4, n, 4), dtype=complex), "valid": np.zeros((4, n, 4), dtype=bool),
+        "d_eq": np.full((4, n, 2), np.nan), "H": np.empty((4, n)), "ok": np.ones((4, n), bool),
+        "E": np.empty((4, n, 5, 5)),
+    }  # fmt: skip
     out = []
     for mask in range(4):
         idx = [i for i in range(2) if mask >> i & 1]
         na = 2 * len(idx)
-        lam = np.zeros((n, 4), dtype=complex)
-        valid = np.zeros((n, 4), dtype=bool)
-        d_eq = np.full((n, 2), np.nan)
+        lam, valid, d_eq, ok, E = (st[x][mask] for x in ("lam", "valid", "d_eq", "ok", "E"))
         V = W = np.zeros((n, na, na), dtype=complex)
-        ok = np.ones(n, dtype=bool)
-        E = lanes.E(mask)
+        E[...] = lanes.E(mask)
         if idx:
             sub = idx + [i + 2 for i in idx]
             A = E[:, sub][:, :, sub]
             BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
             a_S = lanes.a[:, idx]
             first, inv = _distinct(A, BS, a_S)
-            w, V, W, d_S, ok = (x[inv] for x in _active_modes(A[first], BS[first], a_S[first]))
+            w, V, W, d_S, ok[:] = (x[inv] for x in _active_modes(A[first], BS[first], a_S[first]))
             lam[:, :na] = w
             valid[:, :na] = True
             d_eq[:, idx] = d_S
         rho = np.abs(lam).max(axis=1)
-        H = 1.0 / np.maximum(rho, 0.25 * omega)
+        H = st["H"][mask]
+        H[:] = 1.0 / np.maximum(rho, 0.25 * omega)
         out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
-    return out
+    return ModalTables(out, st)
 
 
 def _distinct(*arrays):
@@ -214,29 +228,36 @@ def _augmented(B, a, k, q, mask):
 # ----------------------------------------------------------------------------- segments
 
 
-def segments(lanes: Lanes, tables, ix, mask, g):
+def segments(lanes: Lanes, tables: ModalTables, ix, mask, g):
     """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
     configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
     (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
     n = ix.size
-    P = np.zeros((n, 2, 3))
-    U = np.zeros((n, 2, 4), dtype=complex)
-    lam = np.zeros((n, 4), dtype=complex)
-    valid = np.zeros((n, 4), dtype=bool)
-    H = np.empty(n)
-    ok = np.ones(n, dtype=bool)
-    for m in range(4):
+    lam, valid, H, ok, d_eq = (stack_table(tables, x, ix, mask) for x in _SEGMENT_ENTRIES)
+    present = [m for m in range(4) if (mask == m).any()]
+    if len(present) == 1:
+        return (*_segment_of(lanes, tables, present[0], ix, g, d_eq, lam), lam, valid, H, ok)
+    P = np.empty((n, 2, 3))
+    U = np.empty((n, 2, 4), dtype=complex)
+    for m in present:
         sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab = tables[m]
-        lx = ix[sel]
-        gs = g[sel]
-        lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
-        V, W = (tab.V[lx], tab.W[lx]) if m else (None, None)
-        P[sel], U[sel] = segment(m, gs, tab.d_eq[lx], V, W, tab.lam[lx], lanes.B[lx],
-                                  lanes.a[lx], lanes.k[lx], lanes.q[lx])  # fmt: skip
+        P[sel], U[sel] = _segment_of(lanes, tables, m, ix[sel], g[sel], d_eq[sel], lam[sel])
     return P, U, lam, valid, H, ok
+
+
+_SEGMENT_ENTRIES = ("lam", "valid", "H", "ok", "d_eq")
+
+
+def _segment_of(lanes, tables, m, lx, g, d_eq, lam):
+    """:func:`segment` of the lanes ``lx`` all in configuration ``m`` (NumPy): only the
+    parameters that configuration reads are gathered."""
+    if m == 0:
+        return segment(0, g, d_eq, None, None, lam, None, lanes.a[lx], None, None)
+    tab = tables[m]
+    V, W = tab.V[lx], tab.W[lx]
+    if m == 3:
+        return segment(3, g, d_eq, V, W, lam, None, None, None, None)
+    return segment(m, g, d_eq, V, W, lam, lanes.B[lx], lanes.a[lx], lanes.k[lx], lanes.q[lx])
 
 
 def segment(m, g, d_eq, V, W, lam, B, a, k, q):
@@ -271,14 +292,10 @@ def segment(m, g, d_eq, V, W, lam, B, a, k, q):
     return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
 
 
-def stack_table(tables, name, ix, mask):
-    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
-    arrays = [getattr(tab, name) for tab in tables]
-    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
-    for m in range(4):
-        sel = mask == m
-        out[sel] = arrays[m][ix[sel]]
-    return out
+def stack_table(tables: ModalTables, name, ix, mask):
+    """Table entry ``name`` (``lam``, ``valid``, ``d_eq``, ``H``, ``ok``, ``E``) of the
+    configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
+    return getattr(tables, name)[mask, ix]
 
 
 def z_eq(tables, ix, mask):
@@ -297,12 +314,12 @@ def modal_coordinates(tables, ix, mask, g):
     """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
     the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
     c = np.zeros((ix.size, 4), dtype=complex)
+    d_eq = stack_table(tables, "d_eq", ix, mask)
     for m in (1, 2, 3):
         sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab, lx = tables[m], ix[sel]
-        c[sel, : 2 * (1 + (m == 3))] = modal_coords(m, g[sel], tab.d_eq[lx], tab.W[lx])[1]
+        if sel.size:
+            W = tables[m].W[ix[sel]]
+            c[sel, : 2 * (1 + (m == 3))] = modal_coords(m, g[sel], d_eq[sel], W)[1]
     return c
 
 
@@ -310,6 +327,6 @@ def modal_coords(m, g, d_eq, W):
     """Deviation ``x`` of the active gaps and velocities from the equilibrium and its
     coordinates ``c = W x`` (n, na) in configuration ``m`` (1, 2, 3); NumPy or JAX arrays."""
     xp = eb.xp_of(g, d_eq, W)
-    idx = [i for i in range(2) if m >> i & 1]
-    x = xp.concatenate([g[:, idx] - d_eq[:, idx], g[:, [i + 2 for i in idx]]], axis=1)
+    lo, hi = (0 if m & 1 else 1), (2 if m & 2 else 1)  # the active gaps lo .. hi - 1
+    x = xp.concatenate([g[:, lo:hi] - d_eq[:, lo:hi], g[:, lo + 2 : hi + 2]], axis=1)
     return x, xp.einsum("nij,nj->ni", W, x)
