@@ -23,7 +23,7 @@ from atlas.dynamics.system import Mode, System
 
 __all__ = [
     "Lanes", "ModalTable", "ModalTables", "modal_tables", "light_system", "segments", "segment",
-    "stack_table", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
+    "stack_table", "stack_tables", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
 ]  # fmt: skip
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
@@ -52,10 +52,6 @@ class Lanes:
         kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 2)).copy()
         qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
         return cls(B, a, kk, qq)
-
-    def E(self, mask: int) -> np.ndarray:
-        """Augmented matrices ``[[A_S, c_S], [0, 0]]`` (N, 5, 5) of configuration ``mask``."""
-        return _augmented(self.B, self.a, self.k, self.q, mask)
 
 
 @dataclasses.dataclass
@@ -96,7 +92,7 @@ def modal_tables(lanes: Lanes) -> ModalTables:
     st = {
         "lam": np.zeros((4, n, 4), dtype=complex), "valid": np.zeros((4, n, 4), dtype=bool),
         "d_eq": np.full((4, n, 2), np.nan), "H": np.empty((4, n)), "ok": np.ones((4, n), bool),
-        "E": np.empty((4, n, 5, 5)),
+        "E": _augmented(lanes.B, lanes.a, lanes.k, lanes.q, np.arange(4)[:, None]),
     }  # fmt: skip
     out = []
     for mask in range(4):
@@ -104,14 +100,17 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         na = 2 * len(idx)
         lam, valid, d_eq, ok, E = (st[x][mask] for x in ("lam", "valid", "d_eq", "ok", "E"))
         V = W = np.zeros((n, na, na), dtype=complex)
-        E[...] = lanes.E(mask)
         if idx:
             sub = idx + [i + 2 for i in idx]
             A = E[:, sub][:, :, sub]
             BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
             a_S = lanes.a[:, idx]
             first, inv = _distinct(A, BS, a_S)
-            w, V, W, d_S, ok[:] = (x[inv] for x in _active_modes(A[first], BS[first], a_S[first]))
+            if first.size == n:  # all distinct: no gathers
+                w, V, W, d_S, ok[:] = _active_modes(A, BS, a_S)
+            else:
+                modes = _active_modes(A[first], BS[first], a_S[first])
+                w, V, W, d_S, ok[:] = (x[inv] for x in modes)
             lam[:, :na] = w
             valid[:, :na] = True
             d_eq[:, idx] = d_S
@@ -214,10 +213,12 @@ def light_system(lanes: Lanes, tables, n: int) -> System:
 
 
 def _augmented(B, a, k, q, mask):
-    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (paper eqs. 7, 8;
-    as :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
-    act = np.array([mask & 1, (mask >> 1) & 1], dtype=float)
-    E = np.zeros(a.shape[:-1] + (5, 5))
+    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (an int, or an
+    integer array broadcasting against the lanes) (paper eqs. 7, 8; as
+    :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
+    m = np.asarray(mask)
+    act = np.stack([m & 1, (m >> 1) & 1], axis=-1).astype(float)
+    E = np.zeros(np.broadcast_shapes(a.shape[:-1], act.shape[:-1]) + (5, 5))
     E[..., 0, 2] = E[..., 1, 3] = 1.0
     E[..., 2:4, 0:2] = -B * (k * act)[..., None, :]
     E[..., 2:4, 2:4] = -B * (q * act)[..., None, :]
@@ -233,9 +234,9 @@ def segments(lanes: Lanes, tables: ModalTables, ix, mask, g):
     configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
     (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
     n = ix.size
-    lam, valid, H, ok, d_eq = (stack_table(tables, x, ix, mask) for x in _SEGMENT_ENTRIES)
-    present = [m for m in range(4) if (mask == m).any()]
-    if len(present) == 1:
+    lam, valid, H, ok, d_eq = stack_tables(tables, _SEGMENT_ENTRIES, ix, mask)
+    present = np.flatnonzero(np.bincount(mask, minlength=4))
+    if present.size == 1:
         return (*_segment_of(lanes, tables, present[0], ix, g, d_eq, lam), lam, valid, H, ok)
     P = np.empty((n, 2, 3))
     U = np.empty((n, 2, 4), dtype=complex)
@@ -295,7 +296,17 @@ def segment(m, g, d_eq, V, W, lam, B, a, k, q):
 def stack_table(tables: ModalTables, name, ix, mask):
     """Table entry ``name`` (``lam``, ``valid``, ``d_eq``, ``H``, ``ok``, ``E``) of the
     configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
-    return getattr(tables, name)[mask, ix]
+    return stack_tables(tables, (name,), ix, mask)[0]
+
+
+def stack_tables(tables: ModalTables, names, ix, mask):
+    """:func:`stack_table` of several entries (one index computation)."""
+    flat = mask * tables.ok.shape[1] + ix
+    out = []
+    for name in names:
+        x = getattr(tables, name)
+        out.append(x.reshape((-1,) + x.shape[2:]).take(flat, axis=0))
+    return out
 
 
 def z_eq(tables, ix, mask):
