@@ -285,10 +285,9 @@ def segment(m, g, d_eq, V, W, lam, B, a, k, q):
     Uj = Wm / lm**2
     acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
     zero = xp.zeros((n,))
-    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
-    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
-                   0.5 * acc0], axis=1)  # fmt: skip
-    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
+    Pi = [d_eq[:, i], zero, zero]
+    Pj = [g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real, 0.5 * acc0]
+    P = xp.stack(Pi + Pj if i == 0 else Pj + Pi, axis=1).reshape(n, 2, 3)
     U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
     return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
 
@@ -301,7 +300,7 @@ def stack_table(tables: ModalTables, name, ix, mask):
 
 def stack_tables(tables: ModalTables, names, ix, mask):
     """:func:`stack_table` of several entries (one index computation)."""
-    flat = mask * tables.ok.shape[1] + ix
+    flat = np.asarray(mask, dtype=np.intp) * tables.ok.shape[1] + ix
     out = []
     for name in names:
         x = getattr(tables, name)
