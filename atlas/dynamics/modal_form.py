@@ -172,12 +172,15 @@ def cond_bound(V, W):
     here); ``inf`` where no bound follows (also for NaN or overflow).
 
     With ``R = W V - I`` and ``|R|_2 < 1``, ``V^-1 = (I + R)^-1 W`` gives ``|V^-1|_2 <= |W|_2 /
-    (1 - |R|_2)``, so ``cond(V) <= |V|_F |W|_F / (1 - |R|_F)``.  The floating-point product
-    ``fl(W V)`` differs from ``W V`` by at most ``gamma |W| |V|`` entrywise (``gamma = na u`` real,
-    ``< 2 na u`` complex; ``u = 2^-53``, Higham 2002, Sec. 3.5-3.6), whose Frobenius norm is at most
-    ``gamma |W|_F |V|_F``: the computed residual is raised by ``4 na u |W|_F |V|_F``, and the
-    result by ``1e-12`` relative for the rounding of the norms.  The bound exceeds ``cond(V)`` by
-    at most ``na / (1 - r)`` (``|M|_F <= sqrt(na) |M|_2``)."""
+    (1 - |R|_2)``, so ``cond(V) <= |V|_F |W|_F / (1 - |R|_F)``.  Rounding: a complex inner
+    product of length ``na`` is computed within ``sqrt(2) gamma_(na + 2) |w|^T |v|`` (``gamma_m =
+    m u / (1 - m u)``, ``u = 2^-53``; Higham 2002, Sec. 3.6), so ``|fl(W V) - W V|_F <= sqrt(2)
+    gamma_(na + 2) |W|_F |V|_F``; with the subtraction of ``I`` this is below the ``4 na u |W|_F
+    |V|_F`` added to the computed ``|R|_F`` (``na`` = 2, 4).  The norms' own rounding (relative
+    ``< 1e-14``) is covered by the factor ``1 + 1e-12``.  Against an SVD-computed condition
+    (relative error ``~ u cond``): ``|M|_F >= |M|_2 sqrt(1 + 1 / cond^2)`` for ``M = V, W``, so
+    near ``cond = 1e4`` the bound exceeds ``cond`` by a relative ``>= 1e-8``.  The bound exceeds
+    ``cond(V)`` by at most ``na / (1 - r)`` (``|M|_F <= sqrt(na) |M|_2``)."""
     na = V.shape[-1]
     with np.errstate(all="ignore"):
         fv = np.sqrt(np.sum(V.real**2 + V.imag**2, axis=(1, 2)))
