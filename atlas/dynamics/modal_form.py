@@ -6,8 +6,9 @@ Per configuration ``S`` (mask: bit ``i`` set when contact ``i + 1`` is closed) t
 velocities obey ``x' = A_S x`` about the equilibrium ``d_eq``; with ``A_S = V diag(lambda) W`` a
 segment from the state ``g`` is, for every gap, ``d(t) = p0 + p1 t + p2 t^2 + sum_m U_m
 exp(lambda_m t)`` (:func:`segments`, :func:`segment`).  A configuration whose eigenvector matrix
-``V`` has condition number ``>= 1e4`` (or whose equilibrium is ill-posed) is marked not ``ok``: its
-lanes fall back to the exact simulator (see the fast engine's docstring for why).
+``V`` may have a condition number ``>= 1e4`` (:func:`cond_bound` reaches it; or whose equilibrium is
+ill-posed) is marked not ``ok``: its lanes fall back to the exact simulator (see the fast engine's
+docstring for why).
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ from atlas.dynamics import event_bounds as eb
 from atlas.dynamics.system import Mode, System
 
 __all__ = [
-    "Lanes", "ModalTable", "modal_tables", "light_system", "segments", "segment",
-    "stack_table", "z_eq", "modal_coordinates", "modal_coords",
+    "Lanes", "ModalTable", "ModalTables", "modal_tables", "light_system", "segments", "segment",
+    "stack_table", "stack_tables", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
 ]  # fmt: skip
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
@@ -52,10 +53,6 @@ class Lanes:
         qq = np.broadcast_to(np.asarray(q, dtype=float), (n, 2)).copy()
         return cls(B, a, kk, qq)
 
-    def E(self, mask: int) -> np.ndarray:
-        """Augmented matrices ``[[A_S, c_S], [0, 0]]`` (N, 5, 5) of configuration ``mask``."""
-        return _augmented(self.B, self.a, self.k, self.q, mask)
-
 
 @dataclasses.dataclass
 class ModalTable:
@@ -75,41 +72,125 @@ class ModalTable:
     E: np.ndarray
 
 
-def modal_tables(lanes: Lanes) -> list[ModalTable]:
-    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS)."""
+class ModalTables(list):
+    """The four :class:`ModalTable` of the lanes (``tables[mask]``) and their entries ``lam``,
+    ``valid``, ``d_eq``, ``H``, ``ok``, ``E`` stacked by configuration (4, N, ...) as attributes
+    (each table's entry is a view of one slice), for one gather ``x[mask, ix]`` over mixed
+    configurations (:func:`stack_table`)."""
+
+    def __init__(self, tables, stacked):
+        super().__init__(tables)
+        self.__dict__.update(stacked)
+
+
+def modal_tables(lanes: Lanes) -> ModalTables:
+    """The four :class:`ModalTable` of every lane (FF, SF, FS, SS).  Each distinct active
+    subsystem is solved once (:func:`_distinct`; on a ``(beta1, beta2)`` grid ``SF`` depends on
+    ``beta1`` only, ``FS`` on ``beta2``, and the perturbations of a cell share all four)."""
     n = lanes.a.shape[0]
     omega = np.sqrt(np.max(lanes.k, axis=1))
+    st = {
+        "lam": np.zeros((4, n, 4), dtype=complex), "valid": np.zeros((4, n, 4), dtype=bool),
+        "d_eq": np.full((4, n, 2), np.nan), "H": np.empty((4, n)), "ok": np.ones((4, n), bool),
+        "E": _augmented(lanes.B, lanes.a, lanes.k, lanes.q, np.arange(4)[:, None]),
+    }  # fmt: skip
     out = []
     for mask in range(4):
         idx = [i for i in range(2) if mask >> i & 1]
         na = 2 * len(idx)
-        lam = np.zeros((n, 4), dtype=complex)
-        valid = np.zeros((n, 4), dtype=bool)
-        d_eq = np.full((n, 2), np.nan)
-        V = np.zeros((n, na, na), dtype=complex)
-        W = np.zeros((n, na, na), dtype=complex)
-        ok = np.ones(n, dtype=bool)
-        E = lanes.E(mask)
+        lam, valid, d_eq, ok, E = (st[x][mask] for x in ("lam", "valid", "d_eq", "ok", "E"))
+        V = W = np.zeros((n, na, na), dtype=complex)
         if idx:
             sub = idx + [i + 2 for i in idx]
             A = E[:, sub][:, :, sub]
-            w, V = np.linalg.eig(A)
-            cond = np.linalg.cond(V)
-            ok = np.isfinite(cond) & (cond < _COND_MAX)
-            V = np.where(ok[:, None, None], V, np.eye(na))
-            W = np.linalg.inv(V)
+            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
+            a_S = lanes.a[:, idx]
+            first, inv = _distinct(A, BS, a_S)
+            if first.size == n:  # all distinct: no gathers
+                w, V, W, d_S, ok[:] = _active_modes(A, BS, a_S)
+            else:
+                modes = _active_modes(A[first], BS[first], a_S[first])
+                w, V, W, d_S, ok[:] = (x[inv] for x in modes)
             lam[:, :na] = w
             valid[:, :na] = True
-            BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
-            det = np.linalg.det(BS)
-            ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(n, -1).max(axis=1) ** len(idx)
-            BS = np.where(ok[:, None, None], BS, np.eye(len(idx)))
-            d_eq[:, idx] = np.linalg.solve(BS, -lanes.a[:, idx][:, :, None])[:, :, 0]
-            ok &= np.all(np.abs(w) > 0, axis=1)
+            d_eq[:, idx] = d_S
         rho = np.abs(lam).max(axis=1)
-        H = 1.0 / np.maximum(rho, 0.25 * omega)
+        H = st["H"][mask]
+        H[:] = 1.0 / np.maximum(rho, 0.25 * omega)
         out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
-    return out
+    return ModalTables(out, st)
+
+
+def _distinct(*arrays):
+    """Rows ``first`` of the distinct lanes (bitwise equal in every array, ``(n, ...)``) and
+    ``inv`` (n,) with lane ``r`` equal to lane ``first[inv[r]]``."""
+    n = arrays[0].shape[0]
+    key = np.ascontiguousarray(np.concatenate([x.reshape(n, -1) for x in arrays], axis=1))
+    rows = key.view(np.dtype((np.void, key.dtype.itemsize * key.shape[1]))).ravel()
+    _, first, inv = np.unique(rows, return_index=True, return_inverse=True)
+    return first, inv.ravel()
+
+
+def _active_modes(A, BS, a_S):
+    """Eigenvalues ``w`` (n, na), eigenvectors ``V`` and inverse ``W`` (n, na, na) of the active
+    subsystems ``A`` (n, na, na) (LAPACK ``geev``, ``gesv`` per matrix; the identity where not
+    ``ok``), the equilibria ``d_S`` (n, na / 2) of ``BS d_S = -a_S`` (paper eq. 8 with ``g' =
+    0``) and ``ok`` (n,): the condition of ``V`` below ``1e4`` (:func:`cond_bound`), ``BS``
+    not singular, no zero eigenvalue."""
+    m, na = A.shape[:2]
+    w, V = np.linalg.eig(A)  # real arrays if every eigenvalue of the batch is real
+    V = V.astype(complex)  # each lane's ``W`` by complex arithmetic, whatever the batch
+    W = _inverse(V)
+    ok = cond_bound(V, W) < _COND_MAX
+    V = np.where(ok[:, None, None], V, np.eye(na))
+    W = np.where(ok[:, None, None], W, np.eye(na))
+    det = np.linalg.det(BS)
+    ok &= np.abs(det) > 1e-12 * np.abs(BS).reshape(m, -1).max(axis=1) ** (na // 2)
+    BS = np.where(ok[:, None, None], BS, np.eye(na // 2))
+    d_S = np.linalg.solve(BS, -a_S[:, :, None])[:, :, 0]
+    ok &= np.all(np.abs(w) > 0, axis=1)
+    return w, V, W, d_S, ok
+
+
+def _inverse(V):
+    """``V^-1`` (n, na, na) by LAPACK ``gesv`` per matrix; an exactly singular matrix gets NaN."""
+    try:
+        return np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        W = np.full_like(V, np.nan)
+        for r in range(V.shape[0]):  # only when some matrix is exactly singular
+            try:
+                W[r] = np.linalg.inv(V[r])
+            except np.linalg.LinAlgError:
+                pass
+        return W
+
+
+def cond_bound(V, W):
+    """Upper bound (n,) of the 2-norm condition number ``cond(V) = |V|_2 |V^-1|_2`` of the
+    matrices ``V`` (n, na, na) from a computed inverse ``W`` (any ``W``: its error is bounded
+    here); ``inf`` where no bound follows (also for NaN or overflow).
+
+    With ``R = W V - I`` and ``|R|_2 < 1``, ``V^-1 = (I + R)^-1 W`` gives ``|V^-1|_2 <= |W|_2 /
+    (1 - |R|_2)``, so ``cond(V) <= |V|_F |W|_F / (1 - |R|_F)``.  Rounding: a complex inner
+    product of length ``na`` is computed within ``sqrt(2) gamma_(na + 2) |w|^T |v|`` (``gamma_m =
+    m u / (1 - m u)``, ``u = 2^-53``; Higham 2002, Sec. 3.6), so ``|fl(W V) - W V|_F <= sqrt(2)
+    gamma_(na + 2) |W|_F |V|_F``; with the subtraction of ``I`` this is below the ``4 na u |W|_F
+    |V|_F`` added to the computed ``|R|_F`` (``na`` = 2, 4).  The norms' own rounding (relative
+    ``< 1e-14``) is covered by the factor ``1 + 1e-12``.  Against an SVD-computed condition
+    (relative error ``~ u cond``): ``|M|_F >= |M|_2 sqrt(1 + 1 / cond^2)`` for ``M = V, W``, so
+    near ``cond = 1e4`` the bound exceeds ``cond`` by a relative ``>= 1e-8``.  The bound exceeds
+    ``cond(V)`` by at most ``na / (1 - r)`` (``|M|_F <= sqrt(na) |M|_2``)."""
+    na = V.shape[-1]
+    with np.errstate(all="ignore"):
+        fv = np.sqrt(np.sum(V.real**2 + V.imag**2, axis=(1, 2)))
+        fw = np.sqrt(np.sum(W.real**2 + W.imag**2, axis=(1, 2)))
+        R = W @ V
+        R[:, np.arange(na), np.arange(na)] -= 1.0
+        prod = fv * fw
+        r = np.sqrt(np.sum(R.real**2 + R.imag**2, axis=(1, 2))) + 4 * na * 2.0**-53 * prod
+        bound = (1 + 1e-12) * prod / (1 - r)
+    return np.where((r < 1) & np.isfinite(bound), bound, np.inf)
 
 
 def light_system(lanes: Lanes, tables, n: int) -> System:
@@ -135,10 +216,12 @@ def light_system(lanes: Lanes, tables, n: int) -> System:
 
 
 def _augmented(B, a, k, q, mask):
-    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (paper eqs. 7, 8;
-    as :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
-    act = np.array([mask & 1, (mask >> 1) & 1], dtype=float)
-    E = np.zeros(a.shape[:-1] + (5, 5))
+    """``E_S = [[A_S, c_S], [0, 0]]`` (..., 5, 5) of configuration ``mask`` (an int, or an
+    integer array broadcasting against the lanes) (paper eqs. 7, 8; as
+    :func:`atlas.dynamics.system.build_system`); ``B`` (..., 2, 2), ``a``, ``k``, ``q`` (..., 2)."""
+    m = np.asarray(mask)
+    act = np.stack([m & 1, (m >> 1) & 1], axis=-1).astype(float)
+    E = np.zeros(np.broadcast_shapes(a.shape[:-1], act.shape[:-1]) + (5, 5))
     E[..., 0, 2] = E[..., 1, 3] = 1.0
     E[..., 2:4, 0:2] = -B * (k * act)[..., None, :]
     E[..., 2:4, 2:4] = -B * (q * act)[..., None, :]
@@ -149,29 +232,36 @@ def _augmented(B, a, k, q, mask):
 # ----------------------------------------------------------------------------- segments
 
 
-def segments(lanes: Lanes, tables, ix, mask, g):
+def segments(lanes: Lanes, tables: ModalTables, ix, mask, g):
     """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
     configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
     (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
     n = ix.size
-    P = np.zeros((n, 2, 3))
-    U = np.zeros((n, 2, 4), dtype=complex)
-    lam = np.zeros((n, 4), dtype=complex)
-    valid = np.zeros((n, 4), dtype=bool)
-    H = np.empty(n)
-    ok = np.ones(n, dtype=bool)
-    for m in range(4):
+    lam, valid, H, ok, d_eq = stack_tables(tables, _SEGMENT_ENTRIES, ix, mask)
+    present = np.flatnonzero(np.bincount(mask, minlength=4))
+    if present.size == 1:
+        return (*_segment_of(lanes, tables, present[0], ix, g, d_eq, lam), lam, valid, H, ok)
+    P = np.empty((n, 2, 3))
+    U = np.empty((n, 2, 4), dtype=complex)
+    for m in present:
         sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab = tables[m]
-        lx = ix[sel]
-        gs = g[sel]
-        lam[sel], valid[sel], H[sel], ok[sel] = tab.lam[lx], tab.valid[lx], tab.H[lx], tab.ok[lx]
-        V, W = (tab.V[lx], tab.W[lx]) if m else (None, None)
-        P[sel], U[sel] = segment(m, gs, tab.d_eq[lx], V, W, tab.lam[lx], lanes.B[lx],
-                                  lanes.a[lx], lanes.k[lx], lanes.q[lx])  # fmt: skip
+        P[sel], U[sel] = _segment_of(lanes, tables, m, ix[sel], g[sel], d_eq[sel], lam[sel])
     return P, U, lam, valid, H, ok
+
+
+_SEGMENT_ENTRIES = ("lam", "valid", "H", "ok", "d_eq")
+
+
+def _segment_of(lanes, tables, m, lx, g, d_eq, lam):
+    """:func:`segment` of the lanes ``lx`` all in configuration ``m`` (NumPy): only the
+    parameters that configuration reads are gathered."""
+    if m == 0:
+        return segment(0, g, d_eq, None, None, lam, None, lanes.a[lx], None, None)
+    tab = tables[m]
+    V, W = tab.V[lx], tab.W[lx]
+    if m == 3:
+        return segment(3, g, d_eq, V, W, lam, None, None, None, None)
+    return segment(m, g, d_eq, V, W, lam, lanes.B[lx], lanes.a[lx], lanes.k[lx], lanes.q[lx])
 
 
 def segment(m, g, d_eq, V, W, lam, B, a, k, q):
@@ -198,21 +288,26 @@ def segment(m, g, d_eq, V, W, lam, B, a, k, q):
     Uj = Wm / lm**2
     acc0 = -Bji * k[:, i] * d_eq[:, i] - a[:, j]
     zero = xp.zeros((n,))
-    Pi = xp.stack([d_eq[:, i], zero, zero], axis=1)
-    Pj = xp.stack([g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real,
-                   0.5 * acc0], axis=1)  # fmt: skip
-    P = xp.stack([Pi, Pj] if i == 0 else [Pj, Pi], axis=1)
+    Pi = [d_eq[:, i], zero, zero]
+    Pj = [g[:, j] - xp.sum(Uj, axis=1).real, g[:, j + 2] - xp.sum(Wm / lm, axis=1).real, 0.5 * acc0]
+    P = xp.stack(Pi + Pj if i == 0 else Pj + Pi, axis=1).reshape(n, 2, 3)
     U = xp.stack([Ua[:, 0], Uj] if i == 0 else [Uj, Ua[:, 0]], axis=1)
     return P, xp.concatenate([U, xp.zeros((n, 2, 2), dtype=U.dtype)], axis=2)
 
 
-def stack_table(tables, name, ix, mask):
-    """Table entry ``name`` of the configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
-    arrays = [getattr(tab, name) for tab in tables]
-    out = np.empty((ix.size,) + arrays[0].shape[1:], dtype=arrays[0].dtype)
-    for m in range(4):
-        sel = mask == m
-        out[sel] = arrays[m][ix[sel]]
+def stack_table(tables: ModalTables, name, ix, mask):
+    """Table entry ``name`` (``lam``, ``valid``, ``d_eq``, ``H``, ``ok``, ``E``) of the
+    configurations ``mask`` (n,) of lanes ``ix`` (n,)."""
+    return stack_tables(tables, (name,), ix, mask)[0]
+
+
+def stack_tables(tables: ModalTables, names, ix, mask):
+    """:func:`stack_table` of several entries (one index computation)."""
+    flat = np.asarray(mask, dtype=np.intp) * tables.ok.shape[1] + ix
+    out = []
+    for name in names:
+        x = getattr(tables, name)
+        out.append(x.reshape((-1,) + x.shape[2:]).take(flat, axis=0))
     return out
 
 
@@ -232,12 +327,12 @@ def modal_coordinates(tables, ix, mask, g):
     """Coordinates ``c`` (n, 4) of the active deviation from equilibrium in the eigenvectors of
     the active subsystem (as :func:`atlas.dynamics.system.iwc_aligned` expands it)."""
     c = np.zeros((ix.size, 4), dtype=complex)
+    d_eq = stack_table(tables, "d_eq", ix, mask)
     for m in (1, 2, 3):
         sel = np.flatnonzero(mask == m)
-        if sel.size == 0:
-            continue
-        tab, lx = tables[m], ix[sel]
-        c[sel, : 2 * (1 + (m == 3))] = modal_coords(m, g[sel], tab.d_eq[lx], tab.W[lx])[1]
+        if sel.size:
+            W = tables[m].W[ix[sel]]
+            c[sel, : 2 * (1 + (m == 3))] = modal_coords(m, g[sel], d_eq[sel], W)[1]
     return c
 
 
@@ -245,6 +340,6 @@ def modal_coords(m, g, d_eq, W):
     """Deviation ``x`` of the active gaps and velocities from the equilibrium and its
     coordinates ``c = W x`` (n, na) in configuration ``m`` (1, 2, 3); NumPy or JAX arrays."""
     xp = eb.xp_of(g, d_eq, W)
-    idx = [i for i in range(2) if m >> i & 1]
-    x = xp.concatenate([g[:, idx] - d_eq[:, idx], g[:, [i + 2 for i in idx]]], axis=1)
+    lo, hi = (0 if m & 1 else 1), (2 if m & 2 else 1)  # the active gaps lo .. hi - 1
+    x = xp.concatenate([g[:, lo:hi] - d_eq[:, lo:hi], g[:, lo + 2 : hi + 2]], axis=1)
     return x, xp.einsum("nij,nj->ni", W, x)

@@ -1,0 +1,90 @@
+"""The modal form of the contact configurations (atlas.dynamics.modal_form): the condition bound
+against constructed singular values, the tables of a grid against lane-by-lane tables, the
+closed-form segments against the matrix exponential of the configuration."""
+
+import math
+
+import numpy as np
+import pytest
+
+from atlas.dynamics import modal_form as mf
+from atlas.dynamics import system as SY
+
+PI = math.pi
+
+
+def _with_singular_values(rng, s):
+    """Complex matrices ``U diag(s) Vh`` (m, na, na) with random unitary ``U``, ``Vh``."""
+    m, na = s.shape
+    z = rng.normal(size=(2, m, na, na)) + 1j * rng.normal(size=(2, m, na, na))
+    U, Vh = np.linalg.qr(z[0])[0], np.linalg.qr(z[1])[0]
+    return U @ (s[:, :, None] * Vh)
+
+
+@pytest.mark.parametrize("na", [2, 4])
+def test_cond_bound_is_above_the_condition_and_within_na_of_it(na):
+    """``cond(V) = s_max / s_min`` by construction (1 to 1e12): the bound is never below it and
+    at most ``na`` times it while the inverse is accurate."""
+    rng = np.random.default_rng(1)
+    cond = 10.0 ** rng.uniform(0, 12, 400)
+    s = np.sqrt(cond)[:, None] ** rng.uniform(-1, 1, (400, na))
+    s[:, 0], s[:, -1] = np.sqrt(cond), 1 / np.sqrt(cond)  # s_max / s_min = cond
+    V = _with_singular_values(rng, s)
+    bound = mf.cond_bound(V, np.linalg.inv(V))
+    assert np.all(bound >= cond * (1 - 1e-9))  # rounding of the constructed singular values
+    fine = cond < 1e8
+    assert np.all(bound[fine] <= na * cond[fine] * 1.01)
+
+
+def test_cond_bound_does_not_trust_a_wrong_inverse():
+    """A unitary ``V`` (condition 1) with ``W = 0.3 V^-1``: ``|V|_F |W|_F = 0.6`` alone would
+    pass below the condition; the residual ``W V - I`` raises the bound (or makes it infinite)."""
+    rng = np.random.default_rng(2)
+    for na in (2, 4):
+        V = _with_singular_values(rng, np.ones((20, na)))
+        bound = mf.cond_bound(V, 0.3 * np.linalg.inv(V))
+        assert np.all(bound >= 1.0)
+    V = np.array([[[1.0, 1.0], [1.0, 1.0]]])  # singular: no finite bound
+    assert mf.cond_bound(V + 0j, np.zeros((1, 2, 2), complex))[0] == np.inf
+
+
+def test_grid_tables_equal_lane_by_lane_tables():
+    """Tables of a grid with repeated lanes (each distinct subsystem solved once) are bitwise
+    those of every lane solved alone, degenerate directions (not ``ok``) included."""
+    b = np.linspace(0, 2 * PI, 8, endpoint=False)
+    b1, b2 = np.repeat(b, 8), np.tile(b, 8)
+    b1, b2 = np.concatenate([b1, b1[:5]]), np.concatenate([b2, b2[:5]])  # repeated lanes
+    k, q, alpha = (0.5, 1.0), (0.3, 0.0), 0.35 * PI
+    grid = mf.modal_tables(mf.Lanes.of(b1, b2, alpha, k, q))
+    assert not grid[3].ok.all()  # beta2 = beta1 + pi is on the grid
+    for r in range(b1.size):
+        alone = mf.modal_tables(mf.Lanes.of(b1[r], b2[r], alpha, k, q))
+        for tab, one in zip(grid, alone, strict=True):
+            for name in ("lam", "valid", "V", "W", "d_eq", "H", "ok", "E"):
+                x, y = getattr(tab, name)[r], getattr(one, name)[0]
+                assert x.tobytes() == y.tobytes(), (r, tab.mask, name)
+
+
+@pytest.mark.parametrize("q", [0.0, 0.4])
+def test_segments_follow_the_matrix_exponential(q):
+    """The closed-form gaps and velocities of a segment in each configuration equal ``expm(E_S
+    t) (g, 1)`` of the exact simulator's matrices (paper eqs. 7, 8) at several times."""
+    rng = np.random.default_rng(3)
+    n = 24
+    b1, b2 = rng.uniform(0, 2 * PI, n), rng.uniform(0, 2 * PI, n)
+    lanes = mf.Lanes.of(b1, b2, 0.3 * PI, (0.5, 1.0), q)
+    tables = mf.modal_tables(lanes)
+    g = rng.normal(size=(n, 4))
+    mask = np.arange(n) % 4
+    P, U, lam, valid, H, ok = mf.segments(lanes, tables, np.arange(n), mask, g)
+    for r in np.flatnonzero(ok):
+        sysm = SY.build_system(b1[r], b2[r], 0.3 * PI, (0.5, 1.0), (q, q), (1, 1), 1.0, 0.1)
+        E = sysm.modes[mask[r]].E
+        for t in (0.0, 0.37, 1.9):
+            z = SY.expm(E * t) @ np.concatenate([g[r], [1.0]])
+            e = np.exp(lam[r] * t)
+            d = P[r, :, 0] + P[r, :, 1] * t + P[r, :, 2] * t**2 + (U[r] * e).sum(axis=1).real
+            v = P[r, :, 1] + 2 * P[r, :, 2] * t + (U[r] * lam[r] * e).sum(axis=1).real
+            scale = 1 + np.abs(z[:4]).max()
+            np.testing.assert_allclose(np.concatenate([d, v]), z[:4], atol=1e-9 * scale)
+    assert ok.sum() >= n - 2
