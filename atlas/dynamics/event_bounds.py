@@ -27,6 +27,7 @@ __all__ = [
     "keeps_sign_bound",
     "keeps_sign",
     "no_event_certificate",
+    "may_keep_signs",
 ]
 
 #: relative size of a real part counted as zero (neutral), times the eigenvalue scale
@@ -210,6 +211,27 @@ def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
     )
     monitored = xp.concatenate([xp.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
     return xp.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
+
+
+def may_keep_signs(s, p, UE, lam, valid, k, q):
+    """A necessary condition of :func:`no_event_certificate` (n,), cheaper to test: the constant
+    term ``a0 = s c0 + G - bounded - margin`` of :func:`keeps_sign` is at most ``s c0 - sum |w|
+    + 2 max |w|`` (``G <= |w_1| - sum_{other growing} |w|``, ``bounded >= sum_{not growing} |w|``),
+    at most ``s c0 - sum |w|`` without a growing term (``G = 0``), and ``a0 > 0`` is required of
+    every monitored function.  Rejects a lane only where that bound is below ``-1e-9 (|c0| + sum
+    |w|)``, beyond the rounding of either sum."""
+    xp = xp_of(s, p, UE, lam)
+    scale = xp.abs(lam).max(axis=1, keepdims=True)
+    grow = (valid & (lam.real > NEUTRAL * scale)).any(axis=1)  # as in keeps_sign_bound
+    aw = xp.abs(UE)
+    aw_f = xp.abs(k[:, :, None] + q[:, :, None] * lam[:, None, :]) * aw
+    c0 = xp.concatenate([p[:, :, 0], -k * p[:, :, 0] - q * p[:, :, 1]], axis=1)
+    w = xp.concatenate([aw, aw_f], axis=1)
+    tot = sum4(w)
+    bound = s * c0 - tot + xp.where(grow[:, None], 2 * w.max(axis=2), 0.0)
+    fails = bound < -1e-9 * (xp.abs(c0) + tot)
+    monitored = xp.concatenate([xp.ones_like(fails[:, :2]), s[:, :2] < 0], axis=1)
+    return ~(fails & monitored).any(axis=1)
 
 
 # ----------------------------------------------------------------------------- batch

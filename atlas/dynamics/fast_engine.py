@@ -36,7 +36,8 @@ exact arithmetic on the modal form; its floating-point evaluation is not bounded
 Early decisions (stated, checked)
 ---------------------------------
 On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
-(:func:`may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
+(:func:`may_decide`; no crossing certified by ``sigma_hi``; :func:`eb.may_keep_signs`, a
+necessary condition of the certificate), each monitored function is tested
 for keeping its sign for all later times in the current configuration (:func:`eb.keeps_sign`: the
 modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
 x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
@@ -306,6 +307,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
                     lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
