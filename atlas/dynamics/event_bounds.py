@@ -214,24 +214,35 @@ def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
 
 
 def may_keep_signs(s, p, UE, lam, valid, k, q):
-    """A necessary condition of :func:`no_event_certificate` (n,), cheaper to test: the constant
-    term ``a0 = s c0 + G - bounded - margin`` of :func:`keeps_sign` is at most ``s c0 - sum |w|
-    + 2 max |w|`` (``G <= |w_1| - sum_{other growing} |w|``, ``bounded >= sum_{not growing} |w|``),
-    at most ``s c0 - sum |w|`` without a growing term (``G = 0``), and ``a0 > 0`` is required of
-    every monitored function.  Rejects a lane only where that bound is below ``-1e-9 (|c0| + sum
-    |w|)``, beyond the rounding of either sum."""
+    """A necessary condition of :func:`no_event_certificate` (n,), cheaper to test.  For each
+    monitored function (``c0``, modal terms ``w_m``) :func:`keeps_sign` requires ``a0 = s c0 + G -
+    bounded - margin > 0`` and, with a growing term, ``G > 0`` and ``lam_1`` real, where ``G = s Re
+    w_1 - sum_{other growing} |w_m|`` and ``bounded >= sum_{not growing} |w_m|``: so ``a0 <= s c0 +
+    [s Re w_1 + |w_1|] - sum |w_m|`` (the bracket 0 without a growing term).  Rejects a lane only
+    where ``G`` or that bound is below ``-1e-9 (|c0| + sum |w|)``, beyond the rounding of either
+    side."""
     xp = xp_of(s, p, UE, lam)
+    re = lam.real
     scale = xp.abs(lam).max(axis=1, keepdims=True)
-    grow = (valid & (lam.real > NEUTRAL * scale)).any(axis=1)  # as in keeps_sign_bound
+    gm = valid & (re > NEUTRAL * scale)  # as in keeps_sign_bound
+    grow = gm.any(axis=1)
+    j1 = xp.argmax(xp.where(gm, re, -np.inf), axis=1)
+    lam1 = take(lam, j1)
+    real1 = xp.abs(lam1.imag) <= 1e-12 * xp.abs(lam1)
+    UE1 = take(UE, xp.stack([j1, j1], axis=1))
+    w1 = xp.concatenate([UE1, -(k + q * lam1[:, None]) * UE1], axis=1)
     aw = xp.abs(UE)
-    aw_f = xp.abs(k[:, :, None] + q[:, :, None] * lam[:, None, :]) * aw
-    c0 = xp.concatenate([p[:, :, 0], -k * p[:, :, 0] - q * p[:, :, 1]], axis=1)
-    w = xp.concatenate([aw, aw_f], axis=1)
+    w = xp.concatenate([aw, xp.abs(k[:, :, None] + q[:, :, None] * lam[:, None, :]) * aw], axis=1)
     tot = sum4(w)
-    bound = s * c0 - tot + xp.where(grow[:, None], 2 * w.max(axis=2), 0.0)
-    fails = bound < -1e-9 * (xp.abs(c0) + tot)
+    growing = sum4(xp.where(gm[:, None, :], w, 0.0))
+    sw1, aw1 = s * w1.real, xp.abs(w1)
+    c0 = xp.concatenate([p[:, :, 0], -k * p[:, :, 0] - q * p[:, :, 1]], axis=1)
+    g = grow[:, None]
+    bound = s * c0 - tot + xp.where(g, sw1 + aw1, 0.0)
+    slack = -1e-9 * (xp.abs(c0) + tot)
+    fails = (bound < slack) | (g & (sw1 - (growing - aw1) < slack))
     monitored = xp.concatenate([xp.ones_like(fails[:, :2]), s[:, :2] < 0], axis=1)
-    return ~(fails & monitored).any(axis=1)
+    return ~(fails & monitored).any(axis=1) & (~grow | real1)
 
 
 # ----------------------------------------------------------------------------- batch
