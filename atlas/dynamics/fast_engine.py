@@ -482,7 +482,12 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     r = np.flatnonzero(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
-        iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
+        # aligned from now on: from the stop on too; the stop is searched only for the others
+        now = aligned_from(c, lam[r], valid[r], l1[r], np.zeros(r.size))
+        r, c = r[~now], c[~now]
+        if r.size:
+            iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r],
+                                      scale[r])  # fmt: skip
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
 
@@ -568,11 +573,6 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
     largest real part."""
     xp = eb.xp_of(c, p, UE, lam)
-    re = xp.where(valid, lam.real, -np.inf)
-    j1 = xp.argmax(re, axis=1)
-    dom = xp.abs(eb.take(c, j1))
-    others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
-    strict = xp.all(~others | (re < l1[:, None]), axis=1)
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
     aw = xp.abs(UE)
     grow = xp.maximum(lam.real, 0.0)
@@ -592,6 +592,18 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
         return xp.where(above, lo, mid), xp.where(above, mid, hi)
 
     s0, _ = _fori(64, halve, (xp.zeros(c.shape[0]), rest + 0.0))
+    return aligned_from(c, lam, valid, l1, s0)
+
+
+def aligned_from(c, lam, valid, l1, s0):
+    """The alignment test of :func:`aligned_at_stop` from the time ``s0`` (n,) on; it only gets
+    easier as ``s0`` grows (the off-dominant terms decay relative to the dominant one)."""
+    xp = eb.xp_of(c, lam, s0)
+    re = xp.where(valid, lam.real, -np.inf)
+    j1 = xp.argmax(re, axis=1)
+    dom = xp.abs(eb.take(c, j1))
+    others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
+    strict = xp.all(~others | (re < l1[:, None]), axis=1)
     with np.errstate(all="ignore"):
         off = xp.where(others, xp.abs(c) * xp.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
     return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
