@@ -236,8 +236,10 @@ def _classify_stopped(st: State, tables, n, width, t_max):
 
 
 #: steps between the classifications of the lanes that stopped (those given a longer horizon
-#: rejoin the batch then)
+#: rejoin the batch then); at every step in a batch below ``_READMIT_NOW`` lanes, where a step
+#: costs little more than the classification
 _READMIT = 8
+_READMIT_NOW = 256
 
 
 def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
@@ -257,7 +259,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             sel = np.flatnonzero(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
-        if pending and (ix.size == 0 or it % _READMIT == 0):
+        if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
             pending = []
             if again.size:
@@ -306,8 +308,10 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
-        r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
-        r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
+        if r.size:
+            r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        if r.size:
+            r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
                     lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
