@@ -95,12 +95,13 @@ def event_functions(d, v, acc, k, q):
     return f, fp
 
 
-def curvature_bound(p, UE, lam, H, k, q):
-    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
+def curvature_bound(p, UE, lam, H, k, q, aUE=None):
+    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions (``aUE``:
+    ``|UE|`` if already at hand)."""
     xp = xp_of(p, UE, lam, H)
     lr = xp.abs(lam)
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = xp.abs(UE) * grow
+    a = (xp.abs(UE) if aUE is None else aUE) * grow
     m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
     m3 = sum4(a * lr[:, None, :] ** 3)
     return xp.concatenate([m2, k * m2 + q * m3], axis=1)

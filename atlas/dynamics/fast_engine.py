@@ -293,8 +293,9 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
-        Hw = _window(H, lam, valid, p, UE, scale)
-        M = eb.curvature_bound(p, UE, lam, Hw, k, q)
+        aUE = np.abs(UE)
+        Hw = _window(H, lam, valid, p, aUE, scale)
+        M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
         A, Bd = np.maximum(s * f, 0.0), s * fp
         lo, hi = eb.safe_steps(A, Bd, M)
         flat = (A == 0) & (Bd == 0)
@@ -378,19 +379,19 @@ GROWTH = 2.0
 SMALL = 10.0
 
 
-def _window(H, lam, valid, p, UE, scale):
+def _window(H, lam, valid, p, aUE, scale):
     """Step window (n,): ``WINDOWS H_S``, shortened so that no modal term grows by more than
     ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``); ``H_S``
     unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
-    + GROWTH sum |u|``), so that the tests of the gaps at the step ends (divergence, late
-    amplitude ``> 10 scale``) cannot pass inside the window."""
+    + GROWTH sum |u|``, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
+    (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
     grow = np.where(valid, lam.real, 0.0).max(axis=1)
     with np.errstate(divide="ignore"):
         cap = np.where(grow > 0, math.log(GROWTH) / grow, np.inf)
     w = np.maximum(H, np.minimum(WINDOWS * H, cap))
     a = np.abs(p)
     w2 = w[:, None]
-    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(np.abs(UE))
+    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
     return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
 
 

@@ -210,7 +210,7 @@ def test_window_keeps_growth_and_gaps_within_their_bounds():
     U[:, :, 3] = U[:, :, 2].conj()
     p = rng.normal(size=(n, 2, 3)) * np.array([1.0, 0.3, 0.05])
     H, scale = np.full(n, 0.8), np.full(n, 0.5)
-    w = F._window(H, lam, valid, p, U, scale)
+    w = F._window(H, lam, valid, p, np.abs(U), scale)
     assert np.all((w >= H) & (w <= F.WINDOWS * H))
     assert np.all(np.exp(lam.real.max(axis=1) * w) <= F.GROWTH * (1 + 1e-12))
     long_ = w > H
