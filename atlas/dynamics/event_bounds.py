@@ -27,6 +27,7 @@ __all__ = [
     "keeps_sign_bound",
     "keeps_sign",
     "no_event_certificate",
+    "may_keep_signs",
 ]
 
 #: relative size of a real part counted as zero (neutral), times the eigenvalue scale
@@ -35,7 +36,7 @@ NEUTRAL = 1e-9
 
 def xp_of(*arrays):
     """The array namespace of ``arrays``: :mod:`jax.numpy` if any is a JAX array (or tracer),
-    else :mod:`numpy`; every function here serves both."""
+    else :mod:`numpy`; every function here but :func:`may_keep_signs` serves both."""
     for x in arrays:
         if type(x) is not np.ndarray and type(x).__module__.startswith(("jax", "jaxlib")):
             import jax.numpy as jnp  # noqa: PLC0415 - NumPy callers load no JAX
@@ -94,12 +95,13 @@ def event_functions(d, v, acc, k, q):
     return f, fp
 
 
-def curvature_bound(p, UE, lam, H, k, q):
-    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions."""
+def curvature_bound(p, UE, lam, H, k, q, aUE=None):
+    """``M >= |f''|`` (n, 4) over ``[tau, tau + H]`` for the four event functions (``aUE``:
+    ``|UE|`` if already at hand)."""
     xp = xp_of(p, UE, lam, H)
     lr = xp.abs(lam)
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = xp.abs(UE) * grow
+    a = (xp.abs(UE) if aUE is None else aUE) * grow
     m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
     m3 = sum4(a * lr[:, None, :] ** 3)
     return xp.concatenate([m2, k * m2 + q * m3], axis=1)
@@ -210,6 +212,43 @@ def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
     )
     monitored = xp.concatenate([xp.ones_like(ok[:, :2]), s[:, :2] < 0], axis=1)
     return xp.all(ok | ~monitored, axis=1), G, bounded, l1[:, 0]
+
+
+def may_keep_signs(s, p, UE, lam, valid, k, q):
+    """A necessary condition of :func:`no_event_certificate` (n,), cheaper to test.  For each
+    monitored function (``c0``, modal terms ``w_m``) :func:`keeps_sign` requires ``a0 = s c0 + G -
+    bounded - margin > 0`` and, with a growing term, ``G > 0`` and ``lam_1`` real, where ``G = s Re
+    w_1 - sum_{other growing} |w_m|`` and ``bounded >= sum_{not growing} |w_m|``: so ``a0 <= s c0 +
+    [s Re w_1 + |w_1|] - sum |w_m|`` (the bracket 0 without a growing term, at most ``2 max |w|``
+    with one: tested first, on every lane).  Rejects a lane only where ``G`` or that bound is below
+    ``-1e-9 (|c0| + sum |w|)``, beyond the rounding of either side.  NumPy arrays."""
+    re = lam.real
+    gm = valid & (re > NEUTRAL * np.abs(lam).max(axis=1, keepdims=True))  # as in keeps_sign_bound
+    grow = gm.any(axis=1)
+    aw = np.abs(UE)
+    w = np.concatenate([aw, np.abs(k[:, :, None] + q[:, :, None] * lam[:, None, :]) * aw], axis=1)
+    tot = sum4(w)
+    c0 = np.concatenate([p[:, :, 0], -k * p[:, :, 0] - q * p[:, :, 1]], axis=1)
+    slack = -1e-9 * (np.abs(c0) + tot)
+    monitored = np.concatenate([np.ones((s.shape[0], 2), dtype=bool), s[:, :2] < 0], axis=1)
+    bound = s * c0 - tot + np.where(grow[:, None], 2 * w.max(axis=2), 0.0)
+    out = ~((bound < slack) & monitored).any(axis=1)
+    r = np.flatnonzero(out & grow)
+    if r.size == 0:
+        return out
+    # the dominant growing term itself
+    gr, lr = gm[r], lam[r]
+    j1 = np.argmax(np.where(gr, re[r], -np.inf), axis=1)
+    lam1 = take(lr, j1)
+    UE1 = take(UE[r], np.stack([j1, j1], axis=1))
+    w1 = np.concatenate([UE1, -(k[r] + q[r] * lam1[:, None]) * UE1], axis=1)
+    sw1, aw1 = s[r] * w1.real, np.abs(w1)
+    growing = sum4(np.where(gr[:, None, :], w[r], 0.0))
+    sl = slack[r]
+    fails = (s[r] * c0[r] - tot[r] + sw1 + aw1 < sl) | (sw1 - (growing - aw1) < sl)
+    real1 = np.abs(lam1.imag) <= 1e-12 * np.abs(lam1)
+    out[r] = ~(fails & monitored[r]).any(axis=1) & real1
+    return out
 
 
 # ----------------------------------------------------------------------------- batch

@@ -12,19 +12,22 @@ and so is every event function (gaps ``d_i``, forces ``phi_i = -k_i d_i - q_i d_
 
 Event location (certified bracket)
 ----------------------------------
-From ``tau`` the step ``sigma`` obeys ``|f''| <= M`` on ``[tau, tau + H]`` with ``M`` the sum of
-the moduli of the modal terms (each grown by ``exp(max(Re lambda, 0) H)``), so for the recorded
+From ``tau`` the step ``sigma`` obeys ``|f''| <= M`` on ``[tau, tau + W]`` with ``M`` the sum of
+the moduli of the modal terms (each grown by ``exp(max(Re lambda, 0) W)``), so for the recorded
 sign ``s`` of ``f``::
 
     s f(tau + sigma) >= s f + s f' sigma - M sigma^2 / 2     (no crossing before its root sigma_lo)
     s f(tau + sigma) <= s f + s f' sigma + M sigma^2 / 2     (a crossing by its root sigma_hi)
 
-Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most
-``H_S = 1 / max(rho_S, omega / 4)``); the first crossing is the function whose bracket
-``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
+Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
+``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
+2 over it and both gaps provably stay within ``10 scale``, so that the tests made at the step
+ends on the gaps (divergence, late amplitude) cannot pass inside a longer step); the first
+crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
-bracket of the first function that every other function's ``sigma_lo`` lies beyond is closed by
+bracket of the first function that every other function's ``sigma_lo`` lies beyond (its twin
+aside: the force of a contact with ``q_i = 0`` is ``-k_i d_i``, the same roots) is closed by
 :func:`locate_root` (safeguarded Newton, at most ``ROOT_ITER`` evaluations per step; an
 unfinished bracket resumes from its lower end at the next step).  The bounds hold in
 exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
@@ -33,7 +36,8 @@ exact arithmetic on the modal form; its floating-point evaluation is not bounded
 Early decisions (stated, checked)
 ---------------------------------
 On a schedule (1, 2, 4, ... steps after an event), for the lanes where a decision is possible
-(:func:`may_decide`; no crossing certified by ``sigma_hi``), each monitored function is tested
+(:func:`may_decide`; no crossing certified by ``sigma_hi``; :func:`eb.may_keep_signs`, a
+necessary condition of the certificate), each monitored function is tested
 for keeping its sign for all later times in the current configuration (:func:`eb.keeps_sign`: the
 modal terms bounded below by their moduli, a growing real dominant term by ``exp(x) >= 1 + x +
 x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their signs, no event can follow, and:
@@ -232,8 +236,10 @@ def _classify_stopped(st: State, tables, n, width, t_max):
 
 
 #: steps between the classifications of the lanes that stopped (those given a longer horizon
-#: rejoin the batch then)
+#: rejoin the batch then); at every step in a batch below ``_READMIT_NOW`` lanes, where a step
+#: costs little more than the classification
 _READMIT = 8
+_READMIT_NOW = 256
 
 
 def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
@@ -253,7 +259,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             sel = np.flatnonzero(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
-        if pending and (ix.size == 0 or it % _READMIT == 0):
+        if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
             pending = []
             if again.size:
@@ -287,21 +293,26 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
-        M = eb.curvature_bound(p, UE, lam, H, k, q)
+        aUE = np.abs(UE)
+        Hw = _window(H, lam, valid, p, aUE, scale)
+        M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
         A, Bd = np.maximum(s * f, 0.0), s * fp
         lo, hi = eb.safe_steps(A, Bd, M)
         flat = (A == 0) & (Bd == 0)
         if flat.any():  # a double zero (exactly zero state): the second derivative decides
-            lo = np.where(flat, eb.flat_step(s, p, UE, lam, H, k, q), lo)
+            lo = np.where(flat, eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
         mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
-        lo = np.minimum(lo, H[:, None])
-        hi = np.where(hi <= H[:, None], hi, np.inf)
+        lo = np.minimum(lo, Hw[:, None])
+        hi = np.where(hi <= Hw[:, None], hi, np.inf)
         lo = np.where(mon, lo, np.inf)
         hi = np.where(mon, hi, np.inf)
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
-        r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        if r.size:
+            r = r[may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+        if r.size:
+            r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
         if r.size:
             _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
                     lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
@@ -317,8 +328,10 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         xtol = XTOL * H
         ev = keep & (h - m <= xtol) & (h <= rem)
         # a bracket of the first function that every other function's sigma_lo lies beyond: the
-        # first crossing is in it, located on that function alone (:func:`locate_root`)
-        other = _min_cols(np.where(np.arange(4)[None, :] == first[:, None], np.inf, lo))
+        # first crossing is in it, located on that function alone (:func:`locate_root`); the
+        # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
+        twin = _twins(first, mon, q)
+        other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
         r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
         if r.size:
             fr = first[r]
@@ -330,8 +343,10 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
             rd, fd = r[done], fr[done]
             lo[rd, fd] = hi[rd, fd] = h[rd]
+            tw_r, tw_c = np.nonzero(twin[rd])
+            lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
             ev[rd] = True
-        step = np.where(ev, h, np.minimum(np.minimum(m, H), rem))
+        step = np.where(ev, h, np.minimum(np.minimum(m, Hw), rem))
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -345,6 +360,39 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
                     s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
         cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
+
+
+def _twins(first, mon, q):
+    """(n, 4): the monitored function that is ``-k_i`` times the function ``first`` (n,): the
+    force ``phi_i = -k_i d_i - q_i d_i'`` of a gap ``d_i`` with ``q_i = 0``, and that gap of the
+    force (the same roots)."""
+    i = first % 2
+    undamped = np.take_along_axis(q, i[:, None], axis=1)[:, 0] == 0
+    partner = (first + 2) % 4
+    return (np.arange(4)[None, :] == partner[:, None]) & (undamped[:, None] & mon)
+
+
+#: longest step in windows ``H_S``, where the growth over it stays within ``GROWTH`` and the gaps
+#: provably within ``SMALL`` times the scale
+WINDOWS = 4.0
+GROWTH = 2.0
+SMALL = 10.0
+
+
+def _window(H, lam, valid, p, aUE, scale):
+    """Step window (n,): ``WINDOWS H_S``, shortened so that no modal term grows by more than
+    ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``); ``H_S``
+    unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
+    + GROWTH sum |u|``, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
+    (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
+    grow = np.where(valid, lam.real, 0.0).max(axis=1)
+    with np.errstate(divide="ignore"):
+        cap = np.where(grow > 0, math.log(GROWTH) / grow, np.inf)
+    w = np.maximum(H, np.minimum(WINDOWS * H, cap))
+    a = np.abs(p)
+    w2 = w[:, None]
+    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
+    return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
 
 
 def _all_cols(x):
@@ -439,7 +487,12 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     r = np.flatnonzero(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
-        iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r], scale[r])
+        # aligned from now on: from the stop on too; the stop is searched only for the others
+        now = aligned_from(c, lam[r], valid[r], l1[r], np.zeros(r.size))
+        r, c = r[~now], c[~now]
+        if r.size:
+            iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r],
+                                      scale[r])  # fmt: skip
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
 
@@ -525,11 +578,6 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
     largest real part."""
     xp = eb.xp_of(c, p, UE, lam)
-    re = xp.where(valid, lam.real, -np.inf)
-    j1 = xp.argmax(re, axis=1)
-    dom = xp.abs(eb.take(c, j1))
-    others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
-    strict = xp.all(~others | (re < l1[:, None]), axis=1)
     # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
     aw = xp.abs(UE)
     grow = xp.maximum(lam.real, 0.0)
@@ -549,6 +597,18 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
         return xp.where(above, lo, mid), xp.where(above, mid, hi)
 
     s0, _ = _fori(64, halve, (xp.zeros(c.shape[0]), rest + 0.0))
+    return aligned_from(c, lam, valid, l1, s0)
+
+
+def aligned_from(c, lam, valid, l1, s0):
+    """The alignment test of :func:`aligned_at_stop` from the time ``s0`` (n,) on; it only gets
+    easier as ``s0`` grows (the off-dominant terms decay relative to the dominant one)."""
+    xp = eb.xp_of(c, lam, s0)
+    re = xp.where(valid, lam.real, -np.inf)
+    j1 = xp.argmax(re, axis=1)
+    dom = xp.abs(eb.take(c, j1))
+    others = valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None])
+    strict = xp.all(~others | (re < l1[:, None]), axis=1)
     with np.errstate(all="ignore"):
         off = xp.where(others, xp.abs(c) * xp.exp((re - l1[:, None]) * s0[:, None]), 0.0).sum(1)
     return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)

@@ -194,3 +194,42 @@ def test_classify_many_matches_classify_stats(monkeypatch, n, kappa, q, alpha):
     assert len(seen) >= 15
     assert len(set(want.tolist())) >= 3  # several classes exercised
     assert np.array_equal(got, want)
+
+
+def test_window_keeps_growth_and_gaps_within_their_bounds():
+    """Segments d(t) = p0 + p1 t + p2 t^2 + Re sum u exp(lam t) with a growing real mode, an
+    oscillation and a decaying mode: over the window every term grows by at most GROWTH (the
+    factor the curvature bound takes) and, where the window is longer than H, densely sampled
+    gaps stay within SMALL scale (closed form)."""
+    rng = np.random.default_rng(3)
+    n = 64
+    lam = np.tile(np.array([0.4, -0.2, 0.9j, -0.9j]), (n, 1))
+    lam[:, 0] *= rng.uniform(0.0, 1.5, n)  # some with a negligible growth rate
+    valid = np.ones((n, 4), dtype=bool)
+    U = (rng.normal(size=(n, 2, 4)) * rng.uniform(0.0, 1.0, (n, 1, 1))).astype(complex)
+    U[:, :, 3] = U[:, :, 2].conj()
+    p = rng.normal(size=(n, 2, 3)) * np.array([1.0, 0.3, 0.05])
+    H, scale = np.full(n, 0.8), np.full(n, 0.5)
+    w = F._window(H, lam, valid, p, np.abs(U), scale)
+    assert np.all((w >= H) & (w <= F.WINDOWS * H))
+    assert np.all(np.exp(lam.real.max(axis=1) * w) <= F.GROWTH * (1 + 1e-12))
+    long_ = w > H
+    assert 0 < long_.sum() < n  # both cases occur
+    s = np.linspace(0.0, 1.0, 2001)[None, :] * w[:, None]  # (n, m)
+    d = (p[:, :, :1] + p[:, :, 1:2] * s[:, None] + p[:, :, 2:] * s[:, None] ** 2
+         + (U[:, :, :, None] * np.exp(lam[:, None, :, None] * s[:, None, None])).sum(2).real)  # fmt: skip
+    assert np.all(np.abs(d[long_]).max(axis=(1, 2)) <= F.SMALL * scale[long_])
+
+
+def test_twins_are_the_force_and_gap_of_an_undamped_contact():
+    """phi_i = -k_i d_i - q_i d_i' is -k_i d_i exactly when q_i = 0 (the same roots): the twin of
+    the first function is its partner only then, and only if monitored."""
+    d, v, acc = np.array([[-0.3, 0.2]]), np.array([[0.7, -1.1]]), np.array([[2.0, 0.5]])
+    f, _ = F.eb.event_functions(d, v, acc, np.array([[0.5, 1.0]]), np.array([[0.0, 0.3]]))
+    assert f[0, 2] == -0.5 * d[0, 0] and f[0, 3] != -1.0 * d[0, 1]
+    q = np.array([[0.0, 0.3], [0.0, 0.3], [0.0, 0.0], [0.0, 0.0]])
+    mon = np.array([[1, 1, 1, 1], [1, 1, 1, 1], [1, 1, 1, 1], [1, 1, 0, 0]], dtype=bool)
+    got = F._twins(np.array([0, 3, 2, 1]), mon, q)
+    want = np.zeros((4, 4), dtype=bool)
+    want[0, 2] = want[2, 0] = True  # gap 1 <-> force 1 (q1 = 0); force 2 has q2 = 0.3
+    assert np.array_equal(got, want)  # row 3: the force of an open gap is not monitored

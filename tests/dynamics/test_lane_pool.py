@@ -9,7 +9,7 @@ import pytest
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
-from atlas.dynamics.lane_pool import LanePool, check_workers, usable_cores
+from atlas.dynamics.lane_pool import LanePool, check_workers, chunks, usable_cores
 
 PI = math.pi
 
@@ -56,3 +56,20 @@ def test_bad_workers_one_line(bad):
 def test_default_is_the_usable_cores():
     assert check_workers(None) == usable_cores() >= 1
     assert check_workers(np.int64(2)) == 2
+
+
+@pytest.mark.parametrize(
+    ("n", "w", "extra"), [(49, 2, 0), (49, 3, 5), (10, 2, 100), (65536, 2, 2048)]
+)
+def test_chunks_cover_every_lane_once(n, w, extra):
+    idx = chunks(n, w, extra)
+    assert len(idx) == w
+    assert np.array_equal(np.sort(np.concatenate(idx)), np.arange(n))
+    assert idx[0].size == min(n - (w - 1) * math.ceil(n / (2 * w)), math.ceil(n / w) + extra)
+    assert min(c.size for c in idx) > 0
+    sizes = [c.size for c in idx[1:]]
+    assert max(sizes) - min(sizes) <= 1
+    if idx[0].size < n:  # the first chunk spread over the whole batch, not a block
+        assert (
+            idx[0][0] == 0 and idx[0][-1] == n - 1 and np.diff(idx[0]).max() <= 2 * n / idx[0].size
+        )
