@@ -18,6 +18,7 @@ section alone and prints it.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -238,6 +239,7 @@ class _Session:
         return [*self.atlas, "generate", *args, "--out", str(self.work / "atlas.nc"), "--overwrite"]
 
     def empty_cache(self) -> None:
+        """The section's cache, emptied (the section created it)."""
         shutil.rmtree(self.cache)
         self.cache.mkdir()
 
@@ -265,21 +267,24 @@ _LAYERS = (
 
 
 def _generate(s: _Session, cold_runs: int, runs: int) -> list[dict]:
-    """The 512-point atlas: cold (each run with an empty cache; the last one's cache serves the
-    rest), then ``runs`` rounds of each of :data:`_LAYERS` (interleaved: the machine's load
-    changes alike for each); every figure but the warm one as a multiple of the warm median."""
+    """The 512-point atlas: cold (each run in an emptied cache; the last one's cache serves the
+    rest), then an untimed round and ``runs`` timed rounds of each of :data:`_LAYERS`
+    (interleaved: the machine's load changes alike for each); every figure but the warm one as a
+    multiple of the warm median.  The untimed round leaves each layer's own programs in the
+    cache (``ATLAS_KERNEL_CACHE=0`` runs plain ``jax.jit`` programs, which the cold run's
+    exported ones do not serve)."""
     cmd, text = s.generate(SMALL), "atlas generate " + " ".join(SMALL)
     cold = []
-    for i in range(cold_runs):
-        if i:
-            s.empty_cache()
+    for _ in range(cold_runs):
+        s.empty_cache()
         log("start-up: generate 512 points, cold")
         cold += s.times(cmd, 1)
     timed = {name: [] for name, _ in _LAYERS}
-    for _ in range(runs):
+    for i in range(runs + 1):  # the first round untimed: each layer's own programs cached
         for name, switches in _LAYERS:
-            log(f"start-up: {name}")
-            timed[name] += s.times(cmd, 1, **switches)
+            log(f"start-up: {name}" + ("" if i else " (untimed)"))
+            t = s.times(cmd, 1, **switches)
+            timed[name] += t if i else []
     rows = [_row("generate 512 points, cold", text, [x.wall for x in cold], _fails(cold))]
     for name, switches in _LAYERS:
         env = "".join(f"{k}={v} " for k, v in switches.items())
@@ -318,14 +323,15 @@ def _large(s: _Session, runs: int) -> list[dict]:
 
 def _selftest(s: _Session, runs: int) -> list[dict]:
     """``atlas selftest``: a first run in the cache, then ``runs`` warm runs; the most
-    disagreements of any run."""
+    disagreements of any run (a run that prints no verdict line failed; one that found
+    disagreements exits 1 with its verdict line)."""
     cmd = [*s.atlas, "selftest"]
     log(f"start-up: atlas selftest x {runs + 1}")
     first, warm = s.times(cmd, 1), s.times(cmd, runs)
     rows = []
     for figure, t in (("atlas selftest, first run in the cache", first), ("atlas selftest", warm)):
         parsed = [parse_selftest(x.stdout) for x in t]
-        fails = [x.failure() or ("" if p else "no verdict line") for x, p in zip(t, parsed)]
+        fails = ["" if p else x.failure() or "no verdict line" for x, p in zip(t, parsed)]
         bad = max((p["disagreements"] for p in parsed if p), default=None)
         rows.append(_row(figure, "atlas selftest", [x.wall for x in t], fails,
                          compared="disagreements", value=bad))  # fmt: skip
@@ -334,14 +340,12 @@ def _selftest(s: _Session, runs: int) -> list[dict]:
 
 def _explorer(s: _Session, runs: int) -> list[dict]:
     """:data:`EXPLORER` in a fresh process: the first map, the first click, a second click."""
-    import importlib.util  # noqa: PLC0415
-
     figures = (
         ("explorer: first map", "first_map"),
         ("explorer: first click", "click"),
         ("explorer: second click", "second_click"),
     )
-    if importlib.util.find_spec("ipywidgets") is None:
+    if not _have("ipywidgets"):
         note = "not measured: ipywidgets not installed (the notebook extra)"
         return [_row(figure, "", [], note=note) for figure, _ in figures]
     log(f"start-up: explorer x {runs}")
@@ -350,10 +354,15 @@ def _explorer(s: _Session, runs: int) -> list[dict]:
     fails = [x.failure() or ("" if g else "no result line") for x, g in zip(t, got)]
     n = next((g["n"] for g in got if g), "?")
     text = "python -c EXPLORER (atlas.bench.startup)"
-    return [
-        _row(figure, text, [g[key] if g else math.nan for g in got], fails, note=f"{n}^2 map")
-        for figure, key in figures
-    ]
+    rows = [_row(figure, text, [g[key] if g else math.nan for g in got], fails)
+            for figure, key in figures]  # fmt: skip
+    rows[0]["note"] = "; ".join(x for x in (f"{n} x {n} map", rows[0]["note"]) if x)
+    return rows
+
+
+def _have(module: str) -> bool:
+    """``module`` can be imported in this environment (not imported here)."""
+    return importlib.util.find_spec(module) is not None
 
 
 def measure(cfg: dict, run=run_timed) -> list[dict]:
