@@ -153,6 +153,10 @@ def test_full_section_in_a_temporary_cache(user_cache, tmp_path):
     assert (rows["atlas selftest"]["value"], rows["atlas selftest"]["met"]) == (0, "met")
     assert rows["explorer: first click"]["median_s"] == 8.0
     assert rows["explorer: first map"]["note"] == "513 x 513 map"
+    first = rows["explorer, first session in the cache: first click"]
+    assert (first["runs"], first["median_s"]) == (1, 8.0)
+    explorer = [c for c in procs.calls if "make_widget" in " ".join(c["cmd"])]
+    assert len(explorer) == 1 + CONFIG["full"]["startup"]["explorer_runs"]
     md = "\n".join(startup_section(list(rows.values())))
     assert "**Targets**: met in 3 of 5 figures." in md
     assert "| atlas --help | 5 | 0.7 | 0.7 | 0.7 | - | median s | 0.7 | 0.5 | missed |" in md
