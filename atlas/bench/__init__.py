@@ -4,6 +4,7 @@ Modules: :mod:`~atlas.bench.config` (what a run measures: ``full``, ``quick``, `
 :mod:`~atlas.bench.timing` (clocks, memory, subprocess workers), :mod:`~atlas.bench.grids` (one
 beta grid, every method, checked exactly), :mod:`~atlas.bench.boundaries` (contours, Hausdorff
 distance), :mod:`~atlas.bench.suites` and :mod:`~atlas.bench.simulation` (the measured sections),
+:mod:`~atlas.bench.startup` (start-up figures, whole processes),
 :mod:`~atlas.bench.report` and :mod:`~atlas.bench.plots` (``bench.md`` and its figures),
 :mod:`~atlas.bench.runner` (:func:`run`, the entry point of ``atlas bench``), and
 :mod:`~atlas.bench.distributed` (throughput of distributed generation, ``distributed.md``).

@@ -70,6 +70,11 @@ _QUICK_SUITES = (
     "class_boundaries",
 )
 
+#: start-up of the quick and tiny runs: one ``import atlas`` and one ``atlas --help`` (~1 s)
+_CHEAP_STARTUP = dict(
+    runs=1, cold_runs=0, generate_runs=0, large_runs=0, selftest_runs=0, explorer_runs=0
+)
+
 CONFIG = {
     "full": dict(
         res=(64, 128, 256, 512),
@@ -97,6 +102,9 @@ CONFIG = {
         curve_cases=3,
         distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
+        startup=dict(  # runs of each start-up figure (atlas.bench.startup; ~2.5 min)
+            runs=5, cold_runs=1, generate_runs=3, large_runs=2, selftest_runs=1, explorer_runs=1
+        ),
         atlases=(
             *AXIS_PAIR,
             ("fig1", ["--scene", "fig1"]),
@@ -131,6 +139,7 @@ CONFIG = {
         curve_res=(16,),
         curve_cases=1,
         distributed=False,
+        startup=_CHEAP_STARTUP,
         atlases=(
             (
                 "tiny 4-D",

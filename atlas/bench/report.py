@@ -20,6 +20,7 @@ __all__ = [
     "build_report",
     "fmt",
     "slope",
+    "startup_section",
     "table",
     "write_csv",
 ]
@@ -43,6 +44,8 @@ class Results:
     curves: list = field(default_factory=list)
     #: the fast outcome-map engine against the exact simulator
     maps: list = field(default_factory=list)
+    #: start-up figures, whole processes (:mod:`atlas.bench.startup`)
+    startup: list = field(default_factory=list)
     #: the exact reference: distinct ``points`` evaluated, ``seconds``, ``failures``
     exact: dict = field(default_factory=lambda: dict(points=0, seconds=0.0, failures=0))
 
@@ -178,6 +181,19 @@ OUTCOME_MAP_COLUMNS = (
     "fallback", "agreement", "jax_map", "jax_compile_s", "jax_per_s", "fast_per_s_again",
     "jax_same",
 )  # fmt: skip
+
+STARTUP_COLUMNS = (
+    ("figure", "figure"),
+    ("runs", "runs"),
+    ("median_s", "median [s]"),
+    ("min_s", "min [s]"),
+    ("max_s", "max [s]"),
+    ("in_run_s", "in the run [s]"),
+    ("compared", "compared"),
+    ("value", "value"),
+    ("target", "target (<=)"),
+    ("met", "met"),
+)
 
 # --------------------------------------------------------------------------- sections
 
@@ -536,6 +552,42 @@ def outcome_maps_section(maps) -> list[str]:
     return [*lines, ""]
 
 
+def startup_section(rows) -> list[str]:
+    """Start-up figures, whole processes, against their targets (empty if not measured)."""
+    if not rows:
+        return []
+    targeted = [r for r in rows if r["target"] != ""]
+    met = sum(r["met"] == "met" for r in targeted)
+    shown = [{k: "-" if v == "" else v for k, v in r.items()} for r in rows]
+    commands = dict.fromkeys(f"`{r['command']}`" for r in rows if r["command"])
+    notes = [f"* {r['figure']}: {r['note']}" for r in rows if r["note"]]
+    return [
+        "## Start-up\n",
+        "Each figure is the wall time of a fresh process of this environment, from its start to "
+        "its exit (median, min and max over `runs`; `atlas` is the environment's entry point), "
+        "with one temporary, initially empty `ATLAS_JAX_CACHE` created for this section (never "
+        "the user's) and the files written into a temporary directory. `generate 512 points` = "
+        "the 16 x 16 x 2 damped atlas with every output: `cold` in the empty cache, then an "
+        "untimed round (each layer's own programs cached) and timed rounds of `warm` (exported programs and their compiled executables, compilation cache), "
+        "`exported programs only` (`ATLAS_KERNEL_EXECUTABLES=0`) and `compilation cache only` "
+        "(`ATLAS_KERNEL_CACHE=0`), each as a multiple of the warm median (`x warm`). The "
+        "8.4-million-point atlas: after a first run that compiles its shapes into the cache, the "
+        "warm runs' wall time over the seconds of their own summary line (`in the run`). "
+        "`atlas selftest`: the most disagreements of any run (each run's first in the cache "
+        "compiles its kernels). Explorer: `make_widget()` with its default map built headless "
+        "(matplotlib Agg, the map drawn to the widget's PNG), seconds from the script's first "
+        "statement (imports included) to the drawn map; then a click on the map delivered "
+        "through the canvas's `button_press_event` callbacks, as ipympl delivers one, timed "
+        "until the inspector shows the point, and a second click elsewhere. `met` compares "
+        "`value` with the target.\n",
+        table(shown, STARTUP_COLUMNS),
+        "",
+        f"**Targets**: met in {met} of {len(targeted)} figures.\n",
+        "Commands: " + "; ".join(commands) + ".\n",
+        *([*notes, ""] if notes else []),
+    ]
+
+
 def notes_section(notes, exact) -> list[str]:
     """The run's notes and the cost of the exact reference."""
     return [
@@ -560,6 +612,7 @@ def build_report(r: Results) -> str:
         *curves_section(r.curves),
         *simulation_section(r.sim),
         *outcome_maps_section(r.maps),
+        *startup_section(r.startup),
         *notes_section(r.meta["notes"], r.exact),
     ]
     return "\n".join(parts) + "\n"

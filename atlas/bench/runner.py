@@ -12,7 +12,9 @@ Everything is measured in one run on this machine and reported as ratios measure
 * **scaling** and **end to end**: time and peak RSS per atlas size, ``atlas generate``
   (:mod:`atlas.bench.suites`, subprocesses of :mod:`atlas.bench.timing`);
 * **simulation**: :func:`atlas.dynamics.simulate` against ``solve_ivp``
-  (:mod:`atlas.bench.simulation`).
+  (:mod:`atlas.bench.simulation`);
+* **start-up**: ``import atlas``, ``atlas --help``, ``atlas generate`` cold and warm,
+  ``atlas selftest`` and the explorer as whole processes (:mod:`atlas.bench.startup`).
 
 The report is built by :mod:`atlas.bench.report`, the figures by :mod:`atlas.bench.plots`.
 Nothing here is imported by the library; :func:`run` is called by ``atlas bench``.
@@ -27,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import distributed, plots, suites
+from atlas.bench import distributed, plots, startup, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
@@ -53,7 +55,9 @@ NOTES = (
 
 
 #: the CSV sections of a run (``bench_<name>.csv``)
-SECTIONS = ("work_precision", "suites", "large", "scaling", "atlases", "simulation", "curves")
+SECTIONS = (
+    "work_precision", "suites", "large", "scaling", "atlases", "simulation", "curves", "startup",
+)  # fmt: skip
 #: every file a run writes into its output directory (``distributed.md`` only where the
 #: configuration measures distributed generation: the full run); a test compares ``outputs/``
 FILES = (
@@ -90,6 +94,7 @@ def _measure(cfg, meta) -> Results:
         maps = outcome_maps(cfg)
         jax_outcome_columns(maps, cfg)
         curve_rows = curves(cfg)
+    startup_rows = startup.measure(cfg["startup"])
     exact = dict(points=len(cache.store), seconds=cache.seconds, failures=cache.failures)
     return Results(
         meta=meta,
@@ -104,18 +109,22 @@ def _measure(cfg, meta) -> Results:
         atlases=atlases,
         curves=curve_rows,
         maps=maps,
+        startup=startup_rows,
         exact=exact,
     )
 
 
 def _write(out: Path, r: Results, t_start: float):
     """``bench_*.csv``, the figures, ``bench_headline.json`` and ``bench.md`` into ``out``."""
-    rows = (r.wp, r.suites, r.large, r.scaling, r.atlases, r.sim, r.curves)
+    rows = (r.wp, r.suites, r.large, r.scaling, r.atlases, r.sim, r.curves, r.startup)
     for name, section in zip(SECTIONS, rows):
         write_csv(out / f"bench_{name}.csv", section)
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
     r.meta["duration"] = time.perf_counter() - t_start
-    js = dict(meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases, outcome_maps=r.maps)
+    js = dict(
+        meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases, outcome_maps=r.maps,
+        startup=r.startup,
+    )  # fmt: skip
     atomic_write_text(out / "bench_headline.json", json.dumps(js, indent=1, default=_json_default))
     atomic_write_text(out / "bench.md", build_report(r))
 

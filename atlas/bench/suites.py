@@ -270,14 +270,16 @@ def scaling(cfg) -> list[dict]:
 
 
 def parse_summary(line: str) -> dict:
-    """Points, points/s and undecided before / after settlement from the summary line of
-    ``atlas generate`` (``atlas generate: ...: P points in S s (R points/s) ...; undecided U
+    """Points, seconds, points/s and undecided before / after settlement from the summary line
+    of ``atlas generate`` (``atlas generate: ...: P points in S s (R points/s) ...; undecided U
     before, V after exact resolution``)."""
     words = line.translate(str.maketrans(",();", "    ")).split()
     i = len(words) - 1 - words[::-1].index("undecided") if "undecided" in words else len(words)
     und = words[i + 1 : i + 4 : 2]  # "undecided U before V after"
+    at = words.index("points")  # "P points in S s"
     return dict(
-        points=int(words[words.index("points") - 1]),
+        points=int(words[at - 1]),
+        seconds=float(words[at + 2]),
         points_per_second=float(words[words.index("points/s") - 1]),
         undecided_before=int(und[0]) if und else "",
         undecided_after=int(und[1]) if len(und) > 1 else "",

@@ -35,6 +35,7 @@ __all__ = [
     "machine",
     "run_worker",
     "run_cli",
+    "bench_json",
     "scale_worker",
     "generate_worker",
     "worker_main",
@@ -199,12 +200,19 @@ def run_worker(kind: str, n: int, q: float, dtype: str) -> dict:
     t0 = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     wall = time.perf_counter() - t0
-    for line in p.stdout.splitlines():
+    d = bench_json(p.stdout)
+    if d is None:
+        raise RuntimeError(f"bench worker failed: {p.stderr.strip().splitlines()[-1:]}")
+    d["wall_seconds"] = wall
+    return d
+
+
+def bench_json(stdout: str) -> dict | None:
+    """The value of a subprocess's first ``BENCH_JSON {...}`` line (None without one)."""
+    for line in stdout.splitlines():
         if line.startswith("BENCH_JSON "):
-            d = json.loads(line[len("BENCH_JSON ") :])
-            d["wall_seconds"] = wall
-            return d
-    raise RuntimeError(f"bench worker failed: {p.stderr.strip().splitlines()[-1:]}")
+            return json.loads(line[len("BENCH_JSON ") :])
+    return None
 
 
 #: ``atlas <args>`` in a subprocess that prints its own peak RSS at exit

@@ -55,7 +55,16 @@ import numpy as np
 
 from atlas.core import config
 
-__all__ = ["Kernel", "jit", "kernel_cache", "MODULES", "KERNEL_ENV", "EXECUTABLE_ENV"]
+__all__ = [
+    "Kernel",
+    "jit",
+    "kernel_cache",
+    "keep_kernels",
+    "save_used",
+    "MODULES",
+    "KERNEL_ENV",
+    "EXECUTABLE_ENV",
+]
 
 #: modules whose live code every kernel's digest covers (the kernels and what they call)
 MODULES = (
@@ -78,9 +87,11 @@ KERNEL_ENV = "ATLAS_KERNEL_CACHE"
 EXECUTABLE_ENV = "ATLAS_KERNEL_EXECUTABLES"
 #: values of each argument kept as the canary input of a stored executable
 CANARY = 256
-_STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}}
+_STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}, "manifest": None}
 #: held while the compilation cache is switched off for a fresh compilation
 _FRESH = threading.Lock()
+#: the :func:`kernel_cache` block :func:`keep_kernels` keeps open until the process exits
+_SESSION: dict = {"stack": None, "run": None}
 
 
 @contextlib.contextmanager
@@ -97,16 +108,41 @@ def kernel_cache(where: str | None = None, run: str | None = None):
     manifest = None
     if where is not None and run is not None and os.environ.get(EXECUTABLE_ENV, "") != "0":
         manifest = Path(where) / f"run-{hashlib.sha256(run.encode()).hexdigest()[:24]}.txt"
-    _STATE.update(dir=where, digests={}, used=[], prefetch=_prefetch(manifest))
+    _STATE.update(dir=where, digests={}, used=[], prefetch=_prefetch(manifest), manifest=manifest)
     try:
         yield where
     finally:
         for future in _STATE["prefetch"].values():
             future.cancel()
-        used = "\n".join(_STATE["used"])
-        if manifest is not None and used and _read_text(manifest) != used:
-            _write(manifest, used.encode())
+        save_used()
         _STATE.update(before)
+
+
+def save_used() -> None:
+    """Write the list of executables the active :func:`kernel_cache` block (with a ``run``
+    name) used so far, which the next block of that name loads in the background (done when a
+    block ends; a long-lived session calls it once warm)."""
+    manifest, used = _STATE["manifest"], "\n".join(_STATE["used"])
+    if manifest is not None and used and _read_text(manifest) != used:
+        _write(manifest, used.encode())
+
+
+def keep_kernels(run: str) -> str | None:
+    """Turn on, for the rest of this process, the persistent compilation cache
+    (:func:`atlas.core.config.use_compile_cache`) and a :func:`kernel_cache` block named ``run``:
+    a long-lived session (the notebook explorer's kernel) keeps and reuses compiled kernels like
+    the CLI, with the same switches (``$ATLAS_JAX_CACHE=0``, ``$ATLAS_KERNEL_CACHE=0``).  The
+    block ends when the process exits (:func:`save_used` also writes its list then).  Returns
+    the kernels directory (``None``: off); a second call changes nothing, whatever its ``run``."""
+    if _SESSION["stack"] is None:
+        config.use_compile_cache()
+        stack = contextlib.ExitStack()
+        stack.enter_context(kernel_cache(run=run))
+        _SESSION.update(stack=stack, run=run)
+        import atexit  # noqa: PLC0415
+
+        atexit.register(stack.close)
+    return _STATE["dir"]
 
 
 def _read_text(path: Path) -> str:

@@ -9,7 +9,8 @@ The logic behind ``notebooks/explore.ipynb`` as plain, testable functions, one m
 * :mod:`atlas.explore.colors` -- :func:`layer_rgba`, :func:`legend_entries`.
 * :mod:`atlas.explore.state` -- :class:`Explorer`, the state and callbacks of the widget (no
   ipywidgets needed).  Redraws are bounded: undecided cells beyond :data:`LIVE_MAX_RESOLVE` exact
-  settlements are drawn as undecided until settled on request.
+  settlements are drawn as undecided until settled on request.  :func:`keep_kernels` keeps the
+  compiled kernels for the session (an :class:`Explorer` turns it on).
 * :mod:`atlas.explore.map_view` -- the widget's map figure (matplotlib).
 * :mod:`atlas.explore.widget` -- :func:`make_widget`, ipywidgets controls wired to an
   :class:`Explorer` (clicking the map needs ipympl, the ``notebook`` extra).
@@ -31,7 +32,7 @@ from atlas.explore.maps import (
     layers,
 )
 from atlas.explore.redraw import format_redraw, measure_redraw
-from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, keep_kernels
 from atlas.explore.widget import RESOLUTIONS, make_widget
 
 __all__ = [
@@ -45,6 +46,7 @@ __all__ = [
     "format_inspection",
     "format_redraw",
     "inspect_point",
+    "keep_kernels",
     "layer_groups",
     "layers",
     "layer_rgba",

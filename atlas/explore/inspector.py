@@ -10,10 +10,9 @@ from __future__ import annotations
 import math
 import operator
 
-import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import baseline, exact, expressions, hurwitz, points, spectral
+from atlas.core import baseline, exact, expressions, hurwitz, points, spectral, warm
 from atlas.core import contact_modes as mech
 from atlas.core.rigid_body import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
@@ -60,20 +59,39 @@ def _direction(angle, dt) -> tuple[np.ndarray, np.ndarray]:
     return c, s
 
 
-def _angle_verdicts(j: list) -> dict:
-    """Class code, SF/FS stability, IF/FI consistency and CC of ``b1 = (c1, s1)``, ``b2``."""
-    c1, s1, c2, s2 = j
+@warm.jit
+def _point_arrays(c1, s1, c2, s2, ca, sa, kappa, q1, q2) -> dict:
+    """The float kernels' values at one point, as one compiled program (kept across sessions by
+    :mod:`atlas.core.warm`; one call instead of ~80 small programs compiled on the first click):
+    class and subclass codes, SF/FS stability, IF/FI, CC, Table 1 consistency, the smooth SS
+    margin, the quartic's coefficients and ``M`` (eq. 9)."""
+    j = (c1, s1, c2, s2)
+    model = (kappa, q1, q2)
     return {
-        "class_code": int(mech.class_code(*j)),
-        "stable_SF": int(mech.stable_SF(c1)),
-        "stable_FS": int(mech.stable_FS(s2)),
-        "consistent_IF": bool(mech.consistent_IF(c1, s1)),
-        "consistent_FI": bool(mech.consistent_FI(c2, s2)),
-        "cc_possible": bool(mech.cc_possible(c1, s2)),
+        "class_code": mech.class_code(*j),
+        "subclass_code": mech.subclass_code(*j, ca, sa),
+        "consistency": mech.consistent_modes(*j, ca, sa),
+        "stable_SF": mech.stable_SF(c1),
+        "stable_FS": mech.stable_FS(s2),
+        "consistent_IF": mech.consistent_IF(c1, s1),
+        "consistent_FI": mech.consistent_FI(c2, s2),
+        "cc_possible": mech.cc_possible(c1, s2),
+        "ss_margin": hurwitz.ss_margin(*j, *model),
+        "coefficients": spectral.coefficients(*j, *model),
+        "M": baseline.build_M(*j, *model),
     }
 
 
-def _alpha_verdicts(alpha, dirs: tuple, j: list, dt) -> dict:
+def _angle_verdicts(arr: dict) -> dict:
+    """Class code, SF/FS stability, IF/FI consistency and CC of ``b1 = (c1, s1)``, ``b2``."""
+    return {
+        "class_code": int(arr["class_code"]),
+        **{k: int(arr[k]) for k in ("stable_SF", "stable_FS")},
+        **{k: bool(arr[k]) for k in ("consistent_IF", "consistent_FI", "cc_possible")},
+    }
+
+
+def _alpha_verdicts(alpha, dirs: tuple, a: tuple, arr: dict) -> dict:
     """Subclass code and Table 1 consistency (fast and exact); without ``alpha`` the class only."""
     if alpha is None:
         return {
@@ -81,13 +99,11 @@ def _alpha_verdicts(alpha, dirs: tuple, j: list, dt) -> dict:
             "consistency": None,
             "exact_codes": exact.point_codes(*dirs),
         }
-    ca, sa = _direction(alpha, dt)
-    ja = [jnp.asarray(ca), jnp.asarray(sa)]
     return {
-        "a": (float(ca), float(sa)),
-        "subclass_code": int(mech.subclass_code(*j, *ja)),
-        "consistency": {k: int(v) for k, v in mech.consistent_modes(*j, *ja).items()},
-        "exact_codes": exact.point_codes(*dirs, ca, sa),
+        "a": (float(a[0]), float(a[1])),
+        "subclass_code": int(arr["subclass_code"]),
+        "consistency": {k: int(v) for k, v in arr["consistency"].items()},
+        "exact_codes": exact.point_codes(*dirs, *a),
     }
 
 
@@ -96,12 +112,12 @@ def _sorted_by_real_part(w) -> np.ndarray:
     return w[np.argsort(-w.real, kind="stable")]
 
 
-def _margins(j, model, dirs, fast, ref) -> dict:
+def _margins(arr: dict, dirs, fast, ref) -> dict:
     """The smooth SS margin, ``det B``, the quartic's coefficients and the spectral abscissa."""
     c1, s1, c2, s2 = (float(v) for v in dirs)
-    a3, a2, a1, a0 = (float(x) for x in spectral.coefficients(*j, *model))
+    a3, a2, a1, a0 = (float(x) for x in arr["coefficients"])
     return {
-        "ss_margin": float(hurwitz.ss_margin(*j, *model)),
+        "ss_margin": float(arr["ss_margin"]),
         "det_B": expressions.det(c1, s1, c2, s2, sub=operator.sub),
         "a3": a3,
         "a2": a2,
@@ -112,16 +128,14 @@ def _margins(j, model, dirs, fast, ref) -> dict:
     }
 
 
-def _spectrum(dirs: tuple, model: tuple, dt) -> dict:
+def _spectrum(dirs: tuple, model: tuple, arr: dict, dt) -> dict:
     """SS and II verdicts of the fast path, the settled path and the exact reference; ``M``, its
     eigenvalues (``numpy`` and exact) and the margins."""
-    j = [jnp.asarray(v) for v in dirs]
-    jm = [jnp.asarray(dt.type(v)) for v in model]
     pt = [np.asarray(v, dt) for v in dirs] + [dt.type(v) for v in model]
     fast = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=False)
     settled = points.spectral_points(*pt, names=points.SPECTRAL_NAMES, dtype=dt, resolve=True)
     ref = exact.point_spectral(*(float(v) for v in pt))
-    M = np.asarray(baseline.build_M(*j, *jm))
+    M = np.asarray(arr["M"])
     return {
         "spectral_fast": {k: int(fast[k]) for k in _FLAGS},
         "spectral": {k: int(settled[k]) for k in _FLAGS},
@@ -129,7 +143,7 @@ def _spectrum(dirs: tuple, model: tuple, dt) -> dict:
         "M": M,
         "eigenvalues": _sorted_by_real_part(np.linalg.eigvals(M.astype(np.float64))),
         "eigenvalues_exact": _sorted_by_real_part(np.asarray(ref["roots"], complex)),
-        "margins": _margins(j, jm, dirs, fast, ref),
+        "margins": _margins(arr, dirs, fast, ref),
     }
 
 
@@ -190,6 +204,8 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
     kappa, q1, q2 = model = checked_model(kappa, q1, q2)
     dirs = _direction(beta1, dt) + _direction(beta2, dt)  # c1, s1, c2, s2
     c1, s1, c2, s2 = dirs
+    a = _direction(0.0 if alpha is None else alpha, dt)  # (1, 0) without alpha: results unused
+    arr = _point_arrays(*dirs, *a, *(np.asarray(v, dt) for v in model))
     out = {
         "beta1": float(beta1),
         "beta2": float(beta2),
@@ -199,9 +215,9 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
         "q2": q2,
         "b1": (float(c1), float(s1)),
         "b2": (float(c2), float(s2)),
-        **_angle_verdicts([jnp.asarray(v) for v in dirs]),
-        **_alpha_verdicts(alpha, dirs, [jnp.asarray(v) for v in dirs], dt),
-        **_spectrum(dirs, model, dt),
+        **_angle_verdicts(arr),
+        **_alpha_verdicts(alpha, dirs, a, arr),
+        **_spectrum(dirs, model, arr, dt),
         "others": _others((float(beta1), float(beta2)), alpha, model, dt),
     }
     out["labels"] = _labels(out)

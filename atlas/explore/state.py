@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 
 import numpy as np
 import xarray as xr
 
+from atlas.core import warm
 from atlas.core.brackets import FIELD_LABELS
-from atlas.data.boundaries import slice_boundaries
 from atlas.data.boundary_curves import Boundaries, Curve
 from atlas.explore.colors import layer_rgba
 from atlas.explore.inspector import inspect_point
@@ -23,7 +23,7 @@ from atlas.explore.maps import (
     needs_model,
 )
 
-__all__ = ["Explorer", "LIVE_MAX_RESOLVE", "OVERLAYS", "BOUNDARY_GRID"]
+__all__ = ["Explorer", "LIVE_MAX_RESOLVE", "OVERLAYS", "BOUNDARY_GRID", "RUN", "keep_kernels"]
 
 #: exact settlements per redraw: at most this many undecided points of the spectral layers are
 #: settled by :mod:`atlas.core.exact` when a control moves (up to ~20-100 ms each: the II verdicts need
@@ -34,6 +34,18 @@ OVERLAYS = ("class boundaries", "SS boundary", "certified boundaries")
 #: cells a side of the grid :func:`atlas.data.boundaries.slice_boundaries` starts from for the
 #: "certified boundaries" overlay (its vertices are certified within 1e-10 rad whatever the grid)
 BOUNDARY_GRID = 64
+#: the name under which the explorer's kernels are kept (:func:`atlas.core.warm.keep_kernels`)
+RUN = "atlas.explore"
+#: the point ``(beta1, beta2)`` [rad] the background warm-up inspects (the widget's default point)
+WARM_POINT = (0.25 * math.pi, 0.75 * math.pi)
+
+
+def keep_kernels() -> str | None:
+    """The persistent compilation cache and the kept kernels on for the rest of this process
+    (:func:`atlas.core.warm.keep_kernels`, named :data:`RUN`): from the second session on, the
+    explorer's kernels load instead of compiling.  Off with ``$ATLAS_JAX_CACHE=0`` (both) or
+    ``$ATLAS_KERNEL_CACHE=0`` (the kept kernels)."""
+    return warm.keep_kernels(RUN)
 
 
 def format_boundary(curve: Curve, i: int, distance: float) -> str:
@@ -71,6 +83,10 @@ class Explorer:
     several categorical layers as translucent colours makes the colours unreadable, and contours
     of 0/1 labels are staircases of the grid, not boundaries; the point inspector gives every
     verdict at a point instead.
+
+    Start-up.  An :class:`Explorer` turns on :func:`keep_kernels` for its process, and
+    :meth:`warm_up` (called by the widget once its first map is drawn) compiles the point
+    inspector's kernels in a background thread; a click that arrives earlier waits for it.
 
     The widget's sliders redraw when released (``continuous_update=False``): a redraw of the II
     layers with damping takes a few hundred milliseconds at 513 x 513, and a drag would otherwise
@@ -114,6 +130,8 @@ class Explorer:
         self.on_boundaries = None
         self._curves: dict[tuple, Future] = {}
         self._pool: ThreadPoolExecutor | None = None
+        self._warm: Future | None = None
+        keep_kernels()
 
     def update(self, **changes) -> xr.Dataset:
         """Apply parameter changes and recompute the selected layer; returns the map."""
@@ -203,8 +221,31 @@ class Explorer:
         self.timings["render_ms"] = 1e3 * (time.perf_counter() - t)
         return img
 
+    def warm_up(self) -> Future:
+        """Compile the point inspector's kernels in a background thread: one inspection of
+        :data:`WARM_POINT` at the current model, alpha and dtype, its result discarded (the kept
+        kernels' list is then saved, :func:`atlas.core.warm.save_used`).  Started once; returns
+        its future."""
+        if self._warm is None:
+            p = self.params
+            pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-warm-up")
+            self._warm = pool.submit(
+                _warm_up,
+                alpha=p["alpha"],
+                kappa=p["kappa"],
+                q1=p["q1"],
+                q2=p["q2"],
+                dtype=p["dtype"],
+            )
+            pool.shutdown(wait=False)
+        return self._warm
+
     def inspect(self, beta1, beta2) -> dict:
-        """The point inspector at ``(beta1, beta2)`` [rad] with the current model and alpha."""
+        """The point inspector at ``(beta1, beta2)`` [rad] with the current model and alpha
+        (after the :meth:`warm_up` if one is running: its kernels, not a second compilation;
+        an error of the warm-up is not raised here, the inspection's own would be)."""
+        if self._warm is not None:
+            wait([self._warm])
         p = self.params
         self.point = (float(beta1) % (2 * math.pi), float(beta2) % (2 * math.pi))
         self.last_inspection = inspect_point(
@@ -228,6 +269,8 @@ class Explorer:
         key = (p["kappa"], p["q1"], p["q2"])
         fut = self._curves.get(key)
         if fut is None:
+            from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
+
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-boundaries")
             grid = beta_grid(BOUNDARY_GRID)
@@ -275,3 +318,9 @@ class Explorer:
             f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )
+
+
+def _warm_up(**model) -> None:
+    """:meth:`Explorer.warm_up`'s work: one inspection, then the kept kernels' list saved."""
+    inspect_point(*WARM_POINT, **model)
+    warm.save_used()

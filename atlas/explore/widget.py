@@ -325,7 +325,9 @@ def make_widget(explorer: Explorer | None = None, **initial):
     resolution, layer, overlays, exact settlements per redraw and a "settle undecided" button;
     the map redraws on every change; clicking the map fills the point inspector (needs an
     interactive matplotlib backend: ``%matplotlib widget`` with ipympl, the ``notebook`` extra),
-    as does entering beta1, beta2 and pressing "inspect point".
+    as does entering beta1, beta2 and pressing "inspect point".  The kernels are kept for the
+    process (:func:`~atlas.explore.state.keep_kernels`); the inspector's compile in the
+    background once the first map is drawn (:meth:`Explorer.warm_up`).
 
     Returns an ``ipywidgets.VBox``; its ``explorer`` attribute is the :class:`Explorer`,
     ``controls`` the dict of control widgets, ``figure`` the map's figure (its canvas has the
@@ -340,6 +342,7 @@ def make_widget(explorer: Explorer | None = None, **initial):
     cb = _Callbacks(ex, ctl, view, image, status, inspector)
     cid = cb.connect()
     cb.on_change()  # a bad initial value raises
+    ex.warm_up()  # the inspector's kernels, in the background: the first click does not compile
     for key, c in ctl.items():  # names for the page's CSS and the browser test
         c.add_class(f"atlas-{key.replace('_', '-')}")
     status.add_class("atlas-status")

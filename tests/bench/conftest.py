@@ -80,6 +80,15 @@ def fake_results(mode="full") -> Results:
              identical=True, ref_cells=500, ref_per_s=50.0, speedup=14.6, early_settle=0.13,
              early_iwc=0.62, stepped=0.25, fallback=0.0, agreement=1.0, disagreements="")
     ]  # fmt: skip
+    startup = [
+        dict(figure=f, command=f, runs=5, median_s=m, min_s=m, max_s=m, in_run_s=i,
+             compared=c, value=v, target=t, met=met, note="")
+        for f, m, i, c, v, t, met in (
+            ("import atlas", 0.1, "", "median s", 0.1, 0.5, "met"),
+            ("generate 512 points, warm", 2.5, "", "median s", 2.5, 2.0, "missed"),
+            ("generate 512 points, cold", 20.0, "", "x warm", 8.0, "", ""),
+        )
+    ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
     meta = dict(
         mode=mode, quick=mode != "full", start="2024-06-01T12:00:00+0000",
@@ -90,7 +99,7 @@ def fake_results(mode="full") -> Results:
     return Results(
         meta=meta, cfg=cfg, head=headline(wp, cfg), wp=wp, refs=refs, suites=suites,
         scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves, maps=maps,
-        exact=dict(points=42, seconds=3.0, failures=0),
+        startup=startup, exact=dict(points=42, seconds=3.0, failures=0),
     )  # fmt: skip
 
 

@@ -46,6 +46,7 @@ def test_sections_in_order(results):
         "## Boundary curves (`atlas boundaries`)",
         "## Simulation",
         "## Outcome maps: fast engine against the exact simulator",
+        "## Start-up",
         "## Notes, omissions",
     ]
     assert "Mode: **full**" in md and "total duration **1234 s**" in md
@@ -77,6 +78,9 @@ def test_numbers_of_the_made_up_run(results):
     # the suites' totals: 2 suites x 10 points, 1 undecided each
     assert "certified float64: 0 misclassified, 2 undecided of 20" in md
     assert "| d | solve_ivp DOP853 | 0.001 | 0.05 | 20 | mismatch | 1500 |" in md
+    # start-up: the made-up figures against their targets, "-" where a figure has none
+    assert "**Targets**: met in 1 of 2 figures." in md
+    assert "| generate 512 points, cold | 5 | 20 | 20 | 20 | - | x warm | 8 | - | - |" in md
 
 
 def test_tables_have_no_empty_cells(results):
@@ -134,8 +138,8 @@ def test_outcome_maps_section_lists_every_disagreement(results):
     results.maps = [row, dict(row, map="other", agreement=1.0, disagreements="")]
     md = report.build_report(results)
     heads = [ln for ln in md.splitlines() if ln.startswith("#")]
-    assert heads[-2:] == ["## Outcome maps: fast engine against the exact simulator",
-                          "## Notes, omissions"]  # fmt: skip
+    assert heads[-3:] == ["## Outcome maps: fast engine against the exact simulator",
+                          "## Start-up", "## Notes, omissions"]  # fmt: skip
     assert "| map | trajectories | workers | fast_seconds | fast_per_s | core_seconds |" in md
     assert "* 8x8, kappa=0.5, q=0, alpha=0.35pi: (1,2): reference IWC" in md
     assert "* other:" not in md

@@ -56,6 +56,13 @@ def test_tiny_run_end_to_end(tmp_path, monkeypatch, capsys):
         assert (out / f"bench_{name}").stat().st_size > 0
     # exactly the declared files (outputs/ is compared with the same list)
     assert sorted(f.name for f in out.iterdir()) == sorted(runner.files("tiny"))
+    # start-up, the cheap part: one import and one --help, whole processes, against 0.5 s
+    start = _csv(out / "bench_startup.csv")
+    assert [(r["figure"], r["runs"], r["target"]) for r in start] == [
+        ("import atlas", "1", "0.5"), ("atlas --help", "1", "0.5")
+    ]  # fmt: skip
+    assert all(float(r["median_s"]) > 0 and r["met"] in ("met", "missed") for r in start)
+    assert "## Start-up" in md and len(js["startup"]) == 2
     (curve_ss, curve_ii) = _csv(out / "bench_curves.csv")
     assert float(curve_ss["max_bracket"]) <= 1e-10 and int(curve_ss["curves"]) > 0
     rows = [ln for ln in md.split("## Headline")[1].split("##")[0].splitlines() if ln[:3] == "| ("]

@@ -12,7 +12,7 @@ def test_parse_summary_of_generate():
         "undecided 12 before, 0 after exact resolution"
     )
     assert parse_summary(line) == dict(
-        points=1024, points_per_second=1970.0, undecided_before=12, undecided_after=0
+        points=1024, seconds=0.52, points_per_second=1970.0, undecided_before=12, undecided_after=0
     )
 
 
@@ -24,6 +24,7 @@ def test_parse_summary_of_distributed_generate():
     )
     s = parse_summary(line)
     assert (s["points"], s["undecided_before"], s["undecided_after"]) == (4096, 7, 1)
+    assert s["seconds"] == 2.0
 
 
 def _row(case, outputs, dtype, n, method, seconds, **kw):

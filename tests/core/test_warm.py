@@ -249,3 +249,18 @@ def test_an_executable_given_other_arguments_falls_back():
     want = warm._result_digest(rootfree._tier2_dominance.jitted(*other))
     assert warm._result_digest(guarded(*other)) == want
     assert guarded.compiled is None
+
+
+def test_save_used_writes_the_run_list_before_the_block_ends(stored_dominance, tmp_path):
+    """A long-lived session (:func:`warm.keep_kernels`) lists the executables it used when it
+    calls :func:`warm.save_used`, not only when its block ends (at exit)."""
+    import shutil
+
+    for f in stored_dominance.iterdir():
+        shutil.copy(f, tmp_path)
+    with warm.kernel_cache(str(tmp_path), run="a session"):
+        warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
+        assert not list(tmp_path.glob("run-*.txt"))
+        warm.save_used()
+        (manifest,) = tmp_path.glob("run-*.txt")
+        assert manifest.read_text() == next(tmp_path.glob("*.xlaexec")).name

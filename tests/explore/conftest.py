@@ -24,6 +24,25 @@ def need_module(module: str):
     return pytest.importorskip(module)
 
 
+#: environment variables of the warm start a probe process must not inherit
+_SWITCHES = ("ATLAS_JAX_CACHE", "ATLAS_KERNEL_CACHE", "ATLAS_KERNEL_EXECUTABLES")
+_SWITCHES += ("JAX_COMPILATION_CACHE_DIR",)
+
+
+@pytest.fixture(scope="session")
+def probe_env():
+    """``probe_env(cache, **switches)``: a fresh process's environment, ``cache`` as
+    ``$ATLAS_JAX_CACHE``, only ``switches`` of the warm start set, this source tree first on the
+    path, matplotlib's Agg backend."""
+
+    def env(cache, **switches) -> dict:
+        base = {k: v for k, v in os.environ.items() if k not in _SWITCHES}
+        path = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
+        return dict(base, ATLAS_JAX_CACHE=str(cache), PYTHONPATH=path, MPLBACKEND="Agg", **switches)
+
+    return env
+
+
 @pytest.fixture(scope="session")
 def need():
     """:func:`need_module` as a fixture (``need("ipywidgets")``)."""

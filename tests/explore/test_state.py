@@ -1,11 +1,44 @@
 """The widget's state without ipywidgets (:class:`atlas.explore.Explorer`): what a control change
-recomputes, the capped settlement and the one-line errors."""
+recomputes, the capped settlement and the one-line errors; the kept kernels' switches."""
 
 from __future__ import annotations
+
+import json
+import subprocess
+import sys
 
 import pytest
 
 from atlas.explore import maps, state
+
+_SWITCH_PROBE = """
+import json, jax
+from atlas.explore import state
+print(json.dumps(dict(kept=state.keep_kernels(), cache=jax.config.jax_compilation_cache_dir)))
+"""
+
+
+def test_keep_kernels_follows_the_cli_switches(tmp_path, probe_env):
+    """An explorer's process keeps kernels in ``<cache>/kernels`` and uses the compilation
+    cache; ``ATLAS_KERNEL_CACHE=0`` leaves the kept kernels off, ``ATLAS_JAX_CACHE=0`` both."""
+    cases = {
+        "on": ({}, str(tmp_path / "kernels"), str(tmp_path)),
+        "no kept kernels": ({"ATLAS_KERNEL_CACHE": "0"}, None, str(tmp_path)),
+        "no caches": ({}, None, None),
+    }
+    procs = {}
+    for name, (switches, _, _) in cases.items():
+        cache = "0" if name == "no caches" else tmp_path
+        cmd = [sys.executable, "-c", _SWITCH_PROBE]
+        env = probe_env(cache, **switches)
+        procs[name] = subprocess.Popen(
+            cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE, text=True
+        )
+    for name, (_, kept, cache) in cases.items():
+        out, _ = procs[name].communicate(timeout=300)
+        assert procs[name].returncode == 0, name
+        got = json.loads(out.strip().splitlines()[-1])
+        assert (got["kept"], got["cache"] or None) == (kept, cache), name
 
 
 def test_layers_of_a_group_share_one_computation():

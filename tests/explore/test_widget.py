@@ -4,6 +4,7 @@ redraws are capped and "settle undecided" settles; overlays draw the SS boundary
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
@@ -279,3 +280,57 @@ def test_certified_boundaries_overlay_and_click_near_a_curve(need):
     verdict = int(exact.point_spectral(*d, kappa, q, q)["stable_SS"])
     sides = {FIELD_LABELS["SS"][ss.side_a], FIELD_LABELS["SS"][ss.side_b]}
     assert FIELD_LABELS["SS"][verdict] in sides
+
+
+#: a widget in a fresh process: XLA compilations while it is made, during its inspector's
+#: warm-up (waited for unless ``now``) and on a click right after (counted by jax.monitoring)
+_START_PROBE = """
+import json, sys
+import jax
+from atlas.core import warm
+from atlas.explore.widget import make_widget
+
+compiles = []
+def count(event, seconds, **kw):
+    if event.endswith("backend_compile_duration"):
+        compiles.append(event)
+jax.monitoring.register_event_duration_secs_listener(count)
+box = make_widget(n=9, layer="stable_SS", kappa=0.5, q1=0.3)
+made, started = len(compiles), box.explorer._warm is not None
+if sys.argv[1:] != ["now"]:
+    box.explorer.warm_up().result()
+warmed = len(compiles)
+box.controls["beta1"].value, box.controls["beta2"].value = 1.3, 0.2
+box.callbacks["inspect"]()
+assert box.explorer.last_inspection is not None
+out = dict(started=started, made=made, warm_up=warmed - made, click=len(compiles) - warmed, used=len(warm._STATE["used"]))
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.e2e
+def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, need, probe_env):
+    """A first session (empty cache) compiles the map's and, in the background warm-up, the
+    inspector's kernels, so a click compiles nothing; a click before the warm-up is done waits for
+    it (the same compilations in all); a second session compiles nothing at all (kept kernels)."""
+    need("ipywidgets")
+
+    def start(cache, *args):
+        cmd = [sys.executable, "-c", _START_PROBE, *args]
+        env = probe_env(cache)
+        return subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE, text=True)
+
+    def result(proc):
+        out, _ = proc.communicate(timeout=600)
+        assert proc.returncode == 0
+        return json.loads(out.strip().splitlines()[-1])
+
+    first, now = start(tmp_path / "a"), start(tmp_path / "b", "now")
+    first, now = result(first), result(now)
+    assert first["started"] and first["warm_up"] > 0 and first["click"] == 0, first
+    assert now["made"] + now["warm_up"] + now["click"] == first["made"] + first["warm_up"], now
+    kept = sorted(p.suffix for p in (tmp_path / "a" / "kernels").iterdir())
+    assert ".jaxexport" in kept and ".txt" in kept  # the programs and the session's list
+    second = result(start(tmp_path / "a"))
+    assert (second["made"], second["warm_up"], second["click"]) == (0, 0, 0), second
+    assert second["used"] > 0  # kept executables served it
