@@ -57,7 +57,8 @@ Lanes that are decided, diverge, reach the horizon or the event cap leave the ba
 Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
 a longer horizon (:func:`atlas.dynamics.needs_longer_run`) rejoin the running batch from where
 they stopped, so the horizon extensions of some lanes overlap the first runs of the others.
-Lanes the modal form cannot serve (eigenvector condition > ``1e4``, singular ``B_SS``, a zero
+Lanes the modal form cannot serve (a proven upper bound of the eigenvector condition ``>= 1e4``,
+:func:`atlas.dynamics.modal_form.cond_bound`; singular ``B_SS``, a zero
 eigenvalue) or whose root location stalls (a grazing contact) are run by the exact simulator
 instead (``fallback``).  The condition bound separates the near-defective configurations of
 degenerate directions: a grid through ``b_ii = 0`` (e.g. ``beta2 = pi``, where ``sin beta2`` rounds
