@@ -382,7 +382,9 @@ SMALL = 10.0
 
 def _window(H, lam, valid, p, aUE, scale):
     """Step window (n,): ``WINDOWS H_S``, shortened so that no modal term grows by more than
-    ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``); ``H_S``
+    ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``), but never
+    below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window is ``H_S``, and the
+    curvature bound uses that window's own growth factor); ``H_S``
     unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
     + GROWTH sum |u|``, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
     (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""

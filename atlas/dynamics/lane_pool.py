@@ -57,7 +57,10 @@ START_LANES = 4096
 def chunks(n: int, w: int, extra: int = 0) -> list[np.ndarray]:
     """Lane indices (sorted) of ``w`` chunks of ``n`` lanes: the first ``ceil(n / w) + extra``
     lanes spread evenly over ``0 .. n - 1`` (``extra`` taken from the others, at most half of
-    their even share), the others strided over the rest; every lane in exactly one chunk."""
+    their even share), the others strided over the rest; every lane in exactly one chunk, none
+    empty (``n >= w``, as :meth:`LanePool.map` ensures)."""
+    if n < w:
+        raise ValueError(f"chunks: {n} lanes cannot fill {w} chunks (need n >= w)")
     if w == 1:
         return [np.arange(n)]
     n0 = min(n - (w - 1) * (-(-n // (2 * w))), -(-n // w) + max(0, int(extra)))

@@ -177,7 +177,8 @@ def cond_bound(V, W):
     m u / (1 - m u)``, ``u = 2^-53``; Higham 2002, Sec. 3.6), so ``|fl(W V) - W V|_F <= sqrt(2)
     gamma_(na + 2) |W|_F |V|_F``; with the subtraction of ``I`` this is below the ``4 na u |W|_F
     |V|_F`` added to the computed ``|R|_F`` (``na`` = 2, 4).  The norms' own rounding (relative
-    ``< 1e-14``) is covered by the factor ``1 + 1e-12``.  Against an SVD-computed condition
+    ``< 1e-14``) is covered by the factor ``1 + 1e-12`` and, in ``1 - r`` (whose relative error
+    grows as ``1 / (1 - r)``), by taking ``r (1 + 1e-13)``.  Against an SVD-computed condition
     (relative error ``~ u cond``): ``|M|_F >= |M|_2 sqrt(1 + 1 / cond^2)`` for ``M = V, W``, so
     near ``cond = 1e4`` the bound exceeds ``cond`` by a relative ``>= 1e-8``.  The bound exceeds
     ``cond(V)`` by at most ``na / (1 - r)`` (``|M|_F <= sqrt(na) |M|_2``)."""
@@ -189,6 +190,7 @@ def cond_bound(V, W):
         R[:, np.arange(na), np.arange(na)] -= 1.0
         prod = fv * fw
         r = np.sqrt(np.sum(R.real**2 + R.imag**2, axis=(1, 2))) + 4 * na * 2.0**-53 * prod
+        r = r * (1 + 1e-13)
         bound = (1 + 1e-12) * prod / (1 - r)
     return np.where((r < 1) & np.isfinite(bound), bound, np.inf)
 

@@ -73,3 +73,9 @@ def test_chunks_cover_every_lane_once(n, w, extra):
         assert (
             idx[0][0] == 0 and idx[0][-1] == n - 1 and np.diff(idx[0]).max() <= 2 * n / idx[0].size
         )
+
+
+@pytest.mark.parametrize(("n", "w"), [(1, 3), (4, 6), (0, 1)])
+def test_chunks_refuse_fewer_lanes_than_chunks(n, w):
+    with pytest.raises(ValueError, match="need n >= w"):
+        chunks(n, w)
