@@ -50,6 +50,7 @@ __all__ = [
     "atomic_path",
     "atomic_write_text",
     "savefig",
+    "FIGURE_METADATA",
     "NetCDFSink",
     "COMPLEVEL",
 ]
@@ -224,11 +225,27 @@ def atomic_write_text(path, text: str, overwrite: bool = True) -> str:
     return os.fspath(path)
 
 
+#: metadata of the figures :func:`savefig` writes: no dates and no versions, so that a figure is
+#: a pure function of what is drawn (two runs give the same bytes)
+FIGURE_METADATA = {
+    ".png": {"Software": None},
+    ".pdf": {"Creator": None, "Producer": None, "CreationDate": None, "ModDate": None},
+    ".svg": {"Creator": None, "Date": None},
+}
+
+
 def savefig(fig, path, dpi: int = 120, **kwargs) -> str:
-    """``fig.savefig`` atomically (:func:`atomic_path`); the format follows the suffix of ``path``."""
+    """``fig.savefig`` atomically (:func:`atomic_path`); the format follows the suffix of ``path``;
+    the metadata are :data:`FIGURE_METADATA` (``metadata=`` adds to them), SVG ids not random."""
     suffix = os.path.splitext(os.fspath(path))[1] or ".png"
-    with atomic_path(path, suffix=".tmp" + suffix) as tmp:
-        fig.savefig(tmp, dpi=dpi, **kwargs)
+    metadata = {**FIGURE_METADATA.get(suffix.lower(), {}), **kwargs.pop("metadata", {})}
+    import matplotlib  # noqa: PLC0415 - loaded already: ``fig`` is a matplotlib figure
+
+    with (
+        atomic_path(path, suffix=".tmp" + suffix) as tmp,
+        matplotlib.rc_context({"svg.hashsalt": "painleve-atlas"}),  # SVG ids: not random
+    ):
+        fig.savefig(tmp, dpi=dpi, metadata=metadata or None, **kwargs)
     return os.fspath(path)
 
 

@@ -11,8 +11,9 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from atlas.data.boundaries import Boundaries, boundaries
-from atlas.data.io import savefig
+from atlas.data.io import atomic_path, savefig
 from atlas.data.scene import Scene
+from atlas.paper import runlog
 from atlas.paper.drawing import pi_axis
 
 __all__ = ["SLICES", "STYLE", "draw_boundaries", "slice_of", "write_boundaries"]
@@ -65,13 +66,14 @@ def draw_boundaries(bd, ax, kappa: float, q: float) -> list:
 
 def write_boundaries(out, n: int = 64, chord: float = 1e-5):
     """Compute the curves of :data:`SLICES` on an ``n x n`` grid; write ``fig1_boundaries.nc``
-    (CF-1.10 geometry) and ``fig1_boundaries.png`` into ``out``; returns the curves."""
+    (CF-1.10 geometry; the seconds and the date in the run log, :func:`atlas.paper.runlog.fixed`) and ``fig1_boundaries.png`` into ``out``; returns the curves."""
     grid = f"0:2pi:{n}"
     bd = boundaries(
         Scene(beta1=grid, beta2=grid, kappa=SLICES[0][0], q=",".join(str(q) for _, q in SLICES)),
         chord=chord,
     )
-    bd.to_netcdf(out / "fig1_boundaries.nc")
+    with atomic_path(out / "fig1_boundaries.nc") as tmp:
+        runlog.fixed(bd.to_dataset(), "fig1_boundaries.nc").to_netcdf(tmp)
     fig = Figure(figsize=(10, 5.2), constrained_layout=True)
     axes = fig.subplots(1, len(SLICES))
     for ax, (kappa, q) in zip(axes, SLICES):

@@ -23,7 +23,7 @@ from atlas.dynamics import (
     outcome_map,
     simulate,
 )
-from atlas.paper import drawing
+from atlas.paper import drawing, runlog
 from atlas.paper.figures import stability_map
 
 __all__ = [
@@ -356,12 +356,13 @@ def outcome_map_files(out, n: int = 24, theory=None, **kwargs) -> list:
     """Compute an outcome map on :func:`atlas.dynamics.outcome_grid` ``(n)`` and write
     ``out/outcome_map.nc`` and ``out/outcome_map.png`` (beside ``theory``, see
     :func:`plot_outcome_map`; the netCDF holds the theory verdicts of the same cells too).
-    ``kwargs`` go to :func:`atlas.dynamics.outcome_map`."""
+    ``kwargs`` go to :func:`atlas.dynamics.outcome_map`.  The netCDF holds no date or seconds
+    (:func:`atlas.paper.runlog.fixed`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     b1, b2 = outcome_grid(n)
     ds = outcome_map(b1, b2, **{"theory": True, **kwargs})
-    nc = Path(write_outcome_map(ds, out / "outcome_map.nc"))
+    nc = Path(write_outcome_map(runlog.fixed(ds, "outcome_map.nc"), out / "outcome_map.nc"))
     png = plot_outcome_map(ds, out / "outcome_map.png", theory=theory)
     return [nc, png]
 

@@ -8,7 +8,6 @@ set it to ``0`` to disable) so repeated runs skip the ~20 s compile of each kern
 
 from __future__ import annotations
 
-import datetime as _dt
 import sys
 import time
 from pathlib import Path
@@ -16,7 +15,7 @@ from pathlib import Path
 from atlas.core import config
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
-from atlas.paper import figure_boundaries, figure_ladder, realisability
+from atlas.paper import figure_boundaries, figure_ladder, realisability, runlog
 
 __all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
 
@@ -56,18 +55,19 @@ REFERENCE = (
 )
 
 
-def write_netcdf(ds, path) -> Path:
-    """Atomic netCDF4 write with the SPEC §2 encodings (no ``_FillValue`` on ints or coords)."""
+def write_netcdf(ds, path, call: str = "atlas.paper.run") -> Path:
+    """Atomic netCDF4 write with the SPEC §2 encodings (no ``_FillValue`` on ints or coords);
+    ``history`` is ``call`` (no time stamp: :mod:`atlas.paper.runlog`)."""
     import numpy as np
 
-    ds = ds.copy()
+    ds = runlog.fixed(ds, Path(path).name)
     ds.attrs.update(
         {
             "Conventions": "CF-1.10",
             "title": f"Fig. 1 map of the paper (kappa = {float(ds['kappa']):g}, q1 = "
             f"{float(ds['q1']):g}, q2 = {float(ds['q2']):g})",
             "source": config.source(),
-            "history": config.history(f"{' '.join(sys.argv) or 'python'} (atlas.paper.run)"),
+            "history": call,
             "references": REFERENCE,
             "scene": "fig1: beta1 x beta2 offset grid over [0, 2 pi), certified fast kernels, float64, "
             "undecided cells settled by atlas.core.exact",
@@ -92,6 +92,8 @@ def write_netcdf(ds, path) -> Path:
 def _write_realisability(path) -> None:
     """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
     found, stats = realisability.search(1 << 19)
+    for key in ("seconds_search", "seconds_verify"):
+        runlog.record(f"realisability {key}", stats[key])
     atomic_write_text(path, realisability.markdown(found, stats))
 
 
@@ -99,19 +101,29 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     """Regenerate Fig. 1 (classes, stability map, variants), Table 2 (md, csv, png), the audit,
     Fig. 2 (if :mod:`atlas.paper.figures_dynamics` is available) and ``fig1_map.nc`` into ``out``.
 
-    Returns a dict ``{file name: seconds}``; also writes ``out/README.md`` listing them.
+    Returns a dict ``{step: seconds}``; also writes ``out/README.md`` listing the files.  The files
+    are a pure function of the code and ``quick`` / ``ci``: dates, seconds, host and command line
+    go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
     """
     use_compile_cache()
-    from atlas.paper import audit, figures, plots, tables
-
     say = progress or (lambda msg: print(f"[atlas paper] {msg}", file=sys.stderr, flush=True))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    quick = quick or ci  # ci: the CI test's size (smallest grids, audit.run_audit(ci=True))
-    n_map, n_var = (41, 41) if ci else (121, 61) if quick else (361, 201)  # odd: no beta1* cells
-    step = _Steps(say)
-    t_all = time.perf_counter()
+    with runlog.RunLog(out):
+        step = _Steps(say)
+        t_all = time.perf_counter()
+        _run_steps(step, out, quick or ci, ci)  # ci: the CI test's size (smallest grids)
+        total = time.perf_counter() - t_all
+        runlog.record("total seconds", total)
+    say(f"all done in {total:.1f} s -> {out}")
+    return dict(step.timings, total=total)
 
+
+def _run_steps(step: _Steps, out: Path, quick: bool, ci: bool) -> None:
+    """The steps of :func:`run`, each file written into ``out``."""
+    from atlas.paper import audit, figures, plots, tables
+
+    n_map, n_var = (41, 41) if ci else (121, 61) if quick else (361, 201)  # odd: no beta1* cells
     rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
     step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
     step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
@@ -126,12 +138,9 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         "fig1_stability.png",
         lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
-    step(
-        "fig1_map.nc",
-        lambda: write_netcdf(
-            ds[[v for v in ds.data_vars if v != "margin_II_stable"]], out / "fig1_map.nc"
-        ),
-    )
+    fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
+    call = f"atlas.paper.run(quick={quick}, ci={ci})"
+    step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
     step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
     maps = step(
         "fig1 variants (compute)",
@@ -142,7 +151,8 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         lambda: plots.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
     )
     claims = step(
-        "audit (compute)", lambda: audit.run_audit(quick=quick, progress=say, rows=rows, ci=ci)
+        "audit (compute)",
+        lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
     )
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
     step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
@@ -150,11 +160,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
     )
     notes = _dynamics_steps(step, out, quick, ds)
-    total = time.perf_counter() - t_all
-    counts = _audit_counts(claims)
-    _write_readme(out, step.timings, total, quick, n_map, n_var, counts, notes, ds)
-    say(f"all done in {total:.1f} s -> {out}")
-    return dict(step.timings, total=total)
+    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds)
 
 
 class _Steps:
@@ -170,6 +176,7 @@ class _Steps:
         t = time.perf_counter()
         res = fn()
         self.timings[name] = time.perf_counter() - t
+        runlog.record(f"step {name} seconds", self.timings[name])
         self.say(f"{name} done in {self.timings[name]:.1f} s")
         return res
 
@@ -207,22 +214,24 @@ def _audit_counts(claims) -> dict:
     }
 
 
-def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
-    """``out/README.md``: how the files were made, their sizes and times, the figures inline."""
+def _write_readme(out, quick, n_map, n_var, counts, notes, ds):
+    """``out/README.md``: how the files were made, their sizes, the figures inline (no dates or
+    seconds: those are in ``run.log``)."""
     lines = [
         "# Regenerated figures and tables (`atlas paper`)",
         "",
-        f"Made by `atlas.paper.run(quick={quick})` on "
-        f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} in {total:.1f} s "
-        f"(Fig. 1 map {n_map}^2 cells, variants {n_var}^2; {ds.attrs.get('n_resolved', 0)} map "
-        f"cells settled by the exact reference, {ds.attrs.get('n_undecided', 0)} undecided).",
+        f"Made by `atlas.paper.run(quick={quick})` (Fig. 1 map {n_map}^2 cells, variants "
+        f"{n_var}^2; {ds.attrs.get('n_resolved', 0)} map cells settled by the exact reference, "
+        f"{ds.attrs.get('n_undecided', 0)} undecided).  The files are a pure function of the code "
+        f"and these sizes; the date, seconds per step and host of the run are in `{runlog.LOG}` "
+        "(not committed).",
         "",
         f"Audit of the paper's claims ([audit.md](audit.md)): {counts['confirmed']} confirmed, "
         f"{counts['refuted']} refuted, {counts['imprecise']} imprecise.",
         "",
-        "| file | size | seconds |",
-        "|---|---|---|",
-        *_file_rows(out, timings),
+        "| file | size |",
+        "|---|---|",
+        *_file_rows(out),
         "",
         *(f"* {n}" for n in notes),
         "",
@@ -231,33 +240,18 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
     atomic_write_text(out / "README.md", "\n".join(lines))
 
 
-def _file_rows(out: Path, timings: dict) -> list[str]:
-    """README table rows ``| file | size | seconds |`` of the files in ``out`` (compute steps
-    counted with the file they make)."""
+def _file_rows(out: Path) -> list[str]:
+    """README table rows ``| file | size |`` of the files in ``out`` but the README, the run
+    log and ``atlas bench``'s."""
     files = sorted(
         p.name
         for p in out.iterdir()
         if p.is_file()
         and not p.name.startswith("bench")
-        and p.name != "README.md"
+        and p.name not in ("README.md", runlog.LOG)
         and ".tmp" not in p.name
     )
-    tmap = {
-        "fig1 map (compute)": "fig1_stability.png",
-        "fig1 variants (compute)": "fig1_stability_variants.png",
-        "audit (compute)": "audit.md",
-    }
-    per_file = {}
-    for k, v in timings.items():
-        per_file[tmap.get(k, k)] = per_file.get(tmap.get(k, k), 0.0) + v
-    rows = []
-    for f in files:
-        size = (out / f).stat().st_size
-        sec = per_file.get(f)
-        rows.append(
-            f"| [{f}]({f}) | {size / 1024:.0f} kB | {'' if sec is None else f'{sec:.1f}'} |"
-        )
-    return rows
+    return [f"| [{f}]({f}) | {(out / f).stat().st_size / 1024:.0f} kB |" for f in files]
 
 
 def _figure_sections(out: Path) -> list[str]:

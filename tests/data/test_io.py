@@ -232,3 +232,23 @@ def test_unwritable_directory_is_refused_up_front():
 
     with pytest.raises(OSError, match="^out: directory /proc is not writable"):
         check_output_path("/proc/atlas.nc")
+
+
+@pytest.mark.parametrize("suffix", [".png", ".pdf", ".svg"])
+def test_savefig_writes_the_same_bytes_at_another_time(suffix, tmp_path, monkeypatch):
+    """A figure is a pure function of what is drawn: the date matplotlib writes into PDF and SVG
+    (``SOURCE_DATE_EPOCH`` when set, else now), its version and SVG's random ids are left out."""
+    from matplotlib.figure import Figure
+
+    got = []
+    for k, epoch in enumerate(("0", "1700000000")):
+        monkeypatch.setenv("SOURCE_DATE_EPOCH", epoch)
+        fig = Figure(figsize=(2, 2))
+        ax = fig.subplots()
+        ax.fill_between([0, 1], [0, 1], clip_on=True)
+        ax.set_title("beta1")
+        path = tmp_path / f"{k}{suffix}"
+        aio.savefig(fig, path)
+        got.append(path.read_bytes())
+    assert got[0] == got[1]
+    assert b"atplotlib version" not in got[0] and b"Matplotlib v" not in got[0]

@@ -1,9 +1,14 @@
 """``atlas.paper.run(quick=True)`` end to end."""
 
+import os
+import subprocess
+import sys
+
 import pytest
 import xarray as xr
 
 from atlas import paper
+from atlas.paper.runlog import LOG
 
 
 def test_atomic_write_text(tmp_path):
@@ -38,4 +43,23 @@ def test_run_ci(paper_run):
 def test_run_quick(tmp_path):
     paper.run(out=tmp_path, quick=True, progress=lambda m: None)
     _check_outputs(tmp_path)
-    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(paper.files(quick=True))
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted([*paper.files(quick=True), LOG])
+
+
+@pytest.mark.e2e
+def test_a_second_run_elsewhere_writes_the_same_bytes(paper_run, tmp_path):
+    """The files ``atlas paper`` writes are a pure function of the code and its inputs: a second
+    CI-sized run, in another process (another hash seed, time zone, working directory and output
+    path, a later time), gives every file byte for byte; dates and seconds are in the run log."""
+    env = dict(os.environ, PYTHONHASHSEED="7", TZ="Asia/Tokyo")
+    code = "import sys; from atlas import paper; paper.run(sys.argv[1], ci=True, progress=print)"
+    out = tmp_path / "again"
+    subprocess.run([sys.executable, "-c", code, str(out)], env=env, cwd=tmp_path, check=True)
+    differ = [
+        f
+        for f in paper.files(quick=True)
+        if (out / f).read_bytes() != (paper_run.out / f).read_bytes()
+    ]
+    assert differ == []
+    log = (out / LOG).read_text()
+    assert "date: " in log and "total seconds: " in log and str(out) in log
