@@ -264,3 +264,41 @@ def test_save_used_writes_the_run_list_before_the_block_ends(stored_dominance, t
         warm.save_used()
         (manifest,) = tmp_path.glob("run-*.txt")
         assert manifest.read_text() == next(tmp_path.glob("*.xlaexec")).name
+
+
+#: the programs a cold 16 x 16 x 2 ``atlas generate`` compiles (every output, damped): the first
+#: pass per point (``rootfree.codes``), the spectral abscissa, the axis and geometry kernels and
+#: the tier-2 / enclosure stages of the few points the first pass leaves open
+COLD_GENERATE_PROGRAMS = 10
+COLD = """
+import json, sys, jax
+compiles = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, seconds, **kw: compiles.append(event.endswith("backend_compile_duration")))
+from atlas import cli
+print(json.dumps({"rc": cli.main(sys.argv[1:]), "compiles": sum(compiles)}))
+"""
+
+
+@pytest.mark.e2e
+def test_a_cold_small_generate_compiles_no_more_programs(tmp_path):
+    """A 16 x 16 x 2 ``atlas generate`` in an empty cache compiles each kernel program it keeps
+    once (no other XLA compilation: no eager operation, no second compilation of a kept
+    kernel) and at most :data:`COLD_GENERATE_PROGRAMS` of them: a new program (another shape
+    bucket, a kernel split in two) fails here.  Counted, not timed."""
+    import json
+
+    cache = tmp_path / "cache"
+    args = ["generate", "--beta1", "0:2pi:16", "--beta2", "0:2pi:16", "--kappa", "0.5,2"]
+    args += ["--q", "0.1", "--no-progress", "--out", str(tmp_path / "a.nc")]
+    env = {**os.environ, "ATLAS_JAX_CACHE": str(cache)}
+    env.pop(warm.KERNEL_ENV, None)  # as a user runs it (conftest.py turns it off in-process)
+    p = subprocess.run(
+        [sys.executable, "-c", COLD, *args], capture_output=True, text=True, env=env, timeout=900
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    got = json.loads(p.stdout.strip().splitlines()[-1])
+    programs = sorted(f.name.rsplit("-", 1)[0] for f in (cache / "kernels").glob("*.jaxexport"))
+    assert got["rc"] == 0 and programs, (got, p.stderr[-2000:])
+    assert got["compiles"] == len(programs), (got, programs)
+    assert len(programs) <= COLD_GENERATE_PROGRAMS, programs
