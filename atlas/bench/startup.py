@@ -7,7 +7,8 @@ exit), over several runs (median, min, max): ``python -c "import atlas"``, ``atl
 start (``ATLAS_KERNEL_EXECUTABLES=0``: the exported programs and the compilation cache;
 ``ATLAS_KERNEL_CACHE=0``: the compilation cache alone); the 8.4-million-point atlas (:data:`LARGE`)
 against the seconds of its own summary line; ``atlas selftest`` and its disagreements; the
-explorer widget built headless (:data:`EXPLORER`: first map, one click).
+explorer widget built headless (:data:`EXPLORER`: first map, one click); the refusal of a 1e14-point
+scene (:data:`HUGE`, exit 2).
 
 Every run uses one temporary ``ATLAS_JAX_CACHE`` that this module creates and deletes (the user's
 cache is neither read nor written) and writes its files into a temporary directory, its working
@@ -38,6 +39,7 @@ from atlas.bench.timing import bench_json, log
 
 __all__ = [
     "EXPLORER",
+    "HUGE",
     "LARGE",
     "MEDIAN",
     "SMALL",
@@ -58,6 +60,10 @@ SMALL += ["--alpha", "0.35pi"]
 #: the 8.4-million-point damped atlas (512 x 512 x 8 x 2 x 2), the three flag verdicts
 LARGE = ["--beta1", "0:2pi:512", "--beta2", "0:2pi:512", "--kappa", "log:0.1:10:8"]
 LARGE += ["--q1", "0.1,1", "--q2", "0.1,1", "--outputs", ",".join(FLAGS)]
+
+#: a 1e14-point scene (every output): refused with one line, exit 2, before any work (the suite
+#: proves "before any work" by counting, tests/test_cli.py; its seconds are reported here)
+HUGE = ["--beta1", "0:2pi:10000000", "--beta2", "0:2pi:10000000"]
 
 #: the figure compared with a time target: the median wall time [s]
 MEDIAN = "median s"
@@ -258,6 +264,15 @@ def _cheap(s: _Session, runs: int) -> list[dict]:
     return rows
 
 
+def _refusal(s: _Session, runs: int) -> list[dict]:
+    """``atlas generate`` of :data:`HUGE`: exit 2 (one line) is its success."""
+    log(f"start-up: 1e14-point scene refused x {runs}")
+    t = s.times(s.generate(HUGE), runs)
+    fails = ["" if x.returncode == 2 else x.failure() or "exit 0: not refused" for x in t]
+    text = "atlas generate " + " ".join(HUGE)
+    return [_row("1e14-point scene refused", text, [x.wall for x in t], fails, note="exit 2")]
+
+
 #: the 512-point atlas with each layer of the warm start, and the switches that leave it out
 _LAYERS = (
     ("generate 512 points, warm", {}),
@@ -379,6 +394,7 @@ def measure(cfg: dict, run=run_timed) -> list[dict]:
         s = _Session(Path(tmp), run)
         rows = _cheap(s, cfg["runs"])
         if cfg["generate_runs"]:
+            rows += _refusal(s, cfg["runs"])
             rows += _generate(s, cfg["cold_runs"], cfg["generate_runs"])
         if cfg["large_runs"]:
             rows += _large(s, cfg["large_runs"])

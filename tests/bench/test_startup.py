@@ -77,6 +77,8 @@ class FakeProcesses:
             return Timed(0.3, 0)
         if cmd[-1] == "--help":
             return Timed(0.7, 0)
+        if "0:2pi:10000000" in text:
+            return Timed(0.9, 2, "", "atlas: error: size: 1e+14 points ...")
         if "0:2pi:16" in text:
             if not self.calls[-1]["cache_before"]:
                 wall = 20.0
@@ -141,6 +143,8 @@ def test_full_section_in_a_temporary_cache(user_cache, tmp_path):
     assert switched == [(None, None), (None, "0"), ("0", None)] * 4  # a round untimed
     # the figures and their targets, from the made-up times
     assert rows["import atlas"]["met"] == "met" and rows["import atlas"]["runs"] == 5
+    refused = rows["1e14-point scene refused"]  # reported, no target: exit 2 is its success
+    assert (refused["median_s"], refused["met"], refused["runs"]) == (0.9, "", 5)
     assert rows["atlas --help"]["met"] == "missed"  # 0.7 s > 0.5 s
     warm = rows["generate 512 points, warm"]
     assert (warm["median_s"], warm["target"], warm["met"]) == (2.5, 2.0, "missed")
@@ -189,3 +193,16 @@ def test_quick_and_tiny_runs_start_two_processes(user_cache, mode):
     rows = startup.measure(CONFIG[mode]["startup"], run=procs)
     assert [r["figure"] for r in rows] == ["import atlas", "atlas --help"]
     assert len(procs.calls) == 2
+
+
+def test_a_refusal_that_does_not_refuse_is_a_failure(user_cache):
+    """``atlas generate`` of the 1e14-point scene must exit 2; exit 0 is reported as a failure."""
+    procs = FakeProcesses()
+    real = procs.__call__
+
+    def accepting(cmd, env, cwd):
+        got = real(cmd, env, cwd)
+        return Timed(got.wall, 0) if got.returncode == 2 else got
+
+    rows = _by_figure(startup.measure(CONFIG["full"]["startup"], run=accepting))
+    assert rows["1e14-point scene refused"]["note"] == "exit 2; exit 0: not refused"
