@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 
-import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import contact_modes
@@ -68,7 +67,7 @@ NO_STABLE_SUBCLASSES = (132, 133, 142, 143)
 
 def _code_args(beta1, beta2, alpha):
     vec = [contact_modes.direction(np.asarray(x, dtype=float)) for x in (beta1, beta2, alpha)]
-    return [jnp.asarray(v) for cs in vec for v in cs]
+    return [np.asarray(v) for cs in vec for v in cs]
 
 
 def subclass_codes(beta1, beta2, alpha) -> np.ndarray:

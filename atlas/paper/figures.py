@@ -233,7 +233,7 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
 
     samples = class_samples(n, per_class=10_000)
     alpha = _offset_grid(n_alpha)
-    ca, sa = (jnp.asarray(v) for v in contact_modes.direction(alpha))
+    ca, sa = (np.asarray(v) for v in contact_modes.direction(alpha))
     out = {}
     for cls, pts in samples.items():
         b1, b2 = pts[:, 0], pts[:, 1]
@@ -245,7 +245,7 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
         beta1, beta2 = float(b1[best]), float(b2[best])
         c1, s1 = contact_modes.direction(beta1)
         c2, s2 = contact_modes.direction(beta2)
-        sub = np.asarray(_subclass_jit(*(jnp.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
+        sub = np.asarray(_subclass_jit(*(np.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
         alphas = {}
         for k in range(1, 7):
             hit = alpha[sub == 10 * cls + k]

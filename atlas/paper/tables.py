@@ -119,10 +119,10 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     c, s = contact_modes.direction(b)
     code = np.asarray(
         _class_code_jit(
-            jnp.asarray(c)[:, None],
-            jnp.asarray(s)[:, None],
-            jnp.asarray(c)[None, :],
-            jnp.asarray(s)[None, :],
+            np.asarray(c)[:, None],
+            np.asarray(s)[:, None],
+            np.asarray(c)[None, :],
+            np.asarray(s)[None, :],
         )
     )
     # beta2 = beta1 (det B = 0) and beta2 = beta1 + pi (the tie with beta1*) are grid points for
@@ -187,7 +187,7 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
     """Regenerate Table 2 (all 24 classes) from the kernels."""
     samples = class_samples(n, per_class)
     alpha = _grid(n_alpha)
-    ca, sa = (jnp.asarray(v) for v in contact_modes.direction(alpha, dtype))
+    ca, sa = (np.asarray(v) for v in contact_modes.direction(alpha, dtype))
     rows = []
     # one array shape for every class (repeat the last point; sets of verdicts are unchanged), so
     # each jitted kernel compiles once instead of once per distinct class sample size
@@ -195,8 +195,8 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
     for cls in contact_modes.ALL_CLASSES:
         pts = samples[cls]
         pts = np.concatenate([pts, np.repeat(pts[-1:], size - len(pts), 0)])
-        c1, s1 = (jnp.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 0], dtype))
-        c2, s2 = (jnp.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 1], dtype))
+        c1, s1 = (np.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 0], dtype))
+        c2, s2 = (np.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
         dual, sub, cons = class_kernel(c1, s1, c2, s2, ca[None, :], sa[None, :])
         duals = set(np.asarray(dual).ravel().tolist())

@@ -3,7 +3,6 @@ consistency is model-dependent, and the CC necessary condition."""
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import contact_modes, exact
@@ -25,11 +24,11 @@ def dense_alpha(class_points: dict, blocks: int):
     subs, conss, spots = [], {m: [] for m in MODES}, []
     for c in contact_modes.ALL_CLASSES:
         p = class_points[c]
-        c1, s1, c2, s2 = (jnp.asarray(v)[:, None] for v in directions(p[:, 0], p[:, 1]))
+        c1, s1, c2, s2 = (np.asarray(v)[:, None] for v in directions(p[:, 0], p[:, 1]))
         ii, jj = np.meshgrid(np.arange(len(p)), np.arange(720), indexing="ij")
         for blk in range(blocks):
             al = (np.arange(720) + (blk + 0.5) / blocks) * (2 * PI / 720)
-            ca, sa = (jnp.asarray(v)[None, :] for v in contact_modes.direction(al))
+            ca, sa = (np.asarray(v)[None, :] for v in contact_modes.direction(al))
             _, sub, cons = class_kernel(c1, s1, c2, s2, ca, sa)
             subs.append(np.asarray(sub).ravel())
             for m in conss:

@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass
 from fractions import Fraction
 
-import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import contact_modes, expressions
@@ -32,7 +31,7 @@ def directions(b1, b2):
 
 
 def _classes(c1, s1, c2, s2):
-    return np.asarray(contact_modes.class_code(*(jnp.asarray(v) for v in (c1, s1, c2, s2)))).astype(
+    return np.asarray(contact_modes.class_code(*(np.asarray(v) for v in (c1, s1, c2, s2)))).astype(
         int
     )
 
@@ -124,7 +123,7 @@ def table1_points(n: int = 20000, seed: int = 7) -> Table1Points:
     b1, b2, al = rng.uniform(0, 2 * PI, (3, n))
     c1, s1, c2, s2 = directions(b1, b2)
     ca, sa = contact_modes.direction(al)
-    args = [jnp.asarray(v) for v in (c1, s1, c2, s2, ca, sa)]
+    args = [np.asarray(v) for v in (c1, s1, c2, s2, ca, sa)]
     cons = {k: np.asarray(v) for k, v in contact_modes.consistent_modes(*args).items()}
     sub = np.asarray(contact_modes.subclass_code(*args))
     return Table1Points(c1, s1, c2, s2, ca, sa, cons, sub)
@@ -170,7 +169,7 @@ def matrix7_sample(n: int, seed: int = 11) -> Matrix7Sample:
             failing.add(key)
         counts[key][0] += 1
         counts[key][1] += int(ok)
-    kern = np.asarray(contact_modes.stable_SF(jnp.asarray(c)))
+    kern = np.asarray(contact_modes.stable_SF(np.asarray(c)))
     n_kernel_bad = int(np.sum((kern == S) != (c > 0)))
     return Matrix7Sample(beta, kap, q, c, counts, failing, n_kernel_bad)
 
