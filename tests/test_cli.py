@@ -738,3 +738,27 @@ def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, 
     err = capsys.readouterr().err
     assert "no partial output file left; complete before it: " in err
     assert str(tmp_path / "table2.md") in err
+
+
+@pytest.mark.parametrize("place", [".", "", "~"])
+def test_overwrite_never_deletes_the_working_directory(place, tmp_path, monkeypatch, capsys):
+    """``simulate --map --store . --overwrite`` (or ``''``, the home directory) in a directory
+    holding a file and a sub-directory: one line naming ``store``, exit 2, everything kept."""
+    work = tmp_path / "d"
+    (work / "sub").mkdir(parents=True)
+    (work / "keep.txt").write_text("x")
+    monkeypatch.chdir(work)
+    monkeypatch.setenv("HOME", str(work))
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--overwrite", "--workers", "1"]
+    assert cli.main([*args, "--store", os.path.expanduser(place)]) == 2
+    _check_one_line(capsys.readouterr().err, "atlas: error: store: ", place)
+    assert sorted(os.listdir(work)) == ["keep.txt", "sub"]
+    assert (work / "keep.txt").read_text() == "x"
+
+
+def test_simulate_map_resume_of_no_store_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--store", "st", "--resume"]
+    assert cli.main(args) == 2
+    _check_one_line(capsys.readouterr().err, "resume: store", args)
+    assert os.listdir(tmp_path) == []

@@ -39,6 +39,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import interrupts
+from atlas.data import store_guard
 from atlas.data import tiles as tiling
 from atlas.data.engine import Schema, block_shape
 from atlas.data.tiles import TilePlan
@@ -49,6 +50,8 @@ __all__ = [
     "FORMAT_VERSION",
     "CHUNK_POINTS",
     "open_store",
+    "is_atlas_store",
+    "digest",
     "read_record",
     "drop_record",
     "make_plan",
@@ -88,7 +91,7 @@ def _chunks(sch: Schema, name: str, slab: int, block2: int | None = None) -> tup
     return tuple(min(fixed[d], n) if d in fixed else next(rest) for d, n in zip(dims, shape))
 
 
-def _digest(arr) -> str:
+def digest(arr) -> str:
     """SHA-256 of an array's dtype, shape and raw bytes (C order)."""
     a = np.ascontiguousarray(np.asarray(arr))
     h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
@@ -103,7 +106,7 @@ def _sha(text: str) -> str:
 def make_plan(scene, sch: Schema, tiles, opts: dict) -> dict:
     """The plan of a store: scene, coordinate checksums, variables, tiles, versions and the run
     options ``opts``, with ``hash`` over all of them (a resume must match it)."""
-    coords = {k: _digest(v) for k, (_, v, _) in sch.coords.items()}
+    coords = {k: digest(v) for k, (_, v, _) in sch.coords.items()}
     variables = {k: [list(d), np.dtype(t).str] for k, (d, t, _, _) in sch.variables.items()}
     plan = {
         "format": FORMAT_VERSION,
@@ -136,6 +139,16 @@ def stored_plan(store: str) -> dict:
         raise ValueError(f"store: {store} is not an atlas store (no {PLAN_ATTR})") from None
 
 
+def is_atlas_store(store: str) -> bool:
+    """True if ``store`` is a directory this module laid out: a readable plan, or (root metadata
+    damaged) the ``_tiles`` group of the tile records."""
+    try:
+        stored_plan(store)
+        return True
+    except (OSError, ValueError):
+        return any(os.path.isfile(os.path.join(store, TILES, f)) for f in ("zarr.json", ".zgroup"))
+
+
 # --- tile records -------------------------------------------------------------------------------
 
 
@@ -166,7 +179,7 @@ def drop_record(store: str, i: int):
 
 
 def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
-    return {k: _digest(ds[k].isel(tiling.region(ds[k].dims, split)).values) for k in names}
+    return {k: digest(ds[k].isel(tiling.region(ds[k].dims, split)).values) for k in names}
 
 
 def _tile_fields(tile) -> dict:
@@ -188,7 +201,7 @@ def write_tile(store: str, i: int, tile, ds: xr.Dataset, run: dict) -> dict:
 
     split = tiling.ranges("beta1" in ds.dims, tile)
     names = list(ds.data_vars)
-    digests = {k: _digest(ds[k].values) for k in names}
+    digests = {k: digest(ds[k].values) for k in names}
     owned = [k for k in names if tiling.owns(ds[k].dims, split)]
     t1 = time.perf_counter()
     groups = {}
@@ -310,9 +323,9 @@ def corrupt_arrays(store: str, plan: dict) -> list[str]:
     import zarr
 
     bad = []
-    for name, digest in plan["coords"].items():
+    for name, want in plan["coords"].items():
         try:
-            ok = _digest(zarr.open_array(store, path=name, mode="r")[...]) == digest
+            ok = digest(zarr.open_array(store, path=name, mode="r")[...]) == want
         except Exception:  # undecodable metadata or chunk bytes
             ok = False
         if not ok:
@@ -369,7 +382,7 @@ def create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | 
         record_attrs(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
         interrupts.check()
-        os.replace(tmp, store)
+        store_guard.install(tmp, store)  # an existing store is moved aside, never deleted first
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
