@@ -762,3 +762,43 @@ def test_simulate_map_resume_of_no_store_is_refused(tmp_path, monkeypatch, capsy
     assert cli.main(args) == 2
     _check_one_line(capsys.readouterr().err, "resume: store", args)
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("fault", ["full", "read-only"])
+def test_a_failed_write_into_the_outcome_store_names_it(fault, tmp_path, monkeypatch, capsys):
+    """ENOSPC while a tile is written, or a read-only place (the temporary layout refused): one
+    line naming the store (not a temporary path) and the cause; a store holding tiles says that
+    ``--resume`` continues, and it does."""
+    import errno
+
+    from atlas.dynamics import outcome_tiles
+
+    store = tmp_path / "st"
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--slab", "2", "--workers", "1"]
+    args += ["--store", str(store)]
+    if fault == "full":
+        write = outcome_tiles._write
+
+        def full(path, data):
+            if os.path.basename(path).startswith("t000001"):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), f"{path}.123.tmp")
+            write(path, data)
+
+        monkeypatch.setattr(outcome_tiles, "_write", full)
+    else:
+
+        def read_only(*a, dir=None, **kw):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), f"{dir}/.st.x.tmp")
+
+        monkeypatch.setattr(outcome_tiles.tempfile, "mkdtemp", read_only)
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, f"atlas: error: store: cannot write {store}: ", args)
+    assert ".tmp" not in err
+    if fault == "read-only":
+        assert "Permission denied" in err and os.listdir(tmp_path) == []
+        return
+    assert "no space left on device" in err and "--resume" in err
+    monkeypatch.undo()
+    assert cli.main([*args, "--resume"]) == 0
+    assert "1 computed, 1 verified" in capsys.readouterr().err

@@ -239,13 +239,7 @@ def _prepare_store(job: _Job, resume: bool, overwrite: bool) -> bool:
     if resume and not exists:
         raise FileNotFoundError(f"resume: store {store} does not exist")
     if exists and resume:
-        old = tile_store.stored_plan(store)
-        if old.get("hash") != job.plan["hash"]:
-            diff = [k for k in job.plan if k != "hash" and old.get(k) != job.plan[k]]
-            raise ValueError(
-                f"store: {store} was created for a different atlas (differs in "
-                f"{', '.join(diff) or 'hash'})"
-            )
+        tile_store.check_resumable(store, job.plan)  # a damaged root is restored from its record
     elif exists and not overwrite:
         raise FileExistsError(f"store: {store} exists (use resume=True or overwrite=True)")
     else:
@@ -266,7 +260,7 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     if resumed:
         damaged = tile_store.corrupt_arrays(job.store, job.plan)
         if damaged:
-            tile_store.repair_layout(job.store, job.sch, damaged)
+            tile_store.repair_layout(job.store, job.sch, damaged, job.plan)
     report, recs = _verify_all(ex, job.store, job.tiles) if resumed else (None, {})
     if report is not None:
         report["arrays"] = damaged

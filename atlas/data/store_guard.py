@@ -23,7 +23,7 @@ import os
 import shutil
 import socket
 
-__all__ = ["check_place", "check_replaceable", "install", "held", "lock_path"]
+__all__ = ["check_place", "check_replaceable", "install", "held", "lock_path", "write_failure"]
 
 
 def check_place(store: str, option: str = "store") -> str:
@@ -143,3 +143,20 @@ def held(store: str, option: str = "store"):
         if _holder(path) == me:
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(path)
+
+
+def write_failure(store: str, exc: BaseException) -> OSError | None:
+    """The one-line ``OSError`` of a failed write into ``store`` (a full disk, a read-only
+    location): it names ``store``, the cause and, when the store exists, that the same command
+    with ``--resume`` continues it; ``None`` when ``exc`` is not a failed write."""
+    from atlas.data.io import write_error  # noqa: PLC0415 - netCDF4: only on a failure
+
+    err = exc if ": cannot write " in str(exc) else write_error(store, exc, "store")
+    if err is None:
+        return None
+    if os.path.isdir(store):
+        return OSError(
+            f"{err}; finished tiles are kept in {store}: make room and continue with the same "
+            "command and --resume"
+        )
+    return err

@@ -56,6 +56,7 @@ __all__ = [
     "drop_record",
     "make_plan",
     "stored_plan",
+    "check_resumable",
     "create_layout",
     "corrupt_arrays",
     "repair_layout",
@@ -136,7 +137,55 @@ def stored_plan(store: str) -> dict:
         attrs = dict(zarr.open_group(store, mode="r").attrs)
         return json.loads(attrs[PLAN_ATTR])
     except Exception:
+        if os.path.isdir(os.path.join(store, TILES)):
+            raise ValueError(
+                f"store: {store}: its root metadata (zarr.json, {PLAN_ATTR}) is damaged; the same "
+                "command with --resume restores it from its record"
+            ) from None
         raise ValueError(f"store: {store} is not an atlas store (no {PLAN_ATTR})") from None
+
+
+def check_resumable(store: str, plan: dict) -> None:
+    """Check that ``store`` was made for ``plan`` before a resume: its plan, or, when the root
+    metadata is damaged (unreadable, or a plan whose hash is not its own), the copy of the root
+    attributes in the intact attribute record, which then restores them.  ``ValueError`` naming
+    ``store`` and what differs otherwise."""
+    try:
+        old = stored_plan(store)
+    except ValueError:
+        old = None
+    if old is not None and old.get("hash") == plan["hash"]:
+        return
+    rec = _attrs_record(store)
+    try:
+        copy = json.loads(rec["attributes"][""][PLAN_ATTR]) if rec else None
+    except (KeyError, TypeError, ValueError):
+        copy = None
+    if copy is not None and copy.get("hash") == plan["hash"]:
+        _restore_root(store, rec["attributes"][""])
+        return
+    if old is None:
+        raise ValueError(
+            f"store: {store} is not an atlas store, or its root metadata and their record are "
+            "both damaged (start again with --overwrite)"
+        )
+    diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]] or ["hash"]
+    raise ValueError(
+        f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
+    )
+
+
+def _restore_root(store: str, attrs: dict) -> None:
+    """Write the root group's metadata anew with the attributes ``attrs`` (its arrays kept)."""
+    import zarr
+
+    try:
+        zarr.open_group(store, mode="r")
+    except Exception:  # unreadable root metadata
+        for meta in ("zarr.json", ".zgroup", ".zattrs"):
+            if os.path.exists(os.path.join(store, meta)):
+                os.unlink(os.path.join(store, meta))
+    zarr.open_group(store, mode="a").attrs.put(attrs)
 
 
 def is_atlas_store(store: str) -> bool:
@@ -335,27 +384,82 @@ def corrupt_arrays(store: str, plan: dict) -> list[str]:
     return bad + ([] if ok else ["attributes"])
 
 
-def repair_layout(store: str, sch: Schema, names) -> None:
+def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> None:
     """Rewrite the coordinates ``names`` from the schema and (with ``"attributes"``) every
-    attribute from its record; ``ValueError`` naming ``store`` if that does not restore every
-    metadata byte (the record itself, or metadata other than attributes, damaged)."""
+    attribute from its record; a damaged record is rebuilt from the metadata it describes when
+    that verifies against ``plan`` and the schema (:func:`_rebuild_record`).  ``ValueError``
+    naming ``store`` if that does not restore every metadata byte."""
     import zarr
 
     group = zarr.open_group(store, mode="r+")
     for name in names:
         if name in sch.coords:
             group[name][...] = sch.coords[name][1]
-    if "attributes" in names:
-        rec = _attrs_record(store)
-        if rec is not None:
-            attrs = rec["attributes"]
-            group.attrs.put(attrs.pop(""))
-            for name, a in attrs.items():
-                group[name].attrs.put(a)
-        if rec is None or rec["metadata"] != _metadata_digests(store):
-            raise ValueError(
-                f"store: {store}: metadata damaged beyond its record (start again with --overwrite)"
-            )
+    if "attributes" not in names:
+        return
+    rec = _attrs_record(store)
+    if rec is None and plan is not None:
+        _rebuild_record(store, sch, plan)
+        return
+    if rec is not None:
+        attrs = rec["attributes"]
+        group.attrs.put(attrs.pop(""))
+        for name, a in attrs.items():
+            group[name].attrs.put(a)
+    if rec is None or rec["metadata"] != _metadata_digests(store):
+        what = "its record" if rec is None else "the metadata other than attributes"
+        raise ValueError(
+            f"store: {store}: {what} damaged beyond repair (start again with --overwrite)"
+        )
+
+
+def _same_value(a, b) -> bool:
+    try:
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    except Exception:
+        return a == b
+
+
+def _attrs_differ(store: str, sch: Schema, plan: dict) -> list[str]:
+    """What of the store's attributes differs from ``plan`` and the schema: ``"atlas_plan"``,
+    global attribute names, variable names (only the attributes the schema fixes are compared:
+    the undecided counts and ``history`` are rewritten when a run finishes)."""
+    try:
+        attrs = _all_attrs(store)
+        root = attrs[""]
+        bad = [] if json.loads(root[PLAN_ATTR]).get("hash") == plan["hash"] else [PLAN_ATTR]
+    except Exception:
+        return ["zarr.json"]
+    bad += [k for k, v in sch.attrs.items() if k != "history" and not _same_value(root.get(k), v)]
+    fixed_attrs = {k: a for k, (_, _, a) in sch.coords.items()}
+    fixed_attrs.update({k: v[2] for k, v in sch.variables.items()})
+    for name, fixed in fixed_attrs.items():
+        got = attrs.get(name, {})
+        if any(not _same_value(got.get(k), v) for k, v in fixed.items()):
+            bad.append(name)
+    return bad
+
+
+def _rebuild_record(store: str, sch: Schema, plan: dict) -> None:
+    """Write the attribute record anew from the store's metadata, after checking that metadata
+    against the plan and the schema (``ValueError`` naming what differs otherwise)."""
+    import zarr
+
+    for meta in ("zarr.json", ".zgroup", ".zattrs"):  # unreadable: zarr lists no array
+        path = os.path.join(store, TILES, meta)
+        if os.path.exists(path):
+            try:
+                zarr.open_group(store, path=TILES, mode="r")
+            except Exception:
+                os.unlink(path)
+    zarr.open_group(store, path=TILES, mode="a")
+    bad = _attrs_differ(store, sch, plan)
+    if bad:
+        raise ValueError(
+            f"store: {store}: the record of the attributes is damaged and the attributes differ "
+            f"from this atlas in {', '.join(bad)} (start again with --overwrite)"
+        )
+    record_attrs(store)
 
 
 def create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):

@@ -176,7 +176,9 @@ def _stored_plan(store: str, plan: dict) -> dict | None:
         return None  # unreadable: the tile records decide
     if intact and old["hash"] == plan["hash"]:
         return plan
-    diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]] if isinstance(old, dict) else []
+    diff = (
+        [k for k in plan if k != "hash" and old.get(k) != plan[k]] if isinstance(old, dict) else []
+    )
     if not intact and (not diff or old.get("hash") == plan["hash"]):
         return None  # damaged where a flipped bit can be: the tile records decide
     what = ", ".join(diff) if diff else "hash"

@@ -334,7 +334,9 @@ def test_overwrite_replaces_only_an_atlas_store(inproc, tmp_path):
     same_bytes(open_store(store).load(), generate(small))
 
 
-def test_a_second_writer_is_refused_and_a_changed_store_gives_no_file(inproc, tmp_path, monkeypatch):
+def test_a_second_writer_is_refused_and_a_changed_store_gives_no_file(
+    inproc, tmp_path, monkeypatch
+):
     """A live writer's lock refuses a second one; a region changed under a run (by a writer that
     ignored the lock) is found when the file is assembled: no netCDF file."""
     import json
@@ -361,3 +363,46 @@ def test_a_second_writer_is_refused_and_a_changed_store_gives_no_file(inproc, tm
     with pytest.raises(RuntimeError, match="^store: .*changed under this run.*class_code"):
         generate_distributed(small, store, to_netcdf=nc)
     assert not nc.exists() and not os.path.exists(store_guard.lock_path(str(store)))
+
+
+def _files(store):
+    return {p.relative_to(store): p.read_bytes() for p in sorted(store.rglob("*")) if p.is_file()}
+
+
+def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, reference, tmp_path):
+    """The attribute record (its value), the root metadata (truncated) and the plan's hash (a
+    flipped bit) are rebuilt by --resume from what verifies (the metadata against plan and schema,
+    the root from the record's copy) without recomputing a tile; a damaged record whose attributes
+    also differ is refused naming the variable; another atlas names what differs."""
+    good = inproc[0] / "a.zarr"
+    store = tmp_path / "f.zarr"
+    record = store / TILES / "zarr.json"
+
+    def damaged(edits):
+        shutil.rmtree(store, ignore_errors=True)
+        shutil.copytree(good, store)
+        for path, edit in edits:
+            path.write_bytes(edit(path.read_bytes()))
+        return generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
+
+    flip = lambda at: lambda d: d[:at] + bytes([d[at] ^ 1]) + d[at + 1 :]  # noqa: E731
+    root = (good / "zarr.json").read_bytes()
+    cases = [
+        [(record, flip(len((good / TILES / "zarr.json").read_bytes()) // 2))],
+        [(store / "zarr.json", lambda d: d[: len(d) // 2])],
+        [(store / "zarr.json", flip(root.index(b'\\"hash\\": \\"') + 12))],
+    ]
+    for edits in cases:
+        summary = damaged(edits)
+        assert summary["computed"] == [], edits
+        assert verify_store(store) == {
+            "ok": [0, 1, 2, 3],
+            "missing": [],
+            "corrupt": [],
+            "arrays": [],
+        }
+        same_bytes(open_store(store).load(), reference)
+    unit = store / "stable_SS" / "zarr.json"
+    swap = lambda d: d.replace(b'"flag_meanings": "', b'"flag_meanings": "x', 1)  # noqa: E731
+    with pytest.raises(ValueError, match="^store: .*record .*damaged.*differ .* in stable_SS"):
+        damaged([(record, flip(len((good / TILES / "zarr.json").read_bytes()) // 2)), (unit, swap)])
