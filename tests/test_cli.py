@@ -682,6 +682,10 @@ def test_a_full_disk_under_the_store_says_how_to_resume(tmp_path, monkeypatch, c
         (["generate", *TINY, "--dtype", "float16"], "dtype"),
         (["generate", "--no-such-option"], "unrecognized"),
         (["nonsense"], "invalid choice"),
+        (["simulate", "--map", "--n", "4", "--seed", "99999999999999999999999"], "seed: "),
+        (["simulate", "--map", "--n", "4", "--seed", "4294967296"], "seed: "),
+        (["simulate", "--map", "--n", "4", "--t-end", "1e300"], "t_end: must be <= 10000"),
+        (["simulate", "--case", "fig2b", "--t-end", "1e300"], "t-end: must be > 0 and <= 10000"),
     ],
 )
 def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):

@@ -62,6 +62,15 @@ DEFAULT_ALPHA = 0.35 * math.pi
 CLASSES = np.array([int(o) for o in Outcome], dtype=np.int8)
 #: largest ``n_perturb`` (the counts are stored as int16)
 MAX_PERTURB = np.iinfo(np.int16).max
+#: largest ``seed``: numpy's seed range (``numpy.random.seed``, 32-bit), kept as an integer
+#: attribute of the netCDF file
+MAX_SEED = 2**32 - 1
+#: largest ``t_end`` [scaled time]: the exact simulator (the reference, and the fast engine's
+#: fallback) advances in sub-steps of about 1/12 of the fastest period, about 2 per unit of scaled
+#: time at kappa = 1 and more for stiffer contacts, so a run to ``horizon_cap * t_end`` = 8e4
+#: already takes ~1e5-1e6 sub-steps (seconds per run); far beyond it a run ends at the
+#: simulator's 1e7 sub-step cap, undetermined, after minutes
+MAX_T_END = 1e4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,7 +92,7 @@ class Dynamics:
     engine: str = "fast"
 
     def __post_init__(self):
-        for name, lo, hi in (("n_perturb", 1, MAX_PERTURB), ("seed", 0, None),
+        for name, lo, hi in (("n_perturb", 1, MAX_PERTURB), ("seed", 0, MAX_SEED),
                              ("max_events", 1, None)):  # fmt: skip
             object.__setattr__(self, name, integer(name, getattr(self, name), lo, hi))
         for name in ("perturbation", "t_end", "horizon_cap"):
@@ -91,6 +100,11 @@ class Dynamics:
             if not v > 0:
                 raise ValueError(f"{name}: must be > 0, got {v!r}")
             object.__setattr__(self, name, v)
+        if self.t_end > MAX_T_END:
+            raise ValueError(
+                f"t_end: must be <= {MAX_T_END:g} (scaled time; the default is 150), "
+                f"got {self.t_end!r}"
+            )
         if self.horizon_cap < 1:
             raise ValueError(f"horizon_cap: must be >= 1, got {self.horizon_cap!r}")
         if self.engine not in ENGINES:

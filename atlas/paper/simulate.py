@@ -20,7 +20,7 @@ from atlas.data.scene import parse_values
 from atlas.dynamics import Outcome, classify, fig2_cases, outcome_grid, simulate
 from atlas.dynamics.lane_pool import check_workers, usable_cores
 from atlas.dynamics.outcome_tiles import default_slab, outcome_atlas_tiles
-from atlas.dynamics.outcomes import Dynamics, outcome_atlas, outcome_scene
+from atlas.dynamics.outcomes import MAX_T_END, Dynamics, outcome_atlas, outcome_scene
 from atlas.paper import drawing
 from atlas.paper.figures_dynamics import (
     PAPER_SAYS,
@@ -110,6 +110,8 @@ def _case_params(case, angles, t_end, k, q) -> dict:
     )
     if not case and None in angles.values():
         raise ValueError("case: give --case or all of --beta1, --beta2, --alpha")
+    if t_end is not None and not 0 < t_end <= MAX_T_END:
+        raise ValueError(f"t-end: must be > 0 and <= {MAX_T_END:g}, got {t_end!r}")
     for key, v in (*angles.items(), ("t_end", t_end)):
         if v is not None:
             p[key] = v

@@ -111,6 +111,11 @@ def test_standard_normals_of_any_rows_equal_the_whole_draw():
         (dict(n_perturb=2.5), "n_perturb"),
         (dict(n_perturb=40000), "n_perturb"),
         (dict(seed=-1), "seed"),
+        (dict(seed=2**32), "seed"),  # numpy's seed range
+        (dict(seed=10**23), "seed"),
+        (dict(t_end=1e300), "t_end"),  # never ends (the simulator's sub-steps)
+        (dict(t_end=1.0001e4), "t_end"),
+        (dict(max_events=1.5), "max_events"),
         (dict(t_end=0.0), "t_end"),
         (dict(t_end=float("nan")), "t_end"),
         (dict(horizon_cap=0.5), "horizon_cap"),
