@@ -261,6 +261,8 @@ def boundaries_estimate(n1: int, n2: int, check: int, slices: int, outputs=()) -
     written = slices * (BOUNDARY_SLICE_BYTES + BOUNDARY_EDGE_BYTES * (n1 + n2)) + 8 * points
     opts = {**BOUNDARIES, "output_bytes_per_point": written / points}
     return grid_estimate("boundaries", points, outputs=outputs, **opts)
+
+
 #: ``atlas simulate --map`` per trajectory: peak bytes (engine state, initial states, codes),
 #: seconds by engine (outputs/bench.md: ~0.4 ms fast, ~0.012 s exact, run by run; jax ~0.04 s)
 OUTCOME_TRAJECTORY_BYTES = 2000
