@@ -31,7 +31,7 @@ import tempfile
 
 import numpy as np
 
-from atlas.core import config, interrupts
+from atlas.core import checks, config, interrupts
 from atlas.data import store_guard
 from atlas.data.cluster import check_scheduler, executor
 from atlas.data.io import check_output_path, write_netcdf
@@ -297,6 +297,9 @@ def outcome_atlas_tiles(
         ``computed`` and ``verified`` (tile indices), ``trajectories``, ``seconds``.
     """
     scene = check_scene(scene)
+    for name, v in (("resume", resume), ("overwrite", overwrite), ("theory", theory),
+                    ("overwrite_netcdf", overwrite_netcdf)):  # fmt: skip
+        checks.boolean(name, v)
     dyn = Dynamics() if dynamics is None else dynamics
     if not isinstance(dyn, Dynamics):
         raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")

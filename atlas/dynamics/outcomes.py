@@ -123,17 +123,9 @@ class Dynamics:
 
 
 def integer(name: str, value, lo: int = 1, hi: int | None = None) -> int:
-    """``value`` as an ``int`` in ``[lo, hi]``, or a one-line ``ValueError`` naming ``name``."""
-    ok = not isinstance(value, (bool, np.bool_, str, bytes))
-    try:
-        v = int(value) if ok else None
-        ok = ok and v == value and v >= lo and (hi is None or v <= hi)
-    except (TypeError, ValueError, OverflowError):
-        ok = False
-    if not ok:
-        bound = f">= {lo}" + (f" and <= {hi}" if hi is not None else "")
-        raise ValueError(f"{name}: must be an integer {bound}, got {value!r}")
-    return v
+    """``value`` as an ``int`` in ``[lo, hi]``, or a one-line ``ValueError`` naming ``name``
+    (:func:`atlas.core.checks.integer`)."""
+    return checks.integer(name, value, lo, hi)
 
 
 def outcome_scene(
@@ -374,6 +366,7 @@ def outcome_atlas(
         ``agreement`` (float32), ``no_stable_subclass`` (bool) and the theory verdicts.
     """
     scene = check_scene(scene)
+    theory = checks.boolean("theory", theory)
     dyn = Dynamics(n_perturb, seed, perturbation, t_end, horizon_cap, max_events, engine)
     n1 = scene.axes["beta1"].size
     step = n1 if slab is None else integer("slab", slab)
@@ -405,9 +398,9 @@ def outcome_map(
     """The outcome atlas of one ``(kappa, q, alpha)`` over the grid ``beta1_values x
     beta2_values`` [rad] (e.g. :func:`atlas.dynamics.outcome_grid`); ``q`` a number (``q1 = q2``)
     or a pair ``(q1, q2)`` [1].  ``kwargs``: the options of :func:`outcome_atlas`."""
-    b1 = checks.real("beta1_values", np.atleast_1d(np.asarray(beta1_values, dtype=float)))
-    b2 = checks.real("beta2_values", np.atleast_1d(np.asarray(beta2_values, dtype=float)))
-    qq = np.broadcast_to(np.asarray(q, dtype=float), (2,))
+    b1 = np.atleast_1d(checks.real("beta1_values", beta1_values))
+    b2 = np.atleast_1d(checks.real("beta2_values", beta2_values))
+    qq = checks.pair("q", q)
     model = {"q": float(qq[0])} if qq[0] == qq[1] else {"q1": float(qq[0]), "q2": float(qq[1])}
     for name, v in (("kappa", kappa), ("alpha", alpha), *model.items()):
         checks.real(name, v)

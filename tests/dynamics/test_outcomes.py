@@ -139,3 +139,25 @@ def test_bad_scene_one_line():
         O.outcome_atlas(O.outcome_scene("0.1,0.2", "1,2"), slab=0)
     with pytest.raises(ValueError, match="^scene: "):
         O.outcome_atlas("fig1")
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: O.outcome_atlas(O.outcome_scene("0.1", "0.2"), theory="no"), "theory"),
+        (lambda: O.outcome_map([0.1], [0.2], q=True), "q"),
+        (lambda: O.outcome_map([1 + 2j], [0.2]), "beta1_values"),
+        (lambda: O.outcome_map(["a"], [0.2]), "beta1_values"),
+        (lambda: O.outcome_map([0.1], [0.2], q=(0.1, 0.2, 0.3)), "q"),
+        (lambda: O.outcome_map([0.1], [0.2], kappa=True), "kappa"),
+    ],
+)
+def test_api_values_refused_naming_the_parameter(call, name):
+    with pytest.raises(ValueError, match=f"^{name}: ") as e:
+        call()
+    assert "\n" not in str(e.value)
+
+
+def test_a_1e14_value_axis_is_a_size_refusal():
+    with pytest.raises(MemoryError, match="^size: beta1 has 1e\\+14 values"):
+        O.outcome_scene("0:2pi:100000000000000", "0.2")
