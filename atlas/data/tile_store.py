@@ -394,7 +394,13 @@ def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> N
     group = zarr.open_group(store, mode="r+")
     for name in names:
         if name in sch.coords:
-            group[name][...] = sch.coords[name][1]
+            try:
+                group[name][...] = sch.coords[name][1]
+            except Exception:  # its array metadata unreadable: not rebuilt
+                raise ValueError(
+                    f"store: {store}: the metadata of {name} is damaged beyond repair (start "
+                    "again with --overwrite)"
+                ) from None
     if "attributes" not in names:
         return
     rec = _attrs_record(store)
