@@ -411,7 +411,13 @@ def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> N
         attrs = rec["attributes"]
         group.attrs.put(attrs.pop(""))
         for name, a in attrs.items():
-            group[name].attrs.put(a)
+            try:
+                group[name].attrs.put(a)
+            except Exception:  # its array metadata unreadable: not rebuilt
+                raise ValueError(
+                    f"store: {store}: the metadata of {name} is damaged beyond repair (start "
+                    "again with --overwrite)"
+                ) from None
     if rec is None or rec["metadata"] != _metadata_digests(store):
         what = "its record" if rec is None else "the metadata other than attributes"
         raise ValueError(

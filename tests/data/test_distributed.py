@@ -402,6 +402,10 @@ def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, refere
             "arrays": [],
         }
         same_bytes(open_store(store).load(), reference)
+    for name in ("beta1", "class_code"):  # array metadata: no copy to rebuild them from
+        meta = store / name / "zarr.json"
+        with pytest.raises(ValueError, match=f"^store: .*metadata of {name} is damaged beyond"):
+            damaged([(meta, lambda d: d.replace(b'"fill_value"', b'"fill_valuf"'))])
     unit = store / "stable_SS" / "zarr.json"
     swap = lambda d: d.replace(b'"flag_meanings": "', b'"flag_meanings": "x', 1)  # noqa: E731
     with pytest.raises(ValueError, match="^store: .*record .*damaged.*differ .* in stable_SS"):
