@@ -386,24 +386,21 @@ def corrupt_arrays(store: str, plan: dict) -> list[str]:
 
 def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> None:
     """Rewrite the coordinates ``names`` from the schema and (with ``"attributes"``) every
-    attribute from its record; a damaged record is rebuilt from the metadata it describes when
-    that verifies against ``plan`` and the schema (:func:`_rebuild_record`).  ``ValueError``
-    naming ``store`` if that does not restore every metadata byte."""
+    metadata file from a fresh layout of ``plan`` and every attribute from its record; a damaged
+    record is rebuilt from the metadata it describes when that verifies against ``plan`` and the
+    schema (:func:`_rebuild_record`).  ``ValueError`` naming ``store`` if that does not restore
+    every metadata byte."""
     import zarr
 
+    rec = _attrs_record(store) if "attributes" in names else None
+    if rec is not None and plan is not None:
+        _fresh_metadata(store, sch, plan, rec["metadata"])
     group = zarr.open_group(store, mode="r+")
     for name in names:
         if name in sch.coords:
-            try:
-                group[name][...] = sch.coords[name][1]
-            except Exception:  # its array metadata unreadable: not rebuilt
-                raise ValueError(
-                    f"store: {store}: the metadata of {name} is damaged beyond repair (start "
-                    "again with --overwrite)"
-                ) from None
+            _beyond_repair(store, name, lambda n=name: group[n].__setitem__(..., sch.coords[n][1]))
     if "attributes" not in names:
         return
-    rec = _attrs_record(store)
     if rec is None and plan is not None:
         _rebuild_record(store, sch, plan)
         return
@@ -411,18 +408,41 @@ def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> N
         attrs = rec["attributes"]
         group.attrs.put(attrs.pop(""))
         for name, a in attrs.items():
-            try:
-                group[name].attrs.put(a)
-            except Exception:  # its array metadata unreadable: not rebuilt
-                raise ValueError(
-                    f"store: {store}: the metadata of {name} is damaged beyond repair (start "
-                    "again with --overwrite)"
-                ) from None
+            _beyond_repair(store, name, lambda n=name, a=a: group[n].attrs.put(a))
     if rec is None or rec["metadata"] != _metadata_digests(store):
         what = "its record" if rec is None else "the metadata other than attributes"
         raise ValueError(
             f"store: {store}: {what} damaged beyond repair (start again with --overwrite)"
         )
+
+
+def _beyond_repair(store: str, name: str, fix) -> None:
+    """``fix()``, or ``ValueError`` naming ``name`` if its array metadata is unreadable."""
+    try:
+        fix()
+    except Exception:
+        raise ValueError(
+            f"store: {store}: the metadata of {name} is damaged beyond repair (start again with "
+            "--overwrite)"
+        ) from None
+
+
+def _fresh_metadata(store: str, sch: Schema, plan: dict, recorded: dict) -> None:
+    """Replace every metadata file whose bytes differ from ``recorded`` by the same file of a
+    fresh layout of ``plan`` (the layout is a function of the plan; its attributes are then
+    restored from the record)."""
+    bad = [rel for rel, h in _metadata_digests(store).items() if recorded.get(rel) != h]
+    bad += [rel for rel in recorded if not os.path.exists(os.path.join(store, rel))]
+    if not bad:
+        return
+    first = TilePlan.of(plan["tiles"])[0]
+    block2 = first[3] - first[2] if len(first) == 4 else None
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = os.path.join(tmp, "s")
+        create_layout(fresh, sch, first[1] - first[0], plan, block2)
+        for rel in bad:
+            if os.path.exists(os.path.join(fresh, rel)):
+                shutil.copyfile(os.path.join(fresh, rel), os.path.join(store, rel))
 
 
 def _same_value(a, b) -> bool:

@@ -366,7 +366,12 @@ def test_a_second_writer_is_refused_and_a_changed_store_gives_no_file(
 
 
 def _files(store):
-    return {p.relative_to(store): p.read_bytes() for p in sorted(store.rglob("*")) if p.is_file()}
+    """Every file but the two a resume rewrites (its history: the root and the record)."""
+    skip = {"zarr.json", f"{TILES}/zarr.json"}
+    files = (p for p in sorted(store.rglob("*")) if p.is_file())
+    return {
+        p.relative_to(store): p.read_bytes() for p in files if str(p.relative_to(store)) not in skip
+    }
 
 
 def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, reference, tmp_path):
@@ -394,7 +399,7 @@ def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, refere
     ]
     for edits in cases:
         summary = damaged(edits)
-        assert summary["computed"] == [], edits
+        assert summary["computed"] == [] and _files(store) == _files(good), edits
         assert verify_store(store) == {
             "ok": [0, 1, 2, 3],
             "missing": [],
@@ -402,10 +407,10 @@ def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, refere
             "arrays": [],
         }
         same_bytes(open_store(store).load(), reference)
-    for name in ("beta1", "class_code"):  # array metadata: no copy to rebuild them from
+    for name in ("beta1", "class_code"):  # array metadata: rebuilt from a fresh layout
         meta = store / name / "zarr.json"
-        with pytest.raises(ValueError, match=f"^store: .*metadata of {name} is damaged beyond"):
-            damaged([(meta, lambda d: d.replace(b'"fill_value"', b'"fill_valuf"'))])
+        summary = damaged([(meta, lambda d: d.replace(b'"fill_value"', b'"fill_valuf"'))])
+        assert summary["computed"] == [] and _files(store) == _files(good), name
     unit = store / "stable_SS" / "zarr.json"
     swap = lambda d: d.replace(b'"flag_meanings": "', b'"flag_meanings": "x', 1)  # noqa: E731
     with pytest.raises(ValueError, match="^store: .*record .*damaged.*differ .* in stable_SS"):
