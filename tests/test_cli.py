@@ -690,6 +690,10 @@ def test_a_full_disk_under_the_store_says_how_to_resume(tmp_path, monkeypatch, c
         (["generate", *TINY, "--dtype", "float16"], "dtype"),
         (["generate", "--no-such-option"], "unrecognized"),
         (["nonsense"], "invalid choice"),
+        (["simulate", "--map", "--n", "4", "--seed", "99999999999999999999999"], "seed: "),
+        (["simulate", "--map", "--n", "4", "--seed", "4294967296"], "seed: "),
+        (["simulate", "--map", "--n", "4", "--t-end", "1e300"], "t_end: must be <= 10000"),
+        (["simulate", "--case", "fig2b", "--t-end", "1e300"], "t-end: must be > 0 and <= 10000"),
     ],
 )
 def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):
@@ -746,3 +750,67 @@ def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, 
     err = capsys.readouterr().err
     assert "no partial output file left; complete before it: " in err
     assert str(tmp_path / "table2.md") in err
+
+
+@pytest.mark.parametrize("place", [".", "", "~"])
+def test_overwrite_never_deletes_the_working_directory(place, tmp_path, monkeypatch, capsys):
+    """``simulate --map --store . --overwrite`` (or ``''``, the home directory) in a directory
+    holding a file and a sub-directory: one line naming ``store``, exit 2, everything kept."""
+    work = tmp_path / "d"
+    (work / "sub").mkdir(parents=True)
+    (work / "keep.txt").write_text("x")
+    monkeypatch.chdir(work)
+    monkeypatch.setenv("HOME", str(work))
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--overwrite", "--workers", "1"]
+    assert cli.main([*args, "--store", os.path.expanduser(place)]) == 2
+    _check_one_line(capsys.readouterr().err, "atlas: error: store: ", place)
+    assert sorted(os.listdir(work)) == ["keep.txt", "sub"]
+    assert (work / "keep.txt").read_text() == "x"
+
+
+def test_simulate_map_resume_of_no_store_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--store", "st", "--resume"]
+    assert cli.main(args) == 2
+    _check_one_line(capsys.readouterr().err, "resume: store", args)
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("fault", ["full", "read-only"])
+def test_a_failed_write_into_the_outcome_store_names_it(fault, tmp_path, monkeypatch, capsys):
+    """ENOSPC while a tile is written, or a read-only place (the temporary layout refused): one
+    line naming the store (not a temporary path) and the cause; a store holding tiles says that
+    ``--resume`` continues, and it does."""
+    import errno
+
+    from atlas.dynamics import outcome_tiles
+
+    store = tmp_path / "st"
+    args = ["simulate", "--map", "--n", "4", "--no-theory", "--slab", "2", "--workers", "1"]
+    args += ["--store", str(store)]
+    if fault == "full":
+        write = outcome_tiles._write
+
+        def full(path, data):
+            if os.path.basename(path).startswith("t000001"):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), f"{path}.123.tmp")
+            write(path, data)
+
+        monkeypatch.setattr(outcome_tiles, "_write", full)
+    else:
+
+        def read_only(*a, dir=None, **kw):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), f"{dir}/.st.x.tmp")
+
+        monkeypatch.setattr(outcome_tiles.tempfile, "mkdtemp", read_only)
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    _check_one_line(err, f"atlas: error: store: cannot write {store}: ", args)
+    assert ".tmp" not in err
+    if fault == "read-only":
+        assert "Permission denied" in err and os.listdir(tmp_path) == []
+        return
+    assert "no space left on device" in err and "--resume" in err
+    monkeypatch.undo()
+    assert cli.main([*args, "--resume"]) == 0
+    assert "1 computed, 1 verified" in capsys.readouterr().err

@@ -4,14 +4,26 @@
 * :func:`pair`: one real number for both contacts or exactly two;
 * :func:`boolean`: ``True`` or ``False`` (``"no"``, ``1`` or ``None`` are refused, not read);
 * :func:`float_dtype`: the working precision, ``"float32"`` or ``"float64"`` only (a float16
-  kernel has no error model, and its codes differ).
+  kernel has no error model, and its codes differ);
+* :func:`integer`, :func:`choice`: integers in a range, one of a few words;
+* :func:`axis_size`: an axis whose values alone exceed the memory (``MemoryError``, ``size:``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["real", "pair", "boolean", "positive_int", "float_dtype", "FLOAT_DTYPES"]
+__all__ = [
+    "real",
+    "pair",
+    "boolean",
+    "positive_int",
+    "float_dtype",
+    "FLOAT_DTYPES",
+    "integer",
+    "choice",
+    "axis_size",
+]
 
 FLOAT_DTYPES = ("float64", "float32")
 
@@ -73,3 +85,41 @@ def float_dtype(value, name: str = "dtype") -> str:
     if text not in FLOAT_DTYPES:
         raise ValueError(f"{name}: must be float32 or float64, got {value!r}")
     return text
+
+
+def integer(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an ``int`` if it is an integral number (numpy integers and integral floats
+    included; booleans and strings refused) in ``[lo, hi]``, else ``ValueError`` naming ``name``."""
+    bound = " and ".join(
+        b for b in (f">= {lo}" if lo is not None else "", f"<= {hi}" if hi is not None else "") if b
+    )
+    bad = ValueError(f"{name}: must be an integer{' ' + bound if bound else ''}, got {value!r}")
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise bad
+    try:
+        n = int(value)
+        whole = n == value
+    except (TypeError, ValueError, OverflowError):
+        raise bad from None
+    if not whole or (lo is not None and n < lo) or (hi is not None and n > hi):
+        raise bad
+    return n
+
+
+def choice(name: str, value, options) -> str:
+    """``value`` if it is one of the strings ``options``, else ``ValueError`` naming ``name``."""
+    if not isinstance(value, str) or value not in options:
+        raise ValueError(f"{name}: must be one of {', '.join(options)}, got {value!r}")
+    return value
+
+
+def axis_size(name: str, n: int, available: int | None, itemsize: int = 8) -> int:
+    """``n`` values of an axis, or ``MemoryError`` (``size: ...``, naming ``name``) when the axis
+    alone (``n * itemsize`` bytes) needs more than ``available`` bytes of memory."""
+    need = n * itemsize
+    if available is not None and need > available:
+        raise MemoryError(
+            f"size: {name} has {n:.3g} values: ~{need / 2**40:.3g} TiB of memory for the axis "
+            f"alone, {available / 2**30:.3g} GiB available; use fewer values"
+        )
+    return n

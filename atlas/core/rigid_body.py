@@ -80,8 +80,8 @@ from functools import cached_property
 
 import numpy as np
 
+from atlas.core import checks, kernels
 from atlas.core import contact_modes as mech
-from atlas.core import kernels
 
 __all__ = [
     "Mechanism",
@@ -186,10 +186,7 @@ def _first(x, bad):
 
 def _real(name, v, *, low=None, high=None, open_low=False, open_high=False):
     """``v`` as float (or float64 array), finite and within the bounds; else a one-line error."""
-    try:
-        x = np.asarray(v, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: cannot interpret {v!r} as a number") from None
+    x = checks.real(name, v, finite=False)  # booleans, strings, complex numbers refused
     bad = ~np.isfinite(x)
     if np.any(bad):
         raise ValueError(f"{name}: must be finite, got {_first(x, bad)}")

@@ -32,13 +32,12 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import os
-import shutil
 import time
 
 import xarray as xr
 
 from atlas.core import interrupts
-from atlas.data import tile_store
+from atlas.data import store_guard, tile_store
 from atlas.data import tiles as tiling
 from atlas.data.cluster import check_scheduler, executor
 from atlas.data.engine import MemorySink, RunOptions, Schema, progress_bar, run, schema
@@ -179,17 +178,18 @@ def generate_distributed(
     job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes))
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
-    resumed = _prepare_store(job, resume, overwrite)
-    ex = executor(scheduler)
-    bar = progress_bar(job.opts.progress, len(job.tiles), "atlas tiles", unit="tile")
-    try:
-        report, recs, computed = _run_tiles(ex, job, resumed, bar)
-        totals = _finalize(job.store, job.sch, job.plan, job.tiles, recs, computed, resumed)
-    finally:
-        if bar is not None:
-            bar.close()
-        ex.close()
-    netcdf = _to_netcdf(job.store, job.sch, job.tiles, totals, to_netcdf, overwrite_netcdf)
+    with store_guard.held(job.store):
+        resumed = _prepare_store(job, resume, overwrite)
+        ex = executor(scheduler)
+        bar = progress_bar(job.opts.progress, len(job.tiles), "atlas tiles", unit="tile")
+        try:
+            report, recs, computed = _run_tiles(ex, job, resumed, bar)
+            totals = _finalize(job.store, job.sch, job.plan, job.tiles, recs, computed, resumed)
+        finally:
+            if bar is not None:
+                bar.close()
+            ex.close()
+        netcdf = _to_netcdf(job, recs, totals, to_netcdf, overwrite_netcdf)
     seconds = time.perf_counter() - t0
     return _summary(job, ex, netcdf, report, recs, computed, totals, seconds)
 
@@ -224,7 +224,7 @@ def _job(scene, store, scheduler, slab, block2, opts: RunOptions):
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
     check_scheduler(scheduler)
-    store = os.path.abspath(os.fspath(store))
+    store = store_guard.check_place(store)
     tiles = tile_plan(scene, slab, block2)
     sch = schema(scene, opts)
     plan = tile_store.make_plan(scene, sch, tiles, opts.stored())
@@ -236,21 +236,17 @@ def _prepare_store(job: _Job, resume: bool, overwrite: bool) -> bool:
     existing store only with ``overwrite``); true when resuming."""
     store = job.store
     exists = os.path.exists(store)
+    if resume and not exists:
+        raise FileNotFoundError(f"resume: store {store} does not exist")
     if exists and resume:
-        old = tile_store.stored_plan(store)
-        if old.get("hash") != job.plan["hash"]:
-            diff = [k for k in job.plan if k != "hash" and old.get(k) != job.plan[k]]
-            raise ValueError(
-                f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
-            )
+        tile_store.check_resumable(store, job.plan)  # a damaged root is restored from its record
     elif exists and not overwrite:
         raise FileExistsError(f"store: {store} exists (use resume=True or overwrite=True)")
     else:
         if not os.path.isdir(os.path.dirname(store)):
             raise FileNotFoundError(f"store: directory {os.path.dirname(store)} does not exist")
-        if exists:
-            shutil.rmtree(store)
-        tile_store.create_layout(store, job.sch, job.slab, job.plan, job.block2)
+        store_guard.check_replaceable(store, tile_store.is_atlas_store, "an atlas store")
+        tile_store.create_layout(store, job.sch, job.slab, job.plan, job.block2)  # by renames
     return exists and resume
 
 
@@ -264,7 +260,7 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     if resumed:
         damaged = tile_store.corrupt_arrays(job.store, job.plan)
         if damaged:
-            tile_store.repair_layout(job.store, job.sch, damaged)
+            tile_store.repair_layout(job.store, job.sch, damaged, job.plan)
     report, recs = _verify_all(ex, job.store, job.tiles) if resumed else (None, {})
     if report is not None:
         report["arrays"] = damaged
@@ -353,23 +349,35 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
 
 
-def _to_netcdf(store, sch, tiles, totals, path, overwrite):
-    """Stream the store into a netCDF4 file with the schema's (typed) attributes."""
+def _to_netcdf(job: _Job, recs: dict, totals: dict, path, overwrite):
+    """Stream the store into a netCDF4 file with the schema's (typed) attributes, every region
+    checked against the record of the tile that wrote it and the store's plan against this run's
+    (``RuntimeError`` naming the store if anything changed under the run; no file)."""
     if path is None:
         return None
+    store, sch, tiles = job.store, job.sch, job.tiles
     sink = NetCDFSink(path, overwrite)
     sch = Schema(sch.coords, sch.variables, {**sch.attrs, "history": totals["history"]}, sch.shape)
     ds = tile_store.open_store(store)
     has_b1 = "beta1" in sch.shape
     try:
+        if tile_store.stored_plan(store).get("hash") != job.plan["hash"]:
+            raise RuntimeError(f"store: {store} changed under this run (its plan); no file written")
         sink.begin(sch)  # inside: an interrupt while the header is written still aborts
-        for tile in tiles:  # every region once, from the tile that owns it
+        for i, tile in enumerate(tiles):  # every region once, from the tile that owns it
             split = tiling.ranges(has_b1, tile)
+            sums = {**recs[i]["checksums"], **recs[i]["shared"]}
             for k, (dims, *_) in sch.variables.items():
                 if tiling.owns(dims, split):
                     reg = tiling.region(dims, split)
                     index = tuple(reg.get(d, slice(None)) for d in dims)
-                    sink.write(k, index, ds[k].isel(reg).values)
+                    values = ds[k].isel(reg).values
+                    if tile_store.digest(values) != sums.get(k):
+                        raise RuntimeError(
+                            f"store: {store} changed under this run (tile {i}, {k}); no file "
+                            "written"
+                        )
+                    sink.write(k, index, values)
         return sink.finish(totals["attrs"], totals["var_attrs"])
     except BaseException:
         sink.abort()

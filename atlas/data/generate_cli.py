@@ -17,9 +17,10 @@ import sys
 
 from atlas.core.config import use_compile_cache
 from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions
-from atlas.data.io import check_output_path, generate_to_file, write_error
+from atlas.data.io import check_output_path, generate_to_file
 from atlas.data.limits import generate_estimate
 from atlas.data.scene import Scene, builtin
+from atlas.data.store_guard import write_failure
 
 __all__ = ["run_cli", "scene_from_options", "parse_physical"]
 
@@ -176,14 +177,9 @@ def _run_store(sc, opts, out, overwrite, screen, *, scheduler, store, resume, sl
             f"finished tiles are kept in {store}: continue with the same command and --resume"
         ) from None
     except (OSError, RuntimeError) as e:
-        err = e if ": cannot write " in str(e) else write_error(store, e, "store")
+        err = write_failure(store, e)
         if err is None:  # not a failed write (a refused argument, a bug)
             raise
-        if os.path.isdir(store):
-            raise OSError(
-                f"{err}; finished tiles are kept in {store}: make room and continue with the same "
-                "command and --resume"
-            ) from None
         raise err from None
     print(_summary(s), file=sys.stderr)
     return 0

@@ -30,6 +30,7 @@ __all__ = [
     "human_bytes",
     "generate_estimate",
     "grid_estimate",
+    "boundaries_estimate",
     "outcome_estimate",
     "NS_PER_POINT",
 ]
@@ -242,8 +243,26 @@ def grid_estimate(
 #: and the int8 verdicts written
 MECHANISM = dict(bytes_per_point=400, output_bytes_per_point=110, seconds_per_point=4e-6)
 #: ``atlas boundaries`` (points = grid nodes x check**2 x slices): 256 x 256, check 2 -> 3.9 kB
-#: and 0.33 ms per grid node; curves are a small fraction of the grid
+#: and 0.33 ms per grid node
 BOUNDARIES = dict(bytes_per_point=1200, output_bytes_per_point=8, seconds_per_point=1e-4)
+#: ``atlas boundaries`` bytes written per (kappa, q1, q2) slice and output file: the vertices are
+#: refined to 1e-10 rad whatever the grid, so a slice's files hardly grow with it (measured at
+#: kappa 2, q 0.1 on 16^2, 32^2, 64^2 grids: CSV 1.23, 1.25, 1.34 MB, GeoJSON 0.48-0.53 MB,
+#: netCDF 0.30-0.33 MB): a constant and a part per grid value along beta1 and beta2
+BOUNDARY_SLICE_BYTES = 1.2e6
+BOUNDARY_EDGE_BYTES = 1.3e3
+
+
+def boundaries_estimate(n1: int, n2: int, check: int, slices: int, outputs=()) -> Estimate:
+    """The cost of ``atlas boundaries`` on an ``n1 x n2`` grid, ``check`` sub-samples per cell
+    side, ``slices`` model slices: each output holds at most the largest file's bytes
+    (:data:`BOUNDARY_SLICE_BYTES`)."""
+    points = n1 * n2 * max(1, check) ** 2 * slices
+    written = slices * (BOUNDARY_SLICE_BYTES + BOUNDARY_EDGE_BYTES * (n1 + n2)) + 8 * points
+    opts = {**BOUNDARIES, "output_bytes_per_point": written / points}
+    return grid_estimate("boundaries", points, outputs=outputs, **opts)
+
+
 #: ``atlas simulate --map`` per trajectory: peak bytes (engine state, initial states, codes),
 #: seconds by engine (outputs/bench.md: ~0.4 ms fast, ~0.012 s exact, run by run; jax ~0.04 s)
 OUTCOME_TRAJECTORY_BYTES = 2000

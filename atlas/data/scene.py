@@ -139,7 +139,9 @@ def _parse_count(text: str, name: str) -> int:
         raise ValueError(f"{name}: N must be an integer, got {text.strip()!r}") from None
     if n < 1:
         raise ValueError(f"{name}: empty range (N = {n})")
-    return n
+    from atlas.data.limits import available_memory  # noqa: PLC0415 - limits imports the tiles
+
+    return checks.axis_size(name, n, available_memory())
 
 
 def _check_order(start, stop, n, name, text):

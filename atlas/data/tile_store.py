@@ -39,6 +39,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import interrupts
+from atlas.data import store_guard
 from atlas.data import tiles as tiling
 from atlas.data.engine import Schema, block_shape
 from atlas.data.tiles import TilePlan
@@ -49,10 +50,13 @@ __all__ = [
     "FORMAT_VERSION",
     "CHUNK_POINTS",
     "open_store",
+    "is_atlas_store",
+    "digest",
     "read_record",
     "drop_record",
     "make_plan",
     "stored_plan",
+    "check_resumable",
     "create_layout",
     "corrupt_arrays",
     "repair_layout",
@@ -88,7 +92,7 @@ def _chunks(sch: Schema, name: str, slab: int, block2: int | None = None) -> tup
     return tuple(min(fixed[d], n) if d in fixed else next(rest) for d, n in zip(dims, shape))
 
 
-def _digest(arr) -> str:
+def digest(arr) -> str:
     """SHA-256 of an array's dtype, shape and raw bytes (C order)."""
     a = np.ascontiguousarray(np.asarray(arr))
     h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
@@ -103,7 +107,7 @@ def _sha(text: str) -> str:
 def make_plan(scene, sch: Schema, tiles, opts: dict) -> dict:
     """The plan of a store: scene, coordinate checksums, variables, tiles, versions and the run
     options ``opts``, with ``hash`` over all of them (a resume must match it)."""
-    coords = {k: _digest(v) for k, (_, v, _) in sch.coords.items()}
+    coords = {k: digest(v) for k, (_, v, _) in sch.coords.items()}
     variables = {k: [list(d), np.dtype(t).str] for k, (d, t, _, _) in sch.variables.items()}
     plan = {
         "format": FORMAT_VERSION,
@@ -133,7 +137,65 @@ def stored_plan(store: str) -> dict:
         attrs = dict(zarr.open_group(store, mode="r").attrs)
         return json.loads(attrs[PLAN_ATTR])
     except Exception:
+        if os.path.isdir(os.path.join(store, TILES)):
+            raise ValueError(
+                f"store: {store}: its root metadata (zarr.json, {PLAN_ATTR}) is damaged; the same "
+                "command with --resume restores it from its record"
+            ) from None
         raise ValueError(f"store: {store} is not an atlas store (no {PLAN_ATTR})") from None
+
+
+def check_resumable(store: str, plan: dict) -> None:
+    """Check that ``store`` was made for ``plan`` before a resume: its plan, or, when the root
+    metadata is damaged (unreadable, or a plan whose hash is not its own), the copy of the root
+    attributes in the intact attribute record, which then restores them.  ``ValueError`` naming
+    ``store`` and what differs otherwise."""
+    try:
+        old = stored_plan(store)
+    except ValueError:
+        old = None
+    if old is not None and old.get("hash") == plan["hash"]:
+        return
+    rec = _attrs_record(store)
+    try:
+        copy = json.loads(rec["attributes"][""][PLAN_ATTR]) if rec else None
+    except (KeyError, TypeError, ValueError):
+        copy = None
+    if copy is not None and copy.get("hash") == plan["hash"]:
+        _restore_root(store, rec["attributes"][""])
+        return
+    if old is None:
+        raise ValueError(
+            f"store: {store} is not an atlas store, or its root metadata and their record are "
+            "both damaged (start again with --overwrite)"
+        )
+    diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]] or ["hash"]
+    raise ValueError(
+        f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
+    )
+
+
+def _restore_root(store: str, attrs: dict) -> None:
+    """Write the root group's metadata anew with the attributes ``attrs`` (its arrays kept)."""
+    import zarr
+
+    try:
+        zarr.open_group(store, mode="r")
+    except Exception:  # unreadable root metadata
+        for meta in ("zarr.json", ".zgroup", ".zattrs"):
+            if os.path.exists(os.path.join(store, meta)):
+                os.unlink(os.path.join(store, meta))
+    zarr.open_group(store, mode="a").attrs.put(attrs)
+
+
+def is_atlas_store(store: str) -> bool:
+    """True if ``store`` is a directory this module laid out: a readable plan, or (root metadata
+    damaged) the ``_tiles`` group of the tile records."""
+    try:
+        stored_plan(store)
+        return True
+    except (OSError, ValueError):
+        return any(os.path.isfile(os.path.join(store, TILES, f)) for f in ("zarr.json", ".zgroup"))
 
 
 # --- tile records -------------------------------------------------------------------------------
@@ -166,7 +228,7 @@ def drop_record(store: str, i: int):
 
 
 def _region_digests(ds: xr.Dataset, names, split: dict) -> dict:
-    return {k: _digest(ds[k].isel(tiling.region(ds[k].dims, split)).values) for k in names}
+    return {k: digest(ds[k].isel(tiling.region(ds[k].dims, split)).values) for k in names}
 
 
 def _tile_fields(tile) -> dict:
@@ -188,7 +250,7 @@ def write_tile(store: str, i: int, tile, ds: xr.Dataset, run: dict) -> dict:
 
     split = tiling.ranges("beta1" in ds.dims, tile)
     names = list(ds.data_vars)
-    digests = {k: _digest(ds[k].values) for k in names}
+    digests = {k: digest(ds[k].values) for k in names}
     owned = [k for k in names if tiling.owns(ds[k].dims, split)]
     t1 = time.perf_counter()
     groups = {}
@@ -310,9 +372,9 @@ def corrupt_arrays(store: str, plan: dict) -> list[str]:
     import zarr
 
     bad = []
-    for name, digest in plan["coords"].items():
+    for name, want in plan["coords"].items():
         try:
-            ok = _digest(zarr.open_array(store, path=name, mode="r")[...]) == digest
+            ok = digest(zarr.open_array(store, path=name, mode="r")[...]) == want
         except Exception:  # undecodable metadata or chunk bytes
             ok = False
         if not ok:
@@ -322,27 +384,114 @@ def corrupt_arrays(store: str, plan: dict) -> list[str]:
     return bad + ([] if ok else ["attributes"])
 
 
-def repair_layout(store: str, sch: Schema, names) -> None:
+def repair_layout(store: str, sch: Schema, names, plan: dict | None = None) -> None:
     """Rewrite the coordinates ``names`` from the schema and (with ``"attributes"``) every
-    attribute from its record; ``ValueError`` naming ``store`` if that does not restore every
-    metadata byte (the record itself, or metadata other than attributes, damaged)."""
+    metadata file from a fresh layout of ``plan`` and every attribute from its record; a damaged
+    record is rebuilt from the metadata it describes when that verifies against ``plan`` and the
+    schema (:func:`_rebuild_record`).  ``ValueError`` naming ``store`` if that does not restore
+    every metadata byte."""
     import zarr
 
+    rec = _attrs_record(store) if "attributes" in names else None
+    if rec is not None and plan is not None:
+        _fresh_metadata(store, sch, plan, rec["metadata"])
     group = zarr.open_group(store, mode="r+")
     for name in names:
         if name in sch.coords:
-            group[name][...] = sch.coords[name][1]
-    if "attributes" in names:
-        rec = _attrs_record(store)
-        if rec is not None:
-            attrs = rec["attributes"]
-            group.attrs.put(attrs.pop(""))
-            for name, a in attrs.items():
-                group[name].attrs.put(a)
-        if rec is None or rec["metadata"] != _metadata_digests(store):
-            raise ValueError(
-                f"store: {store}: metadata damaged beyond its record (start again with --overwrite)"
-            )
+            _beyond_repair(store, name, lambda n=name: group[n].__setitem__(..., sch.coords[n][1]))
+    if "attributes" not in names:
+        return
+    if rec is None and plan is not None:
+        _rebuild_record(store, sch, plan)
+        return
+    if rec is not None:
+        attrs = rec["attributes"]
+        group.attrs.put(attrs.pop(""))
+        for name, a in attrs.items():
+            _beyond_repair(store, name, lambda n=name, a=a: group[n].attrs.put(a))
+    if rec is None or rec["metadata"] != _metadata_digests(store):
+        what = "its record" if rec is None else "the metadata other than attributes"
+        raise ValueError(
+            f"store: {store}: {what} damaged beyond repair (start again with --overwrite)"
+        )
+
+
+def _beyond_repair(store: str, name: str, fix) -> None:
+    """``fix()``, or ``ValueError`` naming ``name`` if its array metadata is unreadable."""
+    try:
+        fix()
+    except Exception:
+        raise ValueError(
+            f"store: {store}: the metadata of {name} is damaged beyond repair (start again with "
+            "--overwrite)"
+        ) from None
+
+
+def _fresh_metadata(store: str, sch: Schema, plan: dict, recorded: dict) -> None:
+    """Replace every metadata file whose bytes differ from ``recorded`` by the same file of a
+    fresh layout of ``plan`` (the layout is a function of the plan; its attributes are then
+    restored from the record)."""
+    bad = [rel for rel, h in _metadata_digests(store).items() if recorded.get(rel) != h]
+    bad += [rel for rel in recorded if not os.path.exists(os.path.join(store, rel))]
+    if not bad:
+        return
+    first = TilePlan.of(plan["tiles"])[0]
+    block2 = first[3] - first[2] if len(first) == 4 else None
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = os.path.join(tmp, "s")
+        create_layout(fresh, sch, first[1] - first[0], plan, block2)
+        for rel in bad:
+            if os.path.exists(os.path.join(fresh, rel)):
+                shutil.copyfile(os.path.join(fresh, rel), os.path.join(store, rel))
+
+
+def _same_value(a, b) -> bool:
+    try:
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    except Exception:
+        return a == b
+
+
+def _attrs_differ(store: str, sch: Schema, plan: dict) -> list[str]:
+    """What of the store's attributes differs from ``plan`` and the schema: ``"atlas_plan"``,
+    global attribute names, variable names (only the attributes the schema fixes are compared:
+    the undecided counts and ``history`` are rewritten when a run finishes)."""
+    try:
+        attrs = _all_attrs(store)
+        root = attrs[""]
+        bad = [] if json.loads(root[PLAN_ATTR]).get("hash") == plan["hash"] else [PLAN_ATTR]
+    except Exception:
+        return ["zarr.json"]
+    bad += [k for k, v in sch.attrs.items() if k != "history" and not _same_value(root.get(k), v)]
+    fixed_attrs = {k: a for k, (_, _, a) in sch.coords.items()}
+    fixed_attrs.update({k: v[2] for k, v in sch.variables.items()})
+    for name, fixed in fixed_attrs.items():
+        got = attrs.get(name, {})
+        if any(not _same_value(got.get(k), v) for k, v in fixed.items()):
+            bad.append(name)
+    return bad
+
+
+def _rebuild_record(store: str, sch: Schema, plan: dict) -> None:
+    """Write the attribute record anew from the store's metadata, after checking that metadata
+    against the plan and the schema (``ValueError`` naming what differs otherwise)."""
+    import zarr
+
+    for meta in ("zarr.json", ".zgroup", ".zattrs"):  # unreadable: zarr lists no array
+        path = os.path.join(store, TILES, meta)
+        if os.path.exists(path):
+            try:
+                zarr.open_group(store, path=TILES, mode="r")
+            except Exception:
+                os.unlink(path)
+    zarr.open_group(store, path=TILES, mode="a")
+    bad = _attrs_differ(store, sch, plan)
+    if bad:
+        raise ValueError(
+            f"store: {store}: the record of the attributes is damaged and the attributes differ "
+            f"from this atlas in {', '.join(bad)} (start again with --overwrite)"
+        )
+    record_attrs(store)
 
 
 def create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | None = None):
@@ -369,7 +518,7 @@ def create_layout(store: str, sch: Schema, slab: int, plan: dict, block2: int | 
         record_attrs(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
         interrupts.check()
-        os.replace(tmp, store)
+        store_guard.install(tmp, store)  # an existing store is moved aside, never deleted first
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

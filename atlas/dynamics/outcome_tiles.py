@@ -25,12 +25,14 @@ import io
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
 
 import numpy as np
 
-from atlas.core import config, interrupts
+from atlas.core import checks, config, interrupts
+from atlas.data import store_guard
 from atlas.data.cluster import check_scheduler, executor
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.scene import Scene
@@ -45,7 +47,7 @@ from atlas.dynamics.outcomes import (
     sum_info,
 )
 
-__all__ = ["outcome_atlas_tiles", "default_slab", "TILE_TRAJECTORIES"]
+__all__ = ["outcome_atlas_tiles", "default_slab", "is_outcome_store", "TILE_TRAJECTORIES"]
 
 #: default trajectories per tile (a batch of the fast engine)
 TILE_TRAJECTORIES = 1 << 15
@@ -82,16 +84,25 @@ def _name(i: int, ext: str) -> str:
     return f"t{i:06d}.{ext}"
 
 
-def _record(store: str, i: int, tile) -> dict | None:
-    """The record of tile ``i`` if it is readable and matches the bytes of its tile file."""
+def _body_sha(rec: dict, key: str) -> str:
+    """SHA-256 of a record's JSON without its own checksum field ``key``."""
+    body = {k: v for k, v in rec.items() if k != key}
+    return _sha(json.dumps(body, sort_keys=True).encode())
+
+
+def _record(store: str, i: int, tile, plan_hash: str) -> dict | None:
+    """The record of tile ``i`` if it is intact (its own checksum), made for the plan
+    ``plan_hash`` and matches the bytes of its tile file; ``None`` otherwise (recomputed)."""
     try:
         with open(os.path.join(store, _name(i, "json")), encoding="utf-8") as fh:
             rec = json.load(fh)
         with open(os.path.join(store, _name(i, "npy")), "rb") as fh:
             ok = _sha(fh.read()) == rec["sha256"]
-    except (OSError, ValueError, KeyError):
+        ok = ok and rec["record_sha256"] == _body_sha(rec, "record_sha256")
+    except (OSError, ValueError, KeyError, TypeError):
         return None
-    return rec if ok and rec.get("index") == i and rec.get("rows") == list(tile) else None
+    same = rec.get("index") == i and rec.get("rows") == list(tile) and rec.get("plan") == plan_hash
+    return rec if ok and same else None
 
 
 def _write(path: str, data: bytes) -> None:
@@ -108,45 +119,92 @@ def _write(path: str, data: bytes) -> None:
         raise
 
 
-def _verified_records(store: str, tiles) -> dict:
+def _verified_records(store: str, tiles, plan_hash: str) -> dict:
     """``{tile index: record}`` of the tiles of ``store`` whose files check (:func:`_record`)."""
     recs = {}
     for i, tile in enumerate(tiles):
-        rec = _record(store, i, tile)
+        rec = _record(store, i, tile, plan_hash)
         if rec is not None:
             recs[i] = rec
     return recs
 
 
-def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile, pool=None) -> dict:
+def _run_tile(store: str, scene: Scene, dyn: Dynamics, i: int, tile, pool=None,
+              plan_hash: str = "") -> dict:  # fmt: skip
     """Compute tile ``i`` (on the processes of ``pool``, if given), write its counts, then its
-    record."""
+    record (with the plan's hash and a checksum of itself)."""
     counts, info = outcome_slab(scene, range(*tile), dyn, pool)
     buf = io.BytesIO()
     np.save(buf, counts, allow_pickle=False)
     data = buf.getvalue()
-    rec = {"index": i, "rows": list(tile), "sha256": _sha(data), "info": info}
+    rec = {"index": i, "rows": list(tile), "sha256": _sha(data), "info": info, "plan": plan_hash}
+    rec["record_sha256"] = _body_sha(rec, "record_sha256")
     interrupts.check()
     _write(os.path.join(store, _name(i, "npy")), data)
     _write(os.path.join(store, _name(i, "json")), json.dumps(rec, sort_keys=True).encode())
     return rec
 
 
-def _prepare(store: str, plan: dict, resume: bool, overwrite: bool) -> bool:
-    """Continue an existing store of the same plan, or lay out a new one; true when resuming."""
-    exists = os.path.exists(store)
-    if exists and resume:
-        try:
-            with open(os.path.join(store, PLAN), encoding="utf-8") as fh:
-                old = json.load(fh)
-        except (OSError, ValueError):
-            raise ValueError(f"store: {store} is not an outcome-atlas store (no {PLAN})") from None
-        if old.get("hash") != plan["hash"]:
-            diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]]
-            raise ValueError(
-                f"store: {store} was made for a different atlas (differs in {', '.join(diff)})"
-            )
-        return True
+_OWN_FILE = re.compile(r"^(plan\.json|t\d{6}\.(npy|json)|.*\.tmp)$")
+
+
+def is_outcome_store(store: str) -> bool:
+    """True if every entry of the directory ``store`` is a file an outcome store holds, its plan
+    among them (the marker :func:`outcome_atlas_tiles` replaces with ``overwrite``)."""
+    try:
+        names = os.listdir(store)
+    except OSError:
+        return False
+    files = all(os.path.isfile(os.path.join(store, n)) for n in names)
+    return PLAN in names and files and all(_OWN_FILE.match(n) for n in names)
+
+
+def _stored_plan(store: str, plan: dict) -> dict | None:
+    """The plan of ``store``: ``plan`` itself when the stored one is ours, damaged or not (a
+    damaged one is rewritten from ``plan`` when the stored bytes differ only where a flipped bit
+    can be: its own hash or a body whose hash is ours); ``ValueError`` naming what differs."""
+    path = os.path.join(store, PLAN)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            text = fh.read()
+    except OSError:
+        raise ValueError(f"store: {store} is not an outcome-atlas store (no {PLAN})") from None
+    try:
+        old = json.loads(text)
+        intact = isinstance(old, dict) and old.get("hash") == _body_sha(old, "hash")
+    except ValueError:
+        return None  # unreadable: the tile records decide
+    if intact and old["hash"] == plan["hash"]:
+        return plan
+    diff = (
+        [k for k in plan if k != "hash" and old.get(k) != plan[k]] if isinstance(old, dict) else []
+    )
+    if not intact and (not diff or old.get("hash") == plan["hash"]):
+        return None  # damaged where a flipped bit can be: the tile records decide
+    what = ", ".join(diff) if diff else "hash"
+    raise ValueError(f"store: {store} was made for a different atlas (differs in {what})")
+
+
+def _prepare(store: str, plan: dict, resume: bool, overwrite: bool, tiles) -> dict:
+    """Continue an existing store of the same plan (its verified tile records), or lay out a
+    new one (replacing a store the project wrote, only with ``overwrite``); ``None`` when new.
+
+    A damaged ``plan.json`` is rewritten from ``plan`` when at least one tile record made for
+    ``plan`` verifies against its data (the records carry the plan's hash), refused otherwise."""
+    if resume:
+        if not os.path.isdir(store):
+            raise FileNotFoundError(f"resume: store {store} does not exist")
+        stored = _stored_plan(store, plan)
+        recs = _verified_records(store, tiles, plan["hash"])
+        if stored is None:
+            if not recs:
+                raise ValueError(
+                    f"store: {store}: {PLAN} is damaged and no tile record confirms it (start "
+                    "again with overwrite)"
+                )
+            _write(os.path.join(store, PLAN), json.dumps(plan, sort_keys=True).encode())
+        return recs
+    exists = store_guard.check_replaceable(store, is_outcome_store, "an outcome-atlas store")
     if exists and not overwrite:
         raise FileExistsError(f"store: {store} exists (use resume or overwrite)")
     parent = os.path.dirname(store)
@@ -156,13 +214,31 @@ def _prepare(store: str, plan: dict, resume: bool, overwrite: bool) -> bool:
     try:
         with open(os.path.join(tmp, PLAN), "w", encoding="utf-8") as fh:
             json.dump(plan, fh, sort_keys=True)
-        if exists:
-            shutil.rmtree(store)
-        os.replace(tmp, store)
+        store_guard.install(tmp, store)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return False
+    return None
+
+
+def _assemble(store: str, plan: dict, recs: dict, n: int) -> np.ndarray:
+    """The counts of every tile, read back and checked against this run's records and plan:
+    ``RuntimeError`` naming the store if anything changed under the run."""
+    try:
+        ok = _stored_plan(store, plan) is plan
+    except ValueError:
+        ok = False
+    parts = []
+    for i in range(n):
+        with open(os.path.join(store, _name(i, "npy")), "rb") as fh:
+            data = fh.read()
+        if not ok or _sha(data) != recs[i]["sha256"]:
+            raise RuntimeError(
+                f"store: {store} changed under this run ({PLAN if not ok else _name(i, 'npy')} "
+                "is not what this run wrote or verified); no file written"
+            )
+        parts.append(np.load(io.BytesIO(data), allow_pickle=False))
+    return np.concatenate(parts)
 
 
 def outcome_atlas_tiles(
@@ -221,6 +297,9 @@ def outcome_atlas_tiles(
         ``computed`` and ``verified`` (tile indices), ``trajectories``, ``seconds``.
     """
     scene = check_scene(scene)
+    for name, v in (("resume", resume), ("overwrite", overwrite), ("theory", theory),
+                    ("overwrite_netcdf", overwrite_netcdf)):  # fmt: skip
+        checks.boolean(name, v)
     dyn = Dynamics() if dynamics is None else dynamics
     if not isinstance(dyn, Dynamics):
         raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
@@ -230,41 +309,19 @@ def outcome_atlas_tiles(
         raise ValueError(
             f"workers: the tiles run on the scheduler's workers, give 1, got {workers}"
         )
-    store = os.path.abspath(os.fspath(store))
+    store = store_guard.check_place(store)
     slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
     tiles = tile_plan(scene, slab=slab)
     plan = _plan(scene, dyn, tiles)
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
-    resumed = _prepare(store, plan, resume, overwrite)
-    recs = _verified_records(store, tiles) if resumed else {}
-    verified = sorted(recs)
-    total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
-
-    def report():
-        if progress is not None:
-            progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
-
-    report()
-    ex = executor(scheduler)
-    pool = LanePool(workers) if scheduler is None else None
-    todo = [(i, (store, scene, dyn, i, tile, pool)) for i, tile in enumerate(tiles)
-            if i not in recs]  # fmt: skip
-    try:
-        for i, rec in ex.map(_run_tile, todo):
-            recs[i] = rec
-            interrupts.check()
-            report()
-    finally:
-        ex.close()
-        if pool is not None:
-            pool.close()
-    counts = np.concatenate(
-        [np.load(os.path.join(store, _name(i, "npy"))) for i in range(len(tiles))]
-    )
+    with store_guard.held(store):
+        counts, recs, resumed = _run_store(store, scene, dyn, tiles, plan, resume, overwrite,
+                                           (scheduler, workers, progress))  # fmt: skip
+    verified = sorted(resumed or {})
     info = sum_info(recs[i]["info"] for i in range(len(tiles)))
     call = history
-    if resumed:
+    if resumed is not None:
         call = (history or "atlas.dynamics.outcome_tiles.outcome_atlas_tiles(...)") + (
             f" (resumed: {len(tiles) - len(verified)} of {len(tiles)} tiles computed)"
         )
@@ -283,3 +340,32 @@ def outcome_atlas_tiles(
         "trajectories": int(info["trajectories"]),
         "seconds": float(info["seconds"]),
     }
+
+
+def _run_store(store, scene, dyn, tiles, plan, resume, overwrite, where):
+    """Prepare the store, compute the tiles not verified, and assemble the counts: ``(counts,
+    records, verified records on resume or None)``."""
+    scheduler, workers, progress = where
+    resumed = _prepare(store, plan, resume, overwrite, tiles)
+    recs = dict(resumed or {})
+    total = math.prod(a.size for a in scene.axes.values()) * dyn.n_perturb
+
+    def report():
+        if progress is not None:
+            progress(sum(r["info"]["trajectories"] for r in recs.values()), total)
+
+    report()
+    ex = executor(scheduler)
+    pool = LanePool(workers) if scheduler is None else None
+    todo = [(i, (store, scene, dyn, i, tile, pool, plan["hash"])) for i, tile in enumerate(tiles)
+            if i not in recs]  # fmt: skip
+    try:
+        for i, rec in ex.map(_run_tile, todo):
+            recs[i] = rec
+            interrupts.check()
+            report()
+    finally:
+        ex.close()
+        if pool is not None:
+            pool.close()
+    return _assemble(store, plan, recs, len(tiles)), recs, resumed

@@ -62,6 +62,15 @@ DEFAULT_ALPHA = 0.35 * math.pi
 CLASSES = np.array([int(o) for o in Outcome], dtype=np.int8)
 #: largest ``n_perturb`` (the counts are stored as int16)
 MAX_PERTURB = np.iinfo(np.int16).max
+#: largest ``seed``: numpy's seed range (``numpy.random.seed``, 32-bit), kept as an integer
+#: attribute of the netCDF file
+MAX_SEED = 2**32 - 1
+#: largest ``t_end`` [scaled time]: the exact simulator (the reference, and the fast engine's
+#: fallback) advances in sub-steps of about 1/12 of the fastest period, about 2 per unit of scaled
+#: time at kappa = 1 and more for stiffer contacts, so a run to ``horizon_cap * t_end`` = 8e4
+#: already takes ~1e5-1e6 sub-steps (seconds per run); far beyond it a run ends at the
+#: simulator's 1e7 sub-step cap, undetermined, after minutes
+MAX_T_END = 1e4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,7 +92,7 @@ class Dynamics:
     engine: str = "fast"
 
     def __post_init__(self):
-        for name, lo, hi in (("n_perturb", 1, MAX_PERTURB), ("seed", 0, None),
+        for name, lo, hi in (("n_perturb", 1, MAX_PERTURB), ("seed", 0, MAX_SEED),
                              ("max_events", 1, None)):  # fmt: skip
             object.__setattr__(self, name, integer(name, getattr(self, name), lo, hi))
         for name in ("perturbation", "t_end", "horizon_cap"):
@@ -91,6 +100,11 @@ class Dynamics:
             if not v > 0:
                 raise ValueError(f"{name}: must be > 0, got {v!r}")
             object.__setattr__(self, name, v)
+        if self.t_end > MAX_T_END:
+            raise ValueError(
+                f"t_end: must be <= {MAX_T_END:g} (scaled time; the default is 150), "
+                f"got {self.t_end!r}"
+            )
         if self.horizon_cap < 1:
             raise ValueError(f"horizon_cap: must be >= 1, got {self.horizon_cap!r}")
         if self.engine not in ENGINES:
@@ -109,17 +123,9 @@ class Dynamics:
 
 
 def integer(name: str, value, lo: int = 1, hi: int | None = None) -> int:
-    """``value`` as an ``int`` in ``[lo, hi]``, or a one-line ``ValueError`` naming ``name``."""
-    ok = not isinstance(value, (bool, np.bool_, str, bytes))
-    try:
-        v = int(value) if ok else None
-        ok = ok and v == value and v >= lo and (hi is None or v <= hi)
-    except (TypeError, ValueError, OverflowError):
-        ok = False
-    if not ok:
-        bound = f">= {lo}" + (f" and <= {hi}" if hi is not None else "")
-        raise ValueError(f"{name}: must be an integer {bound}, got {value!r}")
-    return v
+    """``value`` as an ``int`` in ``[lo, hi]``, or a one-line ``ValueError`` naming ``name``
+    (:func:`atlas.core.checks.integer`)."""
+    return checks.integer(name, value, lo, hi)
 
 
 def outcome_scene(
@@ -360,6 +366,7 @@ def outcome_atlas(
         ``agreement`` (float32), ``no_stable_subclass`` (bool) and the theory verdicts.
     """
     scene = check_scene(scene)
+    theory = checks.boolean("theory", theory)
     dyn = Dynamics(n_perturb, seed, perturbation, t_end, horizon_cap, max_events, engine)
     n1 = scene.axes["beta1"].size
     step = n1 if slab is None else integer("slab", slab)
@@ -391,9 +398,9 @@ def outcome_map(
     """The outcome atlas of one ``(kappa, q, alpha)`` over the grid ``beta1_values x
     beta2_values`` [rad] (e.g. :func:`atlas.dynamics.outcome_grid`); ``q`` a number (``q1 = q2``)
     or a pair ``(q1, q2)`` [1].  ``kwargs``: the options of :func:`outcome_atlas`."""
-    b1 = checks.real("beta1_values", np.atleast_1d(np.asarray(beta1_values, dtype=float)))
-    b2 = checks.real("beta2_values", np.atleast_1d(np.asarray(beta2_values, dtype=float)))
-    qq = np.broadcast_to(np.asarray(q, dtype=float), (2,))
+    b1 = np.atleast_1d(checks.real("beta1_values", beta1_values))
+    b2 = np.atleast_1d(checks.real("beta2_values", beta2_values))
+    qq = checks.pair("q", q)
     model = {"q": float(qq[0])} if qq[0] == qq[1] else {"q1": float(qq[0]), "q2": float(qq[1])}
     for name, v in (("kappa", kappa), ("alpha", alpha), *model.items()):
         checks.real(name, v)

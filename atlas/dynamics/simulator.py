@@ -26,6 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from atlas.core import checks
 from atlas.dynamics.system import (
     FORCE_OFF,
     FORCE_ON,
@@ -264,10 +265,9 @@ def _run_limits(sysm, g0, t_end, max_events, max_steps, amplitude_limit, penetra
     if g0.shape != (4,):
         raise ValueError(f"g0 must have 4 components (d1, d2, d1', d2'), got shape {g0.shape}")
     t_end = float(check_finite("t_end", t_end, positive=True))
-    if int(max_events) < 1:
-        raise ValueError(f"max_events must be >= 1, got {max_events!r}")
-    if int(max_steps) < 1:
-        raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
+    max_events = checks.integer("max_events", max_events, 1)
+    max_steps = checks.integer("max_steps", max_steps, 1)
+    stop_when_settled = checks.boolean("stop_when_settled", stop_when_settled)
     scale = run_scale(sysm, g0)
     amp_lim = 1e4 * scale if amplitude_limit is None else float(amplitude_limit)
     pen_lim = 1e3 * scale if penetration_limit is None else float(penetration_limit)

@@ -5,6 +5,7 @@ as CF netCDF or drawn beside the theory map (:mod:`atlas.paper.figures_dynamics`
 from __future__ import annotations
 
 import functools
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -12,13 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from atlas.core.config import use_compile_cache
+from atlas.data import store_guard
 from atlas.data.engine import progress_bar
 from atlas.data.io import atomic_write_text, savefig
 from atlas.data.scene import parse_values
 from atlas.dynamics import Outcome, classify, fig2_cases, outcome_grid, simulate
 from atlas.dynamics.lane_pool import check_workers, usable_cores
 from atlas.dynamics.outcome_tiles import default_slab, outcome_atlas_tiles
-from atlas.dynamics.outcomes import Dynamics, outcome_atlas, outcome_scene
+from atlas.dynamics.outcomes import MAX_T_END, Dynamics, outcome_atlas, outcome_scene
 from atlas.paper import drawing
 from atlas.paper.figures_dynamics import (
     PAPER_SAYS,
@@ -108,6 +110,8 @@ def _case_params(case, angles, t_end, k, q) -> dict:
     )
     if not case and None in angles.values():
         raise ValueError("case: give --case or all of --beta1, --beta2, --alpha")
+    if t_end is not None and not 0 < t_end <= MAX_T_END:
+        raise ValueError(f"t-end: must be > 0 and <= {MAX_T_END:g}, got {t_end!r}")
     for key, v in (*angles.items(), ("t_end", t_end)):
         if v is not None:
             p[key] = v
@@ -163,6 +167,18 @@ def map_dynamics(n_perturb=None, seed=None, engine="fast", t_end=None) -> Dynami
     return Dynamics(**kw)
 
 
+def _tiles_into(scene, store, **kw) -> dict:
+    """:func:`outcome_atlas_tiles`, a failed write into the store (full disk, read-only place)
+    said in one line naming the store and how to continue (:func:`store_guard.write_failure`)."""
+    try:
+        return outcome_atlas_tiles(scene, store, **kw)
+    except OSError as e:
+        err = store_guard.write_failure(os.path.abspath(store), e)
+        if err is None:
+            raise
+        raise err from None
+
+
 def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, overwrite=False,
              no_theory=False, argv=None, scheduler=None, workers=None, **kw) -> int:  # fmt: skip
     if workers is None:
@@ -188,7 +204,7 @@ def _run_map(t_end, out, engine="fast", store=None, resume=False, slab=None, ove
     try:
         progress = None if bar is None else functools.partial(_advance, bar)
         if store is not None:
-            s = outcome_atlas_tiles(
+            s = _tiles_into(
                 scene, store, dynamics=dyn, slab=slab, resume=resume, overwrite=overwrite,
                 theory=theory, history=history, scheduler=scheduler, progress=progress,
                 workers=workers,

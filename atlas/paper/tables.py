@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import contact_modes
+from atlas.core import checks, contact_modes
 from atlas.core.points import spectral_points
 from atlas.core.verdicts import Consistency, Verdict
 
@@ -185,6 +185,11 @@ def class_kernel(c1, s1, c2, s2, ca, sa):
 
 def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float64) -> list[Row]:
     """Regenerate Table 2 (all 24 classes) from the kernels."""
+    n, per_class, n_alpha = (
+        checks.positive_int(k, v)
+        for k, v in (("n", n), ("per_class", per_class), ("n_alpha", n_alpha))
+    )
+    checks.float_dtype(dtype)
     samples = class_samples(n, per_class)
     alpha = _grid(n_alpha)
     ca, sa = (np.asarray(v) for v in contact_modes.direction(alpha, dtype))

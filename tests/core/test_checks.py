@@ -42,3 +42,19 @@ def test_float_dtype_only_float32_float64(value):
     assert (
         checks.float_dtype(np.float32) == "float32" and checks.float_dtype("float64") == "float64"
     )
+
+
+def test_integer_range_and_type():
+    assert checks.integer("n", np.int64(3), 1) == 3 and checks.integer("n", 4.0, 1, 4) == 4
+    for bad in (True, "3", 1.5, 0, 5, None, 1 + 0j, float("inf")):
+        with pytest.raises(ValueError, match="^n: must be an integer >= 1 and <= 4"):
+            checks.integer("n", bad, 1, 4)
+
+
+def test_choice_and_axis_size():
+    assert checks.choice("engine", "fast", ("fast", "numpy")) == "fast"
+    with pytest.raises(ValueError, match="^engine: must be one of fast, numpy, got 'gpu'"):
+        checks.choice("engine", "gpu", ("fast", "numpy"))
+    assert checks.axis_size("beta1", 1000, 1 << 20) == 1000
+    with pytest.raises(MemoryError, match=r"^size: beta1 has 1e\+14 values: ~728 TiB"):
+        checks.axis_size("beta1", 10**14, 1 << 30)

@@ -290,6 +290,9 @@ _BASE = dict(m=1.0, I=1.0, r1=(1.0, -1.0), r2=(-1.0, -1.0), n1=(0.0, 1.0), n2=(0
         (dict(r1=(0.0, 1.0), r2=(0.0, -1.0), n2=(0.0, -1.0)), "s2"),  # one normal line: give s2
         (dict(r1=(0.0, 1.0), r2=(0.0, -1.0), n2=(0.0, -1.0), s2=1, speed=1.0), "speed"),
         (dict(n2=(1.0, 0.0)), "s1"),  # the only twist turns about contact 1
+        (dict(m=True), "m"),  # a boolean is not a mass
+        (dict(m="1"), "m"),  # nor is a string
+        (dict(I=1 + 2j), "I"),
     ],
 )
 def test_one_line_errors(change, name):

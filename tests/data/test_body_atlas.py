@@ -68,6 +68,8 @@ def test_bad_axis_and_name_are_one_line_errors():
         mechanism_atlas("chair")
     with pytest.raises(ValueError, match=r"^mu: "):
         mechanism_atlas("ladder", mu="0:nan:3")
+    with pytest.raises(ValueError, match=r"^L: expected real numbers, got True"):
+        mechanism_atlas("ladder", fixed={"L": True}, theta="0.1:0.4:3", mu="0:1:3")
 
 
 def test_cli_writes_the_mechanism_atlas(tmp_path, capsys):

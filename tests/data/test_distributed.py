@@ -309,3 +309,109 @@ def test_a_flipped_byte_anywhere_is_detected_and_repaired(inproc, reference, tmp
     assert summary["repaired"] == ["beta1", "attributes"] and summary["computed"] == []
     same_bytes(open_store(store).load(), reference)
     assert verify_store(store)["arrays"] == []
+
+
+def test_overwrite_replaces_only_an_atlas_store(inproc, tmp_path):
+    """``overwrite`` refuses a zarr store the project did not write (no plan, no tile records)
+    and a non-empty directory; an atlas store is replaced by renames (nothing left beside)."""
+    small = Scene(beta1="0.1,0.2", beta2="0.3,0.4", outputs="class_code")
+    foreign = tmp_path / "data.zarr"
+    zarr.open_group(str(foreign), mode="w").create_array("x", shape=(3,), dtype="i4")
+    (tmp_path / "d.zarr").mkdir()
+    (tmp_path / "d.zarr" / "keep.txt").write_text("x")
+    before = sorted(str(p) for p in tmp_path.rglob("*"))
+    for place in (foreign, tmp_path / "d.zarr"):
+        with pytest.raises(ValueError, match="^store: .*not an atlas store.*refusing"):
+            generate_distributed(small, place, overwrite=True)
+    with pytest.raises(ValueError, match="^store: "):
+        generate_distributed(small, tmp_path, overwrite=True)  # a directory holding stores
+    assert sorted(str(p) for p in tmp_path.rglob("*")) == before
+    store = tmp_path / "a.zarr"
+    shutil.copytree(inproc[0] / "a.zarr", store)
+    summary = generate_distributed(small, store, overwrite=True)
+    assert summary["computed"] == [0]
+    assert sorted(os.listdir(tmp_path)) == ["a.zarr", "d.zarr", "data.zarr"]
+    same_bytes(open_store(store).load(), generate(small))
+
+
+def test_a_second_writer_is_refused_and_a_changed_store_gives_no_file(
+    inproc, tmp_path, monkeypatch
+):
+    """A live writer's lock refuses a second one; a region changed under a run (by a writer that
+    ignored the lock) is found when the file is assembled: no netCDF file."""
+    import json
+    import socket
+
+    from atlas.data import store_guard, tile_store
+
+    small = Scene(beta1="0.1,0.2", beta2="0.3,0.4", outputs="class_code")
+    store = tmp_path / "a.zarr"
+    with open(store_guard.lock_path(str(store)), "w") as fh:
+        json.dump({"pid": os.getppid(), "host": socket.gethostname()}, fh)
+    with pytest.raises(BlockingIOError, match="^store: .*being written by process"):
+        generate_distributed(small, store)
+    assert not store.exists()
+    os.remove(store_guard.lock_path(str(store)))
+    mark = tile_store.mark_complete
+
+    def then_changed(path, *a):
+        mark(path, *a)
+        zarr.open_group(path, mode="r+")["class_code"][0, 0] = 99
+
+    monkeypatch.setattr(tile_store, "mark_complete", then_changed)
+    nc = tmp_path / "a.nc"
+    with pytest.raises(RuntimeError, match="^store: .*changed under this run.*class_code"):
+        generate_distributed(small, store, to_netcdf=nc)
+    assert not nc.exists() and not os.path.exists(store_guard.lock_path(str(store)))
+
+
+def _files(store):
+    """Every file but the two a resume rewrites (its history: the root and the record)."""
+    skip = {"zarr.json", f"{TILES}/zarr.json"}
+    files = (p for p in sorted(store.rglob("*")) if p.is_file())
+    return {
+        p.relative_to(store): p.read_bytes() for p in files if str(p.relative_to(store)) not in skip
+    }
+
+
+def test_a_damaged_record_or_root_is_rebuilt_when_the_data_verify(inproc, reference, tmp_path):
+    """The attribute record (its value), the root metadata (truncated) and the plan's hash (a
+    flipped bit) are rebuilt by --resume from what verifies (the metadata against plan and schema,
+    the root from the record's copy) without recomputing a tile; a damaged record whose attributes
+    also differ is refused naming the variable; another atlas names what differs."""
+    good = inproc[0] / "a.zarr"
+    store = tmp_path / "f.zarr"
+    record = store / TILES / "zarr.json"
+
+    def damaged(edits):
+        shutil.rmtree(store, ignore_errors=True)
+        shutil.copytree(good, store)
+        for path, edit in edits:
+            path.write_bytes(edit(path.read_bytes()))
+        return generate_distributed(scene(), store, slab=2, tile_points=TP, resume=True)
+
+    flip = lambda at: lambda d: d[:at] + bytes([d[at] ^ 1]) + d[at + 1 :]  # noqa: E731
+    root = (good / "zarr.json").read_bytes()
+    cases = [
+        [(record, flip(len((good / TILES / "zarr.json").read_bytes()) // 2))],
+        [(store / "zarr.json", lambda d: d[: len(d) // 2])],
+        [(store / "zarr.json", flip(root.index(b'\\"hash\\": \\"') + 12))],
+    ]
+    for edits in cases:
+        summary = damaged(edits)
+        assert summary["computed"] == [] and _files(store) == _files(good), edits
+        assert verify_store(store) == {
+            "ok": [0, 1, 2, 3],
+            "missing": [],
+            "corrupt": [],
+            "arrays": [],
+        }
+        same_bytes(open_store(store).load(), reference)
+    for name in ("beta1", "class_code"):  # array metadata: rebuilt from a fresh layout
+        meta = store / name / "zarr.json"
+        summary = damaged([(meta, lambda d: d.replace(b'"fill_value"', b'"fill_valuf"'))])
+        assert summary["computed"] == [] and _files(store) == _files(good), name
+    unit = store / "stable_SS" / "zarr.json"
+    swap = lambda d: d.replace(b'"flag_meanings": "', b'"flag_meanings": "x', 1)  # noqa: E731
+    with pytest.raises(ValueError, match="^store: .*record .*damaged.*differ .* in stable_SS"):
+        damaged([(record, flip(len((good / TILES / "zarr.json").read_bytes()) // 2)), (unit, swap)])

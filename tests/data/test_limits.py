@@ -70,3 +70,20 @@ def test_outcome_estimate_counts_every_axis_and_the_theory():
     assert tiled.peak_bytes == est.peak_bytes - (cells * 5 - 10) * limits.OUTCOME_TRAJECTORY_BYTES
     slow = limits.outcome_estimate(scene, 5, theory=False, engine="numpy")
     assert slow.seconds > 10 * est.seconds
+
+
+@pytest.mark.slow
+def test_boundaries_estimate_against_the_bytes_written(tmp_path):
+    """``atlas boundaries``' estimate of one output file against the files it writes for a model
+    other than the one the constants were measured at (kappa 2, q 0.1): it covers the largest
+    and is within 2x of it (it was 8 bytes per point: 2 KiB for ~1 MB here)."""
+    from atlas.data.boundaries import boundaries
+
+    scene = Scene(beta1="0:2pi:24", beta2="0:2pi:24", kappa="0.5", q="0.3")
+    b = boundaries(scene)
+    sizes = []
+    for ext, write in (("nc", b.to_netcdf), ("csv", b.to_csv), ("json", b.to_geojson)):
+        write(tmp_path / f"b.{ext}")
+        sizes.append((tmp_path / f"b.{ext}").stat().st_size)
+    est = limits.boundaries_estimate(24, 24, 2, 1)
+    assert max(sizes) <= est.output_bytes <= 2 * max(sizes), (sizes, est.output_bytes)

@@ -75,3 +75,108 @@ def test_tiles_on_dask_workers_bit_identical(tmp_path, single):
     )
     assert s["computed"] == list(range(5))
     _same(s["dataset"], single)
+
+
+def test_overwrite_replaces_only_an_outcome_store(tmp_path, monkeypatch):
+    """``overwrite`` never deletes a directory the project did not write: the working directory
+    (with a file beside the would-be store), a non-empty directory without a plan; a store it
+    wrote is replaced by renames."""
+    work = tmp_path / "w"
+    (work / "sub").mkdir(parents=True)
+    (work / "keep.txt").write_text("x")
+    monkeypatch.chdir(work)
+    small = SCENE.replace(beta1="0.1,0.2")
+    for place in (".", "", str(work), "sub/.."):
+        with pytest.raises(ValueError, match="^store: "):
+            T.outcome_atlas_tiles(small, place, dynamics=DYN, theory=False, overwrite=True)
+    (work / "theirs").mkdir()
+    (work / "theirs" / "notes.md").write_text("mine")
+    with pytest.raises(ValueError, match="^store: .*not an outcome-atlas store"):
+        T.outcome_atlas_tiles(small, "theirs", dynamics=DYN, theory=False, overwrite=True)
+    assert (work / "keep.txt").read_text() == "x" and (work / "sub").is_dir()
+    assert (work / "theirs" / "notes.md").read_text() == "mine"
+    T.outcome_atlas_tiles(small, "m.tiles", dynamics=DYN, slab=1, theory=False)
+    s = T.outcome_atlas_tiles(SCENE, "m.tiles", dynamics=DYN, slab=5, theory=False, overwrite=True)
+    assert sorted(os.listdir("m.tiles")) == ["plan.json", "t000000.json", "t000000.npy"]
+    assert s["computed"] == [0]
+    assert sorted(os.listdir(work)) == ["keep.txt", "m.tiles", "sub", "theirs"]
+
+
+def test_resume_of_no_store_is_refused(tmp_path):
+    with pytest.raises(FileNotFoundError, match="^resume: store .* does not exist"):
+        T.outcome_atlas_tiles(SCENE, tmp_path / "none", dynamics=DYN, resume=True)
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_second_writer_is_refused(tmp_path):
+    """A store held by a live writer (its lock file: pid and host) is refused, store untouched."""
+    import json
+    import socket
+
+    from atlas.data import store_guard
+
+    store = tmp_path / "m.tiles"
+    T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False)
+    before = {p: (store / p).read_bytes() for p in os.listdir(store)}
+    with open(store_guard.lock_path(str(store)), "w") as fh:
+        json.dump({"pid": os.getppid(), "host": socket.gethostname()}, fh)
+    for kw in ({"overwrite": True}, {"resume": True}):
+        with pytest.raises(BlockingIOError, match="^store: .*being written by process"):
+            T.outcome_atlas_tiles(SCENE.replace(q=0.5), store, dynamics=DYN, theory=False, **kw)
+    assert {p: (store / p).read_bytes() for p in os.listdir(store)} == before
+
+
+@pytest.mark.parametrize("swap", ["tile", "plan"])
+def test_a_store_changed_under_the_writer_gives_no_file(tmp_path, swap):
+    """Another writer that ignores the lock replaces a tile or the plan while this one runs: the
+    assembly checks every tile against this run's records and plan and refuses; no file."""
+    store, other = tmp_path / "m.tiles", tmp_path / "o.tiles"
+    T.outcome_atlas_tiles(SCENE.replace(q=0.5), other, dynamics=DYN, slab=2, theory=False)
+    calls = []
+
+    def progress(done, total):
+        calls.append(done)
+        if len(calls) == 2:  # after the first tile
+            name = "t000000.npy" if swap == "tile" else "plan.json"
+            (store / name).write_bytes((other / name).read_bytes())
+
+    nc = tmp_path / "m.nc"
+    with pytest.raises(RuntimeError, match="^store: .*changed under this run"):
+        T.outcome_atlas_tiles(
+            SCENE, store, dynamics=DYN, slab=2, theory=False, progress=progress, to_netcdf=nc
+        )
+    assert not nc.exists()
+
+
+def _edit_json(path, edit):
+    import json
+
+    rec = json.loads(path.read_text())
+    edit(rec)
+    path.write_text(json.dumps(rec, sort_keys=True))
+
+
+def test_every_record_is_checked(tmp_path, single):
+    """A tile record with one number changed is recomputed (not "verified"); a plan with a
+    flipped bit is rebuilt from the tile records made for it; a plan of another atlas (intact)
+    or a damaged plan no record confirms is refused, naming what differs."""
+    store = tmp_path / "m.tiles"
+    T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False)
+    more = lambda r: r["info"].update(trajectories=r["info"]["trajectories"] + 1)  # noqa: E731
+    _edit_json(store / "t000001.json", more)
+    s = T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False, resume=True)
+    assert s["computed"] == [1] and s["trajectories"] == single.attrs["trajectories"]
+    plan = (store / "plan.json").read_bytes()
+    for at in (plan.index(b'"hash"') + 12, plan.index(b'"dynamics"') + 20):
+        (store / "plan.json").write_bytes(plan[:at] + bytes([plan[at] ^ 1]) + plan[at + 1 :])
+        s = T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False, resume=True)
+        assert s["computed"] == [] and (store / "plan.json").read_bytes() == plan
+    (store / "plan.json").write_bytes(plan[: len(plan) // 2])  # truncated: the records decide
+    s = T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False, resume=True)
+    assert s["computed"] == [] and (store / "plan.json").read_bytes() == plan
+    for name in os.listdir(store):
+        if name.endswith(".json") and name != "plan.json":
+            os.remove(store / name)
+    (store / "plan.json").write_bytes(plan[: len(plan) // 2])
+    with pytest.raises(ValueError, match="^store: .*plan.json is damaged and no tile record"):
+        T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False, resume=True)

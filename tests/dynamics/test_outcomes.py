@@ -111,6 +111,11 @@ def test_standard_normals_of_any_rows_equal_the_whole_draw():
         (dict(n_perturb=2.5), "n_perturb"),
         (dict(n_perturb=40000), "n_perturb"),
         (dict(seed=-1), "seed"),
+        (dict(seed=2**32), "seed"),  # numpy's seed range
+        (dict(seed=10**23), "seed"),
+        (dict(t_end=1e300), "t_end"),  # never ends (the simulator's sub-steps)
+        (dict(t_end=1.0001e4), "t_end"),
+        (dict(max_events=1.5), "max_events"),
         (dict(t_end=0.0), "t_end"),
         (dict(t_end=float("nan")), "t_end"),
         (dict(horizon_cap=0.5), "horizon_cap"),
@@ -134,3 +139,25 @@ def test_bad_scene_one_line():
         O.outcome_atlas(O.outcome_scene("0.1,0.2", "1,2"), slab=0)
     with pytest.raises(ValueError, match="^scene: "):
         O.outcome_atlas("fig1")
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: O.outcome_atlas(O.outcome_scene("0.1", "0.2"), theory="no"), "theory"),
+        (lambda: O.outcome_map([0.1], [0.2], q=True), "q"),
+        (lambda: O.outcome_map([1 + 2j], [0.2]), "beta1_values"),
+        (lambda: O.outcome_map(["a"], [0.2]), "beta1_values"),
+        (lambda: O.outcome_map([0.1], [0.2], q=(0.1, 0.2, 0.3)), "q"),
+        (lambda: O.outcome_map([0.1], [0.2], kappa=True), "kappa"),
+    ],
+)
+def test_api_values_refused_naming_the_parameter(call, name):
+    with pytest.raises(ValueError, match=f"^{name}: ") as e:
+        call()
+    assert "\n" not in str(e.value)
+
+
+def test_a_1e14_value_axis_is_a_size_refusal():
+    with pytest.raises(MemoryError, match="^size: beta1 has 1e\\+14 values"):
+        O.outcome_scene("0:2pi:100000000000000", "0.2")

@@ -157,10 +157,13 @@ def test_step_cap_returns_status():
         ({"b_norm": (0.0, 1.0)}, "b_norm"),
         ({"t_end": -1.0}, "t_end"),
         ({"max_events": 0}, "max_events"),
+        ({"max_events": 1.5}, "max_events"),
+        ({"max_steps": "10"}, "max_steps"),
+        ({"stop_when_settled": "no"}, "stop_when_settled"),
     ],
 )
 def test_bad_input_raises_naming_parameter(kwargs, name):
     args = dict(beta1=0.1, beta2=2.0, alpha=0.5)
     args.update(kwargs)
-    with pytest.raises(ValueError, match=name):
+    with pytest.raises(ValueError, match=f"^{name}"):
         S.simulate(**args)

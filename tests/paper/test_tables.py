@@ -160,3 +160,13 @@ def _dirs(b1, b2):
 def test_markdown_has_key(rows):
     md = t2.to_markdown(list(rows.values()))
     assert "**bold** = unstable" in md and "_italics_ = model-dependent" in md
+
+
+@pytest.mark.parametrize(
+    "kw, name", [(dict(n="xml"), "n"), (dict(per_class=2.5), "per_class"), (dict(n_alpha=0), "n_alpha"),
+                 (dict(dtype="float16"), "dtype")],
+)  # fmt: skip
+def test_bad_arguments_one_line_naming_the_parameter(kw, name):
+    with pytest.raises(ValueError, match=f"^{name}: ") as e:
+        t2.table2(**kw)
+    assert "\n" not in str(e.value)
