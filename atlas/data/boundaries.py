@@ -584,7 +584,9 @@ def slice_boundaries(
         for p in pts:
             p.field = fld
         if fld == "SS":
-            pts = _proven_line_points(pts, polys.xy, model, chord, cell)
+            pts, roots = _proven_line_points(pts, model, cell, dtype)
+            out.attrs["SS_line_roots"] = roots
+            out.attrs["SS_line_points"] = sum(p.proven for p in pts)
         by_field[fld] = curves
         out.curves += curves
         out.points += pts
@@ -606,17 +608,18 @@ def slice_boundaries(
     return out
 
 
-def _proven_line_points(pts, xy, model, chord, cell) -> list[Point]:
-    """The SS points where a boundary meets a class line with proven enclosures
-    (:mod:`atlas.data.boundary_points`), replacing the estimated ``leaves_class_line`` and
-    ``crosses_class_line`` points within a grid ``cell`` of one."""
-    proven = boundary_points.ss_line_points(xy, model, reach=max(16 * chord, 1e-4))
+def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
+    """The SS points where a boundary meets a class line, found from the algebra with proven
+    enclosures (:func:`atlas.data.boundary_points.ss_line_points`), replacing the estimated
+    ``leaves_class_line`` and ``crosses_class_line`` points within a grid ``cell`` of one;
+    returns the points and the algebraic count of roots on the lines."""
+    proven, roots = boundary_points.ss_line_points(model, dtype)
     if not proven:
-        return pts
+        return pts, roots
     tree = cKDTree([[p.beta1, p.beta2] for p in proven])
     kinds = ("leaves_class_line", "crosses_class_line")
     kept = [p for p in pts if p.kind not in kinds or tree.query([p.beta1, p.beta2])[0] > cell]
-    return kept + proven
+    return kept + proven, roots
 
 
 #: the smallest vertex tolerance [rad]: a bracket between float coordinates near ``2 pi``
