@@ -244,7 +244,9 @@ def root_codes(fld, roots, model, dtype="float64") -> np.ndarray:
     return codes.reshape(len(roots), 2, ROOT_SAMPLES.size)
 
 
-def ss_line_points(model, dtype="float64", lines=TORUS_LINES) -> tuple[list[Point], int]:
+def ss_line_points(
+    model, dtype="float64", lines=TORUS_LINES, roots=None
+) -> tuple[list[Point], int]:
     """Proven points where the SS boundary meets the class lines ``lines`` (indices ``m``), found
     from the algebra: every root of :func:`line_roots` next to which the certified SS code on a
     side of the line changes along it (:func:`root_codes`); kind ``touches_class_line`` (even
@@ -252,8 +254,8 @@ def ss_line_points(model, dtype="float64", lines=TORUS_LINES) -> tuple[list[Poin
     (one side).  Returns the points and the number of roots (the algebraic count).  The
     uncertainty bounds the distance of the stated point to the true one: the radius of the
     certified angle interval plus the rounding of the stated coordinates, times ``sqrt 2`` on a
-    diagonal (both coordinates move)."""
-    roots = line_roots(model, lines)
+    diagonal (both coordinates move).  ``roots``: :func:`line_roots` if already computed."""
+    roots = line_roots(model, lines) if roots is None else roots
     codes = root_codes("SS", roots, model, dtype)
     changes = (codes != codes[:, :, :1]).any(axis=2)  # (n, side)
     out = []
