@@ -521,9 +521,9 @@ def _dispatch_estimate(args):
         axes = {k: getattr(args, k) for k in ("beta1", "beta2", "kappa", "q", "q1", "q2")}
         scene = Scene(**{k: v for k, v in axes.items() if v is not None})
         slices = math.prod(scene.axes[m].size for m in scene.model_names)
-        grid = scene.axes["beta1"].size * scene.axes["beta2"].size * max(1, args.check) ** 2
+        n1, n2 = scene.axes["beta1"].size, scene.axes["beta2"].size
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
-        return limits.grid_estimate("boundaries", grid * slices, outputs=outs, **limits.BOUNDARIES)
+        return limits.boundaries_estimate(n1, n2, args.check, slices, outs)
     if args.command == "simulate" and args.outcome_map:
         from atlas.paper.simulate import map_dynamics, map_scene, scene_options
 

@@ -766,8 +766,19 @@ def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
         tolerance=options.get("tol", TOL),
         chord_tolerance=options.get("chord", CHORD),
         seconds=time.perf_counter() - t0,
+        **_completeness(out.attrs.get("slices", [])),
     )
     return out
+
+
+def _completeness(slices) -> dict:
+    """``complete``: 1 when every class-line stretch of every field and slice is proven covered
+    (:mod:`atlas.data.boundary_cover`; SS only: II is checked, not proven), else 0; and the
+    class-line length [rad] still uncovered, summed."""
+    left = [v for s in slices for k, v in s.items() if k.endswith("_line_length_left_uncovered")]
+    proven = [v for s in slices for k, v in s.items() if k.endswith("_lines_complete")]
+    complete = bool(slices) and all(proven) and not any(left)
+    return dict(complete=int(complete), uncovered_line_length=float(sum(left)))
 
 
 def run_cli(

@@ -316,6 +316,8 @@ def _to_dataset(bd: Boundaries) -> xr.Dataset:
         chord_tolerance=float(bd.attrs.get("chord_tolerance", CHORD)),
         field_labels=json.dumps({k: v for k, v in brackets.FIELD_LABELS.items()}),
         slices=json.dumps(_json(bd.attrs.get("slices", []))),
+        complete=int(bd.attrs.get("complete", 0)),
+        uncovered_line_length=float(bd.attrs.get("uncovered_line_length", math.nan)),
     )
     return ds
 
@@ -336,7 +338,11 @@ def summary(bd: Boundaries) -> str:
     for s in bd.attrs.get("slices", []):
         counts = [v for k, v in s.items() if k.endswith("hidden_cells")]
         hidden = "not checked" if None in counts else sum(counts)
+        added = sum(v for k, v in s.items() if k.endswith("_uncovered_line_length"))
+        left = sum(v for k, v in s.items() if k.endswith("_line_length_left_uncovered"))
         lines.append(
-            f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden}"
+            f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden};"
+            f" class-line stretches: {added:.3g} rad added to the traced curves, {left:.3g} rad"
+            " left uncovered"
         )
     return "\n".join(lines)

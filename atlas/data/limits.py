@@ -244,6 +244,15 @@ MECHANISM = dict(bytes_per_point=400, output_bytes_per_point=110, seconds_per_po
 #: ``atlas boundaries`` (points = grid nodes x check**2 x slices): 256 x 256, check 2 -> 3.9 kB
 #: and 0.33 ms per grid node; curves are a small fraction of the grid
 BOUNDARIES = dict(bytes_per_point=1200, output_bytes_per_point=8, seconds_per_point=1e-4)
+
+
+def boundaries_estimate(n1: int, n2: int, check: int, slices: int, outputs=()) -> Estimate:
+    """The cost of ``atlas boundaries`` / ``atlas.boundaries`` on an ``n1 x n2`` grid resampled
+    ``check`` times finer, over ``slices`` model slices (:data:`BOUNDARIES`)."""
+    points = n1 * n2 * max(1, check) ** 2 * slices
+    return grid_estimate("boundaries", points, outputs=outputs, **BOUNDARIES)
+
+
 #: ``atlas simulate --map`` per trajectory: peak bytes (engine state, initial states, codes),
 #: seconds by engine (outputs/bench.md: ~0.4 ms fast, ~0.012 s exact, run by run; jax ~0.04 s)
 OUTCOME_TRAJECTORY_BYTES = 2000
