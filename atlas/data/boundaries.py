@@ -598,10 +598,11 @@ def slice_boundaries(
             pts, out.attrs["SS_line_roots"] = _proven_line_points(pts, model, cell, roots, dtype)
             out.attrs["SS_line_points"] = sum(p.proven for p in pts)
         distance = max(chord, near)
-        added, (stretches, gap, left_over) = boundary_cover.cover_lines(
+        added, left, (stretches, gap, left_over) = boundary_cover.cover_lines(
             fld, box, model, curves, roots, tips, distance, tol, dtype
         )
         curves += added
+        pts += left
         reached = np.concatenate([polys.xy] + [c.vertices for c in added])
         by_field[fld] = curves
         out.curves += curves

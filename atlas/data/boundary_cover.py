@@ -25,7 +25,7 @@ import numpy as np
 
 from atlas.core import brackets
 from atlas.data import boundary_sides
-from atlas.data.boundary_curves import Curve
+from atlas.data.boundary_curves import Curve, Point
 from atlas.data.boundary_tips import TIP_OFFSET
 from atlas.data.class_lines import line_frames, line_values
 
@@ -133,8 +133,9 @@ def _grad(m) -> tuple[float, float]:
 def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="float64"):
     """The class-line stretches of ``fld`` (:func:`line_stretches`) not covered by ``curves``
     within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line
-    (:func:`_pulled` ends); returns them and the stats ``(stretches, uncovered length [rad],
-    length still uncovered [rad])``.  A gap no longer than ``distance`` next to a covered part
+    (:func:`_pulled` ends); returns them, the pieces still uncovered as points (kind
+    ``uncovered_class_line`` at their middle, not proven), and the stats ``(stretches,
+    uncovered length [rad], length still uncovered [rad])``.  A gap no longer than ``distance`` next to a covered part
     is left (each of its points is within ``2 distance`` of a curve)."""
     stretches = line_stretches(fld, box, model, roots, tips, dtype)
     gaps, length = [], 0.0
@@ -149,15 +150,20 @@ def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="floa
             length += size
             gaps.append((m, np.asarray(base, float), d, a, b, left, right))
     if not gaps:
-        return [], (len(stretches), length, 0.0)
+        return [], [], (len(stretches), length, 0.0)
     ends, ok = _pulled(fld, gaps, model, tol, dtype)
-    added, left_over = [], length
-    for (m, base, d, *_, left, right), (a, b), good in zip(gaps, ends, ok):
+    added, left, left_over = [], [], 0.0
+    for (m, base, d, a0, b0, lft, rgt), (a, b), good in zip(gaps, ends, ok):
         if good and b > a:
             xy = _on_torus(m, base + np.array([[a], [b]]) * d)
-            left_over -= math.hypot(*(xy[1] - xy[0]))
-            added.append(_line_curve(fld, xy, m, left, right, model, dtype))
-    return added, (len(stretches), length, max(left_over, 0.0))
+            added.append(_line_curve(fld, xy, m, lft, rgt, model, dtype))
+        rest = [(a0, a), (b, b0)] if good and b > a else [(a0, b0)]
+        for u, v in rest:
+            if (v - u) * math.hypot(*d) > 2 * tol:
+                left_over += (v - u) * math.hypot(*d)
+                at = _on_torus(m, base[None] + 0.5 * (u + v) * d[None])[0]
+                left.append(Point(*at, "uncovered_class_line", math.nan, *model, field=fld))
+    return added, left, (len(stretches), length, left_over)
 
 
 def _codes_at(fld, gaps, u, step, model, dtype):

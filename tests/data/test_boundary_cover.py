@@ -10,6 +10,7 @@ import pytest
 from atlas.core import contact_modes, exact
 from atlas.data import boundaries as bd
 from atlas.data import boundary_cover as bc
+from atlas.data.class_lines import LINE_GRADS, line_values
 
 PI = math.pi
 GRID = np.arange(32) * 2 * PI / 32
@@ -93,3 +94,22 @@ def test_uncovered_parts_of_a_stretch():
 
     curves = [on([0.1, 0.3]), on([0.5, 0.6]), on([0.65, 0.9], off=0.1)]  # the last one is far
     assert bc.uncovered(1, 0.0, 1.0, curves, 1e-3) == [(0.0, 0.1), (0.3, 0.5), (0.6, 1.0)]
+
+
+def test_what_is_left_uncovered_is_listed(q0):
+    """The class-line length still uncovered is listed piece by piece as unproven points on a
+    class line, where the exact tier sees different codes 1e-13 rad off the line's two sides
+    (1e-9 off it both are in the needle a tangent boundary leaves along the line)."""
+    left = [p for p in q0.points if p.kind == "uncovered_class_line"]
+    assert (q0.attrs["SS_line_length_left_uncovered"] > 0) == bool(left)
+    model = (0.5, 0.0, 0.0)
+    for p in left:
+        xy = np.array([p.beta1, p.beta2])
+        assert not p.proven and math.isnan(p.uncertainty)
+        w = (line_values(xy[None])[0] + PI) % (2 * PI) - PI  # offsets from the lines, wrapped
+        m = int(np.argmin(np.abs(w)))
+        assert abs(w[m]) < 1e-12
+        n = LINE_GRADS[m] / np.hypot(*LINE_GRADS[m])
+        assert _exact_code("SS", *(xy + 1e-13 * n), model) != _exact_code(
+            "SS", *(xy - 1e-13 * n), model
+        )
