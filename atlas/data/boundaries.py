@@ -602,6 +602,7 @@ def slice_boundaries(
             fld, box, model, curves, roots, tips, distance, tol, dtype
         )
         curves += added
+        off = _off_curves([p for p in pts if p.proven], curves, 2 * distance)
         pts += left
         reached = np.concatenate([polys.xy] + [c.vertices for c in added])
         by_field[fld] = curves
@@ -621,6 +622,7 @@ def slice_boundaries(
         out.attrs[f"{fld}_line_length_left_uncovered"] = left_over
         out.attrs[f"{fld}_line_pieces_added"] = len(added)
         out.attrs[f"{fld}_lines_complete"] = int(fld == "SS")
+        out.attrs[f"{fld}_points_off_curves"] = off
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         if out.attrs[f"{fld}_max_bracket"] > tol:  # bisect shrinks every bracket to <= tol
             raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
@@ -629,6 +631,23 @@ def slice_boundaries(
     for p in out.points:
         p.beta1, p.beta2 = float(p.beta1) % TWO_PI, float(p.beta2) % TWO_PI
     return out
+
+
+def _off_curves(points, curves, reach) -> int:
+    """How many of ``points`` lie farther than ``reach`` [rad] from every segment of ``curves``
+    (a proven codimension-2 point that no drawn curve comes near)."""
+    segs = [c.vertices for c in curves if len(c.vertices) >= 2]
+    if not points or not segs:
+        return len(points)
+    a = np.concatenate([v[:-1] for v in segs])
+    d = np.concatenate([v[1:] for v in segs]) - a
+    dd = np.maximum(np.sum(d * d, 1), 1e-300)
+    count = 0
+    for p in points:
+        xy = np.array([p.beta1, p.beta2]) % TWO_PI
+        t = np.clip(np.sum((xy - a) * d, 1) / dd, 0.0, 1.0)
+        count += int(np.hypot(*(a + t[:, None] * d - xy).T).min() > reach)
+    return count
 
 
 def _model_value(name, value) -> float:

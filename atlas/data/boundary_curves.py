@@ -342,7 +342,7 @@ def summary(bd: Boundaries) -> str:
         left = sum(v for k, v in s.items() if k.endswith("_line_length_left_uncovered"))
         lines.append(
             f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden};"
-            f" class-line stretches: {added:.3g} rad added to the traced curves, {left:.3g} rad"
+            f" class-line stretches: {added:.3g} rad not traced (added as curves), {left:.3g} rad"
             " left uncovered"
         )
     return "\n".join(lines)

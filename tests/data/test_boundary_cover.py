@@ -113,3 +113,14 @@ def test_what_is_left_uncovered_is_listed(q0):
         assert _exact_code("SS", *(xy + 1e-13 * n), model) != _exact_code(
             "SS", *(xy - 1e-13 * n), model
         )
+
+
+def test_proven_points_off_the_curves_are_counted(q0):
+    """``SS_points_off_curves`` is the number of proven points farther than twice the cover
+    distance from every SS curve (distances computed here); none is dropped for it."""
+    proven = [p for p in q0.points if p.proven]
+    assert len(proven) == q0.attrs["SS_line_points"] == 10
+    xy = np.array([[p.beta1, p.beta2] for p in proven])
+    dist = _distance(xy, [c for c in q0.curves if c.field == "SS"])
+    want = int((dist > 2 * q0.attrs["SS_cover_distance"]).sum())
+    assert q0.attrs["SS_points_off_curves"] == want
