@@ -602,7 +602,9 @@ def slice_boundaries(
             fld, box, model, curves, roots, tips, distance, tol, dtype
         )
         curves += added
-        off = _off_curves([p for p in pts if p.proven], curves, 2 * distance)
+        proven = [p for p in pts if p.proven]
+        curves, spliced = boundary_points.attach_points(curves, proven, tol, cell, tol)
+        off = _off_curves(proven, curves, 2 * distance)
         pts += left
         reached = np.concatenate([polys.xy] + [c.vertices for c in added])
         by_field[fld] = curves
@@ -622,6 +624,7 @@ def slice_boundaries(
         out.attrs[f"{fld}_line_length_left_uncovered"] = left_over
         out.attrs[f"{fld}_line_pieces_added"] = len(added)
         out.attrs[f"{fld}_lines_complete"] = int(fld == "SS")
+        out.attrs[f"{fld}_points_attached"] = spliced
         out.attrs[f"{fld}_points_off_curves"] = off
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         if out.attrs[f"{fld}_max_bracket"] > tol:  # bisect shrinks every bracket to <= tol
@@ -635,19 +638,9 @@ def slice_boundaries(
 
 def _off_curves(points, curves, reach) -> int:
     """How many of ``points`` lie farther than ``reach`` [rad] from every segment of ``curves``
-    (a proven codimension-2 point that no drawn curve comes near)."""
-    segs = [c.vertices for c in curves if len(c.vertices) >= 2]
-    if not points or not segs:
-        return len(points)
-    a = np.concatenate([v[:-1] for v in segs])
-    d = np.concatenate([v[1:] for v in segs]) - a
-    dd = np.maximum(np.sum(d * d, 1), 1e-300)
-    count = 0
-    for p in points:
-        xy = np.array([p.beta1, p.beta2]) % TWO_PI
-        t = np.clip(np.sum((xy - a) * d, 1) / dd, 0.0, 1.0)
-        count += int(np.hypot(*(a + t[:, None] * d - xy).T).min() > reach)
-    return count
+    on the torus (a proven codimension-2 point that no drawn curve comes near)."""
+    near = (boundary_points.nearest_segment((p.beta1, p.beta2), curves)[0] for p in points)
+    return sum(d > reach for d in near)
 
 
 def _model_value(name, value) -> float:

@@ -71,7 +71,10 @@ class Curve:
     certified bracket [rad] (0 for the closed-form class lines; NaN for a point where the curve
     crosses a seam of the torus, interpolated on its segment); ``ends``: per vertex the
     bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint; NaN at a seam point),
-    ``None`` for class lines.
+    ``None`` for class lines; ``spliced``: the indices of vertices that are proven
+    codimension-2 points spliced in after labelling (:func:`atlas.data.boundary_points.attach_points`:
+    ``bracket`` twice the point's proven radius, ``ends`` NaN; three codes meet there, so the side
+    labels hold next to them, not at them).
     """
 
     field: str
@@ -86,6 +89,7 @@ class Curve:
     q2: float = math.nan
     ends: np.ndarray | None = None
     side_on: int = -1
+    spliced: tuple[int, ...] = ()
 
 
 @dataclass

@@ -29,16 +29,25 @@ from __future__ import annotations
 
 import math
 import operator
+from dataclasses import replace
 from fractions import Fraction
 
 import flint
 import numpy as np
+import shapely
 
 from atlas.core import brackets, expressions
-from atlas.data.boundary_curves import Point
+from atlas.data.boundary_curves import Curve, Point
 from atlas.data.boundary_tips import TIP_OFFSET
 
-__all__ = ["line_polynomials", "line_roots", "root_codes", "ss_line_points"]
+__all__ = [
+    "attach_points",
+    "line_polynomials",
+    "line_roots",
+    "nearest_segment",
+    "root_codes",
+    "ss_line_points",
+]
 
 TWO_PI = 2 * math.pi
 
@@ -268,3 +277,63 @@ def ss_line_points(
         kind = "touches_class_line" if mult % 2 == 0 else kind
         out.append(Point(x, y, kind, unc, *model, proven=True, field="SS"))
     return out, len(roots)
+
+
+def nearest_segment(xy, curves) -> tuple[float, int, int, float, np.ndarray]:
+    """The segment of ``curves`` nearest to ``xy`` [rad] on the torus: ``(distance, curve,
+    segment k, t, image)``, the point's image ``xy + 2 pi n`` nearest to segment ``k -> k + 1``
+    at fraction ``t`` of it (distance ``inf`` and curve ``-1`` when no curve has a segment)."""
+    best = (math.inf, -1, -1, 0.0, np.asarray(xy, float))
+    for i, c in enumerate(curves):
+        if len(c.vertices) < 2:
+            continue
+        a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
+        img = a + (np.asarray(xy) - a + math.pi) % TWO_PI - math.pi  # per segment, nearest image
+        t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
+        dist = np.hypot(*(a + t[:, None] * d - img).T)
+        k = int(dist.argmin())
+        if dist[k] < best[0]:
+            best = (float(dist[k]), i, k, float(t[k]), img[k])
+    return best
+
+
+def _spliced(c: Curve, k: int, t: float, xy, radius: float) -> Curve:
+    """``c`` with the vertex ``xy`` spliced in after vertex ``k`` (before the first vertex or
+    after the last where the nearest place is the curve's end); its ``bracket`` is twice its
+    proven ``radius``, its ``ends`` NaN (an enclosure, not a bracket between two codes), its
+    index in ``spliced``."""
+    last = len(c.vertices) - 2
+    at = 0 if (k == 0 and t == 0.0) else (k + 2 if (k == last and t == 1.0) else k + 1)
+    ends = None if c.ends is None else np.insert(c.ends, at, np.nan, axis=0)
+    return replace(
+        c,
+        vertices=np.insert(c.vertices, at, xy, axis=0),
+        bracket=np.insert(c.bracket, at, 2 * radius),
+        ends=ends,
+        spliced=tuple(sorted([i + (i >= at) for i in c.spliced] + [at])),
+    )
+
+
+def attach_points(curves, points, reach, within, tol) -> tuple[list[Curve], int]:
+    """Splice each proven point farther than ``reach`` [rad] from every curve into the nearest
+    curve, if that is within ``within`` [rad] and the point's enclosure no wider than the
+    vertex tolerance ``tol`` [rad] (the file's promise for every vertex): a vertex (:func:`_spliced`) where the curve passes
+    or ends nearest to it, the point's image on the torus taken into ``[0, 2 pi)`` (the shift
+    added to its radius); a splice that would make the curve cross itself is not made.  The
+    other vertices keep their brackets.  Returns the curves and the number of points attached."""
+    curves, attached = list(curves), 0
+    for p in points:
+        if not p.proven:
+            continue
+        dist, i, k, t, img = nearest_segment((p.beta1, p.beta2), curves)
+        if not reach < dist <= within:
+            continue
+        xy = np.clip(img, 0.0, np.nextafter(TWO_PI, 0.0))
+        shift = float(np.hypot(*(xy - img)))
+        radius = p.uncertainty + shift
+        if 2 * radius > tol:
+            continue
+        c = _spliced(curves[i], k, t, xy, radius)
+        if shapely.is_simple(shapely.LineString(c.vertices)):
+            curves[i], attached = c, attached + 1
+    return curves, attached

@@ -26,14 +26,16 @@ def _exact_code(field, b1, b2, model):
 
 
 def _distance(points, curves) -> np.ndarray:
-    """Euclidean distance [rad] of each point to the nearest segment of ``curves``."""
+    """Euclidean distance [rad] of each point to the nearest segment of ``curves`` on the torus
+    (each segment against the point's image nearest to its first vertex)."""
     a = np.concatenate([c.vertices[:-1] for c in curves])
     b = np.concatenate([c.vertices[1:] for c in curves])
     d = b - a
     out = []
     for p in points:
-        t = np.clip(np.sum((p - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0, 1)
-        out.append(np.hypot(*(a + t[:, None] * d - p).T).min())
+        img = a + (p - a + PI) % (2 * PI) - PI
+        t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0, 1)
+        out.append(np.hypot(*(a + t[:, None] * d - img).T).min())
     return np.array(out)
 
 
