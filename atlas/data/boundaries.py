@@ -47,7 +47,8 @@
    are split off as ``on_class_line`` pieces; the junctions, the points where a boundary leaves
    or crosses a class line, and where SS and II boundaries cross are returned as
    :attr:`Boundaries.points`.  Where an SS boundary meets a class line the point is located by
-   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`); every
+   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`), then
+   spliced into the nearest curve as a vertex carrying its proven radius (after step 8); every
    other point is an estimate (``proven = False``, ``uncertainty`` NaN).
 7. **Side labels.** Each piece carries the certified codes found just off it on each side and on
    it (:mod:`atlas.data.boundary_sides`): cut where they change, oriented with the higher code on
