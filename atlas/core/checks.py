@@ -123,3 +123,22 @@ def axis_size(name: str, n: int, available: int | None, itemsize: int = 8) -> in
             f"alone, {available / 2**30:.3g} GiB available; use fewer values"
         )
     return n
+
+
+def plain(value):
+    """A numpy scalar (``np.float32(1e-10)``, ``np.int64(2)``) as the Python number it holds;
+    anything else unchanged, for the range checks that follow to accept or name."""
+    if isinstance(value, np.generic) and not isinstance(value, np.bool_):
+        return value.item()
+    return value
+
+
+def model_values(name: str, value) -> np.ndarray:
+    """Values of a model parameter as float64: ``kappa > 0``, ``q``, ``q1``, ``q2 >= 0``, all
+    finite, else the one-line ``ValueError`` of the command line naming ``name``."""
+    arr = real(name, value)
+    if name == "kappa" and np.any(arr <= 0):
+        raise ValueError(f"{name}: must be > 0 (k1|b1|/(k2|b2|)), got {float(np.min(arr))}")
+    if name in ("q", "q1", "q2") and np.any(arr < 0):
+        raise ValueError(f"{name}: must be >= 0, got {float(np.min(arr))}")
+    return arr

@@ -47,7 +47,8 @@
    are split off as ``on_class_line`` pieces; the junctions, the points where a boundary leaves
    or crosses a class line, and where SS and II boundaries cross are returned as
    :attr:`Boundaries.points`.  Where an SS boundary meets a class line the point is located by
-   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`); every
+   its defining condition with a proven enclosure (:mod:`atlas.data.boundary_points`), then
+   spliced into the nearest curve as a vertex carrying its proven radius (after step 8); every
    other point is an estimate (``proven = False``, ``uncertainty`` NaN).
 7. **Side labels.** Each piece carries the certified codes found just off it on each side and on
    it (:mod:`atlas.data.boundary_sides`): cut where they change, oriented with the higher code on
@@ -75,7 +76,15 @@ from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
 from atlas.core import brackets, checks
-from atlas.data import boundary_paths, boundary_points, boundary_sides, boundary_tips, marching
+from atlas.data import (
+    boundary_cover,
+    boundary_paths,
+    boundary_points,
+    boundary_sides,
+    boundary_tips,
+    limits,
+    marching,
+)
 from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
     LINE_GRADS,
@@ -552,10 +561,12 @@ def slice_boundaries(
 ) -> Boundaries:
     """The boundary curves of one slice ``(kappa, q1, q2)`` over the grid ``beta1 x beta2``
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
-    shape = (np.size(beta1), np.size(beta2))
+    beta1, beta2 = (checks.real(k, v).ravel() for k, v in (("beta1", beta1), ("beta2", beta2)))
+    shape = (beta1.size, beta2.size)
     fields = _check_args(tol, chord, check, max_levels, fields, shape)
+    tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
     dtype = checks.float_dtype(dtype)
-    model = tuple(float(checks.real(k, v)) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
+    model = tuple(_model_value(k, v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
     out = Boundaries()
     by_field = {}
     for fld in fields:
@@ -583,8 +594,20 @@ def slice_boundaries(
         curves, retraced = boundary_paths.simple_paths(curves, chord)
         for p in pts:
             p.field = fld
+        roots = boundary_points.line_roots(model) if fld == "SS" else []
         if fld == "SS":
-            pts = _proven_line_points(pts, polys.xy, model, chord, cell)
+            pts, out.attrs["SS_line_roots"] = _proven_line_points(pts, model, cell, roots, dtype)
+            out.attrs["SS_line_points"] = sum(p.proven for p in pts)
+        distance = max(chord, near)
+        added, left, (stretches, gap, left_over) = boundary_cover.cover_lines(
+            fld, box, model, curves, roots, tips, distance, tol, dtype
+        )
+        curves += added
+        proven = [p for p in pts if p.proven]
+        curves, spliced = boundary_points.attach_points(curves, proven, tol, cell, tol)
+        off = _off_curves(proven, curves, 2 * distance)
+        pts += left
+        reached = np.concatenate([polys.xy] + [c.vertices for c in added])
         by_field[fld] = curves
         out.curves += curves
         out.points += pts
@@ -595,7 +618,15 @@ def slice_boundaries(
         out.attrs[f"{fld}_unlabelled_segments"] = dropped
         out.attrs[f"{fld}_retraced_vertices"] = retraced
         out.attrs[f"{fld}_tips_attached"] = attached + spiked
-        out.attrs[f"{fld}_tips_unreached"] = boundary_tips.unreached(tips, polys.xy, cell)
+        out.attrs[f"{fld}_tips_unreached"] = boundary_tips.unreached(tips, reached, cell)
+        out.attrs[f"{fld}_line_stretches"] = stretches
+        out.attrs[f"{fld}_cover_distance"] = distance
+        out.attrs[f"{fld}_uncovered_line_length"] = gap
+        out.attrs[f"{fld}_line_length_left_uncovered"] = left_over
+        out.attrs[f"{fld}_line_pieces_added"] = len(added)
+        out.attrs[f"{fld}_lines_complete"] = int(fld == "SS")
+        out.attrs[f"{fld}_points_attached"] = spliced
+        out.attrs[f"{fld}_points_off_curves"] = off
         out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
         if out.attrs[f"{fld}_max_bracket"] > tol:  # bisect shrinks every bracket to <= tol
             raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
@@ -606,17 +637,33 @@ def slice_boundaries(
     return out
 
 
-def _proven_line_points(pts, xy, model, chord, cell) -> list[Point]:
-    """The SS points where a boundary meets a class line with proven enclosures
-    (:mod:`atlas.data.boundary_points`), replacing the estimated ``leaves_class_line`` and
-    ``crosses_class_line`` points within a grid ``cell`` of one."""
-    proven = boundary_points.ss_line_points(xy, model, reach=max(16 * chord, 1e-4))
+def _off_curves(points, curves, reach) -> int:
+    """How many of ``points`` lie farther than ``reach`` [rad] from every segment of ``curves``
+    on the torus (a proven codimension-2 point that no drawn curve comes near)."""
+    near = (boundary_points.nearest_segment((p.beta1, p.beta2), curves)[0] for p in points)
+    return sum(d > reach for d in near)
+
+
+def _model_value(name, value) -> float:
+    """One model parameter (``kappa > 0``, ``q1, q2 >= 0``: :func:`atlas.core.checks.model_values`)."""
+    arr = checks.model_values(name, value)
+    if arr.size != 1:
+        raise ValueError(f"{name}: expected one number per slice, got {value!r}")
+    return float(arr.ravel()[0])
+
+
+def _proven_line_points(pts, model, cell, roots, dtype) -> tuple[list[Point], int]:
+    """The SS points where a boundary meets a class line, found from the algebra with proven
+    enclosures (:func:`atlas.data.boundary_points.ss_line_points`), replacing the estimated
+    ``leaves_class_line`` and ``crosses_class_line`` points within a grid ``cell`` of one;
+    returns the points and the algebraic count of roots on the lines."""
+    proven, roots = boundary_points.ss_line_points(model, dtype, roots=roots)
     if not proven:
-        return pts
+        return pts, roots
     tree = cKDTree([[p.beta1, p.beta2] for p in proven])
     kinds = ("leaves_class_line", "crosses_class_line")
     kept = [p for p in pts if p.kind not in kinds or tree.query([p.beta1, p.beta2])[0] > cell]
-    return kept + proven
+    return kept + proven, roots
 
 
 #: the smallest vertex tolerance [rad]: a bracket between float coordinates near ``2 pi``
@@ -643,7 +690,8 @@ def _integer(x) -> bool:
 
 def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)) -> tuple[str, ...]:
     """One-line ``ValueError`` naming the first bad argument; returns the fields as a tuple
-    (``"SS"`` and ``"SS,II"`` are accepted as strings)."""
+    (``"SS"`` and ``"SS,II"`` are accepted as strings; numpy scalars as the numbers they hold)."""
+    tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
     num = (int, float)
     if not (isinstance(tol, num) and not isinstance(tol, bool) and MIN_TOL <= tol < 0.1):
         raise ValueError(
@@ -688,6 +736,11 @@ def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, fl
     for k in ("beta1", "beta2", "kappa"):
         if k not in get:
             raise ValueError(f"source: has no {k}")
+    for k, v in get.items():  # the command line's rules (atlas.data.scene) for every source
+        if k in ("beta1", "beta2"):
+            checks.real(k, v)
+        elif k in ("kappa", "q", "q1", "q2"):
+            checks.model_values(k, v)
     if "q1" in get and "q2" in get:
         models = list(itertools.product(get["kappa"], get["q1"], get["q2"]))
     else:
@@ -696,11 +749,20 @@ def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, fl
     return get["beta1"].astype(float), get["beta2"].astype(float), models
 
 
-def boundaries(source, **options) -> Boundaries:
+def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
     """Certified boundary curves of every ``(kappa, q1, q2)`` slice of a scene or an atlas
     (the atlas's ``beta1 x beta2`` grid; options as :func:`slice_boundaries`), plus the
-    closed-form class lines once."""
+    closed-form class lines once.  Bad values are refused with the command line's messages, and
+    with ``size_check`` a run that cannot fit in the memory available now, as the command line
+    refuses it (:func:`atlas.data.limits.boundaries_estimate`)."""
     b1, b2, models = _slices(source)
+    keys = ("tol", "chord", "check", "max_levels", "fields")
+    args = {k: options[k] for k in keys if k in options}
+    _check_args(**(dict(tol=TOL, chord=CHORD, check=2, max_levels=2, fields=("SS",)) | args),
+                shape=(b1.size, b2.size))  # fmt: skip
+    if size_check:
+        check = checks.plain(options.get("check", 2))
+        limits.boundaries_estimate(b1.size, b2.size, check, len(models)).check()
     torus = all(_wrapped(np.sort(b)).size > b.size for b in (b1, b2))
     box = ((b1.min(), b1.max()), (b2.min(), b2.max()))
     out = Boundaries(curves=torus_class_lines() if torus else class_lines(*box))
@@ -718,8 +780,19 @@ def boundaries(source, **options) -> Boundaries:
         tolerance=options.get("tol", TOL),
         chord_tolerance=options.get("chord", CHORD),
         seconds=time.perf_counter() - t0,
+        **_completeness(out.attrs.get("slices", [])),
     )
     return out
+
+
+def _completeness(slices) -> dict:
+    """``complete``: 1 when every class-line stretch of every field and slice is proven covered
+    (:mod:`atlas.data.boundary_cover`; SS only: II is checked, not proven), else 0; and the
+    class-line length [rad] still uncovered, summed."""
+    left = [v for s in slices for k, v in s.items() if k.endswith("_line_length_left_uncovered")]
+    proven = [v for s in slices for k, v in s.items() if k.endswith("_lines_complete")]
+    complete = bool(slices) and all(proven) and not any(left)
+    return dict(complete=int(complete), uncovered_line_length=float(sum(left)))
 
 
 def run_cli(
@@ -744,7 +817,9 @@ def run_cli(
         check_output_path(path, overwrite)
     scene = Scene(**{k: v for k, v in axes.items() if v is not None})
     names = tuple(f.strip() for f in fields.split(",") if f.strip())
-    bd = boundaries(scene, fields=names, tol=tol, chord=chord, check=check, dtype=dtype)
+    bd = boundaries(  # the command line screened the size already (--no-size-check)
+        scene, size_check=False, fields=names, tol=tol, chord=chord, check=check, dtype=dtype
+    )
     print(summary(bd))
     for path, write in ((out, bd.to_netcdf), (csv, bd.to_csv), (geojson, bd.to_geojson)):
         if path is not None:

@@ -71,7 +71,10 @@ class Curve:
     certified bracket [rad] (0 for the closed-form class lines; NaN for a point where the curve
     crosses a seam of the torus, interpolated on its segment); ``ends``: per vertex the
     bracket's two ends ``(m, 2, 2)`` (the vertex is their midpoint; NaN at a seam point),
-    ``None`` for class lines.
+    ``None`` for class lines; ``spliced``: the indices of vertices that are proven
+    codimension-2 points spliced in after labelling (:func:`atlas.data.boundary_points.attach_points`:
+    ``bracket`` twice the point's proven radius, ``ends`` NaN; three codes meet there, so the side
+    labels hold next to them, not at them).
     """
 
     field: str
@@ -86,6 +89,7 @@ class Curve:
     q2: float = math.nan
     ends: np.ndarray | None = None
     side_on: int = -1
+    spliced: tuple[int, ...] = ()
 
 
 @dataclass
@@ -316,6 +320,8 @@ def _to_dataset(bd: Boundaries) -> xr.Dataset:
         chord_tolerance=float(bd.attrs.get("chord_tolerance", CHORD)),
         field_labels=json.dumps({k: v for k, v in brackets.FIELD_LABELS.items()}),
         slices=json.dumps(_json(bd.attrs.get("slices", []))),
+        complete=int(bd.attrs.get("complete", 0)),
+        uncovered_line_length=float(bd.attrs.get("uncovered_line_length", math.nan)),
     )
     return ds
 
@@ -336,7 +342,11 @@ def summary(bd: Boundaries) -> str:
     for s in bd.attrs.get("slices", []):
         counts = [v for k, v in s.items() if k.endswith("hidden_cells")]
         hidden = "not checked" if None in counts else sum(counts)
+        added = sum(v for k, v in s.items() if k.endswith("_uncovered_line_length"))
+        left = sum(v for k, v in s.items() if k.endswith("_line_length_left_uncovered"))
         lines.append(
-            f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden}"
+            f"  slice kappa={s['kappa']:g} q1={s['q1']:g} q2={s['q2']:g}: hidden cells {hidden};"
+            f" class-line stretches: {added:.3g} rad not traced (added as curves), {left:.3g} rad"
+            " left uncovered"
         )
     return "\n".join(lines)

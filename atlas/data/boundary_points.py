@@ -19,24 +19,35 @@ Routh-Hurwitz minors are positive, and the boundary lies on ``a3 = 0``, ``H2 = a
 a3^2``) or a class line ``D = 0``; undamped (``q1 = q2 = 0``) on ``a2 = 0`` or ``disc = a2^2 - 4 a0
 = (kappa c1 - s2)^2 + 4 kappa s1 c2 = 0``.  A numerator may carry extra factors ``1 + t^2``
 (no real roots).
-Only roots within ``reach`` of a traced boundary vertex are reported (a component's zero set is a
-boundary only where the other minors allow it); ``beta = pi`` (``t`` infinite) is not covered.
+Every root on every class line is found (``beta = pi``, ``t`` infinite, from the numerator's
+degree deficit); a component's zero set is a boundary only where the other minors allow it, so a
+root is reported where the certified SS code just off the line changes along the line next to it
+(:func:`ss_line_points`), wherever the traced curves are.
 """
 
 from __future__ import annotations
 
 import math
 import operator
+from dataclasses import replace
 from fractions import Fraction
 
 import flint
 import numpy as np
-from scipy.spatial import cKDTree
+import shapely
 
-from atlas.core import expressions
-from atlas.data.boundary_curves import Point
+from atlas.core import brackets, expressions
+from atlas.data.boundary_curves import Curve, Point
+from atlas.data.boundary_tips import TIP_OFFSET
 
-__all__ = ["ss_line_points", "line_polynomials"]
+__all__ = [
+    "attach_points",
+    "line_polynomials",
+    "line_roots",
+    "nearest_segment",
+    "root_codes",
+    "ss_line_points",
+]
 
 TWO_PI = 2 * math.pi
 
@@ -113,12 +124,18 @@ def _components(c1, s1, c2, s2, kappa, q1, q2) -> dict:
     }
 
 
+def _restrictions(m, kappa, q1, q2) -> dict:
+    """Per component, its restriction ``num / (1 + t^2)^k`` to class line ``m`` (a ``_Rat``);
+    identically zero components (the line lies in them) are left out."""
+    model = [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in (kappa, q1, q2)]
+    comps = _components(*_on_line(m), *model)
+    return {k: v for k, v in comps.items() if isinstance(v, _Rat) and v.num != 0}
+
+
 def line_polynomials(m, kappa, q1, q2) -> dict:
     """Per component, the numerator ``R(t)`` (``flint.fmpq_poly``) of its restriction to class
     line ``m``; identically zero components (the line lies in them) are left out."""
-    model = [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in (kappa, q1, q2)]
-    comps = _components(*_on_line(m), *model)
-    return {k: v.num for k, v in comps.items() if isinstance(v, _Rat) and v.num != 0}
+    return {k: v.num for k, v in _restrictions(m, kappa, q1, q2).items()}
 
 
 def _real_roots(R) -> list[tuple[flint.arb, int]]:
@@ -152,14 +169,23 @@ def _point_xy(m, beta: float) -> tuple[float, float]:
 TORUS_LINES = (0, 1, 2, 3, 5, 6, 7, 8, 11, 12)
 
 
+def _restriction_roots(r) -> list[tuple[flint.arb, int]]:
+    """Certified angles (balls [rad]) where a restriction ``num / (1 + t^2)^k`` vanishes, with
+    multiplicities: the real roots of ``num``, and ``beta = pi`` (``t`` infinite) with
+    multiplicity ``2 k - deg num`` when the numerator's degree falls short of ``2 k``."""
+    out = [(_angle(t), mult) for t, mult in _real_roots(r.num)]
+    if r.num.degree() < 2 * r.k:
+        out.append((flint.arb.pi(), 2 * r.k - r.num.degree()))
+    return out
+
+
 def _line_roots(m, model) -> list[tuple[flint.arb, int]]:
     """The certified angles (balls [rad]) where the components vanish on line ``m``, each with
     its largest multiplicity over the components whose enclosures overlap it (at ``q = 0`` the
     trace ``a2`` vanishes simply where ``disc`` touches a diagonal)."""
     out = []
-    for R in line_polynomials(m, *model).values():
-        for t, mult in _real_roots(R):
-            beta = _angle(t)
+    for r in _restrictions(m, *model).values():
+        for beta, mult in _restriction_roots(r):
             same = [k for k, (b, _) in enumerate(out) if b.overlaps(beta)]
             if not same:
                 out.append((beta, mult))
@@ -170,24 +196,144 @@ def _line_roots(m, model) -> list[tuple[flint.arb, int]]:
     return out
 
 
-def ss_line_points(vertices, model, reach, lines=TORUS_LINES) -> list[Point]:
-    """Proven points where the SS boundary meets the class lines ``lines`` (indices ``m``):
-    roots of the components' restrictions within ``reach`` [rad] of a traced SS vertex
-    (``vertices``, ``(n, 2)``); kind ``touches_class_line`` (even multiplicity) or
-    ``crosses_class_line``.  The uncertainty bounds the distance of the stated point to the
-    true one: the radius of the certified angle interval plus the rounding of the stated
-    coordinates, times ``sqrt 2`` on a diagonal (both coordinates move)."""
-    if not len(vertices):
-        return []
-    tree = cKDTree(np.mod(vertices, TWO_PI), boxsize=TWO_PI + 1e-9)
-    out = []
-    for m in lines:
-        for beta, mult in _line_roots(m, model):
-            mid = float(beta.mid()) % TWO_PI
-            x, y = _point_xy(m, mid)
-            if tree.query([x % TWO_PI, y % TWO_PI])[0] > reach:
-                continue
-            unc = (float(beta.rad()) + 4 * math.ulp(TWO_PI)) * (math.sqrt(2) if m >= 10 else 1.0)
-            kind = "touches_class_line" if mult % 2 == 0 else "crosses_class_line"
-            out.append(Point(x, y, kind, unc, *model, proven=True, field="SS"))
+def line_roots(model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]]:
+    """Every root of the components' restrictions to the class lines ``lines``: ``(m, beta,
+    multiplicity)``, ``beta`` a certified ball [rad] along line ``m``.  These are all the places
+    where an SS boundary can meet a class line (the algebraic count)."""
+    return [(m, beta, mult) for m in lines for beta, mult in _line_roots(m, model)]
+
+
+#: the stretch [rad] of line on each side of a root over which the codes next to the line are
+#: compared (capped at a quarter of the distance to the next root on the line), and the fractions
+#: of it sampled: a boundary tangent to the line as ``c x^2`` is seen for ``c > TIP_OFFSET /
+#: (ROOT_SPAN / 16)^2``, i.e. ``c > 3e-4``
+ROOT_SPAN = 1e-5
+ROOT_SAMPLES = np.array([-1.0, -1 / 16, 0.0, 1 / 16, 1.0])
+
+
+def _frame(m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(base, direction, unit normal)`` of line ``m``: points ``base + beta direction``."""
+    if m < 5:
+        return np.array([m * math.pi / 2, 0.0]), np.array([0.0, 1.0]), np.array([1.0, 0.0])
+    if m < 10:
+        return np.array([0.0, (m - 5) * math.pi / 2]), np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    r = 1 / math.sqrt(2)
+    return np.array([0.0, (m - 11) * math.pi]), np.array([1.0, 1.0]), np.array([-r, r])
+
+
+def _spans(roots) -> np.ndarray:
+    """Per root, :data:`ROOT_SPAN` or a quarter of the distance to the nearest other root on its
+    line (around the torus), whichever is smaller."""
+    mids = np.array([float(b.mid()) for _, b, _ in roots])
+    lines = np.array([m for m, _, _ in roots])
+    out = np.full(len(roots), ROOT_SPAN)
+    for i in range(len(roots)):
+        d = np.abs(mids[lines == lines[i]] - mids[i])
+        d = np.minimum(d, TWO_PI - d)
+        d = d[d > 0]
+        if d.size:
+            out[i] = min(ROOT_SPAN, 0.25 * d.min())
     return out
+
+
+def root_codes(fld, roots, model, dtype="float64") -> np.ndarray:
+    """Certified codes ``(n, 2, len(ROOT_SAMPLES))`` of ``fld`` next to each root of
+    :func:`line_roots`: on the line's two sides (:data:`atlas.data.boundary_tips.TIP_OFFSET`
+    off it), at :data:`ROOT_SAMPLES` of its span (:func:`_spans`) along it."""
+    if not roots:
+        return np.zeros((0, 2, ROOT_SAMPLES.size), np.int8)
+    span = _spans(roots)
+    pts = []
+    for (m, beta, _), h in zip(roots, span):
+        base, direction, normal = _frame(m)
+        along = base + (float(beta.mid()) + h * ROOT_SAMPLES)[:, None] * direction
+        pts += [along - TIP_OFFSET * normal, along + TIP_OFFSET * normal]
+    xy = np.concatenate(pts)
+    codes = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
+    return codes.reshape(len(roots), 2, ROOT_SAMPLES.size)
+
+
+def ss_line_points(
+    model, dtype="float64", lines=TORUS_LINES, roots=None
+) -> tuple[list[Point], int]:
+    """Proven points where the SS boundary meets the class lines ``lines`` (indices ``m``), found
+    from the algebra: every root of :func:`line_roots` next to which the certified SS code on a
+    side of the line changes along it (:func:`root_codes`); kind ``touches_class_line`` (even
+    multiplicity), ``crosses_class_line`` (a change on both sides) or ``leaves_class_line``
+    (one side).  Returns the points and the number of roots (the algebraic count).  The
+    uncertainty bounds the distance of the stated point to the true one: the radius of the
+    certified angle interval plus the rounding of the stated coordinates, times ``sqrt 2`` on a
+    diagonal (both coordinates move).  ``roots``: :func:`line_roots` if already computed."""
+    roots = line_roots(model, lines) if roots is None else roots
+    codes = root_codes("SS", roots, model, dtype)
+    changes = (codes != codes[:, :, :1]).any(axis=2)  # (n, side)
+    out = []
+    for (m, beta, mult), ch in zip(roots, changes):
+        if not ch.any():
+            continue
+        x, y = _point_xy(m, float(beta.mid()) % TWO_PI)
+        unc = (float(beta.rad()) + 4 * math.ulp(TWO_PI)) * (math.sqrt(2) if m >= 10 else 1.0)
+        kind = ("leaves_class_line", "crosses_class_line")[int(ch.all())]
+        kind = "touches_class_line" if mult % 2 == 0 else kind
+        out.append(Point(x, y, kind, unc, *model, proven=True, field="SS"))
+    return out, len(roots)
+
+
+def nearest_segment(xy, curves) -> tuple[float, int, int, float, np.ndarray]:
+    """The segment of ``curves`` nearest to ``xy`` [rad] on the torus: ``(distance, curve,
+    segment k, t, image)``, the point's image ``xy + 2 pi n`` nearest to segment ``k -> k + 1``
+    at fraction ``t`` of it (distance ``inf`` and curve ``-1`` when no curve has a segment)."""
+    best = (math.inf, -1, -1, 0.0, np.asarray(xy, float))
+    for i, c in enumerate(curves):
+        if len(c.vertices) < 2:
+            continue
+        a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
+        img = a + (np.asarray(xy) - a + math.pi) % TWO_PI - math.pi  # per segment, nearest image
+        t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
+        dist = np.hypot(*(a + t[:, None] * d - img).T)
+        k = int(dist.argmin())
+        if dist[k] < best[0]:
+            best = (float(dist[k]), i, k, float(t[k]), img[k])
+    return best
+
+
+def _spliced(c: Curve, k: int, t: float, xy, radius: float) -> Curve:
+    """``c`` with the vertex ``xy`` spliced in after vertex ``k`` (before the first vertex or
+    after the last where the nearest place is the curve's end); its ``bracket`` is twice its
+    proven ``radius``, its ``ends`` NaN (an enclosure, not a bracket between two codes), its
+    index in ``spliced``."""
+    last = len(c.vertices) - 2
+    at = 0 if (k == 0 and t == 0.0) else (k + 2 if (k == last and t == 1.0) else k + 1)
+    ends = None if c.ends is None else np.insert(c.ends, at, np.nan, axis=0)
+    return replace(
+        c,
+        vertices=np.insert(c.vertices, at, xy, axis=0),
+        bracket=np.insert(c.bracket, at, 2 * radius),
+        ends=ends,
+        spliced=tuple(sorted([i + (i >= at) for i in c.spliced] + [at])),
+    )
+
+
+def attach_points(curves, points, reach, within, tol) -> tuple[list[Curve], int]:
+    """Splice each proven point farther than ``reach`` [rad] from every curve into the nearest
+    curve, if that is within ``within`` [rad] and the point's enclosure no wider than the
+    vertex tolerance ``tol`` [rad] (the file's promise for every vertex): a vertex (:func:`_spliced`) where the curve passes
+    or ends nearest to it, the point's image on the torus taken into ``[0, 2 pi)`` (the shift
+    added to its radius); a splice that would make the curve cross itself is not made.  The
+    other vertices keep their brackets.  Returns the curves and the number of points attached."""
+    curves, attached = list(curves), 0
+    for p in points:
+        if not p.proven:
+            continue
+        dist, i, k, t, img = nearest_segment((p.beta1, p.beta2), curves)
+        if not reach < dist <= within:
+            continue
+        xy = np.clip(img, 0.0, np.nextafter(TWO_PI, 0.0))
+        shift = float(np.hypot(*(xy - img)))
+        radius = p.uncertainty + shift
+        if 2 * radius > tol:
+            continue
+        c = _spliced(curves[i], k, t, xy, radius)
+        if shapely.is_simple(shapely.LineString(c.vertices)):
+            curves[i], attached = c, attached + 1
+    return curves, attached

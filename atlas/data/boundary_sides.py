@@ -28,7 +28,7 @@ from atlas.core import brackets, contact_modes
 from atlas.data.boundary_curves import Curve
 from atlas.data.class_lines import LINE_GRADS, line_labels
 
-__all__ = ["NO_CODE", "label_pieces", "normals", "side_step"]
+__all__ = ["NO_CODE", "label_pieces", "normals", "on_line_codes", "side_step"]
 
 #: ``side_on`` of a piece that carries no third code (off the class lines, or on a line whose
 #: own code is one of its side codes)
@@ -73,7 +73,7 @@ def _codes(fld, xy, model, dtype) -> np.ndarray:
     return brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
 
 
-def _on_codes(fld, xy, m, model, dtype) -> np.ndarray:
+def on_line_codes(fld, xy, m, model, dtype) -> np.ndarray:
     """Certified codes exactly on class lines ``m`` at the projections of ``xy``."""
     out = np.empty(len(xy), np.int8)
     for start in range(0, len(xy), brackets.MAX_BATCH):
@@ -105,7 +105,7 @@ def label_pieces(fld, curves, model, tol, near, dtype="float64") -> tuple[list[C
     m = np.where(np.tile(on_line, 2), line_labels(ends, near), -1)
     on = np.full(len(ends), NO_CODE, np.int8)
     if (m >= 0).any():
-        on[m >= 0] = _on_codes(fld, ends[m >= 0], m[m >= 0], model, dtype)
+        on[m >= 0] = on_line_codes(fld, ends[m >= 0], m[m >= 0], model, dtype)
     on_a, on_b = np.split(on, 2)
     m_a, m_b = np.split(m, 2)
     good = (la == lb) & (ra == rb) & (on_a == on_b) & (m_a == m_b) & (la != ra)

@@ -157,10 +157,8 @@ def _finish(vals: np.ndarray, is_dim: bool, name: str):
         raise ValueError(f"{name}: must be finite (NaN or inf given)")
     if is_dim and vals.size > 1 and not np.all(np.diff(vals) > 0):
         raise ValueError(f"{name}: values must be strictly increasing")
-    if name == "kappa" and np.any(vals <= 0):
-        raise ValueError(f"{name}: must be > 0 (k1|b1|/(k2|b2|)), got {float(np.min(vals))}")
-    if name in ("q", "q1", "q2") and np.any(vals < 0):
-        raise ValueError(f"{name}: must be >= 0, got {float(np.min(vals))}")
+    if name in ("kappa", "q", "q1", "q2"):
+        checks.model_values(name, vals)  # one rule for the command line and the API
     return vals, is_dim
 
 

@@ -58,3 +58,16 @@ def test_choice_and_axis_size():
     assert checks.axis_size("beta1", 1000, 1 << 20) == 1000
     with pytest.raises(MemoryError, match=r"^size: beta1 has 1e\+14 values: ~728 TiB"):
         checks.axis_size("beta1", 10**14, 1 << 30)
+
+
+def test_plain_numpy_scalars_and_model_values():
+    """numpy scalars become the Python numbers they hold (booleans and arrays stay); kappa must be
+    > 0 and q >= 0, with the command line's messages."""
+    assert type(checks.plain(np.float32(0.5))) is float and type(checks.plain(np.int64(2))) is int
+    assert checks.plain(np.True_) is np.True_ and checks.plain("2") == "2"
+    with pytest.raises(ValueError, match=r"^kappa: must be > 0 \(k1\|b1\|/\(k2\|b2\|\)\), got 0.0"):
+        checks.model_values("kappa", [1.0, 0.0])
+    with pytest.raises(ValueError, match="^q2: must be >= 0, got -0.1"):
+        checks.model_values("q2", -0.1)
+    with pytest.raises(ValueError, match="^q: must be finite"):
+        checks.model_values("q", np.nan)

@@ -100,7 +100,8 @@ def test_vertices_rechecked_by_the_exact_tier(damped):
     curves = [c for c in damped.curves if c.ends is not None]
     assert {c.field for c in curves} == {"SS", "II"}
     for c in (curves[i] for i in rng.choice(len(curves), 8, replace=False)):
-        certified = np.flatnonzero(np.isfinite(c.bracket))  # NaN: a point on a seam
+        # NaN bracket: a point on a seam; spliced: a proven point (its enclosure, no bracket)
+        certified = np.setdiff1d(np.flatnonzero(np.isfinite(c.bracket)), c.spliced)
         for k in rng.choice(certified, 3):
             p, q = c.ends[k]
             assert np.hypot(*(q - p)) <= bd.TOL
@@ -336,3 +337,58 @@ def test_fields_as_a_string_and_float16_refused():
         bd.boundaries(scene, dtype="float16")
     with pytest.raises(ValueError, match="^fields: "):
         bd.boundaries(scene, fields="SS,XX")
+
+
+def _cli_error(capsys, argv) -> str:
+    assert main(["boundaries", "--beta1", "0:2pi:8", "--beta2", "0:2pi:8", *argv]) == 2
+    return capsys.readouterr().err.strip().splitlines()[-1].removeprefix("atlas: error: ")
+
+
+@pytest.mark.parametrize(
+    "coords, argv",
+    [
+        (dict(kappa=[-1.0], q=[0.0]), ["--kappa", "-1", "--q", "0"]),
+        (dict(kappa=[0.0], q=[0.0]), ["--kappa", "0", "--q", "0"]),
+        (dict(kappa=[0.5], q=[-0.1]), ["--kappa", "0.5", "--q", "-0.1"]),
+        (dict(kappa=[0.5], q1=[0.1], q2=[-0.2]), ["--kappa", "0.5", "--q1", "0.1", "--q2", "-0.2"]),
+    ],
+)
+def test_dataset_refused_with_the_cli_message(capsys, coords, argv):
+    """An atlas Dataset with a bad model value is refused with the command line's message (it
+    returned curves)."""
+    g = np.arange(8) * 2 * PI / 8
+    ds = xr.Dataset(coords=dict(beta1=g, beta2=g) | coords)
+    with pytest.raises(ValueError) as err:
+        bd.boundaries(ds, fields="SS", check=0, chord=1e-2)
+    assert str(err.value) == _cli_error(capsys, argv)
+
+
+def test_numpy_scalars_accepted_and_nan_named():
+    """tol as np.float32 and check as np.int64 are valid values (refused before); a NaN angle
+    names its parameter (the message said "angle")."""
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:8", kappa=2, q=0.1)
+    b = bd.boundaries(scene, fields="SS", tol=np.float32(1e-10), check=np.int64(2), chord=1e-2)
+    assert any(c.field == "SS" for c in b.curves)
+    g = np.arange(8) * 2 * PI / 8
+    for name in ("beta1", "beta2"):
+        bad = dict(beta1=g, beta2=g) | {name: np.r_[g[:-1], np.nan]}
+        ds = xr.Dataset(coords=bad | dict(kappa=[0.5], q=[0.0]))
+        with pytest.raises(ValueError, match=f"^{name}: must be finite"):
+            bd.boundaries(ds, fields="SS", check=0)
+        with pytest.raises(ValueError, match=f"^{name}: must be finite"):
+            bd.slice_boundaries(bad["beta1"], bad["beta2"], 0.5, 0.0, 0.0, check=0)
+
+
+def test_api_size_refusal_is_the_cli_one(capsys, monkeypatch):
+    """A grid that cannot fit in the memory available is refused by the API with the command
+    line's one line (the API went on until the check's own limit or a MemoryError)."""
+    from atlas.data import limits
+
+    monkeypatch.setattr(limits, "available_memory", lambda: 1 << 10)  # 1 KiB free
+    argv = ["--kappa", "0.5", "--q", "0", "--check", "0"]
+    want = _cli_error(capsys, argv)
+    assert want.startswith("size: ")
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:8", kappa=0.5, q=0.0)
+    with pytest.raises(MemoryError) as err:
+        bd.boundaries(scene, check=0)
+    assert str(err.value) == want

@@ -6,7 +6,9 @@ import math
 import mpmath as mp
 import numpy as np
 import pytest
+import shapely
 
+from atlas.core import contact_modes, exact
 from atlas.data import boundaries as bd
 from atlas.data import boundary_points as bp
 
@@ -87,13 +89,12 @@ def _ratios(points, model):
 def test_q0_tangencies_are_the_closed_form(kappa):
     """q = 0: the discriminant curve (kappa C1 - S2)^2 + 4 kappa S1 C2 = 0 touches beta2 = beta1
     where kappa cos + sin = 0 (disc = (kappa C + S)^2 there) and beta2 = beta1 + pi where
-    kappa cos = sin; each proven enclosure holds the 50-digit closed form."""
-    vertices = np.array([[t, t] for t in (PI - math.atan(kappa), 2 * PI - math.atan(kappa))])
-    vertices = np.concatenate([vertices, [[t, t + PI] for t in (math.atan(kappa),)]])
-    pts = bp.ss_line_points(vertices, (kappa, 0.0, 0.0), reach=1e-3)
+    kappa cos = sin (twice: beta1 = atan kappa and pi + atan kappa), found from the algebra
+    alone; each proven enclosure holds the 50-digit closed form."""
+    pts, _ = bp.ss_line_points((kappa, 0.0, 0.0), lines=(11, 12))
     touch = [p for p in pts if p.kind == "touches_class_line"]
-    assert len(touch) == 3 and all(p.proven for p in touch)
-    want = [PI - mp.atan(kappa), 2 * mp.pi - mp.atan(kappa), mp.atan(kappa)]
+    assert len(touch) == 4 and all(p.proven for p in touch)
+    want = [PI - mp.atan(kappa), 2 * mp.pi - mp.atan(kappa), mp.atan(kappa), mp.pi + mp.atan(kappa)]
     for p in touch:
         err = min(abs(mp.mpf(p.beta1) - w) for w in want) * mp.sqrt(2)
         assert 0 < p.uncertainty < 1e-13 and err <= p.uncertainty
@@ -109,3 +110,99 @@ def test_points_of_a_slice_hold_their_enclosures():
         assert proven
         assert _ratios(proven, model).max() <= 1
         assert all(math.isnan(p.uncertainty) for p in b.points if not p.proven)
+
+
+def _exact_ss(b1, b2, model):
+    """The SS code at ``(b1, b2)`` from the exact tier alone (rational arithmetic)."""
+    c1, s1 = (float(x) for x in contact_modes.direction(b1))
+    c2, s2 = (float(x) for x in contact_modes.direction(b2))
+    return exact.point_spectral(c1, s1, c2, s2, *model)["stable_SS"]
+
+
+@pytest.mark.parametrize("chord", [bd.CHORD, 1e-2])
+def test_seam_tangencies_found_at_every_chord(chord):
+    """q = 0, kappa 0.5: on the seam beta1 = 0 the discriminant is (kappa - sin beta2)^2, so the
+    SS boundary touches it at beta2 = asin(kappa) = pi / 6 and 5 pi / 6 (50-digit closed form);
+    the exact tier sees the code change next to both (on the side where sin beta1 cos beta2 < 0).  Both points are
+    listed, proven, at the default chord (the traced polyline passes 1e-3 rad away and the point
+    was dropped) as at a coarse one."""
+    model = (0.5, 0.0, 0.0)
+    want = [mp.asin(mp.mpf(0.5)), mp.pi - mp.asin(mp.mpf(0.5))]
+    for w in want:  # the tangency is a boundary point: an independent code change beside it
+        side = -1e-6 if mp.cos(w) > 0 else 1e-6
+        assert [_exact_ss(side, float(w) + d, model) for d in (-1e-2, 0.0, 1e-2)] == [2, 0, 2]
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=chord)
+    seam = [p for p in b.points if p.kind == "touches_class_line" and p.beta1 == 0.0]
+    assert len(seam) == 2 and all(p.proven for p in seam)
+    for p, w in zip(sorted(seam, key=lambda p: p.beta2), want):
+        assert abs(mp.mpf(p.beta2) - w) <= p.uncertainty < 1e-13
+
+
+def test_every_root_on_the_lines_is_counted_and_only_boundary_points_kept():
+    """q = 0, kappa 0.5: on beta1 = pi / 2 the trace kappa cos beta1 + sin beta2 is sin beta2,
+    zero at beta2 = 0 and at beta2 = pi, where t = tan(beta2 / 2) is infinite: both are counted.
+    At beta2 = pi the SS code is 0 all around (exact tier), so it is not a boundary point and
+    is not listed; the listed crossing is the discriminant's, where the code changes."""
+    model = (0.5, 0.0, 0.0)
+    roots = [float(b.mid()) for m, b, _ in bp.line_roots(model, lines=(1,))]
+    assert min(abs(r - PI) for r in roots) == 0.0 and min(abs(r) for r in roots) < 1e-15
+    around = [(PI / 2 + u, PI + v) for u in (-1e-6, 1e-6) for v in (-1e-3, 0.0, 1e-3)]
+    assert {_exact_ss(*p, model) for p in around} == {0}
+    pts, count = bp.ss_line_points(model, lines=(1,))
+    assert count == len(roots) and not any(abs(p.beta2 - PI) < 1e-3 for p in pts)
+    for p in pts:
+        got = {
+            _exact_ss(PI / 2 + u, p.beta2 + v, model) for u in (-1e-6, 1e-6) for v in (-1e-4, 1e-4)
+        }
+        assert len(got) > 1
+
+
+def _torus_distance(xy, vertices) -> np.ndarray:
+    """Per row of ``vertices``, its distance [rad] to ``xy`` on the torus (mpmath)."""
+    two_pi = 2 * mp.pi
+    out = []
+    for x, y in vertices:
+        d = [(mp.mpf(a) - b + mp.pi) % two_pi - mp.pi for a, b in zip((x, y), xy)]
+        out.append(mp.sqrt(d[0] ** 2 + d[1] ** 2))
+    return np.array(out, dtype=object)
+
+
+def _segment_distance(xy, curves) -> float:
+    """Distance [rad] of ``xy`` to the nearest segment of ``curves`` on the torus (each segment
+    against the image of ``xy`` nearest to its first vertex)."""
+    a = np.concatenate([c.vertices[:-1] for c in curves])
+    d = np.concatenate([np.diff(c.vertices, axis=0) for c in curves])
+    img = a + (np.asarray(xy) - a + PI) % (2 * PI) - PI
+    t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0, 1)
+    return float(np.hypot(*(a + t[:, None] * d - img).T).min())
+
+
+@pytest.mark.parametrize("chord", [bd.CHORD, 1e-2])
+def test_proven_points_lie_on_the_curves_at_every_chord(chord):
+    """kappa 0.5, q = 0, 64 x 64: every proven point is on an SS curve (within the vertex
+    tolerance of a segment, on the torus; up to 4.3e-5 rad off at the default chord and 2.2e-4
+    at 1e-2 before they were spliced in),
+    and the seam tangencies (0, asin kappa), (0, pi - asin kappa) (50-digit closed form) are
+    vertices within their stated radius (half the vertex's bracket; its ends are NaN: an
+    enclosure, not a bracket between two codes).  The curves stay simple."""
+    model = (0.5, 0.0, 0.0)
+    g = np.arange(64) * 2 * PI / 64
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=chord)
+    ss = [c for c in b.curves if c.field == "SS"]
+    proven = [p for p in b.points if p.proven]
+    assert len(proven) == b.attrs["SS_line_points"] == 10
+    assert max(_segment_distance((p.beta1, p.beta2), ss) for p in proven) <= bd.TOL
+    assert b.attrs["SS_points_off_curves"] == 0 and b.attrs["SS_points_attached"] >= 2
+    for w in (mp.asin(mp.mpf(0.5)), mp.pi - mp.asin(mp.mpf(0.5))):
+        dist = _torus_distance((0, w), np.concatenate([c.vertices for c in ss]))
+        k = int(np.argmin(dist))
+        bracket = np.concatenate([c.bracket for c in ss])[k]
+        assert dist[k] <= bracket / 2 < 1e-14
+    spliced = [(c, i) for c in ss for i in c.spliced]
+    assert len(spliced) == b.attrs["SS_points_attached"]
+    for c, i in spliced:  # each spliced vertex is a proven point, its ends no bracket
+        assert c.ends is None or np.isnan(c.ends[i]).all()
+        dist = [_torus_distance((p.beta1, p.beta2), c.vertices[i : i + 1])[0] for p in proven]
+        assert min(dist) <= c.bracket[i] / 2 <= bd.TOL / 2
+    assert all(shapely.is_simple(shapely.LineString(c.vertices)) for c in ss)

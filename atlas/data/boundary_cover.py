@@ -1,0 +1,240 @@
+"""Completeness on the class lines: every stretch of a class line that is itself a boundary (the
+codes just off it differ on its two sides) is covered by a curve, or added as one (step 9 of
+:mod:`atlas.data.boundaries`).
+
+Each class line is cut at *breaks*: the multiples of ``pi/2`` (where it crosses other class lines),
+the tips of :func:`atlas.data.boundary_tips.line_tips` (where the code beside it changes, seen by
+a scan every quarter cell) and, for SS, every root of the SS components restricted to the line
+(:func:`atlas.data.boundary_points.line_roots`).  An SS boundary meets a class line only at such
+a root, so along each interval between breaks the SS codes beside the line are constant: one
+certified evaluation on each side, at the interval's middle, decides whether the whole interval is
+a boundary stretch (proven).  II has no such algebra here: its intervals rest on the scan (a change
+and change back between two samples can hide), a check, not a proof.
+
+A stretch is covered where a curve segment of the field has both ends within ``distance`` of the
+line (every point of the line between their projections is then within ``distance`` of it); the
+uncovered parts are measured and added as curves on the line, exactly on it (bracket 0), with
+their certified side codes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from atlas.core import brackets
+from atlas.data import boundary_sides
+from atlas.data.boundary_curves import Curve, Point
+from atlas.data.boundary_tips import TIP_OFFSET
+from atlas.data.class_lines import line_frames, line_values
+
+__all__ = ["cover_lines", "line_stretches", "uncovered"]
+
+TWO_PI = 2 * math.pi
+#: the torus line (index of :func:`atlas.data.boundary_points.line_roots`) of each frame index
+#: (``beta = 2 pi`` is ``beta = 0``; ``beta2 = beta1 - pi`` is ``beta2 = beta1 + pi``)
+_TORUS_LINE = {4: 0, 9: 5, 10: 12}
+
+
+def _breaks(m, t0, t1, roots, tips) -> np.ndarray:
+    """Sorted breaks of frame ``m`` within ``[t0, t1]`` (module docstring): ``t0``, ``t1``, the
+    multiples of ``pi/2``, the root angles of its torus line and the tips' parameters."""
+    quarter = np.arange(math.floor(t0 / (math.pi / 2)), math.ceil(t1 / (math.pi / 2)) + 1)
+    br = [np.array([t0, t1]), quarter * (math.pi / 2)]
+    line = _TORUS_LINE.get(m, m)
+    br.append(np.array([float(b.mid()) for k, b, _ in roots if k == line]))
+    for side in (-1, 1):
+        if (m, side) in tips:
+            p, q, _, _ = tips[m, side]
+            br.append(_param(m, 0.5 * (p + q)))
+    t = np.unique(np.concatenate(br))
+    return t[(t >= t0) & (t <= t1)]
+
+
+def _param(m, xy) -> np.ndarray:
+    """The parameter along frame ``m`` of the projections of points ``xy`` (torus-wrapped)."""
+    if m < 5:
+        return xy[:, 1]
+    if m < 10:
+        return xy[:, 0]
+    return xy[:, 0] + 0.5 * _wrapped_value(m, xy)
+
+
+def _wrapped_value(m, xy) -> np.ndarray:
+    """Line ``m``'s function (:func:`atlas.data.class_lines.line_values`) wrapped to
+    ``[-pi, pi)``: the signed offset from the line on the torus (times ``sqrt 2`` on a diagonal)."""
+    g = line_values(xy)[:, m]
+    return (g + math.pi) % TWO_PI - math.pi
+
+
+def _frames(box):
+    """The frames of :func:`atlas.data.class_lines.line_frames`, without ``beta = 2 pi`` where
+    ``beta = 0`` is in the box (the torus: the same line)."""
+    frames = line_frames(box)
+    have = {f[0] for f in frames}
+    return [f for f in frames if not (f[0] in (4, 9) and f[0] - 4 in have)]
+
+
+def line_stretches(fld, box, model, roots, tips, dtype="float64") -> list[tuple]:
+    """The intervals of the class lines in ``box`` where the codes beside the line differ on its
+    two sides: ``(m, base, direction, lo, hi, left, right)``, points ``base + t direction`` for
+    ``lo <= t <= hi``, ``left``/``right`` the codes :data:`TIP_OFFSET` off it to the left and
+    the right of ``direction``."""
+    rows, lefts, rights = [], [], []
+    for m, base, direction, _, t0, t1 in _frames(box):
+        t = _breaks(m, t0, t1, roots, tips)
+        mid = 0.5 * (t[:-1] + t[1:])
+        d = np.asarray(direction, float)
+        left = np.array([-d[1], d[0]]) / math.hypot(*d)
+        on = np.asarray(base) + mid[:, None] * d
+        lefts.append(on + TIP_OFFSET * left)
+        rights.append(on - TIP_OFFSET * left)
+        rows += [(m, base, direction, lo, hi) for lo, hi in zip(t[:-1], t[1:])]
+    if not rows:
+        return []
+    xy = np.concatenate(lefts + rights)
+    codes = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
+    lft, rgt = np.split(codes, 2)
+    return [(*r, int(a), int(b)) for r, a, b in zip(rows, lft, rgt) if a != b]
+
+
+def uncovered(m, lo, hi, curves, distance) -> list[tuple[float, float]]:
+    """The parts of ``[lo, hi]`` of frame ``m`` not within ``distance`` [rad] of a segment of
+    ``curves`` whose two ends lie within ``distance`` of the line."""
+    spans = []
+    for c in curves:
+        v = c.vertices
+        if len(v) < 2:
+            continue
+        near = np.abs(_wrapped_value(m, v)) / math.hypot(*_grad(m)) <= distance
+        seg = near[:-1] & near[1:]
+        if seg.any():
+            t = _param(m, v)
+            spans.append(np.stack([np.minimum(t[:-1], t[1:]), np.maximum(t[:-1], t[1:])], 1)[seg])
+    gaps, at = [], lo
+    for a, b in sorted(map(tuple, np.concatenate(spans))) if spans else ():
+        if b <= at:
+            continue
+        if a > at:
+            gaps.append((at, min(a, hi)))
+        at = b
+        if at >= hi:
+            break
+    if at < hi:
+        gaps.append((at, hi))
+    return gaps
+
+
+def _grad(m) -> tuple[float, float]:
+    return (1.0, 0.0) if m < 5 else (0.0, 1.0) if m < 10 else (-1.0, 1.0)
+
+
+def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="float64"):
+    """The class-line stretches of ``fld`` (:func:`line_stretches`) not covered by ``curves``
+    within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line
+    (:func:`_pulled` ends); returns them, the pieces still uncovered as points (kind
+    ``uncovered_class_line`` at their middle, not proven), and the stats ``(stretches,
+    uncovered length [rad], length still uncovered [rad])``.  A gap no longer than ``distance`` next to a covered part
+    is left (each of its points is within ``2 distance`` of a curve)."""
+    stretches = line_stretches(fld, box, model, roots, tips, dtype)
+    gaps, length = [], 0.0
+    for m, base, direction, lo, hi, left, right in stretches:
+        d = np.asarray(direction, float)
+        t_max = _torus_end(base, d)
+        for a, b in uncovered(m, lo, hi, curves, distance):
+            a, b = min(a, t_max), min(b, t_max)  # beyond 2 pi: the torus's other end
+            size = (b - a) * math.hypot(*d)
+            if size <= 2 * tol or (size <= distance and (a > lo or b < hi)):
+                continue  # unresolved by the tips' brackets, or within 2 distance of a curve
+            length += size
+            gaps.append((m, np.asarray(base, float), d, a, b, left, right))
+    if not gaps:
+        return [], [], (len(stretches), length, 0.0)
+    ends, ok = _pulled(fld, gaps, model, tol, dtype)
+    added, left, left_over = [], [], 0.0
+    for (m, base, d, a0, b0, lft, rgt), (a, b), good in zip(gaps, ends, ok):
+        if good and b > a:
+            xy = _on_torus(m, base + np.array([[a], [b]]) * d)
+            added.append(_line_curve(fld, xy, m, lft, rgt, model, dtype))
+        rest = [(a0, a), (b, b0)] if good and b > a else [(a0, b0)]
+        for u, v in rest:
+            if (v - u) * math.hypot(*d) > 2 * tol:
+                left_over += (v - u) * math.hypot(*d)
+                at = _on_torus(m, base[None] + 0.5 * (u + v) * d[None])[0]
+                left.append(Point(*at, "uncovered_class_line", math.nan, *model, field=fld))
+    return added, left, (len(stretches), length, left_over)
+
+
+def _codes_at(fld, gaps, u, step, model, dtype):
+    """Per gap (rows) and parameter ``u`` ``(n, k)`` along its line: whether the codes ``step``
+    [rad] off the line to its left and right are the gap's ``left`` and ``right``, and the code
+    on the line (:func:`atlas.data.boundary_sides.on_line_codes`)."""
+    m = np.array([g[0] for g in gaps])
+    base = np.array([g[1] for g in gaps])[:, None, :]
+    d = np.array([g[2] for g in gaps])[:, None, :]
+    n = np.concatenate([-d[..., 1:], d[..., :1]], -1) / np.hypot(d[..., :1], d[..., 1:])
+    at = base + u[..., None] * d
+    pts = np.concatenate([(at + step * n).reshape(-1, 2), (at - step * n).reshape(-1, 2)])
+    lft, rgt = np.split(brackets.field_codes(fld, pts[:, 0], pts[:, 1], *model, dtype=dtype), 2)
+    on = boundary_sides.on_line_codes(fld, at.reshape(-1, 2), np.repeat(m, u.shape[1]), model,
+                                      dtype)  # fmt: skip
+    sides = (lft.reshape(u.shape) == np.array([g[5] for g in gaps])[:, None]) & (
+        rgt.reshape(u.shape) == np.array([g[6] for g in gaps])[:, None]
+    )
+    return sides, on.reshape(u.shape)
+
+
+def _pulled(fld, gaps, model, tol, dtype):
+    """The gaps' ends ``(a, b)`` moved towards their middle, by bisection to ``tol``, until the
+    codes :func:`atlas.data.boundary_sides.side_step` off the line on both sides and on it are
+    those of the middle (at a root the boundary that meets the line changes them within a needle
+    along it): every vertex of the added curve carries its labels.  Returns the ends and, per
+    gap, whether its middle carries them (else the gap is not added)."""
+    step = boundary_sides.side_step(tol)
+    a, b = np.array([g[3] for g in gaps]), np.array([g[4] for g in gaps])
+    mid = 0.5 * (a + b)
+    speed = np.array([math.hypot(*g[2]) for g in gaps])
+    sides, on = _codes_at(fld, gaps, np.stack([mid, a, b], 1), step, model, dtype)
+    good = sides & (on == on[:, :1])
+    bad = np.stack([a, b], 1)  # per end: a parameter without the labels (or the end itself)
+    ok = np.stack([mid, mid], 1)  # ... and one with them
+    for _ in range(64):
+        live = ~good[:, 1:] & (np.abs(ok - bad) * speed[:, None] > tol)
+        if not live.any():
+            break
+        u = 0.5 * (bad + ok)
+        s, o = _codes_at(fld, gaps, u, step, model, dtype)
+        g = s & (o == on[:, :1])
+        ok, bad = np.where(live & g, u, ok), np.where(live & ~g, u, bad)
+    ends = np.where(good[:, 1:], np.stack([a, b], 1), ok)
+    return ends, good[:, 0]
+
+
+def _torus_end(base, d) -> float:
+    """The largest parameter of the line ``base + t d`` whose points are short of ``2 pi`` in
+    both coordinates (a line at ``beta = 2 pi`` counts as ``beta = 0``)."""
+    t = [(TWO_PI - b) / v for b, v in zip(base, d) if v > 0]
+    return math.nextafter(min(t), 0.0) if t else math.inf
+
+
+def _on_torus(m, xy) -> np.ndarray:
+    """Points of frame ``m`` with a line at ``beta = 2 pi`` moved to ``beta = 0``, and a
+    coordinate rounded up to ``2 pi`` a float short of it."""
+    xy = np.minimum(xy, math.nextafter(TWO_PI, 0.0))
+    if m in (4, 9):
+        xy[:, m // 5] = 0.0
+    return xy
+
+
+def _line_curve(fld, xy, m, left, right, model, dtype) -> Curve:
+    """A curve on class line ``m`` from ``xy[0]`` to ``xy[1]`` with codes ``left``/``right``
+    (of the direction of travel), reversed if needed so that the higher code is on the left;
+    ``side_on`` the code on the line where it differs from both (:mod:`boundary_sides`)."""
+    mid = 0.5 * (xy[:1] + xy[1:])
+    on = int(boundary_sides.on_line_codes(fld, mid, np.array([m]), model, dtype)[0])
+    if left < right:
+        xy, left, right = xy[::-1], right, left
+    third = boundary_sides.NO_CODE if on in (left, right) else on
+    kind = str(brackets.boundary_kind(fld, left, right)[()])
+    return Curve(fld, kind, left, right, xy, np.zeros(2), True, *model, None, third)

@@ -1,0 +1,128 @@
+"""Completeness on the class lines: every stretch of a class line where the codes differ on its two
+sides lies near a curve.  The stretches are located here independently: codes from the exact tier
+(rational arithmetic) 1e-9 rad off the line on both sides."""
+
+import math
+
+import numpy as np
+import pytest
+
+from atlas.core import contact_modes, exact
+from atlas.data import boundaries as bd
+from atlas.data import boundary_cover as bc
+from atlas.data.class_lines import LINE_GRADS, line_values
+
+PI = math.pi
+GRID = np.arange(32) * 2 * PI / 32
+
+
+def _exact_code(field, b1, b2, model):
+    c1, s1 = (float(x) for x in contact_modes.direction(b1))
+    c2, s2 = (float(x) for x in contact_modes.direction(b2))
+    v = exact.point_spectral(c1, s1, c2, s2, *model)
+    if field == "SS":
+        return v["stable_SS"]
+    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+
+
+def _distance(points, curves) -> np.ndarray:
+    """Euclidean distance [rad] of each point to the nearest segment of ``curves`` on the torus
+    (each segment against the point's image nearest to its first vertex)."""
+    a = np.concatenate([c.vertices[:-1] for c in curves])
+    b = np.concatenate([c.vertices[1:] for c in curves])
+    d = b - a
+    out = []
+    for p in points:
+        img = a + (p - a + PI) % (2 * PI) - PI
+        t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0, 1)
+        out.append(np.hypot(*(a + t[:, None] * d - img).T).min())
+    return np.array(out)
+
+
+def _check_stretch(field, model, b, along, normal):
+    """Points ``along`` a class line (unit ``normal``): the exact tier sees different codes 1e-9
+    off it on its two sides (a boundary stretch), and a curve of ``field`` passes within the
+    stated cover distance of each."""
+    for p in along:
+        lo, hi = (_exact_code(field, *(p + s * 1e-9 * normal), model) for s in (-1, 1))
+        assert lo != hi
+    curves = [c for c in b.curves if c.field == field]
+    dist = _distance(along, curves)
+    assert dist.max() <= 2 * b.attrs[f"{field}_cover_distance"]
+
+
+@pytest.fixture(scope="module")
+def q0():
+    g = np.arange(64) * 2 * PI / 64
+    return bd.slice_boundaries(g, g, 0.5, 0.0, 0.0, fields=("SS",), check=0)
+
+
+@pytest.mark.parametrize("lo, hi", [(0.33, 0.46), (3.61, 3.73)])
+def test_q0_antidiagonal_stretches_are_covered(q0, lo, hi):
+    """kappa 0.5, q 0: beta2 = beta1 + pi is an SS boundary (neutral on one side, unstable on the
+    other) for beta1 in 0.328-0.462 and 3.606-3.736; no traced curve ran there (0.19 rad each)."""
+    t = np.linspace(lo, hi, 7)
+    along = np.stack([t, (t + PI) % (2 * PI)], 1)
+    _check_stretch("SS", (0.5, 0.0, 0.0), q0, along, np.array([-1.0, 1.0]) / math.sqrt(2))
+    assert q0.attrs["SS_uncovered_line_length"] > 0.3  # measured before the pieces were added
+    assert q0.attrs["SS_lines_complete"] == 1
+
+
+def test_q0_diagonal_end_at_the_seam_is_covered(q0):
+    """beta2 = beta1 from 6.271 to 2 pi: the last 0.018 rad before the seam carried no curve
+    (0.049 rad on this grid without the check)."""
+    t = np.linspace(6.2715, 2 * PI - 1e-6, 5)
+    _check_stretch("SS", (0.5, 0.0, 0.0), q0, np.stack([t, t], 1), np.array([-1.0, 1.0]) / 2**0.5)
+
+
+def test_ii_stretch_on_three_half_pi_is_covered():
+    """kappa 2, q 0.1: beta2 = 3 pi / 2 separates II codes 2 and 0 for beta1 near 4.16-4.19,
+    where the traced curves left 0.031 rad uncovered."""
+    model = (2.0, 0.1, 0.1)
+    b = bd.slice_boundaries(GRID, GRID, *model, fields=("II",), check=0)
+    t = np.linspace(4.165, 4.188, 5)
+    along = np.stack([t, np.full_like(t, 1.5 * PI)], 1)
+    _check_stretch("II", model, b, along, np.array([0.0, 1.0]))
+    assert b.attrs["II_lines_complete"] == 0  # sampled, not proven
+
+
+def test_uncovered_parts_of_a_stretch():
+    """The gaps of ``[0, 1]`` on beta1 = pi / 2 (frame 1) left by segments near the line."""
+    from atlas.data.boundary_curves import Curve
+
+    def on(xs, off=0.0):
+        v = np.array([[PI / 2 + off, x] for x in xs])
+        return Curve("SS", "SS_stability", 1, 0, v, np.zeros(len(v)))
+
+    curves = [on([0.1, 0.3]), on([0.5, 0.6]), on([0.65, 0.9], off=0.1)]  # the last one is far
+    assert bc.uncovered(1, 0.0, 1.0, curves, 1e-3) == [(0.0, 0.1), (0.3, 0.5), (0.6, 1.0)]
+
+
+def test_what_is_left_uncovered_is_listed(q0):
+    """The class-line length still uncovered is listed piece by piece as unproven points on a
+    class line, where the exact tier sees different codes 1e-13 rad off the line's two sides
+    (1e-9 off it both are in the needle a tangent boundary leaves along the line)."""
+    left = [p for p in q0.points if p.kind == "uncovered_class_line"]
+    assert (q0.attrs["SS_line_length_left_uncovered"] > 0) == bool(left)
+    model = (0.5, 0.0, 0.0)
+    for p in left:
+        xy = np.array([p.beta1, p.beta2])
+        assert not p.proven and math.isnan(p.uncertainty)
+        w = (line_values(xy[None])[0] + PI) % (2 * PI) - PI  # offsets from the lines, wrapped
+        m = int(np.argmin(np.abs(w)))
+        assert abs(w[m]) < 1e-12
+        n = LINE_GRADS[m] / np.hypot(*LINE_GRADS[m])
+        assert _exact_code("SS", *(xy + 1e-13 * n), model) != _exact_code(
+            "SS", *(xy - 1e-13 * n), model
+        )
+
+
+def test_proven_points_off_the_curves_are_counted(q0):
+    """``SS_points_off_curves`` is the number of proven points farther than twice the cover
+    distance from every SS curve (distances computed here); none is dropped for it."""
+    proven = [p for p in q0.points if p.proven]
+    assert len(proven) == q0.attrs["SS_line_points"] == 10
+    xy = np.array([[p.beta1, p.beta2] for p in proven])
+    dist = _distance(xy, [c for c in q0.curves if c.field == "SS"])
+    want = int((dist > 2 * q0.attrs["SS_cover_distance"]).sum())
+    assert q0.attrs["SS_points_off_curves"] == want
