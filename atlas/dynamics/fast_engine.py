@@ -80,6 +80,7 @@ import math
 import numpy as np
 
 from atlas.dynamics import event_bounds as eb
+from atlas.dynamics import stop_rule
 from atlas.dynamics.classification import (
     TrajectoryStats,
     impacts,
@@ -219,7 +220,7 @@ def _admit(lanes, tables, st: State, ix, fallback):
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
             lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
-            np.zeros(ix.size, dtype=int))  # fmt: skip
+            np.zeros(ix.size, dtype=int), t.copy())  # fmt: skip
     return tuple(x[ok] for x in cols)
 
 
@@ -267,30 +268,28 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
                 new = _admit(lanes, tables, st, again, fallback)
                 cols = tuple(np.concatenate([a, b]) for a, b in zip(cols, new, strict=True))
         it += 1
-        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since = cols
+        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0 = cols
         rows = np.arange(ix.size)
         if ix.size == 0:
             return
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
-        b = bins(t, width, nbins)
-        st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
+        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         keep = np.ones(ix.size, dtype=bool)
 
-        # stops of the reference: divergence, horizon
-        div = ~_all_cols(np.isfinite(g))
-        div |= np.maximum(d[:, 0], d[:, 1]) > 1e4 * scale
-        div |= np.minimum(d[:, 0], d[:, 1]) < -1e6 * scale
-        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        # the stop rule (divergence) at the step end, located inside the step; the horizon
+        div = _stops_at(tables, ix, mask, act, g, scale)
+        if div.size:
+            a = np.maximum(t0[div], tseg[div]) - tseg[div]
+            tau[div], g[div] = _locate_stop(tables, ix[div], mask[div], P[div], U[div], lam[div],
+                                            scale[div], a, tau[div], XTOL * H[div])  # fmt: skip
+            t[div] = tseg[div] + tau[div]
+            d = g[:, :2]
+        b = bins(t, width, nbins)
+        st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
+        _leave(st, ix, t, g, s, keep, div, 2)
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        pen = act & (d < -1e3 * scale[:, None])
-        deep = np.flatnonzero(sched & ~div & (pen[:, 0] | pen[:, 1]))
-        if deep.size:
-            lx, mk = ix[deep], mask[deep]
-            div[deep] = iwc_aligned_many(stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk), mk,
-                                         g[deep], 1e-3)  # fmt: skip
-        _leave(st, ix, t, g, s, keep, np.flatnonzero(div), 2)
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
@@ -347,7 +346,14 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             tw_r, tw_c = np.nonzero(twin[rd])
             lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
             ev[rd] = True
-        step = np.where(ev, h, np.minimum(np.minimum(m, Hw), rem))
+        # a limit of the stop rule passed before the first crossing: step past it (certified)
+        # and locate it at the next step; steps never pass it unseen
+        lim_lo, lim_hi = _limit_steps(d, v, M, scale, Hw)
+        ev &= h <= lim_lo
+        past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
+        step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
+        step = np.where(past, lim_hi, step)
+        t0 = t.copy()
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -358,9 +364,24 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         ev &= keep
         ev_r = np.flatnonzero(ev)
         if ev_r.size:
-            _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
-                    s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
-        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
+            dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
+            # the stop rule just before the events (configuration up to them), located
+            ge = np.concatenate(dva[:2], axis=1)
+            sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
+            if sr.size:
+                rs = ev_r[sr]
+                a = np.maximum(t0[rs], tseg[rs]) - tseg[rs]
+                tau_s, ge[sr] = _locate_stop(tables, ix[rs], mask[rs], P[rs], U[rs], lam[rs],
+                                             scale[rs], a, t[rs] - tseg[rs], xtol[rs])  # fmt: skip
+                t[rs] = tseg[rs] + tau_s
+                _leave(st, ix, t, ge, s, keep, sr, 2, rows=rs)
+                ok = np.ones(ev_r.size, dtype=bool)
+                ok[sr] = False
+                ev_r, dva = ev_r[ok], tuple(x[ok] for x in dva)
+        if ev_r.size:
+            _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
+                    H, s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0)
 
 
 def _twins(first, mon, q):
@@ -460,13 +481,67 @@ def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     return a, b
 
 
-def _leave(st, ix, t, g, s, keep, sel, status):
-    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``."""
+def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
+    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``
+    (``rows``: their rows when ``g`` holds the states of ``sel`` alone, in order)."""
     if sel.size == 0:
         return
-    st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
-    st.status[ix[sel]] = status
-    keep[sel] = False
+    r = sel if rows is None else rows
+    st.t[ix[r]], st.g[ix[r]], st.s[ix[r]] = t[r], g[sel], s[r]
+    st.status[ix[r]] = status
+    keep[r] = False
+
+
+def _stops_at(tables, ix, mask, act, g, scale):
+    """Rows where the stop rule (:func:`stop_rule.stopped`) holds at the states ``g`` (n, 4);
+    the alignment is computed only where a penetration passes its limit."""
+    amp, pen = stop_rule.limits(scale)
+    d = g[:, :2]
+    with np.errstate(invalid="ignore"):
+        cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
+        cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
+    r = np.flatnonzero(cand)
+    if r.size:
+        lx, mk = ix[r], mask[r]
+        r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
+                                amp[r], pen[r])]  # fmt: skip
+    return r
+
+
+def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
+    """:func:`stop_rule.locate` on the segments ``P, U, lam`` of lanes ``lx`` in configurations
+    ``mk``: the first ``tau`` in ``(a, b]`` at which the stop holds and the state there."""
+    E, zq = stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk)
+    amp, pen = stop_rule.limits(scale)
+
+    def state_at(tau):
+        d, v = eb.evaluate(P, U, lam, tau)[:2]
+        return np.concatenate([d, v], axis=1)
+
+    return stop_rule.locate(state_at, lambda _, g: stop_rule.stopped(g, mk, E, zq, amp, pen),
+                            a, b, xtol)  # fmt: skip
+
+
+def _limit_steps(d, v, M, scale, Hw):
+    """``(sigma_lo, sigma_hi)`` (n,) of the limits of the stop rule on the gaps (amplitude, deep
+    penetration; :func:`stop_rule.limit_rows`): no gap passes one before ``sigma_lo``, one has
+    passed by ``sigma_hi`` (``inf`` beyond the window ``Hw``); computed only where the curvature
+    bound ``M`` lets a gap reach one within ``Hw``."""
+    n = d.shape[0]
+    lo, hi = np.full(n, np.inf), np.full(n, np.inf)
+    amp, pen = stop_rule.limits(scale)
+    near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
+    w = Hw[:, None]
+    r = np.flatnonzero((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    if r.size == 0:
+        return lo, hi
+    Mg = np.concatenate([M[r, :2], M[r, :2]], axis=1)
+    A = np.concatenate([amp[r, None] - d[r], d[r] + stop_rule.DEEP * pen[r, None]], axis=1)
+    Bd = np.concatenate([-v[r], v[r]], axis=1)
+    lo4, hi4 = eb.safe_steps(np.maximum(A, 0.0), Bd, Mg)
+    lo[r] = _min_cols(lo4)
+    hi[r] = _min_cols(np.where(hi4 <= w[r], hi4, np.inf))
+    return lo, hi
 
 
 def may_decide(lam, valid, s, p, act, mask, t, T):
@@ -490,12 +565,11 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     r = np.flatnonzero(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
-        # aligned from now on: from the stop on too; the stop is searched only for the others
+        s0 = reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
+        # aligned from now on: from the stop on too
         now = aligned_from(c, lam[r], valid[r], l1[r], np.zeros(r.size))
-        r, c = r[~now], c[~now]
-        if r.size:
-            iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r],
-                                      scale[r])  # fmt: skip
+        iwc[r] = now | aligned_from(c, lam[r], valid[r], l1[r], s0)
+        iwc[r] &= signs_from(p[r], UE[r], lam[r], valid[r], l1[r], act[r], s[r], s0)
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
 
@@ -580,8 +654,14 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     deviation (:func:`atlas.dynamics.classify`'s ``align_tol``): ``sum_other |c_m| exp(Re lam_m
     s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
     largest real part."""
-    xp = eb.xp_of(c, p, UE, lam)
-    # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
+    return aligned_from(c, lam, valid, l1, reach_time(p, UE, lam, rest, scale))
+
+
+def reach_time(p, UE, lam, rest, scale):
+    """A lower bound (n,) of the time from now at which a gap can first reach ``1e4 scale`` (the
+    amplitude limit; the deep penetration lies beyond it), at most ``rest``: bisection on the
+    increasing bound ``|p0| + |p1| s + |p2| s^2 + sum |u| exp(max(Re lam, 0) s)``."""
+    xp = eb.xp_of(p, UE, lam)
     aw = xp.abs(UE)
     grow = xp.maximum(lam.real, 0.0)
     a0, a1, a2 = (xp.abs(p[:, :, i]) for i in range(3))
@@ -599,8 +679,41 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
         above = bound(mid) >= lim
         return xp.where(above, lo, mid), xp.where(above, mid, hi)
 
-    s0, _ = _fori(64, halve, (xp.zeros(c.shape[0]), rest + 0.0))
-    return aligned_from(c, lam, valid, l1, s0)
+    s0, _ = _fori(64, halve, (xp.zeros(p.shape[0]), rest + 0.0))
+    return s0
+
+
+def signs_from(p, UE, lam, valid, l1, act, s, s0):
+    """The sign conditions of :func:`atlas.dynamics.system.iwc_aligned` hold from ``s0`` (n,) on:
+    every active gap and its velocity negative, every free gap (recorded sign ``s`` positive)
+    opening.  Each is ``poly(s) + e^{l1 s} (D +- sum_other |w_m| e^{(Re lam_m - l1) s})`` for the
+    dominant term ``D``; the bracket's product with ``e^{l1 s}`` is monotone once of the right
+    sign (the other real parts lie below ``l1``: :func:`aligned_from`'s ``strict``), so with the
+    polynomial part monotone the right way (active) or outgrown (free: the velocity's
+    derivative bounded below at ``s0``) and the sign right at ``s0`` (beyond ``1e-9`` of the
+    terms), it holds for all later times."""
+    xp = eb.xp_of(p, UE, lam, s0)
+    re = xp.where(valid, lam.real, -np.inf)
+    j1 = xp.argmax(re, axis=1)
+    others = (valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None]))[:, None, :]
+    with np.errstate(all="ignore"):
+        rel = xp.where(others, xp.exp((re - l1[:, None]) * s0[:, None])[:, None, :], 0.0)
+    lUE = UE * lam[:, None, :]
+    D, Dv = eb.take(UE, j1[:, None]).real, eb.take(lUE, j1[:, None]).real
+    O, Ov = eb.sum4(xp.abs(UE) * rel), eb.sum4(xp.abs(lUE) * rel)
+    s1 = s0[:, None]
+    c0 = p[:, :, 0] + s1 * (p[:, :, 1] + s1 * p[:, :, 2])
+    c1 = p[:, :, 1] + 2 * s1 * p[:, :, 2]
+    e1 = xp.exp(l1[:, None] * s1)
+    tol = 1e-9
+    neg = (D + O * (1 + tol) < 0) & (Dv + Ov * (1 + tol) < 0) & (p[:, :, 2] <= 0) & (c1 <= 0)
+    neg &= c0 + e1 * (D + O) * (1 - tol) < 0
+    # a free gap stays open (the certificate); its velocity v = c1(s) + e^{l1 s} (Dv - ...) has
+    # v' >= 2 p2 + l1 e^{l1 s0} (Dv - Ov(s0)) for s >= s0 while the bracket is positive
+    up = Dv - Ov * (1 + tol)
+    pos = (up > 0) & (c1 + e1 * up > 0) & (2 * p[:, :, 2] + l1[:, None] * e1 * up >= 0)
+    pos &= s[:, :2] > 0
+    return xp.all(xp.where(act, neg, pos), axis=1)
 
 
 def aligned_from(c, lam, valid, l1, s0):
@@ -617,10 +730,11 @@ def aligned_from(c, lam, valid, l1, s0):
     return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
 
 
-def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s, mask,
-            k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
-    """Switch the lanes ``r`` (rows) at their events and start their new segments (in place)."""
-    d, v, acc, _, _ = eb.evaluate(P[r], U[r], lam[r], t[r] - tseg[r])
+def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s,
+            mask, k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
+    """Switch the lanes ``r`` (rows; gaps, velocities, accelerations ``dva`` there) at their
+    events and start their new segments (in place)."""
+    d, v, acc = dva
     f, fp = eb.event_functions(d, v, acc, k[r], q[r])
     tol = (h[r] + 1e3 * xtol[r])[:, None]
     cross = (hi[r] <= tol) & (lo[r] <= tol)
