@@ -21,8 +21,8 @@ sign ``s`` of ``f``::
 
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it and both gaps provably stay within ``10 scale``, so that the tests made at the step
-ends on the gaps (divergence, late amplitude) cannot pass inside a longer step); the first
+2 over it and both gaps provably stay within ``10 scale``, so that the late-amplitude test made
+at the step ends cannot pass inside a longer step); the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
@@ -53,14 +53,22 @@ x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their si
 Both are declared only where the reference's finite-horizon stops reach the same verdict
 (:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
 
+Divergence (:mod:`atlas.dynamics.stop_rule`, the exact simulator's rule): tested at every step
+end and just before every event, and located inside the step by bisection on the segment; the
+amplitude and deep-penetration limits are bracketed like events (:func:`_limit_steps`: no step
+passes one before its ``sigma_lo``, and a step to its ``sigma_hi`` where no event comes first),
+so a peak past a limit inside a step is not missed.  Early IWC also needs the reference's sign
+conditions at its stop (:func:`signs_from`).
+
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
 a longer horizon (:func:`atlas.dynamics.needs_longer_run`) rejoin the running batch from where
 they stopped, so the horizon extensions of some lanes overlap the first runs of the others.
 Lanes the modal form cannot serve (a proven upper bound of the eigenvector condition ``>= 1e4``,
 :func:`atlas.dynamics.modal_form.cond_bound`; singular ``B_SS``, a zero
-eigenvalue) or whose root location stalls (a grazing contact) are run by the exact simulator
-instead (``fallback``).  The condition bound separates the near-defective configurations of
+eigenvalue; a segment whose terms exceed its gaps ``CANCEL_MAX`` times, :func:`cancels`) or
+whose root location stalls (a grazing contact) are run by the exact simulator instead
+(``fallback``).  The condition bound separates the near-defective configurations of
 degenerate directions: a grid through ``b_ii = 0`` (e.g. ``beta2 = pi``, where ``sin beta2`` rounds
 to ``1.2e-16``) or ``det B = 0`` (``beta2 = beta1 + pi``) gives a double eigenvalue split by
 rounding, ``|lambda| ~ 1e-8``, condition ``~ 1 / |lambda| ~ 1e7-1e9``, an equilibrium ``~ 1 /
@@ -217,6 +225,7 @@ def _admit(lanes, tables, st: State, ix, fallback):
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = mask_of(s)
     P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g)
+    ok &= ~cancels(P, U, g, st.scale[ix])
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
             lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
@@ -417,6 +426,22 @@ def _window(H, lam, valid, p, aUE, scale):
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
     return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
+
+
+#: largest ratio of a segment's terms to its gaps (or the run's scale, if larger): beyond it the
+#: evaluation keeps fewer than 10 of the 16 digits of the gaps and root location crawls
+CANCEL_MAX = 1e6
+
+
+def cancels(P, U, g, scale):
+    """Segments (n,) whose terms ``|p0| + sum |u|`` of a gap exceed ``CANCEL_MAX`` times the
+    gaps ``g[:, :2]`` (or the length ``scale``): near-defective configurations (an eigenvalue
+    ``~1e-4`` of ``lambda`` scale ``1``: equilibrium and modal amplitudes ``~1 / lambda^2``
+    cancelling to the gaps), handed to the exact simulator."""
+    terms = np.abs(P[:, :, 0]) + eb.sum4(np.abs(U))
+    size = np.maximum(np.abs(g[:, :2]).max(axis=1), scale)
+    with np.errstate(invalid="ignore"):
+        return ~(terms.max(axis=1) <= CANCEL_MAX * size)
 
 
 def _all_cols(x):
@@ -752,6 +777,7 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
     P[r], U[r], lam[r], valid[r], H[r], ok = segments(lanes, tables, lanes_r, mask[r], g)
+    ok &= ~cancels(P[r], U[r], g, scale[r])
     tseg[r] = t[r]
     since[r] = 0
     fallback[lanes_r[~ok]] = True

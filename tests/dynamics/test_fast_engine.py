@@ -273,3 +273,25 @@ def test_divergence_stop_is_located_as_in_the_exact_simulator(b1, b2, alpha, kap
     assert int(fast.code[0]) == int(out)
     assert fast.t_final[0] == pytest.approx(res.t_final, rel=1e-9)
     assert res_fine.t_final == pytest.approx(res.t_final, rel=1e-9)
+
+
+def test_near_defective_lane_is_sent_back_at_once():
+    """beta1 = pi/2 + 1e-8 (kappa 5, q 1.5, beta2 0): the SF configuration has eigenvalues
+    ``+-2.2e-4`` and an equilibrium ``~1.2e7`` whose modal amplitudes cancel to the O(1) gaps
+    (evaluated with ~9 of 16 digits): the segment is flagged and the lane falls back to the exact
+    simulator (it was stepped for minutes); at 1e-2 off the axis the same configuration stays on
+    the fast path, and both lanes give the exact simulator's outcome."""
+    alpha, k, q = 0.3 * PI, (5.0, 1.0), (1.5, 1.5)
+    b1 = np.array([PI / 2 + 1e-8, PI / 2 + 1e-2])
+    g = np.array([[1.0, 0.5, 0.0, 0.0]] * 2)  # contact 1 closed as in SF: d1 <= 0
+    g[:, 0] = -0.1
+    lanes = mf.Lanes.of(b1, np.zeros(2), alpha, k, q)
+    tables = mf.modal_tables(lanes)
+    P, U, *_ = mf.segments(lanes, tables, np.arange(2), np.array([1, 1]), g)
+    assert F.cancels(P, U, g, np.ones(2)).tolist() == [True, False]
+    g0 = S.perturbed_initial_states(b1, [0.0], alpha, 5.0, n_perturb=2)[:, 0].reshape(-1, 4)
+    B1 = np.repeat(b1, 2)
+    res = F.run_batch(B1, 0.0, alpha, k, q, g0, reference=_reference)
+    ref = [int(_reference(x, 0.0, alpha, k, q, g)[0]) for x, g in zip(B1, g0, strict=True)]
+    assert res.code.tolist() == ref
+    assert res.decided_by[0] == res.decided_by[1] == F.DECIDED_BY.index("fallback")
