@@ -361,7 +361,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         ev &= h <= lim_lo
         past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
         step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
-        step = np.where(past, lim_hi, step)
+        step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
         t0 = t.copy()
         t = np.where(keep, t + step, t)
         since += 1
@@ -539,12 +539,18 @@ def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
     E, zq = stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk)
     amp, pen = stop_rule.limits(scale)
 
-    def state_at(tau):
-        d, v = eb.evaluate(P, U, lam, tau)[:2]
+    def state_at(tau, rows):
+        d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau)[:2]
         return np.concatenate([d, v], axis=1)
 
-    return stop_rule.locate(state_at, lambda _, g: stop_rule.stopped(g, mk, E, zq, amp, pen),
-                            a, b, xtol)  # fmt: skip
+    def holds(g, rows):
+        return stop_rule.stopped(g, mk[rows], E[rows], zq[rows], amp[rows], pen[rows])
+
+    def near(g, rows):
+        out, penetrated = stop_rule.beyond(g, mk[rows], amp[rows], pen[rows])
+        return out | penetrated
+
+    return stop_rule.locate(state_at, holds, a, b, xtol, near)
 
 
 def _limit_steps(d, v, M, scale, Hw):

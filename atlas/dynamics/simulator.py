@@ -21,6 +21,7 @@ truncation error below 1e-30 for ``rho_S tau <= 0.5``) to an absolute time toler
 from __future__ import annotations
 
 import dataclasses
+import math
 import time as _time
 from collections.abc import Sequence
 
@@ -505,24 +506,45 @@ def _stops(mode: Mode, g, amp_lim, pen_lim):
                              np.broadcast_to(z_eq, (n, 5)), amp_lim, pen_lim)  # fmt: skip
 
 
+def _may_stop(mode: Mode, z, lim: _Limits) -> bool:
+    """A necessary condition of the stop rule at ``z`` (scalar tests): a gap past a limit, an
+    active one past the penetration limit, or a non-finite component."""
+    d1, d2, v1, v2 = (float(x) for x in z[:4])
+    if not (math.isfinite(d1) and math.isfinite(d2) and math.isfinite(v1) and math.isfinite(v2)):
+        return True
+    if max(d1, d2) > lim.amp_lim or min(d1, d2) < -stop_rule.DEEP * lim.pen_lim:
+        return True
+    return (mode.mask & 1 and d1 < -lim.pen_lim) or (mode.mask & 2 and d2 < -lim.pen_lim)
+
+
 def _stop_in(mode: Mode, z, r, z_end, lim: _Limits):
     """The first stop in ``(0, r]`` of the sub-step from ``z`` (ending at ``z_end``, before any
     event there): the stop rule at ``z_end``, or a limit of :func:`stop_rule.limit_rows` passed at
     an interior peak; located by :func:`stop_rule.locate`.  Returns ``(tau, z(tau))`` or None."""
-    R = stop_rule.limit_rows(lim.amp_lim, lim.pen_lim)
-    peaks, W = _brackets(R, R @ mode.E, -np.ones(4), z, z_end, r, mode, rows=(0, 1, 2, 3))
-    hi = min(peaks.values(), default=None)
-    if _stops(mode, z_end[None, :4], lim.amp_lim, lim.pen_lim)[0]:
+    hi, W = None, None
+    near = min(lim.amp_lim, stop_rule.DEEP * lim.pen_lim)
+    # |z(tau)| <= exp(|E| tau) |z| (infinity norms): no limit within reach, no peak to bracket
+    if np.abs(z).max() * math.exp(np.abs(mode.E).sum(axis=1).max() * r) >= near:
+        R = stop_rule.limit_rows(lim.amp_lim, lim.pen_lim)
+        peaks, W = _brackets(R, R @ mode.E, -np.ones(4), z, z_end, r, mode, rows=(0, 1, 2, 3))
+        hi = min(peaks.values(), default=None)
+    if _may_stop(mode, z_end, lim) and _stops(mode, z_end[None, :4], lim.amp_lim, lim.pen_lim)[0]:
         hi = r
     if hi is None:
         return None
     W = mode.P @ z if W is None else W
 
-    def state_at(tau):
-        return _horner_vec(W, tau[0])[None, :4]
+    powers = np.arange(W.shape[0])
 
-    tau, g = stop_rule.locate(state_at, lambda _, g: _stops(mode, g, lim.amp_lim, lim.pen_lim),
-                              np.zeros(1), np.full(1, hi), 1e-13 * mode.h)  # fmt: skip
+    def state_at(tau, _):
+        return (tau[:, None] ** powers @ W)[:, :4]
+
+    def near(g, _):
+        out, pen = stop_rule.beyond(g, np.full(g.shape[0], mode.mask), lim.amp_lim, lim.pen_lim)
+        return out | pen
+
+    tau, g = stop_rule.locate(state_at, lambda g, _: _stops(mode, g, lim.amp_lim, lim.pen_lim),
+                              np.zeros(1), np.full(1, hi), 1e-13 * mode.h, near)  # fmt: skip
     return float(tau[0]), np.append(g[0], 1.0)
 
 

@@ -28,12 +28,12 @@ def test_locate_finds_the_first_crossing_of_the_amplitude_limit():
     mask, E, zq = _free(3)
     amp, pen = SR.limits(np.ones(3))
 
-    def state_at(tau):
-        d = np.where(np.arange(3) == 0, np.exp(tau), 2e4 * np.sin(tau))
+    def state_at(tau, rows):
+        d = np.where(rows == 0, np.exp(tau), 2e4 * np.sin(tau))
         return np.stack([d, 0 * d, 0 * d, 0 * d], axis=1)
 
-    def holds(_, g):
-        return SR.stopped(g, mask, E, zq, amp, pen)
+    def holds(g, rows):
+        return SR.stopped(g, mask[rows], E[rows], zq[rows], amp[rows], pen[rows])
 
     a = np.array([0.0, 0.0, 0.3])
     b = np.array([20.0, 2.5, 2.0])
