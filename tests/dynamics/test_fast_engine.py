@@ -295,3 +295,17 @@ def test_near_defective_lane_is_sent_back_at_once():
     ref = [int(_reference(x, 0.0, alpha, k, q, g)[0]) for x, g in zip(B1, g0, strict=True)]
     assert res.code.tolist() == ref
     assert res.decided_by[0] == res.decided_by[1] == F.DECIDED_BY.index("fallback")
+
+
+def test_a_gap_landing_on_the_amplitude_limit_steps_on():
+    """A growing bouncing run of the Fig. 2 map (64^2 cell (2, 30)) reaches a state with a gap
+    exactly at the amplitude limit (not past it: no stop); the engine steps past it instead of
+    stalling there and handing the lane to the exact simulator, and gives its outcome."""
+    alpha, kappa = 0.35 * PI, 0.5
+    b1, b2 = S.outcome_grid(64)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)[2, 30, 0]
+    res = F.run_batch(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0), g0[None],
+                      reference=_reference)  # fmt: skip
+    assert F.DECIDED_BY[res.decided_by[0]] == "stepped"
+    assert int(res.code[0]) == int(_reference(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0),
+                                              g0)[0]) == int(S.Outcome.GROWING_BOUNCING)  # fmt: skip
