@@ -261,7 +261,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
     cols = _admit(lanes, tables, st, np.arange(st.t.size), fallback)
     ix = cols[0]
     keep = np.ones(ix.size, dtype=bool)
-    pending = []
+    pending, stops = [], []
     it = 0
     while True:
         if not keep.all():
@@ -271,6 +271,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
+            _locate_stops(st, tables, stops, width)
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
             pending = []
             if again.size:
@@ -289,15 +290,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
 
         # the stop rule (divergence) at the step end, located inside the step; the horizon
         div = _stops_at(tables, ix, mask, act, g, scale)
-        if div.size:
-            a = np.maximum(t0[div], tseg[div]) - tseg[div]
-            tau[div], g[div] = _locate_stop(tables, ix[div], mask[div], P[div], U[div], lam[div],
-                                            scale[div], a, tau[div], XTOL * H[div])  # fmt: skip
-            t[div] = tseg[div] + tau[div]
-            d = g[:, :2]
+        if div.size:  # located with the others of the next classification (_locate_stops)
+            stops.append((ix[div], mask[div], P[div], U[div], lam[div], scale[div],
+                          np.maximum(t0[div], tseg[div]) - tseg[div], tau[div], XTOL * H[div],
+                          tseg[div]))  # fmt: skip
+            _leave(st, ix, t, g, s, keep, div, 2)
         b = bins(t, width, nbins)
-        st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
-        _leave(st, ix, t, g, s, keep, div, 2)
+        st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
@@ -379,10 +378,9 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
             if sr.size:
                 rs = ev_r[sr]
-                a = np.maximum(t0[rs], tseg[rs]) - tseg[rs]
-                tau_s, ge[sr] = _locate_stop(tables, ix[rs], mask[rs], P[rs], U[rs], lam[rs],
-                                             scale[rs], a, t[rs] - tseg[rs], xtol[rs])  # fmt: skip
-                t[rs] = tseg[rs] + tau_s
+                stops.append((ix[rs], mask[rs], P[rs], U[rs], lam[rs], scale[rs],
+                              np.maximum(t0[rs], tseg[rs]) - tseg[rs], t[rs] - tseg[rs], xtol[rs],
+                              tseg[rs]))  # fmt: skip
                 _leave(st, ix, t, ge, s, keep, sr, 2, rows=rs)
                 ok = np.ones(ev_r.size, dtype=bool)
                 ok[sr] = False
@@ -531,6 +529,21 @@ def _stops_at(tables, ix, mask, act, g, scale):
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
                                 amp[r], pen[r])]  # fmt: skip
     return r
+
+
+def _locate_stops(st, tables, stops, width):
+    """Locate the collected stops ``[(lanes, mask, P, U, lam, scale, a, b, xtol, tseg)]`` (each
+    between ``a`` and ``b`` on its segment) in one :func:`_locate_stop`; their time, state and
+    amplitude into ``st``."""
+    if not stops:
+        return
+    lx, mk, P, U, lam, scale, a, b, xtol, tseg = (np.concatenate(x) for x in zip(*stops))
+    stops.clear()
+    tau, g = _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol)
+    t = tseg + tau
+    st.t[lx], st.g[lx] = t, g
+    bb = bins(t, width, st.amp.shape[1])
+    st.amp[lx, bb] = np.maximum(st.amp[lx, bb], np.abs(g[:, :2]))
 
 
 def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
