@@ -54,7 +54,7 @@ Both are declared only where the reference's finite-horizon stops reach the same
 (:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
 
 Divergence (:mod:`atlas.dynamics.stop_rule`, the exact simulator's rule): tested at every step
-end and just before every event, and located inside the step by bisection on the segment; the
+end and just before every event, and located inside the step by a search on the segment; the
 amplitude and deep-penetration limits are bracketed like events (:func:`_limit_steps`: no step
 passes one before its ``sigma_lo``, and a step to its ``sigma_hi`` where no event comes first),
 so a peak past a limit inside a step is not missed.  Early IWC also needs the reference's sign

@@ -10,7 +10,7 @@ configuration active from ``t`` on, or the one active up to an event at ``t``) h
   with an IWC eigenvector (:func:`atlas.dynamics.system.iwc_aligned`, tolerance ``ALIGN_TOL``).
 
 The engines test :func:`stopped` at the ends of their steps and at their events; where it holds at
-the end of a step and not at its start, :func:`locate` bisects the step on the closed-form
+the end of a step and not at its start, :func:`locate` searches the step on the closed-form
 solution to the first time it holds (to ``xtol``), so both engines stop at the same time (within
 ``xtol``) for the same reason whatever their steps.  A crossing of the amplitude or the deep
 penetration limit that is undone inside one step (a peak) is found by each engine's own bracket
@@ -32,8 +32,8 @@ AMPLITUDE, PENETRATION = 1e4, 1e3
 DEEP = 1e3
 #: alignment tolerance of the aligned-penetration stop (the classification uses 1e-2)
 ALIGN_TOL = 1e-3
-#: bisection halvings of :func:`locate` at most (a step of 2^-80 of its length is below rounding)
-MAX_HALVINGS = 80
+#: search rounds of :func:`locate` at most (each divides the bracket by ``SPLIT``)
+MAX_ROUNDS = 40
 
 
 def limits(scale):
@@ -105,7 +105,7 @@ SPLIT = 16
 def _search(state_at, holds, a, b, xtol):
     a, b = a.copy(), b.copy()
     frac = np.arange(1, SPLIT) / SPLIT
-    for _ in range(MAX_HALVINGS):
+    for _ in range(MAX_ROUNDS):
         r = np.flatnonzero(b - a > xtol)
         if r.size == 0:
             break
