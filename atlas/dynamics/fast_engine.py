@@ -21,8 +21,8 @@ sign ``s`` of ``f``::
 
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it and both gaps provably stay within ``10 scale``, so that the tests made at the step
-ends on the gaps (divergence, late amplitude) cannot pass inside a longer step); the first
+2 over it and both gaps provably stay within ``10 scale``, so that the late-amplitude test made
+at the step ends cannot pass inside a longer step); the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
@@ -53,14 +53,22 @@ x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their si
 Both are declared only where the reference's finite-horizon stops reach the same verdict
 (:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
 
+Divergence (:mod:`atlas.dynamics.stop_rule`, the exact simulator's rule): tested at every step
+end and just before every event, and located inside the step by a search on the segment; the
+amplitude and deep-penetration limits are bracketed like events (:func:`_limit_steps`: no step
+passes one before its ``sigma_lo``, and a step to its ``sigma_hi`` where no event comes first),
+so a peak past a limit inside a step is not missed.  Early IWC also needs the reference's sign
+conditions at its stop (:func:`signs_from`).
+
 Lanes that are decided, diverge, reach the horizon or the event cap leave the batch (compaction).
 Every ``8`` steps the lanes that stopped are classified; those the reference would run again with
 a longer horizon (:func:`atlas.dynamics.needs_longer_run`) rejoin the running batch from where
 they stopped, so the horizon extensions of some lanes overlap the first runs of the others.
 Lanes the modal form cannot serve (a proven upper bound of the eigenvector condition ``>= 1e4``,
 :func:`atlas.dynamics.modal_form.cond_bound`; singular ``B_SS``, a zero
-eigenvalue) or whose root location stalls (a grazing contact) are run by the exact simulator
-instead (``fallback``).  The condition bound separates the near-defective configurations of
+eigenvalue; a segment whose terms exceed its gaps ``CANCEL_MAX`` times, :func:`cancels`) or
+whose root location stalls (a grazing contact) are run by the exact simulator instead
+(``fallback``).  The condition bound separates the near-defective configurations of
 degenerate directions: a grid through ``b_ii = 0`` (e.g. ``beta2 = pi``, where ``sin beta2`` rounds
 to ``1.2e-16``) or ``det B = 0`` (``beta2 = beta1 + pi``) gives a double eigenvalue split by
 rounding, ``|lambda| ~ 1e-8``, condition ``~ 1 / |lambda| ~ 1e7-1e9``, an equilibrium ``~ 1 /
@@ -80,6 +88,7 @@ import math
 import numpy as np
 
 from atlas.dynamics import event_bounds as eb
+from atlas.dynamics import stop_rule
 from atlas.dynamics.classification import (
     TrajectoryStats,
     impacts,
@@ -216,10 +225,11 @@ def _admit(lanes, tables, st: State, ix, fallback):
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = mask_of(s)
     P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g)
+    ok &= ~cancels(P, U, g, st.scale[ix])
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
             lanes.k[ix], lanes.q[ix], st.scale[ix], np.zeros(ix.size, dtype=int),
-            np.zeros(ix.size, dtype=int))  # fmt: skip
+            np.zeros(ix.size, dtype=int), t.copy())  # fmt: skip
     return tuple(x[ok] for x in cols)
 
 
@@ -251,7 +261,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
     cols = _admit(lanes, tables, st, np.arange(st.t.size), fallback)
     ix = cols[0]
     keep = np.ones(ix.size, dtype=bool)
-    pending = []
+    pending, stops = [], []
     it = 0
     while True:
         if not keep.all():
@@ -261,36 +271,33 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
+            _locate_stops(st, tables, stops, width)
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
             pending = []
             if again.size:
                 new = _admit(lanes, tables, st, again, fallback)
                 cols = tuple(np.concatenate([a, b]) for a, b in zip(cols, new, strict=True))
         it += 1
-        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since = cols
+        ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0 = cols
         rows = np.arange(ix.size)
         if ix.size == 0:
             return
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
-        b = bins(t, width, nbins)
-        st.amp[ix, b] = np.maximum(st.amp[ix, b], np.abs(d))
+        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         keep = np.ones(ix.size, dtype=bool)
 
-        # stops of the reference: divergence, horizon
-        div = ~_all_cols(np.isfinite(g))
-        div |= np.maximum(d[:, 0], d[:, 1]) > 1e4 * scale
-        div |= np.minimum(d[:, 0], d[:, 1]) < -1e6 * scale
-        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        # the stop rule (divergence) at the step end, located inside the step; the horizon
+        div = _stops_at(tables, ix, mask, act, g, scale)
+        if div.size:  # located with the others of the next classification (_locate_stops)
+            stops.append((ix[div], mask[div], P[div], U[div], lam[div], scale[div],
+                          np.maximum(t0[div], tseg[div]) - tseg[div], tau[div], XTOL * H[div],
+                          tseg[div]))  # fmt: skip
+            _leave(st, ix, t, g, s, keep, div, 2)
+        b = bins(t, width, nbins)
+        st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        pen = act & (d < -1e3 * scale[:, None])
-        deep = np.flatnonzero(sched & ~div & (pen[:, 0] | pen[:, 1]))
-        if deep.size:
-            lx, mk = ix[deep], mask[deep]
-            div[deep] = iwc_aligned_many(stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk), mk,
-                                         g[deep], 1e-3)  # fmt: skip
-        _leave(st, ix, t, g, s, keep, np.flatnonzero(div), 2)
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         f, fp = eb.event_functions(d, v, acc, k, q)
@@ -347,7 +354,14 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             tw_r, tw_c = np.nonzero(twin[rd])
             lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
             ev[rd] = True
-        step = np.where(ev, h, np.minimum(np.minimum(m, Hw), rem))
+        # a limit of the stop rule passed before the first crossing: step past it (certified)
+        # and locate it at the next step; steps never pass it unseen
+        lim_lo, lim_hi = _limit_steps(d, v, M, scale, Hw)
+        ev &= h <= lim_lo
+        past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
+        step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
+        step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
+        t0 = t.copy()
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -358,9 +372,23 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         ev &= keep
         ev_r = np.flatnonzero(ev)
         if ev_r.size:
-            _events(lanes, tables, st, ix, ev_r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H,
-                    s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
-        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since)
+            dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
+            # the stop rule just before the events (configuration up to them), located
+            ge = np.concatenate(dva[:2], axis=1)
+            sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
+            if sr.size:
+                rs = ev_r[sr]
+                stops.append((ix[rs], mask[rs], P[rs], U[rs], lam[rs], scale[rs],
+                              np.maximum(t0[rs], tseg[rs]) - tseg[rs], t[rs] - tseg[rs], xtol[rs],
+                              tseg[rs]))  # fmt: skip
+                _leave(st, ix, t, ge, s, keep, sr, 2, rows=rs)
+                ok = np.ones(ev_r.size, dtype=bool)
+                ok[sr] = False
+                ev_r, dva = ev_r[ok], tuple(x[ok] for x in dva)
+        if ev_r.size:
+            _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
+                    H, s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
+        cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0)
 
 
 def _twins(first, mon, q):
@@ -396,6 +424,22 @@ def _window(H, lam, valid, p, aUE, scale):
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
     return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
+
+
+#: largest ratio of a segment's terms to its gaps (or the run's scale, if larger): beyond it the
+#: evaluation keeps fewer than 10 of the 16 digits of the gaps and root location crawls
+CANCEL_MAX = 1e6
+
+
+def cancels(P, U, g, scale):
+    """Segments (n,) whose terms ``|p0| + sum |u|`` of a gap exceed ``CANCEL_MAX`` times the
+    gaps ``g[:, :2]`` (or the length ``scale``): near-defective configurations (an eigenvalue
+    ``~1e-4`` of ``lambda`` scale ``1``: equilibrium and modal amplitudes ``~1 / lambda^2``
+    cancelling to the gaps), handed to the exact simulator."""
+    terms = np.abs(P[:, :, 0]) + eb.sum4(np.abs(U))
+    size = np.maximum(np.abs(g[:, :2]).max(axis=1), scale)
+    with np.errstate(invalid="ignore"):
+        return ~(terms.max(axis=1) <= CANCEL_MAX * size)
 
 
 def _all_cols(x):
@@ -460,13 +504,88 @@ def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     return a, b
 
 
-def _leave(st, ix, t, g, s, keep, sel, status):
-    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``."""
+def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
+    """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``
+    (``rows``: their rows when ``g`` holds the states of ``sel`` alone, in order)."""
     if sel.size == 0:
         return
-    st.t[ix[sel]], st.g[ix[sel]], st.s[ix[sel]] = t[sel], g[sel], s[sel]
-    st.status[ix[sel]] = status
-    keep[sel] = False
+    r = sel if rows is None else rows
+    st.t[ix[r]], st.g[ix[r]], st.s[ix[r]] = t[r], g[sel], s[r]
+    st.status[ix[r]] = status
+    keep[r] = False
+
+
+def _stops_at(tables, ix, mask, act, g, scale):
+    """Rows where the stop rule (:func:`stop_rule.stopped`) holds at the states ``g`` (n, 4);
+    the alignment is computed only where a penetration passes its limit."""
+    amp, pen = stop_rule.limits(scale)
+    d = g[:, :2]
+    with np.errstate(invalid="ignore"):
+        cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
+        cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
+    r = np.flatnonzero(cand)
+    if r.size:
+        lx, mk = ix[r], mask[r]
+        r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
+                                amp[r], pen[r])]  # fmt: skip
+    return r
+
+
+def _locate_stops(st, tables, stops, width):
+    """Locate the collected stops ``[(lanes, mask, P, U, lam, scale, a, b, xtol, tseg)]`` (each
+    between ``a`` and ``b`` on its segment) in one :func:`_locate_stop`; their time, state and
+    amplitude into ``st``."""
+    if not stops:
+        return
+    lx, mk, P, U, lam, scale, a, b, xtol, tseg = (np.concatenate(x) for x in zip(*stops))
+    stops.clear()
+    tau, g = _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol)
+    t = tseg + tau
+    st.t[lx], st.g[lx] = t, g
+    bb = bins(t, width, st.amp.shape[1])
+    st.amp[lx, bb] = np.maximum(st.amp[lx, bb], np.abs(g[:, :2]))
+
+
+def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
+    """:func:`stop_rule.locate` on the segments ``P, U, lam`` of lanes ``lx`` in configurations
+    ``mk``: the first ``tau`` in ``(a, b]`` at which the stop holds and the state there."""
+    E, zq = stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk)
+    amp, pen = stop_rule.limits(scale)
+
+    def state_at(tau, rows):
+        d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau)[:2]
+        return np.concatenate([d, v], axis=1)
+
+    def holds(g, rows):
+        return stop_rule.stopped(g, mk[rows], E[rows], zq[rows], amp[rows], pen[rows])
+
+    def near(g, rows):
+        out, penetrated = stop_rule.beyond(g, mk[rows], amp[rows], pen[rows])
+        return out | penetrated
+
+    return stop_rule.locate(state_at, holds, a, b, xtol, near)
+
+
+def _limit_steps(d, v, M, scale, Hw):
+    """``(sigma_lo, sigma_hi)`` (n,) of the limits of the stop rule on the gaps (amplitude, deep
+    penetration; :func:`stop_rule.limit_rows`): no gap passes one before ``sigma_lo``, one has
+    passed by ``sigma_hi`` (``inf`` beyond the window ``Hw``); computed only where the curvature
+    bound ``M`` lets a gap reach one within ``Hw``."""
+    n = d.shape[0]
+    lo, hi = np.full(n, np.inf), np.full(n, np.inf)
+    amp, pen = stop_rule.limits(scale)
+    near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
+    w = Hw[:, None]
+    r = np.flatnonzero((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    if r.size == 0:
+        return lo, hi
+    Mg = np.concatenate([M[r, :2], M[r, :2]], axis=1)
+    A = np.concatenate([amp[r, None] - d[r], d[r] + stop_rule.DEEP * pen[r, None]], axis=1)
+    Bd = np.concatenate([-v[r], v[r]], axis=1)
+    lo4, hi4 = eb.safe_steps(np.maximum(A, 0.0), Bd, Mg)
+    lo[r] = _min_cols(lo4)
+    hi[r] = _min_cols(np.where(hi4 <= w[r], hi4, np.inf))
+    return lo, hi
 
 
 def may_decide(lam, valid, s, p, act, mask, t, T):
@@ -490,12 +609,11 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     r = np.flatnonzero(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
-        # aligned from now on: from the stop on too; the stop is searched only for the others
+        s0 = reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
+        # aligned from now on: from the stop on too
         now = aligned_from(c, lam[r], valid[r], l1[r], np.zeros(r.size))
-        r, c = r[~now], c[~now]
-        if r.size:
-            iwc[r] &= aligned_at_stop(c, p[r], UE[r], lam[r], valid[r], l1[r], T[r] - t[r],
-                                      scale[r])  # fmt: skip
+        iwc[r] = now | aligned_from(c, lam[r], valid[r], l1[r], s0)
+        iwc[r] &= signs_from(p[r], UE[r], lam[r], valid[r], l1[r], act[r], s[r], s0)
     st.code[ix[iwc]] = int(Outcome.IWC)
     st.decided_by[ix[iwc]] = 2
 
@@ -580,8 +698,14 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
     deviation (:func:`atlas.dynamics.classify`'s ``align_tol``): ``sum_other |c_m| exp(Re lam_m
     s) (1 + 1e-2) <= 1e-2 |c_1| exp(lam_1 s)``, a ratio that only decreases when ``lam_1`` is the
     largest real part."""
-    xp = eb.xp_of(c, p, UE, lam)
-    # earliest reach of 1e4 scale by bisection on the increasing upper bound (64 halvings)
+    return aligned_from(c, lam, valid, l1, reach_time(p, UE, lam, rest, scale))
+
+
+def reach_time(p, UE, lam, rest, scale):
+    """A lower bound (n,) of the time from now at which a gap can first reach ``1e4 scale`` (the
+    amplitude limit; the deep penetration lies beyond it), at most ``rest``: bisection on the
+    increasing bound ``|p0| + |p1| s + |p2| s^2 + sum |u| exp(max(Re lam, 0) s)``."""
+    xp = eb.xp_of(p, UE, lam)
     aw = xp.abs(UE)
     grow = xp.maximum(lam.real, 0.0)
     a0, a1, a2 = (xp.abs(p[:, :, i]) for i in range(3))
@@ -599,8 +723,41 @@ def aligned_at_stop(c, p, UE, lam, valid, l1, rest, scale):
         above = bound(mid) >= lim
         return xp.where(above, lo, mid), xp.where(above, mid, hi)
 
-    s0, _ = _fori(64, halve, (xp.zeros(c.shape[0]), rest + 0.0))
-    return aligned_from(c, lam, valid, l1, s0)
+    s0, _ = _fori(64, halve, (xp.zeros(p.shape[0]), rest + 0.0))
+    return s0
+
+
+def signs_from(p, UE, lam, valid, l1, act, s, s0):
+    """The sign conditions of :func:`atlas.dynamics.system.iwc_aligned` hold from ``s0`` (n,) on:
+    every active gap and its velocity negative, every free gap (recorded sign ``s`` positive)
+    opening.  Each is ``poly(s) + e^{l1 s} (D +- sum_other |w_m| e^{(Re lam_m - l1) s})`` for the
+    dominant term ``D``; the bracket's product with ``e^{l1 s}`` is monotone once of the right
+    sign (the other real parts lie below ``l1``: :func:`aligned_from`'s ``strict``), so with the
+    polynomial part monotone the right way (active) or outgrown (free: the velocity's
+    derivative bounded below at ``s0``) and the sign right at ``s0`` (beyond ``1e-9`` of the
+    terms), it holds for all later times."""
+    xp = eb.xp_of(p, UE, lam, s0)
+    re = xp.where(valid, lam.real, -np.inf)
+    j1 = xp.argmax(re, axis=1)
+    others = (valid & (xp.arange(valid.shape[1])[None, :] != j1[:, None]))[:, None, :]
+    with np.errstate(all="ignore"):
+        rel = xp.where(others, xp.exp((re - l1[:, None]) * s0[:, None])[:, None, :], 0.0)
+    lUE = UE * lam[:, None, :]
+    D, Dv = eb.take(UE, j1[:, None]).real, eb.take(lUE, j1[:, None]).real
+    O, Ov = eb.sum4(xp.abs(UE) * rel), eb.sum4(xp.abs(lUE) * rel)
+    s1 = s0[:, None]
+    c0 = p[:, :, 0] + s1 * (p[:, :, 1] + s1 * p[:, :, 2])
+    c1 = p[:, :, 1] + 2 * s1 * p[:, :, 2]
+    e1 = xp.exp(l1[:, None] * s1)
+    tol = 1e-9
+    neg = (D + O * (1 + tol) < 0) & (Dv + Ov * (1 + tol) < 0) & (p[:, :, 2] <= 0) & (c1 <= 0)
+    neg &= c0 + e1 * (D + O) * (1 - tol) < 0
+    # a free gap stays open (the certificate); its velocity v = c1(s) + e^{l1 s} (Dv - ...) has
+    # v' >= 2 p2 + l1 e^{l1 s0} (Dv - Ov(s0)) for s >= s0 while the bracket is positive
+    up = Dv - Ov * (1 + tol)
+    pos = (up > 0) & (c1 + e1 * up > 0) & (2 * p[:, :, 2] + l1[:, None] * e1 * up >= 0)
+    pos &= s[:, :2] > 0
+    return xp.all(xp.where(act, neg, pos), axis=1)
 
 
 def aligned_from(c, lam, valid, l1, s0):
@@ -617,10 +774,11 @@ def aligned_from(c, lam, valid, l1, s0):
     return strict & (dom > 0) & (off * (1 + 1e-2) <= 1e-2 * dom)
 
 
-def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s, mask,
-            k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
-    """Switch the lanes ``r`` (rows) at their events and start their new segments (in place)."""
-    d, v, acc, _, _ = eb.evaluate(P[r], U[r], lam[r], t[r] - tseg[r])
+def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s,
+            mask, k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
+    """Switch the lanes ``r`` (rows; gaps, velocities, accelerations ``dva`` there) at their
+    events and start their new segments (in place)."""
+    d, v, acc = dva
     f, fp = eb.event_functions(d, v, acc, k[r], q[r])
     tol = (h[r] + 1e3 * xtol[r])[:, None]
     cross = (hi[r] <= tol) & (lo[r] <= tol)
@@ -638,6 +796,7 @@ def _events(lanes, tables, st, ix, r, lo, hi, h, xtol, t, tseg, P, U, lam, valid
     mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
     P[r], U[r], lam[r], valid[r], H[r], ok = segments(lanes, tables, lanes_r, mask[r], g)
+    ok &= ~cancels(P[r], U[r], g, scale[r])
     tseg[r] = t[r]
     since[r] = 0
     fallback[lanes_r[~ok]] = True

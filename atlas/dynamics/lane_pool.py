@@ -15,6 +15,7 @@ starts them: that batch gives the calling process ``START_LANES`` more lanes tha
 from __future__ import annotations
 
 import concurrent.futures
+import math
 import multiprocessing
 import os
 
@@ -24,10 +25,21 @@ __all__ = ["usable_cores", "check_workers", "chunks", "LanePool", "MIN_LANES", "
 
 
 def usable_cores() -> int:
-    """Cores this process may run on (``os.sched_getaffinity``; ``os.cpu_count`` elsewhere)."""
+    """Cores that would run more processes of this one now: those it may run on
+    (``os.sched_getaffinity``; ``os.cpu_count`` elsewhere) less the load of the others (the
+    1-minute ``os.getloadavg``, this process counted as one of it), rounded; never below one.
+    On a machine shared with other work a process per core only takes turns with it: more
+    processes than idle cores run slower than one."""
     if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
+        n = max(1, len(os.sched_getaffinity(0)))
+    else:
+        n = max(1, os.cpu_count() or 1)
+    try:
+        load = os.getloadavg()[0]
+    except (AttributeError, OSError):  # no load average here: the cores alone
+        return n
+    idle = n - max(0.0, load - 1.0)
+    return int(min(n, max(1, math.floor(idle + 0.5))))
 
 
 def check_workers(workers) -> int:

@@ -21,12 +21,14 @@ truncation error below 1e-30 for ``rho_S tau <= 0.5``) to an absolute time toler
 from __future__ import annotations
 
 import dataclasses
+import math
 import time as _time
 from collections.abc import Sequence
 
 import numpy as np
 
 from atlas.core import checks
+from atlas.dynamics import stop_rule
 from atlas.dynamics.system import (
     FORCE_OFF,
     FORCE_ON,
@@ -38,7 +40,6 @@ from atlas.dynamics.system import (
     build_system,
     check_finite,
     expm,
-    iwc_aligned,
     mask_from_signs,
     mode_name,
     run_scale,
@@ -309,13 +310,21 @@ def _sub_step(sysm: System, mode: Mode, s, t, z, mask, lim: _Limits, log: _Log):
     """
     h = min(mode.h, lim.t_end - t)
     z1 = (mode.Phi if h == mode.h else expm(mode.E * h)) @ z
-    brackets, W = _brackets(sysm.L, mode, s, z, z1, h)
+    brackets, W = _brackets(sysm.L, mode.LE, s, z, z1, h, mode)
+    if brackets:
+        r, crossing, z_end = _first_crossing(sysm.L, mode, s, z, brackets, W)
+    else:
+        r, z_end = h, z1
+    stop = _stop_in(mode, z, r, z_end, lim)
+    if stop is not None:
+        tau, z = stop
+        log.step(t + tau, z)
+        return t + tau, z, mask, (Status.DIVERGED, _div_message(z, mask, lim.amp_lim, lim.pen_lim))
     if not brackets:
         t, z = t + h, z1
         log.step(t, z)
         return t, z, mask, _stop_after_step(sysm, mode, z, lim)
-    r, crossing, z = _first_crossing(sysm.L, mode, s, z, brackets, W)
-    t += r
+    t, z = t + r, z_end
     for kind, contact in _switch(sysm, mode, s, z, crossing, lim.scale):
         log.event(t, kind, contact, z)
     mask = mask_from_signs(s)
@@ -385,18 +394,21 @@ class _Log:
         )
 
 
-def _brackets(L, mode: Mode, s, z, z1, h):
-    """Crossings of the monitored event functions in the sub-step ``(0, h]`` from ``z`` to ``z1``.
+def _brackets(L, LE, s, z, z1, h, mode: Mode, rows=None):
+    """Crossings of the monitored event functions ``L z`` (the gaps; the forces of the closed
+    gaps; or the ``rows`` given) in the sub-step ``(0, h]`` from ``z`` to ``z1`` (``LE = L E``).
 
     Returns ``({function index: upper end of its bracket}, W)`` with ``W`` the Taylor
     coefficients ``E^n / n! z`` of ``z(tau)`` if they were needed (else None).
     """
     f1 = L @ z1
-    fp0 = mode.LE @ z
-    fp1 = mode.LE @ z1
+    fp0 = LE @ z
+    fp1 = LE @ z1
     xtol = 1e-13 * mode.h
     brackets, W = {}, None
-    for j in (0, 1) + tuple(2 + i for i in range(2) if s[i] < 0):
+    if rows is None:
+        rows = (0, 1) + tuple(2 + i for i in range(2) if s[i] < 0)
+    for j in rows:
         if s[j] * f1[j] < 0:
             brackets[j] = h
         elif s[j] * fp0[j] < 0 and s[j] * fp1[j] > 0:
@@ -460,8 +472,6 @@ def _switch(sysm: System, mode: Mode, s, z, crossing, scale) -> list:
 
 def _stop_after_step(sysm, mode, z, lim: _Limits):
     """``(status, message)`` if the run stops after an event-free sub-step, else None."""
-    if _diverged(sysm, z, mode.mask, lim.amp_lim, lim.pen_lim):
-        return Status.DIVERGED, _div_message(z, mode.mask, lim.amp_lim, lim.pen_lim)
     if lim.stop_when_settled and _settled(sysm, mode, z, lim.settle_rtol):
         return Status.SETTLED, f"settled in mode {mode_name(mode.mask)}"
     return None
@@ -484,16 +494,58 @@ def _horner_vec(W, tau):
 
 
 def _diverged(sysm, z, mask, amp_lim, pen_lim) -> bool:
-    """Gap above ``amp_lim``, or an active gap below ``-pen_lim`` along an IWC eigenvector
-    (or any gap below ``-1e3 pen_lim``)."""
-    if not np.all(np.isfinite(z)):
+    """The stop rule (:func:`atlas.dynamics.stop_rule.stopped`) at ``z`` in mode ``mask``."""
+    return _stops(sysm.modes[mask], z[None, :4], amp_lim, pen_lim)[0]
+
+
+def _stops(mode: Mode, g, amp_lim, pen_lim):
+    """:func:`atlas.dynamics.stop_rule.stopped` of states ``g`` (n, 4) in ``mode``."""
+    n = g.shape[0]
+    z_eq = np.full(5, np.nan) if mode.z_eq is None else mode.z_eq
+    return stop_rule.stopped(g, np.full(n, mode.mask), np.broadcast_to(mode.E, (n, 5, 5)),
+                             np.broadcast_to(z_eq, (n, 5)), amp_lim, pen_lim)  # fmt: skip
+
+
+def _may_stop(mode: Mode, z, lim: _Limits) -> bool:
+    """A necessary condition of the stop rule at ``z`` (scalar tests): a gap past a limit, an
+    active one past the penetration limit, or a non-finite component."""
+    d1, d2, v1, v2 = (float(x) for x in z[:4])
+    if not (math.isfinite(d1) and math.isfinite(d2) and math.isfinite(v1) and math.isfinite(v2)):
         return True
-    if np.max(z[:2]) > amp_lim or np.min(z[:2]) < -1e3 * pen_lim:
+    if max(d1, d2) > lim.amp_lim or min(d1, d2) < -stop_rule.DEEP * lim.pen_lim:
         return True
-    for i in range(2):
-        if mask >> i & 1 and z[i] < -pen_lim and iwc_aligned(sysm, mask, z[:4], 1e-3):
-            return True
-    return False
+    return (mode.mask & 1 and d1 < -lim.pen_lim) or (mode.mask & 2 and d2 < -lim.pen_lim)
+
+
+def _stop_in(mode: Mode, z, r, z_end, lim: _Limits):
+    """The first stop in ``(0, r]`` of the sub-step from ``z`` (ending at ``z_end``, before any
+    event there): the stop rule at ``z_end``, or a limit of :func:`stop_rule.limit_rows` passed at
+    an interior peak; located by :func:`stop_rule.locate`.  Returns ``(tau, z(tau))`` or None."""
+    hi, W = None, None
+    near = min(lim.amp_lim, stop_rule.DEEP * lim.pen_lim)
+    # |z(tau)| <= exp(|E| tau) |z| (infinity norms): no limit within reach, no peak to bracket
+    if np.abs(z).max() * math.exp(np.abs(mode.E).sum(axis=1).max() * r) >= near:
+        R = stop_rule.limit_rows(lim.amp_lim, lim.pen_lim)
+        peaks, W = _brackets(R, R @ mode.E, -np.ones(4), z, z_end, r, mode, rows=(0, 1, 2, 3))
+        hi = min(peaks.values(), default=None)
+    if _may_stop(mode, z_end, lim) and _stops(mode, z_end[None, :4], lim.amp_lim, lim.pen_lim)[0]:
+        hi = r
+    if hi is None:
+        return None
+    W = mode.P @ z if W is None else W
+
+    powers = np.arange(W.shape[0])
+
+    def state_at(tau, _):
+        return (tau[:, None] ** powers @ W)[:, :4]
+
+    def near(g, _):
+        out, pen = stop_rule.beyond(g, np.full(g.shape[0], mode.mask), lim.amp_lim, lim.pen_lim)
+        return out | pen
+
+    tau, g = stop_rule.locate(state_at, lambda g, _: _stops(mode, g, lim.amp_lim, lim.pen_lim),
+                              np.zeros(1), np.full(1, hi), 1e-13 * mode.h, near)  # fmt: skip
+    return float(tau[0]), np.append(g[0], 1.0)
 
 
 def _div_message(z, mask, amp_lim, pen_lim) -> str:

@@ -307,12 +307,18 @@ def iwc_aligned(sysm: System, mask: int, g, tol) -> bool:
     return bool(iwc_aligned_many(mode.E[None], mode.z_eq[None], np.array([mask]), g, tol)[0])
 
 
+#: share of the dominant eigenvector part below which an active gap's component counts as zero
+#: (a decoupled contact, ``B`` diagonal up to rounding: its sign is a rounding residue)
+DIRECTION_TOL = 1e-9
+
+
 def aligned_in_basis(w, V, c, dev, n_active, tol):
     """The test of :func:`iwc_aligned` on the expansion ``dev = V c`` (n, na) of the active
     deviations in the eigenvectors ``V`` (n, na, na) with eigenvalues ``w`` (n, na): a real,
     positive dominant eigenvalue carries the deviation (each other part ``|c_m| |v_m| <= tol
     |dev|``) along a direction in which every active gap (the first ``n_active`` components)
-    decreases.  NumPy or JAX arrays (:func:`atlas.dynamics.event_bounds.xp_of`); bool (n,)."""
+    decreases (by more than ``DIRECTION_TOL`` of that part).  NumPy or JAX arrays
+    (:func:`atlas.dynamics.event_bounds.xp_of`); bool (n,)."""
     xp = xp_of(w, V, c, dev)
     real_pos = (xp.abs(w.imag) <= 1e-9 * xp.abs(w).max(axis=1, keepdims=True)) & (w.real > 0)
     norm = xp.linalg.norm(dev, axis=1)[:, None]
@@ -323,7 +329,8 @@ def aligned_in_basis(w, V, c, dev, n_active, tol):
     ok = real_pos.any(axis=1) & xp.isfinite(c).all(axis=1)
     ok &= ~xp.any(~real_pos & (parts > tol * norm), axis=1)
     ok &= p_dom > tol * norm[:, 0]
-    ok &= xp.all(direction[:, :n_active] < 0, axis=1)
+    # each active gap driven down by more than rounding (DIRECTION_TOL of the dominant part)
+    ok &= xp.all(direction[:, :n_active] < -DIRECTION_TOL * p_dom[:, None], axis=1)
     return ok
 
 

@@ -233,3 +233,79 @@ def test_twins_are_the_force_and_gap_of_an_undamped_contact():
     want = np.zeros((4, 4), dtype=bool)
     want[0, 2] = want[2, 0] = True  # gap 1 <-> force 1 (q1 = 0); force 2 has q2 = 0.3
     assert np.array_equal(got, want)  # row 3: the force of an open gap is not monitored
+
+
+def _lane(b1, b2, alpha, kappa, q, cell=None, **kw):
+    """The fast engine's and the exact simulator's runs of one lane from the perturbed SS
+    equilibrium of :func:`atlas.dynamics.perturbed_initial_states` (seed 0; of the cell ``(n, i,
+    j)`` of ``outcome_grid(n)`` if given, where ``b1, b2`` are that cell's angles)."""
+    if cell is None:
+        g0 = S.perturbed_initial_states([b1], [b2], alpha, kappa)[0, 0, 0]
+    else:
+        n, i, j = cell
+        g0 = S.perturbed_initial_states(*S.outcome_grid(n), alpha, kappa)[i, j, 0]
+    fast = F.run_lanes(np.array([b1]), np.array([b2]), np.array([alpha]),
+                       np.array([[kappa, 1.0]]), np.array([[q, q]]), g0[None])  # fmt: skip
+    out, res = S.simulate_outcome(b1, b2, alpha, k=(kappa, 1.0), q=(q, q), g0=g0,
+                                  max_events=2000, **kw)  # fmt: skip
+    return fast, out, res
+
+
+@pytest.mark.parametrize(("b1", "b2", "alpha", "kappa", "q", "cell", "expected"), [
+    (*S.outcome_grid(32)[0][19:20], *S.outcome_grid(32)[1][4:5], 0.4 * PI, 0.02, 0.01,
+     (32, 19, 4), "IWC"),
+    (1.75185, 3.57682, 0.58641, 0.05946, 0.03685, None, "UNDETERMINED"),
+    (0.0, 1.5 * PI, 0.3 * PI, 0.1, 0.05, None, "UNDETERMINED"),
+])  # fmt: skip
+def test_divergence_stop_is_located_as_in_the_exact_simulator(b1, b2, alpha, kappa, q, cell,
+                                                               expected):  # fmt: skip
+    """The divergence stops (aligned penetration, amplitude) located as events: both engines stop
+    at the same time (to 1e-9 relative) with the same verdict, the exact simulator's verdict and
+    stop unchanged at a 10 times finer sub-step (theta 0.05).  The first lane drifts without
+    events into an aligned penetration (an independent solve_ivp oracle calls it IWC); the second
+    passes the amplitude limit between the steps of either engine; in the third ``B`` is diagonal
+    (up to the rounding of cos(1.5 pi)): contact 1 is decoupled, its gap is not driven to -inf
+    along the growing eigenvector, so no IWC (early or at the stop) whatever the rounding."""
+    fast, out, res = _lane(b1, b2, alpha, kappa, q, cell)
+    _, out_fine, res_fine = _lane(b1, b2, alpha, kappa, q, cell, theta=0.05)
+    assert out == out_fine == S.Outcome[expected]
+    assert res.status == res_fine.status == S.Status.DIVERGED
+    assert int(fast.code[0]) == int(out)
+    assert fast.t_final[0] == pytest.approx(res.t_final, rel=1e-9)
+    assert res_fine.t_final == pytest.approx(res.t_final, rel=1e-9)
+
+
+def test_near_defective_lane_is_sent_back_at_once():
+    """beta1 = pi/2 + 1e-8 (kappa 5, q 1.5, beta2 0): the SF configuration has eigenvalues
+    ``+-2.2e-4`` and an equilibrium ``~1.2e7`` whose modal amplitudes cancel to the O(1) gaps
+    (evaluated with ~9 of 16 digits): the segment is flagged and the lane falls back to the exact
+    simulator (it was stepped for minutes); at 1e-2 off the axis the same configuration stays on
+    the fast path, and both lanes give the exact simulator's outcome."""
+    alpha, k, q = 0.3 * PI, (5.0, 1.0), (1.5, 1.5)
+    b1 = np.array([PI / 2 + 1e-8, PI / 2 + 1e-2])
+    g = np.array([[1.0, 0.5, 0.0, 0.0]] * 2)  # contact 1 closed as in SF: d1 <= 0
+    g[:, 0] = -0.1
+    lanes = mf.Lanes.of(b1, np.zeros(2), alpha, k, q)
+    tables = mf.modal_tables(lanes)
+    P, U, *_ = mf.segments(lanes, tables, np.arange(2), np.array([1, 1]), g)
+    assert F.cancels(P, U, g, np.ones(2)).tolist() == [True, False]
+    g0 = S.perturbed_initial_states(b1, [0.0], alpha, 5.0, n_perturb=2)[:, 0].reshape(-1, 4)
+    B1 = np.repeat(b1, 2)
+    res = F.run_batch(B1, 0.0, alpha, k, q, g0, reference=_reference)
+    ref = [int(_reference(x, 0.0, alpha, k, q, g)[0]) for x, g in zip(B1, g0, strict=True)]
+    assert res.code.tolist() == ref
+    assert res.decided_by[0] == res.decided_by[1] == F.DECIDED_BY.index("fallback")
+
+
+def test_a_gap_landing_on_the_amplitude_limit_steps_on():
+    """A growing bouncing run of the Fig. 2 map (64^2 cell (2, 30)) reaches a state with a gap
+    exactly at the amplitude limit (not past it: no stop); the engine steps past it instead of
+    stalling there and handing the lane to the exact simulator, and gives its outcome."""
+    alpha, kappa = 0.35 * PI, 0.5
+    b1, b2 = S.outcome_grid(64)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)[2, 30, 0]
+    res = F.run_batch(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0), g0[None],
+                      reference=_reference)  # fmt: skip
+    assert F.DECIDED_BY[res.decided_by[0]] == "stepped"
+    assert int(res.code[0]) == int(_reference(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0),
+                                              g0)[0]) == int(S.Outcome.GROWING_BOUNCING)  # fmt: skip

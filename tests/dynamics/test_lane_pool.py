@@ -79,3 +79,16 @@ def test_chunks_cover_every_lane_once(n, w, extra):
 def test_chunks_refuse_fewer_lanes_than_chunks(n, w):
     with pytest.raises(ValueError, match="need n >= w"):
         chunks(n, w)
+
+
+@pytest.mark.parametrize(("cores", "load", "expected"), [
+    (2, 1.0, 2), (2, 0.2, 2), (2, 1.4, 2), (2, 1.6, 1), (2, 2.6, 1), (2, 7.0, 1), (8, 3.0, 6), (1, 0.0, 1),
+])  # fmt: skip
+def test_usable_cores_leave_out_the_load_of_other_processes(monkeypatch, cores, load, expected):
+    """The cores idle for more processes of this one (this process counted in the load): on 2
+    cores shared with 6 running processes one process, never fewer."""
+    import os
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda _: set(range(cores)), raising=False)
+    monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
+    assert usable_cores() == expected

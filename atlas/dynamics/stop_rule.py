@@ -1,0 +1,118 @@
+"""The divergence stop of a run, one rule for both engines (:func:`atlas.dynamics.simulate` and
+:mod:`atlas.dynamics.fast_engine`; paper Sec. 4.3 for the impact without collision).
+
+A run stops as ``diverged`` at the first time ``t`` at which its state ``g(t)`` (in the
+configuration active from ``t`` on, or the one active up to an event at ``t``) has
+
+* a non-finite component, or a gap ``d_i > amplitude_limit`` (default ``1e4 scale``), or
+* a gap ``d_i < -1e3 penetration_limit`` (default ``1e6 scale``), or
+* an active gap ``d_i < -penetration_limit`` (default ``1e3 scale``) while the state is aligned
+  with an IWC eigenvector (:func:`atlas.dynamics.system.iwc_aligned`, tolerance ``ALIGN_TOL``).
+
+The engines test :func:`stopped` at the ends of their steps and at their events; where it holds at
+the end of a step and not at its start, :func:`locate` searches the step on the closed-form
+solution to the first time it holds (to ``xtol``), so both engines stop at the same time (within
+``xtol``) for the same reason whatever their steps.  A crossing of the amplitude or the deep
+penetration limit that is undone inside one step (a peak) is found by each engine's own bracket
+of the shifted gaps ``d_i - amplitude_limit``, ``-d_i - 1e3 penetration_limit``
+(:func:`limit_rows`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from atlas.dynamics.system import iwc_aligned_many
+
+__all__ = ["AMPLITUDE", "PENETRATION", "DEEP", "ALIGN_TOL", "limits", "limit_rows", "beyond",
+           "stopped", "locate"]  # fmt: skip
+
+#: default limits relative to the run's length scale: amplitude, aligned penetration
+AMPLITUDE, PENETRATION = 1e4, 1e3
+#: the penetration that stops a run whatever its alignment, times the penetration limit
+DEEP = 1e3
+#: alignment tolerance of the aligned-penetration stop (the classification uses 1e-2)
+ALIGN_TOL = 1e-3
+#: search rounds of :func:`locate` at most (each divides the bracket by ``SPLIT``)
+MAX_ROUNDS = 40
+
+
+def limits(scale):
+    """``(amplitude_limit, penetration_limit)`` of a run of length scale ``scale`` [1]."""
+    return AMPLITUDE * scale, PENETRATION * scale
+
+
+def limit_rows(amp, pen):
+    """Rows ``R`` (4, 5) of the shifted gaps on the augmented state ``z = (d, d', 1)``: ``R z``
+    is ``d_i - amp`` (rows 0, 1) and ``-d_i - DEEP pen`` (rows 2, 3), all negative inside the
+    limits."""
+    R = np.zeros((4, 5))
+    R[[0, 1], [0, 1]] = 1.0
+    R[[2, 3], [0, 1]] = -1.0
+    R[:2, 4] = -amp
+    R[2:, 4] = -DEEP * pen
+    return R
+
+
+def beyond(g, mask, amp, pen):
+    """The stop rule without its alignment test (bool (n,)): a non-finite component, a gap past
+    the amplitude or the deep-penetration limit, or an active gap past the penetration limit; a
+    necessary condition of :func:`stopped`, and ``(stop, penetrated)`` where it is sufficient."""
+    g = np.asarray(g, dtype=float)
+    mask = np.asarray(mask, dtype=int)
+    amp, pen = np.broadcast_to(amp, mask.shape), np.broadcast_to(pen, mask.shape)
+    out = ~np.isfinite(g).all(axis=1)
+    with np.errstate(invalid="ignore"):
+        out |= np.max(g[:, :2], axis=1) > amp
+        out |= np.min(g[:, :2], axis=1) < -DEEP * pen
+        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        pen_ = ~out & (act & (g[:, :2] < -pen[:, None])).any(axis=1)
+    return out, pen_
+
+
+def stopped(g, mask, E, z_eq, amp, pen):
+    """The stop rule at the states ``g`` (n, 4) in configurations ``mask`` (n,) (augmented
+    matrices ``E`` (n, 5, 5), equilibria ``z_eq`` (n, 5), NaN where none), limits ``amp``, ``pen``
+    (n,); bool (n,)."""
+    out, deep = beyond(g, mask, amp, pen)
+    r = np.flatnonzero(deep)
+    if r.size:
+        out[r] = iwc_aligned_many(E[r], z_eq[r], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL)
+    return out
+
+
+def locate(state_at, holds, a, b, xtol, near=None):
+    """First time in ``(a, b]`` (n,) at which the stop holds: ``holds(g, rows)`` (bool) of the
+    states ``g`` of the lanes ``rows`` is false at ``a`` and true at ``b``; ``state_at(tau,
+    rows)`` gives the states (m, 4) of lanes ``rows`` (m,) at ``tau`` (m,).  ``near(g, rows)``, a
+    cheaper necessary condition of ``holds`` (:func:`beyond`), if given, is located first (``holds``
+    is false before it).  Each is located by a search in ``SPLIT`` equal parts of the bracket (the
+    first part where it turns true), to ``xtol``.  Returns ``(b, g(b))`` with ``b - a <= xtol``
+    (the stop holds at ``b``)."""
+    a, b = np.array(a, dtype=float), np.array(b, dtype=float)
+    lanes = np.arange(a.size)
+    if near is not None:
+        a1, b1 = _search(state_at, near, a, b, xtol)
+        hit = holds(state_at(b1, lanes), lanes)
+        a, b = np.where(hit, a1, b1), np.where(hit, b1, b)
+    a, b = _search(state_at, holds, a, b, xtol)
+    return b, state_at(b, lanes)
+
+
+#: parts of a bracket per evaluation round of :func:`locate` (``SPLIT - 1`` states per lane)
+SPLIT = 16
+
+
+def _search(state_at, holds, a, b, xtol):
+    a, b = a.copy(), b.copy()
+    frac = np.arange(1, SPLIT) / SPLIT
+    for _ in range(MAX_ROUNDS):
+        r = np.flatnonzero(b - a > xtol)
+        if r.size == 0:
+            break
+        x = a[r, None] + (b - a)[r, None] * frac
+        rows = np.repeat(r, SPLIT - 1)
+        hit = holds(state_at(x.ravel(), rows), rows).reshape(r.size, SPLIT - 1)
+        grid = np.concatenate([a[r, None], x, b[r, None]], axis=1)
+        first = np.where(hit.any(axis=1), hit.argmax(axis=1), SPLIT - 1)
+        a[r], b[r] = grid[np.arange(r.size), first], grid[np.arange(r.size), first + 1]
+    return a, b
