@@ -40,7 +40,7 @@ import numpy as np
 
 from atlas.core.contact_space import ContactSpace, contact_space
 
-__all__ = ["INSTALL", "Contact", "MujocoContacts", "load", "touching", "contact_data", "require"]
+__all__ = ["INSTALL", "MissingExtra", "Contact", "MujocoContacts", "load", "touching", "contact_data", "require"]
 
 #: the one line a user without the extra gets
 INSTALL = "pip install 'painleve-atlas[mujoco]'"
@@ -49,12 +49,16 @@ TOUCH_TOL = 1e-6
 _FD_STEP = 1e-5  # of the model's extent, per finite-difference step
 
 
+class MissingExtra(ImportError, ValueError):
+    """The ``mujoco`` extra is not installed (a ``ValueError`` too: the CLI prints one line)."""
+
+
 def require():
-    """The ``mujoco`` module, or one line naming the install command."""
+    """The ``mujoco`` module, or :class:`MissingExtra` naming the install command."""
     try:
         import mujoco  # noqa: PLC0415  (optional extra)
     except ImportError:
-        raise ImportError(f"mujoco: the MuJoCo bridge needs the mujoco extra: {INSTALL}") from None
+        raise MissingExtra(f"mujoco: the MuJoCo bridge needs the mujoco extra: {INSTALL}") from None
     return mujoco
 
 
