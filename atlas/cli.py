@@ -270,6 +270,11 @@ def _add_mujoco(sub) -> None:
     pm.add_argument("--qvel", metavar="V,...", help="generalised velocities (default: 0)")
     pm.add_argument("--tol", type=float, default=1e-6, help="touching: distance <= TOL [m]")
     pm.add_argument("--json", dest="json_out", action="store_true", help="one JSON object")
+    pm.add_argument(
+        "--rollout", type=float, metavar="T", help="step the model T seconds and report the "
+        "verdicts along the trajectory (where the mode or a verdict changes)",
+    )  # fmt: skip
+    pm.add_argument("--every", type=int, default=10, help="rollout: judge every N-th step")
 
 
 def _add_boundaries(sub) -> None:

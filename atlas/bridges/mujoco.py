@@ -40,7 +40,10 @@ import numpy as np
 
 from atlas.core.contact_space import ContactSpace, contact_space
 
-__all__ = ["INSTALL", "MissingExtra", "Contact", "MujocoContacts", "load", "touching", "contact_data", "require"]
+__all__ = [
+    "INSTALL", "MissingExtra", "Contact", "MujocoContacts", "load", "touching", "contact_data",
+    "require", "state", "collide", "relative_jacobian", "same_contact",
+]
 
 #: the one line a user without the extra gets
 INSTALL = "pip install 'painleve-atlas[mujoco]'"
@@ -98,7 +101,7 @@ def _geom_name(mj, model, gid):
     return mj.mj_id2name(model, mj.mjtObj.mjOBJ_GEOM, gid) or f"geom{gid}"
 
 
-def _collide(model, data, qpos, margin):
+def collide(model, data, qpos, margin):
     """Contacts of ``model`` at ``qpos`` (``data`` is scratch) with every geom margin raised to
     ``margin`` [m] while MuJoCo collides (restored after).  The midphase is off meanwhile: its
     bounding volumes are compiled with the model's margins, and a body's touching geoms lie on
@@ -129,7 +132,7 @@ def _collide(model, data, qpos, margin):
 
 def touching(model, data, qpos, tol=TOUCH_TOL) -> list:
     """The contacts with MuJoCo's signed distance ``<= tol`` [m] at ``qpos``."""
-    return [c for c in _collide(model, data, qpos, tol) if c.dist <= tol]
+    return [c for c in collide(model, data, qpos, tol) if c.dist <= tol]
 
 
 def _select(found, contacts):
@@ -161,7 +164,7 @@ def _select(found, contacts):
     return out
 
 
-def _jacobian(mj, model, data, contact):
+def relative_jacobian(mj, model, data, contact):
     """``J_2 - J_1`` (3, nv): relative velocity of bodies 2 and 1 at ``contact.pos``."""
     out = []
     for body in contact.bodies:
@@ -171,7 +174,7 @@ def _jacobian(mj, model, data, contact):
     return out[1] - out[0]
 
 
-def _match(found, contact):
+def same_contact(found, contact):
     """The contact of the same geom pair nearest to ``contact.pos`` in ``found``."""
     same = [c for c in found if c.ids == contact.ids]
     if not same:
@@ -191,9 +194,9 @@ def _drift(mj, model, qpos, qvel, chosen, scratch):
     for sign in (1.0, -1.0):
         q = qpos.copy()
         mj.mj_integratePos(model, q, qvel, sign * h)
-        found = _collide(model, scratch, q, margin)
-        shifted = [_match(found, c) for c in chosen]
-        rows = [c.n @ _jacobian(mj, model, scratch, c) for c in shifted]
+        found = collide(model, scratch, q, margin)
+        shifted = [same_contact(found, c) for c in chosen]
+        rows = [c.n @ relative_jacobian(mj, model, scratch, c) for c in shifted]
         rates.append(np.array([row @ qvel for row in rows]))
     return (rates[0] - rates[1]) / (2 * h)
 
@@ -230,8 +233,8 @@ class MujocoContacts:
     slip: np.ndarray
     speeds: np.ndarray
 
-    def verdicts(self, dtype="float64") -> dict:
-        return self.space.verdicts(dtype)
+    def verdicts(self, dtype="float64", names=None) -> dict:
+        return self.space.verdicts(dtype, names)
 
 
 def contact_data(
@@ -243,27 +246,16 @@ def contact_data(
     ``None``: the model's ``qpos0`` and zero velocity.  ``qpos`` (nq,), ``qvel`` (nv,) override it.
     ``contacts``: ``None`` (the one or two touching contacts), or one or two geom names / pairs
     ``"g1/g2"`` (a list or a comma-separated string).  ``slip``: unit slip directions per contact
-    (world 3-vectors), needed only where a contact does not slide.  ``tol`` [m]: touching.
+    (world 3-vectors), needed only where a frictional contact does not slide.  ``tol`` [m]: touching.
     """
     mj = require()
-    work = mj.MjData(model)
-    if data is not None:
-        for key in ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos"):
-            getattr(work, key)[:] = getattr(data, key)
-        work.mocap_quat[:] = data.mocap_quat
-        work.time = data.time
-    for key, value, size in (("qpos", qpos, model.nq), ("qvel", qvel, model.nv)):
-        if value is not None:
-            arr = np.asarray(value, dtype=np.float64).ravel()
-            if arr.shape != (size,) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"{key}: expected {size} finite numbers, got {arr.size}")
-            getattr(work, key)[:] = arr
+    work = state(model, data, qpos, qvel)
     qpos0, qvel0 = work.qpos.copy(), work.qvel.copy()
     chosen = _select(touching(model, work, qpos0, tol), contacts)
     work.qpos[:] = qpos0
     mj.mj_forward(model, work)
     M = _full_mass(mj, model, work)
-    rel = [_jacobian(mj, model, work, c) for c in chosen]
+    rel = [relative_jacobian(mj, model, work, c) for c in chosen]
     Jn = np.array([c.n @ J for c, J in zip(chosen, rel)])
     slip, speeds = _slip(chosen, rel, qvel0, slip)
     Jt = np.array([t @ J for t, J in zip(slip, rel)])
@@ -278,6 +270,25 @@ def contact_data(
     return MujocoContacts(space, tuple(chosen), slip, speeds)
 
 
+def state(model, data=None, qpos=None, qvel=None):
+    """A fresh ``MjData`` with the state of ``data`` (positions, velocities, controls, applied
+    forces, mocap, time; ``None``: ``qpos0`` at rest) and ``qpos`` / ``qvel`` overriding it."""
+    mj = require()
+    work = mj.MjData(model)
+    if data is not None:
+        for key in ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos"):
+            getattr(work, key)[:] = getattr(data, key)
+        work.mocap_quat[:] = data.mocap_quat
+        work.time = data.time
+    for key, value, size in (("qpos", qpos, model.nq), ("qvel", qvel, model.nv)):
+        if value is not None:
+            arr = np.asarray(value, dtype=np.float64).ravel()
+            if arr.shape != (size,) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{key}: expected {size} finite numbers, got {arr.size}")
+            getattr(work, key)[:] = arr
+    return work
+
+
 def _slip(chosen, rel, qvel, given):
     """Unit slip directions: the tangential relative velocity at each contact, or ``given``."""
     out, speeds = [], []
@@ -286,7 +297,9 @@ def _slip(chosen, rel, qvel, given):
         vt = v - (c.n @ v) * c.n
         speed = float(np.linalg.norm(vt))
         speeds.append(speed)
-        if given is not None and given[j] is not None:
+        if c.mu == 0.0 and not speed > 0:
+            out.append(np.zeros(3))  # frictionless: the slip direction does not enter B
+        elif given is not None and given[j] is not None:
             t = np.asarray(given[j], dtype=np.float64)
             t = t - (c.n @ t) * c.n
             norm = float(np.linalg.norm(t))

@@ -115,13 +115,38 @@ def _text(rep) -> str:
     return "\n".join(lines + meaning(rep))
 
 
-def run_cli(model, contacts=None, qpos=None, qvel=None, json_out=False, tol=bridge.TOUCH_TOL):
-    """``atlas mujoco``: load, compute at the state, print (text or ``--json``); returns 0."""
+def run_cli(
+    model, contacts=None, qpos=None, qvel=None, json_out=False, tol=bridge.TOUCH_TOL,
+    rollout=None, every=10,
+):  # fmt: skip
+    """``atlas mujoco``: load, compute at the state (or along ``rollout`` seconds of MuJoCo's
+    trajectory), print (text or ``--json``); returns 0."""
     mj_model, data = bridge.load(model)
-    res = bridge.contact_data(
-        mj_model, data, contacts=contacts, qpos=_numbers("qpos", qpos),
-        qvel=_numbers("qvel", qvel), tol=tol,
-    )  # fmt: skip
+    state = dict(qpos=_numbers("qpos", qpos), qvel=_numbers("qvel", qvel))
+    if rollout is not None:
+        from atlas.bridges.rollout import rollout as run  # noqa: PLC0415  (only with --rollout)
+
+        tol = max(tol, 1e-4)  # a rollout's contacts penetrate: touching within 0.1 mm
+        res = run(mj_model, data, rollout, contacts=contacts, every=every, tol=tol, **state)
+        print(json.dumps(_rollout_report(res, model)) if json_out else _rollout_text(res))
+        return 0
+    res = bridge.contact_data(mj_model, data, contacts=contacts, tol=tol, **state)
     rep = report(res, model)
     print(json.dumps(rep) if json_out else _text(rep))
     return 0
+
+
+def _rollout_report(res, model) -> dict:
+    return {
+        "model": str(model),
+        "contacts": list(res.contacts),
+        "events": [{"t": t, "event": e} for t, e in res.events],
+        "samples": res.samples,
+        "seconds_per_sample": res.step_time,
+    }
+
+
+def _rollout_text(res) -> str:
+    lines = [f"contacts: {', '.join(res.contacts)}; {len(res.samples)} states judged"]
+    lines += [f"t = {t:.4f} s: {e}" for t, e in res.events]
+    return "\n".join(lines)

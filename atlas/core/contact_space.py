@@ -186,12 +186,12 @@ class ContactSpace:
         out.update(mech.invariants(k[0], k[1], c[0], c[1], b1, b2))
         return out
 
-    def verdicts(self, dtype="float64") -> dict:
-        """Every verdict at this contact space: :func:`verdicts_at` at the invariants (two
-        contacts) or :func:`single_contact_verdicts` (one)."""
+    def verdicts(self, dtype="float64", names=None) -> dict:
+        """Every verdict at this contact space (or those ``names``): :func:`verdicts_at` at the
+        invariants (two contacts) or :func:`single_contact_verdicts` (one)."""
         if self.n_contacts == 1:
             return single_contact_verdicts(self.B[0, 0], self.a[0])
-        res = verdicts_at(**self.invariants(), dtype=dtype)
+        res = verdicts_at(**self.invariants(), dtype=dtype, names=names)
         return {key: v[()] for key, v in res.items()}
 
     def _need_two(self, what):

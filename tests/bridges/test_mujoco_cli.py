@@ -81,3 +81,18 @@ def test_missing_extra_is_one_line_naming_the_install(monkeypatch, capsys):
         "atlas: error: mujoco: the MuJoCo bridge needs the mujoco extra: "
         "pip install 'painleve-atlas[mujoco]'"
     )
+
+
+@needs_mujoco
+def test_rollout_reports_events(capsys):
+    """--rollout: the example ladder (mu = 0.4) sliding at 0.5 m/s slows to a stop; the events
+    name the state at the start and where a contact stops sliding."""
+    args = ["mujoco", EXAMPLE, "--qvel", QVEL, "--rollout", "0.3", "--every", "20"]
+    assert cli.main([*args, "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["contacts"] == ["floor/foot", "wall/top"] and len(rep["samples"]) == 31
+    first = rep["events"][0]
+    assert first["t"] == 0.0 and "consistent_SS = True" in first["event"]
+    assert any("stuck" in e["event"] for e in rep["events"][1:])
+    assert cli.main(args) == 0
+    assert capsys.readouterr().out.startswith("contacts: floor/foot, wall/top; 31 states judged")
