@@ -275,6 +275,10 @@ def _add_mujoco(sub) -> None:
         "verdicts along the trajectory (where the mode or a verdict changes)",
     )  # fmt: skip
     pm.add_argument("--every", type=int, default=10, help="rollout: judge every N-th step")
+    pm.add_argument(
+        "--jam-test", action="store_true", help="rollout: run again with the constraint time "
+        "constants halved (a jam's stop time halves, a friction stop's does not)",
+    )  # fmt: skip
 
 
 def _add_boundaries(sub) -> None:

@@ -117,18 +117,24 @@ def _text(rep) -> str:
 
 def run_cli(
     model, contacts=None, qpos=None, qvel=None, json_out=False, tol=bridge.TOUCH_TOL,
-    rollout=None, every=10,
+    rollout=None, every=10, jam_test=False,
 ):  # fmt: skip
     """``atlas mujoco``: load, compute at the state (or along ``rollout`` seconds of MuJoCo's
     trajectory), print (text or ``--json``); returns 0."""
     mj_model, data = bridge.load(model)
     state = dict(qpos=_numbers("qpos", qpos), qvel=_numbers("qvel", qvel))
     if rollout is not None:
-        from atlas.bridges.rollout import rollout as run  # noqa: PLC0415  (only with --rollout)
+        from atlas.bridges import rollout as roll  # noqa: PLC0415  (only with --rollout)
 
         tol = max(tol, 1e-4)  # a rollout's contacts penetrate: touching within 0.1 mm
-        res = run(mj_model, data, rollout, contacts=contacts, every=every, tol=tol, **state)
-        print(json.dumps(_rollout_report(res, model)) if json_out else _rollout_text(res))
+        kw = dict(contacts=contacts, every=every, tol=tol, **state)
+        res = roll.rollout(mj_model, data, rollout, **kw)
+        rep = _rollout_report(res, model)
+        text = _rollout_text(res)
+        if jam_test:
+            rep["jam_test"] = roll.jam_test(mj_model, data, rollout, **kw)
+            text += "\n" + _jam_text(rep["jam_test"])
+        print(json.dumps(rep) if json_out else text)
         return 0
     res = bridge.contact_data(mj_model, data, contacts=contacts, tol=tol, **state)
     rep = report(res, model)
@@ -144,6 +150,14 @@ def _rollout_report(res, model) -> dict:
         "samples": res.samples,
         "seconds_per_sample": res.step_time,
     }
+
+
+def _jam_text(jt) -> str:
+    ms = lambda t: "none" if t is None else f"{t * 1e3:.1f} ms"  # noqa: E731
+    line = f"stop: {ms(jt['stop'])}, with the time constants halved: {ms(jt['stop_halved'])}"
+    if jt["kind"] is None:
+        return line
+    return line + f" (ratio {jt['ratio']:.2f}: {jt['kind']})"
 
 
 def _rollout_text(res) -> str:

@@ -18,7 +18,7 @@ import numpy as np
 
 from atlas.bridges import mujoco as bridge
 
-__all__ = ["Rollout", "rollout", "KEYS"]
+__all__ = ["Rollout", "rollout", "jam_test", "KEYS"]
 
 #: the verdicts recorded along a rollout (two contacts; one contact: all of its four)
 KEYS = (
@@ -49,11 +49,12 @@ class Rollout:
 
 def rollout(
     model, data=None, duration=1.0, *, contacts=None, qpos=None, qvel=None, every=10,
-    tol=1e-4, stop_speed=1e-2,
+    tol=1e-4, stop_speed=1e-2, judge=True,
 ) -> Rollout:  # fmt: skip
     """Step ``model`` for ``duration`` [s] from the state (``data`` / ``qpos`` / ``qvel`` as in
     :func:`atlas.bridges.mujoco.contact_data`, which also chooses ``contacts`` at the start) and
-    judge every ``every``-th state (module docstring).  ``data`` is not changed."""
+    judge every ``every``-th state (module docstring; ``judge=False``: modes only, no verdicts).
+    ``data`` is not changed."""
     import time  # noqa: PLC0415  (wall time of the sampled states only)
 
     mj = bridge.require()
@@ -69,7 +70,7 @@ def rollout(
     for i in range(steps + 1):
         if i % int(every) == 0:
             t0 = time.perf_counter()
-            samples.append(_sample(mj, model, work, chosen, tol, stop_speed))
+            samples.append(_sample(mj, model, work, chosen, tol, stop_speed, judge))
             spent += time.perf_counter() - t0
         if i < steps:
             mj.mj_step(model, work)
@@ -82,7 +83,7 @@ def _any_slip(n):
     return [(1.0, 0.0, 0.0)] * n
 
 
-def _sample(mj, model, work, chosen, tol, stop_speed) -> dict:
+def _sample(mj, model, work, chosen, tol, stop_speed, judge=True) -> dict:
     """One sampled state: distances, speeds, modes and (where they apply) the verdicts."""
     scratch = bridge.state(model, work)
     margin = 0.05 * (float(model.stat.extent) or 1.0)
@@ -102,7 +103,9 @@ def _sample(mj, model, work, chosen, tol, stop_speed) -> dict:
     out = dict(t=float(work.time), qpos=work.qpos.tolist(), qvel=work.qvel.tolist(), dist=dist, speed=speed,
                touching=touching, sliding=sliding, verdicts=None, why=None)  # fmt: skip
     active = [c.name for c, t in zip(chosen, touching) if t]
-    if not active:
+    if not judge:
+        out["why"] = "not judged"
+    elif not active:
         out["why"] = "no contact touches"
     elif not all(s for s, t in zip(sliding, touching) if t):
         out["why"] = "a touching contact does not slide"
@@ -142,4 +145,38 @@ def _events(samples, names) -> list:
             text = "; ".join(x for x in (mode, ", ".join(changed)) if x)
             out.append((s["t"], text or (s["why"] or "verdicts not applicable")))
         last = sig
+    return out
+
+
+def _stop(res):
+    """Time [s] of the first sample after the start where a touching contact does not slide."""
+    for s in res.samples[1:]:
+        if any(t and not sl for t, sl in zip(s["touching"], s["sliding"])):
+            return s["t"]
+    return None
+
+
+def jam_test(model, data=None, duration=0.5, **kw) -> dict:
+    """Tell a jam from a friction stop: the stop time at the model's constraint time constants
+    and at half of them (``solref[0]`` of the geoms and pairs halved; a direct ``(-k, -b)``
+    becomes ``(-4k, -2b)``).  A jam (an impact without collision, resolved by the constraint's
+    own dynamics) stops in proportion to the time constant; a friction stop does not.  Returns
+    ``stop``, ``stop_halved`` [s] (``None``: no stop within ``duration``), their ``ratio`` and
+    ``kind`` (``"jam"`` where the ratio exceeds 1.5, else ``"friction stop"``)."""
+    kw = dict(kw, judge=False)
+    first = _stop(rollout(model, data, duration, **kw))
+    saved = model.geom_solref.copy(), model.pair_solref.copy()
+    try:
+        for arr in (model.geom_solref, model.pair_solref):
+            pos = arr[:, 0] > 0
+            arr[pos, 0] *= 0.5
+            arr[~pos, 0] *= 4.0
+            arr[~pos, 1] *= 2.0
+        halved = _stop(rollout(model, data, duration, **kw))
+    finally:
+        model.geom_solref[:], model.pair_solref[:] = saved
+    out = dict(stop=first, stop_halved=halved, ratio=None, kind=None)
+    if first is not None and halved:
+        out["ratio"] = first / halved
+        out["kind"] = "jam" if out["ratio"] > 1.5 else "friction stop"
     return out

@@ -94,5 +94,7 @@ def test_rollout_reports_events(capsys):
     first = rep["events"][0]
     assert first["t"] == 0.0 and "consistent_SS = True" in first["event"]
     assert any("stuck" in e["event"] for e in rep["events"][1:])
-    assert cli.main(args) == 0
-    assert capsys.readouterr().out.startswith("contacts: floor/foot, wall/top; 31 states judged")
+    assert cli.main([*args, "--jam-test"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("contacts: floor/foot, wall/top; 31 states judged")
+    assert out.splitlines()[-1].startswith("stop: ") and "friction stop)" in out

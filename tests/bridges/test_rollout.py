@@ -16,7 +16,7 @@ mujoco = pytest.importorskip("mujoco", reason="the mujoco extra is not installed
 from mjcf_bodies import mjcf  # noqa: E402
 
 from atlas.bridges import mujoco as bridge  # noqa: E402
-from atlas.bridges.rollout import rollout  # noqa: E402
+from atlas.bridges.rollout import jam_test, rollout  # noqa: E402
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ladder.xml"
 
@@ -64,28 +64,24 @@ def _rod(mu, timeconst):
     return mujoco.MjModel.from_xml_string(text)
 
 
-def _stop_time(mu, timeconst, duration):
-    res = rollout(
-        _rod(mu, timeconst), None, duration, qpos=[0.1, 0, 0], qvel=[1.0, 0, 0], contacts="c1",
-        every=10,
-    )  # fmt: skip
-    stop = next(s for s in res.samples if not s["sliding"][0])
-    return res.samples[0]["verdicts"], stop["t"]
-
-
 def test_jam_and_friction_stop_told_apart_by_the_time_constant():
-    """mu = 2: only the jam (IWC) is consistent, and MuJoCo's stop time scales with the
-    constraint time constant (measured 55 / 14 ms at 20 / 5 ms); mu = 0.5: sliding consistent
-    and stable, a friction stop, nearly independent of it (216 / 202 ms)."""
-    v, slow = _stop_time(2.0, 0.02, 0.1)
-    assert v == {"consistent_F": False, "consistent_S": False, "stable_S": False,
-                 "consistent_I": True}  # fmt: skip
-    _, fast = _stop_time(2.0, 0.005, 0.1)
-    assert 3.0 < slow / fast < 5.0
-    v, slow = _stop_time(0.5, 0.02, 0.3)
+    """Painleve's rod at mu = 2: only the jam (IWC) is consistent at the start, and MuJoCo's stop
+    time halves with the constraint time constant (jam_test); at mu = 0.5 sliding is consistent
+    and stable, a friction stop, nearly independent of it.  (With 20 / 5 ms: 55 / 14 ms against
+    216 / 202 ms.)"""
+    kw = dict(qpos=[0.1, 0, 0], qvel=[1.0, 0, 0], contacts="c1", every=10)
+    state = {k: kw[k] for k in ("qpos", "qvel", "contacts")}
+    jam, slide = _rod(2.0, 0.02), _rod(0.5, 0.02)
+    assert bridge.contact_data(jam, **state).verdicts() == {
+        "consistent_F": False, "consistent_S": False, "stable_S": False, "consistent_I": True,
+    }  # fmt: skip
+    v = bridge.contact_data(slide, **state).verdicts()
     assert v["consistent_S"] and v["stable_S"] and not v["consistent_I"]
-    _, fast = _stop_time(0.5, 0.005, 0.3)
-    assert 0.85 < slow / fast < 1.2
+    jt = jam_test(jam, None, 0.1, **kw)
+    assert jt["kind"] == "jam" and 1.6 < jt["ratio"] < 2.5, jt
+    ft = jam_test(slide, None, 0.3, **kw)
+    assert ft["kind"] == "friction stop" and 0.85 < ft["ratio"] < 1.2, ft
+    assert jam.geom_solref[0, 0] == 0.02  # restored
 
 
 def test_rollout_errors():
