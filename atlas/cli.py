@@ -268,6 +268,10 @@ def _add_mujoco(sub) -> None:
     )  # fmt: skip
     pm.add_argument("--qpos", metavar="X,...", help="generalised positions (default: qpos0)")
     pm.add_argument("--qvel", metavar="V,...", help="generalised velocities (default: 0)")
+    pm.add_argument(
+        "--slip", metavar="X,Y,Z;...", help="slip directions (world) of the contacts, in order: "
+        "needed only where a frictional contact does not slide",
+    )  # fmt: skip
     pm.add_argument("--tol", type=float, default=1e-6, help="touching: distance <= TOL [m]")
     pm.add_argument("--json", dest="json_out", action="store_true", help="one JSON object")
     pm.add_argument(

@@ -28,6 +28,16 @@ def _numbers(name, text):
         raise ValueError(f"{name}: expected comma-separated numbers, got {text!r}") from None
 
 
+def _slips(text):
+    """``"x,y,z;x,y,z"`` -> per-contact 3-vectors (``None``: not given)."""
+    if text is None:
+        return None
+    out = [_numbers("slip", part) for part in text.split(";")]
+    if any(len(v) != 3 for v in out):
+        raise ValueError(f"slip: expected x,y,z per contact separated by ';', got {text!r}")
+    return out
+
+
 def _plain(v):
     """JSON-ready value of a verdict (numpy scalars -> bool / int / float)."""
     v = np.asarray(v)
@@ -117,7 +127,7 @@ def _text(rep) -> str:
 
 def run_cli(
     model, contacts=None, qpos=None, qvel=None, json_out=False, tol=bridge.TOUCH_TOL,
-    rollout=None, every=10, jam_test=False,
+    rollout=None, every=10, jam_test=False, slip=None,
 ):  # fmt: skip
     """``atlas mujoco``: load, compute at the state (or along ``rollout`` seconds of MuJoCo's
     trajectory), print (text or ``--json``); returns 0."""
@@ -136,7 +146,9 @@ def run_cli(
             text += "\n" + _jam_text(rep["jam_test"])
         print(json.dumps(rep) if json_out else text)
         return 0
-    res = bridge.contact_data(mj_model, data, contacts=contacts, tol=tol, **state)
+    res = bridge.contact_data(
+        mj_model, data, contacts=contacts, tol=tol, slip=_slips(slip), **state
+    )
     rep = report(res, model)
     print(json.dumps(rep) if json_out else _text(rep))
     return 0

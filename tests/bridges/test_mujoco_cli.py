@@ -54,6 +54,9 @@ def test_text_report_and_single_contact(capsys):
     assert cli.main(["mujoco", EXAMPLE, "--qvel", QVEL, "--contacts", "foot"]) == 0
     out = capsys.readouterr().out
     assert "consistent_S = True" in out and "B [1/kg] = [[0.0598017]]" in out
+    args = ["mujoco", EXAMPLE, "--slip", "1,0,0;0,0,-1"]  # at rest: the directions given
+    assert cli.main(args) == 0
+    assert "B [1/kg] = [[0.0598017, -0.0267456], [-7.89585e-05, 0.273532]]" in capsys.readouterr().out
 
 
 @needs_mujoco
@@ -65,6 +68,7 @@ def test_text_report_and_single_contact(capsys):
         (["--qpos", "0.3,0.5,0"], "atlas: error: contacts: no two geoms touch"),
         ([], "atlas: error: qvel: contact floor/foot does not slide"),
         (["--qvel", QVEL, "--contacts", "rails"], "atlas: error: contacts: 'rails' does not"),
+        (["--slip", "1,0"], "atlas: error: slip: expected x,y,z per contact"),
     ],
 )
 def test_errors_are_one_line(extra, pattern, capsys):
