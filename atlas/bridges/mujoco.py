@@ -8,8 +8,9 @@ points from geom 1 to geom 2; ``pos`` is the midpoint of the surfaces) the Jacob
 ``J_n = n^T (J_2 - J_1)`` and ``J_t = t^T (J_2 - J_1)`` of the points of bodies 1 and 2 at ``pos``
 (``mj_jac``).  ``t`` is the unit slip direction, the tangential part of the relative velocity
 ``(J_2 - J_1) qvel`` at ``pos`` (so ``s = +1``), and ``mu`` the contact's first friction
-coefficient (MuJoCo's combination of the two geoms').  The velocity term ``drift = (J_n)' qvel``
-is the derivative of ``J_n`` along ``qvel`` by central differences of the collision geometry at
+coefficient (MuJoCo's combination of the two geoms'; 0 where ``condim = 1``).  The velocity term
+``drift = (J_n)' qvel`` is the derivative of ``J_n`` along ``qvel`` by central differences of the
+collision geometry at
 ``qpos (+-) h qvel`` (``mj_integratePos``; ``h qvel`` moves about ``1e-5`` of the model's extent,
 error about 1e-9 relative): it carries every geometric term -- the normal turning with a body side,
 the rolling of rounded geoms -- that the planar closed forms of :mod:`atlas.core.rigid_body` write
@@ -123,7 +124,8 @@ def collide(model, data, qpos, margin):
             Contact(
                 _geom_name(mj, model, g1), _geom_name(mj, model, g2), (g1, g2),
                 (int(model.geom_bodyid[g1]), int(model.geom_bodyid[g2])), c.pos.copy(),
-                c.frame[:3].copy(), float(c.dist), float(c.friction[0]), tuple(c.solref),
+                c.frame[:3].copy(), float(c.dist), 0.0 if c.dim == 1 else float(c.friction[0]),
+                tuple(c.solref),
                 tuple(c.solimp),
             )
         )  # fmt: skip
