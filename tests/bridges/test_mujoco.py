@@ -159,3 +159,66 @@ def test_contact_model_matches_mujocos_contact_dynamics():
     ups = np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]
     period = np.mean(np.diff(ups)) * 1e-5
     assert len(ups) >= 3 and 2 * math.pi / period == pytest.approx(wd, rel=0.01)
+
+
+def _xyz(v):
+    return " ".join(repr(float(x)) for x in v)
+
+
+def _quat_matrix(q):
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_spatial_body_matches_the_rigid_body_formulas(seed):
+    """A free body in 3-D (full inertia tensor, turned, spinning, sliding in any direction) with
+    two spheres on two planes: ``b_ij = n_i . w_j / m + (r_i x n_i) . I^-1 (r_j x w_j)`` (``I``
+    in world axes, ``w_j = n_j - mu_j t_j``, ``t_j`` the slip direction at the contact point) and
+    ``a_i = -n_i . (g + alpha x c_i + omega x (omega x c_i))`` for the sphere centres ``c_i``
+    (free rotation: ``alpha = -I^-1 (omega x I omega)``), written here from Newton-Euler."""
+    rng = np.random.default_rng(seed)
+    m, inertia, rho = 3.0, rng.uniform(0.4, 0.7, 3), 0.02  # A + B >= C
+    quat = rng.normal(size=4)
+    R = _quat_matrix(quat)
+    local = rng.uniform(-0.5, 0.5, (2, 3))
+    normals = [np.array([0.0, 0.0, 1.0]), np.array([0.3, -0.4, 0.866])]
+    normals[1] /= np.linalg.norm(normals[1])
+    mu = rng.uniform(0.1, 1.5, 2)
+    centres = [R @ lj for lj in local]  # relative to the centre of mass (at the origin)
+    world, parts = [], []
+    for j in (0, 1):
+        p = centres[j] - rho * normals[j]
+        bits = f'contype="{1 << j}" conaffinity="{1 << j}" friction="{float(mu[j])!r} 0 0"'
+        world.append(f'<geom name="plane{j}" type="plane" size="0 0 1" pos="{_xyz(p)}" '
+                     f'zaxis="{_xyz(normals[j])}" {bits}/>')
+        parts.append(f'<geom name="s{j}" type="sphere" size="{rho}" pos="'
+                     f'{_xyz(local[j])}" {bits}/>')
+    q = _xyz(quat / np.linalg.norm(quat))
+    model = mujoco.MjModel.from_xml_string(f"""<mujoco><worldbody>{"".join(world)}
+        <body pos="0 0 0" quat="{q}"><freejoint/><inertial pos="0 0 0" mass="{m}"
+        diaginertia="{_xyz(inertia)}"/>{"".join(parts)}</body>
+        </worldbody></mujoco>""")  # fmt: skip
+    qvel = rng.uniform(-1, 1, 6)
+    res = bridge.contact_data(model, qvel=qvel, contacts="s0,s1")
+    v, omega = qvel[:3], R @ qvel[3:]  # MuJoCo: linear in world, angular in body axes
+    Iw = R @ np.diag(inertia) @ R.T
+    r = [c - rho * n for c, n in zip(centres, normals)]  # the contact points
+    w = []
+    for j in (0, 1):
+        vel = v + np.cross(omega, r[j])
+        t = vel - (normals[j] @ vel) * normals[j]
+        w.append(normals[j] - mu[j] * t / np.linalg.norm(t))
+    B = np.array([[normals[i] @ w[j] / m
+                   + np.cross(r[i], normals[i]) @ np.linalg.solve(Iw, np.cross(r[j], w[j]))
+                   for j in (0, 1)] for i in (0, 1)])  # fmt: skip
+    alpha = -np.linalg.solve(Iw, np.cross(omega, Iw @ omega))
+    g = np.array([0.0, 0.0, -9.81])
+    a = [-(n @ (g + np.cross(alpha, c) + np.cross(omega, np.cross(omega, c))))
+         for n, c in zip(normals, centres)]  # fmt: skip
+    np.testing.assert_allclose(res.space.B, B, rtol=0, atol=1e-13 * np.abs(B).max())
+    np.testing.assert_allclose(res.space.a, a, rtol=0, atol=1e-9 * np.abs(a).max())
