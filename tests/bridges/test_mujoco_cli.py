@@ -51,6 +51,7 @@ def test_text_report_and_single_contact(capsys):
     out = capsys.readouterr().out
     assert "contact wall/top: mu 0.4" in out.splitlines()[1]
     assert "stable_SS = 1 (stable)" in out and "jam consistent: none" in out
+    assert "lift-off consistent: none (a separation the engine shows here is an artefact" in out
     assert cli.main(["mujoco", EXAMPLE, "--qvel", QVEL, "--contacts", "foot"]) == 0
     out = capsys.readouterr().out
     assert "consistent_S = True" in out and "B [1/kg] = [[0.0598017]]" in out
