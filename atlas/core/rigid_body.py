@@ -89,6 +89,7 @@ __all__ = [
     "BODY_SIDE",
     "CONTACT_KINDS",
     "admissible_twist",
+    "jacobians",
     "sliding_signs",
     "twist",
     "check_body",
@@ -134,6 +135,13 @@ def admissible_twist(r, n):
     )
     u = tuple(_dot(tangent(n[j]), z[:2]) + _cross(r[j], tangent(n[j])) * z[2] for j in (0, 1))
     return z, u
+
+
+def jacobians(r, n):
+    """``(J_n, J_t)``: rows ``[n_jx, n_jy, r_j x n_j]`` and ``[t_jx, t_jy, r_j x t_j]`` of the contacts
+    at ``r`` [m] with unit normals ``n`` (module docstring): ``d' = J_n x'``, ``u = J_t x'``."""
+    rows = lambda e: np.array([[*e(nj), _cross(rj, e(nj))] for rj, nj in zip(r, n)])  # noqa: E731
+    return rows(lambda nj: nj), rows(tangent)
 
 
 def mobility(m, I, r, n, mu, s):
@@ -487,12 +495,12 @@ class Mechanism:
     @property
     def normal_jacobian(self) -> np.ndarray:
         """Rows ``J_j = [n_jx, n_jy, r_j x n_j]``: ``d_j' = J_j x'`` [1, 1, m]."""
-        return np.array([[*n, _cross(r, n)] for r, n in zip(self._r, self._n)])
+        return jacobians(self._r, self._n)[0]
 
     @property
     def tangent_jacobian(self) -> np.ndarray:
         """Rows ``[t_jx, t_jy, r_j x t_j]``: tangential velocity of contact ``j`` along ``t_j``."""
-        return np.array([[*tangent(n), _cross(r, tangent(n))] for r, n in zip(self._r, self._n)])
+        return jacobians(self._r, self._n)[1]
 
     @cached_property
     def B(self) -> np.ndarray:
