@@ -9,7 +9,11 @@ vertex contacts on planes of any direction), sliding.  Prediction from the verdi
 geom): the first contact whose distance exceeds ``LIFT`` -> ``SF`` (contact 2 lifts) / ``FS`` /
 ``FF``; else a contact whose sliding speed falls below a tenth of its start: a stop, a ``jam``
 where halving the time constant shortens its time by more than 1.5x, else a friction stop (the
-sliding mode ending by friction: agrees with ``SS``); else ``SS``.
+sliding mode ending by friction: agrees with ``SS``); else ``SS``.  Where MuJoCo separates a
+contact, the verdicts are also taken at the state where it actually separates (the last sample,
+every 0.5 ms from 0.1 ms, or the start, at which the lifting contact still touched, ``dist <= 1e-6`` m): the prediction
+``at separation`` (the start's prediction where nothing separates; ``n/a`` where the bridge cannot
+judge that state, e.g. a contact there not touching or not sliding).
 """
 
 from __future__ import annotations
@@ -68,12 +72,14 @@ def predict(v) -> str:
 
 
 def outcome(model, qvel):
-    """``(kind, time)``: ``SF`` / ``FS`` / ``FF`` / ``stop`` / ``SS`` and when."""
+    """``(kind, time, separation)``: ``SF`` / ``FS`` / ``FF`` / ``stop`` / ``SS``, when, and for
+    a lift-off ``(t, qpos, qvel)`` where the (first) lifting contact last touched."""
     data = bridge.state(model, None, None, qvel)
     start = bridge.contact_data(model, data, contacts="c1,c2")
     v0 = start.speeds
     scratch = bridge.state(model)
     stopped = False
+    touched = [(0.0, data.qpos.copy(), data.qvel.copy())] * 2
     for i in range(int(round(HORIZON / model.opt.timestep))):
         mujoco.mj_step(model, data)
         if i % 5:
@@ -86,20 +92,34 @@ def outcome(model, qvel):
                 lifted.append(j)
                 continue
             x = bridge.same_contact(found, c)
+            if x.dist <= bridge.TOUCH_TOL:
+                touched[j] = (data.time, data.qpos.copy(), data.qvel.copy())
             scratch.qvel[:] = data.qvel
             vel = bridge.relative_jacobian(mujoco, model, scratch, x) @ data.qvel
             if np.linalg.norm(vel - (x.n @ vel) * x.n) < 0.1 * v0[j]:
                 stopped = True
         if lifted:
-            return {(0,): "FS", (1,): "SF", (0, 1): "FF"}[tuple(lifted)], data.time
+            kind = {(0,): "FS", (1,): "SF", (0, 1): "FF"}[tuple(lifted)]
+            return kind, data.time, min((touched[j] for j in lifted), key=lambda x: x[0])
         if stopped:
-            return "stop", data.time
-    return "SS", HORIZON
+            return "stop", data.time, None
+    return "SS", HORIZON, None
+
+
+def predict_at(model, separation, pred):
+    """The prediction at the separation state (``pred`` where nothing separates)."""
+    if separation is None:
+        return pred
+    try:
+        v = bridge.contact_data(model, qpos=separation[1], qvel=separation[2], contacts="c1,c2")
+        return predict(v.verdicts())
+    except ValueError:
+        return "n/a"
 
 
 def _classify(got):
     """Stops told apart: a jam's stop time scales with the time constant."""
-    kinds = [k for k, _t in got]
+    kinds = [g[0] for g in got]
     if kinds == ["stop", "stop"]:
         jam = got[0][1] > 1.5 * got[1][1]
         return ["jam" if jam else "SS"] * 2
@@ -107,36 +127,60 @@ def _classify(got):
 
 
 def measure(n=16, seed=40):
-    """``rows``: (body name, prediction, outcome per time constant)."""
+    """``rows``: (body name, prediction, outcome per time constant, prediction at separation
+    per time constant, separation time [s] per time constant or ``None``)."""
     rng = np.random.default_rng(seed)
     rows = []
     for body in _random_states(rng, n):
         text, qvel = mjcf(body, rho=0.005)
-        got = []
+        got, models = [], []
         for tc in TIMECONSTANTS:
-            model = mujoco.MjModel.from_xml_string(text.replace(
+            models.append(mujoco.MjModel.from_xml_string(text.replace(
                 "<option ", '<option timestep="1e-4" ').replace(
-                "<geom ", f'<geom solref="{tc} 1" '))  # fmt: skip
-            got.append(outcome(model, qvel))
+                "<geom ", f'<geom solref="{tc} 1" ')))  # fmt: skip
+            got.append(outcome(models[-1], qvel))
         model = mujoco.MjModel.from_xml_string(text)
         pred = predict(bridge.contact_data(model, qvel=qvel, contacts="c1,c2").verdicts())
-        rows.append((body.name, pred, *_classify(got)))
+        sep = [predict_at(m, g[2], pred) for m, g in zip(models, got)]
+        when = [None if g[2] is None else g[2][0] for g in got]
+        rows.append((body.name, pred, *_classify(got), *sep, *when))
     return rows
 
 
+def _agree(sel, k, at_separation=False):
+    nt = len(TIMECONSTANTS)
+    pred = [r[2 + nt + k] if at_separation else r[1] for r in sel]
+    return sum(p == r[2 + k] for p, r in zip(pred, sel))
+
+
 def table(rows) -> str:
-    lines = ["| body | predicted | n | " + " | ".join(
-        f"agree at tc = {tc * 1e3:g} ms" for tc in TIMECONSTANTS) + " | MuJoCo outcomes |",
-        "|---|---|---|" + "---|" * len(TIMECONSTANTS) + "---|"]  # fmt: skip
-    keys = sorted({(r[0], r[1]) for r in rows})
-    for name, pred in keys:
+    """The table by body and prediction at the start; agreement of the start's and of the
+    separation state's predictions per time constant, and the totals over decided states."""
+    tcs = [f"{tc * 1e3:g} ms" for tc in TIMECONSTANTS]
+    heads = [f"agree at tc = {t}" for t in tcs] + [f"at separation, tc = {t}" for t in tcs]
+    lines = ["| body | predicted | n | " + " | ".join(heads) + " | MuJoCo outcomes |",
+             "|---|---|---|" + "---|" * len(heads) + "---|"]  # fmt: skip
+    for name, pred in sorted({(r[0], r[1]) for r in rows}):
         sel = [r for r in rows if (r[0], r[1]) == (name, pred)]
-        agree = [sum(r[2 + k] == pred for r in sel) for k in range(len(TIMECONSTANTS))]
+        cells = [f"{_agree(sel, k, s)}/{len(sel)}" for s in (False, True) for k in range(len(tcs))]
+        cells[: len(tcs)] = ["-"] * len(tcs) if pred == "several" else cells[: len(tcs)]
         seen = Counter(f"{r[2]}/{r[3]}" for r in sel)
-        lines.append(f"| {name} | {pred} | {len(sel)} | " + " | ".join(
-            f"{a}/{len(sel)}" for a in agree) + " | " + ", ".join(
+        lines.append(f"| {name} | {pred} | {len(sel)} | " + " | ".join(cells) + " | " + ", ".join(
             f"{k} x{v}" for k, v in sorted(seen.items())) + " |")  # fmt: skip
-    return "\n".join(lines)
+    return "\n".join(lines + [totals(rows)])
+
+
+def totals(rows) -> str:
+    """Agreement over the decided states, at the start and at separation, per time constant."""
+    nt, out = len(TIMECONSTANTS), []
+    for k, tc in enumerate(TIMECONSTANTS):
+        start = [r for r in rows if r[1] != "several"]
+        sep = [r for r in rows if r[2 + nt + k] not in ("several", "n/a")]
+        when = [r[2 + 2 * nt + k] for r in rows if r[2 + 2 * nt + k] is not None]
+        out.append(f"tc = {tc * 1e3:g} ms: {_agree(start, k)}/{len(start)} at the start, "
+                   f"{_agree(sep, k, True)}/{len(sep)} at separation ({len(when)} lift-offs, "
+                   f"{when.count(0.0)} of them apart at the first sample)")  # fmt: skip
+    return "\n" + "; ".join(out)
 
 
 if __name__ == "__main__":
