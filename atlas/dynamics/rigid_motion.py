@@ -12,16 +12,20 @@ on its fixed surface (normal ``n_j``); a ``body_side`` contact sits at the fixed
 ``e_j`` (``r_j = e_j - x_c``) with the body's normal ``R(phi) n_j``.  At every evaluation the twist
 is projected on the admissible twists (the null space of the closed contacts' ``J_n``: a line for
 two contacts, :func:`~atlas.core.rigid_body.admissible_twist`, a plane for one), which removes the
-integrator's drift off the constraint.  Classical Runge-Kutta of step ``dt`` [s].
+integrator's drift off the constraint.  Classical Runge-Kutta of step ``dt`` [s], halved where
+``det B`` would change by more than a tenth of itself in a step (near a singular ``B`` the forces
+change on the time ``det B / (det B)'``, so the steps shrink with it).
 
 **Events** (first one ends the motion): a contact force ``f*_j`` reaches zero (the mode stops
 being consistent: contact ``j`` lifts off), a sliding speed reaches zero (a contact sticks), ``det
 B`` reaches zero (``"B singular"``; one contact: ``b11 = 0``, Painleve's point, beyond which
 sliding is inconsistent and a jam (IWC) consistent, :func:`~atlas.core.contact_space.
-single_contact_verdicts`), or ``t_end``.  The event time is located by bisection on the step
-(``1e-12`` s).  Checked against closed forms: the frictionless ladder leaves the wall at
-``sin(theta) = (2/3) sin(theta0)``; Painleve's rod reaches ``b11 = 0`` at the root of
-``1 + 3 cos(theta) (cos(theta) - mu sin(theta)) = 0``.
+single_contact_verdicts`; reported once the step falls below ``1e-12`` s), or ``t_end``.  The
+other event times are located by bisection on the step (``1e-12`` s).  Checked against closed
+forms: the frictionless ladder leaves the wall at ``sin(theta) = (2/3) sin(theta0)``; Painleve's
+rod (uniform, on its tip) reaches ``b11 = 0`` at the root of ``1 + 3 cos(theta) (cos(theta) -
+mu sin(theta)) = 0``; at ``mu = 2``, ``a1 -> 0`` as ``b11^0.34`` (``f*`` diverges, integrably):
+it reaches Painleve's point ``a = b = 0`` rather than lifting off.
 """
 
 from __future__ import annotations
