@@ -82,6 +82,7 @@ HELP = {
     "table": "Table 2 of the paper from the kernels",
     "bench": "work-precision benchmark of the kernels",
     "selftest": "check the certified kernels on this JAX backend against the exact tier",
+    "mujoco": "B, a and every verdict of a MuJoCo model's contacts at a state (extra: mujoco)",
 }
 
 
@@ -104,6 +105,7 @@ def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
         "table": _add_table,
         "bench": _add_bench,
         "selftest": _add_selftest,
+        "mujoco": _add_mujoco,
     }
     for name, add in adders.items():
         if command in ("*", name):
@@ -249,6 +251,38 @@ def _add_mechanism(sub) -> None:
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     pm.add_argument("--dtype", choices=["float64", "float32"], default="float64")
     _add_limits(pm)
+
+
+def _add_mujoco(sub) -> None:
+    pm = sub.add_parser(
+        "mujoco",
+        help=HELP["mujoco"],
+        description="Read a MuJoCo model (MJCF) at a state, build B and a of eq. (1) from its "
+        "mass matrix and contact Jacobians, and print every verdict (needs: pip install "
+        "'painleve-atlas[mujoco]').",
+    )
+    pm.add_argument("model", metavar="MODEL.xml", help="MJCF (or MJB) file")
+    pm.add_argument(
+        "--contacts", metavar="A,B", help="one or two geom names or pairs g1/g2 (default: the "
+        "touching contacts, when one or two touch)",
+    )  # fmt: skip
+    pm.add_argument("--qpos", metavar="X,...", help="generalised positions (default: qpos0)")
+    pm.add_argument("--qvel", metavar="V,...", help="generalised velocities (default: 0)")
+    pm.add_argument(
+        "--slip", metavar="X,Y,Z;...", help="slip directions (world) of the contacts, in order: "
+        "needed only where a frictional contact does not slide",
+    )  # fmt: skip
+    pm.add_argument("--tol", type=float, default=1e-6, help="touching: distance <= TOL [m]")
+    pm.add_argument("--json", dest="json_out", action="store_true", help="one JSON object")
+    pm.add_argument(
+        "--rollout", type=float, metavar="T", help="step the model T seconds and report the "
+        "verdicts along the trajectory (where the mode or a verdict changes)",
+    )  # fmt: skip
+    pm.add_argument("--every", type=int, default=10, help="rollout: judge every N-th step")
+    pm.add_argument(
+        "--jam-test", action="store_true", help="rollout: run again with the constraint time "
+        "constants halved (a jam's stop time halves, a friction stop's does not)",
+    )  # fmt: skip
 
 
 def _add_boundaries(sub) -> None:
@@ -556,6 +590,7 @@ _DISPATCH = {
     "table": ("atlas.paper.tables", "run_cli"),
     "bench": ("atlas.bench", "run"),
     "selftest": ("atlas.core.selftest", "run_cli"),
+    "mujoco": ("atlas.bridges.mujoco_cli", "run_cli"),
 }
 
 

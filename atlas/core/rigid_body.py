@@ -82,6 +82,7 @@ import numpy as np
 
 from atlas.core import checks, kernels
 from atlas.core import contact_modes as mech
+from atlas.core.contact_space import ContactSpace, verdict_names, verdicts_at
 
 __all__ = [
     "Mechanism",
@@ -90,6 +91,7 @@ __all__ = [
     "BODY_SIDE",
     "CONTACT_KINDS",
     "admissible_twist",
+    "jacobians",
     "sliding_signs",
     "twist",
     "check_body",
@@ -135,6 +137,13 @@ def admissible_twist(r, n):
     )
     u = tuple(_dot(tangent(n[j]), z[:2]) + _cross(r[j], tangent(n[j])) * z[2] for j in (0, 1))
     return z, u
+
+
+def jacobians(r, n):
+    """``(J_n, J_t)``: rows ``[n_jx, n_jy, r_j x n_j]`` and ``[t_jx, t_jy, r_j x t_j]`` of the contacts
+    at ``r`` [m] with unit normals ``n`` (module docstring): ``d' = J_n x'``, ``u = J_t x'``."""
+    rows = lambda e: np.array([[*e(nj), _cross(rj, e(nj))] for rj, nj in zip(r, n)])  # noqa: E731
+    return rows(lambda nj: nj), rows(tangent)
 
 
 def mobility(m, I, r, n, mu, s):
@@ -485,12 +494,12 @@ class Mechanism:
     @property
     def normal_jacobian(self) -> np.ndarray:
         """Rows ``J_j = [n_jx, n_jy, r_j x n_j]``: ``d_j' = J_j x'`` [1, 1, m]."""
-        return np.array([[*n, _cross(r, n)] for r, n in zip(self._r, self._n)])
+        return jacobians(self._r, self._n)[0]
 
     @property
     def tangent_jacobian(self) -> np.ndarray:
         """Rows ``[t_jx, t_jy, r_j x t_j]``: tangential velocity of contact ``j`` along ``t_j``."""
-        return np.array([[*tangent(n), _cross(r, tangent(n))] for r, n in zip(self._r, self._n)])
+        return jacobians(self._r, self._n)[1]
 
     @cached_property
     def B(self) -> np.ndarray:
@@ -521,25 +530,24 @@ class Mechanism:
     # --- invariants and verdicts -----------------------------------------------------------
 
     @cached_property
+    def contact_space(self) -> ContactSpace:
+        """The body's contact-space data (:class:`atlas.core.contact_space.ContactSpace`): ``B``,
+        ``a``, ``k``, ``c``; the verdicts of every mechanism are taken from it."""
+        return ContactSpace(self.B, self.a, k=(self.k1, self.k2), c=(self.c1, self.c2))
+
+    @property
+    def generalized_force(self) -> np.ndarray:
+        """``Q = [m g + F; tau]`` [N, N, N m]: the generalised force without contact forces."""
+        return np.array([self.m * self.g[0] + self.F[0], self.m * self.g[1] + self.F[1], self.tau])
+
+    @cached_property
     def invariants(self) -> dict:
         """``beta1, beta2, alpha`` [rad, in [0, 2 pi)] and ``kappa, q1, q2`` [1] (SPEC §1)."""
-        B, a = self.B, self.a
-        if not (a[0] or a[1]):
-            raise ValueError("a: the free acceleration is zero, alpha is undefined")
-        out = {
-            "beta1": _angle(B[0, 0], B[1, 0]),
-            "beta2": _angle(B[0, 1], B[1, 1]),
-            "alpha": _angle(a[0], a[1]),
-        }
-        b1, b2 = math.hypot(B[0, 0], B[1, 0]), math.hypot(B[0, 1], B[1, 1])
-        out.update(mech.invariants(self.k1, self.k2, self.c1, self.c2, b1, b2))
-        return out
+        return self.contact_space.invariants()
 
     def verdicts(self, dtype="float64") -> dict:
         """Every verdict of the atlas at this body's invariants (see :func:`verdicts_at`)."""
-        inv = self.invariants
-        res = verdicts_at(**inv, dtype=dtype)
-        return {k: v[()] for k, v in res.items()}
+        return self.contact_space.verdicts(dtype)
 
     def replace(self, **changes) -> Mechanism:
         """A copy with some parameters changed (validated again; a derived ``s2`` is derived
@@ -702,55 +710,3 @@ def body_invariants(body: dict, k1=1e5, k2=1e5, c1=0.0, c2=0.0, speed=0.0, g=(0.
 
 
 BODIES = {"ladder": ladder_body, "two_legged": two_legged_body, "leaning_rod": leaning_rod_body}
-
-
-def _angle(x, y) -> float:
-    """Direction angle of ``(x, y)`` in ``[0, 2 pi)`` [rad]."""
-    t = math.atan2(y, x) + 0.0  # no -0.0
-    return t + _TWO_PI if t < 0 else t
-
-
-# --- verdicts at invariants --------------------------------------------------------------------
-
-
-def verdict_names() -> tuple[str, ...]:
-    """The verdicts a single mechanism has: every result of the verdict kernels
-    (:func:`atlas.core.kernels.verdict_kernels`; the reductions over model samples need several
-    samples and are not among them)."""
-    return tuple(r for k in kernels.verdict_kernels() for r in k.results)
-
-
-def verdicts_at(beta1, beta2, alpha, kappa, q1, q2, *, dtype="float64", names=None) -> dict:
-    """The verdicts ``names`` (default :func:`verdict_names`) at broadcastable invariants.
-
-    The angles [rad] enter through :func:`atlas.core.contact_modes.direction` in ``dtype``, exactly as
-    in :func:`atlas.generate`; each verdict comes from its kernel (:mod:`atlas.core.kernels`), and
-    undecided codes are settled exactly.  Returns numpy arrays of the broadcast shape in the
-    storage types of SPEC §2 (codes ``int8``/``int16``, flags with a ``true_code`` -- Table 1,
-    SF/FS stability, IF/FI, CC -- as ``bool``, spectral verdict flags ``int8``, the abscissa float).
-    """
-    dtype = np.dtype(dtype)
-    names = verdict_names() if names is None else tuple(names)
-    unknown = set(names) - set(verdict_names())
-    if unknown:
-        raise ValueError(f"names: unknown verdict(s) {sorted(unknown)}")
-    args = [np.asarray(x, np.float64) for x in (beta1, beta2, alpha, kappa, q1, q2)]
-    shape = np.broadcast_shapes(*(x.shape for x in args))
-    args = [np.broadcast_to(x, shape) for x in args]
-    dirs = [c for ang in args[:3] for c in mech.direction(ang, dtype)]
-    keys = [i for p in ("beta1", "beta2", "alpha", "model") for i in kernels.PARAM_INPUTS[p]]
-    inputs = dict(zip(keys, dirs + args[3:]))
-    out = {}
-    for k in kernels.verdict_kernels():
-        want = tuple(r for r in k.results if r in names)
-        if not want:
-            continue
-        if k.driver is not None:
-            res = k.driver(*(inputs[i] for i in k.inputs), names=want, dtype=dtype)
-        else:
-            res = {r: np.broadcast_to(v, shape).copy() for r, v in kernels.run(k, inputs).items()}
-            kernels.settle(k, res, inputs)
-        for r in want:
-            v = np.asarray(res[r]).reshape(shape)
-            out[r] = v == k.true_code[r] if r in k.true_code else v
-    return {r: out[r] for r in names}
