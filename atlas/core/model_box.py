@@ -218,13 +218,13 @@ def _conditions(g, box: ModelBox, piece: _Piece):
     D = c1 * s2 - s1 * c2
     if D < 0:
         return None
+    nonneg_s1c2 = (bz.Poly.const(s1 * c2, len(piece.axes)), ">=0")
     if piece.kind == "undamped":
         k1, one = bz.Poly.var(0, 1), Fraction(1)
         a2u = ex.a2_undamped(k1, c1, one, s2, sub=bz.sub)
-        return [
-            (a2u, ">=0", None),
-            (ex.disc_undamped(k1, c1, one, s2, s1, c2, sub=bz.sub), ">=0", None),
-        ]
+        disc = ex.disc_undamped(k1, c1, one, s2, s1, c2, sub=bz.sub)
+        # disc = X^2 + 4 kappa s1 c2 with kappa > 0
+        return [(a2u, ">=0", None), (disc, ">=0", [nonneg_s1c2])]
     k1, q1, q2, e = _variables(piece, box)
     one = Fraction(1)
     a2u = ex.a2_undamped(k1, c1, one, s2, sub=bz.sub)
@@ -233,8 +233,7 @@ def _conditions(g, box: ModelBox, piece: _Piece):
         return [(a3, ">=0", None), (a2u, ">=0", None)]
     G = ex.G(c1, s1, c2, s2, k1, one, q1, q2, D, sub=bz.sub).divide_var(1, 2 * e)
     # G = s1 c2 m^2 + q1 q2 X^2 + D q1 q2 a3 m with m, q1 q2 >= 0 and D > 0
-    structural = [(bz.Poly.const(s1 * c2, len(piece.axes)), ">=0"), (a3, ">=0")]
-    return [(a3, ">0", None), (G, ">=0", structural)]
+    return [(a3, ">0", None), (G, ">=0", [nonneg_s1c2, (a3, ">=0")])]
 
 
 def _model(piece: _Piece, x) -> tuple[float, float, float]:

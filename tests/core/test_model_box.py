@@ -142,7 +142,7 @@ def test_degenerate_det_zero():
 
 def test_settlement_counts():
     c1, s1, c2, s2, _ = _per_class(2)
-    # a geometry of class 41 whose "no stable model" proof needs more than the first budget
+    # a geometry of class 46 whose "no stable model" proof needs more than the first budget
     hard = np.array([1.5317666284305962, 1.59801498331714]) * np.pi
     (hc1, hc2), (hs1, hs2) = direction(hard)
     c1, s1, c2, s2 = (np.append(a, b) for a, b in ((c1, hc1), (s1, hs1), (c2, hc2), (s2, hs2)))
