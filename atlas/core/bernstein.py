@@ -27,7 +27,7 @@ from math import comb
 
 import numpy as np
 
-__all__ = ["Poly", "Axis", "to_bernstein", "prove_any", "point_of"]
+__all__ = ["Poly", "Axis", "Template", "to_bernstein", "prove_any", "point_of"]
 
 KINDS = ("<0", "<=0", ">0", ">=0")
 
@@ -142,25 +142,60 @@ def _axis_matrix(axis: Axis, d: int) -> list:
 
 
 @functools.lru_cache(maxsize=256)
-def _int_matrix(key, d: int) -> np.ndarray:
-    """:func:`_axis_matrix` times its common denominator (a positive factor), as Python ints."""
-    M = _axis_matrix(Axis(*key), d)
-    den = math.lcm(*(v.denominator for row in M for v in row))
-    return np.array([[int(v * den) for v in row] for row in M], dtype=object)
+def _matrix(key, d: int) -> np.ndarray:
+    """:func:`_axis_matrix` of the axis ``Axis(*key)`` (cached: one per box and degree)."""
+    return np.array(_axis_matrix(Axis(*key), d), dtype=object)
+
+
+def _fractions(p: Poly, axes, degrees) -> np.ndarray:
+    """Rational Bernstein coefficients of ``p`` on ``axes`` in the given degrees."""
+    arr = np.zeros(tuple(d + 1 for d in degrees), dtype=object)
+    arr[...] = Fraction(0)
+    for e, c in p.terms.items():
+        arr[e] = c
+    for i, (axis, d) in enumerate(zip(axes, degrees)):
+        M = _matrix((axis.lo, axis.hi, axis.open_lo), d)
+        arr = np.moveaxis(np.tensordot(M, arr, axes=([1], [i])), 0, i)
+    return arr
+
+
+def _to_ints(arrays):
+    """Rational arrays times their common denominator (a positive factor), as Python ints."""
+    den = math.lcm(*(v.denominator for a in arrays for v in a.flat))
+    return [np.vectorize(lambda v: int(v * den), otypes=[object])(a) for a in arrays]
 
 
 def to_bernstein(p: Poly, axes, degrees=None) -> np.ndarray:
     """Integer Bernstein coefficients (object array, one axis per variable) of ``p`` on the box
     ``axes``, up to a positive factor."""
     degrees = p.degrees() if degrees is None else degrees
-    den = math.lcm(*(c.denominator for c in p.terms.values()))
-    arr = np.zeros(tuple(d + 1 for d in degrees), dtype=object)
-    for e, c in p.terms.items():
-        arr[e] = int(c * den)
-    for i, (axis, d) in enumerate(zip(axes, degrees)):
-        M = _int_matrix((axis.lo, axis.hi, axis.open_lo), d)
-        arr = np.moveaxis(np.tensordot(M, arr, axes=([1], [i])), 0, i)
-    return arr
+    return _to_ints([_fractions(p, axes, degrees)])[0]
+
+
+class Template:
+    """Bernstein coefficients on a box of a polynomial whose coefficients are polynomials in
+    parameters (variables ``n_box ...`` of ``p``), prepared once: per parameter monomial its
+    integer Bernstein array; :meth:`at` sums them with the monomials' values (exact)."""
+
+    def __init__(self, p: Poly, axes):
+        n = len(axes)
+        groups: dict = {}
+        for e, c in p.terms.items():
+            groups.setdefault(e[n:], {})[e[:n]] = c
+        self.exps = list(groups) or [(0,) * (p.n - n)]
+        polys = [Poly(groups.get(e, {}), n) for e in self.exps]
+        degrees = tuple(max(q.degrees()[i] for q in polys) for i in range(n))
+        self.dmax = max(sum(e) for e in self.exps)
+        self.arrays = np.stack(_to_ints([_fractions(q, axes, degrees) for q in polys]))
+
+    def at(self, values, N: int) -> np.ndarray:
+        """Integer Bernstein coefficients (up to a positive factor) at parameters
+        ``values[i] / N`` (``values``, ``N``: ints)."""
+        vals = [
+            math.prod(v**k for v, k in zip(values, e)) * N ** (self.dmax - sum(e))
+            for e in self.exps
+        ]
+        return np.tensordot(np.array(vals, dtype=object), self.arrays, axes=1)
 
 
 def _split(b: np.ndarray, axis: int):
@@ -205,7 +240,8 @@ def _certified(b, kind, faces, left_out) -> bool:
 
 def prove_any(conds, axes, patterns=(), budget: int = 256):
     """Prove that on the box ``axes`` (minus the faces of ``patterns``) every point satisfies at
-    least one of ``conds`` (pairs ``(Poly, kind)``, kind in ``<0 <=0 >0 >=0``).
+    least one of ``conds`` (pairs ``(p, kind)``, kind in ``<0 <=0 >0 >=0``; ``p`` a
+    :class:`Poly` or its integer Bernstein coefficients on the box, e.g. from :class:`Template`).
 
     ``patterns``: faces left out besides the open ends, each a dict ``{axis: side}`` (a face lies
     in it when its sides agree on those axes).  Returns ``("proved", None)``, ``("counterexample",
@@ -214,8 +250,8 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
     """
     n = len(axes)
     fixed = [a.fixed for a in axes]
-    degs = [tuple(max(d) for d in zip(*(p.degrees() for p, _ in conds)))]
-    polys = [to_bernstein(p, axes, degs[0]) for p, _ in conds]
+    polys = [p if isinstance(p, np.ndarray) else to_bernstein(p, axes) for p, _ in conds]
+    degs = [tuple(max(b.shape[i] - 1 for b in polys) for i in range(n))]
     faces = _faces(n, fixed)
     queue = collections.deque([((Fraction(0),) * n, (Fraction(1),) * n, polys)])
     for _ in range(budget):

@@ -49,6 +49,7 @@ for every model iff ``D >= 0``, ``c1 > 0``, ``s2 > 0`` and ``s1 c2 >= 0``; depen
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from fractions import Fraction
 
@@ -157,7 +158,7 @@ def parse_model_box(text: str) -> ModelBox:
 # --- the pieces of the box and their conditions, exactly -------------------------------------------
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class _Piece:
     """A box in its own variables: ``axes`` (:class:`atlas.core.bernstein.Axis`), faces left out
     (``patterns``), ``kind`` (``undamped``, ``rect``: ``(kappa, q1, q2)`` or ``(kappa, q)``,
@@ -172,35 +173,36 @@ def _axis(lo, hi, open_lo=False):
     return bz.Axis(lo, None if hi == math.inf else hi, open_lo)
 
 
-def _pieces(box: ModelBox) -> list:
+@functools.lru_cache(maxsize=16)
+def _pieces(box: ModelBox) -> tuple:
     """The parts of the box (module docstring) as pieces.  The damped part of a 3-variable box
     whose ``q`` ranges both start at 0 is the corner ``q1 + q2 <= h`` in ``(kappa, r, u)`` (where
     ``G / r^2`` has no zero at ``r = 0``, unlike ``G`` at ``q = 0``) and two rectangles
     ``q1 >= h/2`` and ``q1 <= h/2, q2 >= h/2``: they cover it."""
     K = _axis(*box.kappa, open_lo=box.kappa[0] == 0)
-    out = [_Piece("undamped", (K,))] if box.has_undamped else []
+    out = (_Piece("undamped", (K,)),) if box.has_undamped else ()
     if not box.has_damped:
         return out
     (l1, h1), (l2, h2) = box.q1, box.q2
     if box.equal:
-        return out + [_Piece("rect", (K, _axis(l1, h1)), ({1: 0},) if l1 == 0 else ())]
+        return out + (_Piece("rect", (K, _axis(l1, h1)), ({1: 0},) if l1 == 0 else ()),)
     if l1 > 0 or l2 > 0:
-        return out + [_Piece("rect", (K, _axis(l1, h1), _axis(l2, h2)))]
+        return out + (_Piece("rect", (K, _axis(l1, h1), _axis(l2, h2))),)
     if h1 == 0 or h2 == 0:
-        return out + [_Piece("rect", (K, _axis(l1, h1), _axis(l2, h2)), ({1: 0, 2: 0},))]
+        return out + (_Piece("rect", (K, _axis(l1, h1), _axis(l2, h2)), ({1: 0, 2: 0},)),)
     h = min([v for v in (h1, h2) if v < math.inf] or [1.0])
     half = Fraction(h) / 2
-    return out + [
+    return out + (
         _Piece("corner", (K, bz.Axis(0, h), bz.Axis(0, 1)), ({1: 0},)),
         _Piece("rect", (K, _axis(half, h1), _axis(0, h2))),
         _Piece("rect", (K, _axis(0, half), _axis(half, h2))),
-    ]
+    )
 
 
-def _variables(piece: _Piece, box: ModelBox):
-    """``(k1, q1, q2, power)``: the model as polynomials in the piece's variables, and the power
-    of the damping scale (``q``, ``r``) divided out of ``a3`` (``G``: twice that)."""
-    P, n = bz.Poly, len(piece.axes)
+def _variables(piece: _Piece, box: ModelBox, n: int):
+    """``(k1, q1, q2, power)``: the model as polynomials in the piece's variables (of ``n``), and
+    the power of the damping scale (``q``, ``r``) divided out of ``a3`` (``G``: twice that)."""
+    P = bz.Poly
     k1 = P.var(0, n)
     if piece.kind == "corner":
         r, u = P.var(1, n), P.var(2, n)
@@ -210,30 +212,57 @@ def _variables(piece: _Piece, box: ModelBox):
     return k1, P.var(1, n), P.var(2, n), 0
 
 
-def _conditions(g, box: ModelBox, piece: _Piece):
-    """``[(Poly, kind, implied_by)]`` whose conjunction is "stable or neutral" on ``piece``
-    (``implied_by``: conditions that together imply it, tried first), or ``None`` where no model
-    is (``D < 0``)."""
-    c1, s1, c2, s2 = g
+@functools.lru_cache(maxsize=64)
+def _template(piece: _Piece, box: ModelBox, name: str) -> bz.Template:
+    """The condition ``name`` (``a2u``, ``disc``, ``a3``, ``G``) of ``piece`` as a polynomial in
+    the piece's variables whose coefficients are polynomials in ``c1, s1, c2, s2``, written in
+    the Bernstein basis of the piece once (:class:`atlas.core.bernstein.Template`)."""
+    n = len(piece.axes)
+    tot = n + 4
+    c1, s1, c2, s2 = (bz.Poly.var(n + i, tot) for i in range(4))
+    one = Fraction(1)
+    if piece.kind == "undamped":
+        k1, q1, q2, e = bz.Poly.var(0, tot), None, None, 0
+    else:
+        k1, q1, q2, e = _variables(piece, box, tot)
+    if name == "a2u":
+        p = ex.a2_undamped(k1, c1, one, s2, sub=bz.sub)
+    elif name == "disc":
+        p = ex.disc_undamped(k1, c1, one, s2, s1, c2, sub=bz.sub)
+    elif name == "a3":
+        p = ex.a3(c1, s2, q1, q2, sub=bz.sub).divide_var(1, e)
+    else:
+        D = ex.det(c1, s1, c2, s2, sub=bz.sub)
+        p = ex.G(c1, s1, c2, s2, k1, one, q1, q2, D, sub=bz.sub).divide_var(1, 2 * e)
+    return bz.Template(p, piece.axes)
+
+
+def _integers(gf) -> tuple[list, int]:
+    """The direction components as integers over one power of two ``N`` (exact)."""
+    ratios = [float(v).as_integer_ratio() for v in gf]
+    N = max(d for _, d in ratios)
+    return [a * (N // d) for a, d in ratios], N
+
+
+def _conditions(gf, box: ModelBox, piece: _Piece):
+    """``[(coefficients, kind, implied_by)]`` whose conjunction is "stable or neutral" on
+    ``piece`` (integer Bernstein coefficients; ``implied_by``: conditions that together imply
+    it, tried first), or ``None`` where no model is (``D < 0``)."""
+    ints, N = _integers(gf)
+    c1, s1, c2, s2 = ints
     D = c1 * s2 - s1 * c2
     if D < 0:
         return None
-    nonneg_s1c2 = (bz.Poly.const(s1 * c2, len(piece.axes)), ">=0")
+    at = lambda name: _template(piece, box, name).at(ints, N)  # noqa: E731
+    nonneg_s1c2 = (np.full((1,) * len(piece.axes), s1 * c2, dtype=object), ">=0")
     if piece.kind == "undamped":
-        k1, one = bz.Poly.var(0, 1), Fraction(1)
-        a2u = ex.a2_undamped(k1, c1, one, s2, sub=bz.sub)
-        disc = ex.disc_undamped(k1, c1, one, s2, s1, c2, sub=bz.sub)
         # disc = X^2 + 4 kappa s1 c2 with kappa > 0
-        return [(a2u, ">=0", None), (disc, ">=0", [nonneg_s1c2])]
-    k1, q1, q2, e = _variables(piece, box)
-    one = Fraction(1)
-    a2u = ex.a2_undamped(k1, c1, one, s2, sub=bz.sub)
-    a3 = ex.a3(c1, s2, q1, q2, sub=bz.sub).divide_var(1, e)
+        return [(at("a2u"), ">=0", None), (at("disc"), ">=0", [nonneg_s1c2])]
+    a3 = at("a3")
     if D == 0:
-        return [(a3, ">=0", None), (a2u, ">=0", None)]
-    G = ex.G(c1, s1, c2, s2, k1, one, q1, q2, D, sub=bz.sub).divide_var(1, 2 * e)
+        return [(a3, ">=0", None), (at("a2u"), ">=0", None)]
     # G = s1 c2 m^2 + q1 q2 X^2 + D q1 q2 a3 m with m, q1 q2 >= 0 and D > 0
-    return [(a3, ">0", None), (G, ">=0", [nonneg_s1c2, (a3, ">=0")])]
+    return [(a3, ">0", None), (at("G"), ">=0", [nonneg_s1c2, (a3, ">=0")])]
 
 
 def _model(piece: _Piece, x) -> tuple[float, float, float]:
@@ -259,10 +288,9 @@ def _holds_everywhere(piece, task, budget):
 def _prove(gf, box: ModelBox, side: str, budget: int):
     """Prove no model of ``side`` (``good`` / ``bad``) exists in the box: ``("proved", None)``,
     ``("witness", model)`` (checked by the exact tier) or ``("unknown", None)``."""
-    g = tuple(Fraction(v) for v in gf)
     status = "proved"
     for piece in _pieces(box):
-        conds = _conditions(g, box, piece)
+        conds = _conditions(gf, box, piece)
         if conds is None:
             if side == "good":
                 continue
