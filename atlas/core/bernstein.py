@@ -229,13 +229,13 @@ def _faces(n: int, fixed):
 
 
 def _certified(b, kind, faces, left_out) -> bool:
-    """Whether ``b`` proves ``p kind 0`` on the box minus the faces ``left_out(face)``."""
-    if not all(_sign_ok(v, kind, False) for v in b.flat):
+    """Whether ``b`` proves ``p kind 0`` on the box minus the faces in ``left_out``."""
+    if (b > 0).any() if kind[0] == "<" else (b < 0).any():
         return False
     if kind in ("<=0", ">=0"):
         return True
     at = lambda v: b[tuple(-s for s in v)]  # noqa: E731  (index 0 or -1 per axis)
-    return all(left_out(f) or any(_sign_ok(at(v), kind, True) for v in vs) for f, vs in faces)
+    return all(f in left_out or any(_sign_ok(at(v), kind, True) for v in vs) for f, vs in faces)
 
 
 def prove_any(conds, axes, patterns=(), budget: int = 256):
@@ -254,11 +254,15 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
     degs = [tuple(max(b.shape[i] - 1 for b in polys) for i in range(n))]
     faces = _faces(n, fixed)
     queue = collections.deque([((Fraction(0),) * n, (Fraction(1),) * n, polys)])
+    outs: dict = {}  # faces left out, per contact of the box with the whole box's faces
     for _ in range(budget):
         if not queue:
             return "proved", None
         lo, hi, bs = queue.popleft()
-        left_out = _left_out(axes, patterns, lo, hi)
+        on = tuple((lo[i] == 0, hi[i] == 1) for i in range(n))
+        if on not in outs:
+            outs[on] = _left_out(axes, patterns, on, faces)
+        left_out = outs[on]
         if any(_certified(b, k, faces, left_out) for b, (_, k) in zip(bs, conds)):
             continue
         v = _failing_vertex(bs, conds, faces, left_out)
@@ -271,7 +275,7 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
 def _failing_vertex(bs, conds, faces, left_out):
     """A vertex of the box, inside the whole box, where every condition fails (exactly)."""
     for f, vs in faces:
-        if None in f or left_out(f):
+        if None in f or f in left_out:
             continue
         at = tuple(-s for s in vs[0])
         if all(not _sign_ok(b[at], k, k in ("<0", ">0")) for b, (_, k) in zip(bs, conds)):
@@ -279,10 +283,10 @@ def _failing_vertex(bs, conds, faces, left_out):
     return None
 
 
-def _left_out(axes, patterns, lo, hi):
-    """The face filter of the sub-box ``[lo, hi]``: a face is out when it lies on an open end of
-    the whole box or in one of ``patterns`` there."""
-    on = [(lo[i] == 0, hi[i] == 1) for i in range(len(axes))]
+def _left_out(axes, patterns, on, faces) -> frozenset:
+    """The faces of a sub-box outside the whole box: on an open end of it, or in one of
+    ``patterns`` (``on[i]``: whether the sub-box's low and high faces of axis ``i`` are the whole
+    box's)."""
 
     def out(face):
         for i, s in enumerate(face):
@@ -290,7 +294,7 @@ def _left_out(axes, patterns, lo, hi):
                 return True
         return any(all(face[i] == s and on[i][s] for i, s in p.items()) for p in patterns)
 
-    return out
+    return frozenset(f for f, _ in faces if out(f))
 
 
 def _halves(lo, hi, bs, fixed, degs):
