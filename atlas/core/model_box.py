@@ -389,8 +389,62 @@ def _decide(gf, box: ModelBox, good, bad, budget: int):
     return int(OverModels.UNDECIDED), good, bad
 
 
-def _checked(gf, m, want: bool):
-    return m if _is_good(gf, tuple(float(v) for v in m)) is want else None
+def _det_signs(geo: np.ndarray) -> np.ndarray:
+    """Exact signs of ``D = c1 s2 - s1 c2`` per row: the float difference where it exceeds its
+    rounding bound, exact rationals elsewhere."""
+    c1, s1, c2, s2 = geo.T
+    d = c1 * s2 - s1 * c2
+    bound = 4 * np.finfo(np.float64).eps * (np.abs(c1 * s2) + np.abs(s1 * c2)) + 1e-300
+    sign = np.where(np.abs(d) > bound, np.sign(d), 2).astype(np.int8)
+    for i in np.flatnonzero(sign == 2):
+        a, b, c, e = (Fraction(float(v)) for v in geo[i])
+        sign[i] = (a * e > b * c) - (a * e < b * c)
+    return sign
+
+
+def _by_signs(geo: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """Codes proven by signs alone, for every box (``UNDECIDED`` elsewhere): ``D < 0``: unstable;
+    ``D > 0``, ``c1 <= 0``, ``s2 <= 0``: ``a3 <= 0`` (damped) and ``a2 = kappa c1 + s2 <= 0``
+    (undamped; ``= 0`` only with ``c1 = s2 = 0``, then ``disc = -4 kappa D < 0``): unstable;
+    ``D > 0``, ``c1 > 0``, ``s2 > 0``, ``s1 c2 >= 0``: ``a3 > 0``, every term of ``G`` and of
+    ``disc`` ``>= 0``, ``a2 > 0``: stable or neutral."""
+    c1, s1, c2, s2 = geo.T
+    code = np.full(len(geo), int(OverModels.UNDECIDED), np.int8)
+    code[(sd == -1) | ((sd == 1) & (c1 <= 0) & (s2 <= 0))] = int(OverModels.UNSTABLE)
+    code[(sd == 1) & (c1 > 0) & (s2 > 0) & (np.sign(s1) * np.sign(c2) >= 0)] = int(
+        OverModels.STABLE
+    )
+    return code
+
+
+@functools.cache
+def _jitted_ss(fn):
+    import jax  # noqa: PLC0415
+
+    return jax.jit(fn)
+
+
+def _verify(geo: np.ndarray, models) -> np.ndarray:
+    """``True`` (stable or neutral), ``False`` (unstable) of model ``models[i]`` at ``geo[i]``:
+    the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`), the exact tier where it
+    leaves a point undecided."""
+    import jax.numpy as jnp  # noqa: PLC0415 - JAX only when witnesses are checked
+
+    from atlas.core import hurwitz  # noqa: PLC0415
+
+    m = np.asarray(models, np.float64).reshape(-1, 3)
+    n = len(m)
+    size = max(16, 1 << (n - 1).bit_length())  # padded: one compilation per power of two
+    pad = np.tile([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0], (size - n, 1))
+    cols = [jnp.asarray(a) for a in np.concatenate([np.hstack([geo, m]), pad]).T]
+    undecided = int(Verdict.UNDECIDED)
+    if n and all(c.dtype == jnp.float64 for c in cols):
+        v = np.array(_jitted_ss(hurwitz.ss_verdict)(*cols))[:n]
+    else:  # no float64 in JAX here: the exact tier for all
+        v = np.full(n, undecided, np.int8)
+    for i in np.flatnonzero(v == undecided):
+        v[i] = exact.ss_hurwitz(*geo[i].tolist(), *m[i].tolist())
+    return np.isin(v, _GOOD)
 
 
 def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dict:
@@ -401,19 +455,17 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    code = np.full(len(geo), int(OverModels.UNSTABLE), np.int8)
+    code = _by_signs(geo, _det_signs(geo))
     wit = np.full((len(geo), 6), np.nan)
-    open_idx = np.flatnonzero(
-        [
-            Fraction(c) * Fraction(s) >= Fraction(a) * Fraction(b)
-            for c, a, b, s in geo[:, [0, 1, 2, 3]]
-        ]
-    )
-    cands = _search(geo[open_idx], box) if len(open_idx) else ([], [])
-    stats = {"points": len(geo), "det_negative": len(geo) - len(open_idx), "undecided_before": 0}
+    open_idx = np.flatnonzero(code == int(OverModels.UNDECIDED))
+    stats = {"points": len(geo), "by_signs": len(geo) - len(open_idx), "undecided_before": 0}
+    good_m, bad_m = _search(geo[open_idx], box) if len(open_idx) else ([], [])
+    is_good = _verify(geo[open_idx], good_m) if len(open_idx) else []
+    is_bad = ~_verify(geo[open_idx], bad_m) if len(open_idx) else []
     for n, i in enumerate(open_idx):
         gf = tuple(geo[i].tolist())
-        good, bad = _checked(gf, cands[0][n], True), _checked(gf, cands[1][n], False)
+        good = tuple(map(float, good_m[n])) if is_good[n] else None
+        bad = tuple(map(float, bad_m[n])) if is_bad[n] else None
         c, w_good, w_bad = _decide(gf, box, good, bad, BUDGET)
         if c == int(OverModels.UNDECIDED):
             stats["undecided_before"] += 1

@@ -176,3 +176,17 @@ def test_bad_boxes(text, name):
     with pytest.raises(ValueError, match=f"^model_box: ({name}: )?") as e:
         mb.parse_model_box(text)
     assert "\n" not in str(e.value) and name in str(e.value)
+
+
+@pytest.mark.parametrize("text", ["kappa=0:inf", "kappa=0.01:100,q1=0:1,q2=0:1", "q=0.1:2"])
+def test_sign_rules_agree_with_the_bernstein_proofs(text):
+    # the codes proven by signs alone (D, c1, s2, s1 c2) proven again by the subdivision
+    box = mb.parse_model_box(text)
+    c1, s1, c2, s2, _ = _per_class(1)
+    geo = np.stack([c1, s1, c2, s2], axis=1)
+    signs = mb._by_signs(geo, mb._det_signs(geo))
+    decided = np.flatnonzero((signs != UND) & (mb._det_signs(geo) == 1))
+    assert len(decided) >= 4
+    for i in decided:
+        code, _, _ = mb._decide(tuple(geo[i].tolist()), box, None, None, mb.SETTLE_BUDGET)
+        assert code == signs[i]
