@@ -334,14 +334,16 @@ def _samples(lo: float, hi: float, open_lo: bool) -> np.ndarray:
     return np.unique(np.clip(np.array(vals), lo, hi))
 
 
-def _model_grid(box: ModelBox):
-    """The sample models of the box, as flat ``(kappa, q1, q2)`` arrays."""
-    k = _samples(*box.kappa, open_lo=True) if box.kappa[0] == 0 else _samples(*box.kappa, False)
-    q1 = _samples(*box.q1, False)
+def _model_grid(box: ModelBox, fine: bool):
+    """The sample models of the box, as flat ``(kappa, q1, q2)`` arrays (``fine``: every sample
+    value, else about every third)."""
+    pick = (lambda v: v) if fine else (lambda v: np.unique(np.append(v[::3], v[-1])))  # noqa: E731
+    k = pick(_samples(*box.kappa, open_lo=box.kappa[0] == 0))
+    q1 = pick(_samples(*box.q1, False))
     if box.equal:
         K, Q = np.meshgrid(k, q1, indexing="ij")
         return K.ravel(), Q.ravel(), Q.ravel()
-    K, Q1, Q2 = np.meshgrid(k, q1, _samples(*box.q2, False), indexing="ij")
+    K, Q1, Q2 = np.meshgrid(k, q1, pick(_samples(*box.q2, False)), indexing="ij")
     return K.ravel(), Q1.ravel(), Q2.ravel()
 
 
@@ -359,9 +361,9 @@ def _score(c1, s1, c2, s2, kappa, q1, q2):
     return np.where(D < 0, -1.0, good)
 
 
-def _search(geo, box: ModelBox, chunk: int = 256):
+def _search(geo, box: ModelBox, fine: bool, chunk: int = 256):
     """Per geometry (rows of ``geo``), the sample models of largest and smallest score."""
-    K, Q1, Q2 = _model_grid(box)
+    K, Q1, Q2 = _model_grid(box, fine)
     best = np.empty((len(geo), 2), dtype=np.int64)
     for i in range(0, len(geo), chunk):
         g = [geo[i : i + chunk, j, None] for j in range(4)]
@@ -447,6 +449,23 @@ def _verify(geo: np.ndarray, models) -> np.ndarray:
     return np.isin(v, _GOOD)
 
 
+def _witnesses(geo: np.ndarray, box: ModelBox) -> list:
+    """Per geometry, ``(good, bad)``: checked sample models (``None`` where none was found): a
+    coarse sample first, the fine one where a side is missing."""
+    found = [[None, None] for _ in range(len(geo))]
+    todo = np.arange(len(geo))
+    for fine in (False, True):
+        if not len(todo):
+            break
+        good_m, bad_m = _search(geo[todo], box, fine)
+        is_good, is_bad = _verify(geo[todo], good_m), ~_verify(geo[todo], bad_m)
+        for n, i in enumerate(todo):
+            found[i][0] = found[i][0] or (tuple(map(float, good_m[n])) if is_good[n] else None)
+            found[i][1] = found[i][1] or (tuple(map(float, bad_m[n])) if is_bad[n] else None)
+        todo = np.array([i for i in todo if None in found[i]], dtype=np.int64)
+    return found
+
+
 def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dict:
     """Certified SS verdict over the model ``box`` (module docstring) for broadcastable direction
     components: ``ss_over_models`` (:class:`atlas.core.verdicts.OverModels` codes, int8) and the
@@ -459,13 +478,10 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
     wit = np.full((len(geo), 6), np.nan)
     open_idx = np.flatnonzero(code == int(OverModels.UNDECIDED))
     stats = {"points": len(geo), "by_signs": len(geo) - len(open_idx), "undecided_before": 0}
-    good_m, bad_m = _search(geo[open_idx], box) if len(open_idx) else ([], [])
-    is_good = _verify(geo[open_idx], good_m) if len(open_idx) else []
-    is_bad = ~_verify(geo[open_idx], bad_m) if len(open_idx) else []
+    found = _witnesses(geo[open_idx], box)
     for n, i in enumerate(open_idx):
         gf = tuple(geo[i].tolist())
-        good = tuple(map(float, good_m[n])) if is_good[n] else None
-        bad = tuple(map(float, bad_m[n])) if is_bad[n] else None
+        good, bad = found[n]
         c, w_good, w_bad = _decide(gf, box, good, bad, BUDGET)
         if c == int(OverModels.UNDECIDED):
             stats["undecided_before"] += 1
