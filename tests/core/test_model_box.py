@@ -97,6 +97,9 @@ def test_curved_classes_split_in_a_bounded_box():
         "q=0:inf",
         "kappa=0.2:5,q=0.1:2",
         "kappa=0.1:10,q1=0.5:2,q2=0:0.1",
+        "kappa=0.1:10,q1=0:0,q2=0:0",
+        "kappa=2,q1=0.5,q2=0:inf",
+        "kappa=0:3,q1=0:2,q2=1:1",
     ],
 )
 def test_dense_sample_never_contradicts_and_witnesses_hold(text):
