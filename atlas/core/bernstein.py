@@ -268,7 +268,10 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
         v = _failing_vertex(bs, conds, faces, left_out)
         if v is not None:
             return "counterexample", tuple(hi[i] if s else lo[i] for i, s in enumerate(v))
-        queue.extend(_halves(lo, hi, bs, fixed, degs[0]))
+        halves = _halves(lo, hi, bs, fixed, degs[0])
+        if not halves:  # every condition constant here and not certified: it fails everywhere
+            return "counterexample", tuple((a + b) / 2 for a, b in zip(lo, hi))
+        queue.extend(halves)
     return ("proved", None) if not queue else ("unknown", None)
 
 

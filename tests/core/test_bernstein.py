@@ -102,3 +102,15 @@ def test_random_polynomials_never_wrongly_proved():
         elif res == "counterexample":
             a, b = bz.point_of(box, t)
             assert sum(cf * a ** e[0] * b ** e[1] for e, cf in p.terms.items()) <= 0
+
+
+def test_constant_failing_where_every_vertex_is_left_out():
+    # a negative constant on (0, inf): no vertex is in the box and nothing can be split; it is a
+    # counterexample everywhere, never a proof
+    box = [bz.Axis(0, None, True)]
+    res, t = bz.prove_any([(bz.Poly.const(-1, 1), ">=0")], box)
+    assert res == "counterexample" and 0 < t[0] < 1
+    assert bz.prove_any([(bz.Poly.const(2, 1), ">0")], box)[0] == "proved"
+    two = [bz.Axis(0, None, True), bz.Axis(0, None)]
+    res, _ = bz.prove_any([(bz.Poly.const(0, 2), ">0")], two, ({1: 0},))
+    assert res == "counterexample"

@@ -193,3 +193,15 @@ def test_sign_rules_agree_with_the_bernstein_proofs(text):
     for i in decided:
         code, _, _ = mb._decide(tuple(geo[i].tolist()), box, None, None, mb.SETTLE_BUDGET)
         assert code == signs[i]
+
+
+def test_equal_damping_undamped_point_found_by_the_proof():
+    # class 13, q1 = q2 in [0, inf): c1, s2 > 0 > s1 c2; the sampled models miss the unstable ones
+    # (undamped, kappa near s2 / c1), the subdivision of disc = X^2 + 4 kappa s1 c2 finds one
+    b = (np.array([0, 24]) + 0.5) * 2 * np.pi / 61
+    (c1, c2), (s1, s2) = direction(b)
+    r = mb.ss_over_models(c1, s1, c2, s2, mb.parse_model_box("q=0:inf"))
+    assert int(r["ss_over_models"]) == DEP
+    w = [float(r[n]) for n in mb.WITNESS_NAMES]
+    g = (c1, s1, c2, s2)
+    assert _good(g, w[:3]) and not _good(g, w[3:])
