@@ -168,6 +168,13 @@ def _add_generate(sub) -> None:
         help="keep undecided points instead of resolving them exactly",
     )
     g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    g.add_argument(
+        "--model-box",
+        metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
+        help="add ss_over_models and its witness models: SS stable for every model of the box, "
+        "unstable for every model, or depends (q=LO:HI: equal damping; inf allowed; an axis not "
+        "given: its whole range)",
+    )
     _add_limits(g)
     _add_distributed(g)
 

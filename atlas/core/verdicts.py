@@ -13,6 +13,7 @@ import numpy as np
 __all__ = [
     "Verdict",
     "Consistency",
+    "OverModels",
     "flag_attrs",
     "UNDECIDED_FLAG",
     "UNDECIDED_CODE",
@@ -88,3 +89,30 @@ def flag_attrs(codes: type[enum.IntEnum], long_name: str) -> dict:
         "flag_values": np.array([int(m) for m in members], dtype=np.int8),
         "flag_meanings": " ".join(m.name.lower() for m in members),
     }
+
+
+class OverModels(enum.IntEnum):
+    """Verdict over a box of contact models (:mod:`atlas.core.model_box`): the SS mode is stable
+    (neutral counted as stable, as :data:`Verdict.NEUTRAL` is drawn in Fig. 1) for every model of
+    the box, unstable for every model, or depends on the model (witnesses on both sides)."""
+
+    UNSTABLE = 0
+    STABLE = 1
+    DEPENDS = 2
+    UNDECIDED = UNDECIDED_FLAG
+
+    @property
+    def label(self) -> str:
+        return _OVER_MODELS_STYLE[self][0]
+
+    @property
+    def color(self) -> str:
+        return _OVER_MODELS_STYLE[self][1]
+
+
+_OVER_MODELS_STYLE = {
+    OverModels.UNSTABLE: ("unstable for every model", "#f7f7f7"),
+    OverModels.STABLE: ("stable for every model", "#525252"),
+    OverModels.DEPENDS: ("depends on the model", "#fdae6b"),
+    OverModels.UNDECIDED: ("undecided", "#e41a1c"),
+}

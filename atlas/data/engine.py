@@ -631,7 +631,9 @@ def generate(scene: Scene, options: RunOptions | None = None, **changes) -> xr.D
         How to compute it (method, dtype, exact resolution, tile size, progress bar, history).
     **changes
         Options changed by name, e.g. ``generate(scene, dtype="float32")`` (see
-        :class:`RunOptions`; an unknown name is refused).
+        :class:`RunOptions`; an unknown name is refused).  ``model_box=`` (a
+        :class:`atlas.core.model_box.ModelBox`, its text ``"kappa=0.01:100,q1=0:1,q2=0:1"`` or a
+        dict) adds ``ss_over_models`` and its witnesses (:mod:`atlas.data.over_models`).
 
     Returns
     -------
@@ -640,4 +642,11 @@ def generate(scene: Scene, options: RunOptions | None = None, **changes) -> xr.D
         The undecided counts are its attributes; :func:`run` also returns the run's diagnostics.
         For atlases larger than memory use :func:`atlas.data.io.generate_to_file`.
     """
-    return run(scene, MemorySink(), RunOptions.of(options, **changes)).result
+    box = changes.pop("model_box", None)
+    if box is None:
+        return run(scene, MemorySink(), RunOptions.of(options, **changes)).result
+    from atlas.data import over_models  # noqa: PLC0415 - only on request
+
+    box = over_models.as_model_box(box)  # refused before any work
+    ds = run(scene, MemorySink(), RunOptions.of(options, **changes)).result
+    return over_models.add_over_models(ds, box)

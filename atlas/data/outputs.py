@@ -31,10 +31,12 @@ import numpy as np
 
 from atlas.core import contact_modes as mech
 from atlas.core import kernels
+from atlas.core.model_box import WITNESS_NAMES
 from atlas.core.verdicts import (
     UNDECIDED_CODE,
     UNDECIDED_FLAG,
     Consistency,
+    OverModels,
     Verdict,
     flag_attrs,
 )
@@ -350,6 +352,42 @@ def _margin_outputs() -> list[Output]:
     ]
 
 
+_OVER_MODELS = "atlas.data.over_models.add_over_models"
+
+
+def _over_models_outputs() -> list[Output]:
+    """Certified SS verdicts over a box of models (on request: ``model_box``)."""
+    witness = [
+        Output(
+            name,
+            _B1B2,
+            "float",
+            {
+                "long_name": f"{name.split('_')[-1]} of a model on the {name.split('_')[2]} side "
+                "(ss_over_models = depends; checked by the exact tier)",
+                "units": "1",
+            },
+            computed_by=_OVER_MODELS,
+            in_atlas=False,
+        )
+        for name in WITNESS_NAMES
+    ]
+    code = Output(
+        "ss_over_models",
+        _B1B2,
+        "int8",
+        {
+            **flag_attrs(OverModels, "SS stability over every model of the model box (proven)"),
+            "comment": "stable: stable or neutral for every model; unstable: for every model; "
+            "depends: a certified witness model on each side (ss_witness_*)",
+        },
+        computed_by=_OVER_MODELS,
+        enum=OverModels,
+        in_atlas=False,
+    )
+    return [code, *witness]
+
+
 # --- declaration ---------------------------------------------------------------------------------
 
 #: every output, by name (atlas outputs first, in SPEC §2 order)
@@ -447,7 +485,7 @@ def unregister(name: str) -> None:
     OUTPUTS.pop(name)
 
 
-for _o in _geometry_outputs() + _spectral_outputs() + _margin_outputs():
+for _o in _geometry_outputs() + _spectral_outputs() + _margin_outputs() + _over_models_outputs():
     register(_o)
 
 #: attributes of the coordinates (scene parameters, SPEC §1-2)

@@ -1,0 +1,85 @@
+"""Verdicts over a box of contact models as atlas variables (:mod:`atlas.core.model_box`).
+
+``ss_over_models`` (:class:`atlas.core.verdicts.OverModels` codes) and its witnesses
+(:data:`atlas.core.model_box.WITNESS_NAMES`, float64, NaN where the code is not "depends") span
+``beta1, beta2`` only: the model box replaces the scene's model axes for them.  They are added to an
+atlas on request (``atlas.generate(scene, model_box=...)``, ``atlas generate --model-box ...``),
+never by default.  The box is stored as the global attribute ``model_box``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import xarray as xr
+
+from atlas.core import contact_modes as mech
+from atlas.core import model_box as mb
+from atlas.data.outputs import variable_attrs
+
+__all__ = ["as_model_box", "over_models", "add_over_models", "OVER_MODELS_OUTPUTS"]
+
+#: the variables this module adds
+OVER_MODELS_OUTPUTS = ("ss_over_models", *mb.WITNESS_NAMES)
+
+
+def as_model_box(value) -> mb.ModelBox:
+    """A :class:`atlas.core.model_box.ModelBox` from itself, its text (``"kappa=0.01:100,q=0:1"``)
+    or a dict of :func:`atlas.core.model_box.model_box` keywords; one-line ``ValueError``."""
+    if isinstance(value, mb.ModelBox):
+        return value
+    if isinstance(value, str):
+        return mb.parse_model_box(value)
+    if isinstance(value, dict):
+        unknown = set(value) - {"kappa", "q1", "q2", "q"}
+        if unknown:
+            raise ValueError(f"model_box: unknown axes {sorted(unknown)} (kappa, q1, q2, q)")
+        return mb.model_box(**value)
+    raise ValueError(f"model_box: expected a ModelBox, a dict or text, got {value!r}")
+
+
+def over_models(beta1, beta2, box, dtype: str = "float64") -> xr.Dataset:
+    """The variables of :data:`OVER_MODELS_OUTPUTS` on the grid ``beta1 x beta2`` [rad] (directions
+    rounded to ``dtype`` as in an atlas); ``.attrs``: the box and the run's counts."""
+    box = as_model_box(box)
+    b1 = xr.DataArray(np.atleast_1d(np.asarray(beta1, np.float64)), dims="beta1")
+    b2 = xr.DataArray(np.atleast_1d(np.asarray(beta2, np.float64)), dims="beta2")
+    return _compute(b1, b2, box, dtype)
+
+
+def _compute(b1: xr.DataArray, b2: xr.DataArray, box, dtype) -> xr.Dataset:
+    c1, s1 = (np.asarray(v, np.float64) for v in mech.direction(b1.values, dtype))
+    c2, s2 = (np.asarray(v, np.float64) for v in mech.direction(b2.values, dtype))
+    dims = b1.dims + b2.dims
+    shape = (c1.size, c2.size)
+    start = time.perf_counter()
+    res = mb.ss_over_models(
+        c1.reshape(-1, 1), s1.reshape(-1, 1), c2.reshape(1, -1), s2.reshape(1, -1), box
+    )
+    seconds = time.perf_counter() - start
+    data = {}
+    for name in OVER_MODELS_OUTPUTS:
+        arr = np.asarray(res[name]).reshape(shape)
+        arr = arr.reshape(np.shape(b1.values) + np.shape(b2.values))
+        data[name] = xr.Variable(dims, arr, variable_attrs(name))
+    attrs = {
+        "model_box": str(box),
+        "over_models_undecided_before_settlement": int(res.stats["undecided_before"]),
+        "over_models_undecided": int(res.stats["undecided_after"]),
+        "over_models_seconds": round(seconds, 3),
+    }
+    return xr.Dataset(data, coords={b1.name or "beta1": b1, b2.name or "beta2": b2}, attrs=attrs)
+
+
+def add_over_models(ds: xr.Dataset, box) -> xr.Dataset:
+    """``ds`` with the :data:`OVER_MODELS_OUTPUTS` over its ``beta1, beta2`` (coordinates or
+    scalars) and the box's attributes added (a new Dataset)."""
+    box = as_model_box(box)
+    b1, b2 = ds["beta1"], ds["beta2"]
+    extra = _compute(b1, b2, box, ds.attrs.get("dtype", "float64"))
+    out = ds.copy()
+    for name in OVER_MODELS_OUTPUTS:
+        out[name] = extra[name].variable
+    out.attrs.update(extra.attrs)
+    return out
