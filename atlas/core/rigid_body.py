@@ -80,8 +80,7 @@ from functools import cached_property
 
 import numpy as np
 
-from atlas.core import checks, kernels
-from atlas.core import contact_modes as mech
+from atlas.core import checks
 from atlas.core.contact_space import ContactSpace, verdict_names, verdicts_at
 
 __all__ = [
