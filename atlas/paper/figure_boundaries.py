@@ -34,6 +34,7 @@ _MARKERS = {
     "touches_class_line": "b^",
     "SS_meets_II": "m*",
     "end": "kx",
+    "uncovered_class_line": "co",  # a class-line stretch no curve covers (proven = 0)
 }
 
 
