@@ -6,6 +6,7 @@ signal test (``e2e``)."""
 import contextlib
 import io
 import os
+import re
 import subprocess
 import sys
 
@@ -699,6 +700,24 @@ def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):
     assert err.startswith("atlas: error: "), err
     assert sorted(os.listdir(tmp_path)) == ["existing.md"]
     assert (tmp_path / "existing.md").read_text() == "keep me"
+
+
+def _dry_run_seconds(args, capsys) -> float:
+    """The time ``--dry-run`` predicts for ``args`` [s]."""
+    assert cli.main([*args, "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    value, unit = re.search(r"~(\S+) (s|min|h|days|years) on one core", out).groups()
+    return float(value) * {"s": 1, "min": 60, "h": 3600, "days": 86400, "years": 31536000}[unit]
+
+
+def test_simulate_dry_run_time_grows_with_t_end(capsys):
+    """``simulate --map --dry-run``'s time is proportional to ``--t-end`` over the default
+    horizon 150 (it predicted the same time for every ``--t-end``)."""
+    args = ["simulate", "--map", "--n", "8", "--no-theory"]
+    base = _dry_run_seconds(args, capsys)
+    long = _dry_run_seconds([*args, "--t-end", "1e4"], capsys)
+    assert base == _dry_run_seconds([*args, "--t-end", "150"], capsys)
+    assert 60 < long / base < 73  # 1e4 / 150 = 66.7, both printed to 2 significant digits
 
 
 def test_negative_range_start_needs_no_equals_sign(capsys):
