@@ -282,6 +282,27 @@ def test_generate_scheduler_inprocess_then_resume(distributed_run):
         assert "resumed, 2 of 4 tiles recomputed" in ds.attrs["history"]
 
 
+def test_generate_resume_after_a_killed_replacement(distributed_run, tmp_path):
+    """A run killed between the renames of ``--overwrite`` leaves the store only as
+    ``.NAME.old.PID`` (its process gone): ``--resume`` renames it back, says so in one line,
+    and verifies every tile (it was "store ... does not exist")."""
+    import shutil
+
+    d, _ = distributed_run
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    shutil.copytree(d / "a.zarr", tmp_path / f".c.zarr.old.{int(gone.stdout)}")
+    args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
+    rc, err = _main([*args, "--store", str(tmp_path / "c.zarr"), "--out", str(tmp_path / "c.nc"),
+                     "--resume"])  # fmt: skip
+    assert rc == 0, err
+    lines = err.strip().splitlines()
+    assert lines[0].startswith(f"store: restored {tmp_path / 'c.zarr'} from "), err
+    assert "4 tiles: 0 computed, 4 verified" in lines[-1], err
+    assert sorted(os.listdir(tmp_path)) == ["c.nc", "c.zarr"]
+    _same_netcdf(tmp_path / "c.nc", d / "ref.nc")
+
+
 def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
     """One line ``atlas: error: PARAMETER: ...``, exit code 2, existing files untouched."""
     d, _ = distributed_run
