@@ -580,7 +580,7 @@ def _dispatch_estimate(args):
             tile *= dyn.n_perturb
         return limits.outcome_estimate(
             scene, dyn.n_perturb, engine=dyn.engine, theory=not args.no_theory, outputs=outs,
-            tile_runs=tile,
+            tile_runs=tile, t_end=dyn.t_end,
         )  # fmt: skip
     return None
 

@@ -6,6 +6,7 @@ signal test (``e2e``)."""
 import contextlib
 import io
 import os
+import re
 import subprocess
 import sys
 
@@ -280,6 +281,27 @@ def test_generate_scheduler_inprocess_then_resume(distributed_run):
     _same_netcdf(d / "b.nc", d / "ref.nc")
     with xr.open_dataset(d / "b.nc") as ds:
         assert "resumed, 2 of 4 tiles recomputed" in ds.attrs["history"]
+
+
+def test_generate_resume_after_a_killed_replacement(distributed_run, tmp_path):
+    """A run killed between the renames of ``--overwrite`` leaves the store only as
+    ``.NAME.old.PID`` (its process gone): ``--resume`` renames it back, says so in one line,
+    and verifies every tile (it was "store ... does not exist")."""
+    import shutil
+
+    d, _ = distributed_run
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    shutil.copytree(d / "a.zarr", tmp_path / f".c.zarr.old.{int(gone.stdout)}")
+    args = ["generate", *SCENE5, "--scheduler", "inprocess", "--slab", "2"]
+    rc, err = _main([*args, "--store", str(tmp_path / "c.zarr"), "--out", str(tmp_path / "c.nc"),
+                     "--resume"])  # fmt: skip
+    assert rc == 0, err
+    lines = err.strip().splitlines()
+    assert lines[0].startswith(f"store: restored {tmp_path / 'c.zarr'} from "), err
+    assert "4 tiles: 0 computed, 4 verified" in lines[-1], err
+    assert sorted(os.listdir(tmp_path)) == ["c.nc", "c.zarr"]
+    _same_netcdf(tmp_path / "c.nc", d / "ref.nc")
 
 
 def test_generate_distributed_bad_inputs(distributed_run, tmp_path, capsys):
@@ -707,6 +729,24 @@ def test_usage_errors_one_prefix_nothing_written(args, name, tmp_path, capsys):
     assert err.startswith("atlas: error: "), err
     assert sorted(os.listdir(tmp_path)) == ["existing.md"]
     assert (tmp_path / "existing.md").read_text() == "keep me"
+
+
+def _dry_run_seconds(args, capsys) -> float:
+    """The time ``--dry-run`` predicts for ``args`` [s]."""
+    assert cli.main([*args, "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    value, unit = re.search(r"~(\S+) (s|min|h|days|years) on one core", out).groups()
+    return float(value) * {"s": 1, "min": 60, "h": 3600, "days": 86400, "years": 31536000}[unit]
+
+
+def test_simulate_dry_run_time_grows_with_t_end(capsys):
+    """``simulate --map --dry-run``'s time is proportional to ``--t-end`` over the default
+    horizon 150 (it predicted the same time for every ``--t-end``)."""
+    args = ["simulate", "--map", "--n", "8", "--no-theory"]
+    base = _dry_run_seconds(args, capsys)
+    long = _dry_run_seconds([*args, "--t-end", "1e4"], capsys)
+    assert base == _dry_run_seconds([*args, "--t-end", "150"], capsys)
+    assert 60 < long / base < 73  # 1e4 / 150 = 66.7, both printed to 2 significant digits
 
 
 def test_negative_range_start_needs_no_equals_sign(capsys):

@@ -178,7 +178,7 @@ def generate_distributed(
     job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes))
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
-    with store_guard.held(job.store):
+    with store_guard.held(job.store, ours=tile_store.is_atlas_store):
         resumed = _prepare_store(job, resume, overwrite)
         ex = executor(scheduler)
         bar = progress_bar(job.opts.progress, len(job.tiles), "atlas tiles", unit="tile")

@@ -20,7 +20,7 @@ from atlas.data.engine import DEFAULT_TILE_POINTS, RunOptions
 from atlas.data.io import check_output_path, generate_to_file
 from atlas.data.limits import generate_estimate
 from atlas.data.scene import Scene, builtin
-from atlas.data.store_guard import write_failure
+from atlas.data.store_guard import settle, write_failure
 
 __all__ = ["run_cli", "scene_from_options", "parse_physical"]
 
@@ -249,6 +249,9 @@ def _store_path(sc, out, store, resume, overwrite) -> str:
     store = store or (os.path.splitext(stem)[0] + ".zarr")
     if resume and overwrite:
         raise ValueError("resume: --resume continues the store, --overwrite replaces it; not both")
+    from atlas.data.tile_store import is_atlas_store  # noqa: PLC0415 - xarray: only here
+
+    settle(store, is_atlas_store)  # the old copy a killed replacement left beside the store
     if resume and not os.path.exists(store):
         raise FileNotFoundError(f"resume: store {store} does not exist")
     if os.path.exists(store) and not (resume or overwrite):

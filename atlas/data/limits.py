@@ -265,8 +265,12 @@ def boundaries_estimate(n1: int, n2: int, check: int, slices: int, outputs=()) -
 
 #: ``atlas simulate --map`` per trajectory: peak bytes (engine state, initial states, codes),
 #: seconds by engine (outputs/bench.md: ~0.4 ms fast, ~0.012 s exact, run by run; jax ~0.04 s)
+#: at the horizon :data:`OUTCOME_T_END`
 OUTCOME_TRAJECTORY_BYTES = 2000
 OUTCOME_SECONDS = {"fast": 4e-4, "numpy": 0.02, "jax": 0.04}
+#: the horizon [scaled time] of :data:`OUTCOME_SECONDS` (``Dynamics``' default ``t_end``): a
+#: run's time grows in proportion to its horizon, as the exact simulator's sub-steps do
+OUTCOME_T_END = 150.0
 #: stored bytes per cell of an outcome atlas: 8 int16 counts, int8 outcome, float32 agreement,
 #: the no-stable-subclass flag
 OUTCOME_CELL_BYTES = 8 * 2 + 1 + 4 + 1
@@ -280,17 +284,20 @@ def outcome_estimate(
     theory: bool = True,
     outputs=(),
     tile_runs: int | None = None,
+    t_end: float = OUTCOME_T_END,
 ) -> Estimate:
     """The cost of an outcome atlas (``atlas simulate --map``) of ``scene``: points =
     trajectories (cells over every axis x ``n_perturb``), simulated ``tile_runs`` at a time
-    (default all); with ``theory`` the theory verdicts of the same cells
-    (:func:`generate_estimate`) are held and written too."""
+    (default all), each for a time proportional to its horizon ``t_end`` [scaled time]; with
+    ``theory`` the theory verdicts of the same cells (:func:`generate_estimate`) are held and
+    written too."""
     cells = math.prod(a.size for a in scene.axes.values())
     runs = cells * max(1, int(n_perturb))
     batch = runs if tile_runs is None else min(runs, int(tile_runs))
     out_bytes = cells * OUTCOME_CELL_BYTES
     peak = batch * OUTCOME_TRAJECTORY_BYTES + out_bytes
-    seconds = runs * OUTCOME_SECONDS.get(engine, OUTCOME_SECONDS["numpy"])
+    per_run = OUTCOME_SECONDS.get(engine, OUTCOME_SECONDS["numpy"]) * t_end / OUTCOME_T_END
+    seconds = runs * per_run
     if theory:
         th = generate_estimate(scene)
         out_bytes += th.output_bytes

@@ -12,7 +12,10 @@ the zarr store of :mod:`atlas.data.tile_store` and the outcome store of
   place; never deleted before);
 * :func:`held`: a writer holds ``store`` by a lock file beside it, ``.NAME.lock``, holding its
   pid and host; a second writer is refused with one line (a lock left by a process of this host
-  that no longer runs is taken over).
+  that no longer runs is taken over);
+* :func:`recover`: the old store an :func:`install` left aside, ``.NAME.old.PID``, when its
+  process was killed between the renames, is renamed back if ``store`` is missing (it is the only
+  copy), or removed if the store in place is one the project wrote; one line says which.
 """
 
 from __future__ import annotations
@@ -20,10 +23,21 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import socket
+import sys
 
-__all__ = ["check_place", "check_replaceable", "install", "held", "lock_path", "write_failure"]
+__all__ = [
+    "check_place",
+    "check_replaceable",
+    "install",
+    "held",
+    "lock_path",
+    "recover",
+    "settle",
+    "write_failure",
+]
 
 
 def check_place(store: str, option: str = "store") -> str:
@@ -78,6 +92,55 @@ def install(tmp: str, store: str) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
+def _leftovers(store: str) -> list[tuple[str, int]]:
+    """``(path, pid)`` of each ``.NAME.old.PID`` beside ``store`` whose process no longer runs,
+    newest first."""
+    head, name = os.path.split(os.path.abspath(store))
+    pattern = re.compile(rf"\.{re.escape(name)}\.old\.(\d+)")
+    try:
+        names = os.listdir(head)
+    except OSError:
+        return []
+    found = []
+    for entry in names:
+        match = pattern.fullmatch(entry)
+        path = os.path.join(head, entry)
+        if match and os.path.isdir(path) and not os.path.islink(path):
+            pid = int(match.group(1))
+            if pid != os.getpid() and not _alive(pid):
+                found.append((path, pid, os.lstat(path).st_mtime))
+    return [(p, pid) for p, pid, _ in sorted(found, key=lambda f: -f[2])]
+
+
+def recover(store: str, ours, option: str = "store") -> list[str]:
+    """Finish the replacements of ``store`` that a killed process left half done (see the
+    module docstring; ``ours(path)`` recognises a store the project wrote): a leftover is
+    restored when ``store`` is missing, removed when ``ours(store)``, else kept. Call it holding
+    ``store`` (:func:`held`). Returns the lines said (each also printed to stderr)."""
+    said = []
+    for old, pid in _leftovers(store):
+        gone = f"left by process {pid}, which was stopped while replacing {store}"
+        if not os.path.lexists(store):
+            os.replace(old, store)
+            line = f"{option}: restored {store} from {old} ({gone})"
+        elif ours(store):
+            shutil.rmtree(old)
+            line = f"{option}: removed the old copy {old} ({gone}; the new store is in place)"
+        else:
+            line = f"{option}: kept {old} ({gone}; {store} is not a store this project wrote)"
+        print(line, file=sys.stderr)
+        said.append(line)
+    return said
+
+
+def settle(store: str, ours, option: str = "store") -> None:
+    """:func:`recover` holding ``store``, if a killed replacement left anything beside it (for a
+    check of the store's existence made before the writer holds it)."""
+    if _leftovers(store):
+        with held(store, option, ours):
+            pass
+
+
 def lock_path(store: str) -> str:
     """The lock file of ``store``: ``.NAME.lock`` beside it."""
     head, name = os.path.split(os.path.abspath(store))
@@ -130,14 +193,17 @@ def _take(path: str, me: dict, option: str, store: str) -> None:
 
 
 @contextlib.contextmanager
-def held(store: str, option: str = "store"):
-    """Hold ``store`` for writing while the block runs (see the module docstring)."""
+def held(store: str, option: str = "store", ours=None):
+    """Hold ``store`` for writing while the block runs (see the module docstring); with
+    ``ours`` (the store kind's test), first :func:`recover` what a killed replacement left."""
     path = lock_path(store)
     if not os.path.isdir(os.path.dirname(path)):
         raise FileNotFoundError(f"{option}: directory {os.path.dirname(path)} does not exist")
     me = {"pid": os.getpid(), "host": socket.gethostname()}
     _take(path, me, option, store)
     try:
+        if ours is not None:
+            recover(store, ours, option)
         yield path
     finally:
         if _holder(path) == me:

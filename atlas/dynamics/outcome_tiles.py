@@ -315,7 +315,7 @@ def outcome_atlas_tiles(
     plan = _plan(scene, dyn, tiles)
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
-    with store_guard.held(store):
+    with store_guard.held(store, ours=is_outcome_store):
         counts, recs, resumed = _run_store(store, scene, dyn, tiles, plan, resume, overwrite,
                                            (scheduler, workers, progress))  # fmt: skip
     verified = sorted(resumed or {})

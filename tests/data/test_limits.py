@@ -72,6 +72,20 @@ def test_outcome_estimate_counts_every_axis_and_the_theory():
     assert slow.seconds > 10 * est.seconds
 
 
+def test_outcome_estimate_grows_with_the_horizon():
+    """A run's time is proportional to its horizon ``t_end`` (the exact simulator's sub-steps):
+    the default horizon is ``Dynamics``' own, and 1e4 costs 1e4 / 150 times as much (it was the
+    same 0.0064 s whatever ``t_end``)."""
+    from atlas.dynamics.outcomes import Dynamics
+
+    scene = Scene(beta1="0:2pi:8", beta2="0:2pi:8", kappa=2, q=0.5)
+    base = limits.outcome_estimate(scene, 1, theory=False)
+    assert limits.OUTCOME_T_END == Dynamics().t_end == 150.0
+    for t_end in (15.0, 150.0, 1e4):
+        est = limits.outcome_estimate(scene, 1, theory=False, t_end=t_end)
+        assert est.seconds == pytest.approx(base.seconds * t_end / 150.0, rel=1e-12)
+
+
 @pytest.mark.slow
 def test_boundaries_estimate_against_the_bytes_written(tmp_path):
     """``atlas boundaries``' estimate of one output file against the files it writes for a model

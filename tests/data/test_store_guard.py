@@ -90,3 +90,65 @@ def test_a_lock_of_a_finished_process_is_taken_over_and_released(tmp_path):
             with G.held(store):
                 pass
     assert not os.path.exists(G.lock_path(store))
+
+
+def _dead_pid() -> int:
+    """The pid of a process of this host that has finished."""
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    return int(gone.stdout)
+
+
+def _leftover(tmp_path, pid, text="old"):
+    """The old store ``install`` moved aside as ``.s.old.PID``, its process killed before the
+    new one went in or before the old one was removed."""
+    old = tmp_path / f".s.old.{pid}"
+    old.mkdir()
+    (old / "marker").write_text("")
+    (old / "a").write_text(text)
+    return old
+
+
+def test_a_killed_replacement_is_finished_by_the_next_writer(tmp_path, capsys):
+    store, pid = tmp_path / "s", _dead_pid()
+    # killed between the renames: the old store is the only copy, renamed back
+    _leftover(tmp_path, pid)
+    with G.held(str(store), ours=_ours):
+        assert (store / "a").read_text() == "old"
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"store: restored {store} from ")
+    assert f"process {pid}" in err[0]
+    assert sorted(os.listdir(tmp_path)) == ["s"]
+    # killed after the renames: the new store (ours) is in place, the old copy removed
+    old = _leftover(tmp_path, pid, "older")
+    with G.held(str(store), ours=_ours):
+        pass
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"store: removed the old copy {old} ")
+    assert sorted(os.listdir(tmp_path)) == ["s"] and (store / "a").read_text() == "old"
+    # the store in place is not one we wrote: nothing removed
+    (store / "marker").unlink()
+    _leftover(tmp_path, pid)
+    with G.held(str(store), ours=_ours):
+        pass
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"store: kept {old} ")
+    assert sorted(os.listdir(tmp_path)) == [".s.old." + str(pid), "s"]
+
+
+def test_a_leftover_of_a_live_process_is_left_alone(tmp_path, capsys):
+    """A live process (our parent) may be replacing the store right now: never touched."""
+    old = _leftover(tmp_path, os.getppid())
+    G.settle(str(tmp_path / "s"), _ours)
+    with G.held(str(tmp_path / "s"), ours=_ours):
+        pass
+    assert capsys.readouterr().err == ""
+    assert sorted(os.listdir(tmp_path)) == [old.name] and (old / "a").read_text() == "old"
+
+
+def test_settle_restores_before_the_store_is_looked_at(tmp_path, capsys):
+    store = tmp_path / "s"
+    _leftover(tmp_path, _dead_pid())
+    G.settle(str(store), _ours)
+    assert (store / "a").read_text() == "old" and sorted(os.listdir(tmp_path)) == ["s"]
+    assert capsys.readouterr().err.startswith("store: restored ")

@@ -102,6 +102,25 @@ def test_overwrite_replaces_only_an_outcome_store(tmp_path, monkeypatch):
     assert sorted(os.listdir(work)) == ["keep.txt", "m.tiles", "sub", "theirs"]
 
 
+def test_resume_after_a_killed_replacement(tmp_path, single, capsys):
+    """A run killed between the renames of ``overwrite`` leaves the store only as
+    ``.NAME.old.PID``: ``resume`` renames it back (one line) and computes nothing."""
+    import subprocess
+    import sys
+
+    store = tmp_path / "m.tiles"
+    T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False)
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    os.rename(store, tmp_path / f".m.tiles.old.{int(gone.stdout)}")
+    capsys.readouterr()
+    s = T.outcome_atlas_tiles(SCENE, store, dynamics=DYN, slab=2, theory=False, resume=True)
+    assert s["computed"] == [] and s["verified"] == [0, 1, 2]
+    _same(s["dataset"], single)
+    assert capsys.readouterr().err.startswith(f"store: restored {store} from ")
+    assert sorted(os.listdir(tmp_path)) == ["m.tiles"]
+
+
 def test_resume_of_no_store_is_refused(tmp_path):
     with pytest.raises(FileNotFoundError, match="^resume: store .* does not exist"):
         T.outcome_atlas_tiles(SCENE, tmp_path / "none", dynamics=DYN, resume=True)
