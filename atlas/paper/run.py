@@ -16,7 +16,7 @@ from pathlib import Path
 from atlas.core import config
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
-from atlas.paper import figure_boundaries, figure_ladder, realisability
+from atlas.paper import figure_boundaries, figure_ladder, figure_models, realisability
 
 __all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
 
@@ -30,6 +30,7 @@ FILES = (
     "fig1_boundaries.png",
     "fig1_classes.png",
     "fig1_map.nc",
+    "fig1_models.png",
     "fig1_stability.png",
     "fig1_stability_variants.png",
     "ladder.png",
@@ -43,6 +44,11 @@ FILES = (
     "table2.png",
     *FIG2_FILES,
 )
+
+
+#: cells per axis of ``fig1_models.png`` (full, quick, CI runs); divisible by 4, so no cell lies on
+#: a class line ``beta = k pi / 2``
+N_MODELS = (360, 120, 40)
 
 
 def files(quick: bool = False) -> tuple[str, ...]:
@@ -133,6 +139,12 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
         ),
     )
     step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
+    (models,) = step(
+        "fig1_models.png",
+        lambda: figure_models.plot_model_dependence(
+            out / "fig1_models.png", n=N_MODELS[ci + quick], boxes=figure_models.BOXES[:1]
+        ),
+    )
     maps = step(
         "fig1 variants (compute)",
         lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
@@ -152,7 +164,7 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     notes = _dynamics_steps(step, out, quick, ds)
     total = time.perf_counter() - t_all
     counts = _audit_counts(claims)
-    _write_readme(out, step.timings, total, quick, n_map, n_var, counts, notes, ds)
+    _write_readme(out, step.timings, total, quick, n_map, n_var, counts, notes, ds, models)
     say(f"all done in {total:.1f} s -> {out}")
     return dict(step.timings, total=total)
 
@@ -207,7 +219,7 @@ def _audit_counts(claims) -> dict:
     }
 
 
-def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
+def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds, models):
     """``out/README.md``: how the files were made, their sizes and times, the figures inline."""
     lines = [
         "# Regenerated figures and tables (`atlas paper`)",
@@ -227,8 +239,26 @@ def _write_readme(out, timings, total, quick, n_map, n_var, counts, notes, ds):
         *(f"* {n}" for n in notes),
         "",
         *_figure_sections(out),
+        *_models_section(models),
     ]
     atomic_write_text(out / "README.md", "\n".join(lines))
+
+
+def _models_section(models) -> list[str]:
+    """README section: the model-dependence panel and the share of the plane in each region."""
+    return [
+        "## Fig. 1 plane over every contact model",
+        "",
+        "Where SS is stable for every model `kappa > 0, q1, q2 >= 0` (the whole model space, "
+        "undamped models included), unstable for every model, or depends on the model: the "
+        "paper's Appendix C judged this from sampled models, here each region is proved "
+        "(`atlas.core.model_box`).",
+        "",
+        *figure_models.fractions_markdown(models),
+        "",
+        "![fig1 models](fig1_models.png)",
+        "",
+    ]
 
 
 def _file_rows(out: Path, timings: dict) -> list[str]:
