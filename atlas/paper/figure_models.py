@@ -18,6 +18,7 @@ from atlas.paper import drawing
 
 __all__ = [
     "BOXES",
+    "N_MODELS",
     "model_dependence_map",
     "draw_model_dependence",
     "plot_model_dependence",
@@ -25,6 +26,9 @@ __all__ = [
     "fractions_markdown",
 ]
 
+#: cells per axis of the ``atlas paper`` panel (full, quick, CI runs); divisible by 4, so no cell lies
+#: on a class line ``beta = k pi / 2``
+N_MODELS = (360, 120, 40)
 #: the boxes of the panels: the whole model space, equal damping, and a bounded box
 BOXES = ("kappa=0:inf", "q=0:inf", "kappa=0.01:100,q1=0:1,q2=0:1")
 

@@ -46,11 +46,6 @@ FILES = (
 )
 
 
-#: cells per axis of ``fig1_models.png`` (full, quick, CI runs); divisible by 4, so no cell lies on
-#: a class line ``beta = k pi / 2``
-N_MODELS = (360, 120, 40)
-
-
 def files(quick: bool = False) -> tuple[str, ...]:
     """The files a run writes (quick and CI runs leave out :data:`FIG2_FILES`)."""
     return tuple(f for f in FILES if not (quick and f in FIG2_FILES))
@@ -142,7 +137,9 @@ def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = Fal
     (models,) = step(
         "fig1_models.png",
         lambda: figure_models.plot_model_dependence(
-            out / "fig1_models.png", n=N_MODELS[ci + quick], boxes=figure_models.BOXES[:1]
+            out / "fig1_models.png",
+            n=figure_models.N_MODELS[ci + quick],
+            boxes=figure_models.BOXES[:1],
         ),
     )
     maps = step(

@@ -17,7 +17,6 @@ from atlas import paper
 from atlas.core.contact_modes import direction
 from atlas.core.verdicts import OverModels
 from atlas.paper import figure_models
-from atlas.paper.run import N_MODELS
 
 
 def _closed_form(b):
@@ -38,7 +37,9 @@ def _closed_form(b):
 def whole(tmp_path_factory):
     """The whole-model-space panel at ``atlas paper``'s CI size, written like ``atlas paper``."""
     path = tmp_path_factory.mktemp("models") / "fig1_models.png"
-    (ds,) = figure_models.plot_model_dependence(path, n=N_MODELS[2], boxes=figure_models.BOXES[:1])
+    (ds,) = figure_models.plot_model_dependence(
+        path, n=figure_models.N_MODELS[2], boxes=figure_models.BOXES[:1]
+    )
     return path, ds
 
 
@@ -62,4 +63,4 @@ def test_reported_shares_agree_with_the_closed_form(whole):
 
 def test_declared_among_the_paper_files():
     assert "fig1_models.png" in paper.files(quick=True)
-    assert all(n % 4 == 0 for n in N_MODELS)  # no cell on a class line
+    assert all(n % 4 == 0 for n in figure_models.N_MODELS)  # no cell on a class line
