@@ -16,8 +16,19 @@ from atlas.data.io import savefig
 from atlas.data.over_models import over_models
 from atlas.paper import drawing
 
-__all__ = ["BOXES", "model_dependence_map", "draw_model_dependence", "plot_model_dependence"]
+__all__ = [
+    "BOXES",
+    "N_MODELS",
+    "model_dependence_map",
+    "draw_model_dependence",
+    "plot_model_dependence",
+    "fractions",
+    "fractions_markdown",
+]
 
+#: cells per axis of the ``atlas paper`` panel (full, quick, CI runs); divisible by 4, so no cell lies
+#: on a class line ``beta = k pi / 2``
+N_MODELS = (360, 120, 40)
 #: the boxes of the panels: the whole model space, equal damping, and a bounded box
 BOXES = ("kappa=0:inf", "q=0:inf", "kappa=0.01:100,q1=0:1,q2=0:1")
 
@@ -60,3 +71,27 @@ def plot_model_dependence(path, n: int = 181, boxes=BOXES):
     draw_model_dependence(fig, maps)
     savefig(fig, path, dpi=150)
     return maps
+
+
+def fractions(ds) -> dict:
+    """``{OverModels code: (cells, fraction of the plane)}`` of a map of
+    :func:`model_dependence_map` (every code, fractions summing to 1)."""
+    code = ds["ss_over_models"].values
+    return {
+        v: (int(np.count_nonzero(code == int(v))), np.count_nonzero(code == int(v)) / code.size)
+        for v in OverModels
+    }
+
+
+def fractions_markdown(ds) -> list[str]:
+    """Markdown lines: the share of the ``(beta1, beta2)`` plane in each region of the map ``ds``."""
+    n1, n2 = ds["ss_over_models"].shape
+    rows = [f"| {v.label} | {k} | {100 * f:.2f} % |" for v, (k, f) in fractions(ds).items()]
+    return [
+        f"Model box `{ds.attrs['model_box']}`, {n1} x {n2} offset cells of the Fig. 1 plane "
+        "(`ss_over_models`, every region proved; neutral counted as stable):",
+        "",
+        "| region | cells | share of the plane |",
+        "|---|---|---|",
+        *rows,
+    ]

@@ -15,7 +15,7 @@ from pathlib import Path
 from atlas.core import config
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
-from atlas.paper import figure_boundaries, figure_ladder, realisability, runlog
+from atlas.paper import figure_boundaries, figure_ladder, figure_models, realisability, runlog
 
 __all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
 
@@ -29,6 +29,7 @@ FILES = (
     "fig1_boundaries.png",
     "fig1_classes.png",
     "fig1_map.nc",
+    "fig1_models.png",
     "fig1_stability.png",
     "fig1_stability_variants.png",
     "ladder.png",
@@ -142,6 +143,14 @@ def _run_steps(step: _Steps, out: Path, quick: bool, ci: bool) -> None:
     call = f"atlas.paper.run(quick={quick}, ci={ci})"
     step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
     step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
+    (models,) = step(
+        "fig1_models.png",
+        lambda: figure_models.plot_model_dependence(
+            out / "fig1_models.png",
+            n=figure_models.N_MODELS[ci + quick],
+            boxes=figure_models.BOXES[:1],
+        ),
+    )
     maps = step(
         "fig1 variants (compute)",
         lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
@@ -160,7 +169,7 @@ def _run_steps(step: _Steps, out: Path, quick: bool, ci: bool) -> None:
         "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
     )
     notes = _dynamics_steps(step, out, quick, ds)
-    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds)
+    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds, models)
 
 
 class _Steps:
@@ -214,7 +223,7 @@ def _audit_counts(claims) -> dict:
     }
 
 
-def _write_readme(out, quick, n_map, n_var, counts, notes, ds):
+def _write_readme(out, quick, n_map, n_var, counts, notes, ds, models):
     """``out/README.md``: how the files were made, their sizes, the figures inline (no dates or
     seconds: those are in ``run.log``)."""
     lines = [
@@ -236,8 +245,26 @@ def _write_readme(out, quick, n_map, n_var, counts, notes, ds):
         *(f"* {n}" for n in notes),
         "",
         *_figure_sections(out),
+        *_models_section(models),
     ]
     atomic_write_text(out / "README.md", "\n".join(lines))
+
+
+def _models_section(models) -> list[str]:
+    """README section: the model-dependence panel and the share of the plane in each region."""
+    return [
+        "## Fig. 1 plane over every contact model",
+        "",
+        "Where SS is stable for every model `kappa > 0, q1, q2 >= 0` (the whole model space, "
+        "undamped models included), unstable for every model, or depends on the model: the "
+        "paper's Appendix C judged this from sampled models, here each region is proved "
+        "(`atlas.core.model_box`).",
+        "",
+        *figure_models.fractions_markdown(models),
+        "",
+        "![fig1 models](fig1_models.png)",
+        "",
+    ]
 
 
 def _file_rows(out: Path) -> list[str]:

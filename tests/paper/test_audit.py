@@ -142,3 +142,27 @@ def test_mode_2x2_exact_against_closed_form():
     r = audit.mode_2x2_exact(-0.5, 2.0, 0.1)  # roots (0.05 +- sqrt(0.0025 + 4)) / 2
     assert r["verdict_2x2"] == 0 and r["saddle"]
     assert abs(max(z.real for z in r["roots"]) - (0.05 + (0.0025 + 4) ** 0.5) / 2) < 1e-12
+
+
+def test_app_c_q1_over_every_model(monkeypatch):
+    """C1w is decided by the proved whole-model-space map: confirmed as computed, refuted by one
+    class-12 cell that depends on the model, not confirmed with an undecided cell."""
+    from atlas.core.verdicts import OverModels
+    from atlas.paper import figure_models
+
+    ctx = audit.Context(ci=True)
+    assert audit.CLAIMS["C1w"](ctx).status == "confirmed"
+    real = figure_models.model_dependence_map
+    n = figure_models.N_MODELS[2]
+    i = int(n * 0.1)  # beta1 = beta2 - 0.2 pi ~ 0.2 pi, 0.4 pi: class 12
+    for flip, status in ((OverModels.DEPENDS, "refuted"), (OverModels.UNDECIDED, "imprecise")):
+
+        def mutated(n, box="kappa=0:inf", flip=flip):
+            ds = real(n, box)
+            ds["ss_over_models"][i, 2 * i] = int(flip)
+            return ds
+
+        monkeypatch.setattr(figure_models, "model_dependence_map", mutated)
+        c = audit.CLAIMS["C1w"](ctx)
+        assert c.status == status
+        assert f"12: stable for every model, {flip.label};" in c.evidence

@@ -37,6 +37,9 @@ def test_run_ci(paper_run):
     _check_outputs(paper_run.out)
     assert "quick = True, ci = True" in (paper_run.out / "audit.md").read_text()
     assert {"table2", "fig1 map (compute)", "audit (compute)"} <= set(paper_run.timings)
+    readme = (paper_run.out / "README.md").read_text()
+    assert "## Fig. 1 plane over every contact model" in readme
+    assert "| depends on the model |" in readme
 
 
 @pytest.mark.slow

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from atlas.core import contact_modes
-from atlas.core.verdicts import Verdict
+from atlas.core.verdicts import OverModels, Verdict
+from atlas.paper import figure_models
 from atlas.paper.audit.context import KAPPAS_Q0
 from atlas.paper.audit.printed import SS_CURVED
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
@@ -246,6 +247,44 @@ def _damped_changes(ctx):
                     cx.note = "II consistent, but a complex pair dominates the II root"
                 cxs.append(cx)
     return q1, q2, q3, cxs
+
+
+def _over_models_by_class(ctx) -> tuple[dict, int]:
+    """``{class: OverModels codes of its cells}`` on the whole-model-space map of ``atlas paper``'s
+    size, and the cell count."""
+    ds = figure_models.model_dependence_map(figure_models.N_MODELS[ctx.ci + ctx.quick])
+    code = ds["ss_over_models"].values
+    b = ds.beta1.values
+    (c1, s1), (c2, s2) = contact_modes.direction(b[:, None]), contact_modes.direction(b[None, :])
+    cls = np.broadcast_to(np.asarray(contact_modes.class_code(c1, s1, c2, s2)), code.shape)
+    return {c: set(np.unique(code[cls == c]).tolist()) for c in contact_modes.ALL_CLASSES}, b.size
+
+
+@claim(
+    "C1w",
+    "App. C (Q != 0), Q1",
+    "The Q = 0 answer to Q1 remains true for every model (kappa > 0, q1, q2 >= 0): SS is never "
+    "unstable in classes 12 and 42, always unstable in the 16 classes other than 13, 14, 23, 31, "
+    "41, 46, and only in these six does it depend on the geometry and the model.",
+)
+def q1_every_model(ctx) -> Finding:
+    seen, n = _over_models_by_class(ctx)
+    st, un, dep = int(OverModels.STABLE), int(OverModels.UNSTABLE), int(OverModels.DEPENDS)
+    rest = [c for c in seen if c not in SS_CURVED and c not in (12, 42)]
+    undecided = [c for c, v in seen.items() if int(OverModels.UNDECIDED) in v or not v]
+    bad = [c for c in (12, 42) if seen[c] & {un, dep}] + [c for c in rest if seen[c] & {st, dep}]
+    bad += [c for c in SS_CURVED if dep not in seen[c] and c not in undecided]
+    status = "refuted" if bad else "imprecise" if undecided else "confirmed"
+    return Finding(
+        status,
+        f"ss_over_models (every region proved, atlas.core.model_box) on the {n}^2 offset grid "
+        "of the Fig. 1 plane (fig1_models.png), per class: "
+        + "; ".join(
+            f"{c}: {', '.join(OverModels(x).label for x in sorted(v))}" for c, v in seen.items()
+        )
+        + f". Classes breaking the pattern: {fmt_classes(bad)}; with undecided cells or none: "
+        f"{fmt_classes(undecided)}.",
+    )
 
 
 @claim(
