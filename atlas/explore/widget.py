@@ -15,7 +15,7 @@ import traceback
 from atlas.explore.inspector import format_inspection
 from atlas.explore.map_view import FIGSIZE, MapView
 from atlas.explore.maps import layers
-from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, format_boundary
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
 
 __all__ = ["make_widget", "RESOLUTIONS"]
 
@@ -32,6 +32,8 @@ _WATCHED = ("kappa", "q", "q1", "q2", "alpha", "n", "layer", "overlays", "max_re
 #: the controls, in the order shown
 _SHOWN = ("log10_kappa", "kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
 _SHOWN += ("max_resolve", "settle")
+#: put before the inspector's text when an inspection failed: it still describes the last point
+_FAILED = "<pre style='color:#b00020'>(the last inspection failed, see the status line; below: the point before)\n"
 _HINT = "<pre>click the map or enter beta1, beta2 and press 'inspect point'</pre>"
 
 
@@ -279,14 +281,21 @@ class _Callbacks:
         self.show_status()
 
     def show_point(self, b1, b2):
-        info = self.ex.inspect(b1, b2)
-        text = format_inspection(info)
-        near = self.ex.nearest_boundary(*self.ex.point)
-        if near is not None:
-            text += "\n" + format_boundary(*near)
+        """Inspect ``(b1, b2)`` [rad] and show it: the inspector's text, the beta fields and the
+        marker change together, after the inspection succeeded (an error leaves all three on the
+        previous point and says so in the inspector)."""
+        try:
+            info = self.ex.inspect(b1, b2)
+        except Exception:
+            self.inspector.value = self.inspector.value.replace("<pre>", _FAILED, 1)
+            raise
+        text = "\n".join([format_inspection(info), *self.ex.last_near])
         self.inspector.value = "<pre>" + html.escape(text, quote=False) + "</pre>"
+        b1, b2 = self.ex.point
+        self.ctl["beta1"].value = round(b1 / math.pi, 6)
+        self.ctl["beta2"].value = round(b2 / math.pi, 6)
         with self._lock:
-            self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
+            self.view.marker.set_data([b1], [b2])
             self.draw()
 
     def on_inspect(self, _b=None):
@@ -299,8 +308,6 @@ class _Callbacks:
             return
         if event.inaxes is not self.ax or event.xdata is None or event.ydata is None:
             return
-        self.ctl["beta1"].value = round(event.xdata / math.pi, 6)
-        self.ctl["beta2"].value = round(event.ydata / math.pi, 6)
         self.show_point(event.xdata, event.ydata)
 
     def connect(self) -> int:

@@ -4,6 +4,7 @@ redraws are capped and "settle undecided" settles; overlays draw the SS boundary
 
 from __future__ import annotations
 
+import html
 import json
 import math
 import os
@@ -24,7 +25,7 @@ from atlas.core.brackets import FIELD_LABELS
 from atlas.core.verdicts import Verdict
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
-from atlas.explore import inspector, maps, widget
+from atlas.explore import inspector, maps, state, widget
 
 ROOT = Path(__file__).resolve().parents[2]
 N = 65
@@ -247,12 +248,31 @@ def test_status_times_the_repaint_not_the_request(need):
     assert ms >= 50
 
 
+def _wait_boundaries(ex):
+    t = time.perf_counter()
+    while ex.boundaries() is None:
+        assert time.perf_counter() - t < 900
+        time.sleep(0.2)
+    time.sleep(0.5)  # the worker's redraw
+    return ex.boundaries()
+
+
+def _exact_code(field, point, kappa, q):
+    """The field's code at ``point`` from the exact reference (numpy directions)."""
+    d = [np.cos(point[0]), np.sin(point[0]), np.cos(point[1]), np.sin(point[1])]
+    ref = exact.point_spectral(*d, kappa, q, q)
+    if field == "SS":
+        return int(ref["stable_SS"])
+    return 0 if not ref["consistent_II"] else {1: 2, 0: 1, 2: 3}[int(ref["stable_II"])]
+
+
 @pytest.mark.slow
-def test_certified_boundaries_overlay_and_click_near_a_curve(need):
+def test_certified_boundaries_overlay_and_clicks_near_each_kind(need):
     """The "certified boundaries" overlay: computed in the background (the map shows
     "computing" until then), then drawn as the curves of
-    :func:`atlas.data.boundaries.slice_boundaries`; a click next to an SS curve names it, and the
-    exact SS verdict at the clicked point is the label of one of its two sides."""
+    :func:`atlas.data.boundaries.slice_boundaries`.  A click next to a curve of each kind names
+    the kind, its vertex's bracket and the codes on its two sides, and the exact code at the
+    clicked point is one of them; a click on a codimension-2 point names the point."""
     need("ipywidgets")
     kappa, q = 0.5, 0.3
     box = widget.make_widget(n=N, layer="stable_SS", kappa=kappa, q1=q)
@@ -260,26 +280,54 @@ def test_certified_boundaries_overlay_and_click_near_a_curve(need):
     box.controls["overlays"].value = ("certified boundaries",)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "certified boundaries: computing" in labels
-    t = time.perf_counter()
-    while ex.boundaries() is None:
-        assert time.perf_counter() - t < 900
-        time.sleep(0.2)
-    time.sleep(0.5)  # the worker's redraw
-    b = ex.boundaries()
+    b = _wait_boundaries(ex)
     drawn = [np.column_stack(a.get_data()) for a in ax.lines]
     curves = [c for c in b.curves if c.field != "class"]
-    assert curves
     for c in curves:
         assert any(d.shape == c.vertices.shape and np.array_equal(d, c.vertices) for d in drawn)
-    ss = next(c for c in curves if c.field == "SS")
-    v = ss.vertices[len(ss.vertices) // 2]
-    _click(box, v[0] + 0.01, v[1])
-    text = box.inspector.value
-    assert "near the certified SS_stability boundary" in text
-    d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
-    verdict = int(exact.point_spectral(*d, kappa, q, q)["stable_SS"])
-    sides = {FIELD_LABELS["SS"][ss.side_a], FIELD_LABELS["SS"][ss.side_b]}
-    assert FIELD_LABELS["SS"][verdict] in sides
+    kinds = ("SS_stability", "II_consistency", "II_stability")
+    for kind in kinds:
+        c = max((c for c in curves if c.kind == kind), key=lambda c: len(c.vertices))
+        i = len(c.vertices) // 2
+        v = c.vertices[i]
+        _click(box, v[0] + 1e-6, v[1] - 1e-6)
+        text = html.unescape(box.inspector.value)
+        lab = FIELD_LABELS[c.field]
+        assert f"near the certified {kind} boundary" in text, text
+        assert f"bracketed within {c.bracket[i]:.2g} rad" in text
+        assert f"{lab[c.side_left]} | {lab[c.side_right]}" in text
+        assert lab[_exact_code(c.field, ex.point, kappa, q)] in (lab[c.side_left], lab[c.side_right])
+        assert inspector.format_inspection(ex.last_inspection) in text
+        np.testing.assert_allclose(ex.point, (v[0] + 1e-6, v[1] - 1e-6), atol=1e-9)
+    p = b.points[0]
+    _click(box, p.beta1, p.beta2)
+    text = html.unescape(box.inspector.value)
+    assert f"on the codimension-2 point '{p.kind}'" in text, text
+    assert ("proven within" if p.proven else "no bound claimed") in text
+    assert "near the certified" in text  # a point lies on a curve
+
+
+def test_failed_inspection_leaves_the_widget_on_the_previous_point(need, monkeypatch):
+    """An error in the click callback shows in the status line and the inspector says the
+    inspection failed; marker, beta fields and inspector text stay on the previous point."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    ex, c, ax = box.explorer, box.controls, box.figure.axes[0]
+    _click(box, 1.0, 2.0)
+    before = (ex.point, c["beta1"].value, c["beta2"].value, box.inspector.value)
+    marker = np.ravel(ax.lines[-1].get_data()).copy()
+
+    def boom(*a, **k):
+        raise RuntimeError("inspection failed on purpose")
+
+    monkeypatch.setattr(state, "inspect_point", boom)
+    with pytest.raises(RuntimeError):
+        _click(box, 4.0, 5.0)
+    assert (ex.point, c["beta1"].value, c["beta2"].value) == before[:3]
+    np.testing.assert_array_equal(np.ravel(ax.lines[-1].get_data()), marker)
+    assert "the last inspection failed" in box.inspector.value
+    assert before[3].replace("<pre>", "") in box.inspector.value
+    assert "inspection failed on purpose" in box.status.value
 
 
 #: a widget in a fresh process: XLA compilations while it is made, during its inspector's
