@@ -149,6 +149,14 @@ class Explorer:
         #: called (from the worker thread) with the slice ``(kappa, q1, q2)`` whose certified
         #: boundaries are ready
         self.on_boundaries = None
+        #: called with a line saying what the explorer is doing (the widget's status line):
+        #: ``"step 1 of 2: computing ..."`` before each computation of :meth:`update` /
+        #: :meth:`settle`
+        self.on_progress = None
+        #: whether the last computed map was the first of its kind this session (its time
+        #: includes compiling or loading the kernels)
+        self.first_of_kind = False
+        self._steps: tuple[list, int] = ([], 0)  # the steps of the running update, the next one
         self._curves: dict[tuple, Future] = {}
         self._pool: ThreadPoolExecutor | None = None
         self._warm: Future | None = None
@@ -170,16 +178,39 @@ class Explorer:
         group = check_layer(p["layer"])
         check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
         self.params = p
-        self._update_margin()
         key = self._key(group)
-        if self.ds is not None and key == self._last_key:
+        compute = self.ds is None or key != self._last_key
+        steps = ["the map"] * compute
+        if self._margin_due():
+            steps.insert(0, "the SS margin")
+        self._steps = (steps, 0)
+        self._update_margin()
+        if not compute:
+            self.first_of_kind = False
             self.timings["compute_ms"] = 0.0  # only the displayed layer or the overlays changed
             return self.ds
+        self._progress(self._compute_text(group))
         t = time.perf_counter()
+        self.first_of_kind = _first_of_kind(key[:3])
         self.ds = self._compute(group, p["max_resolve"])
         self._last_key = key
         self.timings["compute_ms"] = 1e3 * (time.perf_counter() - t)
         return self.ds
+
+    def _compute_text(self, group) -> str:
+        """What computing ``group`` at the current parameters involves, in words."""
+        p = self.params
+        what = f"computing {p['layer']} on {p['n']}^2 cells"
+        if _first_of_kind(self._key(group)[:3], peek=True):
+            what = f"compiling (or loading) the kernels for {p['n']}^2 cells, then {what}"
+        return what
+
+    def _progress(self, text: str) -> None:
+        """Report the next step of :meth:`update` (``step i of n: text``) to :attr:`on_progress`."""
+        steps, i = self._steps
+        self._steps = (steps, i + 1)
+        if self.on_progress is not None:
+            self.on_progress(f"step {i + 1} of {max(len(steps), i + 1)}: {text}")
 
     def _compute(self, group, max_resolve, resolve=None) -> xr.Dataset:
         p = self.params
@@ -195,16 +226,19 @@ class Explorer:
             max_resolve=max_resolve,
         )
 
+    def _margin_due(self) -> bool:
+        p = self.params
+        key = (p["n"], p["dtype"], p["kappa"], p["q1"], p["q2"])
+        return "SS boundary" in p["overlays"] and key != self._margin_key
+
     def _update_margin(self):
         """The smooth SS margin for the "SS boundary" overlay (one jitted kernel, cached)."""
+        if not self._margin_due():
+            self.timings["margin_ms"] = 0.0
+            return
         p = self.params
-        if "SS boundary" not in p["overlays"]:
-            self.timings["margin_ms"] = 0.0
-            return
+        self._progress(f"computing the SS margin on {p['n']}^2 cells (the SS boundary overlay)")
         key = (p["n"], p["dtype"], p["kappa"], p["q1"], p["q2"])
-        if key == self._margin_key:
-            self.timings["margin_ms"] = 0.0
-            return
         t = time.perf_counter()
         m = compute_map(
             p["kappa"], p["q1"], p["q2"], n=p["n"], dtype=p["dtype"], layers=("margin_SS",)
@@ -220,6 +254,8 @@ class Explorer:
             self.update()
         t = time.perf_counter()
         if self.ds.attrs["n_undecided"] > 0 or not self.params["resolve"]:
+            self._steps = (["settle"], 0)
+            self._progress(f"settling {self.ds.attrs['n_undecided']} undecided cells exactly")
             n_fast = self.ds.attrs["n_undecided_fast"]
             self.ds = self._compute(check_layer(self.params["layer"]), None, resolve=True)
             self.ds.attrs["n_undecided_fast"] = n_fast
@@ -352,8 +388,12 @@ class Explorer:
         return (b.points[i], float(d[i])) if d[i] < within else None
 
     def status(self) -> str:
+        """The map's summary: layer, model (and alpha for the layers that depend on it), size,
+        times, undecided counts."""
         p, ds = self.params, self.ds
         q = f"q = {p['q1']:g}" if p["q1"] == p["q2"] else f"q1 = {p['q1']:g}, q2 = {p['q2']:g}"
+        if needs_alpha(p["layer"]):
+            q += f", alpha = {p['alpha'] / math.pi:.3f} pi"
         und = ""
         if ds is not None:
             und = (
@@ -364,11 +404,24 @@ class Explorer:
             if ds.attrs["n_undecided"]:
                 und += " (drawn as undecided; 'settle undecided' settles them)"
         t = self.timings
+        first = " (its kernels compiled or loaded first)" if self.first_of_kind else ""
         return (
             f"{p['layer']} at kappa = {p['kappa']:.4g}, {q}, {p['n']}^2 cells: "
-            f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms, "
+            f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms{first}, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )
+
+
+#: ``(group, n, dtype)`` of the maps computed in this process
+_SEEN: set = set()
+
+
+def _first_of_kind(kind: tuple, peek: bool = False) -> bool:
+    """Whether no map of this ``kind`` was computed in this process (recorded unless ``peek``)."""
+    first = kind not in _SEEN
+    if not peek:
+        _SEEN.add(kind)
+    return first
 
 
 def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:

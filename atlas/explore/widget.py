@@ -148,6 +148,7 @@ class _Callbacks:
         self._quiet = False  # set while a callback moves other controls
         self._requested = None  # perf_counter of a canvas draw requested and not yet done
         self._note = ""
+        self._draws = 0  # canvas draws done (ipympl)
         self._lock = threading.RLock()  # the boundaries' worker thread redraws too
 
     @contextlib.contextmanager
@@ -193,11 +194,20 @@ class _Callbacks:
             return
         self.ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - self._requested)
         self._requested = None
+        self._draws += 1
         self.show_status()
+
+    def busy(self, text: str):
+        """Say what the session is doing now (sent to the browser at once)."""
+        self.status.value = f"<tt>working -- {html.escape(text, quote=False)} ...</tt>"
 
     def show_status(self):
         if self._requested is not None:
-            drawn = "repaint pending"
+            drawn = "drawing in the browser"
+        elif self._draws <= 1 and self.image is None:
+            # the first draw waits until the browser shows the widget (after Run All: until the
+            # notebook's later cells ran), its time says nothing about drawing
+            drawn = "drawn"
         else:
             drawn = f"repaint {self.ex.timings.get('draw_ms', float('nan')):.0f} ms"
         self.status.value = (
@@ -208,7 +218,21 @@ class _Callbacks:
         with self._lock:
             self.view.render(self.ex)
             self.draw()
+            self.refresh_hover()
             self.show_status()
+
+    def on_move(self, event):
+        """``motion_notify_event``: remember the pointer's map point for :meth:`refresh_hover`."""
+        inside = event.inaxes is self.ax and event.xdata is not None
+        self.view.hover_at = (event.xdata, event.ydata) if inside else None
+
+    def refresh_hover(self):
+        """The hover text for the new layer at the pointer's last map point (ipympl shows the
+        toolbar's message only on mouse moves otherwise)."""
+        toolbar = getattr(self.fig.canvas, "toolbar", None)
+        text = self.view.hover_text()
+        if text is not None and hasattr(toolbar, "set_message"):
+            toolbar.set_message(text)
 
     def on_boundaries(self, key):
         """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
@@ -249,6 +273,7 @@ class _Callbacks:
         if kappa > 0 and math.isfinite(kappa):
             with self.quiet():
                 self.ctl["log10_kappa"].value = math.log10(kappa)
+        self.busy("updating the map")
         self.ex.update(**self.model_changes())
         self._note = ""
         self.render()
@@ -321,6 +346,8 @@ class _Callbacks:
         self.ctl["settle"].on_click(g(self.on_settle))
         canvas = self.fig.canvas
         canvas.mpl_connect("draw_event", g(self.on_drawn))
+        canvas.mpl_connect("motion_notify_event", g(self.on_move))
+        self.ex.on_progress = self.busy
         self.ex.on_boundaries = g(self.on_boundaries)
         # connected on every backend; only interactive canvases (ipympl) deliver clicks from a
         # browser.  A function, not the bound method: matplotlib holds bound methods weakly.
@@ -355,8 +382,10 @@ def make_widget(explorer: Explorer | None = None, **initial):
     status.add_class("atlas-status")
     inspector.add_class("atlas-inspector")
     controls = W.VBox([ctl[k] for k in _SHOWN], layout={"width": _WIDTH, "flex": "0 0 auto"})
-    point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]])
-    box = W.VBox([W.HBox([controls, shown]), status, point, inspector])
+    # controls beside the map in a wide column, above it in a narrow one (no sideways scroll)
+    row = W.HBox([controls, shown], layout={"flex_flow": "row wrap", "max_width": "100%"})
+    point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]], layout={"flex_flow": "row wrap"})
+    box = W.VBox([row, status, point, inspector], layout={"max_width": "100%"})
     box.add_class("atlas-explorer")
     box.explorer = ex
     box.controls = ctl

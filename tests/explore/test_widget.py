@@ -230,7 +230,8 @@ def test_kappa_log10_slider_and_text_box(need):
 
 def test_status_times_the_repaint_not_the_request(need):
     """On a canvas that draws later (ipympl draws when the browser asks), the status line says
-    "repaint pending" until the canvas has drawn, then the time from the request to the draw."""
+    "drawing in the browser" until the canvas has drawn; the first draw (which waits until the
+    browser shows the widget) reads "drawn", later ones the time from the request to the draw."""
     need("ipywidgets")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -241,11 +242,66 @@ def test_status_times_the_repaint_not_the_request(need):
     requested = []
     canvas.draw_idle = lambda: requested.append(1)
     box.controls["kappa"].value = 0.7
-    assert requested and "repaint pending" in status.value
+    assert requested and "drawing in the browser" in status.value
+    canvas.draw()
+    assert status.value.endswith(", drawn</tt>") and "repaint" not in status.value
+    box.controls["kappa"].value = 0.8
+    assert "drawing in the browser" in status.value
     time.sleep(0.05)
     canvas.draw()
     ms = float(re.search(r"repaint (\d+) ms", status.value).group(1))
     assert ms >= 50
+
+
+def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
+    """Every value the status line takes during a move to 513^2 cells (with the SS boundary
+    overlay): first what is being computed, step by step, then the new map's summary."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5, q1=0.3, overlays=())
+    seen = []
+    box.status.observe(lambda ch: seen.append(html.unescape(ch["new"])), names="value")
+    box.controls["overlays"].value = ("SS boundary",)
+    box.controls["n"].value = 513
+    assert box.explorer.ds.sizes["beta1"] == 513
+    done = next(i for i, s in enumerate(seen) if "513^2 cells: compute" in s)
+    before = seen[:done]
+    margin = [s for s in before if "step 1 of 2: computing the SS margin on 513^2 cells" in s]
+    layer = [s for s in before if "step 2 of 2: " in s and "computing stable_SS on 513^2" in s]
+    assert margin and layer, seen
+    assert seen.index(margin[0]) < seen.index(layer[0])
+    assert all(s.startswith("<tt>working -- ") for s in margin + layer)
+    assert not any("513^2 cells: compute" in s for s in before)
+
+
+def test_hover_text_follows_the_layer(need):
+    """After a layer change the hover readout is rewritten at the pointer's last point (not
+    left on the previous layer's value until the mouse moves): the exact class code there."""
+    need("ipywidgets")
+    from matplotlib.backend_bases import MouseEvent as Event
+
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    fig, messages = box.figure, []
+    fig.canvas.toolbar = type("Toolbar", (), {"mode": "", "set_message": messages.append})()
+    b1, b2 = 0.4 * math.pi, 1.3 * math.pi
+    x, y = fig.axes[0].transData.transform((b1, b2))
+    fig.canvas.callbacks.process(
+        "motion_notify_event", Event("motion_notify_event", fig.canvas, x, y)
+    )
+    box.controls["layer"].value = "class_code"
+    d = [np.cos(b1), np.sin(b1), np.cos(b2), np.sin(b2)]
+    cls = exact.point_codes(*d, np.cos(ALPHA), np.sin(ALPHA))["class_code"]
+    assert messages and messages[-1].endswith(f"class_code: class {cls}"), messages
+
+
+def test_alpha_in_status_and_title_for_the_layers_that_depend_on_it(need):
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5, alpha=0.35 * math.pi)
+    title = box.figure.axes[0].get_title
+    assert "alpha" not in box.status.value and "alpha" not in title()
+    box.controls["layer"].value = "subclass_code"
+    assert "alpha = 0.350 pi" in box.status.value and "alpha = 0.350 π" in title()
+    box.controls["alpha"].value = 0.6
+    assert "alpha = 0.600 pi" in box.status.value and "alpha = 0.600 π" in title()
 
 
 def _wait_boundaries(ex):
@@ -296,7 +352,10 @@ def test_certified_boundaries_overlay_and_clicks_near_each_kind(need):
         assert f"near the certified {kind} boundary" in text, text
         assert f"bracketed within {c.bracket[i]:.2g} rad" in text
         assert f"{lab[c.side_left]} | {lab[c.side_right]}" in text
-        assert lab[_exact_code(c.field, ex.point, kappa, q)] in (lab[c.side_left], lab[c.side_right])
+        assert lab[_exact_code(c.field, ex.point, kappa, q)] in (
+            lab[c.side_left],
+            lab[c.side_right],
+        )
         assert inspector.format_inspection(ex.last_inspection) in text
         np.testing.assert_allclose(ex.point, (v[0] + 1e-6, v[1] - 1e-6), atol=1e-9)
     p = b.points[0]
