@@ -139,12 +139,14 @@ class _Callbacks:
     """The widget's callbacks: a control moved, "settle undecided", "inspect point", a click.
 
     A bad value (``ValueError``, e.g. kappa <= 0) shows its one-line message in the status line;
-    any other error shows its traceback there (and is re-raised), not only in the kernel's log."""
+    any other error shows its traceback there and in the widget's output area ``log`` (and is
+    re-raised: the kernel's log), not only in the kernel's log."""
 
     def __init__(self, ex: Explorer, ctl: dict, view: MapView, image, status, inspector):
         self.ex, self.ctl, self.view = ex, ctl, view
         self.fig, self.ax = view.fig, view.ax
         self.image, self.status, self.inspector = image, status, inspector
+        self.log = None  # an ipywidgets Output: the tracebacks of the callbacks
         self._quiet = False  # set while a callback moves other controls
         self._requested = None  # perf_counter of a canvas draw requested and not yet done
         self._note = ""
@@ -169,8 +171,10 @@ class _Callbacks:
             except ValueError as e:
                 self.status.value = f"<tt style='color:#b00020'>{html.escape(str(e))}</tt>"
             except Exception:
-                tb = html.escape(traceback.format_exc())
-                self.status.value = f"<pre style='color:#b00020'>{tb}</pre>"
+                tb = traceback.format_exc()
+                self.status.value = f"<pre style='color:#b00020'>{html.escape(tb)}</pre>"
+                if self.log is not None:
+                    self.log.append_stderr(tb)
                 raise
 
         return run
@@ -223,7 +227,7 @@ class _Callbacks:
 
     def on_move(self, event):
         """``motion_notify_event``: remember the pointer's map point for :meth:`refresh_hover`."""
-        inside = event.inaxes is self.ax and event.xdata is not None
+        inside = getattr(event, "inaxes", None) is self.ax and event.xdata is not None
         self.view.hover_at = (event.xdata, event.ydata) if inside else None
 
     def refresh_hover(self):
@@ -347,6 +351,7 @@ class _Callbacks:
         canvas = self.fig.canvas
         canvas.mpl_connect("draw_event", g(self.on_drawn))
         canvas.mpl_connect("motion_notify_event", g(self.on_move))
+        canvas.mpl_connect("figure_leave_event", g(self.on_move))
         self.ex.on_progress = self.busy
         self.ex.on_boundaries = g(self.on_boundaries)
         # connected on every backend; only interactive canvases (ipympl) deliver clicks from a
@@ -374,6 +379,8 @@ def make_widget(explorer: Explorer | None = None, **initial):
     status, inspector = W.HTML(), W.HTML(_HINT)
     fig, view, shown, image = _map_figure(W)
     cb = _Callbacks(ex, ctl, view, image, status, inspector)
+    cb.log = W.Output()
+    cb.log.add_class("atlas-log")
     cid = cb.connect()
     cb.on_change()  # a bad initial value raises
     ex.warm_up()  # the inspector's kernels, in the background: the first click does not compile
@@ -385,7 +392,7 @@ def make_widget(explorer: Explorer | None = None, **initial):
     # controls beside the map in a wide column, above it in a narrow one (no sideways scroll)
     row = W.HBox([controls, shown], layout={"flex_flow": "row wrap", "max_width": "100%"})
     point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]], layout={"flex_flow": "row wrap"})
-    box = W.VBox([row, status, point, inspector], layout={"max_width": "100%"})
+    box = W.VBox([row, status, point, inspector, cb.log], layout={"max_width": "100%"})
     box.add_class("atlas-explorer")
     box.explorer = ex
     box.controls = ctl
@@ -393,6 +400,7 @@ def make_widget(explorer: Explorer | None = None, **initial):
     box.inspector = inspector
     box.click_cid = cid
     box.status = status
+    box.errors = cb.log  # the callbacks' tracebacks (an Output)
     box.callbacks = {
         "change": cb.on_change,
         "inspect": cb.on_inspect,

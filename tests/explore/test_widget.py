@@ -387,6 +387,7 @@ def test_failed_inspection_leaves_the_widget_on_the_previous_point(need, monkeyp
     assert "the last inspection failed" in box.inspector.value
     assert before[3].replace("<pre>", "") in box.inspector.value
     assert "inspection failed on purpose" in box.status.value
+    assert any("inspection failed on purpose" in o.get("text", "") for o in box.errors.outputs)
 
 
 #: a widget in a fresh process: XLA compilations while it is made, during its inspector's
