@@ -231,6 +231,7 @@ class Notebook:
     def click_map(self, beta1: float, beta2: float, timeout: float = 10) -> float:
         """Click the map at ``(beta1, beta2)``; the inspector must move there (within 0.01 pi)
         and the marker appear (canvas pixels change).  Returns the click-to-inspector seconds."""
+        self.page.locator(_CANVAS).first.scroll_into_view_if_needed()  # the whole map in view
         old, before = self.inspector(), self.pixels()
         x, y = self.to_page(beta1, beta2)
         t = time.perf_counter()
@@ -312,7 +313,7 @@ def slice_targets():
     """Click targets on the certified boundaries of :data:`SLICE` (computed here, independently
     of the kernel): per curve kind a vertex ``(beta1, beta2, curve)`` far (> 0.15 rad) from
     every curve of another kind and from the codimension-2 points, and the codimension-2 point
-    farthest from the others."""
+    off ``det B = 0`` farthest from the others."""
     from atlas.data.boundaries import slice_boundaries
     from atlas.explore.maps import beta_grid
 
@@ -340,6 +341,7 @@ def slice_targets():
         out[kind] = best[1:]
     spread = far(pts, pts + 10 * np.eye(len(pts), 2)) if len(pts) > 1 else np.ones(len(pts))
     inside = np.all((pts > 0.15) & (pts < 2 * PI - 0.15), axis=1)
+    inside &= np.abs(np.sin(pts[:, 1] - pts[:, 0])) > 0.15  # off det B = 0 (slow exact reference)
     out["point"] = b.points[int(np.argmax(np.where(inside, spread, -1)))]
     return out
 
@@ -471,8 +473,10 @@ def _certified(nb: Notebook, targets, times: dict):
 
     if nb.widget("separate").locator("input").is_checked():
         _act(nb, lambda: nb.widget("separate").locator("input").click(), False)
-    _act(nb, lambda: nb.set_text("q", f"{SLICE[1]}"))
-    _act(nb, lambda: nb.set_text("kappa", f"{SLICE[0]}"), False)
+    for name, value in (("q", SLICE[1]), ("kappa", SLICE[0])):
+        if f"{name} = {value:g}," not in nb.status():
+            _act(nb, lambda name=name, value=value: nb.set_text(name, f"{value}"), False)
+    assert nb.status().startswith(f"stable_SS at kappa = {SLICE[0]:g}, q = {SLICE[1]:g},")
     over = nb.widget("overlays").locator("select")
     t = time.perf_counter()
     over.select_option(["certified boundaries"])
