@@ -23,24 +23,37 @@ def _hex_rgba(h: str) -> tuple:
 _BOOL_COLORS = ("#f7f7f7", Consistency.CONSISTENT.color)
 
 
+#: the 24 classes ``ij``: colours of matplotlib's tab20 / tab20b / tab20c, assigned so that classes
+#: sharing an edge on the beta1-beta2 plane differ by CIE76 Delta E >= 23 and any two classes by
+#: >= 10, in normal vision and for deutan, protan and tritan vision (Machado et al. 2009,
+#: severity 1), chosen by a local search over the 60 colours
+CLASS_COLORS = {
+    11: "#c7e9c0", 12: "#a55194", 13: "#dbdb8d", 14: "#74c476", 15: "#843c39", 16: "#e7ba52",
+    21: "#d62728", 22: "#7b4173", 23: "#e6550d", 24: "#393b79", 25: "#8c6d31", 26: "#6baed6",
+    31: "#636363", 32: "#e7969c", 33: "#6b6ecf", 34: "#bdbdbd", 35: "#756bb1", 36: "#bcbd22",
+    41: "#9edae5", 42: "#bd9e39", 43: "#a1d99b", 44: "#5254a3", 45: "#e377c2", 46: "#31a354",
+}  # fmt: skip
+
+
 def _code_palette(name: str) -> dict:
     """code -> colour of an integer code layer (its CF flag values), no colour repeated.
 
-    The 24 classes ``ij`` (in code order) take 24 hues 105 degrees apart (neighbouring codes far
-    apart in hue) at saturation 0.75, value 0.85; a code ``ijk`` whose ``ij`` is a class (the
-    subclasses) is its class's colour shaded by ``k`` (k = 1..3 darker, 4..6 lighter), so the
-    subclasses of one class read as one family; other codes take the hues in the same way.
+    The classes ``ij`` take :data:`CLASS_COLORS`; a code ``ijk`` whose ``ij`` is a class (the
+    subclasses) is the ``ij``-th of 24 hues 105 degrees apart (saturation 0.75, value 0.85) shaded
+    by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of one class read as one family;
+    other codes take hues 7/n of a turn apart.
     """
     import colorsys
 
     import matplotlib
 
     hue = lambda i, n: np.array(colorsys.hsv_to_rgb((7 * i % n) / n, 0.75, 0.85))  # noqa: E731
-    classes = [int(c) for c in variable_attrs("class_code")["flag_values"] if c > 0]
-    cls = {c: hue(i, 24) for i, c in enumerate(classes)}
+    # the subclasses' families: 24 hues 105 degrees apart (144 shades pairwise distinct, which
+    # shades of the tab20 colours are not)
+    cls = {c: hue(i, 24) for i, c in enumerate(CLASS_COLORS)}
     codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]
     if name == "class_code":
-        cols = {c: matplotlib.colors.to_hex(rgb) for c, rgb in cls.items()}
+        cols = dict(CLASS_COLORS)
     elif codes and all(c // 10 in cls and 1 <= c % 10 <= len(_SHADES) for c in codes):
         cols = {}
         for c in codes:
@@ -78,16 +91,27 @@ def _category_colors(name: str) -> dict:
     return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
 
 
-def value_label(name: str, value) -> str:
+def _undamped(ds: xr.Dataset | None) -> bool:
+    """Whether ``ds`` is a map of the undamped model (``q1 = q2 = 0``), or of no known model."""
+    if ds is None or "q1" not in ds.coords or "q2" not in ds.coords:
+        return True
+    return float(ds.q1) == 0 and float(ds.q2) == 0
+
+
+def value_label(name: str, value, ds: xr.Dataset | None = None) -> str:
     """A layer's value in words: verdict labels, ``class 23`` / ``subclass 231``, true / false,
-    or the number of a continuous layer."""
+    or the number of a continuous layer.  On a damped map ``ds`` (q1 or q2 > 0) a neutral
+    verdict reads ``neutral (Re = 0)``: an eigenvalue on the imaginary axis, not the q = 0 case."""
     kind = _kind(name)
     if kind == "float":
         return f"{float(value):+.4g}"
     v = int(value)
     if kind == "enum":
+        enum = OUTPUTS[name].enum
+        if enum is Verdict and v == Verdict.NEUTRAL and not _undamped(ds):
+            return "neutral (Re = 0)"
         try:
-            return OUTPUTS[name].enum(v).label
+            return enum(v).label
         except ValueError:
             return f"code {v}"
     if kind == "code":
@@ -138,8 +162,8 @@ def layer_rgba(ds: xr.Dataset, name: str) -> np.ndarray:
 
 
 def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, str]]:
-    """(colour, label) pairs of a categorical layer (only codes present in ``ds`` if given);
-    none for the continuous layers."""
+    """(colour, label) pairs of a categorical layer (only codes present in ``ds`` if given, labelled
+    for its model: :func:`value_label`); none for the continuous layers."""
     kind = _kind(name)
     if kind == "float":
         return []
@@ -149,4 +173,4 @@ def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, s
         codes = [int(v) for v in OUTPUTS[name].enum]
     else:
         codes = sorted(cols)
-    return [(cols[c], value_label(name, c)) for c in codes if present is None or c in present]
+    return [(cols[c], value_label(name, c, ds)) for c in codes if present is None or c in present]

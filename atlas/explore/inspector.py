@@ -268,8 +268,8 @@ def _stability_lines(info: dict) -> list[str]:
     """One-contact modes, IF/FI/CC, and the SS and II verdicts of the three sources."""
     lab = info["labels"]
     lines = [
-        f"SF: {lab['stable_SF']} (b11 = {info['b1'][0]:+.4g}); "
-        f"FS: {lab['stable_FS']} (b22 = {info['b2'][1]:+.4g}); FF: stable when consistent",
+        f"SF: {lab['stable_SF']} (b11 = {_signed(info['b1'][0])}); "
+        f"FS: {lab['stable_FS']} (b22 = {_signed(info['b2'][1])}); FF: stable when consistent",
         f"IF consistent (and stable): {info['consistent_IF']}; FI: {info['consistent_FI']}; "
         f"CC possible: {info['cc_possible']}",
     ]
@@ -282,15 +282,21 @@ def _stability_lines(info: dict) -> list[str]:
     return lines
 
 
+def _signed(x: float, spec: str = "+.4g") -> str:
+    """``x`` with its sign, a zero as ``+0`` (never ``-0``)."""
+    return f"{float(x) + 0.0:{spec}}"  # -0.0 + 0.0 is +0.0
+
+
 def _spectrum_lines(info: dict) -> list[str]:
     m = info["margins"]
     others = ", ".join(f"{k}: {value_label(k, v)}" for k, v in info["others"].items())
     return ([f"other outputs -- {others}"] if others else []) + [
         "eigenvalues of M (eig): " + format_roots(info["eigenvalues"]),
         "eigenvalues (exact ref): " + format_roots(info["eigenvalues_exact"]),
-        f"margins: ss_margin = {m['ss_margin']:+.4g}, det B = {m['det_B']:+.4g}, "
-        f"a3 = {m['a3']:+.4g}, a2 = {m['a2']:+.4g}, a1 = {m['a1']:+.4g}, a0 = {m['a0']:+.4g}, "
-        f"spectral abscissa = {m['spectral_abscissa_exact']:+.6g}",
+        f"margins: ss_margin = {_signed(m['ss_margin'])}, det B = {_signed(m['det_B'])}, "
+        f"a3 = {_signed(m['a3'])}, a2 = {_signed(m['a2'])}, a1 = {_signed(m['a1'])}, "
+        f"a0 = {_signed(m['a0'])}, "
+        f"spectral abscissa = {_signed(m['spectral_abscissa_exact'], '+.6g')}",
     ]
 
 

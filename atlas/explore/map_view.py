@@ -10,6 +10,7 @@ import time
 import numpy as np
 
 from atlas.explore.colors import legend_entries, value_label
+from atlas.explore.maps import needs_alpha
 from atlas.explore.state import Explorer
 
 __all__ = ["MapView", "class_lines", "FIGSIZE", "AXES_RECT"]
@@ -73,6 +74,8 @@ class MapView:
         self.explorer: Explorer | None = None
         self.certified: list = []  # the artists of the certified boundaries
         ax.format_coord = self.format_coord
+        #: the pointer's last map point ``(beta1, beta2)`` [rad] (set by the widget), or None
+        self.hover_at: tuple[float, float] | None = None
         self.contour = None
         self._ss_handle = Line2D([], [], color="k", ls="--", lw=0.8, label="SS boundary")
         ax.set_xlabel(r"$\beta_1$")
@@ -106,7 +109,10 @@ class MapView:
                 columnspacing=0.8,
                 frameon=False,
             )
-        ax.set_title(p["layer"], fontsize=10)
+        title = p["layer"]
+        if needs_alpha(p["layer"]):
+            title += f"  (alpha = {p['alpha'] / math.pi:.3f} π)"
+        ax.set_title(title, fontsize=10)
         self.marker.set_data(
             [] if ex.point is None else [ex.point[0]], [] if ex.point is None else [ex.point[1]]
         )
@@ -124,7 +130,11 @@ class MapView:
         for dim, v in (("beta1", x), ("beta2", y)):
             if dim in da.dims:
                 at[dim] = min(int(v / (2 * math.pi) * da.sizes[dim]), da.sizes[dim] - 1)
-        return f"{text} | {name}: {value_label(name, da.isel(at).values)}"
+        return f"{text} | {name}: {value_label(name, da.isel(at).values, ex.ds)}"
+
+    def hover_text(self) -> str | None:
+        """:meth:`format_coord` at the pointer's last map point (``None`` if it is off the map)."""
+        return None if self.hover_at is None else self.format_coord(*self.hover_at)
 
     def _layer_handles(self, ex: Explorer) -> list:
         from matplotlib.patches import Patch

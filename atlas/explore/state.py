@@ -11,7 +11,7 @@ import xarray as xr
 
 from atlas.core import warm
 from atlas.core.brackets import FIELD_LABELS
-from atlas.data.boundary_curves import Boundaries, Curve
+from atlas.data.boundary_curves import Boundaries, Curve, Point
 from atlas.explore.colors import layer_rgba
 from atlas.explore.inspector import inspect_point
 from atlas.explore.maps import (
@@ -24,6 +24,7 @@ from atlas.explore.maps import (
 )
 
 __all__ = ["Explorer", "LIVE_MAX_RESOLVE", "OVERLAYS", "BOUNDARY_GRID", "RUN", "keep_kernels"]
+__all__ += ["format_boundary", "format_point"]
 
 #: exact settlements per redraw: at most this many undecided points of the spectral layers are
 #: settled by :mod:`atlas.core.exact` when a control moves (up to ~20-100 ms each: the II verdicts need
@@ -38,6 +39,9 @@ BOUNDARY_GRID = 64
 RUN = "atlas.explore"
 #: the point ``(beta1, beta2)`` [rad] the background warm-up inspects (the widget's default point)
 WARM_POINT = (0.25 * math.pi, 0.75 * math.pi)
+#: a click closer than this to a codimension-2 point [rad] names the point (two cells of the
+#: widget's 129^2 grid)
+NEAR_POINT = 0.1
 
 
 def keep_kernels() -> str | None:
@@ -50,12 +54,28 @@ def keep_kernels() -> str | None:
 
 def format_boundary(curve: Curve, i: int, distance: float) -> str:
     """The inspector's line for a click near a certified boundary: its kind, the certified
-    bracket of the nearest vertex and the field's codes on its two sides."""
+    bracket of the nearest vertex and the field's codes on its two sides (left | right of the
+    direction of travel)."""
     lab = FIELD_LABELS[curve.field]
     return (
         f"near the certified {curve.kind} boundary ({distance:.3g} rad away; its vertex is "
-        f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_a, curve.side_a)} "
-        f"| {lab.get(curve.side_b, curve.side_b)}"
+        f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_left, curve.side_left)}"
+        f" | {lab.get(curve.side_right, curve.side_right)}"
+    )
+
+
+def format_point(point: Point, distance: float) -> str:
+    """The inspector's line for a click on a codimension-2 point: its kind, field and position
+    bound (a proven enclosure radius, or none claimed)."""
+    where = f" of the {point.field} boundary" if point.field else " of the SS and II boundaries"
+    bound = (
+        f"proven within {point.uncertainty:.2g} rad"
+        if point.proven
+        else "position estimated, no bound claimed"
+    )
+    return (
+        f"on the codimension-2 point '{point.kind}'{where} ({distance:.3g} rad away; {bound}) "
+        f"at beta1 = {point.beta1 / math.pi:.4f} pi, beta2 = {point.beta2 / math.pi:.4f} pi"
     )
 
 
@@ -125,9 +145,18 @@ class Explorer:
         self.timings: dict[str, float] = {}
         self.point: tuple[float, float] | None = None
         self.last_inspection: dict | None = None
+        self.last_near: list[str] = []
         #: called (from the worker thread) with the slice ``(kappa, q1, q2)`` whose certified
         #: boundaries are ready
         self.on_boundaries = None
+        #: called with a line saying what the explorer is doing (the widget's status line):
+        #: ``"step 1 of 2: computing ..."`` before each computation of :meth:`update` /
+        #: :meth:`settle`
+        self.on_progress = None
+        #: whether the last computed map was the first of its kind this session (its time
+        #: includes compiling or loading the kernels)
+        self.first_of_kind = False
+        self._steps: tuple[list, int] = ([], 0)  # the steps of the running update, the next one
         self._curves: dict[tuple, Future] = {}
         self._pool: ThreadPoolExecutor | None = None
         self._warm: Future | None = None
@@ -149,16 +178,39 @@ class Explorer:
         group = check_layer(p["layer"])
         check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
         self.params = p
-        self._update_margin()
         key = self._key(group)
-        if self.ds is not None and key == self._last_key:
+        compute = self.ds is None or key != self._last_key
+        steps = ["the map"] * compute
+        if self._margin_due():
+            steps.insert(0, "the SS margin")
+        self._steps = (steps, 0)
+        self._update_margin()
+        if not compute:
+            self.first_of_kind = False
             self.timings["compute_ms"] = 0.0  # only the displayed layer or the overlays changed
             return self.ds
+        self._progress(self._compute_text(group))
         t = time.perf_counter()
+        self.first_of_kind = _first_of_kind(key[:3])
         self.ds = self._compute(group, p["max_resolve"])
         self._last_key = key
         self.timings["compute_ms"] = 1e3 * (time.perf_counter() - t)
         return self.ds
+
+    def _compute_text(self, group) -> str:
+        """What computing ``group`` at the current parameters involves, in words."""
+        p = self.params
+        what = f"computing {p['layer']} on {p['n']}^2 cells"
+        if _first_of_kind(self._key(group)[:3], peek=True):
+            what = f"compiling (or loading) the kernels for {p['n']}^2 cells, then {what}"
+        return what
+
+    def _progress(self, text: str) -> None:
+        """Report the next step of :meth:`update` (``step i of n: text``) to :attr:`on_progress`."""
+        steps, i = self._steps
+        self._steps = (steps, i + 1)
+        if self.on_progress is not None:
+            self.on_progress(f"step {i + 1} of {max(len(steps), i + 1)}: {text}")
 
     def _compute(self, group, max_resolve, resolve=None) -> xr.Dataset:
         p = self.params
@@ -174,16 +226,19 @@ class Explorer:
             max_resolve=max_resolve,
         )
 
+    def _margin_due(self) -> bool:
+        p = self.params
+        key = (p["n"], p["dtype"], p["kappa"], p["q1"], p["q2"])
+        return "SS boundary" in p["overlays"] and key != self._margin_key
+
     def _update_margin(self):
         """The smooth SS margin for the "SS boundary" overlay (one jitted kernel, cached)."""
+        if not self._margin_due():
+            self.timings["margin_ms"] = 0.0
+            return
         p = self.params
-        if "SS boundary" not in p["overlays"]:
-            self.timings["margin_ms"] = 0.0
-            return
+        self._progress(f"computing the SS margin on {p['n']}^2 cells (the SS boundary overlay)")
         key = (p["n"], p["dtype"], p["kappa"], p["q1"], p["q2"])
-        if key == self._margin_key:
-            self.timings["margin_ms"] = 0.0
-            return
         t = time.perf_counter()
         m = compute_map(
             p["kappa"], p["q1"], p["q2"], n=p["n"], dtype=p["dtype"], layers=("margin_SS",)
@@ -199,6 +254,8 @@ class Explorer:
             self.update()
         t = time.perf_counter()
         if self.ds.attrs["n_undecided"] > 0 or not self.params["resolve"]:
+            self._steps = (["settle"], 0)
+            self._progress(f"settling {self.ds.attrs['n_undecided']} undecided cells exactly")
             n_fast = self.ds.attrs["n_undecided_fast"]
             self.ds = self._compute(check_layer(self.params["layer"]), None, resolve=True)
             self.ds.attrs["n_undecided_fast"] = n_fast
@@ -243,20 +300,38 @@ class Explorer:
     def inspect(self, beta1, beta2) -> dict:
         """The point inspector at ``(beta1, beta2)`` [rad] with the current model and alpha
         (after the :meth:`warm_up` if one is running: its kernels, not a second compilation;
-        an error of the warm-up is not raised here, the inspection's own would be)."""
+        an error of the warm-up is not raised here, the inspection's own would be).
+
+        All or nothing: ``point``, ``last_inspection`` and ``last_near`` (the lines of
+        :meth:`near`) change together, or not at all when the inspection raises."""
         if self._warm is not None:
             wait([self._warm])
         p = self.params
-        self.point = (float(beta1) % (2 * math.pi), float(beta2) % (2 * math.pi))
-        self.last_inspection = inspect_point(
-            *self.point,
+        point = (float(beta1) % (2 * math.pi), float(beta2) % (2 * math.pi))
+        info = inspect_point(
+            *point,
             alpha=p["alpha"],
             kappa=p["kappa"],
             q1=p["q1"],
             q2=p["q2"],
             dtype=p["dtype"],
         )
-        return self.last_inspection
+        near = self.near(*point)
+        self.point, self.last_inspection, self.last_near = point, info, near
+        return info
+
+    def near(self, beta1, beta2) -> list[str]:
+        """The inspector's lines for the certified boundaries near ``(beta1, beta2)`` [rad]: the
+        codimension-2 point within :data:`NEAR_POINT` rad (:func:`format_point`) and the nearest
+        curve vertex (:func:`format_boundary`); none while they are computed or off."""
+        lines = []
+        pt = self.nearest_point(beta1, beta2)
+        if pt is not None:
+            lines.append(format_point(*pt))
+        cv = self.nearest_boundary(beta1, beta2)
+        if cv is not None:
+            lines.append(format_boundary(*cv))
+        return lines
 
     def boundaries(self) -> Boundaries | None:
         """The certified boundary curves and codimension-2 points of the current slice, or
@@ -288,21 +363,37 @@ class Explorer:
 
     def nearest_boundary(self, beta1, beta2, within=2 * math.pi / BOUNDARY_GRID):
         """``(curve, vertex index, distance [rad])`` of the certified boundary vertex nearest to
-        ``(beta1, beta2)`` if closer than ``within``, else ``None`` (class lines excluded)."""
+        ``(beta1, beta2)`` (on the torus) if closer than ``within``, else ``None`` (class lines
+        excluded)."""
         b = self.boundaries()
         best = None
         for c in [] if b is None else b.curves:
             if c.field == "class" or not len(c.vertices):
                 continue
-            d = np.hypot(c.vertices[:, 0] - beta1, c.vertices[:, 1] - beta2)
-            i = int(np.argmin(d))
+            d = _torus_distance(c.vertices, beta1, beta2)
+            i = int(np.nanargmin(d))
             if d[i] < within and (best is None or d[i] < best[2]):
                 best = (c, i, float(d[i]))
         return best
 
+    def nearest_point(self, beta1, beta2, within=NEAR_POINT):
+        """``(point, distance [rad])`` of the codimension-2 point nearest to ``(beta1, beta2)``
+        (on the torus) if closer than ``within``, else ``None``."""
+        b = self.boundaries()
+        if b is None or not b.points:
+            return None
+        xy = np.array([(p.beta1, p.beta2) for p in b.points])
+        d = _torus_distance(xy, beta1, beta2)
+        i = int(np.argmin(d))
+        return (b.points[i], float(d[i])) if d[i] < within else None
+
     def status(self) -> str:
+        """The map's summary: layer, model (and alpha for the layers that depend on it), size,
+        times, undecided counts."""
         p, ds = self.params, self.ds
         q = f"q = {p['q1']:g}" if p["q1"] == p["q2"] else f"q1 = {p['q1']:g}, q2 = {p['q2']:g}"
+        if needs_alpha(p["layer"]):
+            q += f", alpha = {p['alpha'] / math.pi:.3f} pi"
         und = ""
         if ds is not None:
             und = (
@@ -313,11 +404,30 @@ class Explorer:
             if ds.attrs["n_undecided"]:
                 und += " (drawn as undecided; 'settle undecided' settles them)"
         t = self.timings
+        first = " (its kernels compiled or loaded first)" if self.first_of_kind else ""
         return (
             f"{p['layer']} at kappa = {p['kappa']:.4g}, {q}, {p['n']}^2 cells: "
-            f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms, "
+            f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms{first}, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )
+
+
+#: ``(group, n, dtype)`` of the maps computed in this process
+_SEEN: set = set()
+
+
+def _first_of_kind(kind: tuple, peek: bool = False) -> bool:
+    """Whether no map of this ``kind`` was computed in this process (recorded unless ``peek``)."""
+    first = kind not in _SEEN
+    if not peek:
+        _SEEN.add(kind)
+    return first
+
+
+def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:
+    """Distances [rad] from the rows ``(beta1, beta2)`` of ``xy`` to a point, on the torus."""
+    d = (xy - np.array([beta1, beta2]) + math.pi) % (2 * math.pi) - math.pi
+    return np.hypot(d[:, 0], d[:, 1])
 
 
 def _warm_up(**model) -> None:

@@ -15,7 +15,7 @@ import traceback
 from atlas.explore.inspector import format_inspection
 from atlas.explore.map_view import FIGSIZE, MapView
 from atlas.explore.maps import layers
-from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, format_boundary
+from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
 
 __all__ = ["make_widget", "RESOLUTIONS"]
 
@@ -32,6 +32,8 @@ _WATCHED = ("kappa", "q", "q1", "q2", "alpha", "n", "layer", "overlays", "max_re
 #: the controls, in the order shown
 _SHOWN = ("log10_kappa", "kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
 _SHOWN += ("max_resolve", "settle")
+#: put before the inspector's text when an inspection failed: it still describes the last point
+_FAILED = "<pre style='color:#b00020'>(the last inspection failed, see the status line; below: the point before)\n"
 _HINT = "<pre>click the map or enter beta1, beta2 and press 'inspect point'</pre>"
 
 
@@ -137,15 +139,18 @@ class _Callbacks:
     """The widget's callbacks: a control moved, "settle undecided", "inspect point", a click.
 
     A bad value (``ValueError``, e.g. kappa <= 0) shows its one-line message in the status line;
-    any other error shows its traceback there (and is re-raised), not only in the kernel's log."""
+    any other error shows its traceback there and in the widget's output area ``log`` (and is
+    re-raised: the kernel's log), not only in the kernel's log."""
 
     def __init__(self, ex: Explorer, ctl: dict, view: MapView, image, status, inspector):
         self.ex, self.ctl, self.view = ex, ctl, view
         self.fig, self.ax = view.fig, view.ax
         self.image, self.status, self.inspector = image, status, inspector
+        self.log = None  # an ipywidgets Output: the tracebacks of the callbacks
         self._quiet = False  # set while a callback moves other controls
         self._requested = None  # perf_counter of a canvas draw requested and not yet done
         self._note = ""
+        self._draws = 0  # canvas draws done (ipympl)
         self._lock = threading.RLock()  # the boundaries' worker thread redraws too
 
     @contextlib.contextmanager
@@ -166,8 +171,10 @@ class _Callbacks:
             except ValueError as e:
                 self.status.value = f"<tt style='color:#b00020'>{html.escape(str(e))}</tt>"
             except Exception:
-                tb = html.escape(traceback.format_exc())
-                self.status.value = f"<pre style='color:#b00020'>{tb}</pre>"
+                tb = traceback.format_exc()
+                self.status.value = f"<pre style='color:#b00020'>{html.escape(tb)}</pre>"
+                if self.log is not None:
+                    self.log.append_stderr(tb)
                 raise
 
         return run
@@ -191,11 +198,20 @@ class _Callbacks:
             return
         self.ex.timings["draw_ms"] = 1e3 * (time.perf_counter() - self._requested)
         self._requested = None
+        self._draws += 1
         self.show_status()
+
+    def busy(self, text: str):
+        """Say what the session is doing now (sent to the browser at once)."""
+        self.status.value = f"<tt>working -- {html.escape(text, quote=False)} ...</tt>"
 
     def show_status(self):
         if self._requested is not None:
-            drawn = "repaint pending"
+            drawn = "drawing in the browser"
+        elif self._draws <= 1 and self.image is None:
+            # the first draw waits until the browser shows the widget (after Run All: until the
+            # notebook's later cells ran), its time says nothing about drawing
+            drawn = "drawn"
         else:
             drawn = f"repaint {self.ex.timings.get('draw_ms', float('nan')):.0f} ms"
         self.status.value = (
@@ -206,7 +222,21 @@ class _Callbacks:
         with self._lock:
             self.view.render(self.ex)
             self.draw()
+            self.refresh_hover()
             self.show_status()
+
+    def on_move(self, event):
+        """``motion_notify_event``: remember the pointer's map point for :meth:`refresh_hover`."""
+        inside = getattr(event, "inaxes", None) is self.ax and event.xdata is not None
+        self.view.hover_at = (event.xdata, event.ydata) if inside else None
+
+    def refresh_hover(self):
+        """The hover text for the new layer at the pointer's last map point (ipympl shows the
+        toolbar's message only on mouse moves otherwise)."""
+        toolbar = getattr(self.fig.canvas, "toolbar", None)
+        text = self.view.hover_text()
+        if text is not None and hasattr(toolbar, "set_message"):
+            toolbar.set_message(text)
 
     def on_boundaries(self, key):
         """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
@@ -247,6 +277,7 @@ class _Callbacks:
         if kappa > 0 and math.isfinite(kappa):
             with self.quiet():
                 self.ctl["log10_kappa"].value = math.log10(kappa)
+        self.busy("updating the map")
         self.ex.update(**self.model_changes())
         self._note = ""
         self.render()
@@ -279,14 +310,21 @@ class _Callbacks:
         self.show_status()
 
     def show_point(self, b1, b2):
-        info = self.ex.inspect(b1, b2)
-        text = format_inspection(info)
-        near = self.ex.nearest_boundary(*self.ex.point)
-        if near is not None:
-            text += "\n" + format_boundary(*near)
+        """Inspect ``(b1, b2)`` [rad] and show it: the inspector's text, the beta fields and the
+        marker change together, after the inspection succeeded (an error leaves all three on the
+        previous point and says so in the inspector)."""
+        try:
+            info = self.ex.inspect(b1, b2)
+        except Exception:
+            self.inspector.value = self.inspector.value.replace("<pre>", _FAILED, 1)
+            raise
+        text = "\n".join([format_inspection(info), *self.ex.last_near])
         self.inspector.value = "<pre>" + html.escape(text, quote=False) + "</pre>"
+        b1, b2 = self.ex.point
+        self.ctl["beta1"].value = round(b1 / math.pi, 6)
+        self.ctl["beta2"].value = round(b2 / math.pi, 6)
         with self._lock:
-            self.view.marker.set_data([self.ex.point[0]], [self.ex.point[1]])
+            self.view.marker.set_data([b1], [b2])
             self.draw()
 
     def on_inspect(self, _b=None):
@@ -299,8 +337,6 @@ class _Callbacks:
             return
         if event.inaxes is not self.ax or event.xdata is None or event.ydata is None:
             return
-        self.ctl["beta1"].value = round(event.xdata / math.pi, 6)
-        self.ctl["beta2"].value = round(event.ydata / math.pi, 6)
         self.show_point(event.xdata, event.ydata)
 
     def connect(self) -> int:
@@ -314,6 +350,9 @@ class _Callbacks:
         self.ctl["settle"].on_click(g(self.on_settle))
         canvas = self.fig.canvas
         canvas.mpl_connect("draw_event", g(self.on_drawn))
+        canvas.mpl_connect("motion_notify_event", g(self.on_move))
+        canvas.mpl_connect("figure_leave_event", g(self.on_move))
+        self.ex.on_progress = self.busy
         self.ex.on_boundaries = g(self.on_boundaries)
         # connected on every backend; only interactive canvases (ipympl) deliver clicks from a
         # browser.  A function, not the bound method: matplotlib holds bound methods weakly.
@@ -340,6 +379,8 @@ def make_widget(explorer: Explorer | None = None, **initial):
     status, inspector = W.HTML(), W.HTML(_HINT)
     fig, view, shown, image = _map_figure(W)
     cb = _Callbacks(ex, ctl, view, image, status, inspector)
+    cb.log = W.Output()
+    cb.log.add_class("atlas-log")
     cid = cb.connect()
     cb.on_change()  # a bad initial value raises
     ex.warm_up()  # the inspector's kernels, in the background: the first click does not compile
@@ -348,8 +389,10 @@ def make_widget(explorer: Explorer | None = None, **initial):
     status.add_class("atlas-status")
     inspector.add_class("atlas-inspector")
     controls = W.VBox([ctl[k] for k in _SHOWN], layout={"width": _WIDTH, "flex": "0 0 auto"})
-    point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]])
-    box = W.VBox([W.HBox([controls, shown]), status, point, inspector])
+    # controls beside the map in a wide column, above it in a narrow one (no sideways scroll)
+    row = W.HBox([controls, shown], layout={"flex_flow": "row wrap", "max_width": "100%"})
+    point = W.HBox([ctl["beta1"], ctl["beta2"], ctl["inspect"]], layout={"flex_flow": "row wrap"})
+    box = W.VBox([row, status, point, inspector, cb.log], layout={"max_width": "100%"})
     box.add_class("atlas-explorer")
     box.explorer = ex
     box.controls = ctl
@@ -357,6 +400,7 @@ def make_widget(explorer: Explorer | None = None, **initial):
     box.inspector = inspector
     box.click_cid = cid
     box.status = status
+    box.errors = cb.log  # the callbacks' tracebacks (an Output)
     box.callbacks = {
         "change": cb.on_change,
         "inspect": cb.on_inspect,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -42,3 +43,15 @@ def test_roots_print_zero_parts_as_zero():
     assert inspector.format_roots(exact) == "+0+0.96i, +0-0.96i, -2.5+0i, +0.001+0i"
     # 6 significant digits of the largest modulus: small nonzero parts above that stay
     assert inspector.format_roots([1.0, 2e-5j]) == "+1+0i, +0+2e-05i"
+
+
+def test_margins_line_prints_no_negative_zero():
+    """Undamped (q = 0): the quartic's odd coefficients a3, a1 vanish (eq. 9: they carry Q);
+    they print as +0, never -0, whatever sign the float zero has (a product with q = 0 can give
+    -0.0)."""
+    info = inspector.inspect_point(0.25 * math.pi, 0.75 * math.pi, ALPHA, kappa=0.5, q1=0.0)
+    for sign in (1.0, -1.0):
+        info["margins"]["a1"] = info["margins"]["a3"] = sign * 0.0
+        line = next(s for s in inspector.format_inspection(info).splitlines() if "margins" in s)
+        assert "a3 = +0," in line and "a1 = +0," in line, line
+        assert not re.search(r"= -0(,|$)", line), line

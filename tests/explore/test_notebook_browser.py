@@ -1,12 +1,17 @@
-"""``notebooks/explore.ipynb`` as a person uses it: JupyterLab on 127.0.0.1, Chromium driven by
-Playwright, Run All, then the map is clicked and every control moved; the inspector's text, the
-status line, the hover text and the canvas's pixels are read back from the page.
+"""``notebooks/explore.ipynb`` as a person uses it: JupyterLab on 127.0.0.1 with its file browser
+open (the widget gets an 848 px column at 1280 px), Chromium driven by Playwright, Run All, then
+every advertised path: hover, clicks, each model control, each layer, 129^2 and 513^2 (the status
+line's texts recorded while the 513^2 map is computed), each overlay, clicks next to each kind of
+certified curve and on a codimension-2 point, exact settlements, "settle undecided"; the
+inspector's text, the status line, the hover text, the canvas's pixels, the widget's output area
+and the kernel's log console are read back from the page (any traceback fails the test).
 
-The same checks fail on a copy of the notebook whose click handler is disconnected.  Needs the
-``e2e`` extra (jupyterlab, playwright) and Debian's ``chromium`` (``$ATLAS_CHROMIUM``; Playwright's
-own browser download is not used); skipped without them, except in CI (``CI`` set), where it
-fails.  ``python tests/explore/test_notebook_browser.py --n 129`` prints the latencies of a run
-at ``n x n`` cells.
+The same checks fail on a copy of the notebook whose click handler is disconnected and whose
+"settle undecided" raises.  Needs the ``e2e`` extra (jupyterlab, playwright) and Debian's
+``chromium`` (``$ATLAS_CHROMIUM``; Playwright's own browser download is not used); skipped
+without them, except in CI (``CI`` set), where it fails.  ``python
+tests/explore/test_notebook_browser.py --n 129`` prints the latencies of a run at ``n x n``
+cells.  About 2 minutes with a warm compilation cache (2 shared cores).
 """
 
 from __future__ import annotations
@@ -124,7 +129,15 @@ class Notebook:
         self.page.wait_for_selector(".jp-NotebookPanel .jp-Cell", timeout=120_000)
         with contextlib.suppress(PlaywrightTimeout):  # older JupyterLab: it asks for the kernel
             self.page.get_by_role("button", name="Select", exact=True).click(timeout=2000)
-        self.page.keyboard.press("Control+b")  # close the file browser: the column a person sees
+        # JupyterLab's default file browser stays open: the notebook gets an ~850 px column
+        self.page.wait_for_selector(".jp-FileBrowser", timeout=60_000)
+
+    def open_log_console(self):
+        """View > Show Log Console: the kernel's log (a widget callback's error lands there)."""
+        self.page.get_by_role("menuitem", name="View", exact=True).click()
+        self.page.get_by_text("Show Log Console", exact=True).click()
+        self.page.wait_for_selector(".jp-LogConsolePanel", timeout=30_000)
+        self.page.locator(".jp-NotebookPanel").first.click(position={"x": 5, "y": 5})
 
     def start_run_all(self):
         """Run > Run All Cells, once the kernel is connected (a Run All before runs nothing)."""
@@ -151,10 +164,24 @@ class Notebook:
         return time.perf_counter() - self._started
 
     def tracebacks(self) -> list[str]:
-        """The text of every error output and of anything in the page that shows a traceback."""
+        """The text of every error in the page: cell outputs, the widget's output area (its
+        callbacks' tracebacks), the status line and the kernel's log console."""
         texts = self.page.locator(".jp-OutputArea-output").all_inner_texts()
+        texts += self.page.locator(".atlas-explorer .atlas-log").all_inner_texts()
+        texts += self.page.locator(".jp-LogConsolePanel .jp-OutputArea-output").all_inner_texts()
         texts += [self.status()]
         return [t for t in texts if "Traceback" in t or "Error" in t.split("\n", 1)[0]]
+
+    def record_status(self):
+        """Record every text the status line takes from now on (a MutationObserver)."""
+        self.page.locator(".atlas-explorer .atlas-status").evaluate(
+            """el => { window.__atlasStatus = [];
+                new MutationObserver(() => window.__atlasStatus.push(el.textContent))
+                    .observe(el, {subtree: true, childList: true, characterData: true}); }"""
+        )
+
+    def recorded_status(self) -> list[str]:
+        return self.page.evaluate("() => window.__atlasStatus")
 
     # --- the widget ----------------------------------------------------------------------
     def widget(self, css: str):
@@ -195,7 +222,8 @@ class Notebook:
                 now = self.pixels()
                 done &= now.shape != before.shape or bool(np.any(now != before))
             if status is not None:
-                done &= self.status() != status and "pending" not in self.status()
+                now = self.status()
+                done &= now != status and not _busy(now)
             if done:
                 return time.perf_counter() - t
             if time.perf_counter() - t > timeout:
@@ -208,6 +236,7 @@ class Notebook:
     def click_map(self, beta1: float, beta2: float, timeout: float = 10) -> float:
         """Click the map at ``(beta1, beta2)``; the inspector must move there (within 0.01 pi)
         and the marker appear (canvas pixels change).  Returns the click-to-inspector seconds."""
+        self.page.locator(_CANVAS).first.scroll_into_view_if_needed()  # the whole map in view
         old, before = self.inspector(), self.pixels()
         x, y = self.to_page(beta1, beta2)
         t = time.perf_counter()
@@ -239,6 +268,11 @@ class Notebook:
         return self.widget(css).locator(".widget-readout").first.inner_text().strip()
 
 
+def _busy(status: str) -> bool:
+    """The status line says the session is still working or drawing."""
+    return status.startswith("working --") or "drawing in the browser" in status
+
+
 def _fits(nb: Notebook) -> list[str]:
     """Every figure and the widget within the notebook's column; labels not cut."""
     return nb.page.evaluate(
@@ -251,6 +285,10 @@ def _fits(nb: Notebook) -> list[str]:
                     if (e.width > 0 && e.right > r.right + 1)
                         bad.push(`${el.tagName}.${el.className} ${e.width}px wide ends at ${e.right}, column ends at ${r.right}`);
                 }
+            }
+            for (const el of document.querySelectorAll('.jp-NotebookPanel .jp-OutputArea-output, .jp-NotebookPanel .jp-WindowedPanel-outer, .atlas-explorer, .atlas-explorer .widget-hbox')) {
+                if (el.scrollWidth > el.clientWidth + 1)
+                    bad.push(`${el.className} scrolls sideways (${el.scrollWidth} > ${el.clientWidth} px)`);
             }
             for (const l of document.querySelectorAll('.atlas-explorer .widget-label, .atlas-explorer .widget-label-basic')) {
                 if (l.scrollWidth > l.clientWidth + 1)
@@ -270,16 +308,71 @@ def _legend_pixels(img: np.ndarray) -> int:
     return int(np.sum(rgb.max(axis=-1) - rgb.min(axis=-1) > 40))
 
 
-def check_explorer(nb: Notebook) -> dict:
-    """The explorer after Run All, as a person meets it; returns the measured seconds."""
-    page, times = nb.page, {}
-    # the widget's first state is the one its cell states, nothing went wrong
+#: the slice whose certified boundaries the browser test clicks: ``(kappa, q)``
+SLICE = (0.5, 0.3)
+#: the kinds of certified curves a click must name
+KINDS = ("SS_stability", "II_consistency", "II_stability")
+
+
+def slice_targets():
+    """Click targets on the certified boundaries of :data:`SLICE` (computed here, independently
+    of the kernel): per curve kind a vertex ``(beta1, beta2, curve)`` far (> 0.15 rad) from
+    every curve of another kind and from the codimension-2 points, and the codimension-2 point
+    off ``det B = 0`` farthest from the others."""
+    from atlas.data.boundaries import slice_boundaries
+    from atlas.explore.maps import beta_grid
+
+    g = beta_grid(64)
+    b = slice_boundaries(g, g, SLICE[0], SLICE[1], SLICE[1])
+    pts = np.array([(p.beta1, p.beta2) for p in b.points]).reshape(-1, 2)
+
+    def far(xy, others):
+        d = (xy[:, None] - others[None] + PI) % (2 * PI) - PI
+        return np.hypot(d[..., 0], d[..., 1]).min(axis=1) if len(others) else np.full(len(xy), 9.0)
+
+    out = {}
+    for kind in KINDS:
+        mine = [c for c in b.curves if c.kind == kind]
+        others = np.concatenate([c.vertices for c in b.curves if c.kind != kind] + [pts])
+        best = None
+        for c in mine:
+            v = c.vertices
+            inside = np.all((v > 0.15) & (v < 2 * PI - 0.15), axis=1)
+            score = np.where(inside, far(v, others), -1.0)
+            i = int(np.argmax(score))
+            if best is None or score[i] > best[0]:
+                best = (score[i], v[i, 0], v[i, 1], c)
+        assert best is not None and best[0] > 0.15, (kind, best)
+        out[kind] = best[1:]
+    spread = far(pts, pts + 10 * np.eye(len(pts), 2)) if len(pts) > 1 else np.ones(len(pts))
+    inside = np.all((pts > 0.15) & (pts < 2 * PI - 0.15), axis=1)
+    inside &= np.abs(np.sin(pts[:, 1] - pts[:, 0])) > 0.15  # off det B = 0 (slow exact reference)
+    out["point"] = b.points[int(np.argmax(np.where(inside, spread, -1)))]
+    return out
+
+
+def _first_state(nb: Notebook) -> dict:
+    """After Run All: the widget's first state as its cell says, no error, and every figure and
+    the widget within the notebook's column (no sideways scroll).  Returns the widths [px]."""
     assert not nb.tracebacks(), nb.tracebacks()
     assert nb.status().startswith("stable_SS at kappa = 0.5, q = 0,"), nb.status()
+    assert nb.status().endswith(", drawn"), nb.status()  # not a first draw's wait as a repaint
     assert "click the map" in nb.inspector()
     assert not _fits(nb), _fits(nb)
+    col = nb.page.locator(".jp-OutputArea-output:has(.atlas-explorer)").first.bounding_box()
+    box = nb.page.locator(".atlas-explorer").bounding_box()
+    assert 800 <= col["width"] <= 900, col  # the column a person with the file browser open has
+    assert box["x"] + box["width"] <= col["x"] + col["width"], (box, col)
+    return {"column_px": col["width"], "widget_px": box["width"]}
 
-    # hovering shows (beta1, beta2) in units of pi; the toolbar stays above the map
+
+def _footer(nb: Notebook) -> str:
+    return nb.page.locator(".atlas-explorer .jupyter-matplotlib-footer").inner_text()
+
+
+def _hover(nb: Notebook):
+    """Hovering shows (beta1, beta2) in units of pi; the toolbar stays above the map."""
+    page = nb.page
     page.locator(".atlas-explorer").scroll_into_view_if_needed()
     page.locator(_CANVAS).first.scroll_into_view_if_needed()
     x, y = nb.to_page(0.25 * PI, 1.5 * PI)
@@ -294,50 +387,155 @@ def check_explorer(nb: Notebook) -> dict:
     _, axes_top = nb.to_page(0, 2 * PI)
     assert tb["y"] + tb["height"] <= axes_top, (tb, axes_top)
 
-    # clicks move the inspector to the clicked point
-    clicks = [nb.click_map(b1 * PI, b2 * PI) for b1, b2 in ((0.15, 1.07), (1.6, 0.3), (0.8, 1.8))]
-    times["click_s"] = clicks
 
-    # every control repaints the map (or, where the map cannot change, rewrites the status)
-    def act(action, repaint=True):
-        before, status = nb.pixels(), nb.status()
-        t = time.perf_counter()
-        action()
-        nb.wait_change(before if repaint else None, None if repaint else status, 30)
-        assert not nb.tracebacks(), nb.tracebacks()
-        return time.perf_counter() - t
+def _act(nb: Notebook, action, repaint=True, timeout=60) -> float:
+    """Run ``action``; wait for the canvas to change (``repaint``) or the status line to change
+    and settle; no error anywhere.  Returns the seconds."""
+    before, status = nb.pixels(), nb.status()
+    t = time.perf_counter()
+    action()
+    nb.wait_change(before if repaint else None, None if repaint else status, timeout)
+    if repaint:  # and the status line done too
+        nb.wait_change(None, "", timeout)
+    assert not nb.tracebacks(), nb.tracebacks()
+    return time.perf_counter() - t
 
-    times["kappa_text_s"] = act(lambda: nb.set_text("kappa", "2"))
+
+def _model_controls(nb: Notebook, times: dict):
+    """kappa (text box, slider), q, q1/q2 separately, alpha."""
+    page = nb.page
+    times["kappa_text_s"] = _act(nb, lambda: nb.set_text("kappa", "2"))
     assert float(nb.readout("log10-kappa")) == 0.30
     slider = nb.widget("log10-kappa").locator(".noUi-handle").first
-    times["kappa_slider_s"] = act(lambda: (slider.focus(), page.keyboard.press("ArrowLeft")), False)
+    times["kappa_slider_s"] = _act(
+        nb, lambda: (slider.focus(), page.keyboard.press("ArrowLeft")), False
+    )
     assert "kappa = 1.95," in nb.status(), nb.status()  # one step: x 10^-0.01
-    times["q_s"] = act(lambda: nb.set_text("q", "0.3"))
-    act(lambda: nb.widget("separate").locator("input").click(), False)
+    times["q_s"] = _act(nb, lambda: nb.set_text("q", "0.3"))
+    _act(nb, lambda: nb.widget("separate").locator("input").click(), False)
     assert float(nb.readout("q1")) == float(nb.readout("q2")) == 0.3  # the model did not jump
     assert "q = 0.3," in nb.status(), nb.status()
-    times["q2_s"] = act(lambda: nb.set_text("q2", "1.5"))
+    times["q2_s"] = _act(nb, lambda: nb.set_text("q2", "1.5"))
     assert "q1 = 0.3, q2 = 1.5" in nb.status()
+    times["q1_s"] = _act(nb, lambda: nb.set_text("q1", "0.4"))
+    assert "q1 = 0.4, q2 = 1.5" in nb.status()
     select = nb.widget("layer").locator("select")
-    times["layer_s"] = act(lambda: select.select_option("class_code"))
-    assert _legend_pixels(nb.pixels()) > 200  # a colour key
-    act(lambda: select.select_option("subclass_code"))
-    times["alpha_s"] = act(lambda: nb.set_text("alpha", "0.6"))
-    over = nb.widget("overlays").locator("select")
-    times["overlays_s"] = act(lambda: over.select_option(["SS boundary"]))
+    _act(nb, lambda: select.select_option("subclass_code"))
+    times["alpha_s"] = _act(nb, lambda: nb.set_text("alpha", "0.6"))
+    assert "alpha = 0.600 pi" in nb.status(), nb.status()
+
+
+def _layers(nb: Notebook, times: dict):
+    """Every layer: the status names it, the hover readout (pointer kept on the map) follows it
+    without a mouse move, the categorical ones have a colour key."""
+    select = nb.widget("layer").locator("select")
+    # the controls and the map in view together: selecting a layer scrolls nothing (a scroll
+    # under a resting pointer moves it off the map)
+    nb.page.locator(".atlas-explorer").evaluate("e => e.scrollIntoView({block: 'start'})")
+    x, y = nb.to_page(0.4 * PI, 1.3 * PI)
+    nb.page.mouse.move(x, y)
+    t = time.perf_counter()
+    for layer in select.evaluate("s => [...s.options].map(o => o.value)"):
+        if layer == select.input_value():
+            continue
+        _act(nb, lambda layer=layer: select.select_option(layer), False, timeout=120)
+        assert nb.status().startswith(f"{layer} at kappa"), nb.status()
+        nb.page.wait_for_function(
+            "([el, k]) => el.textContent.includes('| ' + k + ':')",
+            arg=[
+                nb.page.locator(".atlas-explorer .jupyter-matplotlib-footer").element_handle(),
+                layer,
+            ],
+            timeout=20_000,
+        )
+        if layer in ("class_code", "subclass_code"):
+            assert _legend_pixels(nb.pixels()) > 200, layer  # a colour key
+    times["all_layers_s"] = time.perf_counter() - t
+    _act(nb, lambda: select.select_option("stable_SS"), False)
+
+
+def _resolution(nb: Notebook, times: dict, small: str):
+    """129^2 and 513^2: the status says what is being done before the 513^2 map arrives (every
+    status text recorded), and a kappa move's repaint at each size."""
     n = nb.widget("n").locator("select")
-    other = next(
-        v for v in n.evaluate("s => [...s.options].map(o => o.value)") if v != n.input_value()
+    if n.input_value() != "129":  # (a run at 129^2 starts there)
+        times["n129_s"] = _act(nb, lambda: n.select_option("129"), timeout=300)
+    times["repaint_129_s"] = _act(nb, lambda: nb.set_text("kappa", "0.6"))
+    nb.record_status()
+    times["n513_s"] = _act(nb, lambda: n.select_option("513"), timeout=600)
+    seen = nb.recorded_status()
+    done = next(i for i, s in enumerate(seen) if "513^2 cells: compute" in s)
+    working = [s for s in seen[:done] if s.startswith("working --")]
+    assert any("computing stable_SS on 513^2" in s or "compiling" in s for s in working), seen
+    times["repaint_513_s"] = _act(nb, lambda: nb.set_text("kappa", "0.5"), timeout=300)
+    _act(nb, lambda: n.select_option(small))
+
+
+def _certified(nb: Notebook, targets, times: dict):
+    """The certified boundaries of :data:`SLICE`: drawn once computed; a click next to a curve
+    of each kind names the kind, the bracket and the codes on its two sides; a click on a
+    codimension-2 point names it."""
+    from atlas.core.brackets import FIELD_LABELS
+
+    if nb.widget("separate").locator("input").is_checked():
+        _act(nb, lambda: nb.widget("separate").locator("input").click(), False)
+    for name, value in (("q", SLICE[1]), ("kappa", SLICE[0])):
+        if f"{name} = {value:g}," not in nb.status():
+            _act(nb, lambda name=name, value=value: nb.set_text(name, f"{value}"), False)
+    assert nb.status().startswith(f"stable_SS at kappa = {SLICE[0]:g}, q = {SLICE[1]:g},")
+    over = nb.widget("overlays").locator("select")
+    t = time.perf_counter()
+    over.select_option(["certified boundaries"])
+    nb.page.wait_for_function(
+        "() => /certified boundaries \\d+ ms/.test(document.querySelector('.atlas-explorer .atlas-status').textContent)",
+        timeout=600_000,
+        polling=200,
     )
-    times["resolution_s"] = act(lambda: n.select_option(other))
-    act(lambda: nb.set_text("max-resolve", "0"), False)
+    times["first_overlay_s"] = time.perf_counter() - t
+    assert not nb.tracebacks(), nb.tracebacks()
+    tg = targets()
+    for kind in KINDS:
+        b1, b2, c = tg[kind]
+        times[f"click_{kind}_s"] = nb.click_map(b1, b2)
+        text, lab = nb.inspector(), FIELD_LABELS[c.field]
+        assert f"near the certified {kind} boundary" in text, text
+        assert "bracketed within" in text and f"{lab[c.side_left]} | {lab[c.side_right]}" in text
+        assert not nb.tracebacks(), nb.tracebacks()
+    p = tg["point"]
+    times["click_point_s"] = nb.click_map(p.beta1, p.beta2)
+    assert f"on the codimension-2 point '{p.kind}'" in nb.inspector(), nb.inspector()
+    assert not nb.tracebacks(), nb.tracebacks()
+    for chosen in (["class boundaries", "SS boundary"], ["class boundaries"]):
+        times["overlays_s"] = _act(nb, lambda chosen=chosen: over.select_option(chosen))
+
+
+def check_explorer(nb: Notebook, targets=None) -> dict:
+    """The explorer after Run All, as a person meets it, then every advertised path: hover,
+    clicks, each model control, each layer, 129^2 and 513^2 (the status during the long
+    computation), each overlay with clicks near each kind of certified curve and on a
+    codimension-2 point (``targets``: a callable giving :func:`slice_targets`; skipped if
+    None), exact settlements, 'settle undecided', 'inspect point'; no error anywhere (cell
+    outputs, the widget's output area, the status line, the kernel's log console).  Returns the
+    measured seconds."""
+    times = _first_state(nb)
+    _hover(nb)
+    times["click_s"] = [
+        nb.click_map(b1 * PI, b2 * PI) for b1, b2 in ((0.15, 1.07), (1.6, 0.3), (0.8, 1.8))
+    ]
+    small = nb.widget("n").locator("select").input_value()
+    _model_controls(nb, times)
+    _layers(nb, times)
+    _resolution(nb, times, small)
+    if targets is not None:
+        _certified(nb, targets, times)
+    _act(nb, lambda: nb.set_text("max-resolve", "0"), False)
     assert "at most 0 a redraw" in nb.status()
-    act(lambda: nb.widget("settle").click(), False)
+    _act(nb, lambda: nb.widget("settle").click(), False)
     assert "settled in" in nb.status()
     nb.set_text("beta1", "1.5")
     nb.set_text("beta2", "0.5")
     old = nb.inspector()
-    act(lambda: nb.widget("inspect").click())
+    _act(nb, lambda: nb.widget("inspect").click())
     assert nb.inspector() != old and "(1.5000 pi)" in nb.inspector()
     times["click_after_s"] = nb.click_map(0.4 * PI, 0.9 * PI)
     assert not nb.tracebacks(), nb.tracebacks()
@@ -349,28 +547,56 @@ def _launch(p):
 
 
 def _broken_copy(path: Path):
-    """The notebook up to the widget's cell, its click handler disconnected."""
+    """The notebook up to the widget's cell, its click handler disconnected and its "settle
+    undecided" raising (an error in a widget callback)."""
     import nbformat
 
     nb = nbformat.read(path, as_version=4)
     i = next(i for i, c in enumerate(nb.cells) if "make_widget(" in c.source)
-    nb.cells[i].source += "\nbox.figure.canvas.mpl_disconnect(box.click_cid)\nbox"
+    nb.cells[i].source += (
+        "\nbox.figure.canvas.mpl_disconnect(box.click_cid)"
+        "\nbox.explorer.settle = lambda: 1 / 0\nbox"
+    )
     nb.cells = nb.cells[: i + 1]
     nbformat.write(nb, path)
 
 
+def _check_broken(broken: Notebook):
+    """The checks fail on the broken copy: a click does not move the inspector, and the error of
+    "settle undecided" is seen in the widget's output area and in the kernel's log console."""
+    assert not broken.tracebacks(), broken.tracebacks()
+    with pytest.raises(AssertionError, match="did not move the inspector"):
+        broken.click_map(0.15 * PI, 1.07 * PI, timeout=3)
+    broken.widget("settle").click()
+    broken.page.wait_for_function(
+        "() => /ZeroDivisionError/.test(document.querySelector('.jp-LogConsolePanel')?.textContent ?? '')",
+        timeout=30_000,
+        polling=100,
+    )
+    assert "ZeroDivisionError" in broken.page.locator(".atlas-explorer .atlas-log").inner_text()
+    assert any("ZeroDivisionError" in t for t in broken.tracebacks())
+
+
 @pytest.mark.e2e
 def test_explorer_in_a_browser(tmp_path, need):
-    """Run All in JupyterLab, then every check of :func:`check_explorer`; the click check fails
-    on a copy whose click handler is disconnected (run alongside, in a second tab)."""
+    """Run All in JupyterLab (the file browser open: an ~850 px column), then every check of
+    :func:`check_explorer`; the click and error checks fail on a copy whose click handler is
+    disconnected and whose "settle undecided" raises (run alongside, in a second tab)."""
     _need_browser(need)
+    from concurrent.futures import ThreadPoolExecutor
+
     from playwright.sync_api import sync_playwright
 
     prepare_notebook(ROOT / "notebooks" / "explore.ipynb", tmp_path / "explore.ipynb")
     prepare_notebook(ROOT / "notebooks" / "explore.ipynb", tmp_path / "broken.ipynb")
     _broken_copy(tmp_path / "broken.ipynb")
     t0 = time.perf_counter()
-    with jupyterlab(tmp_path) as (base, token), sync_playwright() as p:
+    with (
+        ThreadPoolExecutor(1) as pool,
+        jupyterlab(tmp_path) as (base, token),
+        sync_playwright() as p,
+    ):
+        targets = pool.submit(slice_targets)  # the click targets, computed here meanwhile
         browser = _launch(p)
         try:
             nb, broken = (
@@ -380,10 +606,10 @@ def test_explorer_in_a_browser(tmp_path, need):
             broken.start_run_all()  # the two kernels run side by side
             seconds = nb.wait_run_all()
             broken.wait_run_all()
-            assert not broken.tracebacks(), broken.tracebacks()
-            with pytest.raises(AssertionError, match="did not move the inspector"):
-                broken.click_map(0.15 * PI, 1.07 * PI, timeout=3)
-            times = check_explorer(nb)
+            for page in (nb, broken):
+                page.open_log_console()
+            _check_broken(broken)
+            times = check_explorer(nb, targets.result)
             nb.page.screenshot(path=str(tmp_path / "explorer.png"), full_page=True)
         finally:
             browser.close()
@@ -404,7 +630,8 @@ def _measure(n: int):
             nb = Notebook(browser, base, token, "explore.ipynb")
             nb.start_run_all()
             seconds = nb.wait_run_all(timeout=1800)
-            times = check_explorer(nb)
+            nb.open_log_console()
+            times = check_explorer(nb, slice_targets)
             nb.page.screenshot(path=str(tmp / "explorer.png"), full_page=True)
         finally:
             browser.close()

@@ -4,6 +4,7 @@ redraws are capped and "settle undecided" settles; overlays draw the SS boundary
 
 from __future__ import annotations
 
+import html
 import json
 import math
 import os
@@ -24,7 +25,7 @@ from atlas.core.brackets import FIELD_LABELS
 from atlas.core.verdicts import Verdict
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
-from atlas.explore import inspector, maps, widget
+from atlas.explore import inspector, maps, state, widget
 
 ROOT = Path(__file__).resolve().parents[2]
 N = 65
@@ -229,7 +230,8 @@ def test_kappa_log10_slider_and_text_box(need):
 
 def test_status_times_the_repaint_not_the_request(need):
     """On a canvas that draws later (ipympl draws when the browser asks), the status line says
-    "repaint pending" until the canvas has drawn, then the time from the request to the draw."""
+    "drawing in the browser" until the canvas has drawn; the first draw (which waits until the
+    browser shows the widget) reads "drawn", later ones the time from the request to the draw."""
     need("ipywidgets")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -240,19 +242,93 @@ def test_status_times_the_repaint_not_the_request(need):
     requested = []
     canvas.draw_idle = lambda: requested.append(1)
     box.controls["kappa"].value = 0.7
-    assert requested and "repaint pending" in status.value
+    assert requested and "drawing in the browser" in status.value
+    canvas.draw()
+    assert status.value.endswith(", drawn</tt>") and "repaint" not in status.value
+    box.controls["kappa"].value = 0.8
+    assert "drawing in the browser" in status.value
     time.sleep(0.05)
     canvas.draw()
     ms = float(re.search(r"repaint (\d+) ms", status.value).group(1))
     assert ms >= 50
 
 
+def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
+    """Every value the status line takes during a move to 513^2 cells (with the SS boundary
+    overlay): first what is being computed, step by step, then the new map's summary."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5, q1=0.3, overlays=())
+    seen = []
+    box.status.observe(lambda ch: seen.append(html.unescape(ch["new"])), names="value")
+    box.controls["overlays"].value = ("SS boundary",)
+    box.controls["n"].value = 513
+    assert box.explorer.ds.sizes["beta1"] == 513
+    done = next(i for i, s in enumerate(seen) if "513^2 cells: compute" in s)
+    before = seen[:done]
+    margin = [s for s in before if "step 1 of 2: computing the SS margin on 513^2 cells" in s]
+    layer = [s for s in before if "step 2 of 2: " in s and "computing stable_SS on 513^2" in s]
+    assert margin and layer, seen
+    assert seen.index(margin[0]) < seen.index(layer[0])
+    assert all(s.startswith("<tt>working -- ") for s in margin + layer)
+    assert not any("513^2 cells: compute" in s for s in before)
+
+
+def test_hover_text_follows_the_layer(need):
+    """After a layer change the hover readout is rewritten at the pointer's last point (not
+    left on the previous layer's value until the mouse moves): the exact class code there."""
+    need("ipywidgets")
+    from matplotlib.backend_bases import MouseEvent as Event
+
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    fig, messages = box.figure, []
+    fig.canvas.toolbar = type("Toolbar", (), {"mode": "", "set_message": messages.append})()
+    b1, b2 = 0.4 * math.pi, 1.3 * math.pi
+    x, y = fig.axes[0].transData.transform((b1, b2))
+    fig.canvas.callbacks.process(
+        "motion_notify_event", Event("motion_notify_event", fig.canvas, x, y)
+    )
+    box.controls["layer"].value = "class_code"
+    d = [np.cos(b1), np.sin(b1), np.cos(b2), np.sin(b2)]
+    cls = exact.point_codes(*d, np.cos(ALPHA), np.sin(ALPHA))["class_code"]
+    assert messages and messages[-1].endswith(f"class_code: class {cls}"), messages
+
+
+def test_alpha_in_status_and_title_for_the_layers_that_depend_on_it(need):
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5, alpha=0.35 * math.pi)
+    title = box.figure.axes[0].get_title
+    assert "alpha" not in box.status.value and "alpha" not in title()
+    box.controls["layer"].value = "subclass_code"
+    assert "alpha = 0.350 pi" in box.status.value and "alpha = 0.350 π" in title()
+    box.controls["alpha"].value = 0.6
+    assert "alpha = 0.600 pi" in box.status.value and "alpha = 0.600 π" in title()
+
+
+def _wait_boundaries(ex):
+    t = time.perf_counter()
+    while ex.boundaries() is None:
+        assert time.perf_counter() - t < 900
+        time.sleep(0.2)
+    time.sleep(0.5)  # the worker's redraw
+    return ex.boundaries()
+
+
+def _exact_code(field, point, kappa, q):
+    """The field's code at ``point`` from the exact reference (numpy directions)."""
+    d = [np.cos(point[0]), np.sin(point[0]), np.cos(point[1]), np.sin(point[1])]
+    ref = exact.point_spectral(*d, kappa, q, q)
+    if field == "SS":
+        return int(ref["stable_SS"])
+    return 0 if not ref["consistent_II"] else {1: 2, 0: 1, 2: 3}[int(ref["stable_II"])]
+
+
 @pytest.mark.slow
-def test_certified_boundaries_overlay_and_click_near_a_curve(need):
+def test_certified_boundaries_overlay_and_clicks_near_each_kind(need):
     """The "certified boundaries" overlay: computed in the background (the map shows
     "computing" until then), then drawn as the curves of
-    :func:`atlas.data.boundaries.slice_boundaries`; a click next to an SS curve names it, and the
-    exact SS verdict at the clicked point is the label of one of its two sides."""
+    :func:`atlas.data.boundaries.slice_boundaries`.  A click next to a curve of each kind names
+    the kind, its vertex's bracket and the codes on its two sides, and the exact code at the
+    clicked point is one of them; a click on a codimension-2 point names the point."""
     need("ipywidgets")
     kappa, q = 0.5, 0.3
     box = widget.make_widget(n=N, layer="stable_SS", kappa=kappa, q1=q)
@@ -260,26 +336,58 @@ def test_certified_boundaries_overlay_and_click_near_a_curve(need):
     box.controls["overlays"].value = ("certified boundaries",)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "certified boundaries: computing" in labels
-    t = time.perf_counter()
-    while ex.boundaries() is None:
-        assert time.perf_counter() - t < 900
-        time.sleep(0.2)
-    time.sleep(0.5)  # the worker's redraw
-    b = ex.boundaries()
+    b = _wait_boundaries(ex)
     drawn = [np.column_stack(a.get_data()) for a in ax.lines]
     curves = [c for c in b.curves if c.field != "class"]
-    assert curves
     for c in curves:
         assert any(d.shape == c.vertices.shape and np.array_equal(d, c.vertices) for d in drawn)
-    ss = next(c for c in curves if c.field == "SS")
-    v = ss.vertices[len(ss.vertices) // 2]
-    _click(box, v[0] + 0.01, v[1])
-    text = box.inspector.value
-    assert "near the certified SS_stability boundary" in text
-    d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
-    verdict = int(exact.point_spectral(*d, kappa, q, q)["stable_SS"])
-    sides = {FIELD_LABELS["SS"][ss.side_a], FIELD_LABELS["SS"][ss.side_b]}
-    assert FIELD_LABELS["SS"][verdict] in sides
+    kinds = ("SS_stability", "II_consistency", "II_stability")
+    for kind in kinds:
+        c = max((c for c in curves if c.kind == kind), key=lambda c: len(c.vertices))
+        i = len(c.vertices) // 2
+        v = c.vertices[i]
+        _click(box, v[0] + 1e-6, v[1] - 1e-6)
+        text = html.unescape(box.inspector.value)
+        lab = FIELD_LABELS[c.field]
+        assert f"near the certified {kind} boundary" in text, text
+        assert f"bracketed within {c.bracket[i]:.2g} rad" in text
+        assert f"{lab[c.side_left]} | {lab[c.side_right]}" in text
+        assert lab[_exact_code(c.field, ex.point, kappa, q)] in (
+            lab[c.side_left],
+            lab[c.side_right],
+        )
+        assert inspector.format_inspection(ex.last_inspection) in text
+        np.testing.assert_allclose(ex.point, (v[0] + 1e-6, v[1] - 1e-6), atol=1e-9)
+    p = b.points[0]
+    _click(box, p.beta1, p.beta2)
+    text = html.unescape(box.inspector.value)
+    assert f"on the codimension-2 point '{p.kind}'" in text, text
+    assert ("proven within" if p.proven else "no bound claimed") in text
+    assert "near the certified" in text  # a point lies on a curve
+
+
+def test_failed_inspection_leaves_the_widget_on_the_previous_point(need, monkeypatch):
+    """An error in the click callback shows in the status line and the inspector says the
+    inspection failed; marker, beta fields and inspector text stay on the previous point."""
+    need("ipywidgets")
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5)
+    ex, c, ax = box.explorer, box.controls, box.figure.axes[0]
+    _click(box, 1.0, 2.0)
+    before = (ex.point, c["beta1"].value, c["beta2"].value, box.inspector.value)
+    marker = np.ravel(ax.lines[-1].get_data()).copy()
+
+    def boom(*a, **k):
+        raise RuntimeError("inspection failed on purpose")
+
+    monkeypatch.setattr(state, "inspect_point", boom)
+    with pytest.raises(RuntimeError):
+        _click(box, 4.0, 5.0)
+    assert (ex.point, c["beta1"].value, c["beta2"].value) == before[:3]
+    np.testing.assert_array_equal(np.ravel(ax.lines[-1].get_data()), marker)
+    assert "the last inspection failed" in box.inspector.value
+    assert before[3].replace("<pre>", "") in box.inspector.value
+    assert "inspection failed on purpose" in box.status.value
+    assert any("inspection failed on purpose" in o.get("text", "") for o in box.errors.outputs)
 
 
 #: a widget in a fresh process: XLA compilations while it is made, during its inspector's
