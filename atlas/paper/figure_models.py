@@ -57,7 +57,7 @@ def draw_model_dependence(fig, maps: list) -> list:
     fig.legend(
         handles=drawing.legend_patches(OverModels, present),
         loc="outside lower center",
-        ncol=4,
+        ncol=4 if len(maps) > 1 else 1,  # one narrow panel: one entry a row, none clipped
         fontsize=8,
     )
     return artists

@@ -64,3 +64,19 @@ def test_reported_shares_agree_with_the_closed_form(whole):
 def test_declared_among_the_paper_files():
     assert "fig1_models.png" in paper.files(quick=True)
     assert all(n % 4 == 0 for n in figure_models.N_MODELS)  # no cell on a class line
+
+
+def test_the_key_fits_the_figure(whole):
+    """Every entry of the key is inside the figure as drawn (one panel: the key of three entries
+    in a row was wider than the 3.2-inch figure and lost both ends)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from atlas.paper import drawing
+
+    _, ds = whole
+    fig = drawing.new_figure(figsize=(3.2, 3.8), layout="constrained")
+    figure_models.draw_model_dependence(fig, [ds])
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    box, key = fig.bbox, fig.legends[0].get_window_extent(renderer)
+    assert box.x0 <= key.x0 and key.x1 <= box.x1, (key, box)
