@@ -305,9 +305,9 @@ def test_alpha_in_status_and_title_for_the_layers_that_depend_on_it(need):
 
 
 def _wait_boundaries(ex):
-    t = time.perf_counter()
+    """The slice's curves once the background thread has them (a hang is ended by
+    pytest-timeout, not by a clock in the test)."""
     while ex.boundaries() is None:
-        assert time.perf_counter() - t < 900
         time.sleep(0.2)
     time.sleep(0.5)  # the worker's redraw
     return ex.boundaries()
