@@ -14,6 +14,7 @@ import numpy as np
 
 __all__ = [
     "xp_of",
+    "fori",
     "take",
     "NEUTRAL",
     "sum4",
@@ -252,3 +253,18 @@ def may_keep_signs(s, p, UE, lam, valid, k, q):
 
 
 # ----------------------------------------------------------------------------- batch
+
+
+def fori(n, body, carry, until=None):
+    """``carry = body(i, carry)`` for ``i < n`` (``carry`` a tuple of arrays): a Python loop on
+    NumPy arrays (left as soon as ``until(carry)``, where given), a :func:`jax.lax.fori_loop` on
+    JAX arrays (all ``n`` iterations; ``body`` must leave a finished carry unchanged)."""
+    if xp_of(*carry) is np:
+        for i in range(n):
+            if until is not None and until(carry):
+                break
+            carry = body(i, carry)
+        return carry
+    import jax  # noqa: PLC0415 - NumPy callers load no JAX
+
+    return jax.lax.fori_loop(0, n, body, carry)

@@ -50,6 +50,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from atlas.dynamics import early_decisions as early
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import fast_engine as fe
 from atlas.dynamics import modal_form as mf
@@ -152,9 +153,9 @@ def _step(c, prm):
     hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
     # early decisions
     tryd = keep & sched & jnp.all(hi > (t_max - t)[:, None], axis=1)
-    tryd &= fe.may_decide(lam, valid, s, p, act, mask, t, T)
-    settle, iwc, l1 = fe.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
-    iwc &= fe.aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
+    tryd &= early.may_decide(lam, valid, s, p, act, mask, t, T)
+    settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
+    iwc &= early.aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
     settle &= tryd
     iwc &= tryd & ~settle
     code = jnp.where(settle, jnp.asarray(_OUTCOME_OF_MASK)[mask], c["code"])
