@@ -6,7 +6,9 @@ by point.  Parameters enter through their direction components or model invarian
 ``model`` -> ``kappa, q1, q2``, all [1]).  ``fn`` is pure ``jax.numpy`` on broadcastable arrays
 (jit-able, returns a dict of arrays); a kernel whose verdicts need tiers has a ``driver`` (the
 certified path on broadcastable numpy inputs, :func:`atlas.core.points.spectral_points`), and one
-whose codes floating point may leave undecided a ``settle`` (their exact reference, in place).  The
+whose codes floating point may leave undecided its exact reference: ``exact``, one point's codes
+decided exactly (:mod:`atlas.core.settle` makes the kernel's ``settle`` from it, checked on a probe
+point when declared), or a ``settle`` of whole arrays.  The
 meaning of the raw codes is declared here: ``undecided`` (the code meaning undecided) and
 ``true_code`` (for a result stored as a boolean, the code stored as ``True``).
 
@@ -24,8 +26,9 @@ from types import MappingProxyType
 
 import numpy as np
 
-from atlas.core import baseline, hurwitz, points, warm
+from atlas.core import baseline, exact, hurwitz, points, warm
 from atlas.core import contact_modes as mech
+from atlas.core import settle as exact_settle
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Consistency, Verdict
 
 __all__ = [
@@ -62,7 +65,9 @@ class PointKernel:
     ``true_code``: per boolean result, the raw code meaning ``True``.  ``driver``: certified tiers,
     ``driver(*inputs, names=, dtype=, resolve=, max_resolve=) -> {result: array}`` with its
     diagnostics in ``.stats``.  ``settle``: exact settlement, ``settle(codes, masks, *inputs)``
-    replaces the codes where ``masks`` hold and returns its diagnostics.  ``batches``: result sets computed together (default: all at once).
+    replaces the codes where ``masks`` hold and returns its diagnostics.  ``exact``: the exact
+    reference of one point, ``exact(*inputs) -> {result: code}`` on floats (``settle`` is made from
+    it, :func:`atlas.core.settle.by_points`).  ``batches``: result sets computed together (default: all at once).
     ``kind``: ``"verdict"`` or ``"display"``.
     """
 
@@ -76,6 +81,7 @@ class PointKernel:
     settle: Callable | None = None
     batches: tuple[tuple[str, ...], ...] = ()
     kind: str = "verdict"
+    exact: Callable | None = None
 
     def __post_init__(self):
         put = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
@@ -84,6 +90,8 @@ class PointKernel:
         put("undecided", MappingProxyType(dict(self.undecided)))
         put("true_code", MappingProxyType(dict(self.true_code)))
         put("batches", tuple(tuple(b) for b in self.batches) or (self.results,))
+        if self.exact is not None and self.settle is None:
+            put("settle", exact_settle.by_points(self.exact))
         _check(self)
 
     @property
@@ -116,7 +124,30 @@ def _check(k: PointKernel) -> None:
     if k.kind not in KINDS:
         raise ValueError(f"kind: {where} must be one of {', '.join(KINDS)}")
     if k.undecided and k.settle is None and k.driver is None:
-        raise ValueError(f"settle: {where} can leave results undecided but cannot settle them")
+        raise ValueError(
+            f"settle: {where} can leave results undecided but cannot settle them (no exact)"
+        )
+    if k.exact is not None:
+        _check_reference(k, where)
+
+
+#: a point of general position at which a declared exact reference is tried (direction components
+#: and model invariants [1], :data:`PARAM_INPUTS` names)
+_PROBE = {"c1": 0.6, "s1": 0.8, "c2": -0.8, "s2": 0.6, "ca": 0.28, "sa": -0.96,
+          "kappa": 0.5, "q1": 0.25, "q2": 0.125}  # fmt: skip
+
+
+def _check_reference(k: PointKernel, where: str) -> None:
+    """The exact reference answers for every result the kernel may leave undecided."""
+    if not callable(k.exact):
+        raise ValueError(f"exact: {where} declares an exact reference that is not callable")
+    try:
+        got = k.exact(*(_PROBE[i] for i in k.inputs))
+    except Exception as e:
+        raise ValueError(f"exact: {where}'s exact reference fails on a probe point: {e}") from None
+    missing = [r for r in k.undecided if r not in got]
+    if missing:
+        raise ValueError(f"exact: {where}'s exact reference gives no {missing[0]!r}")
 
 
 # --- the kernels of the atlas (pure jnp on broadcastable arrays) ---------------------------------
@@ -178,7 +209,7 @@ KERNELS: dict[str, PointKernel] = {
             _b1b2,
             undecided={"class_code": UNDECIDED_CODE},
             true_code={"cc_possible": 1},
-            settle=points.settle_codes,
+            exact=exact.point_codes,
         ),
         PointKernel(
             "b1b2a",
@@ -187,7 +218,7 @@ KERNELS: dict[str, PointKernel] = {
             _b1b2a,
             undecided={"subclass_code": UNDECIDED_CODE, **dict.fromkeys(_TABLE1, UNDECIDED_FLAG)},
             true_code=dict.fromkeys(_TABLE1, _CONSISTENT),
-            settle=points.settle_codes,
+            exact=exact.point_codes,
         ),
         PointKernel(
             "spectral",

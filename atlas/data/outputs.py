@@ -33,12 +33,16 @@ from atlas.core import contact_modes as mech
 from atlas.core import kernels
 from atlas.core.model_box import WITNESS_NAMES
 from atlas.core.verdicts import (
+    CONSISTENCY,
+    OVER_MODELS,
     UNDECIDED_CODE,
+    UNDECIDED_COLOR,
     UNDECIDED_FLAG,
+    VERDICT,
+    Code,
+    Codes,
     Consistency,
-    OverModels,
     Verdict,
-    flag_attrs,
 )
 
 __all__ = [
@@ -48,6 +52,7 @@ __all__ = [
     "register",
     "unregister",
     "atlas_outputs",
+    "default_outputs",
     "kernel_outputs",
     "verdict_outputs",
     "reductions",
@@ -61,38 +66,54 @@ __all__ = [
 ]
 
 STORAGE = ("bool", "int8", "int16", "float")
+#: CF flag attributes an output does not spell: they are generated from its ``codes``
+FLAG_KEYS = ("flag_values", "flag_meanings")
 
 
 @dataclasses.dataclass(frozen=True)
 class Output:
-    """One output variable (module docstring).
+    """One output variable, declared once (module docstring).
 
     ``depends``: parameters, ``"model"`` standing for the scene's spectral parameters (``kappa,
     q`` or ``kappa, q1, q2``).  ``storage``: ``"bool"``, ``"int8"``, ``"int16"`` or ``"float"``
-    (the working dtype).  ``attrs``: CF attributes.  ``kernel``: its point kernel
-    (:data:`atlas.core.kernels.KERNELS`).  ``needs``, ``state``: a reduction of kernel results
-    over the model samples.  ``computed_by``: the function computing a display layer.
-    ``enum``: the verdict enumeration of stored flag values (colours, labels).  ``in_atlas``:
-    part of :func:`atlas.generate`.
+    (the working dtype).  ``attrs``: CF attributes (``long_name``, ``units`` of a float, a
+    ``comment``); the flag attributes are generated from ``codes``.  ``codes``: the stored values
+    of a boolean or integer output (:class:`atlas.core.verdicts.Codes`: meaning, label and colour
+    of each value and the undecided value; a boolean's are ``0, 1``), the source of its CF flags,
+    its enumeration (:attr:`enum`) and the explorer's key and labels.  ``kernel``: its point
+    kernel (a name in :data:`atlas.core.kernels.KERNELS`, or a new
+    :class:`atlas.core.kernels.PointKernel`, registered with it).  ``needs``, ``state``: a
+    reduction of kernel results over the model samples.  ``computed_by``: the function computing a display layer.
+    ``in_atlas``: :func:`atlas.generate` can compute it (``outputs=``).  ``default``: it is in the
+    default set (generate without ``outputs``, the Fig. 1 map, the mechanism files, the
+    inspector); a new output joins it only by saying so.
     """
 
     name: str
     depends: tuple[str, ...]
     storage: str
     attrs: Mapping
-    kernel: str | None = None
+    kernel: str | kernels.PointKernel | None = None
     needs: tuple[str, ...] = ()
     state: Callable | None = None
     computed_by: str | None = None
-    enum: type | None = None
+    codes: Codes | None = None
     in_atlas: bool = True
+    default: bool = False
+
+    @property
+    def enum(self) -> type | None:
+        """The enumeration of the stored values of an integer output, generated from ``codes``
+        (members with ``label`` and ``color``); ``None`` for booleans and floats."""
+        return None if self.codes is None or self.storage == "bool" else self.codes.enum
 
     @property
     def undecided(self) -> int | None:
-        """The raw code meaning undecided (``None``: never undecided)."""
-        return (
-            None if self.kernel is None else kernels.KERNELS[self.kernel].undecided.get(self.name)
-        )
+        """The raw code meaning undecided (``None``: never undecided): the kernel's (a boolean's
+        raw code is not stored), else the declared ``codes``'."""
+        if self.kernel is not None:
+            return kernels.KERNELS[self.kernel].undecided.get(self.name)
+        return None if self.codes is None else self.codes.undecided
 
     @property
     def true_code(self) -> int | None:
@@ -102,32 +123,30 @@ class Output:
         )
 
 
-# --- CF attributes -------------------------------------------------------------------------------
+# --- codes and CF attributes ---------------------------------------------------------------------
 
 
-def _bool_flags(long_name: str, false: str, true: str, comment: str | None = None) -> dict:
-    out = {
-        "long_name": long_name,
-        "flag_values": np.array([0, 1], np.int8),
-        "flag_meanings": f"{false} {true}",
-    }
-    if comment:
-        out["comment"] = comment
-    return out
+def _bool(false: str, true: str) -> Codes:
+    """The codes of a boolean output: ``0`` = ``false``, ``1`` = ``true`` (CF flag meanings)."""
+    return Codes("Bool", ((0, false), (1, true)))
 
 
-def _code_flags(long_name: str, codes: list[int], prefix: str, dtype) -> dict:
-    values = [UNDECIDED_CODE, 0] + codes
-    meanings = ["undecided", "degenerate"] + [f"{prefix}_{c}" for c in codes]
-    return {
-        "long_name": long_name,
-        "flag_values": np.array(values, dtype),
-        "flag_meanings": " ".join(meanings),
-    }
+def _attrs(long_name: str, comment: str | None = None) -> dict:
+    return {"long_name": long_name, **({"comment": comment} if comment else {})}
 
 
-def _verdict_flags(long_name: str, comment: str) -> dict:
-    return {**flag_attrs(Verdict, long_name), "comment": comment}
+def _numbered(name: str, values: list[int], prefix: str) -> Codes:
+    """Integer codes: ``-1`` undecided, ``0`` degenerate, then ``prefix_v`` for each value ``v``
+    (labelled ``prefix v``)."""
+    return Codes(
+        name,
+        (
+            Code(UNDECIDED_CODE, "undecided", color=UNDECIDED_COLOR),
+            Code(0, "degenerate", color="#ffffff"),
+            *(Code(v, f"{prefix}_{v}", f"{prefix} {v}") for v in values),
+        ),
+        undecided=UNDECIDED_CODE,
+    )
 
 
 _SUBCLASSES = [10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7)]
@@ -141,12 +160,10 @@ def _table1(mode: str) -> Output:
         f"consistent_{mode}",
         _B1B2A,
         "bool",
-        _bool_flags(
-            f"consistency of the {mode} contact mode (paper Table 1, Appendix A)",
-            "inconsistent",
-            "consistent",
-        ),
+        _attrs(f"consistency of the {mode} contact mode (paper Table 1, Appendix A)"),
         kernel="b1b2a",
+        codes=_bool("inconsistent", "consistent"),
+        default=True,
     )
 
 
@@ -155,13 +172,13 @@ def _sliding(name: str, param: str, kernel: str, b: str) -> Output:
         name,
         (param,),
         "bool",
-        _bool_flags(
+        _attrs(
             f"stability of the {name[-2:]} contact mode (paper Sec. 4.2)",
-            "not_stable",
-            "stable",
             f"stable iff {b} > 0; {b} = 0 (neutral) is stored as not_stable",
         ),
         kernel=kernel,
+        codes=_bool("not_stable", "stable"),
+        default=True,
     )
 
 
@@ -170,13 +187,13 @@ def _impact(name: str, param: str, kernel: str, cond: str) -> Output:
         name,
         (param,),
         "bool",
-        _bool_flags(
+        _attrs(
             f"consistency of the {name[-2:]} impact without collision (paper Sec. 4.3)",
-            "inconsistent",
-            "consistent",
             f"consistent iff {cond}; stable whenever consistent",
         ),
         kernel=kernel,
+        codes=_bool("inconsistent", "consistent"),
+        default=True,
     )
 
 
@@ -203,9 +220,11 @@ def _model_dependent(mode: str, long_name: str, comment: str, needs, state) -> O
         f"model_dependent_{mode}",
         _B1B2,
         "bool",
-        _bool_flags(long_name, "model_independent", "model_dependent", comment),
+        _attrs(long_name, comment),
         needs=needs,
         state=state,
+        codes=_bool("model_independent", "model_dependent"),
+        default=True,
     )
 
 
@@ -216,22 +235,19 @@ def _geometry_outputs() -> list[Output]:
             "class_code",
             _B1B2,
             "int8",
-            _code_flags(
-                "class code ij (rank of beta1, beta2; paper Sec. 3)",
-                list(mech.ALL_CLASSES),
-                "class",
-                np.int8,
-            ),
+            _attrs("class code ij (rank of beta1, beta2; paper Sec. 3)"),
             kernel="b1b2",
+            codes=_numbered("ClassCode", list(mech.ALL_CLASSES), "class"),
+            default=True,
         ),
         Output(
             "subclass_code",
             _B1B2A,
             "int16",
-            _code_flags(
-                "subclass code ijk (rank of alpha; paper Sec. 3)", _SUBCLASSES, "subclass", np.int16
-            ),
+            _attrs("subclass code ijk (rank of alpha; paper Sec. 3)"),
             kernel="b1b2a",
+            codes=_numbered("SubclassCode", _SUBCLASSES, "subclass"),
+            default=True,
         ),
         *(_table1(m) for m in ("FF", "SF", "FS", "SS")),
         _sliding("stable_SF", "beta1", "b1", "b11"),
@@ -242,13 +258,13 @@ def _geometry_outputs() -> list[Output]:
             "cc_possible",
             _B1B2,
             "bool",
-            _bool_flags(
+            _attrs(
                 "CC inverse chattering possible (paper Sec. 5.2)",
-                "impossible",
-                "possible",
                 "necessary condition b11 > 0 and b22 > 0",
             ),
             kernel="b1b2",
+            codes=_bool("impossible", "possible"),
+            default=True,
         ),
     ]
 
@@ -260,31 +276,34 @@ def _spectral_outputs() -> list[Output]:
             "stable_SS",
             _SPECTRAL,
             "int8",
-            _verdict_flags(
+            _attrs(
                 "stability verdict of the SS contact mode (eigenvalues of M, eq. 9)",
                 "neutral: no eigenvalue with Re > 0, some with Re = 0 (q = 0; Fig. 1 stable)",
             ),
             kernel="spectral",
-            enum=Verdict,
+            codes=VERDICT,
+            default=True,
         ),
         Output(
             "consistent_II",
             _SPECTRAL,
             "int8",
-            flag_attrs(Consistency, "consistency of the II impact without collision (Sec. 4.3)"),
+            _attrs("consistency of the II impact without collision (Sec. 4.3)"),
             kernel="spectral",
-            enum=Consistency,
+            codes=CONSISTENCY,
+            default=True,
         ),
         Output(
             "stable_II",
             _SPECTRAL,
             "int8",
-            _verdict_flags(
+            _attrs(
                 "stability verdict of the II impact without collision (Sec. 4.3)",
                 "stable iff the strictly dominant eigenvalue of M is a II eigenvalue",
             ),
             kernel="spectral",
-            enum=Verdict,
+            codes=VERDICT,
+            default=True,
         ),
         Output(
             "spectral_abscissa",
@@ -297,6 +316,7 @@ def _spectral_outputs() -> list[Output]:
                 "not certified",
             },
             kernel="spectral",
+            default=True,
         ),
         _model_dependent(
             "SS",
@@ -376,13 +396,13 @@ def _over_models_outputs() -> list[Output]:
         "ss_over_models",
         _B1B2,
         "int8",
-        {
-            **flag_attrs(OverModels, "SS stability over every model of the model box (proven)"),
-            "comment": "stable: stable or neutral for every model; unstable: for every model; "
+        _attrs(
+            "SS stability over every model of the model box (proven)",
+            "stable: stable or neutral for every model; unstable: for every model; "
             "depends: a certified witness model on each side (ss_witness_*)",
-        },
+        ),
         computed_by=_OVER_MODELS,
-        enum=OverModels,
+        codes=OVER_MODELS,
         in_atlas=False,
     )
     return [code, *witness]
@@ -407,12 +427,7 @@ def _check(o: Output) -> None:
         raise ValueError(f"storage: {where} must be one of {', '.join(STORAGE)}, got {o.storage!r}")
     if not o.attrs.get("long_name"):
         raise ValueError(f"attrs: {where} needs a long_name")
-    if o.storage == "float" and "units" not in o.attrs:
-        raise ValueError(f"attrs: {where} is a float and needs units")
-    if "flag_values" in o.attrs and len(o.attrs["flag_meanings"].split()) != len(
-        o.attrs["flag_values"]
-    ):
-        raise ValueError(f"attrs: {where} has as many flag_meanings as flag_values")
+    _check_codes(o, where)
     how = [o.kernel is not None, bool(o.needs) or o.state is not None, o.computed_by is not None]
     if sum(how) != 1:
         raise ValueError(
@@ -424,6 +439,38 @@ def _check(o: Output) -> None:
         _check_reduction(o, where)
     elif o.in_atlas:
         raise ValueError(f"computed_by: {where} has no kernel, so it cannot be an atlas output")
+    if o.default and not o.in_atlas:
+        raise ValueError(f"default: {where} is in the default set, so it must be an atlas output")
+
+
+def _check_codes(o: Output, where: str) -> None:
+    """Units of a float, the codes of a boolean or integer output."""
+    if o.storage == "float":
+        if "units" not in o.attrs:
+            raise ValueError(f"attrs: {where} is a float and needs units")
+        if o.codes is not None:
+            raise ValueError(f"codes: {where} is a float and has no codes")
+        return
+    if not isinstance(o.codes, Codes):
+        raise ValueError(
+            f"codes: {where} is stored as {o.storage} and needs its codes "
+            "(atlas.core.verdicts.Codes: each value with its meaning)"
+        )
+    if o.storage == "bool" and o.codes.values != (0, 1):
+        raise ValueError(f"codes: {where} is a boolean, its codes are 0 and 1")
+    info = np.iinfo(np.int8 if o.storage == "bool" else o.storage)
+    if any(not info.min <= v <= info.max for v in o.codes.values):
+        raise ValueError(f"codes: {where} declares a value outside {o.storage}")
+    flags = _flags(o)
+    for k in FLAG_KEYS:
+        if k in o.attrs and not np.array_equal(o.attrs[k], flags[k]):
+            raise ValueError(f"attrs: {where} declares {k}; its flags come from its codes")
+
+
+def _flags(o: Output) -> dict:
+    dtype = np.int8 if o.storage == "bool" else np.dtype(o.storage)
+    flags = o.codes.flag_attrs(o.attrs["long_name"], dtype)
+    return {k: flags[k] for k in FLAG_KEYS}
 
 
 def _check_kernel(o: Output, where: str) -> None:
@@ -445,11 +492,11 @@ def _check_kernel(o: Output, where: str) -> None:
             f"storage: {where} is stored as a boolean iff its kernel declares its true_code"
         )
     u = k.undecided.get(o.name)
-    if u is not None and o.storage != "bool":
-        flags = [int(v) for v in o.attrs.get("flag_values", ())]
-        meanings = o.attrs.get("flag_meanings", "").split()
-        if u not in flags or meanings[flags.index(u)] != "undecided":
-            raise ValueError(f"attrs: {where} stores undecided code {u}, its flags must name it")
+    if o.storage not in ("bool", "float") and u != o.codes.undecided:
+        raise ValueError(
+            f"undecided: {where} declares undecided {o.codes.undecided}, "
+            f"its kernel {o.kernel!r} leaves {u}"
+        )
 
 
 def _check_reduction(o: Output, where: str) -> None:
@@ -465,24 +512,55 @@ def _check_reduction(o: Output, where: str) -> None:
         raise ValueError(f"storage: {where} is a reduction and is stored as a boolean")
 
 
+#: kernels registered by the declaration of an output (:func:`register` with a kernel object)
+_OWN_KERNELS: set[str] = set()
+
+
 def register(output: Output) -> Output:
-    """Declare ``output`` (checked completely, module docstring); returns the stored copy."""
+    """Declare ``output`` (checked completely, module docstring); returns the stored copy, whose
+    ``attrs`` hold the CF flags generated from its codes.  ``kernel`` may be a
+    :class:`atlas.core.kernels.PointKernel` object: it is registered with the output (one
+    declaration for a new kernel and its output)."""
     if not isinstance(output, Output):
         raise ValueError(f"output: expected an Output, got {type(output).__name__}")
     if output.name in OUTPUTS:
         raise ValueError(f"name: output {output.name!r} is already registered")
+    if isinstance(output.kernel, kernels.PointKernel):
+        return _register_with_kernel(output)
     o = dataclasses.replace(
         output, depends=tuple(output.depends), needs=tuple(output.needs),
         attrs=MappingProxyType(dict(output.attrs)),
     )  # fmt: skip
     _check(o)
+    if o.codes is not None:
+        rest = {k: v for k, v in o.attrs.items() if k not in ("long_name", *FLAG_KEYS)}
+        attrs = {"long_name": o.attrs["long_name"], **_flags(o), **rest}
+        o = dataclasses.replace(o, attrs=MappingProxyType(attrs))
     OUTPUTS[o.name] = o
     return o
 
 
+def _register_with_kernel(output: Output) -> Output:
+    k = output.kernel
+    if kernels.KERNELS.get(k.name) is not k:
+        kernels.register(k)
+        _OWN_KERNELS.add(k.name)
+    try:
+        return register(dataclasses.replace(output, kernel=k.name))
+    except ValueError:
+        if k.name in _OWN_KERNELS and not in_kernel(k.name, atlas_only=False):
+            kernels.unregister(k.name)
+            _OWN_KERNELS.discard(k.name)
+        raise
+
+
 def unregister(name: str) -> None:
-    """Remove an output from :data:`OUTPUTS`."""
-    OUTPUTS.pop(name)
+    """Remove an output from :data:`OUTPUTS` (and a kernel registered with it that no other
+    output uses)."""
+    k = OUTPUTS.pop(name).kernel
+    if k in _OWN_KERNELS and not in_kernel(k, atlas_only=False):
+        kernels.unregister(k)
+        _OWN_KERNELS.discard(k)
 
 
 for _o in _geometry_outputs() + _spectral_outputs() + _margin_outputs() + _over_models_outputs():
@@ -523,8 +601,13 @@ def variable_attrs(name: str) -> dict:
 
 
 def atlas_outputs() -> tuple[str, ...]:
-    """The outputs of :func:`atlas.generate`, in the order of the Dataset."""
+    """The outputs :func:`atlas.generate` can compute, in the order of the Dataset."""
     return tuple(n for n, o in OUTPUTS.items() if o.in_atlas)
+
+
+def default_outputs() -> tuple[str, ...]:
+    """The default set: the atlas outputs computed when none are named (``default``)."""
+    return tuple(n for n, o in OUTPUTS.items() if o.in_atlas and o.default)
 
 
 def kernel_outputs(*, atlas_only: bool = False) -> tuple[str, ...]:
@@ -535,12 +618,12 @@ def kernel_outputs(*, atlas_only: bool = False) -> tuple[str, ...]:
 
 
 def verdict_outputs() -> tuple[str, ...]:
-    """The verdicts of one point: the atlas outputs computed by a verdict kernel (the reductions
-    over model samples need several samples), in registry order."""
+    """The verdicts of one point: the outputs of the default set computed by a verdict kernel
+    (the reductions over model samples need several samples), in registry order."""
     return tuple(
         n
-        for n in kernel_outputs(atlas_only=True)
-        if kernels.KERNELS[OUTPUTS[n].kernel].kind == "verdict"
+        for n in default_outputs()
+        if OUTPUTS[n].kernel is not None and kernels.KERNELS[OUTPUTS[n].kernel].kind == "verdict"
     )
 
 

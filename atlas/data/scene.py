@@ -41,7 +41,7 @@ import numpy as np
 
 from atlas.core import checks
 from atlas.core.contact_modes import invariants  # noqa: F401  (re-exported: SPEC §3 physical entry)
-from atlas.data.outputs import OUTPUTS, atlas_outputs, reductions
+from atlas.data.outputs import OUTPUTS, atlas_outputs, default_outputs, reductions
 
 __all__ = [
     "Scene",
@@ -194,7 +194,8 @@ class Scene:
     q1, q2 : str, float, array or None
         The damping invariants varied separately; give both (or neither) and no ``q``.
     outputs : sequence of str or None
-        Subset of :func:`atlas.data.outputs.atlas_outputs`; ``None`` = every output the scene can compute (the
+        Subset of :func:`atlas.data.outputs.atlas_outputs`; ``None`` = every output of the default set
+        (:func:`atlas.data.outputs.default_outputs`) the scene can compute (the
         consistency outputs need ``alpha``, the ``model_dependent_*`` reductions need ``kappa`` or
         ``q`` varied over more than one value).
     name : str
@@ -285,7 +286,7 @@ class Scene:
         """The outputs to compute, in registry order (:func:`atlas.data.outputs.atlas_outputs`)."""
         every = atlas_outputs()
         if self.outputs is None:
-            return tuple(o for o in every if self.available(o) is None)
+            return tuple(o for o in default_outputs() if self.available(o) is None)
         wanted = list(self.outputs)
         if not wanted:
             raise ValueError("outputs: empty list")

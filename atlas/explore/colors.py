@@ -1,16 +1,16 @@
 """Colours of the explorer's map: a layer as an RGBA image and its legend, chosen by what the
-registry (:mod:`atlas.data.outputs`) declares of the layer: verdict flags in the colours of their
-enumeration (:mod:`atlas.core.verdicts`), booleans in two colours, integer codes in a palette of
-their CF flag values, float layers on a diverging map; matplotlib only for the continuous layers
-and the code palettes."""
+registry (:mod:`atlas.data.outputs`) declares of the layer: integer codes in the colours and labels
+of their declared codes (:class:`atlas.core.verdicts.Codes`; a code declared without a colour takes
+a palette), booleans in two colours, float layers on a diverging map; matplotlib only for the
+continuous layers and the code palettes."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 
-from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
-from atlas.data.outputs import OUTPUTS, variable_attrs
+from atlas.core.verdicts import Consistency, Verdict
+from atlas.data.outputs import OUTPUTS
 
 __all__ = ["layer_rgba", "legend_entries", "value_label"]
 
@@ -36,7 +36,7 @@ CLASS_COLORS = {
 
 
 def _code_palette(name: str) -> dict:
-    """code -> colour of an integer code layer (its CF flag values), no colour repeated.
+    """code -> colour of the codes of an integer layer declared without a colour, none repeated.
 
     The classes ``ij`` take :data:`CLASS_COLORS`; a code ``ijk`` whose ``ij`` is a class (the
     subclasses) is the ``ij``-th of 24 hues 105 degrees apart (saturation 0.75, value 0.85) shaded
@@ -51,7 +51,7 @@ def _code_palette(name: str) -> dict:
     # the subclasses' families: 24 hues 105 degrees apart (144 shades pairwise distinct, which
     # shades of the tab20 colours are not)
     cls = {c: hue(i, 24) for i, c in enumerate(CLASS_COLORS)}
-    codes = [int(c) for c in variable_attrs(name)["flag_values"] if c > 0]
+    codes = [c.value for c in OUTPUTS[name].codes.codes if c.color is None]
     if name == "class_code":
         cols = dict(CLASS_COLORS)
     elif codes and all(c // 10 in cls and 1 <= c % 10 <= len(_SHADES) for c in codes):
@@ -64,8 +64,6 @@ def _code_palette(name: str) -> dict:
         cols = {
             c: matplotlib.colors.to_hex(hue(i, max(len(codes), 2))) for i, c in enumerate(codes)
         }
-    cols[0] = "#ffffff"
-    cols[UNDECIDED_CODE] = Verdict.UNDECIDED.color
     return cols
 
 
@@ -74,21 +72,17 @@ _SHADES = (-0.5, -0.32, -0.14, 0.14, 0.32, 0.5)
 
 
 def _kind(name: str) -> str:
-    """How a layer is drawn: ``"enum"`` (verdict flags), ``"bool"``, ``"code"`` or ``"float"``."""
-    o = OUTPUTS[name]
-    if o.enum is not None:
-        return "enum"
-    return {"bool": "bool", "float": "float"}.get(o.storage, "code")
+    """How a layer is drawn: ``"enum"`` (declared integer codes), ``"bool"`` or ``"float"``."""
+    return {"bool": "bool", "float": "float"}.get(OUTPUTS[name].storage, "enum")
 
 
 def _category_colors(name: str) -> dict:
-    """code -> colour for the categorical layers (verdict flags: their enumeration's colours)."""
-    kind = _kind(name)
-    if kind == "enum":
-        return {int(v): v.color for v in OUTPUTS[name].enum}
-    if kind == "code":
-        return _code_palette(name)
-    return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
+    """code -> colour for the categorical layers (integer codes: their declared colours)."""
+    if _kind(name) == "bool":
+        return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
+    codes = OUTPUTS[name].codes.codes
+    palette = _code_palette(name) if any(c.color is None for c in codes) else {}
+    return {c.value: c.color or palette[c.value] for c in codes}
 
 
 def _undamped(ds: xr.Dataset | None) -> bool:
@@ -99,8 +93,8 @@ def _undamped(ds: xr.Dataset | None) -> bool:
 
 
 def value_label(name: str, value, ds: xr.Dataset | None = None) -> str:
-    """A layer's value in words: verdict labels, ``class 23`` / ``subclass 231``, true / false,
-    or the number of a continuous layer.  On a damped map ``ds`` (q1 or q2 > 0) a neutral
+    """A layer's value in words: the declared label of a code (``stable``, ``class 23``),
+    true / false, or the number of a continuous layer.  On a damped map ``ds`` (q1 or q2 > 0) a neutral
     verdict reads ``neutral (Re = 0)``: an eigenvalue on the imaginary axis, not the q = 0 case."""
     kind = _kind(name)
     if kind == "float":
@@ -114,10 +108,6 @@ def value_label(name: str, value, ds: xr.Dataset | None = None) -> str:
             return enum(v).label
         except ValueError:
             return f"code {v}"
-    if kind == "code":
-        if v == UNDECIDED_CODE:
-            return Verdict.UNDECIDED.label
-        return "degenerate" if v == 0 else f"{name.split('_')[0]} {v}"
     return "true" if v else "false"
 
 
@@ -169,8 +159,5 @@ def legend_entries(name: str, ds: xr.Dataset | None = None) -> list[tuple[str, s
         return []
     present = None if ds is None else set(np.unique(ds[name].values.astype(np.int64)).tolist())
     cols = _category_colors(name)
-    if kind == "enum":
-        codes = [int(v) for v in OUTPUTS[name].enum]
-    else:
-        codes = sorted(cols)
+    codes = [int(v) for v in OUTPUTS[name].enum] if kind == "enum" else sorted(cols)
     return [(cols[c], value_label(name, c, ds)) for c in codes if present is None or c in present]

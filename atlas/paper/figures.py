@@ -30,7 +30,7 @@ import numpy as np
 
 from atlas.core import baseline, contact_modes, expressions, spectral
 from atlas.core.points import spectral_points
-from atlas.data.outputs import OUTPUTS, coord_attrs, kernel_outputs, to_storage, variable_attrs
+from atlas.data.outputs import OUTPUTS, coord_attrs, default_outputs, to_storage, variable_attrs
 from atlas.data.plane import map_dims, plane_outputs
 
 __all__ = [
@@ -180,9 +180,13 @@ def stability_map(
 
 
 def map_outputs() -> tuple[str, ...]:
-    """The verdicts of a Fig. 1 map: the registry's atlas outputs with a point kernel that need no
-    ``alpha``, in registry order."""
-    return tuple(n for n in kernel_outputs(atlas_only=True) if "alpha" not in OUTPUTS[n].depends)
+    """The verdicts of a Fig. 1 map: the registry's default outputs with a point kernel that need
+    no ``alpha``, in registry order."""
+    return tuple(
+        n
+        for n in default_outputs()
+        if OUTPUTS[n].kernel is not None and "alpha" not in OUTPUTS[n].depends
+    )
 
 
 _MODEL = ("kappa", "q1", "q2")

@@ -13,6 +13,7 @@ import xarray as xr
 
 from atlas import cli
 from atlas.core import kernels, rigid_body
+from atlas.core.verdicts import Codes
 from atlas.data import outputs
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
@@ -34,12 +35,10 @@ def _declare():
         NAME,
         ("beta1", "beta2"),
         "bool",
-        {
-            "long_name": "b1 and b2 point into the same half-plane",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "opposed aligned",
-        },
+        {"long_name": "b1 and b2 point into the same half-plane"},
         kernel="aligned",
+        codes=Codes("Aligned", ((0, "opposed"), (1, "aligned"))),
+        default=True,
     )
     return kern, out
 
@@ -71,6 +70,7 @@ def test_a_new_output_reaches_every_builder(dummy, tmp_path):
     with xr.open_dataset(path) as ds:
         np.testing.assert_array_equal(ds[NAME].values, want)
         assert ds[NAME].attrs["long_name"] == dummy.attrs["long_name"]
+        assert ds[NAME].attrs["flag_meanings"] == "opposed aligned"
 
     atlas = generate(Scene(beta1=grid, beta2=grid, alpha=0.3, kappa="0.5,2"))
     assert NAME in atlas and atlas[NAME].dims == ("beta1", "beta2")
@@ -118,6 +118,9 @@ def _bad(**changes):
         (dict(storage="int8"), "storage: .* boolean iff"),
         (dict(storage="complex"), "storage: "),
         (dict(attrs={"units": "1"}), "attrs: .* long_name"),
+        (dict(codes=None), "codes: .* needs its codes"),
+        (dict(codes=Codes("A", ((0, "no"), (2, "yes")))), "codes: .* boolean, its codes are 0 and 1"),
+        (dict(default=True, in_atlas=False, kernel="aligned"), "default: .* atlas output"),
         (dict(name="two words"), "name: "),
     ],
 )
