@@ -6,6 +6,8 @@ The dummy output ``aligned_b1b2`` is ``True`` iff ``b1 . b2 > 0``; its reference
 ``cos(beta1 - beta2) > 0`` evaluated in numpy on cells away from the ties (not the kernel).
 """
 
+from fractions import Fraction
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -13,6 +15,7 @@ import xarray as xr
 
 from atlas import cli
 from atlas.core import kernels, rigid_body
+from atlas.core.contact_modes import direction
 from atlas.core.verdicts import Codes
 from atlas.data import outputs
 from atlas.data.engine import generate
@@ -119,7 +122,10 @@ def _bad(**changes):
         (dict(storage="complex"), "storage: "),
         (dict(attrs={"units": "1"}), "attrs: .* long_name"),
         (dict(codes=None), "codes: .* needs its codes"),
-        (dict(codes=Codes("A", ((0, "no"), (2, "yes")))), "codes: .* boolean, its codes are 0 and 1"),
+        (
+            dict(codes=Codes("A", ((0, "no"), (2, "yes")))),
+            "codes: .* boolean, its codes are 0 and 1",
+        ),
         (dict(default=True, in_atlas=False, kernel="aligned"), "default: .* atlas output"),
         (dict(name="two words"), "name: "),
     ],
@@ -137,3 +143,130 @@ def test_an_incomplete_output_fails_at_declaration(changes, match):
 def test_a_registered_name_cannot_be_declared_twice():
     with pytest.raises(ValueError, match="name: output 'class_code' is already registered"):
         outputs.register(outputs.OUTPUTS["class_code"])
+
+
+# --- a three-valued sign, declared at run time in one declaration --------------------------------
+
+SIGN = "det_B_sign_test"
+SIGN_CODES = Codes(
+    "DetBSign",
+    ((-1, "negative"), (0, "zero"), (1, "positive"), (2, "undecided")),
+    undecided=2,
+)
+
+
+def _det_sign(c1, s1, c2, s2):
+    """sign det B with a crude float bound: rounding-level determinants are left undecided (2)."""
+    det = c1 * s2 - s1 * c2
+    bound = 8 * jnp.finfo(det.dtype).eps * (jnp.abs(c1 * s2) + jnp.abs(s1 * c2))
+    return {SIGN: jnp.where(det > bound, 1, jnp.where(det < -bound, -1, 2)).astype(jnp.int8)}
+
+
+def _det_sign_exact(c1, s1, c2, s2):
+    d = Fraction(c1) * Fraction(s2) - Fraction(s1) * Fraction(c2)
+    return {SIGN: (d > 0) - (d < 0)}
+
+
+def _sign_output(**changes) -> outputs.Output:
+    kern = kernels.PointKernel(
+        "det_b_test", ("beta1", "beta2"), (SIGN,), _det_sign, undecided={SIGN: 2},
+        exact=_det_sign_exact,
+    )  # fmt: skip
+    fields = dict(
+        name=SIGN,
+        depends=("beta1", "beta2"),
+        storage="int8",
+        attrs={"long_name": "certified sign of det B"},
+        kernel=kern,
+        codes=SIGN_CODES,
+        default=True,
+    )
+    return outputs.Output(**{**fields, **changes})
+
+
+@pytest.fixture
+def sign():
+    out = outputs.register(_sign_output())
+    try:
+        yield out
+    finally:
+        outputs.unregister(SIGN)
+    assert "det_b_test" not in kernels.KERNELS
+
+
+def _exact_sign(beta1, beta2):
+    """The sign of det B = sin(beta2 - beta1) of the rounded directions: the closed form away from
+    the ties, exact rational arithmetic on the same floats on them."""
+    c1, s1 = (np.asarray(x) for x in direction(beta1[:, None], np.float64))
+    c2, s2 = (np.asarray(x) for x in direction(beta2[None, :], np.float64))
+    d = np.sin(np.subtract.outer(beta2, beta1)).T
+    out = np.sign(d).astype(np.int8)
+    for i, j in zip(*np.nonzero(np.abs(d) < 1e-9)):
+        c1i, s1i, c2j, s2j = (Fraction(float(x)) for x in (c1[i, 0], s1[i, 0], c2[0, j], s2[0, j]))
+        e = c1i * s2j - s1i * c2j
+        out[i, j] = (e > 0) - (e < 0)
+    return out
+
+
+def test_a_sign_output_reaches_generate_mechanism_explorer_and_inspector(sign, tmp_path):
+    grid = np.arange(8) * (np.pi / 4)  # ties: beta2 = beta1 and beta2 = beta1 + pi
+    want = _exact_sign(grid, grid)
+    raw = kernels.run(kernels.KERNELS["det_b_test"], _dirs(grid))[SIGN]
+    assert (raw == 2).sum() >= 8 and (want == -1).any()  # the exact reference has work to do
+    path = tmp_path / "s.nc"
+    values = ",".join(repr(float(b)) for b in grid)
+    rc = cli.main(
+        ["generate", "--beta1", values, "--beta2", values, "--outputs", SIGN, "--out", str(path),
+         "--no-progress"]
+    )  # fmt: skip
+    assert rc == 0
+    with xr.open_dataset(path) as ds:
+        np.testing.assert_array_equal(ds[SIGN].values, want)
+        assert ds[SIGN].dtype == np.int8
+        assert ds[SIGN].attrs["flag_values"].tolist() == [-1, 0, 1, 2]
+        assert ds[SIGN].attrs["flag_meanings"] == "negative zero positive undecided"
+
+    assert [lbl for _, lbl in colors.legend_entries(SIGN)] == [
+        "negative", "zero", "positive", "undecided"
+    ]  # fmt: skip
+    assert colors.value_label(SIGN, -1) == "negative"  # not 'undecided'
+    assert len(set(c for c, _ in colors.legend_entries(SIGN))) == 4
+
+    i, j = 1, 6  # det B = sin(5 pi / 4) < 0
+    info = inspector.inspect_point(grid[i], grid[j])
+    assert info["others"][SIGN] == want[i, j] == -1
+    assert f"{SIGN}: negative" in inspector.format_inspection(info)
+
+    mech = tmp_path / "m.nc"
+    rc = cli.main(
+        ["mechanism", "ladder", "--theta", "0.1pi:0.4pi:4", "--mu", "0:2:3", "--out", str(mech)]
+    )  # fmt: skip
+    assert rc == 0
+    with xr.open_dataset(mech) as ds:
+        det = ds.b11 * ds.b22 - ds.b12 * ds.b21
+        np.testing.assert_array_equal(ds[SIGN].values, np.sign(det.values))
+        assert ds[SIGN].attrs["flag_meanings"] == "negative zero positive undecided"
+
+
+def _dirs(grid):
+    c1, s1 = direction(grid[:, None], np.float64)
+    c2, s2 = direction(grid[None, :], np.float64)
+    return {"c1": c1, "s1": s1, "c2": c2, "s2": s2}
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: Codes("S", ((-1, "negative"), (0, ""), (1, "positive"))), "meaning: .* value 0"),
+        (lambda: Codes("S", ((-1, "neg"), (1, "pos")), undecided=2), "undecided: .* no value"),
+        (lambda: _sign_output(storage="float", codes=None), "attrs: .* needs units"),
+        (lambda: _sign_output(codes=None), "codes: .* needs its codes"),
+        (lambda: _sign_output(codes=Codes("S", ((-1, "n"), (0, "z"), (1, "p")))), "undecided: "),
+        (lambda: _sign_output(name="class_code"), "name: output 'class_code' is already"),
+    ],
+)
+def test_a_bad_declaration_fails_when_made_in_one_line(make, match):
+    with pytest.raises(ValueError, match=match) as e:
+        outputs.register(make())
+    assert "\n" not in str(e.value)
+    assert SIGN not in outputs.OUTPUTS and "det_b_test" not in kernels.KERNELS
