@@ -75,7 +75,7 @@ def _one_line(msg: str) -> str:
 #: asked for its options (``atlas --help`` imports none of them)
 HELP = {
     "generate": "compute a scene into a CF netCDF4 atlas",
-    "mechanism": "atlas of a built-in rigid body over physical axes (ladder, two_legged, leaning_rod)",
+    "mechanism": "atlas of a built-in rigid body over physical axes (the bodies: mechanism --help)",
     "boundaries": "certified boundary curves of (beta1, beta2) slices (CF geometry, CSV, GeoJSON)",
     "paper": "regenerate every figure and table of the paper",
     "simulate": "simulate the compliant-contact dynamics (Fig. 2), or an outcome atlas (--map)",
@@ -230,7 +230,14 @@ def _add_distributed(g) -> None:
 
 
 def _add_mechanism(sub) -> None:
-    from atlas.data.body_atlas import MECHANISM_SCENES
+    from atlas.core.bodies import MODEL
+    from atlas.data.body_atlas import MECHANISM_SCENES, stored_units
+
+    def fixed(sc) -> str:
+        sets = {p for ax in sc.axes.values() for p in ax.sets}
+        units = stored_units(sc)
+        names = [k for k in sc.params if k not in sets] + list(MODEL)
+        return ", ".join(f"{k} [{units[k][0]}]" for k in names)
 
     pm = sub.add_parser(
         "mechanism",
@@ -238,7 +245,9 @@ def _add_mechanism(sub) -> None:
         description="Sweep a built-in body over its physical axes into a CF netCDF4 file: the "
         "invariants, B and a of eq. (1), and every verdict.  Without --out, print a summary.",
         epilog="; ".join(
-            f"{n}: " + ", ".join(f"--{a} [{u}] (default {d})" for a, (d, u, *_r) in sc.axes.items())
+            f"{n} ({sc.description}): "
+            + ", ".join(f"--{a} [{ax.units}] (default {ax.default})" for a, ax in sc.axes.items())
+            + f"; --fixed {fixed(sc)}"
             for n, sc in MECHANISM_SCENES.items()
         ),
     )
@@ -251,8 +260,8 @@ def _add_mechanism(sub) -> None:
     pm.add_argument(
         "--fixed",
         metavar="K=V,...",
-        help="other parameters in SI units, e.g. L=3,m=10,k1=2e5,c1=20,speed=0.5 (see "
-        "atlas.data.body_atlas.FIXED)",
+        help="other parameters in SI units, e.g. L=3,m=10,k1=2e5,c1=20,speed=0.5 (each body's "
+        "below)",
     )
     pm.add_argument("--out", metavar="FILE.nc", help="output file")
     pm.add_argument("--overwrite", action="store_true", help="replace an existing output file")

@@ -1,87 +1,45 @@
 """Atlases of real mechanisms: built-in bodies over physical axes.
 
-A mechanism scene sweeps physical parameters of a built-in body of :mod:`atlas.core.rigid_body`
-(e.g. the ladder's angle ``theta`` [rad] and friction coefficient ``mu`` [1]) and stores, on those
-physical coordinates (with units), the derived invariants ``beta1, beta2, alpha, kappa, q1, q2``,
+A mechanism scene sweeps physical parameters of a built-in body (the registry
+:mod:`atlas.core.bodies`: e.g. the ladder's angle ``theta`` [rad] and friction coefficient ``mu``
+[1]) and stores, on those physical coordinates (with units), the derived invariants ``beta1, beta2, alpha, kappa, q1, q2``,
 the entries of ``B`` [1/kg] and ``a`` [m/s^2] of eq. (1), and every verdict of the atlas at them,
 so ``ds.sel(mu=0.6, method="nearest")`` reads one body's verdicts.  One friction coefficient
 ``mu`` applies to both contacts.  The verdicts (every atlas output of the registry with a verdict
 kernel, :func:`atlas.data.outputs.verdict_outputs`) are those of
 :func:`atlas.core.rigid_body.verdicts_at` (certified kernels, undecided points settled exactly).
 
-Every parameter that is not an axis is stored with its units (:data:`FIXED`): the body's own (e.g.
-the ladder's ``L`` [m], ``m`` [kg]), the derived ``I`` [kg m2], the contact model ``k1, k2`` [N/m],
+Every parameter that is not an axis is stored with its units (:func:`stored_units`): the body's own
+declared parameters (e.g. the ladder's ``L`` [m], ``m`` [kg]), the derived ``I`` [kg m2], the contact model ``k1, k2`` [N/m],
 ``c1, c2`` [N s/m], gravity ``g`` [m s-2] (along ``-y``) and the state's ``speed`` [m/s] (contact 1's
 sliding speed; default 0, the zero-speed limit), the sliding signs ``s1, s2`` and, as attributes, the
 contact kinds.  ``fixed={"L": 3.0, "c1": 20.0}`` (CLI ``--fixed L=3,c1=20``) changes them; every value
-goes through the validation of :mod:`atlas.core.rigid_body`.
+goes through the validation of :mod:`atlas.core.rigid_body` and the declared ranges.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import inspect
 import shlex
 
 import numpy as np
 import xarray as xr
 
 from atlas.core import checks, config
-from atlas.core.rigid_body import BODIES, body_invariants, verdicts_at
+from atlas.core.bodies import BODIES, DERIVED, MODEL, Body
+from atlas.core.rigid_body import body_invariants, verdicts_at
 from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, storage_dtype, variable_attrs, verdict_outputs
 from atlas.data.scene import parse_values
 
-__all__ = ["FIXED", "MECHANISM_SCENES", "MechanismScene", "mechanism_atlas", "run_cli"]
+__all__ = ["MECHANISM_SCENES", "MechanismScene", "mechanism_atlas", "run_cli", "stored_units"]
 
 
-@dataclasses.dataclass(frozen=True)
-class MechanismScene:
-    """A built-in body over physical axes: ``axes`` maps an axis name to ``(default range, units,
-    long_name, body parameters it sets)``."""
-
-    body: str
-    axes: dict
-    description: str
-
-
-MECHANISM_SCENES = {
-    "ladder": MechanismScene(
-        "ladder",
-        {
-            "theta": ("0.02pi:0.48pi:181", "rad", "ladder angle from the floor", ("theta",)),
-            "mu": (
-                "0:2:201",
-                "1",
-                "friction coefficient (floor and wall)",
-                ("mu_floor", "mu_wall"),
-            ),
-        },
-        "a uniform ladder on a floor leaning on a wall, slipping down (Mechanism.ladder)",
-    ),
-    "two_legged": MechanismScene(
-        "two_legged",
-        {
-            "h": ("0.05:2:196", "m", "height of the centre of mass above the feet", ("h",)),
-            "mu": ("0:2:201", "1", "friction coefficient (both legs)", ("mu1", "mu2")),
-        },
-        "a body on two legs (at +-0.2 m) sliding on a floor (Mechanism.two_legged)",
-    ),
-    "leaning_rod": MechanismScene(
-        "leaning_rod",
-        {
-            "theta": ("0.02pi:0.48pi:181", "rad", "rod angle from the floor", ("theta",)),
-            "mu": (
-                "0:2:201",
-                "1",
-                "friction coefficient (floor and edge)",
-                ("mu_floor", "mu_edge"),
-            ),
-        },
-        "a rod on a floor resting on a table edge, slipping down (Mechanism.leaning_rod)",
-    ),
-}
+#: a mechanism scene is a body of the registry (:class:`atlas.core.bodies.Body`: ``axes`` maps an
+#: axis name to ``(default range, units, long_name, body parameters it sets)``)
+MechanismScene = Body
+#: the built-in mechanism scenes: the body registry itself (a body registered at run time is one)
+MECHANISM_SCENES = BODIES
 
 _INVARIANTS = {
     "beta1": None,
@@ -99,38 +57,22 @@ _INVARIANTS = {
 }
 
 
-#: units and long names of the parameters a mechanism atlas stores (axes or fixed values)
-FIXED = {
-    "L": ("m", "length of the body"),
-    "m": ("kg", "mass"),
-    "I": ("kg m2", "moment of inertia about the centre of mass"),
-    "d": ("m", "half the distance between the legs"),
-    "h": ("m", "height of the centre of mass above the feet"),
-    "e": ("m", "position of the table edge along the rod, above its centre"),
-    "theta": ("rad", "angle of the body from the floor"),
-    "mu_floor": ("1", "friction coefficient at the floor"),
-    "mu_wall": ("1", "friction coefficient at the wall"),
-    "mu_edge": ("1", "friction coefficient at the table edge"),
-    "mu1": ("1", "friction coefficient at contact 1"),
-    "mu2": ("1", "friction coefficient at contact 2"),
-    "k1": ("N m-1", "stiffness of contact 1"),
-    "k2": ("N m-1", "stiffness of contact 2"),
-    "c1": ("N s m-1", "damping of contact 1"),
-    "c2": ("N s m-1", "damping of contact 2"),
-    "g": ("m s-2", "gravitational acceleration (along -y)"),
-    "speed": ("m s-1", "sliding speed of contact 1 (0: the zero-speed limit)"),
-    "s1": ("1", "sliding direction of contact 1 along its tangent (n turned by -90 degrees)"),
-    "s2": ("1", "sliding direction of contact 2 (admissible: derived from s1 and the geometry)"),
-}
 #: the contact model and state, with their defaults (SI)
-_MODEL = {"k1": 1e5, "k2": 1e5, "c1": 0.0, "c2": 0.0, "g": 9.81, "speed": 0.0}
+_MODEL = {k: default for k, (_u, _l, default) in MODEL.items()}
+
+
+def stored_units(scene: MechanismScene) -> dict:
+    """Units and long names of every parameter a mechanism atlas of ``scene`` stores (axes or
+    fixed values): the body's declared parameters, the contact model and state, ``m, I, s1, s2``."""
+    out = {k: (p.units, p.meaning) for k, p in scene.params.items()}
+    out.update({k: (u, long_name) for k, (u, long_name, _d) in MODEL.items()})
+    return {**out, **DERIVED}
 
 
 def _fixed_values(scene: MechanismScene, fixed: dict) -> dict:
     """Every non-axis parameter: the body function's defaults and the model's, ``fixed`` applied."""
     sets = {p for *_r, ps in scene.axes.values() for p in ps}
-    body = inspect.signature(BODIES[scene.body]).parameters
-    out = {k: p.default for k, p in body.items() if k not in sets}
+    out = {k: v for k, v in scene.defaults.items() if k not in sets}
     out.update(_MODEL)
     unknown = sorted(set(fixed) - set(out))
     if unknown:
@@ -179,7 +121,7 @@ def mechanism_atlas(
     """The atlas of built-in mechanism scene ``name`` (:data:`MECHANISM_SCENES`) over its physical
     axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``).
 
-    ``fixed``: values of the other parameters (module docstring; SI units of :data:`FIXED`);
+    ``fixed``: values of the other parameters (module docstring; SI units of :func:`stored_units`);
     ``history``: the command recorded in the ``history`` attribute (default: this call, with every
     axis range and fixed value).
     """
@@ -196,7 +138,7 @@ def mechanism_atlas(
     model = {k: consts[k] for k in ("k1", "k2", "c1", "c2", "speed")}
 
     def build():
-        body = BODIES[scene.body](**params)
+        body = scene(**params)
         g = _real_g(consts["g"])
         return body, body_invariants(body, **model, g=(0.0, -g))
 
@@ -219,15 +161,16 @@ def mechanism_atlas(
         axis: (axis, values[axis], {"units": units, "long_name": long_name})
         for axis, (_d, units, long_name, _s) in scene.axes.items()
     }
-    stored = {k: v for k, v in consts.items() if k in FIXED}
+    units = stored_units(scene)
+    stored = dict(consts)
     stored.update(m=body["m"], I=body["I"], s1=body["s1"], s2=inv["s2"])
     for k, v in stored.items():
         v = np.asarray(v, np.float64)
         v = np.broadcast_to(v, inv["beta1"].shape) if v.ndim else v
         if v.ndim and np.all(v == v.flat[0]):
             v = v.flat[0]
-        units, long_name = FIXED[k]
-        coords[k] = (dims if np.ndim(v) else (), v, {"units": units, "long_name": long_name})
+        unit, long_name = units[k]
+        coords[k] = (dims if np.ndim(v) else (), v, {"units": unit, "long_name": long_name})
     if history is None:
         args = [f"{a}={values_spec!r}" for a, values_spec in _specs(scene, axes).items()]
         args += [f"fixed={dict(fixed)!r}"] if fixed else []
