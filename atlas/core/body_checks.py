@@ -12,8 +12,8 @@ from atlas.core import checks
 from atlas.core.body_kinematics import (
     BODY_VERTEX,
     CONTACT_KINDS,
-    _dot,
-    _first,
+    dot,
+    first_bad,
     sliding_signs,
     tangent,
 )
@@ -29,7 +29,7 @@ def real(name, v, *, low=None, high=None, open_low=False, open_high=False):
     x = checks.real(name, v, finite=False)  # booleans, strings, complex numbers refused
     bad = ~np.isfinite(x)
     if np.any(bad):
-        raise ValueError(f"{name}: must be finite, got {_first(x, bad)}")
+        raise ValueError(f"{name}: must be finite, got {first_bad(x, bad)}")
     for bound, is_open, below, word in ((low, open_low, True, ">"), (high, open_high, False, "<")):
         if bound is None:
             continue
@@ -39,7 +39,7 @@ def real(name, v, *, low=None, high=None, open_low=False, open_high=False):
             bad = x >= bound if is_open else x > bound
         if np.any(bad):
             op = word if is_open else word + "="
-            raise ValueError(f"{name}: must be {op} {_fmt_bound(bound)}, got {_first(x, bad)}")
+            raise ValueError(f"{name}: must be {op} {_fmt_bound(bound)}, got {first_bad(x, bad)}")
     return float(x) if x.ndim == 0 else x
 
 
@@ -74,7 +74,7 @@ def _sign_input(name, s, n):
             raise ValueError(f"{name}: sliding sign must be +1 or -1, got {s!r}")
         return int(s)
     vec = vector(name, s)
-    along, off = _dot(vec, tangent(n)), _dot(vec, n)
+    along, off = dot(vec, tangent(n)), dot(vec, n)
     if np.ndim(along):
         raise ValueError(f"{name}: a sliding vector must be one vector, not arrays")
     if along == 0.0 or abs(off) > TANGENT_TOL * math.hypot(*vec):

@@ -82,7 +82,8 @@ def _cross(u, v):
     return u[0] * v[1] - u[1] * v[0]
 
 
-def _dot(u, v):
+def dot(u, v):
+    """``u . v`` of 2-vectors."""
     return u[0] * v[0] + u[1] * v[1]
 
 
@@ -101,7 +102,7 @@ def admissible_twist(r, n):
         c1 * n[1][0] - n[0][0] * c2,
         n[0][0] * n[1][1] - n[0][1] * n[1][0],
     )
-    u = tuple(_dot(tangent(n[j]), z[:2]) + _cross(r[j], tangent(n[j])) * z[2] for j in (0, 1))
+    u = tuple(dot(tangent(n[j]), z[:2]) + _cross(r[j], tangent(n[j])) * z[2] for j in (0, 1))
     return z, u
 
 
@@ -120,7 +121,7 @@ def mobility(m, I, r, n, mu, s):
     """
     w = [_sub(n[j], _scale(mu[j] * s[j], tangent(n[j]))) for j in (0, 1)]
     return tuple(
-        tuple(_dot(n[i], w[j]) / m + _cross(r[i], n[i]) * _cross(r[j], w[j]) / I for j in (0, 1))
+        tuple(dot(n[i], w[j]) / m + _cross(r[i], n[i]) * _cross(r[j], w[j]) / I for j in (0, 1))
         for i in (0, 1)
     )
 
@@ -137,7 +138,7 @@ def free_acceleration(
     acc = (g[0] + F[0] / m, g[1] + F[1] / m)
     out = []
     for i in (0, 1):
-        ai = -(_dot(n[i], acc) + _cross(r[i], n[i]) * tau / I - omega * omega * _dot(n[i], r[i]))
+        ai = -(dot(n[i], acc) + _cross(r[i], n[i]) * tau / I - omega * omega * dot(n[i], r[i]))
         if kinds[i] == BODY_SIDE:
             ai = ai + 2 * omega * u[i]
         out.append(ai)
@@ -152,7 +153,8 @@ def _scale(k, u):
     return (k * u[0], k * u[1])
 
 
-def _first(x, bad):
+def first_bad(x, bad):
+    """The first value of ``x`` where ``bad`` holds (``x`` itself for a scalar): for error messages."""
     return np.asarray(x)[bad].flat[0] if np.ndim(x) else x
 
 
@@ -184,7 +186,7 @@ def sliding_signs(r, n, s1, s2=None):
             rank1[idx] = not any(ze)
             for j in (0, 1):
                 sign[j][idx] = (ue[j] > 0) - (ue[j] < 0)
-    ratio = lambda mask: float(_first(np.broadcast_to(u[1] / u[0], shape), mask))  # noqa: E731
+    ratio = lambda mask: float(first_bad(np.broadcast_to(u[1] / u[0], shape), mask))  # noqa: E731
     if np.any(rank1):
         if s2 is None:
             raise ValueError(

@@ -143,6 +143,8 @@ def mechanism_atlas(
         return body, body_invariants(body, **model, g=(0.0, -g))
 
     body, inv = _validated(scene, build)
+    # an invariant that no axis changes (a block's alpha over mu) spans the grid too
+    inv = {k: np.broadcast_to(v, grids[0].shape) for k, v in inv.items()}
     names = verdict_outputs()
     verdicts = verdicts_at(
         *(inv[k] for k in ("beta1", "beta2", "alpha", "kappa", "q1", "q2")),

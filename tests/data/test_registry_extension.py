@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 from atlas import cli
-from atlas.core import kernels, rigid_body
+from atlas.core import bodies, kernels, rigid_body
 from atlas.core.contact_modes import direction
 from atlas.core.verdicts import Codes
 from atlas.data import outputs
@@ -22,6 +22,7 @@ from atlas.data.engine import generate
 from atlas.data.scene import Scene
 from atlas.explore import colors, inspector, maps, state
 from atlas.paper.figures import stability_map
+from tests.core import test_bodies
 
 NAME = "aligned_b1b2"
 
@@ -270,3 +271,45 @@ def test_a_bad_declaration_fails_when_made_in_one_line(make, match):
         outputs.register(make())
     assert "\n" not in str(e.value)
     assert SIGN not in outputs.OUTPUTS and "det_b_test" not in kernels.KERNELS
+
+
+# --- a made-up body, declared at run time in one declaration --------------------------------------
+
+
+@pytest.fixture
+def block():
+    body = bodies.register(test_bodies.block())
+    try:
+        yield body
+    finally:
+        bodies.unregister(body.name)
+
+
+def test_a_body_and_an_output_reach_atlas_mechanism(block, sign, tmp_path, capsys):
+    """``atlas mechanism block_test``: B by the closed form of a block on its two bottom corners
+    sliding along +x (``w_j = (-mu, 1)``, ``r_j = (-+a, -c)``), every parameter stored with its
+    declared units, the sign output's flags and values."""
+    sub = cli.build_parser("mechanism")._subparsers._group_actions[0].choices["mechanism"]
+    assert "block_test" in sub.format_help()  # a choice, with its axes and fixed parameters
+    path = tmp_path / "b.nc"
+    rc = cli.main(
+        ["mechanism", "block_test", "--mu", "0:1.2:4", "--fixed", "height=0.3,k1=2e5",
+         "--out", str(path)]
+    )  # fmt: skip
+    assert rc == 0
+    mu = np.linspace(0, 1.2, 4)
+    a, c, m = 0.2, 0.15, 2.0
+    inertia = m * (0.4**2 + 0.3**2) / 12
+    b11 = 1 / m + a * (a + c * mu) / inertia  # (r1 x n)(r1 x w1) / I, r1 x n = -a
+    b12 = 1 / m - a * (a - c * mu) / inertia  # (r1 x n)(r2 x w2) / I, r2 x w2 = a - c mu
+    with xr.open_dataset(path) as ds:
+        np.testing.assert_allclose(ds.b11.values, b11, rtol=1e-13)
+        np.testing.assert_allclose(ds.b12.values, b12, rtol=1e-13)
+        assert ds.mu.attrs == {"units": "1", "long_name": "friction coefficient (both corners)"}
+        assert float(ds.height) == 0.3 and ds.height.attrs["units"] == "m"
+        assert ds.width.attrs == {"units": "m", "long_name": "width of the block"}
+        assert ds.k1.attrs["units"] == "N m-1" and float(ds.k1) == 2e5
+        det = ds.b11 * ds.b22 - ds.b12 * ds.b21
+        np.testing.assert_array_equal(ds[SIGN].values, np.sign(det.values))
+        assert ds[SIGN].attrs["flag_meanings"] == "negative zero positive undecided"
+    assert "block_test" in capsys.readouterr().out
