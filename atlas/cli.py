@@ -1,17 +1,15 @@
-"""The ``atlas`` command line: ``generate``, ``mechanism``, ``boundaries``, ``paper``, ``simulate``,
-``table``, ``bench``, ``selftest``.
+"""The ``atlas`` command line: the subcommands of :data:`HELP`, each with its one-line help there.
 
 The parser and the dispatch, nothing else: each subcommand imports only the module that
-implements it, when it runs (``atlas --help`` imports neither JAX nor xarray):
+implements it, when it runs (``atlas --help`` imports neither JAX nor xarray).
 
-==============  ====================================================================
 Every bad input (NaN, negative stiffness, empty or reversed ranges, unknown outputs, an unwritable or
 existing output path) is reported as one line ``atlas: error: PARAMETER: reason`` on stderr with exit
 code 2 -- never a traceback; so is a run that cannot fit (``size: ...``, see ``--dry-run``) and a
 failed write (``out: cannot write PATH: no space left on device``).  SIGINT / SIGTERM end a run
 with exit 130 / 143 and nothing committed after them (:mod:`atlas.cli_signals`).  JAX compilations are cached on disk (``$ATLAS_JAX_CACHE``, default
 ``~/.cache/painleve-atlas/jax``; ``ATLAS_JAX_CACHE=0`` disables it), so repeated runs skip the
-~15 s compilation of the eigenvalue kernel.
+kernels' compilation (its seconds: ``atlas bench``'s Start-up section).
 
 With ``--scheduler`` (``inprocess``, ``local[:N]``, ``tcp://HOST:PORT``) or ``--store``,
 ``atlas generate`` runs the scene tile by tile into a resumable zarr store

@@ -1,5 +1,7 @@
+import importlib
 import os
 from pathlib import Path
+from pkgutil import iter_modules
 
 import pytest
 
@@ -8,6 +10,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 import jax  # noqa: E402
 
 import atlas  # noqa: E402,F401  (turns on float64 in JAX)
+from atlas.core import signs  # noqa: E402
 from atlas.core.config import CACHE_ENV, use_compile_cache  # noqa: E402
 from atlas.core.warm import KERNEL_ENV  # noqa: E402
 
@@ -86,16 +89,25 @@ def paper_run(tmp_path_factory):
     return SimpleNamespace(out=out, **got)
 
 
+def det2_sign_users() -> list:
+    """Every module of :mod:`atlas.core` that calls :func:`atlas.core.signs.det2_sign` by its own
+    name (found, not listed: a new user is patched too)."""
+    import atlas.core
+
+    mods = [
+        importlib.import_module(f"atlas.core.{m.name}") for m in iter_modules(atlas.core.__path__)
+    ]
+    return [m for m in mods if m is not signs and getattr(m, "det2_sign", None) is signs.det2_sign]
+
+
 @pytest.fixture
 def bounded_det_b():
     """The fast kernels with ``sign det B`` certified by its float error bound only (as before the
     exact integer sign): cells on ``beta2 = beta1 + pi`` of an even grid (``det B`` of the rounded
     directions ~ 1e-17) are then undecided, which exercises the settlement paths.  Every jit cache
     is cleared before (the kernels retrace with it) and after."""
-    from atlas.core import contact_modes, enclosures, hurwitz, rootfree, signs, spectral, undamped
-
     with pytest.MonkeyPatch.context() as mp:
-        for mod in (contact_modes, rootfree, spectral, hurwitz, enclosures, undamped):
+        for mod in det2_sign_users():
             mp.setattr(mod, "det2_sign", signs.det2_sign_bounded)
         jax.clear_caches()
         yield
