@@ -22,7 +22,7 @@ from atlas.data.engine import (
     run,
     tile_blocks,
 )
-from atlas.data.outputs import atlas_outputs
+from atlas.data.outputs import default_outputs
 from atlas.data.scene import Scene, builtin
 
 TILE = 1024
@@ -66,7 +66,7 @@ EXPECTED_DIMS = {
 
 
 def test_schema_dims_and_types(tiny):
-    assert set(tiny.data_vars) == set(atlas_outputs())
+    assert set(tiny.data_vars) == set(default_outputs())
     for name, dims in EXPECTED_DIMS.items():
         assert tiny[name].dims == dims, name
     assert tiny.class_code.dtype == np.int8

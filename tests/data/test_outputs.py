@@ -94,8 +94,8 @@ def test_spec_table_lists_the_registry():
 
 def test_every_output_appears_with_its_attributes(atlas_full):
     s = Scene(beta1="0:2pi:6", beta2="0:2pi:5", alpha="0.3,1.1", kappa="0.5,2", q="0,0.3")
-    assert set(atlas_full.data_vars) == set(outputs.atlas_outputs())
-    for name in outputs.atlas_outputs():
+    assert set(atlas_full.data_vars) == set(outputs.default_outputs())
+    for name in outputs.default_outputs():
         v = atlas_full[name]
         reg = outputs.variable_attrs(name)
         assert _same({k: v.attrs[k] for k in reg}, reg), name

@@ -313,3 +313,19 @@ def test_a_body_and_an_output_reach_atlas_mechanism(block, sign, tmp_path, capsy
         np.testing.assert_array_equal(ds[SIGN].values, np.sign(det.values))
         assert ds[SIGN].attrs["flag_meanings"] == "negative zero positive undecided"
     assert "block_test" in capsys.readouterr().out
+
+
+def test_a_new_output_joins_the_defaults_only_by_saying_so():
+    """Without ``default=True`` a new output is computed when asked for, and the default set (the
+    scenes without outputs, the Fig. 1 map, the mechanism files, the inspector) stays as it was."""
+    from atlas.paper.figures import map_outputs
+
+    before = (outputs.default_outputs(), map_outputs(), outputs.verdict_outputs())
+    outputs.register(_sign_output(default=False))
+    try:
+        assert (outputs.default_outputs(), map_outputs(), outputs.verdict_outputs()) == before
+        assert SIGN not in Scene(beta1="0:2pi:4", beta2="0:2pi:4").output_names
+        assert Scene(beta1="0:2pi:4", beta2="0:2pi:4", outputs=SIGN).output_names == (SIGN,)
+        assert SIGN in outputs.atlas_outputs() and SIGN in maps.layers()
+    finally:
+        outputs.unregister(SIGN)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from atlas.data.outputs import atlas_outputs
+from atlas.data.outputs import default_outputs
 from atlas.data.scene import Scene, builtin, invariants, parse_values
 
 
@@ -58,7 +58,7 @@ def test_output_dims_follow_dependencies():
     assert s.output_dims("subclass_code") == ("beta1", "beta2", "alpha")
     assert s.output_dims("stable_II") == ("beta1", "beta2", "kappa", "q1")
     assert s.output_dims("model_dependent_SS") == ("beta1", "beta2")
-    assert s.output_names == atlas_outputs()
+    assert s.output_names == default_outputs()
 
 
 def test_default_outputs_depend_on_scene():
