@@ -413,7 +413,9 @@ def _resolve_each(exact, pts, names, counts):
 
 
 def settle_codes(codes: dict, undecided: dict, c1, s1, c2, s2, ca=None, sa=None) -> dict:
-    """Exact class/subclass codes and Table 1 flags where the fast kernels left them undecided.
+    """Exact class/subclass codes and Table 1 flags where the fast kernels left them undecided
+    (only these: a kernel settles through its own exact reference, ``PointKernel.exact`` and
+    :mod:`atlas.core.settle`; this is the array form of the ``b1b2``/``b1b2a`` reference).
 
     ``codes``: arrays of one shape (``class_code``, ``subclass_code``, ``consistent_FF`` ...),
     replaced in place at the points where the matching mask of ``undecided`` holds; the inputs
