@@ -4,12 +4,15 @@ An *output* is a data variable of the Datasets the package builds: the atlas of
 :func:`atlas.data.engine.generate`, the mechanism atlases (:mod:`atlas.data.body_atlas`), the
 explorer's map (:func:`atlas.explore.maps.compute_map`) and the Fig. 1 map
 (:func:`atlas.paper.figures.stability_map`).  Each is declared here once, in the style of xclim's
-indicators: the parameters it depends on, *how it is computed*, its stored type and its CF
-attributes.  :data:`COORDS` holds the attributes of the coordinates.
+indicators: the parameters it depends on, *how it is computed*, its stored type, its stored values
+(``codes``: each value's CF meaning, label and colour and the undecided value, from which the CF
+flags, the enumeration, the explorer's key and the inspector's words are generated), whether it is
+in the default set, and its other CF attributes.  :data:`COORDS` holds the attributes of the
+coordinates.  How to add one: ``docs/extending.md``.
 
 How an output is computed is one of
 
-* ``kernel``: the name of its point kernel in :data:`atlas.core.kernels.KERNELS` (the kernel's
+* ``kernel``: its point kernel, by name in :data:`atlas.core.kernels.KERNELS` or given (the kernel's
   inputs follow from ``depends``; the meaning of its raw codes, undecided and ``True``, is declared
   with the kernel).  Every builder runs the kernels of the outputs it is asked for;
 * ``needs`` + ``state``: a reduction over the model samples of kernel results (model dependence:
@@ -17,8 +20,9 @@ How an output is computed is one of
 * ``computed_by``: a display layer computed by one named function (not part of an atlas).
 
 :func:`register` checks a declaration completely (unknown kernel, parameters that disagree with the
-kernel's, a stored type that disagrees with its codes, CF flags that miss the undecided code ...):
-a bad output fails when it is declared, not when it is first computed.
+kernel's, a stored type that disagrees with its codes, a value without a meaning, an undecided
+code other than the kernel's, a float without units ...): a bad output fails when it is declared,
+in one line, not when it is first computed.
 """
 
 from __future__ import annotations

@@ -1,8 +1,4 @@
-"""The body registry (atlas.core.bodies): a body is one declaration, checked when it is made;
-the built-ins are the README's list."""
-
-import re
-from pathlib import Path
+"""The body registry (atlas.core.bodies): a body is one declaration, checked when it is made."""
 
 import pytest
 
@@ -72,10 +68,3 @@ def test_a_body_declared_once_is_a_mechanism_constructor():
         bodies.unregister("block_test")
     with pytest.raises(AttributeError):
         Mechanism.block_test  # noqa: B018
-
-
-def test_the_readme_lists_the_built_in_bodies():
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    row = next(line for line in readme.splitlines() if line.startswith("| `atlas mechanism"))
-    listed = re.search(r"physical axes \(([^)]*)\)", row).group(1).split(", ")
-    assert listed == list(bodies.BODIES)

@@ -290,7 +290,8 @@ def test_a_body_and_an_output_reach_atlas_mechanism(block, sign, tmp_path, capsy
     sliding along +x (``w_j = (-mu, 1)``, ``r_j = (-+a, -c)``), every parameter stored with its
     declared units, the sign output's flags and values."""
     sub = cli.build_parser("mechanism")._subparsers._group_actions[0].choices["mechanism"]
-    assert "block_test" in sub.format_help()  # a choice, with its axes and fixed parameters
+    for name in bodies.BODIES:  # every body a choice, with its axes and fixed parameters
+        assert f"{name} ({bodies.BODIES[name].description})" in " ".join(sub.format_help().split())
     path = tmp_path / "b.nc"
     rc = cli.main(
         ["mechanism", "block_test", "--mu", "0:1.2:4", "--fixed", "height=0.3,k1=2e5",
