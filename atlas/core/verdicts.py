@@ -30,6 +30,7 @@ __all__ = [
     "UNDECIDED_FLAG",
     "UNDECIDED_CODE",
     "UNKNOWN_SIGN",
+    "UNDECIDED_COLOR",
 ]
 
 # The three encodings of "floating point could not certify this" (SPEC §2); nothing else in the
