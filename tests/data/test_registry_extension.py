@@ -231,6 +231,15 @@ def test_a_sign_output_reaches_generate_mechanism_explorer_and_inspector(sign, t
         "negative", "zero", "positive", "undecided"
     ]  # fmt: skip
     assert colors.value_label(SIGN, -1) == "negative"  # not 'undecided'
+    ex = state.Explorer(n=7, layer=SIGN, overlays=())
+    odd = maps.beta_grid(7)
+    np.testing.assert_array_equal(ex.update()[SIGN].values, _exact_sign(odd, odd))
+    assert ex.image().shape == (7, 7, 4)
+    assert [lbl for _, lbl in colors.legend_entries(SIGN, ex.ds)] == [
+        "negative",
+        "zero",
+        "positive",
+    ]
     assert len(set(c for c, _ in colors.legend_entries(SIGN))) == 4
 
     i, j = 1, 6  # det B = sin(5 pi / 4) < 0
