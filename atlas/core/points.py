@@ -209,16 +209,19 @@ def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
     small grid and output choice, and the kernel time (< 15 ms) is far below one compilation
     (~1 s).  Beyond, every axis of a slab is padded (edge values) to a size of
     :func:`_bucket` and the kernel shares the row and column factors of the grid; grids of many
-    sizes still share a few compilations (and the persistent compilation cache of the CLI).
+    sizes still share a few compilations (and the persistent compilation cache of the CLI).  The
+    grid is evaluated with its longest axis innermost (:func:`_layout`), the codes returned in
+    the order of ``shape`` (C-contiguous: the later tiers fill them in place).
     """
     if math.prod(shape) <= FLAT_LIMIT:
         kern = _kernel("codes", ss=True, ii=True, damped=None)
         return _on_flat(kern, inputs, shape).astype(np.uint8)
     kern = _kernel("codes", ss=ss, ii=ii, damped=damped)
     nd = len(shape)
-    full = [a.reshape((1,) * (nd - a.ndim) + a.shape) for a in inputs]
-    code = np.empty(shape, np.uint8)
-    for blk in _blocks(shape, BLOCK):
+    order = _layout(shape)
+    full = [a.reshape((1,) * (nd - a.ndim) + a.shape).transpose(order) for a in inputs]
+    code = np.empty(tuple(shape[d] for d in order), np.uint8)
+    for blk in _blocks(code.shape, BLOCK):
         args = []
         for a in full:
             ix = tuple(s if a.shape[d] > 1 else slice(None) for d, s in enumerate(blk))
@@ -229,7 +232,18 @@ def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
         sub = code[blk]
         res = np.broadcast_to(res, np.broadcast_shapes(res.shape, (1,) * sub.ndim))
         code[blk] = res[tuple(slice(0, m) for m in sub.shape)]
-    return code
+    if order == tuple(range(nd)):
+        return code
+    return np.ascontiguousarray(code.transpose(np.argsort(order)))
+
+
+def _layout(shape) -> tuple[int, ...]:
+    """The axis order of the first pass over a grid: shorter axes outside, the longest inside
+    (stable).  The compiled loop vectorizes its innermost axis: a grid laid out ``(beta1, beta2,
+    kappa, q1, q2)`` would put an axis of two values there (measured 5.5x the time per point
+    of the same kernel on ``(q1, q2, kappa, beta1, beta2)``, float64, and 7.7x float32).  Every
+    point's arithmetic is the same in either order."""
+    return tuple(sorted(range(len(shape)), key=lambda d: shape[d]))
 
 
 def spectral_points(

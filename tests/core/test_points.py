@@ -290,3 +290,53 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
     )
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
+
+
+def model_grid(n=16, dtype=np.float64):
+    """A 5-D grid as ``atlas generate`` lays it out: ``(beta1, beta2, kappa, q1, q2)``, the model
+    axes last and short; beta through the axis lines (multiples of pi/8)."""
+    g = np.arange(n) * (2 * np.pi / n)
+    c, s = direction(g.astype(dtype), dtype)
+    e = lambda a, ax: np.asarray(a, dtype).reshape([-1 if d == ax else 1 for d in range(5)])  # noqa: E731
+    return (
+        e(c, 0), e(s, 0), e(c, 1), e(s, 1),
+        e([0.1, 2.0, 10.0], 2), e([0.05, 0.2], 3), e([0.0, 0.3], 4),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("dtype", [np.float64, pytest.param(np.float32, marks=pytest.mark.slow)])
+def test_model_axes_equal_their_slices(monkeypatch, dtype):
+    """A 5-D grid (the first pass on the grid layout, model axes broadcast) gives, before and
+    after settlement, every verdict of each (kappa, q1, q2) slice computed on its own as a 2-D
+    grid with scalar model inputs, and the tier counts add up; the settled verdicts equal the
+    exact tier on a seeded sample."""
+    monkeypatch.setattr(points, "FLAT_LIMIT", 0)  # both on the grid path of the first pass
+    args = model_grid(dtype=dtype)
+    shape = np.broadcast_shapes(*(a.shape for a in args))
+    for resolve in (False, True):
+        res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
+        tiers = {"tier2_points": 0, "roots_points": 0, "undecided_before": 0}
+        for m in np.ndindex(shape[2:]):
+            model = [np.broadcast_to(a, shape)[(0, 0, *m)] for a in args]
+            plane = [a.reshape(a.shape[:2]) for a in args[:4]]
+            one = points.spectral_points(
+                *plane, *model[4:], names=FLAGS, dtype=dtype, resolve=resolve
+            )
+            for k in FLAGS:
+                assert np.array_equal(res[k][(..., *m)], one[k]), (k, m, resolve)
+            for k in tiers:
+                tiers[k] += one.stats[k]
+        assert {k: res.stats[k] for k in tiers} == tiers
+    assert res.stats["undecided_after"] == 0
+    idx = np.random.default_rng(5).choice(np.prod(shape), 300, replace=False)
+    pts = {k: np.broadcast_to(a, shape).ravel()[idx].astype(np.float64) for k, a in zip(KEYS, args)}
+    ref = exact.resolve(pts, names=FLAGS)
+    for k in FLAGS:
+        assert np.array_equal(res[k].ravel()[idx], ref[k]), k
+
+
+def test_first_pass_layout_puts_the_longest_axis_inside():
+    """The first pass evaluates a grid with its longest axis innermost, shorter axes outside."""
+    assert points._layout((128, 128, 8, 2, 2)) == (3, 4, 2, 0, 1)
+    assert points._layout((513, 513)) == (0, 1)
+    assert points._layout((4, 300, 1)) == (2, 0, 1)
