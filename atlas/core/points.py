@@ -64,7 +64,7 @@ BLOCK = 1 << 22
 #: the padded lengths of small point sets (:func:`_flat_columns`, :func:`_run_chunked`): one
 #: compilation per length, kind and dtype
 FLAT_SIZES = (1 << 12, CHUNK)
-#: grids of at most this many points are evaluated as flat columns (:func:`_on_flat`)
+#: grids of one model and at most this many points are evaluated as flat columns (:func:`_flat`)
 FLAT_LIMIT = CHUNK
 #: the dtype of tiers 2 and 3 whatever the input dtype: float32 inputs convert exactly, the tiers
 #: see few points (their cost is mostly fixed), and float64 bounds decide more of them
@@ -201,10 +201,23 @@ def _on_flat(kernel, inputs, shape):
     return np.asarray(kernel(*_flat_columns(inputs, shape)))[: math.prod(shape)].reshape(shape)
 
 
+def _flat(inputs, shape) -> bool:
+    """Whether the first pass takes a grid as flat columns: at most :data:`FLAT_LIMIT` points,
+    unless above ``FLAT_SIZES[0]`` points the grid spans several models ``(kappa, q1, q2)``, each
+    shared by at least 8 points.  Flat columns repeat per point what the grid kernel computes
+    once per model (the exact scalings, the majorants of every error bound): 3.5-7x its time
+    per point on the tiles ``atlas generate`` hands over (16 x 128 x 8 x 2 x 2, loaded machine),
+    which share one compiled grid shape.  Point lists (a model per point) stay flat."""
+    n = math.prod(shape)
+    models = math.prod(np.broadcast_shapes(*(a.shape for a in inputs[4:])))
+    over_models = n > FLAT_SIZES[0] and 1 < models <= n // 8
+    return n <= FLAT_LIMIT and not over_models
+
+
 def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
     """Packed codes of :func:`atlas.core.rootfree.codes` over the broadcast grid, in slabs.
 
-    A grid of at most :data:`FLAT_LIMIT` points is evaluated as flat columns (:func:`_on_flat`)
+    A small grid (:func:`_flat`) is evaluated as flat columns (:func:`_on_flat`)
     by the general kernel (both verdicts, any damping): two compilations per dtype serve every
     small grid and output choice, and the kernel time (< 15 ms) is far below one compilation
     (~1 s).  Beyond, every axis of a slab is padded (edge values) to a size of
@@ -213,7 +226,7 @@ def _first_pass(inputs, shape, dtype, *, ss, ii, damped):
     grid is evaluated with its longest axis innermost (:func:`_layout`), the codes returned in
     the order of ``shape`` (C-contiguous: the later tiers fill them in place).
     """
-    if math.prod(shape) <= FLAT_LIMIT:
+    if _flat(inputs, shape):
         kern = _kernel("codes", ss=True, ii=True, damped=None)
         return _on_flat(kern, inputs, shape).astype(np.uint8)
     kern = _kernel("codes", ss=ss, ii=ii, damped=damped)

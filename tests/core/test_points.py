@@ -340,3 +340,31 @@ def test_first_pass_layout_puts_the_longest_axis_inside():
     assert points._layout((128, 128, 8, 2, 2)) == (3, 4, 2, 0, 1)
     assert points._layout((513, 513)) == (0, 1)
     assert points._layout((4, 300, 1)) == (2, 0, 1)
+
+
+def test_grids_over_models_take_the_grid_kernel(monkeypatch):
+    """Flat columns serve small grids and grids of one model; a grid over several models above
+    ``FLAT_SIZES[0]`` points (a tile of ``atlas generate``) runs the grid kernel, which computes
+    the per-model factors once a model."""
+    calls = []
+    monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
+    g = model_grid(20)  # 20 x 20 x 3 x 2 x 2 = 4800 points
+    points.spectral_points(*g, names=FLAGS, resolve=False)
+    assert not calls
+    plane = [a.reshape(a.shape[:2]) for a in g[:4]]
+    points.spectral_points(*plane, 0.5, 0.1, 0.2, names=FLAGS, resolve=False)  # one model
+    points.spectral_points(*model_grid(4), names=FLAGS, resolve=False)  # 192 points
+    assert len(calls) == 2
+
+
+_on_flat = points._on_flat
+
+
+def test_point_lists_stay_flat(monkeypatch):
+    """Points given as lists (a model per point) keep the flat columns: one compiled shape for
+    every length up to ``FLAT_LIMIT``."""
+    calls = []
+    monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
+    g = [np.broadcast_to(a, (20, 20, 3, 2, 2)).ravel() for a in model_grid(20)]
+    points.spectral_points(*g, names=FLAGS, resolve=False)
+    assert len(calls) == 1
