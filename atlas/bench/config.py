@@ -79,6 +79,8 @@ CONFIG = {
     "full": dict(
         res=(64, 128, 256, 512),
         dtypes=("float32", "float64"),
+        # 2-D grids at one model and a 5-D grid over the model axes (atlas.bench.model_axes)
+        model_grids=dict(two_d=(513, 2048), five_d=512),
         ref_factor=4,
         cases=CASES,
         sample=300,
@@ -116,6 +118,7 @@ CONFIG = {
     "quick": dict(
         res=(32, 64),
         dtypes=("float32", "float64"),
+        model_grids=dict(two_d=(65,), five_d=16),
         ref_factor=2,
         cases=CASES[:2],
         sample=15,
@@ -155,6 +158,7 @@ CONFIG["tiny"] = dict(
     CONFIG["quick"],
     res=(16,),
     dtypes=("float64",),
+    model_grids=dict(two_d=(9,), five_d=8),
     sample=8,
     sample_small=8,
     disagree_cap=5,

@@ -46,6 +46,8 @@ class Results:
     maps: list = field(default_factory=list)
     #: start-up figures, whole processes (:mod:`atlas.bench.startup`)
     startup: list = field(default_factory=list)
+    #: 2-D and 5-D grids through the certified driver (:mod:`atlas.bench.model_axes`)
+    model_grids: list = field(default_factory=list)
     #: the exact reference: distinct ``points`` evaluated, ``seconds``, ``failures``
     exact: dict = field(default_factory=lambda: dict(points=0, seconds=0.0, failures=0))
 
@@ -113,6 +115,19 @@ HEADLINE_COLUMNS = (
     ("misclassified", "miscl. / all checked"),
     ("undecided", "undecided"),
     ("target_1000x", "1000x vs eig"),
+)
+MODEL_GRID_COLUMNS = (
+    ("grid", "grid"),
+    ("dtype", "dtype"),
+    ("points", "points"),
+    ("ns_per_point", "ns/point"),
+    ("over_2d", "/ 2-D"),
+    ("f32_over_f64", "f32 / f64"),
+    ("first_pass", "first pass"),
+    ("tier2", "tier 2"),
+    ("enclosures", "enclosures"),
+    ("exact", "exact"),
+    ("left", "left undecided"),
 )
 LARGE_COLUMNS = (
     ("label", "case"),
@@ -241,6 +256,26 @@ def headline_section(head, cfg) -> list[str]:
         "",
         f"**Target (>= 1000x cheaper than eig)**: met in {met} of {met + notmet} "
         "rows. " + _target_summary(head) + "\n",
+    ]
+
+
+def model_grids_section(rows) -> list[str]:
+    """The 2-D grids beside the 5-D grid over the model axes, with the points each tier
+    received (empty if not measured)."""
+    if not rows:
+        return []
+    return [
+        "### 2-D and 5-D grids\n",
+        "The three flag verdicts through `spectral_points` with exact settlement, as `atlas "
+        "generate` computes them; the 5-D grid laid out `(beta1, beta2, kappa, q1, q2)` like a "
+        "generated atlas (kappa `log:0.1:10:8`, q1 {0.05, 0.2}, q2 {0.1, 0.3}). ns per point = "
+        "minimum of repeats after compilation, same run. `/ 2-D` = over the first 2-D row of the "
+        "same dtype (target for the 5-D row: <= 1.3); `f32 / f64` = float32 over float64 on the "
+        "same grid (target <= 0.7). Points each tier received, as the driver counts them "
+        "(`Verdicts.stats`): first pass (every point), tier 2, root enclosures, exact tier "
+        "(points with a verdict still undecided), left undecided after it.\n",
+        table(rows, MODEL_GRID_COLUMNS),
+        "",
     ]
 
 
@@ -603,6 +638,7 @@ def build_report(r: Results) -> str:
     parts = [
         *header_section(r.meta),
         *headline_section(r.head, r.cfg),
+        *model_grids_section(r.model_grids),
         *large_section(r.large, r.cfg),
         *work_precision_section(r.wp, r.refs, r.cfg),
         *suites_section(r.suites, r.cfg),

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import distributed, plots, startup, suites
+from atlas.bench import distributed, model_axes, plots, startup, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
@@ -86,6 +86,7 @@ def _measure(cfg, meta) -> Results:
     cache = ExactCache()
     with np.errstate(all="ignore"):
         wp, refs = suites.work_precision(cfg, cache, rng)
+        model_grids = model_axes.measure(cfg)
         large = suites.large_grid(cfg, cache, rng)
         hard = suites.hard_case_suites(cfg, cache, rng)
         scaling = suites.scaling(cfg)
@@ -106,6 +107,7 @@ def _measure(cfg, meta) -> Results:
         scaling=scaling,
         sim=sim,
         large=large,
+        model_grids=model_grids,
         atlases=atlases,
         curves=curve_rows,
         maps=maps,
@@ -122,8 +124,8 @@ def _write(out: Path, r: Results, t_start: float):
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
     r.meta["duration"] = time.perf_counter() - t_start
     js = dict(
-        meta=r.meta, headline=r.head, large=r.large, atlases=r.atlases, outcome_maps=r.maps,
-        startup=r.startup,
+        meta=r.meta, headline=r.head, model_grids=r.model_grids, large=r.large,
+        atlases=r.atlases, outcome_maps=r.maps, startup=r.startup,
     )  # fmt: skip
     atomic_write_text(out / "bench_headline.json", json.dumps(js, indent=1, default=_json_default))
     atomic_write_text(out / "bench.md", build_report(r))

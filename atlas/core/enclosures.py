@@ -185,18 +185,12 @@ def _interval_quadratic_sign(sgn, b, c, lo, hi, dtype):
     return s.astype(jnp.int8)
 
 
-def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtype):
-    """II consistency and stability verdicts from enclosed roots (see module docstring)."""
-    u = float(jnp.finfo(dtype).eps) / 2
+def _separations(z, x, R, exact, u):
+    """Per root ``i`` (``x = Re z``): its disk meets no other (``iso``), its conjugate's disk meets no other
+    (``conj_clear``), and it lies strictly right of every other disk (``dom``); each ``(..., n)``.
+    Two exact roots (``R = 0``) never count as overlapping each other."""
     n = z.shape[-1]
-    # a non-finite root or radius says nothing: its disk is the whole plane
-    bad = ~(jnp.isfinite(z) & jnp.isfinite(R))
-    z = jnp.where(bad, 0, z)
-    R = jnp.where(bad, jnp.inf, R)
-    x, y = jnp.real(z), jnp.imag(z)
     lo_f, hi_f = 1 - 8 * u, 1 + 8 * u
-    # exact roots (known zeros) have R = 0 and never count as overlapping each other
-    exact = R == 0
 
     def overlap(zi, zj, Ri, Rj, both_exact):
         return (jnp.abs(zi - zj) * lo_f <= (Ri + Rj) * hi_f) & ~both_exact
@@ -220,7 +214,42 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
         iso.append(~o)
         conj_clear.append(cc)
         dom.append(d)
-    iso, conj_clear, dom = (jnp.stack(v, -1) for v in (iso, conj_clear, dom))
+    return tuple(jnp.stack(v, -1) for v in (iso, conj_clear, dom))
+
+
+def _complex_right(x, R, meets_axis, u):
+    """A certified non-real root strictly right of every root that may be real (then no real
+    root dominates)."""
+    n = x.shape[-1]
+    nonreal = ~meets_axis
+    cplx_right = []
+    for i in range(n):
+        ok = nonreal[..., i]
+        for j in range(n):
+            if j != i:
+                ok = ok & (
+                    ~meets_axis[..., j]
+                    | (
+                        (x[..., i] - R[..., i])
+                        > (x[..., j] + R[..., j])
+                        + 8 * u * (jnp.abs(x[..., i]) + jnp.abs(x[..., j]))
+                    )
+                )
+        cplx_right.append(ok)
+    return jnp.any(jnp.stack(cplx_right, -1), -1)
+
+
+def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtype):
+    """II consistency and stability verdicts from enclosed roots (see module docstring)."""
+    u = float(jnp.finfo(dtype).eps) / 2
+    # a non-finite root or radius says nothing: its disk is the whole plane
+    bad = ~(jnp.isfinite(z) & jnp.isfinite(R))
+    z = jnp.where(bad, 0, z)
+    R = jnp.where(bad, jnp.inf, R)
+    x, y = jnp.real(z), jnp.imag(z)
+    lo_f, hi_f = 1 - 8 * u, 1 + 8 * u
+    # exact roots (known zeros) have R = 0 and never count as overlapping each other
+    iso, conj_clear, dom = _separations(z, x, R, R == 0, u)
     meets_axis = jnp.abs(y) <= R * hi_f + 8 * u * jnp.abs(z)
     real = iso & conj_clear & meets_axis
     lo = jnp.maximum(x - R, 0) * lo_f
@@ -245,23 +274,7 @@ def _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, exact_zero_pair, dtyp
     # stability: strictly dominant root
     stable_dom = jnp.any(dom & cons_cert, -1)
     unstable_dom = jnp.any(dom & incons_cert, -1)
-    # a certified non-real root strictly right of every root that may be real -> no real dominant
-    nonreal = ~meets_axis
-    cplx_right = []
-    for i in range(n):
-        ok = nonreal[..., i]
-        for j in range(n):
-            if j != i:
-                ok = ok & (
-                    ~meets_axis[..., j]
-                    | (
-                        (x[..., i] - R[..., i])
-                        > (x[..., j] + R[..., j])
-                        + 8 * u * (jnp.abs(x[..., i]) + jnp.abs(x[..., j]))
-                    )
-                )
-        cplx_right.append(ok)
-    cplx_right = jnp.any(jnp.stack(cplx_right, -1), -1)
+    cplx_right = _complex_right(x, R, meets_axis, u)
     S, U, XX = int(Verdict.STABLE), int(Verdict.UNSTABLE), int(Verdict.UNDECIDED)
     stable = jnp.where(
         consistent == I, U, jnp.where(stable_dom, S, jnp.where(unstable_dom | cplx_right, U, XX))

@@ -290,3 +290,81 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
     )
     for k in FLAGS:
         assert np.array_equal(got[k], ref[k]), k
+
+
+def model_grid(n=16, dtype=np.float64):
+    """A 5-D grid as ``atlas generate`` lays it out: ``(beta1, beta2, kappa, q1, q2)``, the model
+    axes last and short; beta through the axis lines (multiples of pi/8)."""
+    g = np.arange(n) * (2 * np.pi / n)
+    c, s = direction(g.astype(dtype), dtype)
+    e = lambda a, ax: np.asarray(a, dtype).reshape([-1 if d == ax else 1 for d in range(5)])  # noqa: E731
+    return (
+        e(c, 0), e(s, 0), e(c, 1), e(s, 1),
+        e([0.1, 2.0, 10.0], 2), e([0.05, 0.2], 3), e([0.0, 0.3], 4),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("dtype", [np.float64, pytest.param(np.float32, marks=pytest.mark.slow)])
+def test_model_axes_equal_their_slices(monkeypatch, dtype):
+    """A 5-D grid (the first pass on the grid layout, model axes broadcast) gives, before and
+    after settlement, every verdict of each (kappa, q1, q2) slice computed on its own as a 2-D
+    grid with scalar model inputs, and the tier counts add up; the settled verdicts equal the
+    exact tier on a seeded sample."""
+    monkeypatch.setattr(points, "FLAT_LIMIT", 0)  # both on the grid path of the first pass
+    args = model_grid(dtype=dtype)
+    shape = np.broadcast_shapes(*(a.shape for a in args))
+    for resolve in (False, True):
+        res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
+        tiers = {"tier2_points": 0, "roots_points": 0, "undecided_before": 0}
+        for m in np.ndindex(shape[2:]):
+            model = [np.broadcast_to(a, shape)[(0, 0, *m)] for a in args]
+            plane = [a.reshape(a.shape[:2]) for a in args[:4]]
+            one = points.spectral_points(
+                *plane, *model[4:], names=FLAGS, dtype=dtype, resolve=resolve
+            )
+            for k in FLAGS:
+                assert np.array_equal(res[k][(..., *m)], one[k]), (k, m, resolve)
+            for k in tiers:
+                tiers[k] += one.stats[k]
+        assert {k: res.stats[k] for k in tiers} == tiers
+    assert res.stats["undecided_after"] == 0
+    idx = np.random.default_rng(5).choice(np.prod(shape), 300, replace=False)
+    pts = {k: np.broadcast_to(a, shape).ravel()[idx].astype(np.float64) for k, a in zip(KEYS, args)}
+    ref = exact.resolve(pts, names=FLAGS)
+    for k in FLAGS:
+        assert np.array_equal(res[k].ravel()[idx], ref[k]), k
+
+
+def test_first_pass_layout_puts_the_longest_axis_inside():
+    """The first pass evaluates a grid with its longest axis innermost, shorter axes outside."""
+    assert points._layout((128, 128, 8, 2, 2)) == (3, 4, 2, 0, 1)
+    assert points._layout((513, 513)) == (0, 1)
+    assert points._layout((4, 300, 1)) == (2, 0, 1)
+
+
+def test_grids_over_models_take_the_grid_kernel(monkeypatch):
+    """Flat columns serve small grids and grids of one model; a grid over several models above
+    ``FLAT_SIZES[0]`` points (a tile of ``atlas generate``) runs the grid kernel, which computes
+    the per-model factors once a model."""
+    calls = []
+    monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
+    g = model_grid(20)  # 20 x 20 x 3 x 2 x 2 = 4800 points
+    points.spectral_points(*g, names=FLAGS, resolve=False)
+    assert not calls
+    plane = [a.reshape(a.shape[:2]) for a in g[:4]]
+    points.spectral_points(*plane, 0.5, 0.1, 0.2, names=FLAGS, resolve=False)  # one model
+    points.spectral_points(*model_grid(4), names=FLAGS, resolve=False)  # 192 points
+    assert len(calls) == 2
+
+
+_on_flat = points._on_flat
+
+
+def test_point_lists_stay_flat(monkeypatch):
+    """Points given as lists (a model per point) keep the flat columns: one compiled shape for
+    every length up to ``FLAT_LIMIT``."""
+    calls = []
+    monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
+    g = [np.broadcast_to(a, (20, 20, 3, 2, 2)).ravel() for a in model_grid(20)]
+    points.spectral_points(*g, names=FLAGS, resolve=False)
+    assert len(calls) == 1
