@@ -74,7 +74,11 @@ to ``1.2e-16``) or ``det B = 0`` (``beta2 = beta1 + pi``) gives a double eigenva
 rounding, ``|lambda| ~ 1e-8``, condition ``~ 1 / |lambda| ~ 1e7-1e9``, an equilibrium ``~ 1 /
 |lambda|^2 ~ 1e16`` and modal amplitudes of that size that cancel to the ``O(1)`` gaps: their
 evaluation keeps no digit, and root location crawls (minutes for one run).  Elsewhere the condition stays below
-``1e2`` (``0:2pi:32`` grids, ``kappa = 0.5``, ``q = 0`` and ``0.3``).
+``1e2`` (``0:2pi:32`` grids, ``kappa = 0.5``, ``q = 0`` and ``0.3``).  Where the degeneracy is
+exact or within the rounding of the angles (``b_ii`` or ``det B`` at most ``ROUNDING``
+relative) the configuration is served by its closed form instead
+(:func:`atlas.dynamics.modal_form.closed_segment`: a quartic, or a quadratic and two modes; no
+early decision there), so axis and ``0:2pi:n`` grids stay on the fast path.
 Trajectories that end without an early decision are classified as
 :func:`atlas.dynamics.classify_stats` classifies the reference's runs, on arrays
 (:func:`_classify_many`; :func:`_stats` and :func:`atlas.dynamics.modal_form.light_system` are the per-run form it is
@@ -225,7 +229,7 @@ def _admit(lanes, tables, st: State, ix, fallback):
     in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = mask_of(s)
-    P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g)
+    P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g, closed=True)
     ok &= ~cancels(P, U, g, st.scale[ix])
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
@@ -303,12 +307,15 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        if r.size and tables.closed.any():  # no certificate on the closed forms' quartics
+            r = r[~stack_table(tables, "closed", ix[r], mask[r])]
+        q2 = p[:, :, :3]  # quadratic there (the quartics are closed, left out above)
         if r.size:
-            r = r[early.may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
+            r = r[early.may_decide(lam[r], valid[r], s[r], q2[r], act[r], mask[r], t[r], T[r])]
         if r.size:
-            r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
+            r = r[eb.may_keep_signs(s[r], q2[r], UE[r], lam[r], valid[r], k[r], q[r])]
         if r.size:
-            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
+            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], q2[r], UE[r],
                     lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
             dec = st.code[ix[r]] >= 0
             _leave(st, ix, t, g, s, keep, r[dec], RUNNING)
@@ -424,7 +431,7 @@ def _window(H, lam, valid, p, aUE, scale):
     below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window is ``H_S``, and the
     curvature bound uses that window's own growth factor); ``H_S``
     unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
-    + GROWTH sum |u|``, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
+    + GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
     (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
     grow = np.where(valid, lam.real, 0.0).max(axis=1)
     with np.errstate(divide="ignore"):
@@ -433,6 +440,8 @@ def _window(H, lam, valid, p, aUE, scale):
     a = np.abs(p)
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
+    if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
+        reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
     return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
 
 
@@ -475,16 +484,16 @@ def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     i = j % 2
     gap = j < 2
     Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
-    p2 = P[rows, i, 2]
-    p1, p0 = P[rows, i, 1], P[rows, i, 0]
+    Pi = P[rows, i][:, None]  # (n, 1, degree + 1): the polynomial of eb.evaluate
 
     def g(x):
         t = tau + x
         ue = Ui * xp.exp(lam * t[:, None])
         lue = ue * lam
-        d = p0 + t * (p1 + t * p2) + eb.re_sum4(ue)
-        v = p1 + 2 * t * p2 + eb.re_sum4(lue)
-        acc = 2 * p2 + eb.re_sum4(lue * lam)
+        p = eb.taylor(Pi, t)
+        d = p[:, 0, 0] + eb.re_sum4(ue)
+        v = p[:, 0, 1] + eb.re_sum4(lue)
+        acc = 2 * p[:, 0, 2] + eb.re_sum4(lue * lam)
         f = xp.where(gap, d, -ki * d - qi * v)
         fp = xp.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
@@ -637,7 +646,9 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     s[r] = sn
     mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
-    P[r], U[r], lam[r], valid[r], H[r], ok = segments(lanes, tables, lanes_r, mask[r], g)
+    P[r], U[r], lam[r], valid[r], H[r], ok = segments(
+        lanes, tables, lanes_r, mask[r], g, closed=True
+    )
     ok &= ~cancels(P[r], U[r], g, scale[r])
     tseg[r] = t[r]
     since[r] = 0
@@ -725,6 +736,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
     z[:, 2:4] = np.where(act, 0.0, z[:, 2:4])
     acc_eq = np.einsum("nij,nj->ni", E[:, 2:4], z)
     leaving = np.all(act | ((g[:, :2] > 0) & (g[:, 2:] >= 0) & (acc_eq > 0)), axis=1)
+    leaving &= np.all(~act | np.isfinite(d_eq), axis=1)  # no equilibrium (singular B_SS K_S)
     settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
     decide(settle, np.array([OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
     # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T

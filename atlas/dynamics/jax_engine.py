@@ -24,7 +24,8 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   which give :func:`atlas.dynamics.classify`'s thirds exactly for runs stopped at their horizon
   (``t_end 2^j``, always a bin boundary).  Runs that reach the event cap stop at an arbitrary time:
   they are run by the exact simulator on the host, as are the fallback lanes of the NumPy engine
-  (near-singular modal forms, a stalled root location).
+  (near-singular modal forms, a stalled root location) and the degenerate directions the NumPy
+  engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`; ``ok`` False).
 
 Classification of the stopped runs and the horizon extension are the NumPy engine's
 (:func:`atlas.dynamics.fast_engine.run_batch`, on the host).
