@@ -238,11 +238,17 @@ def _admit(lanes, tables, st: State, ix, fallback):
     return tuple(x[ok] for x in cols)
 
 
-def _classify_stopped(st: State, tables, n, width, t_max):
+def _classify_stopped(st: State, tables, n, width, t_max, fallback):
     """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
     :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
-    returned."""
+    returned; a divergence whose verdict sits within rounding (:func:`stop_rule.within_rounding`)
+    goes to the exact simulator (``fallback``)."""
     st.code[n] = _classify_many(st, tables, n, width)
+    div = n[st.status[n] == 2]
+    if div.size:
+        mk = mask_of(st.s[div])
+        E, zq = stack_table(tables, "E", div, mk), z_eq(tables, div, mk)
+        fallback[div[stop_rule.within_rounding(st.g[div], mk, E, zq)]] = True
     again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
     st.horizon[again] *= 2
@@ -277,7 +283,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
             _locate_stops(st, tables, stops, width)
-            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
+            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max, fallback)
             pending = []
             if again.size:
                 new = _admit(lanes, tables, st, again, fallback)
@@ -781,13 +787,16 @@ def _late_amplitude(st: State, n, width):
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
     ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
-    at), ``g_final`` (N, 4) the state there and ``n_events``."""
+    at), ``g_final`` (N, 4) the state there, ``n_events`` and ``within_rounding`` (a divergence
+    whose verdict sits within rounding, :func:`stop_rule.within_rounding`: decided by the exact
+    simulator, whose own verdict there is flagged by :func:`stop_rule.run_within_rounding`)."""
 
     code: np.ndarray
     decided_by: np.ndarray
     t_final: np.ndarray
     g_final: np.ndarray
     n_events: np.ndarray
+    within_rounding: np.ndarray
 
     @classmethod
     def gather(cls, parts, n: int) -> FastResult:
@@ -828,8 +837,9 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
     for i in np.flatnonzero(res.decided_by == 3):
-        out, _ = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
+        out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
+        res.within_rounding[i] = stop_rule.run_within_rounding(run)
     return res
 
 
@@ -862,10 +872,12 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
             while ix.size:
                 run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
                 ix = ix[(st.status[ix] != RUNNING) & ~fallback[ix]]
-                ix = _classify_stopped(st, tables, ix, width, t_max)
+                ix = _classify_stopped(st, tables, ix, width, t_max, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
-    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
+    return FastResult(
+        st.code, st.decided_by, st.t, st.g, st.n_events, np.zeros(fallback.size, bool)
+    )
 
 
 def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,

@@ -33,7 +33,7 @@ from atlas.core import checks, config
 from atlas.data.engine import REFERENCES, generate
 from atlas.data.outputs import coord_attrs
 from atlas.data.scene import Scene
-from atlas.dynamics import fast_engine, jax_engine
+from atlas.dynamics import fast_engine, jax_engine, stop_rule
 from atlas.dynamics.lane_pool import LanePool
 from atlas.dynamics.outcome import (
     initial_states,
@@ -201,25 +201,17 @@ def _codes(g: dict, g0: np.ndarray, dyn: Dynamics, pool=None) -> tuple[np.ndarra
                   reference=dyn.reference(), **opts)  # fmt: skip
         how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
         info = {f"runs_{n}": int(c) for n, c in zip(fast_engine.DECIDED_BY, how, strict=True)}
+        info["runs_within_rounding"] = int(res.within_rounding.sum())
         return np.asarray(res.code, dtype=np.int8).reshape(shape), info
     ref = dyn.reference()
-    codes = np.array(
-        [
-            int(
-                ref(
-                    lane["beta1"][n],
-                    lane["beta2"][n],
-                    lane["alpha"][n],
-                    k=tuple(k[n]),
-                    q=tuple(q[n]),
-                    g0=flat[n],
-                )[0]
-            )  # fmt: skip
-            for n in range(flat.shape[0])
-        ],
-        dtype=np.int8,
-    )
-    return codes.reshape(shape), {}
+    codes = np.empty(flat.shape[0], dtype=np.int8)
+    near = 0
+    for n in range(flat.shape[0]):
+        out, run = ref(lane["beta1"][n], lane["beta2"][n], lane["alpha"][n], k=tuple(k[n]),
+                       q=tuple(q[n]), g0=flat[n])  # fmt: skip
+        codes[n] = int(out)
+        near += stop_rule.run_within_rounding(run)
+    return codes.reshape(shape), {"runs_within_rounding": int(near)}
 
 
 def sum_info(infos) -> dict:
