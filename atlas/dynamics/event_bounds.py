@@ -30,6 +30,7 @@ __all__ = [
     "keeps_sign",
     "no_event_certificate",
     "may_keep_signs",
+    "locate_root",
 ]
 
 #: relative size of a real part counted as zero (neutral), times the eigenvalue scale
@@ -299,3 +300,55 @@ def fori(n, body, carry, until=None):
     import jax  # noqa: PLC0415 - NumPy callers load no JAX
 
     return jax.lax.fori_loop(0, n, body, carry)
+
+
+def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
+    """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
+    ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
+    the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
+    root, so the far end of the bracket closes in too, and a push that does not cross is followed
+    by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
+    the bracket ``(a, b)`` (relative to ``tau``)."""
+    xp = xp_of(P, U, lam, tau, a)
+    rows = xp.arange(j.size)
+    i = j % 2
+    gap = j < 2
+    Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
+    Pi = P[rows, i][:, None]  # (n, 1, degree + 1): the polynomial of :func:`evaluate`
+
+    def g(x):
+        t = tau + x
+        ue = Ui * xp.exp(lam * t[:, None])
+        lue = ue * lam
+        p = taylor(Pi, t)
+        d = p[:, 0, 0] + re_sum4(ue)
+        v = p[:, 0, 1] + re_sum4(lue)
+        acc = 2 * p[:, 0, 2] + re_sum4(lue * lam)
+        f = xp.where(gap, d, -ki * d - qi * v)
+        fp = xp.where(gap, v, -ki * v - qi * acc)
+        return sj * f, sj * fp
+
+    def newton(_, carry):
+        x, gx, gpx, a, b, dx, failed = carry
+        act = (b - a) > xtol
+        with np.errstate(all="ignore"):
+            step = -gx / gpx
+        toward = xp.where(gx > 0, 0.5, -0.5) * xtol
+        push = xp.abs(step) < 0.5 * xtol
+        xn = xp.where(push, x + toward, x + step)
+        bad = ~xp.isfinite(xn) | (xn <= a) | (xn >= b) | (xp.abs(step) > 0.5 * xp.abs(dx)) | failed
+        xn = xp.where(bad, 0.5 * (a + b), xn)
+        gn, gpn = g(xn)
+        left = gn > 0
+        failed = act & push & ~bad & (left == (gx > 0))
+        dx = xp.where(act, xn - x, dx)
+        a = xp.where(act & left, xn, a)
+        b = xp.where(act & ~left, xn, b)
+        x, gx, gpx = (xp.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+        return x, gx, gpx, a, b, dx, failed
+
+    # dx: the last step; failed: the last push did not cross
+    carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
+    a, b = fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
+    return a, b
