@@ -315,16 +315,20 @@ def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     i = j % 2
     gap = j < 2
     Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
-    Pi = P[rows, i][:, None]  # (n, 1, degree + 1): the polynomial of :func:`evaluate`
+    p0, p1, p2 = P[rows, i, 0], P[rows, i, 1], P[rows, i, 2]
+    quartic = P[rows, i][:, None] if P.shape[2] > 3 else None  # as :func:`taylor`
 
     def g(x):
         t = tau + x
         ue = Ui * xp.exp(lam * t[:, None])
         lue = ue * lam
-        p = taylor(Pi, t)
-        d = p[:, 0, 0] + re_sum4(ue)
-        v = p[:, 0, 1] + re_sum4(lue)
-        acc = 2 * p[:, 0, 2] + re_sum4(lue * lam)
+        if quartic is None:
+            c0, c1, c2 = p0 + t * (p1 + t * p2), p1 + 2 * t * p2, p2
+        else:
+            c0, c1, c2 = (taylor(quartic, t)[:, 0, j] for j in range(3))
+        d = c0 + re_sum4(ue)
+        v = c1 + re_sum4(lue)
+        acc = 2 * c2 + re_sum4(lue * lam)
         f = xp.where(gap, d, -ki * d - qi * v)
         fp = xp.where(gap, v, -ki * v - qi * acc)
         return sj * f, sj * fp
