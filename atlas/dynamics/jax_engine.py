@@ -28,7 +28,25 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`; ``ok`` False).
 
 Classification of the stopped runs and the horizon extension are the NumPy engine's
-(:func:`atlas.dynamics.fast_engine.run_batch`, on the host).
+(:func:`atlas.dynamics.fast_engine.run_batch`, on the host; a divergence within rounding,
+:func:`atlas.dynamics.stop_rule.within_rounding`, is flagged the same way).
+
+Where the kernel differs from the NumPy engines' stop rule (:mod:`atlas.dynamics.stop_rule`,
+located stops; not yet ported, so a verdict can differ where these matter):
+
+* the divergence limits (a non-finite state, a gap above ``1e4 scale`` or below ``-1e6 scale``)
+  are tested at the step ends only, in the configuration of the step that follows (after an
+  event: the new one), and the run stops there: at up to one step ``H_S`` after the located time
+  of :func:`atlas.dynamics.stop_rule.locate`, with the state of that step end;
+* no bracket of the amplitude and deep-penetration limits (:func:`stop_rule.limit_rows`): a
+  peak that passes a limit and comes back inside one step is not seen; steps are at most
+  ``H_S`` (the NumPy engine's windows up to ``4 H_S`` are not used);
+* the aligned-penetration stop (an active gap below ``-1e3 scale``, aligned with an IWC
+  eigenvector) is tested only on the early-decision schedule (1, 2, 4, ... steps after an event),
+  not at every step end nor just before an event, with ``W x`` for the coordinates;
+* the early IWC reads the alignment at the reference's stop (:func:`early.aligned_at_stop`) but
+  not the reference's sign conditions there (:func:`early.signs_from`), nor the alignment from
+  now on; the undamped force and its gap (``q_i = 0``, the same roots) are not located as one.
 
 Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
 floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
