@@ -20,6 +20,7 @@ __all__ = [
     "sum4",
     "re_sum4",
     "evaluate",
+    "taylor",
     "event_functions",
     "curvature_bound",
     "flat_step",
@@ -29,6 +30,7 @@ __all__ = [
     "keeps_sign",
     "no_event_certificate",
     "may_keep_signs",
+    "locate_root",
 ]
 
 #: relative size of a real part counted as zero (neutral), times the eigenvalue scale
@@ -75,17 +77,43 @@ def re_sum4(z):
 
 def evaluate(P, U, lam, tau):
     """Gaps, velocities and accelerations (n, 2) at ``tau`` (n,) from the segment start, the
-    polynomial coefficients there (n, 2, 3) and the modal terms ``U exp(lam tau)`` (n, 2, 4)."""
+    polynomial's Taylor coefficients there (:func:`taylor`) and the modal terms ``U exp(lam
+    tau)`` (n, 2, 4)."""
     xp = xp_of(P, U, lam, tau)
     UE = U * xp.exp(lam * tau[:, None])[:, None, :]
-    t1 = tau[:, None]
-    p = xp.stack([P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]),
-                  P[:, :, 1] + 2 * t1 * P[:, :, 2], P[:, :, 2]], axis=2)  # fmt: skip
+    p = taylor(P, tau)
     lUE = UE * lam[:, None, :]
     d = p[:, :, 0] + re_sum4(UE)
     v = p[:, :, 1] + re_sum4(lUE)
     acc = 2 * p[:, :, 2] + re_sum4(lUE * lam[:, None, :])
     return d, v, acc, p, UE
+
+
+def taylor(P, tau):
+    """Taylor coefficients (n, m, 3; or 5 for a quartic ``P`` (n, m, 5)) at ``tau`` (n,) of the
+    polynomials ``P`` (coefficients of ``1, t, t^2, ...``)."""
+    xp = xp_of(P, tau)
+    t1 = tau[:, None]
+    p = [P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]), P[:, :, 1] + 2 * t1 * P[:, :, 2],
+         P[:, :, 2]]  # fmt: skip
+    if P.shape[2] > 3:  # cubic and quartic terms added last: + 0 where they vanish
+        P3, P4 = P[:, :, 3], P[:, :, 4]
+        p[0] = p[0] + t1**3 * (P3 + t1 * P4)
+        p[1] = p[1] + t1**2 * (3 * P3 + 4 * t1 * P4)
+        p[2] = p[2] + t1 * (3 * P3 + 6 * t1 * P4)
+        p += [P3 + 4 * t1 * P4, P4]
+    return xp.stack(p, axis=2)
+
+
+def _poly_bounds(p, H):
+    """Bounds (n, 2) of the second, third and fourth derivatives of the polynomial part over
+    ``[tau, tau + H]`` beyond those of its quadratic (``2 |p2|``, 0, 0): from the cubic and
+    quartic Taylor coefficients ``p3``, ``p4`` (zeros for a quadratic ``p`` (n, 2, 3))."""
+    if p.shape[2] <= 3:
+        return 0.0, 0.0, 0.0
+    xp = xp_of(p, H)
+    a3, a4, h = xp.abs(p[:, :, 3]), xp.abs(p[:, :, 4]), H[:, None]
+    return h * (6 * a3 + 12 * h * a4), 6 * a3 + 24 * h * a4, 24 * a4
 
 
 def event_functions(d, v, acc, k, q):
@@ -103,8 +131,9 @@ def curvature_bound(p, UE, lam, H, k, q, aUE=None):
     lr = xp.abs(lam)
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
     a = (xp.abs(UE) if aUE is None else aUE) * grow
-    m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2)
-    m3 = sum4(a * lr[:, None, :] ** 3)
+    e2, e3, _ = _poly_bounds(p, H)
+    m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2) + e2
+    m3 = sum4(a * lr[:, None, :] ** 3) + e3
     return xp.concatenate([m2, k * m2 + q * m3], axis=1)
 
 
@@ -119,6 +148,9 @@ def flat_step(s, p, UE, lam, H, k, q):
     d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
     d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
     m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
+    if p.shape[2] > 3:  # the cubic and quartic part: its third derivative and its bounds
+        _, e3, e4 = _poly_bounds(p, H)
+        d3, m3, m4 = d3 + 6 * p[:, :, 3], m3 + e3, m4 + e4
     C = s * xp.concatenate([d2, -k * d2 - q * d3], axis=1)
     M3 = xp.maximum(xp.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
     return xp.where(C > 0, 3 * C / M3, 0.0)
@@ -268,3 +300,59 @@ def fori(n, body, carry, until=None):
     import jax  # noqa: PLC0415 - NumPy callers load no JAX
 
     return jax.lax.fori_loop(0, n, body, carry)
+
+
+def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
+    """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
+    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
+    ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
+    the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
+    root, so the far end of the bracket closes in too, and a push that does not cross is followed
+    by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
+    the bracket ``(a, b)`` (relative to ``tau``)."""
+    xp = xp_of(P, U, lam, tau, a)
+    rows = xp.arange(j.size)
+    i = j % 2
+    gap = j < 2
+    Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
+    p0, p1, p2 = P[rows, i, 0], P[rows, i, 1], P[rows, i, 2]
+    quartic = P[rows, i][:, None] if P.shape[2] > 3 else None  # as :func:`taylor`
+
+    def g(x):
+        t = tau + x
+        ue = Ui * xp.exp(lam * t[:, None])
+        lue = ue * lam
+        if quartic is None:
+            c0, c1, c2 = p0 + t * (p1 + t * p2), p1 + 2 * t * p2, p2
+        else:
+            c0, c1, c2 = (taylor(quartic, t)[:, 0, j] for j in range(3))
+        d = c0 + re_sum4(ue)
+        v = c1 + re_sum4(lue)
+        acc = 2 * c2 + re_sum4(lue * lam)
+        f = xp.where(gap, d, -ki * d - qi * v)
+        fp = xp.where(gap, v, -ki * v - qi * acc)
+        return sj * f, sj * fp
+
+    def newton(_, carry):
+        x, gx, gpx, a, b, dx, failed = carry
+        act = (b - a) > xtol
+        with np.errstate(all="ignore"):
+            step = -gx / gpx
+        toward = xp.where(gx > 0, 0.5, -0.5) * xtol
+        push = xp.abs(step) < 0.5 * xtol
+        xn = xp.where(push, x + toward, x + step)
+        bad = ~xp.isfinite(xn) | (xn <= a) | (xn >= b) | (xp.abs(step) > 0.5 * xp.abs(dx)) | failed
+        xn = xp.where(bad, 0.5 * (a + b), xn)
+        gn, gpn = g(xn)
+        left = gn > 0
+        failed = act & push & ~bad & (left == (gx > 0))
+        dx = xp.where(act, xn - x, dx)
+        a = xp.where(act & left, xn, a)
+        b = xp.where(act & ~left, xn, b)
+        x, gx, gpx = (xp.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
+        return x, gx, gpx, a, b, dx, failed
+
+    # dx: the last step; failed: the last push did not cross
+    carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
+    a, b = fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
+    return a, b

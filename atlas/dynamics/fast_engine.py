@@ -74,7 +74,11 @@ to ``1.2e-16``) or ``det B = 0`` (``beta2 = beta1 + pi``) gives a double eigenva
 rounding, ``|lambda| ~ 1e-8``, condition ``~ 1 / |lambda| ~ 1e7-1e9``, an equilibrium ``~ 1 /
 |lambda|^2 ~ 1e16`` and modal amplitudes of that size that cancel to the ``O(1)`` gaps: their
 evaluation keeps no digit, and root location crawls (minutes for one run).  Elsewhere the condition stays below
-``1e2`` (``0:2pi:32`` grids, ``kappa = 0.5``, ``q = 0`` and ``0.3``).
+``1e2`` (``0:2pi:32`` grids, ``kappa = 0.5``, ``q = 0`` and ``0.3``).  Where the degeneracy is
+exact or within the rounding of the angles (``b_ii`` or ``det B`` at most ``ROUNDING``
+relative) the configuration is served by its closed form instead
+(:func:`atlas.dynamics.modal_form.closed_segment`: a quartic, or a quadratic and two modes; no
+early decision there), so axis and ``0:2pi:n`` grids stay on the fast path.
 Trajectories that end without an early decision are classified as
 :func:`atlas.dynamics.classify_stats` classifies the reference's runs, on arrays
 (:func:`_classify_many`; :func:`_stats` and :func:`atlas.dynamics.modal_form.light_system` are the per-run form it is
@@ -94,6 +98,7 @@ from atlas.dynamics.classification import (
     TrajectoryStats,
     impacts,
 )
+from atlas.dynamics.event_bounds import locate_root
 from atlas.dynamics.modal_form import (
     Lanes,
     modal_coordinates,
@@ -109,7 +114,7 @@ from atlas.dynamics.system import (
     iwc_aligned_many,
 )
 
-__all__ = ["FastResult", "run_batch", "run_lanes", "outcomes"]
+__all__ = ["FastResult", "run_batch", "run_lanes", "outcomes", "locate_root"]
 
 XTOL = 1e-12
 STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
@@ -139,6 +144,7 @@ class State:
     decided_by: np.ndarray
     scale: np.ndarray
     horizon: np.ndarray
+    rounding: np.ndarray
     imp: list
 
     @classmethod
@@ -154,7 +160,8 @@ class State:
             t=np.zeros(n), g=g0.copy(), s=np.where(f > 0, 1.0, -1.0), n_events=np.zeros(n, int),
             last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, RUNNING),
             code=np.full(n, -1, dtype=np.int8), decided_by=np.zeros(n, dtype=np.int8),
-            scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)), imp=[],
+            scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)),
+            rounding=np.zeros(n, dtype=bool), imp=[],
         )  # fmt: skip
 
     def impact_stats(self, n, fr, fc, v_fly):
@@ -225,7 +232,7 @@ def _admit(lanes, tables, st: State, ix, fallback):
     in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
     t, g, s = st.t[ix].copy(), st.g[ix].copy(), st.s[ix].copy()
     mask = mask_of(s)
-    P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g)
+    P, U, lam, valid, H, ok = segments(lanes, tables, ix, mask, g, closed=True)
     ok &= ~cancels(P, U, g, st.scale[ix])
     fallback[ix[~ok]] = True
     cols = (ix, t, g, s, mask, P, U, lam, valid, H, t.copy(), st.horizon[ix].copy(),
@@ -234,11 +241,22 @@ def _admit(lanes, tables, st: State, ix, fallback):
     return tuple(x[ok] for x in cols)
 
 
-def _classify_stopped(st: State, tables, n, width, t_max):
+def _classify_stopped(st: State, tables, n, width, t_max, fallback):
     """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
     :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
-    returned."""
+    returned; a divergence whose verdict sits within rounding (:func:`stop_rule.within_rounding`)
+    is flagged (``st.rounding``) and, on a lane with a closed configuration (whose ``B`` the closed
+    form changed within rounding, :func:`atlas.dynamics.modal_form.closed_segment`), goes to the
+    exact simulator (``fallback``); elsewhere both engines integrate the same ``B`` and place the
+    gaps at an event on the same side of their roots."""
     st.code[n] = _classify_many(st, tables, n, width)
+    div = n[st.status[n] == 2]
+    if div.size:
+        mk = mask_of(st.s[div])
+        E, zq = stack_table(tables, "E", div, mk), z_eq(tables, div, mk)
+        near = div[stop_rule.within_rounding(st.g[div], mk, E, zq)]
+        st.rounding[near] = True
+        fallback[near[tables.closed[:, near].any(axis=0)]] = True
     again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
     st.horizon[again] *= 2
@@ -273,14 +291,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
             _locate_stops(st, tables, stops, width)
-            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max)
+            again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max, fallback)
             pending = []
             if again.size:
                 new = _admit(lanes, tables, st, again, fallback)
                 cols = tuple(np.concatenate([a, b]) for a, b in zip(cols, new, strict=True))
         it += 1
         ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0 = cols
-        rows = np.arange(ix.size)
         if ix.size == 0:
             return
         tau = t - tseg
@@ -304,42 +321,12 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         if r.size:
-            r = r[early.may_decide(lam[r], valid[r], s[r], p[r], act[r], mask[r], t[r], T[r])]
-        if r.size:
-            r = r[eb.may_keep_signs(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r])]
-        if r.size:
-            _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], p[r], UE[r],
-                    lam[r], valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
-            dec = st.code[ix[r]] >= 0
-            _leave(st, ix, t, g, s, keep, r[dec], RUNNING)
-        # the first crossing: smallest sigma_lo, ties to the tightest bracket
-        m = _min_cols(lo)
-        tie_hi = np.where(lo <= m[:, None], hi, np.inf)
-        first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
-                         np.argmin(tie_hi, axis=1))  # fmt: skip
-        h = hi[rows, first]
+            dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
+                                 k, q, scale, act, H)  # fmt: skip
+            _leave(st, ix, t, g, s, keep, dec, RUNNING)
         rem = T - t
         xtol = XTOL * H
-        ev = keep & (h - m <= xtol) & (h <= rem)
-        # a bracket of the first function that every other function's sigma_lo lies beyond: the
-        # first crossing is in it, located on that function alone (:func:`locate_root`); the
-        # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
-        twin = _twins(first, mon, q)
-        other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-        r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
-        if r.size:
-            fr = first[r]
-            a_r, b_r = locate_root(P[r], U[r], lam[r], t[r] - tseg[r], lo[r, fr], h[r], fr,
-                                    s[r, fr], k[r], q[r], xtol[r], ROOT_ITER)  # fmt: skip
-            # located: the event at the upper end; not yet: step to the lower end, no crossing
-            # of any function before it
-            done = b_r - a_r <= xtol[r]
-            h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
-            rd, fd = r[done], fr[done]
-            lo[rd, fd] = hi[rd, fd] = h[rd]
-            tw_r, tw_c = np.nonzero(twin[rd])
-            lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
-            ev[rd] = True
+        ev, h, m = _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
         # a limit of the stop rule passed before the first crossing: step past it (certified)
         # and locate it at the next step; steps never pass it unseen
         lim_lo, lim_hi = _limit_steps(d, v, M, scale, Hw)
@@ -356,23 +343,84 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
-        ev_r = np.flatnonzero(ev)
-        if ev_r.size:
-            dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
-            # the stop rule just before the events (configuration up to them), located
-            ge = np.concatenate(dva[:2], axis=1)
-            sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
-            if sr.size:
-                rs = ev_r[sr]
-                stops.append(_stop_of(rs, ix, mask, P, U, lam, scale, t0, t, tseg, H))
-                _leave(st, ix, t, ge, s, keep, sr, 2, rows=rs)
-                ok = np.ones(ev_r.size, dtype=bool)
-                ok[sr] = False
-                ev_r, dva = ev_r[ok], tuple(x[ok] for x in dva)
+        ev_r, dva = _stops_before_events(st, tables, stops, np.flatnonzero(ev), ix, t, t0, tseg,
+                                         s, mask, act, P, U, lam, scale, H, keep)  # fmt: skip
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
                     H, s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
         cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0)
+
+
+def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale,
+                   act, H):  # fmt: skip
+    """The early decisions (:func:`_decide`) of the rows ``r`` where they may apply
+    (:func:`early.may_decide`, :func:`eb.may_keep_signs`; not on closed forms, whose quartics no
+    certificate reads); returns the rows decided."""
+    if tables.closed.any():
+        r = r[~stack_table(tables, "closed", ix[r], mask[r])]
+    q2 = p[:, :, :3]  # quadratic there (the quartics are closed, left out above)
+    if r.size:
+        r = r[early.may_decide(lam[r], valid[r], s[r], q2[r], act[r], mask[r], t[r], T[r])]
+    if r.size:
+        r = r[eb.may_keep_signs(s[r], q2[r], UE[r], lam[r], valid[r], k[r], q[r])]
+    if r.size == 0:
+        return r
+    _decide(st, tables, ix[r], t[r], T[r], t_max, s[r], mask[r], g[r], q2[r], UE[r], lam[r],
+            valid[r], k[r], q[r], scale[r], act[r], H[r])  # fmt: skip
+    return r[st.code[ix[r]] >= 0]
+
+
+def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
+    """The first crossing of the next step: ``(ev, h, m)`` (n,), the rows with an event, its
+    time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo``; ``lo``, ``hi``
+    of a bracket closed by :func:`locate_root` (and its twin's) set to the event (in place)."""
+    # smallest sigma_lo, ties to the tightest bracket
+    m = _min_cols(lo)
+    tie_hi = np.where(lo <= m[:, None], hi, np.inf)
+    first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
+                     np.argmin(tie_hi, axis=1))  # fmt: skip
+    h = hi[np.arange(first.size), first]
+    ev = keep & (h - m <= xtol) & (h <= rem)
+    # a bracket of the first function that every other function's sigma_lo lies beyond: the
+    # first crossing is in it, located on that function alone (:func:`locate_root`); the
+    # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
+    twin = _twins(first, mon, q)
+    other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
+    r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
+    if r.size:
+        fr = first[r]
+        a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
+                                q[r], xtol[r], ROOT_ITER)  # fmt: skip
+        # located: the event at the upper end; not yet: step to the lower end, no crossing
+        # of any function before it
+        done = b_r - a_r <= xtol[r]
+        h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
+        rd, fd = r[done], fr[done]
+        lo[rd, fd] = hi[rd, fd] = h[rd]
+        tw_r, tw_c = np.nonzero(twin[rd])
+        lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
+        ev[rd] = True
+    return ev, h, m
+
+
+def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act, P, U, lam,
+                         scale, H, keep):  # fmt: skip
+    """The stop rule just before the events of rows ``ev_r`` (configuration up to them): those
+    where it holds leave (located with the next classification, ``stops``); returns the rows
+    that switch and their gaps, velocities and accelerations."""
+    if ev_r.size == 0:
+        return ev_r, None
+    dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
+    ge = np.concatenate(dva[:2], axis=1)
+    sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
+    if sr.size:
+        rs = ev_r[sr]
+        stops.append(_stop_of(rs, ix, mask, P, U, lam, scale, t0, t, tseg, H))
+        _leave(st, ix, t, ge, s, keep, sr, 2, rows=rs)
+        ok = np.ones(ev_r.size, dtype=bool)
+        ok[sr] = False
+        ev_r, dva = ev_r[ok], tuple(x[ok] for x in dva)
+    return ev_r, dva
 
 
 def _stop_of(r, ix, mask, P, U, lam, scale, t0, t, tseg, H):
@@ -424,7 +472,7 @@ def _window(H, lam, valid, p, aUE, scale):
     below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window is ``H_S``, and the
     curvature bound uses that window's own growth factor); ``H_S``
     unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
-    + GROWTH sum |u|``, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
+    + GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
     (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
     grow = np.where(valid, lam.real, 0.0).max(axis=1)
     with np.errstate(divide="ignore"):
@@ -433,6 +481,8 @@ def _window(H, lam, valid, p, aUE, scale):
     a = np.abs(p)
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
+    if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
+        reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
     return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
 
 
@@ -460,58 +510,6 @@ def _all_cols(x):
 def _min_cols(x):
     """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
     return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
-
-
-def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
-    """Crossing of event function ``j`` (n,) with sign ``sj`` in ``[tau + a, tau + b]`` where
-    ``sj f > 0`` at ``a`` and ``<= 0`` at ``b`` (a certified bracket): safeguarded Newton as
-    ``rtsafe`` (a bisection whenever the Newton point leaves the bracket or its step is over half
-    the last one; a Newton step below ``xtol / 2`` is replaced by a push of ``xtol / 2`` towards the
-    root, so the far end of the bracket closes in too, and a push that does not cross is followed
-    by a bisection) until the bracket is below ``xtol`` or after ``max_iter`` evaluations; returns
-    the bracket ``(a, b)`` (relative to ``tau``)."""
-    xp = eb.xp_of(P, U, lam, tau, a)
-    rows = xp.arange(j.size)
-    i = j % 2
-    gap = j < 2
-    Ui, ki, qi = U[rows, i], k[rows, i], q[rows, i]
-    p2 = P[rows, i, 2]
-    p1, p0 = P[rows, i, 1], P[rows, i, 0]
-
-    def g(x):
-        t = tau + x
-        ue = Ui * xp.exp(lam * t[:, None])
-        lue = ue * lam
-        d = p0 + t * (p1 + t * p2) + eb.re_sum4(ue)
-        v = p1 + 2 * t * p2 + eb.re_sum4(lue)
-        acc = 2 * p2 + eb.re_sum4(lue * lam)
-        f = xp.where(gap, d, -ki * d - qi * v)
-        fp = xp.where(gap, v, -ki * v - qi * acc)
-        return sj * f, sj * fp
-
-    def newton(_, carry):
-        x, gx, gpx, a, b, dx, failed = carry
-        act = (b - a) > xtol
-        with np.errstate(all="ignore"):
-            step = -gx / gpx
-        toward = xp.where(gx > 0, 0.5, -0.5) * xtol
-        push = xp.abs(step) < 0.5 * xtol
-        xn = xp.where(push, x + toward, x + step)
-        bad = ~xp.isfinite(xn) | (xn <= a) | (xn >= b) | (xp.abs(step) > 0.5 * xp.abs(dx)) | failed
-        xn = xp.where(bad, 0.5 * (a + b), xn)
-        gn, gpn = g(xn)
-        left = gn > 0
-        failed = act & push & ~bad & (left == (gx > 0))
-        dx = xp.where(act, xn - x, dx)
-        a = xp.where(act & left, xn, a)
-        b = xp.where(act & ~left, xn, b)
-        x, gx, gpx = (xp.where(act, new, old) for new, old in ((xn, x), (gn, gx), (gpn, gpx)))
-        return x, gx, gpx, a, b, dx, failed
-
-    # dx: the last step; failed: the last push did not cross
-    carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
-    a, b = eb.fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
-    return a, b
 
 
 def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
@@ -637,7 +635,9 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     s[r] = sn
     mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
-    P[r], U[r], lam[r], valid[r], H[r], ok = segments(lanes, tables, lanes_r, mask[r], g)
+    P[r], U[r], lam[r], valid[r], H[r], ok = segments(
+        lanes, tables, lanes_r, mask[r], g, closed=True
+    )
     ok &= ~cancels(P[r], U[r], g, scale[r])
     tseg[r] = t[r]
     since[r] = 0
@@ -725,6 +725,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
     z[:, 2:4] = np.where(act, 0.0, z[:, 2:4])
     acc_eq = np.einsum("nij,nj->ni", E[:, 2:4], z)
     leaving = np.all(act | ((g[:, :2] > 0) & (g[:, 2:] >= 0) & (acc_eq > 0)), axis=1)
+    leaving &= np.all(~act | np.isfinite(d_eq), axis=1)  # no equilibrium (singular B_SS K_S)
     settle = (t_end | diverged) & (last <= 0.5 * T) & neutral_or_stable & leaving
     decide(settle, np.array([OUTCOME_OF_MASK[x] for x in range(4)], dtype=np.int8)[mask])
     # impacts: the logged ones, and a gap in free flight (FF) falling back, dated T
@@ -769,13 +770,16 @@ def _late_amplitude(st: State, n, width):
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
     ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
-    at), ``g_final`` (N, 4) the state there and ``n_events``."""
+    at), ``g_final`` (N, 4) the state there, ``n_events`` and ``within_rounding`` (a divergence
+    whose verdict sits within rounding, :func:`stop_rule.within_rounding`, of the engine that
+    decided it: :func:`stop_rule.run_within_rounding` for the exact simulator's runs)."""
 
     code: np.ndarray
     decided_by: np.ndarray
     t_final: np.ndarray
     g_final: np.ndarray
     n_events: np.ndarray
+    within_rounding: np.ndarray
 
     @classmethod
     def gather(cls, parts, n: int) -> FastResult:
@@ -816,8 +820,9 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
     for i in np.flatnonzero(res.decided_by == 3):
-        out, _ = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
+        out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
+        res.within_rounding[i] = stop_rule.run_within_rounding(run)
     return res
 
 
@@ -850,10 +855,10 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
             while ix.size:
                 run_round(lanes, tables, st, ix, t_max, max_events, width, fallback)
                 ix = ix[(st.status[ix] != RUNNING) & ~fallback[ix]]
-                ix = _classify_stopped(st, tables, ix, width, t_max)
+                ix = _classify_stopped(st, tables, ix, width, t_max, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
-    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events)
+    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events, st.rounding & ~fallback)
 
 
 def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,

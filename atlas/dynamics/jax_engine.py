@@ -24,10 +24,31 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   which give :func:`atlas.dynamics.classify`'s thirds exactly for runs stopped at their horizon
   (``t_end 2^j``, always a bin boundary).  Runs that reach the event cap stop at an arbitrary time:
   they are run by the exact simulator on the host, as are the fallback lanes of the NumPy engine
-  (near-singular modal forms, a stalled root location).
+  (near-singular modal forms, a stalled root location) and the degenerate directions the NumPy
+  engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`; ``ok`` False).
 
 Classification of the stopped runs and the horizon extension are the NumPy engine's
-(:func:`atlas.dynamics.fast_engine.run_batch`, on the host).
+(:func:`atlas.dynamics.fast_engine.run_batch`, on the host; a divergence within rounding,
+:func:`atlas.dynamics.stop_rule.within_rounding`, is flagged the same way).
+
+Where the kernel differs from the NumPy engines' stop rule (:mod:`atlas.dynamics.stop_rule`,
+located stops; not yet ported, so a verdict can differ where these matter):
+
+* the divergence limits (a non-finite state, a gap above ``1e4 scale`` or below ``-1e6 scale``)
+  are tested at the step ends only, in the configuration of the step that follows (after an
+  event: the new one), and the run stops there: at up to one step ``H_S`` after the located time
+  of :func:`atlas.dynamics.stop_rule.locate`, with the state of that step end;
+* no bracket of the amplitude and deep-penetration limits (:func:`stop_rule.limit_rows`): a
+  peak that passes a limit and comes back inside one step is not seen; steps are at most
+  ``H_S`` (the NumPy engine's windows up to ``4 H_S`` are not used, so the early decisions are
+  tried at other times: a run may be decided early by one engine and stepped by the other);
+* the aligned-penetration stop (an active gap below ``-1e3 scale``, aligned with an IWC
+  eigenvector) is tested only on the early-decision schedule (1, 2, 4, ... steps after an event),
+  not at every step end nor just before an event, with ``W x`` for the coordinates;
+* the undamped force and its gap (``q_i = 0``, the same roots) are not located as one.
+
+The early IWC is the NumPy engine's (aligned from now or from the reference's stop on, with the
+reference's sign conditions there).
 
 Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
 floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
@@ -142,47 +163,20 @@ def _step(c, prm):
     div |= deep & _aligned_now(mask, g, prm, 1e-3)
     status = jnp.where(run & div, 2, jnp.where(run & (t >= T), 0, c["status"]))
     keep = run & ~div & (t < T)
-    # certified brackets of the monitored event functions
-    f, fp = eb.event_functions(d, v, acc, k, q)
-    M = eb.curvature_bound(p, UE, lam, H, k, q)
-    A, Bd = jnp.maximum(s * f, 0.0), s * fp
-    lo, hi = eb.safe_steps(A, Bd, M)
-    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, H, k, q), lo)
-    mon = jnp.concatenate([jnp.ones_like(act), s[:, :2] < 0], axis=1)
-    lo = jnp.where(mon, jnp.minimum(lo, H[:, None]), np.inf)
-    hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
+    lo, hi = _brackets(d, v, acc, p, UE, lam, H, k, q, s, act)
     # early decisions
     tryd = keep & sched & jnp.all(hi > (t_max - t)[:, None], axis=1)
     tryd &= early.may_decide(lam, valid, s, p, act, mask, t, T)
-    settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
-    iwc &= early.aligned_at_stop(_coords(mask, g, prm), p, UE, lam, valid, l1, T - t, scale)
+    settle, iwc = _decisions(t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H, prm)
     settle &= tryd
     iwc &= tryd & ~settle
     code = jnp.where(settle, jnp.asarray(_OUTCOME_OF_MASK)[mask], c["code"])
     code = jnp.where(iwc, np.int8(Outcome.IWC), code)
     decided_by = jnp.where(settle, 1, jnp.where(iwc, 2, c["decided_by"])).astype(np.int8)
     keep &= ~(settle | iwc)
-    # the first crossing: smallest sigma_lo, ties to the tightest bracket
-    m = lo.min(axis=1)
-    tie_hi = jnp.where(lo <= m[:, None], hi, np.inf)
-    first = jnp.where(jnp.isinf(tie_hi.min(axis=1)), jnp.argmin(lo, axis=1),
-                      jnp.argmin(tie_hi, axis=1))  # fmt: skip
-    one = jnp.arange(4)[None, :] == first[:, None]
-    h = jnp.where(one, hi, 0.0).sum(axis=1)
     rem = T - t
     xtol = fe.XTOL * H
-    ev = keep & (h - m <= xtol) & (h <= rem)
-    other = jnp.where(one, np.inf, lo).min(axis=1)
-    r = keep & ~ev & (h <= rem) & (other > h)
-    lo_f, s_f = jnp.where(one, lo, 0.0).sum(axis=1), jnp.where(one, s, 0.0).sum(axis=1)
-    a_r, b_r = fe.locate_root(P, U, lam, t - tseg, jnp.where(r, lo_f, 0.0),
-                               jnp.where(r, h, 1.0), first, s_f, k, q, xtol, fe.ROOT_ITER)  # fmt: skip
-    done = r & (b_r - a_r <= xtol)
-    h = jnp.where(done, b_r, h)
-    m = jnp.where(r & ~done, a_r, m)
-    lo = jnp.where(done[:, None] & one, h[:, None], lo)
-    hi = jnp.where(done[:, None] & one, h[:, None], hi)
-    ev |= done
+    ev, h, m, lo, hi = _first_crossing(lo, hi, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
     step = jnp.where(ev, h, jnp.minimum(jnp.minimum(m, H), rem))
     t_new = jnp.where(keep, t + step, t)
     since = since + 1
@@ -225,6 +219,59 @@ def _step(c, prm):
         "t_last": jnp.where(hit, jnp.maximum(c["t_last"], t_new), c["t_last"]),
         "status": status, "code": code, "decided_by": decided_by, "fallback": fallback,
     }  # fmt: skip
+
+
+def _brackets(d, v, acc, p, UE, lam, H, k, q, s, act):
+    """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
+    function within ``H`` (as :func:`atlas.dynamics.fast_engine._brackets` with the window
+    ``H_S``)."""
+    f, fp = eb.event_functions(d, v, acc, k, q)
+    M = eb.curvature_bound(p, UE, lam, H, k, q)
+    A, Bd = jnp.maximum(s * f, 0.0), s * fp
+    lo, hi = eb.safe_steps(A, Bd, M)
+    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, H, k, q), lo)
+    mon = jnp.concatenate([jnp.ones_like(act), s[:, :2] < 0], axis=1)
+    lo = jnp.where(mon, jnp.minimum(lo, H[:, None]), np.inf)
+    hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
+    return lo, hi
+
+
+def _decisions(t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H, prm):
+    """``(settle, iwc)`` (n,) of :func:`atlas.dynamics.early_decisions.decisions`, IWC as
+    :func:`atlas.dynamics.fast_engine._decide` has it: aligned from now or from the reference's
+    stop on, with the reference's sign conditions there (:func:`early.signs_from`)."""
+    settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
+    c = _coords(mask, g, prm)
+    s0 = early.reach_time(p, UE, lam, T - t, scale)
+    now = early.aligned_from(c, lam, valid, l1, jnp.zeros_like(t))
+    iwc &= now | early.aligned_from(c, lam, valid, l1, s0)
+    iwc &= early.signs_from(p, UE, lam, valid, l1, act, s, s0)
+    return settle, iwc
+
+
+def _first_crossing(lo, hi, keep, rem, xtol, P, U, lam, tau, s, k, q):
+    """``(ev, h, m, lo, hi)``: the rows with an event in the next step, its time, the smallest
+    ``sigma_lo``, and the brackets with the one closed by :func:`locate_root` set to the event
+    (as :func:`atlas.dynamics.fast_engine._first_crossing`, without the undamped twin)."""
+    # smallest sigma_lo, ties to the tightest bracket
+    m = lo.min(axis=1)
+    tie_hi = jnp.where(lo <= m[:, None], hi, np.inf)
+    first = jnp.where(jnp.isinf(tie_hi.min(axis=1)), jnp.argmin(lo, axis=1),
+                      jnp.argmin(tie_hi, axis=1))  # fmt: skip
+    one = jnp.arange(4)[None, :] == first[:, None]
+    h = jnp.where(one, hi, 0.0).sum(axis=1)
+    ev = keep & (h - m <= xtol) & (h <= rem)
+    other = jnp.where(one, np.inf, lo).min(axis=1)
+    r = keep & ~ev & (h <= rem) & (other > h)
+    lo_f, s_f = jnp.where(one, lo, 0.0).sum(axis=1), jnp.where(one, s, 0.0).sum(axis=1)
+    a_r, b_r = fe.locate_root(P, U, lam, tau, jnp.where(r, lo_f, 0.0), jnp.where(r, h, 1.0),
+                              first, s_f, k, q, xtol, fe.ROOT_ITER)  # fmt: skip
+    done = r & (b_r - a_r <= xtol)
+    h = jnp.where(done, b_r, h)
+    m = jnp.where(r & ~done, a_r, m)
+    lo = jnp.where(done[:, None] & one, h[:, None], lo)
+    hi = jnp.where(done[:, None] & one, h[:, None], hi)
+    return ev | done, h, m, lo, hi
 
 
 def _lane(c, prm, steps):

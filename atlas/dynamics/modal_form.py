@@ -9,6 +9,18 @@ exp(lambda_m t)`` (:func:`segments`, :func:`segment`).  A configuration whose ei
 ``V`` may have a condition number ``>= 1e4`` (:func:`cond_bound` reaches it; or whose equilibrium is
 ill-posed) is marked not ``ok``: its lanes fall back to the exact simulator (see the fast engine's
 docstring for why).
+
+Degenerate directions (:func:`closed_configurations`): where ``b_ii`` (a single contact ``i``) or
+``det B`` (both) is zero up to the rounding of the angles (``<= ROUNDING`` relative), the
+configuration is defective or near-defective (a Jordan block at ``lambda = 0``, split by rounding
+into ``|lambda| ~ 1e-8``).  There the flow of ``B`` with that entry (or ``det B``) set to zero, a
+change of ``B`` within its rounding, is written in closed form (:func:`closed_segment`): a
+single contact with ``b_ii = 0`` has its gap in free flight and the other gap a quartic; both
+contacts with ``B = b c^T`` of rank one have the gaps' component across ``b`` in free flight and
+the one along ``b`` a damped oscillator driven by a quadratic (a quadratic plus two modes).  The
+tables keep, for the classification and the stop rule, the eigenvalues and the equilibrium the
+exact simulator computes from the unperturbed ``B`` (``closed`` True, ``ok`` False: the JAX engine
+still sends these lanes back).
 """
 
 from __future__ import annotations
@@ -24,9 +36,16 @@ from atlas.dynamics.system import Mode, System
 __all__ = [
     "Lanes", "ModalTable", "ModalTables", "modal_tables", "light_system", "segments", "segment",
     "stack_table", "stack_tables", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
+    "ROUNDING", "closed_configurations", "closed_segment",
 ]  # fmt: skip
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
+#: ``|b_ii| / |b_i|`` or ``|det B| / (|b_1| |b_2|)`` at or below which it is zero up to the rounding
+#: of the angles (``cos(fl(pi / 2)) = 6.1e-17``, ``sin(fl(pi)) = 1.2e-16``, a few ulps of ``2 pi``)
+ROUNDING = 16 * np.finfo(float).eps
+#: smallest ``|gamma| / (|c| max k)`` and ``|lambda_+ - lambda_-| / max |lambda_pm|`` of the
+#: rank-one SS closed form (its particular solution divides by ``gamma``, its modes by the split)
+_RANK_ONE_MIN = 1e-4
 
 
 @dataclasses.dataclass
@@ -59,7 +78,9 @@ class ModalTable:
     """Modal form of one configuration for ``N`` lanes: eigenvalues ``lam`` (N, 4; unused
     entries 0 with ``valid`` False), right/left eigenvector blocks ``V``, ``W`` (N, na, na) of
     the active subsystem, equilibrium ``d_eq`` (N, 2; NaN for free gaps), ``H`` step cap,
-    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5)."""
+    ``ok`` (well-conditioned), augmented matrices ``E`` (N, 5, 5), ``closed``
+    (:func:`closed_configurations`; its ``lam``, ``valid`` and ``d_eq`` are the exact
+    simulator's)."""
 
     mask: int
     lam: np.ndarray
@@ -70,6 +91,7 @@ class ModalTable:
     H: np.ndarray
     ok: np.ndarray
     E: np.ndarray
+    closed: np.ndarray
 
 
 class ModalTables(list):
@@ -93,6 +115,7 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         "lam": np.zeros((4, n, 4), dtype=complex), "valid": np.zeros((4, n, 4), dtype=bool),
         "d_eq": np.full((4, n, 2), np.nan), "H": np.empty((4, n)), "ok": np.ones((4, n), bool),
         "E": _augmented(lanes.B, lanes.a, lanes.k, lanes.q, np.arange(4)[:, None]),
+        "closed": np.zeros((4, n), bool),
     }  # fmt: skip
     out = []
     for mask in range(4):
@@ -114,11 +137,67 @@ def modal_tables(lanes: Lanes) -> ModalTables:
             lam[:, :na] = w
             valid[:, :na] = True
             d_eq[:, idx] = d_S
+            closed = st["closed"][mask]
+            closed[:] = closed_configurations(lanes, mask) & ~ok
+            _as_reference(lanes, mask, E, np.flatnonzero(closed), lam, d_eq)
         rho = np.abs(lam).max(axis=1)
         H = st["H"][mask]
         H[:] = 1.0 / np.maximum(rho, 0.25 * omega)
-        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E))
+        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E, st["closed"][mask]))
     return ModalTables(out, st)
+
+
+def closed_configurations(lanes: Lanes, mask: int) -> np.ndarray:
+    """Lanes (N,) whose configuration ``mask`` has the closed form of :func:`closed_segment`:
+    ``|b_ii| <= ROUNDING |b_i|`` (one contact ``i``), or ``|det B| <= ROUNDING |b_1| |b_2|`` with
+    the rank-one form well-posed (``gamma`` and the split of its two modes above
+    ``_RANK_ONE_MIN`` relative)."""
+    B = lanes.B
+    norm = np.linalg.norm(B, axis=1)  # column norms (N, 2)
+    if mask in (1, 2):
+        i = mask - 1
+        return np.abs(B[:, i, i]) <= ROUNDING * norm[:, i]
+    if mask != 3:
+        return np.zeros(B.shape[0], bool)
+    det = B[:, 0, 0] * B[:, 1, 1] - B[:, 0, 1] * B[:, 1, 0]
+    out = np.abs(det) <= ROUNDING * norm[:, 0] * norm[:, 1]
+    b, _, c = _rank_one(B)
+    gamma, beta = (np.sum(c * x * b, axis=1) for x in (lanes.k, lanes.q))
+    lp, lm = _roots(beta, gamma)
+    big = np.maximum(np.abs(lp), np.abs(lm))
+    out &= np.abs(gamma) >= _RANK_ONE_MIN * np.linalg.norm(c, axis=1) * lanes.k.max(axis=1)
+    return out & (np.abs(lp - lm) >= _RANK_ONE_MIN * big)
+
+
+def _rank_one(B):
+    """``b`` (unit, along the first column), ``w`` (unit, across it) and ``c = b^T B`` (N, 2):
+    ``B`` projected on ``b`` is ``b c^T``, off ``B`` by ``|det B| / |b_1|`` in its second column."""
+    b = B[:, :, 0] / np.linalg.norm(B[:, :, 0], axis=1)[:, None]
+    w = np.stack([-b[:, 1], b[:, 0]], axis=1)
+    c = np.einsum("ni,nij->nj", b, B)
+    return b, w, c
+
+
+def _roots(beta, gamma):
+    """Roots ``lambda_pm`` of ``lambda^2 + beta lambda + gamma`` (complex)."""
+    root = np.sqrt((beta * beta - 4 * gamma).astype(complex))
+    return 0.5 * (-beta + root), 0.5 * (-beta - root)
+
+
+def _as_reference(lanes, mask, E, rows, lam, d_eq):
+    """For the lanes ``rows`` of configuration ``mask``: the eigenvalues ``lam`` and equilibria
+    ``d_eq`` as the exact simulator computes them (:func:`atlas.dynamics.system.build_system`:
+    ``eigvals`` and ``solve`` of each lane alone, NaN where ``B_SS K_S`` is singular), for the
+    classification and the stop rule of lanes served by :func:`closed_segment`."""
+    idx = [i for i in range(2) if mask >> i & 1]
+    sub = idx + [i + 2 for i in idx]
+    for r in rows:
+        lam[r, : len(sub)] = np.linalg.eigvals(E[r][np.ix_(sub, sub)])
+        BS = lanes.B[r][np.ix_(idx, idx)] * lanes.k[r][idx][None, :]
+        try:
+            d_eq[r, idx] = np.linalg.solve(BS, -lanes.a[r][idx])
+        except np.linalg.LinAlgError:
+            d_eq[r, idx] = np.nan
 
 
 def _distinct(*arrays):
@@ -211,6 +290,8 @@ def light_system(lanes: Lanes, tables, n: int) -> System:
             z_eq[idx] = tab.d_eq[n, idx]
             z_eq[[i + 2 for i in idx]] = 0.0
             z_eq[4] = 1.0
+            if np.isnan(z_eq[idx]).any():  # singular B_SS K_S: no equilibrium, as build_system
+                z_eq = None
         stable = bool(np.all(eig.real < 0)) if na else True
         modes.append(Mode(tab.mask, tab.E[n], math.nan, None, None, None, eig, stable, z_eq))
     return System(B=lanes.B[n], a=lanes.a[n], k=k, q=lanes.q[n], L=None, modes=tuple(modes),
@@ -234,21 +315,81 @@ def _augmented(B, a, k, q, mask):
 # ----------------------------------------------------------------------------- segments
 
 
-def segments(lanes: Lanes, tables: ModalTables, ix, mask, g):
+def segments(lanes: Lanes, tables: ModalTables, ix, mask, g, closed=False):
     """Closed form of the segments starting at the states ``g`` (n, 4) of lanes ``ix`` in the
     configurations ``mask`` (n,): ``P`` (n, 2, 3) polynomial coefficients of the gaps, ``U``
-    (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,)."""
+    (n, 2, 4) modal amplitudes, ``lam``, ``valid`` (n, 4), step cap ``H`` and ``ok`` (n,).
+
+    ``closed``: the configurations of :func:`closed_configurations` by :func:`closed_segment`
+    (``ok`` there), and ``P`` (n, 2, 5) (degree 4) if any lane of ``tables`` has one."""
     n = ix.size
     lam, valid, H, ok, d_eq = stack_tables(tables, _SEGMENT_ENTRIES, ix, mask)
     present = np.flatnonzero(np.bincount(mask, minlength=4))
     if present.size == 1:
-        return (*_segment_of(lanes, tables, present[0], ix, g, d_eq, lam), lam, valid, H, ok)
-    P = np.empty((n, 2, 3))
-    U = np.empty((n, 2, 4), dtype=complex)
-    for m in present:
-        sel = np.flatnonzero(mask == m)
-        P[sel], U[sel] = _segment_of(lanes, tables, m, ix[sel], g[sel], d_eq[sel], lam[sel])
+        P, U = _segment_of(lanes, tables, present[0], ix, g, d_eq, lam)
+    else:
+        P = np.empty((n, 2, 3))
+        U = np.empty((n, 2, 4), dtype=complex)
+        for m in present:
+            sel = np.flatnonzero(mask == m)
+            P[sel], U[sel] = _segment_of(lanes, tables, m, ix[sel], g[sel], d_eq[sel], lam[sel])
+    if not (closed and tables.closed.any()):
+        return P, U, lam, valid, H, ok
+    P = np.concatenate([P, np.zeros((n, 2, 2))], axis=2)
+    r = np.flatnonzero(stack_table(tables, "closed", ix, mask))
+    for m in np.unique(mask[r]):
+        sel = r[mask[r] == m]
+        lx = ix[sel]
+        P[sel], U[sel], lam[sel], valid[sel] = closed_segment(
+            m, g[sel], lanes.B[lx], lanes.a[lx], lanes.k[lx], lanes.q[lx]
+        )
+        ok[sel] = True
     return P, U, lam, valid, H, ok
+
+
+def closed_segment(m, g, B, a, k, q):
+    """``(P (n, 2, 5), U, lam, valid)`` of segments from ``g`` (n, 4) in a configuration ``m`` of
+    :func:`closed_configurations`, in closed form for ``B`` with ``b_ii = 0`` (``m = 1, 2``) or
+    projected to rank one (``m = 3``); ``B`` (n, 2, 2), ``a``, ``k``, ``q`` (n, 2).
+
+    One contact ``i`` (``b_ii = 0``): ``d_i'' = -a_i`` (free flight), so ``phi_i = f0 + f1 t + f2
+    t^2`` and ``d_j'' = b_ji phi_i - a_j`` integrate to a quartic.  Both (``B = b c^T``, ``c =
+    b^T B``, ``w`` across ``b``): ``zeta = w . d`` has ``zeta'' = -w . a``; ``xi = b . d`` has
+    ``xi'' + beta xi' + gamma xi = -(r0 + r1 t + r2 t^2)`` (``gamma = c^T K b``, ``beta = c^T Q
+    b``; the right side from ``zeta``), a quadratic particular solution plus the modes
+    ``lambda_pm`` of ``lambda^2 + beta lambda + gamma``; ``d = b xi + w zeta`` (paper eq. 1)."""
+    n = g.shape[0]
+    P = np.zeros((n, 2, 5))
+    U = np.zeros((n, 2, 4), dtype=complex)
+    lam = np.zeros((n, 4), dtype=complex)
+    valid = np.zeros((n, 4), dtype=bool)
+    if m in (1, 2):
+        i, j = m - 1, 2 - m
+        gi, vi, ai, ki, qi = g[:, i], g[:, i + 2], a[:, i], k[:, i], q[:, i]
+        f0, f1, f2 = -ki * gi - qi * vi, -ki * vi + qi * ai, 0.5 * ki * ai
+        bji = B[:, j, i]
+        P[:, i, :3] = np.stack([gi, vi, -0.5 * ai], axis=1)
+        P[:, j] = np.stack([g[:, j], g[:, j + 2], 0.5 * (bji * f0 - a[:, j]), bji * f1 / 6,
+                            bji * f2 / 12], axis=1)  # fmt: skip
+        return P, U, lam, valid
+    b, w, c = _rank_one(B)
+    xi0, xiv = np.sum(b * g[:, :2], axis=1), np.sum(b * g[:, 2:], axis=1)
+    ze0, zev = np.sum(w * g[:, :2], axis=1), np.sum(w * g[:, 2:], axis=1)
+    ab, aw = np.sum(b * a, axis=1), np.sum(w * a, axis=1)
+    gamma, beta, kw, qw = (np.sum(c * x * y, axis=1) for x, y in ((k, b), (q, b), (k, w), (q, w)))
+    r0, r1, r2 = ab + kw * ze0 + qw * zev, kw * zev - qw * aw, -0.5 * kw * aw
+    e2 = -r2 / gamma
+    e1 = (-r1 - 2 * beta * e2) / gamma
+    e0 = (-r0 - 2 * e2 - beta * e1) / gamma
+    lp, lm = _roots(beta, gamma)
+    h0, h1 = xi0 - e0, xiv - e1
+    amp_p, amp_m = (h1 - lm * h0) / (lp - lm), (lp * h0 - h1) / (lp - lm)
+    P[:, :, :3] = b[:, :, None] * np.stack([e0, e1, e2], 1)[:, None, :] + w[:, :, None] * np.stack(
+        [ze0, zev, -0.5 * aw], 1)[:, None, :]  # fmt: skip
+    U[:, :, 0], U[:, :, 1] = b * amp_p[:, None], b * amp_m[:, None]
+    lam[:, 0], lam[:, 1] = lp, lm
+    valid[:, :2] = True
+    return P, U, lam, valid
 
 
 _SEGMENT_ENTRIES = ("lam", "valid", "H", "ok", "d_eq")

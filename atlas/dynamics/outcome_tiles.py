@@ -296,19 +296,9 @@ def outcome_atlas_tiles(
         ``store``, ``netcdf``, ``dataset`` (the assembled atlas), ``tiles``, ``slab``,
         ``computed`` and ``verified`` (tile indices), ``trajectories``, ``seconds``.
     """
-    scene = check_scene(scene)
-    for name, v in (("resume", resume), ("overwrite", overwrite), ("theory", theory),
-                    ("overwrite_netcdf", overwrite_netcdf)):  # fmt: skip
-        checks.boolean(name, v)
-    dyn = Dynamics() if dynamics is None else dynamics
-    if not isinstance(dyn, Dynamics):
-        raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
-    check_scheduler(scheduler)
-    workers = check_workers(workers)
-    if scheduler is not None and workers > 1:
-        raise ValueError(
-            f"workers: the tiles run on the scheduler's workers, give 1, got {workers}"
-        )
+    flags = dict(resume=resume, overwrite=overwrite, theory=theory,
+                 overwrite_netcdf=overwrite_netcdf)  # fmt: skip
+    scene, dyn, workers = _checked(scene, dynamics, scheduler, workers, flags)
     store = store_guard.check_place(store)
     slab = default_slab(scene, dyn.n_perturb) if slab is None else integer("slab", slab)
     tiles = tile_plan(scene, slab=slab)
@@ -320,26 +310,42 @@ def outcome_atlas_tiles(
                                            (scheduler, workers, progress))  # fmt: skip
     verified = sorted(resumed or {})
     info = sum_info(recs[i]["info"] for i in range(len(tiles)))
-    call = history
-    if resumed is not None:
-        call = (history or "atlas.dynamics.outcome_tiles.outcome_atlas_tiles(...)") + (
-            f" (resumed: {len(tiles) - len(verified)} of {len(tiles)} tiles computed)"
-        )
+    call = _history(history, resumed is not None, len(tiles), len(verified))
     ds = outcome_dataset(scene, counts, dyn, info, theory=theory, history=call)
     netcdf = None
     if to_netcdf is not None:
         netcdf = write_netcdf(ds, to_netcdf, overwrite=overwrite_netcdf)
-    return {
-        "store": store,
-        "netcdf": netcdf,
-        "dataset": ds,
-        "tiles": len(tiles),
-        "slab": slab,
-        "computed": sorted(set(range(len(tiles))) - set(verified)),
-        "verified": verified,
-        "trajectories": int(info["trajectories"]),
-        "seconds": float(info["seconds"]),
-    }
+    computed = sorted(set(range(len(tiles))) - set(verified))
+    return {"store": store, "netcdf": netcdf, "dataset": ds, "tiles": len(tiles), "slab": slab,
+            "computed": computed, "verified": verified, "trajectories": int(info["trajectories"]),
+            "seconds": float(info["seconds"])}  # fmt: skip
+
+
+def _history(history, resumed: bool, tiles: int, verified: int):
+    """The ``history`` of an atlas, saying how many tiles a resumed run computed."""
+    if not resumed:
+        return history
+    return (history or "atlas.dynamics.outcome_tiles.outcome_atlas_tiles(...)") + (
+        f" (resumed: {tiles - verified} of {tiles} tiles computed)"
+    )
+
+
+def _checked(scene, dynamics, scheduler, workers, flags):
+    """``(scene, dynamics, workers)`` of :func:`outcome_atlas_tiles` checked (one-line
+    ``ValueError`` naming the parameter); ``flags``: its booleans by name."""
+    scene = check_scene(scene)
+    for name, v in flags.items():
+        checks.boolean(name, v)
+    dyn = Dynamics() if dynamics is None else dynamics
+    if not isinstance(dyn, Dynamics):
+        raise ValueError("dynamics: expected an atlas.dynamics.Dynamics")
+    check_scheduler(scheduler)
+    workers = check_workers(workers)
+    if scheduler is not None and workers > 1:
+        raise ValueError(
+            f"workers: the tiles run on the scheduler's workers, give 1, got {workers}"
+        )
+    return scene, dyn, workers
 
 
 def _run_store(store, scene, dyn, tiles, plan, resume, overwrite, where):

@@ -33,7 +33,7 @@ from atlas.core import checks, config
 from atlas.data.engine import REFERENCES, generate
 from atlas.data.outputs import coord_attrs
 from atlas.data.scene import Scene
-from atlas.dynamics import fast_engine, jax_engine
+from atlas.dynamics import fast_engine, jax_engine, stop_rule
 from atlas.dynamics.lane_pool import LanePool
 from atlas.dynamics.outcome import (
     initial_states,
@@ -201,25 +201,17 @@ def _codes(g: dict, g0: np.ndarray, dyn: Dynamics, pool=None) -> tuple[np.ndarra
                   reference=dyn.reference(), **opts)  # fmt: skip
         how = np.bincount(res.decided_by, minlength=len(fast_engine.DECIDED_BY))
         info = {f"runs_{n}": int(c) for n, c in zip(fast_engine.DECIDED_BY, how, strict=True)}
+        info["runs_within_rounding"] = int(res.within_rounding.sum())
         return np.asarray(res.code, dtype=np.int8).reshape(shape), info
     ref = dyn.reference()
-    codes = np.array(
-        [
-            int(
-                ref(
-                    lane["beta1"][n],
-                    lane["beta2"][n],
-                    lane["alpha"][n],
-                    k=tuple(k[n]),
-                    q=tuple(q[n]),
-                    g0=flat[n],
-                )[0]
-            )  # fmt: skip
-            for n in range(flat.shape[0])
-        ],
-        dtype=np.int8,
-    )
-    return codes.reshape(shape), {}
+    codes = np.empty(flat.shape[0], dtype=np.int8)
+    near = 0
+    for n in range(flat.shape[0]):
+        out, run = ref(lane["beta1"][n], lane["beta2"][n], lane["alpha"][n], k=tuple(k[n]),
+                       q=tuple(q[n]), g0=flat[n])  # fmt: skip
+        codes[n] = int(out)
+        near += stop_rule.run_within_rounding(run)
+    return codes.reshape(shape), {"runs_within_rounding": int(near)}
 
 
 def sum_info(infos) -> dict:
@@ -237,36 +229,49 @@ def outcome_dataset(
     """The CF-1.10 outcome atlas of the counts of every ``beta1`` row (:func:`outcome_slab`,
     concatenated along ``beta1``) and, with ``theory``, the certified theory verdicts of the same
     cells (:func:`atlas.generate` of ``scene``)."""
-    dims = scene.dims
-    shape = tuple(scene.axes[d].size for d in dims)
+    shape = tuple(scene.axes[d].size for d in scene.dims)
     counts = counts.reshape(shape + (CLASSES.size,))
-    n = dyn.n_perturb
-    majority = CLASSES[counts.argmax(axis=-1)]
-    agreement = (counts.max(axis=-1) / n).astype(np.float32)
-    g = _grid(scene, range(scene.axes["beta1"].size))
-    region = no_stable_subclass(g["beta1"], g["beta2"], g["alpha"])
-    region = region.reshape(g["beta1"].shape)[(...,) + (0,) * (region.ndim - 3)]
-    region_dims = tuple(d for d in ("beta1", "beta2", "alpha") if d in dims)
-    region = region.reshape(tuple(scene.axes[d].size for d in region_dims))
-    flags = {
-        "flag_values": CLASSES.copy(),
-        "flag_meanings": " ".join(o.label for o in Outcome),
-    }
     coords = {
         k: ((k,) if ax.is_dim else (), ax.values, coord_attrs(k)) for k, ax in scene.axes.items()
     }
     coords["outcome_class"] = (
         ("outcome_class",),
         CLASSES.copy(),
-        {"long_name": "outcome class of a simulated run", **flags},
+        {"long_name": "outcome class of a simulated run", **_flags()},
     )
-    data = {
+    attrs = _attrs(scene, dyn, info, math.prod(shape), history)
+    ds = xr.Dataset(_data_vars(scene, counts, dyn.n_perturb), coords=coords, attrs=attrs)
+    if theory:
+        th = generate(scene)
+        for name in th.data_vars:
+            ds[name] = th[name]
+        ds.attrs["theory"] = "certified verdicts of atlas.generate over the same cells"
+        ds.attrs["theory_undecided_fast"] = int(th.attrs["undecided_fast"])
+        ds.attrs["theory_undecided"] = int(th.attrs["undecided_after_resolve"])
+    return ds
+
+
+def _flags() -> dict:
+    """The CF flags of the outcome classes (a fresh copy)."""
+    return {"flag_values": CLASSES.copy(), "flag_meanings": " ".join(o.label for o in Outcome)}
+
+
+def _data_vars(scene: Scene, counts: np.ndarray, n: int) -> dict:
+    """``outcome``, ``outcome_count``, ``agreement`` and ``no_stable_subclass`` of the counts
+    (grid shape + classes) of ``n`` runs per cell."""
+    dims = scene.dims
+    g = _grid(scene, range(scene.axes["beta1"].size))
+    region = no_stable_subclass(g["beta1"], g["beta2"], g["alpha"])
+    region = region.reshape(g["beta1"].shape)[(...,) + (0,) * (region.ndim - 3)]
+    region_dims = tuple(d for d in ("beta1", "beta2", "alpha") if d in dims)
+    region = region.reshape(tuple(scene.axes[d].size for d in region_dims))
+    return {
         "outcome": (
             dims,
-            majority,
+            CLASSES[counts.argmax(axis=-1)],
             {
                 "long_name": "most frequent simulated outcome of the perturbed SS equilibria",
-                **flags,
+                **_flags(),
             },
         ),
         "outcome_count": (
@@ -276,7 +281,7 @@ def outcome_dataset(
         ),
         "agreement": (
             dims,
-            agreement,
+            (counts.max(axis=-1) / n).astype(np.float32),
             {"units": "1", "long_name": "fraction of perturbed runs giving outcome"},
         ),
         "no_stable_subclass": (
@@ -285,8 +290,13 @@ def outcome_dataset(
             {"long_name": "subclass 132, 133, 142, 143 or dual (paper Sec. 6.4-6.5)"},
         ),
     }
+
+
+def _attrs(scene: Scene, dyn: Dynamics, info: dict, cells: int, history) -> dict:
+    """The global attributes of an outcome atlas of ``cells`` cells (``info``: trajectories,
+    seconds, how the runs were decided)."""
     seconds = float(info.get("seconds", 0.0))
-    trajectories = int(info.get("trajectories", math.prod(shape) * n))
+    trajectories = int(info.get("trajectories", cells * dyn.n_perturb))
     attrs = {
         "Conventions": "CF-1.10",
         "title": "Outcome atlas of the compliant two-contact dynamics",
@@ -306,15 +316,7 @@ def outcome_dataset(
     }
     if "q" in scene.axes and not scene.axes["q"].is_dim:
         attrs["q1"] = attrs["q2"] = float(scene.axes["q"].values)
-    ds = xr.Dataset(data, coords=coords, attrs=attrs)
-    if theory:
-        th = generate(scene)
-        for name in th.data_vars:
-            ds[name] = th[name]
-        ds.attrs["theory"] = "certified verdicts of atlas.generate over the same cells"
-        ds.attrs["theory_undecided_fast"] = int(th.attrs["undecided_fast"])
-        ds.attrs["theory_undecided"] = int(th.attrs["undecided_after_resolve"])
-    return ds
+    return attrs
 
 
 def _default_history(scene: Scene, dyn: Dynamics) -> str:

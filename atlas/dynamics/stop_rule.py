@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from atlas.dynamics.system import iwc_aligned_many
+from atlas.dynamics.system import MODE_NAMES, Status, iwc_aligned_many
 
-__all__ = ["AMPLITUDE", "PENETRATION", "DEEP", "ALIGN_TOL", "limits", "limit_rows", "beyond",
-           "stopped", "locate"]  # fmt: skip
+__all__ = ["AMPLITUDE", "PENETRATION", "DEEP", "ALIGN_TOL", "ROUNDING_SHARE", "limits",
+           "limit_rows", "beyond", "stopped", "within_rounding", "run_within_rounding", "locate"]  # fmt: skip
 
 #: default limits relative to the run's length scale: amplitude, aligned penetration
 AMPLITUDE, PENETRATION = 1e4, 1e3
@@ -32,6 +32,9 @@ AMPLITUDE, PENETRATION = 1e4, 1e3
 DEEP = 1e3
 #: alignment tolerance of the aligned-penetration stop (the classification uses 1e-2)
 ALIGN_TOL = 1e-3
+#: share of a state's largest gap (velocity) within which the sign of a gap (velocity) is a
+#: rounding residue of the run (:func:`within_rounding`)
+ROUNDING_SHARE = 1e-9
 #: search rounds of :func:`locate` at most (each divides the bracket by ``SPLIT``)
 MAX_ROUNDS = 40
 
@@ -78,6 +81,42 @@ def stopped(g, mask, E, z_eq, amp, pen):
     if r.size:
         out[r] = iwc_aligned_many(E[r], z_eq[r], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL)
     return out
+
+
+def within_rounding(g, mask, E, z_eq, tol=1e-2):
+    """Divergence stops (bool (n,)) at the states ``g`` (n, 4) in configurations ``mask`` (n,)
+    (augmented matrices ``E`` (n, 5, 5), equilibria ``z_eq`` (n, 5)) whose verdict sits within
+    rounding: the IWC test of the classification (:func:`atlas.dynamics.system.iwc_aligned`,
+    tolerance ``tol``; paper Sec. 4.3) changes when the gaps and velocities within
+    ``ROUNDING_SHARE`` of the state's largest gap or velocity take either sign (a digit neither
+    engine keeps: e.g. a free gap of ``47`` or ``-3e-4`` beside an active one at ``-7e20``)."""
+    g = np.asarray(g, dtype=float)
+    mask = np.asarray(mask, dtype=int)
+    out = np.zeros(mask.shape[0], dtype=bool)
+    with np.errstate(invalid="ignore"):
+        size = np.repeat(np.abs(g).reshape(-1, 2, 2).max(axis=2), 2, axis=1)  # |d|, |d|, |v|, |v|
+        small = np.abs(g) <= ROUNDING_SHARE * size
+    r = np.flatnonzero((mask > 0) & small.any(axis=1) & np.isfinite(g).all(axis=1))
+    if r.size == 0:
+        return out
+    g, small, size, mask, E, z_eq = g[r], small[r], size[r], mask[r], E[r], z_eq[r]
+    base = iwc_aligned_many(E, z_eq, mask, g, tol)
+    for combo in range(16):  # every sign of the small components
+        sign = np.where((combo >> np.arange(4)) & 1, 1.0, -1.0)
+        moved = np.where(small, sign * ROUNDING_SHARE * size, g)
+        out[r] |= iwc_aligned_many(E, z_eq, mask, moved, tol) != base
+    return out
+
+
+def run_within_rounding(res) -> bool:
+    """:func:`within_rounding` of a run of the exact simulator (a
+    :class:`atlas.dynamics.SimulationResult` that stopped as ``diverged``)."""
+    if res.status != Status.DIVERGED:
+        return False
+    mode = res._system.modes[MODE_NAMES.index(res.mode_final)]
+    z_eq = np.full(5, np.nan) if mode.z_eq is None else mode.z_eq
+    return bool(within_rounding(np.asarray(res.g_final)[None, :4], [mode.mask], mode.E[None],
+                                z_eq[None])[0])  # fmt: skip
 
 
 def locate(state_at, holds, a, b, xtol, near=None):

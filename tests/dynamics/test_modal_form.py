@@ -88,3 +88,52 @@ def test_segments_follow_the_matrix_exponential(q):
             scale = 1 + np.abs(z[:4]).max()
             np.testing.assert_allclose(np.concatenate([d, v]), z[:4], atol=1e-9 * scale)
     assert ok.sum() >= n - 2
+
+
+#: degenerate directions: (beta1, beta2, configuration) with b_ii = 0 exactly (beta2 = 0) or by
+#: rounding (beta1 = pi / 2, beta2 = pi), det B = 0 exactly (beta1 = beta2) or by rounding
+#: (beta2 = beta1 + pi)
+_DEGENERATE = [(0.3 * PI, 0.0, 2), (PI / 2, 0.7 * PI, 1), (1.1 * PI, PI, 2), (1.5 * PI, -0.2 * PI, 1),
+               (0.6 * PI, 0.6 * PI, 3), (0.25 * PI, 1.25 * PI, 3), (1.75 * PI, 0.75 * PI, 3)]  # fmt: skip
+
+
+@pytest.mark.parametrize("q", [0.0, 0.6])
+@pytest.mark.parametrize(("beta1", "beta2", "mask"), _DEGENERATE)
+def test_closed_segments_follow_the_matrix_exponential(beta1, beta2, mask, q):
+    """In the defective and near-defective configurations of degenerate directions (condition
+    ``~1e8`` or a singular ``B_SS``: not ``ok``) the closed form (``closed``) gives the gaps and
+    velocities of ``scipy.linalg.expm(E_S t) (g, 1)`` of the unperturbed matrices to 1e-11 of the
+    state over ``t <= 6`` (the rounding-level entry of ``B`` set to zero changes them by
+    ``~1e-16 t^2``)."""
+    from scipy.linalg import expm
+
+    k = (0.4, 1.0)
+    lanes = mf.Lanes.of(beta1, beta2, 0.3 * PI, k, q)
+    tables = mf.modal_tables(lanes)
+    assert not tables[mask].ok[0] and tables[mask].closed[0]
+    rng = np.random.default_rng(mask)
+    g = rng.normal(size=(1, 4))
+    P, U, lam, valid, H, ok = mf.segments(lanes, tables, np.zeros(1, int), np.array([mask]), g,
+                                          closed=True)  # fmt: skip
+    assert ok[0] and P.shape == (1, 2, 5)
+    E = SY.build_system(beta1, beta2, 0.3 * PI, k, (q, q), (1, 1), 1.0, 0.1).modes[mask].E
+    powers = np.arange(5)
+    for t in (0.0, 0.37, 1.9, 6.0):
+        z = expm(E * t) @ np.concatenate([g[0], [1.0]])
+        e = np.exp(lam[0] * t)
+        d = P[0] @ t**powers + (U[0] * e).sum(axis=1).real
+        v = P[0, :, 1:] @ (powers[1:] * t ** powers[:-1]) + (U[0] * lam[0] * e).sum(axis=1).real
+        np.testing.assert_allclose(np.concatenate([d, v]), z[:4], atol=1e-11 * np.abs(z).max())
+
+
+def test_closed_tables_keep_the_exact_simulators_eigenvalues_and_equilibria():
+    """The tables of closed configurations hold what :func:`atlas.dynamics.system.build_system`
+    computes from the unperturbed ``B`` (the classification and the stop rule read them)."""
+    for beta1, beta2, mask in _DEGENERATE:
+        tables = mf.modal_tables(mf.Lanes.of(beta1, beta2, 0.3 * PI, (0.4, 1.0), 0.6))
+        mode = SY.build_system(beta1, beta2, 0.3 * PI, (0.4, 1.0), (0.6, 0.6), (1, 1), 1.0,
+                               0.1).modes[mask]  # fmt: skip
+        na = mode.eig.size
+        assert np.array_equal(tables.lam[mask, 0, :na], mode.eig)
+        want = np.full(2, np.nan) if mode.z_eq is None else mode.z_eq[:2]
+        assert np.array_equal(tables.d_eq[mask, 0], want, equal_nan=True)

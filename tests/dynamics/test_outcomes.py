@@ -41,6 +41,20 @@ def test_dataset_schema_and_cf_attributes(atlas4):
     assert ds.attrs["source"].startswith("painleve-atlas")
     assert ds.attrs["n_perturb"] == 3 and ds.attrs["trajectories"] == 16 * 3
     assert sum(ds.attrs[f"runs_{k}"] for k in D.fast_engine.DECIDED_BY) == 16 * 3
+    assert ds.attrs["runs_within_rounding"] == 0
+
+
+@pytest.mark.parametrize("engine", ["fast", "numpy"])
+def test_runs_within_rounding_are_counted_by_every_engine(engine):
+    """Row beta1 = pi of a 0:2pi:8 grid (kappa 0.1, q 0.05, alpha 0.3pi): at beta2 = 0 the SS
+    'equilibrium' of ``det B = -1.2e-16`` starts a run that diverges with its free gap a rounding
+    residue of the state (stop_rule.within_rounding): one run flagged, by either engine, with
+    the same counts."""
+    scene = O.outcome_scene("0:2pi:8", "0:2pi:8", alpha="0.3pi", kappa=0.1, q=0.05)
+    counts, info = O.outcome_slab(scene, range(4, 5), O.Dynamics(engine=engine))
+    assert info["runs_within_rounding"] == 1
+    fast, _ = O.outcome_slab(scene, range(4, 5), O.Dynamics())
+    np.testing.assert_array_equal(counts, fast)
 
 
 def test_distribution_counts_sum_to_n_perturb(atlas4):
