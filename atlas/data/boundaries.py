@@ -86,7 +86,17 @@ from atlas.data import (
     limits,
     marching,
 )
-from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
+from atlas.data.boundary_args import (
+    CHORD,
+    MAX_CHECK,
+    MAX_LEVELS,
+    MIN_CHORD,
+    MIN_TOL,
+    TOL,
+    check_args,
+    check_memory,
+)
+from atlas.data.boundary_curves import Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
     LINE_GRADS,
     class_lines,
@@ -100,6 +110,11 @@ from atlas.data.scene import Scene
 
 __all__ = [
     "CHORD",
+    "MAX_CHECK",
+    "MAX_LEVELS",
+    "MIN_CHORD",
+    "MIN_TOL",
+    "check_memory",
     "TOL",
     "Boundaries",
     "Curve",
@@ -564,7 +579,7 @@ def slice_boundaries(
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
     beta1, beta2 = (checks.real(k, v).ravel() for k, v in (("beta1", beta1), ("beta2", beta2)))
     shape = (beta1.size, beta2.size)
-    fields = _check_args(tol, chord, check, max_levels, fields, shape)
+    fields = check_args(tol, chord, check, max_levels, fields, shape)
     tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
     dtype = checks.float_dtype(dtype)
     model = tuple(_model_value(k, v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
@@ -689,64 +704,6 @@ def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
     return kept + proven, roots
 
 
-#: the smallest vertex tolerance [rad]: a bracket between float coordinates near ``2 pi``
-#: (spacing 8.9e-16 rad) cannot be shrunk reliably below a few units in the last place
-MIN_TOL = 2.0**-47
-#: the largest resampling factor of the lost-branch check and its refinement levels
-MAX_CHECK, MAX_LEVELS = 16, 4
-#: the smallest chord tolerance [rad]: below it a curve needs ~1e6 vertices per radian
-MIN_CHORD = 1e-9
-#: bytes per point of the finest checked grid (nodes, codes, kernel batches), and the limit [B]
-BYTES_PER_POINT, MEMORY_LIMIT = 64, 4 << 30
-
-
-def check_memory(n1: int, n2: int, check: int, max_levels: int) -> int:
-    """Worst-case bytes of the lost-branch check on an ``n1 x n2`` grid: the grid refined
-    ``max_levels`` times by ``check`` and resampled once more."""
-    k = max(check, 1) ** (max_levels + 1) if check > 1 else 1
-    return BYTES_PER_POINT * (n1 * k) * (n2 * k)
-
-
-def _integer(x) -> bool:
-    return isinstance(x, int) and not isinstance(x, bool)
-
-
-def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)) -> tuple[str, ...]:
-    """One-line ``ValueError`` naming the first bad argument; returns the fields as a tuple
-    (``"SS"`` and ``"SS,II"`` are accepted as strings; numpy scalars as the numbers they hold)."""
-    tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
-    num = (int, float)
-    if not (isinstance(tol, num) and not isinstance(tol, bool) and MIN_TOL <= tol < 0.1):
-        raise ValueError(
-            f"tol: must be in [{MIN_TOL:.3g}, 0.1) rad (float coordinates near 2 pi cannot "
-            f"resolve a smaller bracket), got {tol!r}"
-        )
-    if not (isinstance(chord, num) and max(tol, MIN_CHORD) <= chord <= 0.1):
-        raise ValueError(f"chord: must be in [max(tol, {MIN_CHORD:g}), 0.1] rad, got {chord!r}")
-    if not (_integer(check) and 0 <= check <= MAX_CHECK):
-        raise ValueError(f"check: must be an integer in [0, {MAX_CHECK}], got {check!r}")
-    if not (_integer(max_levels) and 0 <= max_levels <= MAX_LEVELS):
-        raise ValueError(f"max_levels: must be an integer in [0, {MAX_LEVELS}], got {max_levels!r}")
-    if isinstance(fields, str):  # "SS", "SS,II"
-        fields = tuple(f.strip() for f in fields.split(",") if f.strip())
-    fields = tuple(fields)
-    bad = [f for f in fields if f not in brackets.FIELDS]
-    if bad or not fields:
-        raise ValueError(
-            f"fields: must be a non-empty subset of {list(brackets.FIELDS)}, got {fields!r}"
-        )
-    for name, n in zip(("beta1", "beta2"), shape):
-        if n < 2:
-            raise ValueError(f"{name}: needs at least 2 values for a grid of cells, got {n}")
-    need = check_memory(*shape, check, max_levels)
-    if need > MEMORY_LIMIT:
-        raise ValueError(
-            f"check: {check} on a {shape[0]}x{shape[1]} grid may need {need / 2**30:.1f} GiB "
-            f"(limit {MEMORY_LIMIT / 2**30:.0f} GiB); use a smaller check or grid"
-        )
-    return fields
-
-
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
     """``beta1, beta2`` and the model slices ``(kappa, q1, q2)`` of a scene or an atlas."""
     if isinstance(source, Scene):
@@ -781,7 +738,7 @@ def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
     b1, b2, models = _slices(source)
     keys = ("tol", "chord", "check", "max_levels", "fields")
     args = {k: options[k] for k in keys if k in options}
-    _check_args(**(dict(tol=TOL, chord=CHORD, check=2, max_levels=2, fields=("SS",)) | args),
+    check_args(**(dict(tol=TOL, chord=CHORD, check=2, max_levels=2, fields=("SS",)) | args),
                 shape=(b1.size, b2.size))  # fmt: skip
     if size_check:
         check = checks.plain(options.get("check", 2))

@@ -19,45 +19,11 @@ import xarray as xr
 
 from atlas.core import brackets
 from atlas.core.config import __version__
+from atlas.data.boundary_args import CHORD, CODE_MEANINGS, CSV_COLUMNS, TOL
 from atlas.data.engine import REFERENCES
 from atlas.data.io import atomic_path, atomic_write_text
 
 __all__ = ["CHORD", "CSV_COLUMNS", "TOL", "Boundaries", "Curve", "Point", "summary"]
-
-#: default certified vertex tolerance (bracket length) [rad]
-TOL = 1e-10
-#: default chord tolerance (measured sagitta between vertices) [rad]
-CHORD = 1e-6
-#: the columns of :meth:`Boundaries.to_csv`: ``record`` ``vertex`` (one row per curve vertex, in
-#: order along the curve) or ``point`` (a codimension-2 point); ``curve`` the curve's index;
-#: ``field`` ``SS``/``II``/``class``; ``kind`` the curve kind (``SS_stability``,
-#: ``II_consistency``, ``II_stability``, ``class_line``) or point kind; ``side_left``,
-#: ``side_right``, ``side_on`` the codes left / right of the direction of travel and on the curve
-#: (-1: none; SS 0 unstable, 1 stable, 2 neutral; II 0 inconsistent, 1 consistent and unstable,
-#: 2 consistent and stable, 3 consistent and neutral); ``on_class_line`` 0/1; ``kappa, q1, q2``
-#: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad]
-#: (``nan``: a point where the curve crosses a seam, interpolated on its segment);
-#: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1;
-#: ``spliced`` 0/1: the vertex is a proven codimension-2 point (:attr:`Curve.spliced`)
-CSV_COLUMNS = (
-    "record",
-    "curve",
-    "field",
-    "kind",
-    "side_left",
-    "side_right",
-    "side_on",
-    "on_class_line",
-    "kappa",
-    "q1",
-    "q2",
-    "beta1",
-    "beta2",
-    "bracket",
-    "uncertainty",
-    "proven",
-    "spliced",
-)
 
 
 @dataclass
@@ -209,13 +175,6 @@ def _feature(kind, coords, props) -> dict:
         "geometry": {"type": kind, "coordinates": coords},
         "properties": props,
     }
-
-
-#: the meanings of the side codes, for the ``comment`` of the side variables
-CODE_MEANINGS = (
-    "-1: none; field SS: 0 unstable, 1 stable, 2 neutral; field II: 0 inconsistent, "
-    "1 consistent and unstable, 2 consistent and stable, 3 consistent and neutral"
-)
 
 
 _GEO, _RAD, _ONE = {"geometry": "boundary_geometry"}, {"units": "rad"}, {"units": "1"}
