@@ -143,7 +143,6 @@ def _ii_polynomials(c1, s1, c2, s2, kappa, q1, q2) -> list:
     return [p.discriminant("l"), p.resultant(T, "l")]
 
 
-@functools.cache
 def boundary_polynomials(fld, m, model) -> tuple:
     """The numerators ``F(t, e)`` (``flint.fmpq_mpoly``) of the boundary polynomials of ``fld``
     (module docstring) near class line ``m``; ``model = (kappa, q1, q2)``."""
@@ -167,7 +166,7 @@ def _germ(F):
     return out
 
 
-@functools.cache
+@functools.lru_cache(maxsize=64)  # one slice's lines and fields, a few times over
 def germs(fld, m, model) -> tuple:
     """Per boundary polynomial of ``fld`` near line ``m``: its germ rows (:func:`_germ`)."""
     return tuple(_germ(F) for F in boundary_polynomials(fld, m, model))
