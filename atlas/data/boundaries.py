@@ -637,7 +637,7 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
         attrs["line_points"] = sum(p.proven for p in pts)
     distance = max(chord, near)
     roots = boundary_germs.germ_roots(fld, model)
-    added, left, (stretches, gap, left_over, unproven) = boundary_cover.cover_lines(
+    added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )
     curves += added
@@ -665,6 +665,7 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
             "cover_distance": distance,
             "uncovered_line_length": gap,
             "line_length_left_uncovered": left_over,
+            "uncovered_pieces": pieces,
             "line_pieces_added": len(added),
             "line_intervals_unproven": unproven,
             "lines_complete": int(unproven == 0),

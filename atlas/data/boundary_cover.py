@@ -140,7 +140,8 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
     within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line
     (:func:`_pulled` ends); returns them, the pieces still uncovered as points (kind
     ``uncovered_class_line`` at their middle, not proven), and the stats ``(stretches,
-    uncovered length [rad], length still uncovered [rad], unproven intervals)``.  A gap no
+    uncovered length [rad], length still uncovered [rad], unproven intervals, pieces)``, the
+    pieces still uncovered as ``[beta1, beta2]`` of their two ends [rad].  A gap no
     longer than ``distance`` next to a covered part is left (each of its points is within ``2
     distance`` of a curve).  ``roots``: the germ roots of ``fld``
     (:func:`atlas.data.boundary_germs.germ_roots`)."""
@@ -157,9 +158,9 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
             length += size
             gaps.append((m, np.asarray(base, float), d, a, b, left, right))
     if not gaps:
-        return [], [], (len(stretches), length, 0.0, unproven)
+        return [], [], (len(stretches), length, 0.0, unproven, [])
     ends, ok = _pulled(fld, gaps, model, tol, dtype)
-    added, left, left_over = [], [], 0.0
+    added, left, left_over, pieces = [], [], 0.0, []
     for (m, base, d, a0, b0, lft, rgt), (a, b), good in zip(gaps, ends, ok):
         if good and b > a:
             xy = _on_torus(m, base + np.array([[a], [b]]) * d)
@@ -168,9 +169,10 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
         for u, v in rest:
             if (v - u) * math.hypot(*d) > 2 * tol:
                 left_over += (v - u) * math.hypot(*d)
-                at = _on_torus(m, base[None] + 0.5 * (u + v) * d[None])[0]
-                left.append(Point(*at, "uncovered_class_line", math.nan, *model, field=fld))
-    return added, left, (len(stretches), length, left_over, unproven)
+                at = _on_torus(m, base[None] + np.array([[u], [0.5 * (u + v)], [v]]) * d[None])
+                left.append(Point(*at[1], "uncovered_class_line", math.nan, *model, field=fld))
+                pieces.append(at[[0, 2]].tolist())
+    return added, left, (len(stretches), length, left_over, unproven, pieces)
 
 
 def _codes_at(fld, gaps, u, step, model, dtype):

@@ -102,10 +102,17 @@ def test_uncovered_parts_of_a_stretch():
 
 def test_what_is_left_uncovered_is_listed(q0):
     """The class-line length still uncovered is listed piece by piece as unproven points on a
-    class line, where the exact tier sees different codes 1e-13 rad off the line's two sides
+    class line (and by its ends in ``SS_uncovered_pieces``), where the exact tier sees different codes 1e-13 rad off the line's two sides
     (1e-9 off it both are in the needle a tangent boundary leaves along the line)."""
     left = [p for p in q0.points if p.kind == "uncovered_class_line"]
     assert (q0.attrs["SS_line_length_left_uncovered"] > 0) == bool(left)
+    # each piece also by its two ends (attrs): its middle is the point, the lengths add up
+    pieces = np.array(q0.attrs["SS_uncovered_pieces"])
+    assert pieces.shape == (len(left), 2, 2)
+    mids = np.array([[p.beta1, p.beta2] for p in left])
+    np.testing.assert_allclose(pieces.mean(axis=1), mids, atol=1e-12)
+    total = np.hypot(*(pieces[:, 1] - pieces[:, 0]).T).sum()
+    assert total == pytest.approx(q0.attrs["SS_line_length_left_uncovered"], rel=1e-9)
     model = (0.5, 0.0, 0.0)
     for p in left:
         xy = np.array([p.beta1, p.beta2])
