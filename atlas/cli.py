@@ -300,8 +300,15 @@ def _add_mujoco(sub) -> None:
 
 
 def _add_boundaries(sub) -> None:
-    from atlas.data.boundaries import CHORD, MAX_CHECK, MIN_CHORD, MIN_TOL, TOL
-    from atlas.data.boundary_curves import CODE_MEANINGS, CSV_COLUMNS
+    from atlas.data.boundary_args import (
+        CHORD,
+        CODE_MEANINGS,
+        CSV_COLUMNS,
+        MAX_CHECK,
+        MIN_CHORD,
+        MIN_TOL,
+        TOL,
+    )
 
     pb = sub.add_parser(
         "boundaries",
@@ -463,8 +470,6 @@ def _output_rules(args) -> None:
     name with a known ending (``out: ...`` otherwise), its directory exists and is writable, and an
     existing file is replaced only with ``--overwrite``; ``paper`` and ``bench`` write into a
     directory that exists or whose parent does."""
-    from atlas.data.io import check_output_path
-
     command = args.command
     if command == "simulate" and args.outcome_map:
         command = "simulate --map"
@@ -479,9 +484,20 @@ def _output_rules(args) -> None:
                 f"{opt}: expected a file name ending in {', '.join(endings)}, got {path!r}"
             )
         if opt != "store" and command != "generate":  # generate checks after --resume/--store
+            from atlas.data.io import check_output_path
+
             check_output_path(path, getattr(args, "overwrite", False))
     if command in ("paper", "bench") and args.out is not None:
         _check_output_dir(args.out)
+
+
+def _refuse_early(args) -> None:
+    """The checks that need no heavy import, before any (a refusal costs no JAX start-up):
+    ``atlas boundaries``' ``--tol``, ``--chord``, ``--check`` and ``--fields``."""
+    if args.command == "boundaries":
+        from atlas.data.boundary_args import check_args
+
+        check_args(args.tol, args.chord, args.check, 2, args.fields)
 
 
 def _check_output_dir(path: str) -> None:
@@ -528,6 +544,12 @@ def _positive_int(name):
 
 def _number(name):
     def conv(text):
+        try:  # a plain number needs no parser (nor its imports)
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if math.isfinite(value):
+            return value
         from atlas.data.scene import parse_values
 
         try:
@@ -560,7 +582,7 @@ def _dispatch_estimate(args):
         outs = [args.out] if args.out else []
         return limits.grid_estimate("mechanism", points, outputs=outs, **limits.MECHANISM)
     if args.command == "boundaries":
-        from atlas.data.boundaries import MAX_CHECK
+        from atlas.data.boundary_args import MAX_CHECK
         from atlas.data.scene import Scene
 
         if not 0 <= args.check <= MAX_CHECK:
@@ -699,6 +721,7 @@ def _run_name(args) -> str:
 def _main(argv) -> int:
     try:
         args = build_parser(_command(argv)).parse_args(argv)
+        _refuse_early(args)
         _output_rules(args)
         from atlas.core.warm import kernel_cache
 

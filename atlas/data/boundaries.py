@@ -78,6 +78,7 @@ from scipy.spatial import cKDTree
 from atlas.core import brackets, checks
 from atlas.data import (
     boundary_cover,
+    boundary_germs,
     boundary_paths,
     boundary_points,
     boundary_sides,
@@ -85,7 +86,17 @@ from atlas.data import (
     limits,
     marching,
 )
-from atlas.data.boundary_curves import CHORD, TOL, Boundaries, Curve, Point, summary
+from atlas.data.boundary_args import (
+    CHORD,
+    MAX_CHECK,
+    MAX_LEVELS,
+    MIN_CHORD,
+    MIN_TOL,
+    TOL,
+    check_args,
+    check_memory,
+)
+from atlas.data.boundary_curves import Boundaries, Curve, Point, summary
 from atlas.data.class_lines import (
     LINE_GRADS,
     class_lines,
@@ -99,6 +110,11 @@ from atlas.data.scene import Scene
 
 __all__ = [
     "CHORD",
+    "MAX_CHECK",
+    "MAX_LEVELS",
+    "MIN_CHORD",
+    "MIN_TOL",
+    "check_memory",
     "TOL",
     "Boundaries",
     "Curve",
@@ -563,7 +579,7 @@ def slice_boundaries(
     [rad] (module docstring, steps 1-6); ``attrs`` holds the run's diagnostics per field."""
     beta1, beta2 = (checks.real(k, v).ravel() for k, v in (("beta1", beta1), ("beta2", beta2)))
     shape = (beta1.size, beta2.size)
-    fields = _check_args(tol, chord, check, max_levels, fields, shape)
+    fields = check_args(tol, chord, check, max_levels, fields, shape)
     tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
     dtype = checks.float_dtype(dtype)
     model = tuple(_model_value(k, v) for k, v in (("kappa", kappa), ("q1", q1), ("q2", q2)))
@@ -571,70 +587,93 @@ def slice_boundaries(
     by_field = {}
     for fld in fields:
         t0 = time.perf_counter()
-        b1, b2 = _nudged(_wrapped(np.sort(beta1)), 0), _nudged(_wrapped(np.sort(beta2)), 1)
-        h = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
-        b1, b2, codes, hidden, levels = _checked_grid(fld, b1, b2, model, check, max_levels, dtype)
-        polys = _certified_polys(fld, b1, b2, codes, model, tol, dtype)
-        near = _near(tol, h)
-        unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
-        box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
-        cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
-        tips = boundary_tips.line_tips(fld, box, cell / 4, model, tol, dtype)
-        # a wedge of a boundary tangent to the line is as wide as the square of the distance
-        # to its tip: the grid first sees it ~sqrt(cell) away
-        reach = max(32 * cell, 4 * math.sqrt(cell))
-        attached = boundary_tips.attach_tips(polys, tips, near, chord, reach=reach)
-        if attached:
-            unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
-        spiked = boundary_tips.spike_tips(polys, tips, near, chord, cell)
-        if spiked:
-            unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
-        curves, pts = _pieces(fld, polys, model, tol, box)
-        curves, dropped = boundary_sides.label_pieces(fld, curves, model, tol, near, dtype)
-        curves, retraced = boundary_paths.simple_paths(curves, chord)
-        for p in pts:
-            p.field = fld
-        roots = boundary_points.line_roots(model) if fld == "SS" else []
-        if fld == "SS":
-            pts, out.attrs["SS_line_roots"] = _proven_line_points(pts, model, cell, roots, dtype)
-            out.attrs["SS_line_points"] = sum(p.proven for p in pts)
-        distance = max(chord, near)
-        added, left, (stretches, gap, left_over) = boundary_cover.cover_lines(
-            fld, box, model, curves, roots, tips, distance, tol, dtype
-        )
-        curves += added
-        proven = [p for p in pts if p.proven]
-        curves, spliced = boundary_points.attach_points(curves, proven, tol, cell, tol)
-        off = _off_curves(proven, curves, 2 * distance)
-        pts += left
-        reached = np.concatenate([polys.xy] + [c.vertices for c in added])
+        grid = _field_grid(fld, beta1, beta2, model, check, max_levels, dtype)
+        curves, pts, attrs = _field_curves(fld, grid, model, tol, chord, dtype)
         by_field[fld] = curves
         out.curves += curves
         out.points += pts
-        out.attrs[f"{fld}_grid"] = f"{b1.size}x{b2.size}"
-        out.attrs[f"{fld}_refined_levels"] = levels
-        out.attrs[f"{fld}_hidden_cells"] = hidden
-        out.attrs[f"{fld}_unrefined_segments"] = unrefined
-        out.attrs[f"{fld}_unlabelled_segments"] = dropped
-        out.attrs[f"{fld}_retraced_vertices"] = retraced
-        out.attrs[f"{fld}_tips_attached"] = attached + spiked
-        out.attrs[f"{fld}_tips_unreached"] = boundary_tips.unreached(tips, reached, cell)
-        out.attrs[f"{fld}_line_stretches"] = stretches
-        out.attrs[f"{fld}_cover_distance"] = distance
-        out.attrs[f"{fld}_uncovered_line_length"] = gap
-        out.attrs[f"{fld}_line_length_left_uncovered"] = left_over
-        out.attrs[f"{fld}_line_pieces_added"] = len(added)
-        out.attrs[f"{fld}_lines_complete"] = int(fld == "SS")
-        out.attrs[f"{fld}_points_attached"] = spliced
-        out.attrs[f"{fld}_points_off_curves"] = off
-        out.attrs[f"{fld}_max_bracket"] = float(polys.width.max(initial=0.0))
-        if out.attrs[f"{fld}_max_bracket"] > tol:  # bisect shrinks every bracket to <= tol
-            raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
+        out.attrs.update({f"{fld}_{k}": v for k, v in attrs.items()})
         out.attrs[f"{fld}_seconds"] = time.perf_counter() - t0
     out.points += _meetings(by_field.get("SS", []), by_field.get("II", []), model)
     for p in out.points:
         p.beta1, p.beta2 = float(p.beta1) % TWO_PI, float(p.beta2) % TWO_PI
     return out
+
+
+def _field_grid(fld, beta1, beta2, model, check, max_levels, dtype) -> dict:
+    """Steps 1-2: the nudged, checked grid of ``fld`` and its diagnostics."""
+    b1, b2 = _nudged(_wrapped(np.sort(beta1)), 0), _nudged(_wrapped(np.sort(beta2)), 1)
+    h = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
+    b1, b2, codes, hidden, levels = _checked_grid(fld, b1, b2, model, check, max_levels, dtype)
+    cell = float(max(np.diff(b1).max(initial=0), np.diff(b2).max(initial=0)))
+    box = ((b1[0], b1[-1]), (b2[0], b2[-1]), h)
+    return dict(b1=b1, b2=b2, codes=codes, hidden=hidden, levels=levels, box=box, cell=cell)
+
+
+def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict]:
+    """Steps 3-9 for one field on its checked grid (:func:`_field_grid`): the curves, the points
+    and the diagnostics (``attrs`` without the field's prefix)."""
+    b1, b2, box, cell = grid["b1"], grid["b2"], grid["box"], grid["cell"]
+    polys = _certified_polys(fld, b1, b2, grid["codes"], model, tol, dtype)
+    near = _near(tol, box[2])
+    unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
+    tips = boundary_tips.line_tips(fld, box, cell / 4, model, tol, dtype)
+    # a wedge of a boundary tangent to the line is as wide as the square of the distance to its
+    # tip: the grid first sees it ~sqrt(cell) away
+    attached = boundary_tips.attach_tips(
+        polys, tips, near, chord, reach=max(32 * cell, 4 * math.sqrt(cell))
+    )
+    spiked = boundary_tips.spike_tips(polys, tips, near, chord, cell)
+    if attached or spiked:
+        unrefined = _refine_chords(fld, polys, model, tol, chord, near, dtype)
+    curves, pts = _pieces(fld, polys, model, tol, box)
+    curves, dropped = boundary_sides.label_pieces(fld, curves, model, tol, near, dtype)
+    curves, retraced = boundary_paths.simple_paths(curves, chord)
+    for p in pts:
+        p.field = fld
+    attrs = {}
+    if fld == "SS":
+        pts, attrs["line_roots"] = _proven_line_points(pts, model, cell, dtype)
+        attrs["line_points"] = sum(p.proven for p in pts)
+    distance = max(chord, near)
+    roots = boundary_germs.germ_roots(fld, model)
+    added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
+        fld, box, model, curves, roots, distance, tol, dtype
+    )
+    curves += added
+    proven = [p for p in pts if p.proven]
+    curves, spliced = boundary_points.attach_points(curves, proven, tol, cell, 2 * distance, tol)
+    reached = np.concatenate([polys.xy] + [c.vertices for c in added])
+    max_bracket = float(polys.width.max(initial=0.0))
+    if max_bracket > tol:  # bisect shrinks every bracket to <= tol
+        raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
+    return (
+        curves,
+        pts + left,
+        attrs
+        | {
+            "grid": f"{b1.size}x{b2.size}",
+            "refined_levels": grid["levels"],
+            "hidden_cells": grid["hidden"],
+            "unrefined_segments": unrefined,
+            "unlabelled_segments": dropped,
+            "retraced_vertices": retraced,
+            "tips_attached": attached + spiked,
+            "tips_unreached": boundary_tips.unreached(tips, reached, cell),
+            "germ_roots": len(roots),
+            "line_stretches": stretches,
+            "cover_distance": distance,
+            "uncovered_line_length": gap,
+            "line_length_left_uncovered": left_over,
+            "uncovered_pieces": pieces,
+            "line_pieces_added": len(added),
+            "line_intervals_unproven": unproven,
+            "lines_complete": int(unproven == 0),
+            "points_attached": spliced,
+            "points_off_curves": _off_curves(proven, curves, 2 * distance),
+            "max_bracket": max_bracket,
+        },
+    )
 
 
 def _off_curves(points, curves, reach) -> int:
@@ -652,76 +691,18 @@ def _model_value(name, value) -> float:
     return float(arr.ravel()[0])
 
 
-def _proven_line_points(pts, model, cell, roots, dtype) -> tuple[list[Point], int]:
+def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
     """The SS points where a boundary meets a class line, found from the algebra with proven
     enclosures (:func:`atlas.data.boundary_points.ss_line_points`), replacing the estimated
     ``leaves_class_line`` and ``crosses_class_line`` points within a grid ``cell`` of one;
     returns the points and the algebraic count of roots on the lines."""
-    proven, roots = boundary_points.ss_line_points(model, dtype, roots=roots)
+    proven, roots = boundary_points.ss_line_points(model, dtype)
     if not proven:
         return pts, roots
     tree = cKDTree([[p.beta1, p.beta2] for p in proven])
     kinds = ("leaves_class_line", "crosses_class_line")
     kept = [p for p in pts if p.kind not in kinds or tree.query([p.beta1, p.beta2])[0] > cell]
     return kept + proven, roots
-
-
-#: the smallest vertex tolerance [rad]: a bracket between float coordinates near ``2 pi``
-#: (spacing 8.9e-16 rad) cannot be shrunk reliably below a few units in the last place
-MIN_TOL = 2.0**-47
-#: the largest resampling factor of the lost-branch check and its refinement levels
-MAX_CHECK, MAX_LEVELS = 16, 4
-#: the smallest chord tolerance [rad]: below it a curve needs ~1e6 vertices per radian
-MIN_CHORD = 1e-9
-#: bytes per point of the finest checked grid (nodes, codes, kernel batches), and the limit [B]
-BYTES_PER_POINT, MEMORY_LIMIT = 64, 4 << 30
-
-
-def check_memory(n1: int, n2: int, check: int, max_levels: int) -> int:
-    """Worst-case bytes of the lost-branch check on an ``n1 x n2`` grid: the grid refined
-    ``max_levels`` times by ``check`` and resampled once more."""
-    k = max(check, 1) ** (max_levels + 1) if check > 1 else 1
-    return BYTES_PER_POINT * (n1 * k) * (n2 * k)
-
-
-def _integer(x) -> bool:
-    return isinstance(x, int) and not isinstance(x, bool)
-
-
-def _check_args(tol, chord, check, max_levels, fields, shape=(2, 2)) -> tuple[str, ...]:
-    """One-line ``ValueError`` naming the first bad argument; returns the fields as a tuple
-    (``"SS"`` and ``"SS,II"`` are accepted as strings; numpy scalars as the numbers they hold)."""
-    tol, chord, check, max_levels = map(checks.plain, (tol, chord, check, max_levels))
-    num = (int, float)
-    if not (isinstance(tol, num) and not isinstance(tol, bool) and MIN_TOL <= tol < 0.1):
-        raise ValueError(
-            f"tol: must be in [{MIN_TOL:.3g}, 0.1) rad (float coordinates near 2 pi cannot "
-            f"resolve a smaller bracket), got {tol!r}"
-        )
-    if not (isinstance(chord, num) and max(tol, MIN_CHORD) <= chord <= 0.1):
-        raise ValueError(f"chord: must be in [max(tol, {MIN_CHORD:g}), 0.1] rad, got {chord!r}")
-    if not (_integer(check) and 0 <= check <= MAX_CHECK):
-        raise ValueError(f"check: must be an integer in [0, {MAX_CHECK}], got {check!r}")
-    if not (_integer(max_levels) and 0 <= max_levels <= MAX_LEVELS):
-        raise ValueError(f"max_levels: must be an integer in [0, {MAX_LEVELS}], got {max_levels!r}")
-    if isinstance(fields, str):  # "SS", "SS,II"
-        fields = tuple(f.strip() for f in fields.split(",") if f.strip())
-    fields = tuple(fields)
-    bad = [f for f in fields if f not in brackets.FIELDS]
-    if bad or not fields:
-        raise ValueError(
-            f"fields: must be a non-empty subset of {list(brackets.FIELDS)}, got {fields!r}"
-        )
-    for name, n in zip(("beta1", "beta2"), shape):
-        if n < 2:
-            raise ValueError(f"{name}: needs at least 2 values for a grid of cells, got {n}")
-    need = check_memory(*shape, check, max_levels)
-    if need > MEMORY_LIMIT:
-        raise ValueError(
-            f"check: {check} on a {shape[0]}x{shape[1]} grid may need {need / 2**30:.1f} GiB "
-            f"(limit {MEMORY_LIMIT / 2**30:.0f} GiB); use a smaller check or grid"
-        )
-    return fields
 
 
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
@@ -758,7 +739,7 @@ def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
     b1, b2, models = _slices(source)
     keys = ("tol", "chord", "check", "max_levels", "fields")
     args = {k: options[k] for k in keys if k in options}
-    _check_args(**(dict(tol=TOL, chord=CHORD, check=2, max_levels=2, fields=("SS",)) | args),
+    check_args(**(dict(tol=TOL, chord=CHORD, check=2, max_levels=2, fields=("SS",)) | args),
                 shape=(b1.size, b2.size))  # fmt: skip
     if size_check:
         check = checks.plain(options.get("check", 2))

@@ -2,14 +2,18 @@
 codes just off it differ on its two sides) is covered by a curve, or added as one (step 9 of
 :mod:`atlas.data.boundaries`).
 
-Each class line is cut at *breaks*: the multiples of ``pi/2`` (where it crosses other class lines),
-the tips of :func:`atlas.data.boundary_tips.line_tips` (where the code beside it changes, seen by
-a scan every quarter cell) and, for SS, every root of the SS components restricted to the line
-(:func:`atlas.data.boundary_points.line_roots`).  An SS boundary meets a class line only at such
-a root, so along each interval between breaks the SS codes beside the line are constant: one
+Each class line is cut at *breaks*: the multiples of ``pi/2`` (where it crosses other class lines)
+and every germ root of the field's boundary polynomials
+(:func:`atlas.data.boundary_germs.germ_roots`; for SS the roots of
+:func:`atlas.data.boundary_points.line_roots`, for II those of the discriminant of ``p`` and of
+its resultant with the tie polynomial).  A boundary of the field meets a class line only at such
+a root, so along each interval between breaks the codes beside the line are constant: one
 certified evaluation on each side, at the interval's middle, decides whether the whole interval is
-a boundary stretch (proven).  II has no such algebra here: its intervals rest on the scan (a change
-and change back between two samples can hide), a check, not a proof.
+a boundary stretch.  Each sample is taken :data:`TIP_OFFSET` off the line (along ``beta2`` on a
+diagonal) where :func:`atlas.data.boundary_germs.clear` proves that no boundary passes between
+it and the line: then the classification of the interval is proven; an interval where that fails
+is counted (``unproven``), unless it is shorter than ``2 tol`` (below the vertices' resolution,
+as the gaps left in :func:`cover_lines`).
 
 A stretch is covered where a curve segment of the field has both ends within ``distance`` of the
 line (every point of the line between their projections is then within ``distance`` of it); the
@@ -24,7 +28,7 @@ import math
 import numpy as np
 
 from atlas.core import brackets
-from atlas.data import boundary_sides
+from atlas.data import boundary_germs, boundary_sides
 from atlas.data.boundary_curves import Curve, Point
 from atlas.data.boundary_tips import TIP_OFFSET
 from atlas.data.class_lines import line_frames, line_values
@@ -37,18 +41,13 @@ TWO_PI = 2 * math.pi
 _TORUS_LINE = {4: 0, 9: 5, 10: 12}
 
 
-def _breaks(m, t0, t1, roots, tips) -> np.ndarray:
+def _breaks(m, t0, t1, roots) -> np.ndarray:
     """Sorted breaks of frame ``m`` within ``[t0, t1]`` (module docstring): ``t0``, ``t1``, the
-    multiples of ``pi/2``, the root angles of its torus line and the tips' parameters."""
+    multiples of ``pi/2`` and the root angles of its torus line."""
     quarter = np.arange(math.floor(t0 / (math.pi / 2)), math.ceil(t1 / (math.pi / 2)) + 1)
-    br = [np.array([t0, t1]), quarter * (math.pi / 2)]
     line = _TORUS_LINE.get(m, m)
-    br.append(np.array([float(b.mid()) for k, b, _ in roots if k == line]))
-    for side in (-1, 1):
-        if (m, side) in tips:
-            p, q, _, _ = tips[m, side]
-            br.append(_param(m, 0.5 * (p + q)))
-    t = np.unique(np.concatenate(br))
+    own = [float(b.mid()) for k, b, _ in roots if k == line]
+    t = np.unique(np.concatenate([[t0, t1], quarter * (math.pi / 2), own]))
     return t[(t >= t0) & (t <= t1)]
 
 
@@ -76,27 +75,33 @@ def _frames(box):
     return [f for f in frames if not (f[0] in (4, 9) and f[0] - 4 in have)]
 
 
-def line_stretches(fld, box, model, roots, tips, dtype="float64") -> list[tuple]:
+def line_stretches(fld, box, model, roots, tol, dtype="float64") -> tuple[list[tuple], int]:
     """The intervals of the class lines in ``box`` where the codes beside the line differ on its
     two sides: ``(m, base, direction, lo, hi, left, right)``, points ``base + t direction`` for
     ``lo <= t <= hi``, ``left``/``right`` the codes :data:`TIP_OFFSET` off it to the left and
-    the right of ``direction``."""
-    rows, lefts, rights = [], [], []
+    the right of ``direction`` (``beta2`` moved on a diagonal); and the number of intervals whose
+    codes are not proven to be those of the whole side (module docstring)."""
+    rows, lefts, rights, unproven = [], [], [], 0
     for m, base, direction, _, t0, t1 in _frames(box):
-        t = _breaks(m, t0, t1, roots, tips)
+        t = _breaks(m, t0, t1, roots)
         mid = 0.5 * (t[:-1] + t[1:])
         d = np.asarray(direction, float)
-        left = np.array([-d[1], d[0]]) / math.hypot(*d)
+        off = np.array([-1.0, 0.0]) if m < 5 else np.array([0.0, 1.0])  # to the left of d
         on = np.asarray(base) + mid[:, None] * d
-        lefts.append(on + TIP_OFFSET * left)
-        rights.append(on - TIP_OFFSET * left)
+        lefts.append(on + TIP_OFFSET * off)
+        rights.append(on - TIP_OFFSET * off)
         rows += [(m, base, direction, lo, hi) for lo, hi in zip(t[:-1], t[1:])]
+        line = _TORUS_LINE.get(m, m)
+        unproven += sum(
+            hi - lo > 2 * tol and not boundary_germs.clear(fld, model, line, u, 2 * TIP_OFFSET)
+            for lo, hi, u in zip(t[:-1], t[1:], mid)
+        )  # fmt: skip
     if not rows:
-        return []
+        return [], unproven
     xy = np.concatenate(lefts + rights)
     codes = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
     lft, rgt = np.split(codes, 2)
-    return [(*r, int(a), int(b)) for r, a, b in zip(rows, lft, rgt) if a != b]
+    return [(*r, int(a), int(b)) for r, a, b in zip(rows, lft, rgt) if a != b], unproven
 
 
 def uncovered(m, lo, hi, curves, distance) -> list[tuple[float, float]]:
@@ -130,14 +135,17 @@ def _grad(m) -> tuple[float, float]:
     return (1.0, 0.0) if m < 5 else (0.0, 1.0) if m < 10 else (-1.0, 1.0)
 
 
-def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="float64"):
+def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
     """The class-line stretches of ``fld`` (:func:`line_stretches`) not covered by ``curves``
     within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line
     (:func:`_pulled` ends); returns them, the pieces still uncovered as points (kind
     ``uncovered_class_line`` at their middle, not proven), and the stats ``(stretches,
-    uncovered length [rad], length still uncovered [rad])``.  A gap no longer than ``distance`` next to a covered part
-    is left (each of its points is within ``2 distance`` of a curve)."""
-    stretches = line_stretches(fld, box, model, roots, tips, dtype)
+    uncovered length [rad], length still uncovered [rad], unproven intervals, pieces)``, the
+    pieces still uncovered as ``[beta1, beta2]`` of their two ends [rad].  A gap no
+    longer than ``distance`` next to a covered part is left (each of its points is within ``2
+    distance`` of a curve).  ``roots``: the germ roots of ``fld``
+    (:func:`atlas.data.boundary_germs.germ_roots`)."""
+    stretches, unproven = line_stretches(fld, box, model, roots, tol, dtype)
     gaps, length = [], 0.0
     for m, base, direction, lo, hi, left, right in stretches:
         d = np.asarray(direction, float)
@@ -146,13 +154,13 @@ def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="floa
             a, b = min(a, t_max), min(b, t_max)  # beyond 2 pi: the torus's other end
             size = (b - a) * math.hypot(*d)
             if size <= 2 * tol or (size <= distance and (a > lo or b < hi)):
-                continue  # unresolved by the tips' brackets, or within 2 distance of a curve
+                continue  # below the vertices' resolution, or within 2 distance of a curve
             length += size
             gaps.append((m, np.asarray(base, float), d, a, b, left, right))
     if not gaps:
-        return [], [], (len(stretches), length, 0.0)
+        return [], [], (len(stretches), length, 0.0, unproven, [])
     ends, ok = _pulled(fld, gaps, model, tol, dtype)
-    added, left, left_over = [], [], 0.0
+    added, left, left_over, pieces = [], [], 0.0, []
     for (m, base, d, a0, b0, lft, rgt), (a, b), good in zip(gaps, ends, ok):
         if good and b > a:
             xy = _on_torus(m, base + np.array([[a], [b]]) * d)
@@ -161,9 +169,10 @@ def cover_lines(fld, box, model, curves, roots, tips, distance, tol, dtype="floa
         for u, v in rest:
             if (v - u) * math.hypot(*d) > 2 * tol:
                 left_over += (v - u) * math.hypot(*d)
-                at = _on_torus(m, base[None] + 0.5 * (u + v) * d[None])[0]
-                left.append(Point(*at, "uncovered_class_line", math.nan, *model, field=fld))
-    return added, left, (len(stretches), length, left_over)
+                at = _on_torus(m, base[None] + np.array([[u], [0.5 * (u + v)], [v]]) * d[None])
+                left.append(Point(*at[1], "uncovered_class_line", math.nan, *model, field=fld))
+                pieces.append(at[[0, 2]].tolist())
+    return added, left, (len(stretches), length, left_over, unproven, pieces)
 
 
 def _codes_at(fld, gaps, u, step, model, dtype):

@@ -19,43 +19,11 @@ import xarray as xr
 
 from atlas.core import brackets
 from atlas.core.config import __version__
+from atlas.data.boundary_args import CHORD, CODE_MEANINGS, CSV_COLUMNS, TOL
 from atlas.data.engine import REFERENCES
 from atlas.data.io import atomic_path, atomic_write_text
 
 __all__ = ["CHORD", "CSV_COLUMNS", "TOL", "Boundaries", "Curve", "Point", "summary"]
-
-#: default certified vertex tolerance (bracket length) [rad]
-TOL = 1e-10
-#: default chord tolerance (measured sagitta between vertices) [rad]
-CHORD = 1e-6
-#: the columns of :meth:`Boundaries.to_csv`: ``record`` ``vertex`` (one row per curve vertex, in
-#: order along the curve) or ``point`` (a codimension-2 point); ``curve`` the curve's index;
-#: ``field`` ``SS``/``II``/``class``; ``kind`` the curve kind (``SS_stability``,
-#: ``II_consistency``, ``II_stability``, ``class_line``) or point kind; ``side_left``,
-#: ``side_right``, ``side_on`` the codes left / right of the direction of travel and on the curve
-#: (-1: none; SS 0 unstable, 1 stable, 2 neutral; II 0 inconsistent, 1 consistent and unstable,
-#: 2 consistent and stable, 3 consistent and neutral); ``on_class_line`` 0/1; ``kappa, q1, q2``
-#: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad]
-#: (``nan``: a point where the curve crosses a seam, interpolated on its segment);
-#: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1
-CSV_COLUMNS = (
-    "record",
-    "curve",
-    "field",
-    "kind",
-    "side_left",
-    "side_right",
-    "side_on",
-    "on_class_line",
-    "kappa",
-    "q1",
-    "q2",
-    "beta1",
-    "beta2",
-    "bracket",
-    "uncertainty",
-    "proven",
-)
 
 
 @dataclass
@@ -145,14 +113,14 @@ class Boundaries:
                 f"{int(c.on_class_line)},{float(c.kappa)!r},{float(c.q1)!r},{float(c.q2)!r}"
             )
             rows += [
-                f"{head},{x!r},{y!r},{w!r},,"
-                for (x, y), w in zip(c.vertices.tolist(), c.bracket.tolist())
+                f"{head},{x!r},{y!r},{w!r},,,{int(k in c.spliced)}"
+                for k, ((x, y), w) in enumerate(zip(c.vertices.tolist(), c.bracket.tolist()))
             ]
         for p in self.points:
             unc = "" if not p.proven else repr(float(p.uncertainty))
             rows.append(
                 f"point,,{p.field},{p.kind},,,,,{float(p.kappa)!r},{float(p.q1)!r},"
-                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)}"
+                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)},"
             )
         atomic_write_text(path, "\n".join(rows) + "\n")
 
@@ -196,6 +164,7 @@ def _curve_props(c: Curve) -> dict:
         "q1": c.q1,
         "q2": c.q2,
         "max_bracket": float(np.nanmax(c.bracket, initial=0.0)),
+        "spliced": [int(k) for k in c.spliced],
     }
     return _json(props)
 
@@ -208,103 +177,122 @@ def _feature(kind, coords, props) -> dict:
     }
 
 
-#: the meanings of the side codes, for the ``comment`` of the side variables
-CODE_MEANINGS = (
-    "-1: none; field SS: 0 unstable, 1 stable, 2 neutral; field II: 0 inconsistent, "
-    "1 consistent and unstable, 2 consistent and stable, 3 consistent and neutral"
-)
+_GEO, _RAD, _ONE = {"geometry": "boundary_geometry"}, {"units": "rad"}, {"units": "1"}
+_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"}
 
 
-def _to_dataset(bd: Boundaries) -> xr.Dataset:
-    cs, ps = bd.curves, bd.points
-    geo = {"geometry": "boundary_geometry"}
-    rad = {"units": "rad"}
-    one = {"units": "1"}
-    per = lambda attr: np.array([getattr(c, attr) for c in cs])  # noqa: E731
-    pp = lambda attr: np.array([getattr(p, attr) for p in ps])  # noqa: E731
+def _model_vars(of, items) -> dict:
+    """``<of>_kappa``, ``<of>_q1``, ``<of>_q2`` of the curves or points ``items``."""
+    return {
+        f"{of}_{k}": (
+            of,
+            np.array([getattr(x, k) for x in items], float),
+            _ONE | {"long_name": f"{k} of the {of}'s slice"},
+        )
+        for k in ("kappa", "q1", "q2")
+    }
+
+
+def _node_vars(cs) -> dict:
+    """The geometry container's nodes: coordinates, brackets, and which are spliced points."""
     nodes = np.concatenate([c.vertices for c in cs]) if cs else np.zeros((0, 2))
+    spliced = [np.isin(np.arange(len(c.vertices)), c.spliced) for c in cs]
+    return {
+        "node_beta1": ("node", nodes[:, 0], _RAD | {"axis": "X", "long_name": "beta1"}),
+        "node_beta2": ("node", nodes[:, 1], _RAD | {"axis": "Y", "long_name": "beta2"}),
+        "node_bracket": (
+            "node",
+            np.concatenate([c.bracket for c in cs]) if cs else np.zeros(0),
+            _RAD
+            | {
+                "long_name": "length of the certified bracket of the vertex",
+                "comment": "NaN: a point where the curve crosses a seam of the torus, "
+                "interpolated on its segment (no bracket); at a spliced vertex twice the "
+                "proven radius of the codimension-2 point",
+            },
+        ),
+        "node_spliced": (
+            "node",
+            np.concatenate(spliced).astype(np.int8) if cs else np.zeros(0, np.int8),
+            _FLAG
+            | {
+                "long_name": "the vertex is a proven codimension-2 point spliced into the curve",
+                "comment": "three codes meet there: the side codes hold next to it, not at it",
+            },
+        ),
+    }
+
+
+def _curve_vars(cs) -> dict:
+    """Per curve: vertex count, field, kind, side codes, on a class line, slice."""
+    per = lambda attr: np.array([getattr(c, attr) for c in cs])  # noqa: E731
 
     def side(which):
+        where = " (direction of travel)" if which != "on" else " where it differs from both"
         return (
             "curve",
             per(f"side_{which}").astype(np.int8),
-            geo
-            | {
-                "long_name": f"certified field code {which} of the curve"
-                + (" (direction of travel)" if which != "on" else " where it differs from both"),
-                "comment": CODE_MEANINGS,
-            },
+            _GEO
+            | {"long_name": f"certified field code {which} of the curve{where}"}
+            | {"comment": CODE_MEANINGS},
         )
 
-    def model(of, attr, name):
-        data = (pp if of == "point" else per)(attr).astype(float)
-        return (of, data, one | {"long_name": f"{name} of the {of}'s slice"})
+    return {
+        "node_count": (
+            "curve",
+            np.array([len(c.vertices) for c in cs], np.int32),
+            {"long_name": "number of vertices of each curve"},
+        ),
+        "curve_field": ("curve", per("field").astype(str), _GEO | {"long_name": "field"}),
+        "curve_kind": ("curve", per("kind").astype(str), _GEO | {"long_name": "boundary kind"}),
+        "curve_side_left": side("left"),
+        "curve_side_right": side("right"),
+        "curve_side_on": side("on"),
+        "curve_on_class_line": (
+            "curve",
+            per("on_class_line").astype(np.int8),
+            _GEO | _FLAG | {"long_name": "the curve lies on a class line"},
+        ),
+    } | _model_vars("curve", cs)
 
-    flag = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"}
+
+def _point_vars(ps) -> dict:
+    """Per codimension-2 point: position, kind, field, proven enclosure, slice."""
+    pp = lambda attr: np.array([getattr(p, attr) for p in ps])  # noqa: E731
+    return {
+        "point_beta1": ("point", pp("beta1").astype(float), _RAD | {"long_name": "beta1"}),
+        "point_beta2": ("point", pp("beta2").astype(float), _RAD | {"long_name": "beta2"}),
+        "point_kind": ("point", pp("kind").astype(str), {"long_name": "point kind"}),
+        "point_field": ("point", pp("field").astype(str), {"long_name": "field"}),
+        "point_uncertainty": (
+            "point",
+            pp("uncertainty").astype(float),
+            _RAD
+            | {
+                "long_name": "proven bound on the distance to the true point",
+                "comment": "NaN where point_proven is 0: the position is an estimate",
+            },
+        ),
+        "point_proven": (
+            "point",
+            pp("proven").astype(np.int8),
+            _FLAG | {"long_name": "the point has a proven enclosure"},
+        ),
+    } | _model_vars("point", ps)
+
+
+def _to_dataset(bd: Boundaries) -> xr.Dataset:
+    container = {
+        "geometry_type": "line",
+        "node_count": "node_count",
+        "node_coordinates": "node_beta1 node_beta2",
+        "long_name": "geometry container of the boundary curves",
+    }
     ds = xr.Dataset(
-        {
-            "boundary_geometry": (
-                (),
-                np.int32(0),
-                {
-                    "geometry_type": "line",
-                    "node_count": "node_count",
-                    "node_coordinates": "node_beta1 node_beta2",
-                    "long_name": "geometry container of the boundary curves",
-                },
-            ),
-            "node_count": (
-                "curve",
-                np.array([len(c.vertices) for c in cs], np.int32),
-                {"long_name": "number of vertices of each curve"},
-            ),
-            "node_beta1": ("node", nodes[:, 0], rad | {"axis": "X", "long_name": "beta1"}),
-            "node_beta2": ("node", nodes[:, 1], rad | {"axis": "Y", "long_name": "beta2"}),
-            "node_bracket": (
-                "node",
-                np.concatenate([c.bracket for c in cs]) if cs else np.zeros(0),
-                rad
-                | {
-                    "long_name": "length of the certified bracket of the vertex",
-                    "comment": "NaN: a point where the curve crosses a seam of the torus, "
-                    "interpolated on its segment (no bracket)",
-                },
-            ),
-            "curve_field": ("curve", per("field").astype(str), geo | {"long_name": "field"}),
-            "curve_kind": ("curve", per("kind").astype(str), geo | {"long_name": "boundary kind"}),
-            "curve_side_left": side("left"),
-            "curve_side_right": side("right"),
-            "curve_side_on": side("on"),
-            "curve_on_class_line": (
-                "curve",
-                per("on_class_line").astype(np.int8),
-                geo | flag | {"long_name": "the curve lies on a class line"},
-            ),
-            "curve_kappa": model("curve", "kappa", "kappa"),
-            "curve_q1": model("curve", "q1", "q1"),
-            "curve_q2": model("curve", "q2", "q2"),
-            "point_beta1": ("point", pp("beta1").astype(float), rad | {"long_name": "beta1"}),
-            "point_beta2": ("point", pp("beta2").astype(float), rad | {"long_name": "beta2"}),
-            "point_kind": ("point", pp("kind").astype(str), {"long_name": "point kind"}),
-            "point_field": ("point", pp("field").astype(str), {"long_name": "field"}),
-            "point_uncertainty": (
-                "point",
-                pp("uncertainty").astype(float),
-                rad
-                | {
-                    "long_name": "proven bound on the distance to the true point",
-                    "comment": "NaN where point_proven is 0: the position is an estimate",
-                },
-            ),
-            "point_proven": (
-                "point",
-                pp("proven").astype(np.int8),
-                flag | {"long_name": "the point has a proven enclosure"},
-            ),
-            "point_kappa": model("point", "kappa", "kappa"),
-            "point_q1": model("point", "q1", "q1"),
-            "point_q2": model("point", "q2", "q2"),
-        }
+        {"boundary_geometry": ((), np.int32(0), container)}
+        | _node_vars(bd.curves)
+        | _curve_vars(bd.curves)
+        | _point_vars(bd.points)
     )
     for v in ds.variables.values():
         if v.dtype.kind == "f":

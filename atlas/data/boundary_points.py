@@ -279,21 +279,29 @@ def ss_line_points(
     return out, len(roots)
 
 
+def _on_segments(xy, c: Curve) -> tuple[float, int, float, np.ndarray]:
+    """The segment of curve ``c`` nearest to ``xy`` [rad] on the torus: ``(distance, segment k,
+    t, image)``, the point's image ``xy + 2 pi n`` nearest to segment ``k -> k + 1`` at fraction
+    ``t`` of it (distance ``inf`` for a curve without a segment)."""
+    if len(c.vertices) < 2:
+        return math.inf, -1, 0.0, np.asarray(xy, float)
+    a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
+    img = a + (np.asarray(xy) - a + math.pi) % TWO_PI - math.pi  # per segment, nearest image
+    t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
+    dist = np.hypot(*(a + t[:, None] * d - img).T)
+    k = int(dist.argmin())
+    return float(dist[k]), k, float(t[k]), img[k]
+
+
 def nearest_segment(xy, curves) -> tuple[float, int, int, float, np.ndarray]:
     """The segment of ``curves`` nearest to ``xy`` [rad] on the torus: ``(distance, curve,
-    segment k, t, image)``, the point's image ``xy + 2 pi n`` nearest to segment ``k -> k + 1``
-    at fraction ``t`` of it (distance ``inf`` and curve ``-1`` when no curve has a segment)."""
+    segment k, t, image)`` (:func:`_on_segments`; distance ``inf`` and curve ``-1`` when no
+    curve has a segment)."""
     best = (math.inf, -1, -1, 0.0, np.asarray(xy, float))
     for i, c in enumerate(curves):
-        if len(c.vertices) < 2:
-            continue
-        a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
-        img = a + (np.asarray(xy) - a + math.pi) % TWO_PI - math.pi  # per segment, nearest image
-        t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
-        dist = np.hypot(*(a + t[:, None] * d - img).T)
-        k = int(dist.argmin())
-        if dist[k] < best[0]:
-            best = (float(dist[k]), i, k, float(t[k]), img[k])
+        dist, k, t, img = _on_segments(xy, c)
+        if dist < best[0]:
+            best = (dist, i, k, t, img)
     return best
 
 
@@ -314,26 +322,33 @@ def _spliced(c: Curve, k: int, t: float, xy, radius: float) -> Curve:
     )
 
 
-def attach_points(curves, points, reach, within, tol) -> tuple[list[Curve], int]:
-    """Splice each proven point farther than ``reach`` [rad] from every curve into the nearest
-    curve, if that is within ``within`` [rad] and the point's enclosure no wider than the
-    vertex tolerance ``tol`` [rad] (the file's promise for every vertex): a vertex (:func:`_spliced`) where the curve passes
-    or ends nearest to it, the point's image on the torus taken into ``[0, 2 pi)`` (the shift
-    added to its radius); a splice that would make the curve cross itself is not made.  The
-    other vertices keep their brackets.  Returns the curves and the number of points attached."""
+def attach_points(curves, points, reach, within, near, tol) -> tuple[list[Curve], int]:
+    """Splice each proven point into every curve it lies on that does not already pass within
+    ``reach`` [rad] of it: every curve within ``near`` [rad] of it (the distance to which the
+    drawn curves follow the true ones) and the nearest curve if within ``within`` [rad] (a
+    traced curve that passes a tangency farther off); only where the point's enclosure is no
+    wider than the vertex tolerance ``tol`` [rad] (the file's promise for every vertex).  A
+    vertex (:func:`_spliced`) where the curve passes or ends nearest to it, the point's image on
+    the torus taken into ``[0, 2 pi)`` (the shift added to its radius); a splice that would make
+    the curve cross itself is not made.  The other vertices keep their brackets.  Returns the
+    curves and the number of splices (a point on two curves counts twice)."""
     curves, attached = list(curves), 0
     for p in points:
         if not p.proven:
             continue
-        dist, i, k, t, img = nearest_segment((p.beta1, p.beta2), curves)
-        if not reach < dist <= within:
-            continue
-        xy = np.clip(img, 0.0, np.nextafter(TWO_PI, 0.0))
-        shift = float(np.hypot(*(xy - img)))
-        radius = p.uncertainty + shift
-        if 2 * radius > tol:
-            continue
-        c = _spliced(curves[i], k, t, xy, radius)
-        if shapely.is_simple(shapely.LineString(c.vertices)):
-            curves[i], attached = c, attached + 1
+        found = [_on_segments((p.beta1, p.beta2), c) for c in curves]
+        dist = np.array([f[0] for f in found] + [math.inf])
+        targets = set(np.flatnonzero(dist <= near)) | ({int(dist.argmin())} & {
+            i for i in range(len(curves)) if dist[i] <= within})  # fmt: skip
+        for i in sorted(targets):
+            d, k, t, img = found[i]
+            if d <= reach:
+                continue
+            xy = np.clip(img, 0.0, np.nextafter(TWO_PI, 0.0))
+            radius = p.uncertainty + float(np.hypot(*(xy - img)))
+            if 2 * radius > tol:
+                continue
+            c = _spliced(curves[i], k, t, xy, radius)
+            if shapely.is_simple(shapely.LineString(c.vertices)):
+                curves[i], attached = c, attached + 1
     return curves, attached

@@ -77,13 +77,15 @@ def test_q0_diagonal_end_at_the_seam_is_covered(q0):
 
 def test_ii_stretch_on_three_half_pi_is_covered():
     """kappa 2, q 0.1: beta2 = 3 pi / 2 separates II codes 2 and 0 for beta1 near 4.16-4.19,
-    where the traced curves left 0.031 rad uncovered."""
+    where the traced curves left 0.031 rad uncovered.  Every II class-line interval is now proven
+    (the germ roots of :mod:`atlas.data.boundary_germs`; was 0: sampled, not proven)."""
     model = (2.0, 0.1, 0.1)
     b = bd.slice_boundaries(GRID, GRID, *model, fields=("II",), check=0)
     t = np.linspace(4.165, 4.188, 5)
     along = np.stack([t, np.full_like(t, 1.5 * PI)], 1)
     _check_stretch("II", model, b, along, np.array([0.0, 1.0]))
-    assert b.attrs["II_lines_complete"] == 0  # sampled, not proven
+    assert b.attrs["II_line_intervals_unproven"] == 0
+    assert b.attrs["II_lines_complete"] == 1
 
 
 def test_uncovered_parts_of_a_stretch():
@@ -100,10 +102,17 @@ def test_uncovered_parts_of_a_stretch():
 
 def test_what_is_left_uncovered_is_listed(q0):
     """The class-line length still uncovered is listed piece by piece as unproven points on a
-    class line, where the exact tier sees different codes 1e-13 rad off the line's two sides
+    class line (and by its ends in ``SS_uncovered_pieces``), where the exact tier sees different codes 1e-13 rad off the line's two sides
     (1e-9 off it both are in the needle a tangent boundary leaves along the line)."""
     left = [p for p in q0.points if p.kind == "uncovered_class_line"]
     assert (q0.attrs["SS_line_length_left_uncovered"] > 0) == bool(left)
+    # each piece also by its two ends (attrs): its middle is the point, the lengths add up
+    pieces = np.array(q0.attrs["SS_uncovered_pieces"])
+    assert pieces.shape == (len(left), 2, 2)
+    mids = np.array([[p.beta1, p.beta2] for p in left])
+    np.testing.assert_allclose(pieces.mean(axis=1), mids, atol=1e-12)
+    total = np.hypot(*(pieces[:, 1] - pieces[:, 0]).T).sum()
+    assert total == pytest.approx(q0.attrs["SS_line_length_left_uncovered"], rel=1e-9)
     model = (0.5, 0.0, 0.0)
     for p in left:
         xy = np.array([p.beta1, p.beta2])

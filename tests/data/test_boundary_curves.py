@@ -91,3 +91,23 @@ def test_select_and_summary():
     text = summary(b)
     assert text.startswith("boundaries: 2 curves, 5 vertices, 1 codimension-2 points")
     assert "II_consistency (on a class line): 1" in text and "point leaves_class_line: 1" in text
+
+
+def test_spliced_points_are_marked_in_every_file(tmp_path):
+    """A proven codimension-2 point spliced into a curve (vertex 1 of the SS curve) is marked as
+    such in the netCDF (``node_spliced``), the CSV (``spliced``) and the GeoJSON (``spliced``:
+    vertex indices); the other vertices are not."""
+    b = _boundaries()
+    b.curves[0].spliced = (1,)
+    b.to_netcdf(tmp_path / "b.nc")
+    with xr.open_dataset(tmp_path / "b.nc") as ds:
+        assert ds["node_spliced"].values.tolist() == [0, 1, 0, 0, 0]
+        assert ds["node_spliced"].attrs["flag_meanings"] == "no yes"
+    b.to_csv(tmp_path / "b.csv")
+    rows = [r.split(",") for r in (tmp_path / "b.csv").read_text().splitlines()]
+    col = rows[0].index("spliced")
+    assert [r[col] for r in rows[1:]] == ["0", "1", "0", "0", "0", ""]
+    assert all(len(r) == len(CSV_COLUMNS) for r in rows)
+    b.to_geojson(tmp_path / "b.json")
+    feats = json.loads((tmp_path / "b.json").read_text())["features"]
+    assert [f["properties"].get("spliced") for f in feats[:2]] == [[1], []]

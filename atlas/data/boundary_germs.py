@@ -1,0 +1,206 @@
+"""Where a boundary of a field can meet a class line, from the algebra in two variables, and a
+proof that a code sampled just off the line is the code of the whole side there.
+
+Along class line ``m`` let ``t = tan(beta / 2)`` of its free angle (``beta2`` on ``beta1 = k
+pi/2``, else ``beta1``) and ``e = tan(delta / 2)`` of an angle ``delta`` off it (the fixed angle
+moved by ``delta`` on the lines ``beta_j = k pi/2``, ``beta2`` moved by ``delta`` on the diagonals
+``beta2 = beta1 + k pi``).  The direction components are rational functions of ``(t, e)`` whose
+denominators are powers of ``1 + t^2`` and ``1 + e^2`` (positive), so every polynomial of
+:mod:`atlas.core.expressions` becomes, up to a positive factor, a polynomial ``F(t, e)`` with
+exact rational coefficients (``kappa, q1, q2`` read as exact dyadic rationals; python-flint).
+
+A field's codes change only across the class lines and the zero sets of its *boundary
+polynomials*:
+
+* SS (Routh-Hurwitz, paper App. C): ``a3``, ``H2 = a3 a2 - a1``, ``G`` (``H3 = D G``) and ``D``
+  damped; ``a2`` and ``disc = a2^2 - 4 a0`` undamped.
+* II (SPEC §1: a real root ``l > 0`` of ``p`` whose eigenvector has ``x1 x2 > 0``, strictly
+  dominant for stability): a positive root appears or leaves through ``l = 0`` (``a0 = kappa D =
+  0``, a class line) or in a pair (``disc_l p = 0``); the eigenvector's sign ``-c2 h1`` changes at
+  a root only where ``h1 = 0``, which ``p = h1 h2 - c2 s1 d1 d2`` allows only on ``c2 s1 = 0``
+  (class lines); the largest real root changes at ``disc_l p = 0`` and ties with a complex pair
+  where ``T(l) = 0`` (``T = p' - p'' p''' / 12``, :func:`atlas.core.exact._tie_poly`), so on
+  ``res_l(p, T) = 0``.
+
+Write ``F = e^k G`` with ``G(t, 0)`` not identically zero: a branch of ``F = 0`` off the line can
+approach it only at a real root of ``G(t, 0)`` (continuity).  These *germ roots* (and the
+multiples of ``pi/2``, where other class lines cross) cut the line into intervals along each of
+which the codes just off the line on either side are constant.  At a parameter where
+``|G(t, 0)|`` exceeds the rest of ``G`` over ``|e| <= e_max`` (ball arithmetic, :func:`clear`), no
+branch lies between the line and a sample that far off it: the sample's code is the code of the
+whole side of that interval, a proof.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import operator
+from fractions import Fraction
+
+import flint
+
+from atlas.core import expressions as ex
+from atlas.data.boundary_points import TORUS_LINES, _angle, _real_roots
+
+__all__ = ["boundary_polynomials", "clear", "germ_roots", "germs"]
+
+_CTX = flint.fmpq_mpoly_ctx.get(("t", "e", "l"), "lex")
+_T, _E, _L = _CTX.gens()
+_WT, _WE = 1 + _T * _T, 1 + _E * _E
+
+
+class _Rat2:
+    """``num / ((1 + t^2)^i (1 + e^2)^j)``, ``num`` a polynomial in ``(t, e, l)``."""
+
+    def __init__(self, num, i=0, j=0):
+        self.num, self.i, self.j = num, i, j
+
+    def lift(self, i, j):
+        return self.num * _WT ** (i - self.i) * _WE ** (j - self.j)
+
+    def __add__(self, o):
+        o = o if isinstance(o, _Rat2) else _Rat2(_CTX.from_dict({(0, 0, 0): o} if o else {}))
+        i, j = max(self.i, o.i), max(self.j, o.j)
+        return _Rat2(self.lift(i, j) + o.lift(i, j), i, j)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return _Rat2(-self.num, self.i, self.j)
+
+    def __sub__(self, o):
+        return self + (-o)
+
+    def __rsub__(self, o):
+        return (-self) + o
+
+    def __mul__(self, o):
+        if not isinstance(o, _Rat2):
+            return _Rat2(self.num * o, self.i, self.j)
+        return _Rat2(self.num * o.num, self.i + o.i, self.j + o.j)
+
+    __rmul__ = __mul__
+
+    def __pow__(self, n: int):
+        return _Rat2(self.num**n, self.i * n, self.j * n)
+
+
+_COS_T, _SIN_T = _Rat2(1 - _T * _T, 1), _Rat2(2 * _T, 1)
+_COS_E, _SIN_E = _Rat2(1 - _E * _E, 0, 1), _Rat2(2 * _E, 0, 1)
+_AXES = {0: (1, 0), 1: (0, 1), 2: (-1, 0), 3: (0, -1)}
+
+
+def _turned(c, s):
+    """``(cos, sin)`` of an angle with ``(c, s)`` turned by ``delta``."""
+    return _COS_E * c - _SIN_E * s, _SIN_E * c + _COS_E * s
+
+
+def _directions(m):
+    """``(c1, s1, c2, s2)`` at ``(t, e)`` near class line ``m`` (module docstring)."""
+    if m < 5:
+        return (*_turned(*_AXES[m % 4]), _COS_T, _SIN_T)
+    if m < 10:
+        return (_COS_T, _SIN_T, *_turned(*_AXES[(m - 5) % 4]))
+    sign = 1 if m == 11 else -1
+    return (_COS_T, _SIN_T, *_turned(sign * _COS_T, sign * _SIN_T))
+
+
+def _common(values):
+    """Numerators of ``values`` (``_Rat2`` or rationals) over one common positive denominator."""
+    rats = [v for v in values if isinstance(v, _Rat2)]
+    i, j = max((r.i for r in rats), default=0), max((r.j for r in rats), default=0)
+    one = _Rat2(_CTX.from_dict({(0, 0, 0): 1}), 0, 0)
+    return [(v if isinstance(v, _Rat2) else one * v).lift(i, j) for v in values], _WT**i * _WE**j
+
+
+def _ss_polynomials(c1, s1, c2, s2, kappa, q1, q2) -> list:
+    sub = operator.sub
+    if q1 == 0 and q2 == 0:
+        return [
+            ex.a2_undamped(kappa, c1, 1, s2, sub=sub),
+            ex.disc_undamped(kappa, c1, 1, s2, s1, c2, sub=sub),
+        ]
+    D = ex.det(c1, s1, c2, s2, sub=sub)
+    a3, a2, a1, _ = ex.coefficients(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=sub)
+    G = ex.G(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=sub)
+    return [a3, ex.hurwitz_H2(a3, a2, a1, sub=sub), G, D]
+
+
+def _ii_polynomials(c1, s1, c2, s2, kappa, q1, q2) -> list:
+    sub = operator.sub
+    D = ex.det(c1, s1, c2, s2, sub=sub)
+    a3, a2, a1, a0 = ex.coefficients(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=sub)
+    (A0, A1, A2, A3), W = _common([a0, a1, a2, a3])
+    p = A0 + A1 * _L + A2 * _L**2 + A3 * _L**3 + W * _L**4  # W p(l)
+    # W^2 T of the monic p / W (T = [a1 - a2 a3, -2 a2 - 3 a3^2, -15 a3, -20]: exact._tie_poly)
+    T = (
+        (A1 * W - A2 * A3)
+        - (2 * A2 * W + 3 * A3 * A3) * _L
+        - 15 * A3 * W * _L**2
+        - 20 * W * W * _L**3
+    )
+    return [p.discriminant("l"), p.resultant(T, "l")]
+
+
+def boundary_polynomials(fld, m, model) -> tuple:
+    """The numerators ``F(t, e)`` (``flint.fmpq_mpoly``) of the boundary polynomials of ``fld``
+    (module docstring) near class line ``m``; ``model = (kappa, q1, q2)``."""
+    exact = [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in model]
+    comps = (_ss_polynomials if fld == "SS" else _ii_polynomials)(*_directions(m), *exact)
+    out = [c.num if isinstance(c, _Rat2) else c for c in comps]
+    return tuple(f for f in out if not isinstance(f, flint.fmpq) and not f.is_zero())
+
+
+def _germ(F):
+    """``G(t, e) = F / e^k`` as ``[g_0(t), g_1(t), ...]`` (``flint.fmpq_poly``, ``G = sum g_b
+    e^b``), ``k`` the largest power of ``e`` dividing ``F``."""
+    rows = {}
+    for (a, b, _), c in zip(F.monoms(), F.coeffs()):
+        rows.setdefault(b, {})[a] = c
+    k = min(rows)
+    out = []
+    for b in range(k, max(rows) + 1):
+        coeffs = rows.get(b, {})
+        out.append(flint.fmpq_poly([coeffs.get(a, 0) for a in range(max(coeffs, default=-1) + 1)]))
+    return out
+
+
+@functools.lru_cache(maxsize=64)  # one slice's lines and fields, a few times over
+def germs(fld, m, model) -> tuple:
+    """Per boundary polynomial of ``fld`` near line ``m``: its germ rows (:func:`_germ`)."""
+    return tuple(_germ(F) for F in boundary_polynomials(fld, m, model))
+
+
+def germ_roots(fld, model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]]:
+    """``(m, beta, multiplicity)``: every real root of ``G(t, 0)`` of every boundary polynomial
+    of ``fld`` near every line of ``lines``, ``beta = 2 atan(t)`` a certified ball [rad] (the
+    format of :func:`atlas.data.boundary_points.line_roots`).  ``beta = pi`` (``t`` infinite)
+    is not among them: it is a multiple of ``pi/2``, a break of every line anyway."""
+    model = tuple(float(v) for v in model)
+    out = []
+    for m in lines:
+        for rows in germs(fld, m, model):
+            out += [(m, _angle(t), mult) for t, mult in _real_roots(rows[0])]
+    return out
+
+
+def clear(fld, model, m, beta: float, delta_max: float, slack: float = 1e-14) -> bool:
+    """Whether no branch of a boundary of ``fld`` comes within ``delta_max`` [rad] (angle off the
+    line, module docstring) of line ``m`` at free angle ``beta`` [rad] (+- ``slack``): ``|g_0(t)|
+    > sum_{b >= 1} |g_b(t)| e_max^b`` in ball arithmetic for every boundary polynomial."""
+    model = tuple(float(v) for v in model)
+    with flint.ctx.workprec(256):  # the germs' coefficients are large: 53 bits lose the sign
+        b = flint.arb(beta, slack)
+        if not (b - flint.arb.pi()).abs_lower() > 0:  # t infinite at beta = pi
+            return False
+        t_box, t_mid = (b / 2).tan(), (flint.arb(beta) / 2).tan()
+        e_max = flint.arb(math.tan(0.5 * delta_max) * (1 + 1e-6))
+        for rows in germs(fld, m, model):
+            polys = [flint.arb_poly(list(r.coeffs())) for r in rows]
+            # mean-value form: a ball argument in Horner's scheme loses the cancellation
+            g0 = polys[0](t_mid) + polys[0].derivative()(t_box) * (t_box - t_mid)
+            rest = sum((abs(p(t_box)) * e_max**k for k, p in enumerate(polys) if k), flint.arb(0))
+            if not abs(g0).lower() > rest.upper():
+                return False
+    return True
