@@ -41,7 +41,7 @@ from fractions import Fraction
 import flint
 
 from atlas.core import expressions as ex
-from atlas.data.boundary_points import TORUS_LINES, _angle, _real_roots
+from atlas.data.boundary_points import TORUS_LINES, angle_from_tan_half, real_roots
 
 __all__ = ["boundary_polynomials", "clear", "germ_roots", "germs"]
 
@@ -181,7 +181,7 @@ def germ_roots(fld, model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]
     out = []
     for m in lines:
         for rows in germs(fld, m, model):
-            out += [(m, _angle(t), mult) for t, mult in _real_roots(rows[0])]
+            out += [(m, angle_from_tan_half(t), mult) for t, mult in real_roots(rows[0])]
     return out
 
 

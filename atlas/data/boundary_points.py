@@ -45,8 +45,10 @@ __all__ = [
     "line_polynomials",
     "line_roots",
     "nearest_segment",
+    "real_roots",
     "root_codes",
     "ss_line_points",
+    "angle_from_tan_half",
 ]
 
 TWO_PI = 2 * math.pi
@@ -138,7 +140,7 @@ def line_polynomials(m, kappa, q1, q2) -> dict:
     return {k: v.num for k, v in _restrictions(m, kappa, q1, q2).items()}
 
 
-def _real_roots(R) -> list[tuple[flint.arb, int]]:
+def real_roots(R) -> list[tuple[flint.arb, int]]:
     """Certified real roots of ``R`` (arb balls of ``t``) with their multiplicity."""
     out = []
     _, factors = R.factor()
@@ -150,7 +152,7 @@ def _real_roots(R) -> list[tuple[flint.arb, int]]:
     return out
 
 
-def _angle(t: flint.arb) -> flint.arb:
+def angle_from_tan_half(t: flint.arb) -> flint.arb:
     """``2 atan(t)`` wrapped into ``[0, 2 pi)`` as a ball [rad]."""
     beta = 2 * t.atan()
     return beta + 2 * flint.arb.pi() if beta.mid() < 0 else beta
@@ -173,7 +175,7 @@ def _restriction_roots(r) -> list[tuple[flint.arb, int]]:
     """Certified angles (balls [rad]) where a restriction ``num / (1 + t^2)^k`` vanishes, with
     multiplicities: the real roots of ``num``, and ``beta = pi`` (``t`` infinite) with
     multiplicity ``2 k - deg num`` when the numerator's degree falls short of ``2 k``."""
-    out = [(_angle(t), mult) for t, mult in _real_roots(r.num)]
+    out = [(angle_from_tan_half(t), mult) for t, mult in real_roots(r.num)]
     if r.num.degree() < 2 * r.k:
         out.append((flint.arb.pi(), 2 * r.k - r.num.degree()))
     return out
