@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from atlas.explore.colors import legend_entries, value_label
-from atlas.explore.maps import needs_alpha
+from atlas.explore.maps import is_box_layer, needs_alpha
 from atlas.explore.state import Explorer
 
 __all__ = ["MapView", "class_lines", "FIGSIZE", "AXES_RECT"]
@@ -110,6 +110,8 @@ class MapView:
                 frameon=False,
             )
         title = p["layer"]
+        if is_box_layer(p["layer"]):
+            title += f"  ({p['model_box'].replace(',', ', ')})"
         if needs_alpha(p["layer"]):
             title += f"  (alpha = {p['alpha'] / math.pi:.3f} π)"
         ax.set_title(title, fontsize=10)

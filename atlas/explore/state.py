@@ -18,7 +18,9 @@ from atlas.explore.maps import (
     beta_grid,
     check_layer,
     check_model,
+    checked_box,
     compute_map,
+    is_box_layer,
     needs_alpha,
     needs_model,
 )
@@ -104,6 +106,12 @@ class Explorer:
     of 0/1 labels are staircases of the grid, not boundaries; the point inspector gives every
     verdict at a point instead.
 
+    Box layers.  A verdict over a box of contact models (``ss_over_models``:
+    :func:`atlas.explore.maps.box_layers`) is drawn over ``model_box`` (text such as
+    ``"kappa=0.01:100,q1=0:1,q2=0:1"``; default the whole model space): moving kappa, q or alpha
+    recomputes nothing, changing the box does.  A click on such a layer adds its verdict at the
+    point and, where it depends on the model, the two witness models to the inspector.
+
     Start-up.  An :class:`Explorer` turns on :func:`keep_kernels` for its process, and
     :meth:`warm_up` (called by the widget once its first map is drawn) compiles the point
     inspector's kernels in a background thread; a click that arrives earlier waits for it.
@@ -125,6 +133,7 @@ class Explorer:
         resolve=True,
         max_resolve=LIVE_MAX_RESOLVE,
         overlays=("class boundaries",),
+        model_box=None,
     ):
         self.params = dict(
             kappa=float(kappa),
@@ -137,6 +146,7 @@ class Explorer:
             resolve=bool(resolve),
             max_resolve=max_resolve,
             overlays=tuple(overlays),
+            model_box=checked_box(model_box),
         )
         self.ds: xr.Dataset | None = None
         self.margin: xr.DataArray | None = None
@@ -177,6 +187,7 @@ class Explorer:
             raise ValueError(f"max_resolve: must be None or an integer >= 0, got {mr!r}")
         group = check_layer(p["layer"])
         check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
+        p["model_box"] = checked_box(p["model_box"])
         self.params = p
         key = self._key(group)
         compute = self.ds is None or key != self._last_key
@@ -224,6 +235,7 @@ class Explorer:
             alpha=p["alpha"] if any(needs_alpha(k) for k in group) else None,
             resolve=p["resolve"] if resolve is None else resolve,
             max_resolve=max_resolve,
+            model_box=p["model_box"] if is_box_layer(group[0]) else None,
         )
 
     def _margin_due(self) -> bool:
@@ -265,6 +277,8 @@ class Explorer:
 
     def _key(self, group):
         p = self.params
+        if is_box_layer(group[0]):  # the model box, not the model
+            return (group, p["n"], p["dtype"], p["model_box"])
         model = (p["kappa"], p["q1"], p["q2"]) if any(needs_model(k) for k in group) else ()
         alpha = (p["alpha"],) if any(needs_alpha(k) for k in group) else ()
         return (group, p["n"], p["dtype"], p["resolve"], p["max_resolve"]) + model + alpha
@@ -315,6 +329,7 @@ class Explorer:
             q1=p["q1"],
             q2=p["q2"],
             dtype=p["dtype"],
+            model_box=p["model_box"] if is_box_layer(p["layer"]) else None,
         )
         near = self.near(*point)
         self.point, self.last_inspection, self.last_near = point, info, near
@@ -388,14 +403,20 @@ class Explorer:
         return (b.points[i], float(d[i])) if d[i] < within else None
 
     def status(self) -> str:
-        """The map's summary: layer, model (and alpha for the layers that depend on it), size,
-        times, undecided counts."""
+        """The map's summary: layer, model (and alpha for the layers that depend on it) or the
+        model box of a box layer, size, times, undecided counts."""
         p, ds = self.params, self.ds
         q = f"q = {p['q1']:g}" if p["q1"] == p["q2"] else f"q1 = {p['q1']:g}, q2 = {p['q2']:g}"
         if needs_alpha(p["layer"]):
             q += f", alpha = {p['alpha'] / math.pi:.3f} pi"
         und = ""
-        if ds is not None:
+        box = is_box_layer(p["layer"])
+        if ds is not None and box:
+            und = (
+                f"; undecided: {ds.attrs['n_undecided_fast']} before the settlement, "
+                f"{ds.attrs['n_undecided']} after"
+            )
+        elif ds is not None:
             und = (
                 f"; undecided: {ds.attrs['n_undecided_fast']} fast, "
                 f"{ds.attrs['n_undecided']} after exact settlement"
@@ -405,8 +426,11 @@ class Explorer:
                 und += " (drawn as undecided; 'settle undecided' settles them)"
         t = self.timings
         first = " (its kernels compiled or loaded first)" if self.first_of_kind else ""
+        where = (
+            f"over the model box {p['model_box']}" if box else f"at kappa = {p['kappa']:.4g}, {q}"
+        )
         return (
-            f"{p['layer']} at kappa = {p['kappa']:.4g}, {q}, {p['n']}^2 cells: "
+            f"{p['layer']} {where}, {p['n']}^2 cells: "
             f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms{first}, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )

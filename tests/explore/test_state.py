@@ -4,6 +4,7 @@ recomputes, the capped settlement and the one-line errors; the kept kernels' swi
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -73,6 +74,8 @@ def test_capped_redraw_then_settle_equals_the_settled_map(bounded_det_b):
         (dict(kappa=0.0), "kappa"),
         (dict(q2=-0.1), "q2"),
         (dict(speed=1), "speed"),
+        (dict(model_box="kappa=2:1"), "model_box"),
+        (dict(layer="ss_over_models", model_box="q1=0:1,q=0:1"), "model_box"),
     ],
 )
 def test_bad_changes_name_the_parameter(changes, name):
@@ -81,3 +84,23 @@ def test_bad_changes_name_the_parameter(changes, name):
         ex.update(**changes)
     assert ex.ds is None  # nothing computed, parameters unchanged
     assert ex.params["layer"] == "stable_SS"
+
+
+def test_box_layer_follows_the_model_box_not_the_model():
+    """``ss_over_models`` is computed over the model box: moving kappa, q or alpha recomputes
+    nothing, a new box does; the status names the box; a click adds the verdict over the box
+    to the inspection (and only on a box layer)."""
+    ex = state.Explorer(n=9, layer="ss_over_models", overlays=())
+    ds = ex.update()
+    assert ds.attrs["model_box"] == maps.WHOLE_BOX
+    assert ex.status().startswith(f"ss_over_models over the model box {maps.WHOLE_BOX}, 9^2")
+    assert ex.update(kappa=3.0, q1=0.2, q2=0.7, alpha=1.0) is ds
+    assert ex.timings["compute_ms"] == 0.0
+    box = ex.update(model_box="kappa=0.5:2,q=0:1")
+    assert box is not ds and box.attrs["model_box"] == "kappa=0.5:2,q=0:1"
+    assert "over the model box kappa=0.5:2,q=0:1" in ex.status()
+    assert ex.inspect(0.25 * math.pi, 0.6 * math.pi)["over_models"]["model_box"] == (
+        "kappa=0.5:2,q=0:1"
+    )
+    ex.update(layer="stable_SS")
+    assert "over_models" not in ex.inspect(0.25 * math.pi, 0.6 * math.pi)
