@@ -243,6 +243,12 @@ def _add_mechanism(sub) -> None:
         ),
     )
     pm.add_argument("name", choices=sorted(MECHANISM_SCENES), help="built-in mechanism scene")
+    pm.add_argument(
+        "--model-box",
+        metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
+        help="add ss_over_models and its witness models per body: SS stable for every contact "
+        "model of the box at the body's geometry, for none, or depends",
+    )
     axes = sorted({a for sc in MECHANISM_SCENES.values() for a in sc.axes})
     for a in axes:
         pm.add_argument(

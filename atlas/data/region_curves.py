@@ -21,7 +21,7 @@ polylines (``field`` the output's name, ``kind`` ``<name>_region``), certified t
 Between vertices the polyline is a chord of the grid's resolution (not refined, unlike
 :mod:`atlas.data.boundaries`: no sagitta is claimed).  Side codes: ``side_left`` is the higher
 code, left of the direction of travel (as for the other curves).  The verdict at a point comes
-from the function of :mod:`atlas.core.model_box` named like the output (``ss_over_models``).
+from :func:`atlas.data.box_points.point_values`.
 """
 
 from __future__ import annotations
@@ -31,10 +31,9 @@ import time
 
 import numpy as np
 
-from atlas.core import contact_modes as mech
-from atlas.core import model_box as mb
 from atlas.core.verdicts import OverModels
 from atlas.data.boundary_curves import Boundaries, Curve
+from atlas.data.box_points import box_outputs, point_values
 from atlas.data.marching import region_boundaries
 
 __all__ = ["region_curves", "point_codes", "run_cli", "TOL", "LABELS"]
@@ -46,14 +45,12 @@ LABELS = {int(v): v.label for v in OverModels}
 
 
 def point_codes(name: str, beta1, beta2, box, *, settle: bool, dtype="float64") -> np.ndarray:
-    """The proven codes of output ``name`` over ``box`` at the points ``(beta1[i], beta2[i])``
-    [rad] (directions rounded to ``dtype`` as in an atlas); ``settle=False``: the small budget."""
-    fn = getattr(mb, name, None)
-    if fn is None:
+    """The proven codes of box verdict ``name`` over ``box`` at the points ``(beta1[i],
+    beta2[i])`` [rad] (:func:`atlas.data.box_points.point_values`)."""
+    if name not in box_outputs():
         raise ValueError(f"fields: {name} has no point function in atlas.core.model_box")
-    c1, s1 = (np.asarray(v, np.float64) for v in mech.direction(np.asarray(beta1), dtype))
-    c2, s2 = (np.asarray(v, np.float64) for v in mech.direction(np.asarray(beta2), dtype))
-    return np.asarray(fn(c1, s1, c2, s2, box, settle=settle)[name], np.int8)
+    res = point_values(beta1, beta2, box, (name,), settle=settle, dtype=dtype)
+    return np.asarray(res[name], np.int8)
 
 
 def _bisect(name, lo, hi, code_lo, code_hi, box, tol, dtype):
@@ -149,15 +146,11 @@ def region_curves(beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, d
     return Boundaries(curves, [], attrs)
 
 
-def box_outputs(fields: str | None = None) -> tuple[str, ...]:
+def _fields(fields: str | None) -> tuple[str, ...]:
     """The box verdicts to trace: ``fields`` (comma-separated output names) or, for ``None`` or
-    the SS/II fields of ``atlas boundaries`` (its default), every registry output with
-    :class:`~atlas.core.verdicts.OverModels` codes that has a point function; one-line errors."""
-    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415
-
-    known = tuple(
-        n for n, o in OUTPUTS.items() if o.enum is OverModels and hasattr(mb, n)
-    )  # fmt: skip
+    the SS/II fields of ``atlas boundaries`` (its default), every one
+    (:func:`atlas.data.box_points.box_outputs`); one-line errors."""
+    known = box_outputs()
     names = [f.strip() for f in (fields or "").split(",") if f.strip()]
     if not names or set(names) <= {"SS", "II"}:
         return known
@@ -193,7 +186,7 @@ def run_cli(
         if ignored.get(name) is not None:
             raise ValueError(f"{name}: not with --model-box (the model box replaces the model)")
     box = as_model_box(model_box)
-    names = box_outputs(fields)
+    names = _fields(fields)
     paths = [p for p in (out, csv, geojson) if p is not None]
     for path in paths:
         check_output_path(path, overwrite)
