@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from concurrent.futures import Future, ThreadPoolExecutor, wait
@@ -37,6 +38,9 @@ OVERLAYS = ("class boundaries", "SS boundary", "certified boundaries")
 #: cells a side of the grid :func:`atlas.data.boundaries.slice_boundaries` starts from for the
 #: "certified boundaries" overlay (its vertices are certified within 1e-10 rad whatever the grid)
 BOUNDARY_GRID = 64
+#: cells a side of the grid the region curves of a box layer start from (each vertex a proven
+#: bracket, bisected on proofs over the box: slower a vertex than the other curves)
+BOX_BOUNDARY_GRID = 32
 #: the name under which the explorer's kernels are kept (:func:`atlas.core.warm.keep_kernels`)
 RUN = "atlas.explore"
 #: the point ``(beta1, beta2)`` [rad] the background warm-up inspects (the widget's default point)
@@ -58,12 +62,19 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
     """The inspector's line for a click near a certified boundary: its kind, the certified
     bracket of the nearest vertex and the field's codes on its two sides (left | right of the
     direction of travel)."""
-    lab = FIELD_LABELS[curve.field]
+    lab = FIELD_LABELS.get(curve.field) or _box_labels(curve.field)
     return (
         f"near the certified {curve.kind} boundary ({distance:.3g} rad away; its vertex is "
         f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_left, curve.side_left)}"
         f" | {lab.get(curve.side_right, curve.side_right)}"
     )
+
+
+def _box_labels(name: str) -> dict:
+    """The codes of box layer ``name`` in words (its enumeration's labels)."""
+    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415
+
+    return {int(v): v.label for v in OUTPUTS[name].enum}
 
 
 def format_point(point: Point, distance: float) -> str:
@@ -356,16 +367,13 @@ class Explorer:
         p = self.params
         if "certified boundaries" not in p["overlays"]:
             return None
-        key = (p["kappa"], p["q1"], p["q2"])
+        key = self.boundary_key()
         fut = self._curves.get(key)
         if fut is None:
-            from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
-
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-boundaries")
-            grid = beta_grid(BOUNDARY_GRID)
             t0 = time.perf_counter()
-            fut = self._pool.submit(slice_boundaries, grid, grid, *key, dtype=p["dtype"])
+            fut = self._pool.submit(*_boundary_task(key, p["dtype"]))
 
             def done(f, key=key):
                 self.timings["boundaries_ms"] = 1e3 * (time.perf_counter() - t0)
@@ -375,6 +383,14 @@ class Explorer:
             fut.add_done_callback(done)
             self._curves[key] = fut
         return fut.result() if fut.done() else None  # an error in the worker raises here
+
+    def boundary_key(self) -> tuple:
+        """What the certified boundaries shown depend on: the slice ``(kappa, q1, q2)``, or for
+        a box layer ``(layer, model box)``."""
+        p = self.params
+        if is_box_layer(p["layer"]):
+            return (p["layer"], p["model_box"])
+        return (p["kappa"], p["q1"], p["q2"])
 
     def nearest_boundary(self, beta1, beta2, within=2 * math.pi / BOUNDARY_GRID):
         """``(curve, vertex index, distance [rad])`` of the certified boundary vertex nearest to
@@ -446,6 +462,23 @@ def _first_of_kind(kind: tuple, peek: bool = False) -> bool:
     if not peek:
         _SEEN.add(kind)
     return first
+
+
+def _boundary_task(key: tuple, dtype) -> tuple:
+    """``(function, *args)`` computing the certified boundaries of :meth:`Explorer.boundary_key`
+    ``key``: :func:`atlas.data.boundaries.slice_boundaries` on a :data:`BOUNDARY_GRID` grid, or
+    for a box layer :func:`atlas.data.region_curves.region_curves` on a
+    :data:`BOX_BOUNDARY_GRID` grid."""
+    if isinstance(key[0], str):
+        from atlas.data.over_models import as_model_box  # noqa: PLC0415 - on use
+        from atlas.data.region_curves import region_curves  # noqa: PLC0415
+
+        grid = beta_grid(BOX_BOUNDARY_GRID)
+        return region_curves, grid, grid, as_model_box(key[1]), key[0]
+    from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
+
+    grid = beta_grid(BOUNDARY_GRID)
+    return functools.partial(slice_boundaries, dtype=dtype), grid, grid, *key
 
 
 def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:

@@ -248,10 +248,9 @@ class _Callbacks:
             toolbar.set_message(text)
 
     def on_boundaries(self, key):
-        """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
-        still the slice shown."""
-        p = self.ex.params
-        if key == (p["kappa"], p["q1"], p["q2"]):
+        """The certified boundaries of ``key`` (a slice, or a box layer's box) are ready (worker
+        thread): redraw if they are still the ones shown."""
+        if key == self.ex.boundary_key():
             self._note = f", certified boundaries {self.ex.timings['boundaries_ms']:.0f} ms"
             self.render()
 

@@ -476,6 +476,13 @@ def test_box_layer_key_model_box_and_witnesses_on_click(need):
     assert "model_box: kappa: reversed range 2:1" in html.unescape(box.status.value)
     assert ex.ds is ds
     c["model_box"].value = maps.WHOLE_BOX
+    c["overlays"].value = ("certified boundaries",)  # the region curves over the box
+    curves = _wait_boundaries(ex).curves
+    assert curves and {cv.field for cv in curves} == {"ss_over_models"}
+    labels = [t.get_text() for t in ax.get_legend().texts]
+    assert labels[-1] == "certified region boundary", labels
+    drawn = [ln for ln in ax.lines if ln.get_color() == "#6a3d9a"]
+    assert len(drawn) == sum(1 for cv in curves if len(cv.vertices))
     b1, b2 = 0.25 * math.pi, 0.6 * math.pi  # class 13: depends
     _click(box, b1, b2)
     text = html.unescape(box.inspector.value)
