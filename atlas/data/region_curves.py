@@ -11,9 +11,11 @@ polylines (``field`` the output's name, ``kind`` ``<name>_region``), certified t
    is a grid edge whose two ends carry different proven codes: a bracket.  A polyline is cut where
    the code across it changes, each interface kept once (from the lower code's side).
 3. **Certified vertices.** Every bracket is bisected on the proven verdict at its midpoint (the
-   small budget of :mod:`atlas.core.model_box`, no settlement) until it is ``<= tol`` long; the
+   small budget of :mod:`atlas.core.model_box`, the settlement's for a midpoint it leaves
+   undecided) until it is ``<= tol`` long; the
    vertex is its midpoint, within ``bracket / 2`` of the true boundary.  A midpoint left undecided
-   (or of a third code: a junction inside the bracket) stops that bracket: its length, per vertex
+   after the settlement (or of a third code: a junction inside the bracket; or no float left
+   between the ends) stops that bracket: its length, per vertex
    in ``Curve.bracket``, is what is claimed, never less.  ``attrs["stopped"]`` counts them.
    ``Curve.ends[i]`` holds the bracket's ends: ``[0]`` of code ``side_right`` (the lower),
    ``[1]`` of code ``side_left``.
@@ -53,9 +55,10 @@ def point_codes(name: str, beta1, beta2, box, *, settle: bool, dtype="float64") 
     return np.asarray(res[name], np.int8)
 
 
-def _bisect(name, lo, hi, code_lo, code_hi, box, tol, dtype):
+def _bisect(name, lo, hi, code_lo, code_hi, box, tol, dtype, settle):
     """Shrink the brackets ``lo`` (code ``code_lo``) - ``hi`` (``code_hi``), rows ``(beta1,
-    beta2)``, to ``<= tol`` on proven midpoint codes; returns ``(lo, hi, stopped)``."""
+    beta2)``, to ``<= tol`` on proven midpoint codes (the small budget, then with ``settle`` the
+    settlement's for what it leaves undecided); returns ``(lo, hi, stopped)``."""
     lo, hi = np.array(lo, np.float64).reshape(-1, 2), np.array(hi, np.float64).reshape(-1, 2)
     stopped = np.zeros(len(lo), bool)
     while True:
@@ -65,10 +68,13 @@ def _bisect(name, lo, hi, code_lo, code_hi, box, tol, dtype):
         idx = np.flatnonzero(active)
         mid = 0.5 * (lo[idx] + hi[idx])
         code = point_codes(name, mid[:, 0], mid[:, 1], box, settle=False, dtype=dtype)
+        if settle and (und := code == int(OverModels.UNDECIDED)).any():
+            code[und] = point_codes(name, *mid[und].T, box, settle=True, dtype=dtype)
+        flat = np.all((mid == lo[idx]) | (mid == hi[idx]), axis=1)  # no float between the ends
         to_lo, to_hi = code == code_lo[idx], code == code_hi[idx]
         lo[idx[to_lo]] = mid[to_lo]
         hi[idx[to_hi]] = mid[to_hi]
-        stopped[idx[~to_lo & ~to_hi]] = True
+        stopped[idx[(~to_lo & ~to_hi) | flat]] = True
 
 
 def _pieces(codes: np.ndarray):
@@ -97,11 +103,14 @@ def _oriented(v: np.ndarray, lo: np.ndarray, hi: np.ndarray, ends: np.ndarray):
     return (v, ends) if left >= 0 else (v[::-1], ends[::-1])
 
 
-def region_curves(beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, dtype="float64"):
+def region_curves(
+    beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, dtype="float64", settle=True
+):
     """The certified region boundaries of box verdict ``name`` over ``box`` on the grid ``beta1 x
     beta2`` [rad] (module docstring): a :class:`~atlas.data.boundary_curves.Boundaries` with one
     :class:`~atlas.data.boundary_curves.Curve` per piece, ``attrs``: ``model_box``, ``tolerance``,
-    ``stopped`` (brackets stopped above ``tol``), ``grid_undecided``, ``seconds``."""
+    ``stopped`` (brackets stopped above ``tol``), ``grid_undecided``, ``seconds``.
+    ``settle=False``: midpoints the small budget leaves undecided stop their brackets at once."""
     t0 = time.perf_counter()
     b1 = np.asarray(beta1, np.float64).ravel()
     b2 = np.asarray(beta2, np.float64).ravel()
@@ -125,6 +134,7 @@ def region_curves(beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, d
         box,
         tol,
         dtype,
+        settle,
     )
     curves, at = [], 0
     for p_in, _, c_in, c_out in pieces:
