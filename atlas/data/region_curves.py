@@ -11,8 +11,8 @@ polylines (``field`` the output's name, ``kind`` ``<name>_region``), certified t
    is a grid edge whose two ends carry different proven codes: a bracket.  A polyline is cut where
    the code across it changes, each interface kept once (from the lower code's side).
 3. **Certified vertices.** Every bracket is bisected on the proven verdict at its midpoint (the
-   small budget of :mod:`atlas.core.model_box`, the settlement's for a midpoint it leaves
-   undecided) until it is ``<= tol`` long; the
+   small budget of :mod:`atlas.core.model_box`, the settlement's for up to :data:`SETTLE`
+   midpoints it leaves undecided) until it is ``<= tol`` long; the
    vertex is its midpoint, within ``bracket / 2`` of the true boundary.  A midpoint left undecided
    after the settlement (or of a third code: a junction inside the bracket; or no float left
    between the ends) stops that bracket: its length, per vertex
@@ -42,6 +42,8 @@ __all__ = ["region_curves", "point_codes", "run_cli", "TOL", "LABELS"]
 
 #: default length of a vertex's certified bracket [rad]
 TOL = 1e-8
+#: midpoints a run settles with the large budget (each can take seconds near a curved boundary)
+SETTLE = 256
 #: the region codes in words (:class:`atlas.core.verdicts.OverModels`)
 LABELS = {int(v): v.label for v in OverModels}
 
@@ -57,19 +59,22 @@ def point_codes(name: str, beta1, beta2, box, *, settle: bool, dtype="float64") 
 
 def _bisect(name, lo, hi, code_lo, code_hi, box, tol, dtype, settle):
     """Shrink the brackets ``lo`` (code ``code_lo``) - ``hi`` (``code_hi``), rows ``(beta1,
-    beta2)``, to ``<= tol`` on proven midpoint codes (the small budget, then with ``settle`` the
-    settlement's for what it leaves undecided); returns ``(lo, hi, stopped)``."""
+    beta2)``, to ``<= tol`` on proven midpoint codes (the small budget, then the settlement's
+    for at most ``settle`` midpoints it leaves undecided); returns ``(lo, hi, stopped,
+    settled)``."""
     lo, hi = np.array(lo, np.float64).reshape(-1, 2), np.array(hi, np.float64).reshape(-1, 2)
-    stopped = np.zeros(len(lo), bool)
+    stopped, settled = np.zeros(len(lo), bool), 0
     while True:
         active = ~stopped & (np.hypot(*(hi - lo).T) > tol)
         if not active.any():
-            return lo, hi, stopped
+            return lo, hi, stopped, settled
         idx = np.flatnonzero(active)
         mid = 0.5 * (lo[idx] + hi[idx])
         code = point_codes(name, mid[:, 0], mid[:, 1], box, settle=False, dtype=dtype)
-        if settle and (und := code == int(OverModels.UNDECIDED)).any():
+        und = np.flatnonzero(code == int(OverModels.UNDECIDED))[: max(settle - settled, 0)]
+        if len(und):  # the settlement's budget, for at most ``settle`` midpoints a run
             code[und] = point_codes(name, *mid[und].T, box, settle=True, dtype=dtype)
+            settled += len(und)
         flat = np.all((mid == lo[idx]) | (mid == hi[idx]), axis=1)  # no float between the ends
         to_lo, to_hi = code == code_lo[idx], code == code_hi[idx]
         lo[idx[to_lo]] = mid[to_lo]
@@ -104,13 +109,14 @@ def _oriented(v: np.ndarray, lo: np.ndarray, hi: np.ndarray, ends: np.ndarray):
 
 
 def region_curves(
-    beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, dtype="float64", settle=True
+    beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, dtype="float64", settle=SETTLE
 ):
     """The certified region boundaries of box verdict ``name`` over ``box`` on the grid ``beta1 x
     beta2`` [rad] (module docstring): a :class:`~atlas.data.boundary_curves.Boundaries` with one
     :class:`~atlas.data.boundary_curves.Curve` per piece, ``attrs``: ``model_box``, ``tolerance``,
     ``stopped`` (brackets stopped above ``tol``), ``grid_undecided``, ``seconds``.
-    ``settle=False``: midpoints the small budget leaves undecided stop their brackets at once."""
+    ``settle``: how many midpoints the small budget leaves undecided get the settlement's (the
+    rest stop their brackets; ``attrs["settled"]``); 0: none."""
     t0 = time.perf_counter()
     b1 = np.asarray(beta1, np.float64).ravel()
     b2 = np.asarray(beta2, np.float64).ravel()
@@ -118,6 +124,8 @@ def region_curves(
         raise ValueError("beta1: the grid needs at least 2 x 2 nodes")
     if not (math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol: must be a positive number, got {tol!r}")
+    if isinstance(settle, bool) or not isinstance(settle, int) or settle < 0:
+        raise ValueError(f"settle: must be an integer >= 0, got {settle!r}")
     g1, g2 = np.meshgrid(b1, b2, indexing="ij")
     codes = point_codes(name, g1.ravel(), g2.ravel(), box, settle=True, dtype=dtype)
     codes = codes.reshape(g1.shape)
@@ -125,7 +133,7 @@ def region_curves(
     undecided = int(OverModels.UNDECIDED)
     pieces = [p for p in _pieces(codes) if undecided not in p[2:]]  # both ends proven
     cat = lambda f: np.concatenate([f(p) for p in pieces] or [np.zeros(0, int)])  # noqa: E731
-    lo, hi, stop = _bisect(  # every bracket of every piece at once: one proof batch a step
+    lo, hi, stop, settled = _bisect(  # every bracket of every piece at once: one proof batch a step
         name,
         nodes[cat(lambda p: p[0])],
         nodes[cat(lambda p: p[1])],
@@ -149,6 +157,7 @@ def region_curves(
         tolerance=tol,
         chord_tolerance=math.nan,  # chords are not refined: no sagitta claimed
         stopped=int(stop.sum()),
+        settled=settled,
         grid_undecided=int(np.sum(codes == undecided)),
         seconds=time.perf_counter() - t0,
         history=f"atlas.data.region_curves ({name} over {box})",

@@ -468,13 +468,16 @@ def _boundary_task(key: tuple, dtype) -> tuple:
     """``(function, *args)`` computing the certified boundaries of :meth:`Explorer.boundary_key`
     ``key``: :func:`atlas.data.boundaries.slice_boundaries` on a :data:`BOUNDARY_GRID` grid, or
     for a box layer :func:`atlas.data.region_curves.region_curves` on a
-    :data:`BOX_BOUNDARY_GRID` grid."""
+    :data:`BOX_BOUNDARY_GRID` grid (small proof budget only)."""
     if isinstance(key[0], str):
         from atlas.data.over_models import as_model_box  # noqa: PLC0415 - on use
         from atlas.data.region_curves import region_curves  # noqa: PLC0415
 
         grid = beta_grid(BOX_BOUNDARY_GRID)
-        return region_curves, grid, grid, as_model_box(key[1]), key[0]
+        # without the settlement's budget: a bracket it would have to settle stops (its length
+        # shown), the overlay stays interactive on a bounded box
+        task = functools.partial(region_curves, settle=0)
+        return task, grid, grid, as_model_box(key[1]), key[0]
     from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
 
     grid = beta_grid(BOUNDARY_GRID)

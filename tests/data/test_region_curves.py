@@ -127,7 +127,10 @@ def test_cli_writes_the_curves_and_refuses_bad_input(tmp_path, capsys):
         assert not bad.exists()
 
 
-@pytest.mark.parametrize("tol", [0.0, -1.0, float("nan")])
-def test_bad_tolerance(tol):
-    with pytest.raises(ValueError, match="tol"):
-        rc.region_curves(GRID, GRID, ModelBox(), tol=tol)
+@pytest.mark.parametrize(
+    "kw, name",
+    [(dict(tol=0.0), "tol"), (dict(tol=float("nan")), "tol"), (dict(settle=-1), "settle")],
+)
+def test_bad_options(kw, name):
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        rc.region_curves(GRID, GRID, ModelBox(), **kw)
