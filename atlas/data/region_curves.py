@@ -214,9 +214,11 @@ def run_cli(
     parts = [region_curves(b1, b2, box, n, tol=tol, dtype=dtype) for n in names]
     bd = Boundaries([c for p in parts for c in p.curves], [], dict(parts[0].attrs))
     bd.attrs.update(stopped=sum(p.attrs["stopped"] for p in parts), fields=",".join(names))
+    bd.attrs["settled"] = sum(p.attrs["settled"] for p in parts)
     print(
         summary(bd) + f"\n  model box {box}: {bd.attrs['stopped']} brackets stopped above tol "
-        "(a midpoint undecided or of a third code); chords not refined (nan: none claimed)"
+        f"(a midpoint undecided or of a third code; {bd.attrs['settled']} midpoints settled); "
+        "chords not refined (nan: none claimed)"
     )
     for path, write in ((out, _write_netcdf), (csv, bd.to_csv), (geojson, bd.to_geojson)):
         if path is not None:
