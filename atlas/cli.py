@@ -250,6 +250,12 @@ def _add_mechanism(sub) -> None:
         ),
     )
     pm.add_argument("name", choices=sorted(MECHANISM_SCENES), help="built-in mechanism scene")
+    pm.add_argument(
+        "--model-box",
+        metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
+        help="add ss_over_models and its witness models per body: SS stable for every contact "
+        "model of the box at the body's geometry, for none, or depends",
+    )
     axes = sorted({a for sc in MECHANISM_SCENES.values() for a in sc.axes})
     for a in axes:
         pm.add_argument(
@@ -350,6 +356,12 @@ def _add_boundaries(sub) -> None:
     pb.add_argument("--geojson", metavar="FILE.json", help="GeoJSON FeatureCollection")
     pb.add_argument("--overwrite", action="store_true", help="replace existing output files")
     pb.add_argument("--dtype", choices=["float64", "float32"], default="float64")
+    pb.add_argument(
+        "--model-box",
+        metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
+        help="instead: the certified curves between the regions of ss_over_models over this box "
+        "(stable / unstable for every model, depends; no --kappa/--q; atlas.data.region_curves)",
+    )
     _add_limits(pb)
 
 
@@ -645,6 +657,8 @@ def _cmd_dispatch(args, argv=()) -> int:
     if estimate is not None and estimate.screen(args.dry_run, args.no_size_check):
         return 0
     module, func = _DISPATCH[args.command]
+    if args.command == "boundaries" and args.model_box is not None:
+        module = "atlas.data.region_curves"  # the regions over a box of models
     fn = getattr(importlib.import_module(module), func)
     skip = ("command", "dry_run", "no_size_check")
     opts = {k: v for k, v in vars(args).items() if k not in skip}

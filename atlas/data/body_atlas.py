@@ -15,6 +15,11 @@ declared parameters (e.g. the ladder's ``L`` [m], ``m`` [kg]), the derived ``I``
 sliding speed; default 0, the zero-speed limit), the sliding signs ``s1, s2`` and, as attributes, the
 contact kinds.  ``fixed={"L": 3.0, "c1": 20.0}`` (CLI ``--fixed L=3,c1=20``) changes them; every value
 goes through the validation of :mod:`atlas.core.rigid_body` and the declared ranges.
+
+``model_box=`` (CLI ``--model-box kappa=0.01:100,q1=0:1,q2=0:1``) adds, per body, the verdicts over
+that box of contact models (``ss_over_models`` and its witness models, :mod:`atlas.data.box_points`):
+for the body's geometry ``(beta1, beta2)``, whether SS is stable for every model of the box, for
+none, or depends on the model -- the body's own ``kappa, q1, q2`` replaced by the box.
 """
 
 from __future__ import annotations
@@ -116,6 +121,7 @@ def mechanism_atlas(
     dtype: str = "float64",
     fixed: dict | None = None,
     history: str | None = None,
+    model_box=None,
     **axes,
 ) -> xr.Dataset:
     """The atlas of built-in mechanism scene ``name`` (:data:`MECHANISM_SCENES`) over its physical
@@ -123,10 +129,13 @@ def mechanism_atlas(
 
     ``fixed``: values of the other parameters (module docstring; SI units of :func:`stored_units`);
     ``history``: the command recorded in the ``history`` attribute (default: this call, with every
-    axis range and fixed value).
+    axis range and fixed value); ``model_box``: a box of contact models (a
+    :class:`~atlas.core.model_box.ModelBox`, its text or a dict) whose verdicts are added
+    (module docstring).
     """
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
+    box = None if model_box is None else _checked_box(model_box)
     dtype = checks.float_dtype(dtype)
     scene = MECHANISM_SCENES[name]
     consts = _fixed_values(scene, dict(fixed or {}))
@@ -176,6 +185,7 @@ def mechanism_atlas(
     if history is None:
         args = [f"{a}={values_spec!r}" for a, values_spec in _specs(scene, axes).items()]
         args += [f"fixed={dict(fixed)!r}"] if fixed else []
+        args += [f"model_box={str(box)!r}"] if box is not None else []
         history = f"atlas.mechanism_atlas({', '.join([repr(name), *args, f'dtype={dtype!r}'])})"
     attrs = {
         "Conventions": "CF-1.10",
@@ -188,7 +198,31 @@ def mechanism_atlas(
         "contact1_kind": body.get("kind1", "body_vertex"),
         "contact2_kind": body.get("kind2", "body_vertex"),
     }
+    if box is not None:
+        attrs.update(_add_box_verdicts(data, dims, inv, box, dtype))
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _checked_box(model_box):
+    from atlas.data.over_models import as_model_box  # noqa: PLC0415 - only on request
+
+    return as_model_box(model_box)
+
+
+def _add_box_verdicts(data: dict, dims: tuple, inv: dict, box, dtype) -> dict:
+    """The verdicts over ``box`` at every body's ``(beta1, beta2)`` added to ``data``; returns
+    the attributes (the box, undecided counts before and after the settlement)."""
+    from atlas.data.box_points import point_values  # noqa: PLC0415 - only on request
+
+    res = point_values(inv["beta1"], inv["beta2"], box, dtype=dtype)
+    stats = res.pop("stats")
+    for k, v in res.items():
+        data[k] = (dims, v.astype(storage_dtype(k, dtype)), variable_attrs(k))
+    return {
+        "model_box": str(box),
+        "over_models_undecided_before_settlement": int(stats.get("undecided_before", 0)),
+        "over_models_undecided": int(stats.get("undecided_after", 0)),
+    }
 
 
 def _real_g(g) -> float:
@@ -220,6 +254,14 @@ def summary(ds: xr.Dataset) -> str:
     for k in ("consistent_II", "stable_II", "stable_SS"):
         counts = {int(c): int(m) for c, m in zip(*np.unique(ds[k].values, return_counts=True))}
         lines.append(f"{k}: {counts} (codes: {ds[k].attrs.get('flag_meanings', '')})")
+    for k in [v for v in ds.data_vars if "model_box" in ds.attrs and v.endswith("_over_models")]:
+        counts = {int(c): int(m) for c, m in zip(*np.unique(ds[k].values, return_counts=True))}
+        lines.append(
+            f"{k} over the model box {ds.attrs['model_box']}: {counts} (codes: "
+            f"{ds[k].attrs.get('flag_meanings', '')}); undecided "
+            f"{ds.attrs['over_models_undecided_before_settlement']} before the settlement, "
+            f"{ds.attrs['over_models_undecided']} after"
+        )
     return "\n".join(lines)
 
 
@@ -241,10 +283,12 @@ def parse_fixed(text: str | None) -> dict:
     return out
 
 
-def run_cli(name, out=None, overwrite=False, dtype="float64", fixed=None, **axes) -> int:
-    """``atlas mechanism NAME [--AXIS RANGE ...] [--fixed K=V,...] [--out FILE.nc]``; the file's
-    ``history`` is this command line with every axis range explicit."""
-
+def run_cli(
+    name, out=None, overwrite=False, dtype="float64", fixed=None, model_box=None, **axes
+) -> int:
+    """``atlas mechanism NAME [--AXIS RANGE ...] [--fixed K=V,...] [--model-box BOX] [--out
+    FILE.nc]``; the file's ``history`` is this command line with every axis range explicit."""
+    box = None if model_box is None else _checked_box(model_box)  # refused before any work
     if out is not None:
         check_output_path(out, overwrite)
     given = {a: v for a, v in axes.items() if v is not None}
@@ -253,11 +297,14 @@ def run_cli(name, out=None, overwrite=False, dtype="float64", fixed=None, **axes
     for a, spec in _specs(scene, given).items():
         words += [f"--{a}", str(spec)]
     words += ["--fixed", fixed] if fixed else []
+    words += ["--model-box", str(box)] if box is not None else []
     words += ["--dtype", dtype] if dtype != "float64" else []
     words += ["--out", str(out)] if out is not None else []
     words += ["--overwrite"] if overwrite else []
     history = " ".join(shlex.quote(w) for w in words)
-    ds = mechanism_atlas(name, dtype=dtype, fixed=parse_fixed(fixed), history=history, **given)
+    ds = mechanism_atlas(
+        name, dtype=dtype, fixed=parse_fixed(fixed), history=history, model_box=box, **given
+    )
     print(summary(ds))
     if out is not None:
         write_netcdf(ds, out, overwrite=overwrite)

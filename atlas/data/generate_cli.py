@@ -57,8 +57,14 @@ def run_cli(
     opts = RunOptions(method, dtype, resolve, tile_points, progress, history)
     screen = (dry_run, no_size_check)
     if model_box is not None:
-        if resume or any(a is not None for a in (scheduler, store, slab, block2)):
-            raise ValueError("model_box: not with --scheduler, --store, --resume, --slab, --block2")
+        where = dict(scheduler=scheduler, store=store, slab=slab, block2=block2)
+        given = [k for k, v in where.items() if v is not None] + ["resume"] * bool(resume)
+        if given:
+            raise ValueError(
+                f"model_box: not with --{given[0]} (the verdicts over the box are computed in "
+                "memory and span beta1 x beta2 only: write them apart with --model-box, the "
+                "same --beta1 --beta2 and one model, without a store)"
+            )
         return _run_over_models(sc, opts, out, overwrite, screen, model_box)
     if resume or any(a is not None for a in (scheduler, store, slab, block2)):
         where = dict(scheduler=scheduler, store=store, resume=resume, slab=slab, block2=block2)

@@ -3,7 +3,8 @@
 The logic behind ``notebooks/explore.ipynb`` as plain, testable functions, one module per idea:
 
 * :mod:`atlas.explore.maps` -- :func:`compute_map`, the Fig. 1 layers on an ``n x n`` grid for one
-  ``(kappa, q1, q2)`` (and optionally one ``alpha``), equal to the slice of an atlas.
+  ``(kappa, q1, q2)`` (and optionally one ``alpha``), equal to the slice of an atlas, and the box
+  layers (:func:`box_layers`: verdicts over a box of models, ``ss_over_models``).
 * :mod:`atlas.explore.inspector` -- :func:`inspect_point`, everything the theory says about one
   point, and :func:`format_inspection`.
 * :mod:`atlas.explore.colors` -- :func:`layer_rgba`, :func:`legend_entries`.
@@ -23,13 +24,15 @@ exact sign of ``det B``, but a line of near-ties nobody asked for).
 """
 
 from atlas.explore.colors import layer_rgba, legend_entries
-from atlas.explore.inspector import format_inspection, inspect_point
+from atlas.explore.inspector import format_inspection, inspect_point, over_models_at
 from atlas.explore.maps import (
     DEFAULT_LAYERS,
     beta_grid,
+    box_layers,
     compute_map,
     layer_groups,
     layers,
+    map_layers,
 )
 from atlas.explore.redraw import format_redraw, measure_redraw
 from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer, keep_kernels
@@ -42,6 +45,7 @@ __all__ = [
     "RESOLUTIONS",
     "Explorer",
     "beta_grid",
+    "box_layers",
     "compute_map",
     "format_inspection",
     "format_redraw",
@@ -49,6 +53,8 @@ __all__ = [
     "keep_kernels",
     "layer_groups",
     "layers",
+    "map_layers",
+    "over_models_at",
     "layer_rgba",
     "legend_entries",
     "make_widget",

@@ -2,7 +2,8 @@
 
 :func:`inspect_point` gives the class and subclass codes, Table 1 consistency, SF/FS stability,
 IF/FI, CC, the SS and II verdicts of the certified path *and* of the exact reference, the
-eigenvalues of ``M`` and the margins; :func:`format_inspection` is the widget's text for it.
+eigenvalues of ``M`` and the margins and, given a model box, the verdicts over the box with their
+witness models (:func:`over_models_at`); :func:`format_inspection` is the widget's text for it.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ from atlas.core.rigid_body import verdicts_at
 from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.outputs import OUTPUTS, verdict_outputs
 from atlas.explore.colors import value_label
-from atlas.explore.maps import checked_model
+from atlas.explore.maps import box_layers, box_values, checked_model, witness_outputs
 
-__all__ = ["inspect_point", "format_inspection", "format_roots"]
+__all__ = ["inspect_point", "format_inspection", "format_roots", "over_models_at"]
 
 _FLAGS = ("stable_SS", "consistent_II", "stable_II")
 #: the outputs the inspector shows in its own lines; every other verdict of the registry is listed
@@ -180,7 +181,36 @@ def _others(point: tuple, alpha, model: tuple, dt) -> dict:
     return {k: v[()] for k, v in res.items()}
 
 
-def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="float64") -> dict:
+def _witness(dirs: tuple, model: tuple) -> dict:
+    """A witness model and the exact reference's SS and II verdicts there."""
+    ref = exact.point_spectral(*(float(v) for v in dirs), *model)
+    return {"model": model, "exact": {k: int(ref[k]) for k in _FLAGS}}
+
+
+def over_models_at(beta1, beta2, model_box=None, dtype="float64") -> dict:
+    """The verdicts over ``model_box`` (every box layer, :func:`atlas.explore.maps.box_layers`) at
+    ``(beta1, beta2)`` [rad]: ``{"model_box": text, "verdicts": {name: {"code", "witnesses"}}}``,
+    ``witnesses`` (where the code is "depends") mapping each side to its model ``(kappa, q1,
+    q2)`` and the exact reference's ``stable_SS``, ``consistent_II``, ``stable_II`` there (an
+    independent look at the witness)."""
+    dt = np.dtype(dtype)
+    names = box_layers()
+    ds = box_values([float(beta1)], [float(beta2)], names, model_box, dt)
+    dirs = _direction(beta1, dt) + _direction(beta2, dt)
+    verdicts = {}
+    for name in names:
+        wit = {}
+        for side, var in witness_outputs(name).items():
+            m = tuple(float(ds[v].values.ravel()[0]) for v in var)
+            if all(math.isfinite(x) for x in m):
+                wit[side] = _witness(dirs, m)
+        verdicts[name] = {"code": int(ds[name].values.ravel()[0]), "witnesses": wit}
+    return {"model_box": ds.attrs["model_box"], "verdicts": verdicts}
+
+
+def inspect_point(
+    beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="float64", model_box=None
+) -> dict:
     """Everything the theory says about one point ``(beta1, beta2, alpha)`` [rad] at ``(kappa, q)``.
 
     Returns a dict with
@@ -198,7 +228,9 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
     * ``margins``: ``ss_margin`` (smooth SS margin), ``det_B``, the quartic's coefficients
       ``a3 a2 a1 a0``, ``spectral_abscissa``,
     * ``others``: every other verdict of the output registry (stored values),
-    * ``labels``: the verdicts in words.
+    * ``labels``: the verdicts in words,
+    * ``over_models`` (only with ``model_box``, text or :class:`~atlas.core.model_box.ModelBox`):
+      :func:`over_models_at`, the verdicts over the box and the witness models.
     """
     dt = np.dtype(dtype)
     kappa, q1, q2 = model = checked_model(kappa, q1, q2)
@@ -220,6 +252,8 @@ def inspect_point(beta1, beta2, alpha=None, kappa=0.5, q1=0.0, q2=None, dtype="f
         **_spectrum(dirs, model, arr, dt),
         "others": _others((float(beta1), float(beta2)), alpha, model, dt),
     }
+    if model_box is not None:
+        out["over_models"] = over_models_at(beta1, beta2, model_box, dt)
     out["labels"] = _labels(out)
     return out
 
@@ -300,6 +334,30 @@ def _spectrum_lines(info: dict) -> list[str]:
     ]
 
 
+def _over_models_lines(info: dict) -> list[str]:
+    """Each verdict over the model box, and its witness models (with the exact reference's
+    verdicts there) where it depends on the model."""
+    om = info.get("over_models")
+    if om is None:
+        return []
+    lines = []
+    for name, v in om["verdicts"].items():
+        lines.append(f"{name} over the model box {om['model_box']}: {value_label(name, v['code'])}")
+        for side, w in v["witnesses"].items():
+            k, q1, q2 = w["model"]
+            e = w["exact"]
+            lines.append(
+                f"  {side} witness: kappa = {k:.6g}, q1 = {q1:.6g}, q2 = {q2:.6g} (exact "
+                f"reference there: SS {_label(Verdict, e['stable_SS'])}, II "
+                f"{_label(Consistency, e['consistent_II'])}, II stability "
+                f"{_label(Verdict, e['stable_II'])})"
+            )
+    return lines
+
+
 def format_inspection(info: dict) -> str:
     """The inspector's text for a result of :func:`inspect_point`."""
-    return "\n".join(_codes_lines(info) + _stability_lines(info) + _spectrum_lines(info))
+    return "\n".join(
+        _codes_lines(info) + _over_models_lines(info) + _stability_lines(info)
+        + _spectrum_lines(info)
+    )  # fmt: skip

@@ -10,13 +10,15 @@ import time
 import numpy as np
 
 from atlas.explore.colors import legend_entries, value_label
-from atlas.explore.maps import needs_alpha
+from atlas.explore.maps import box_layers, is_box_layer, needs_alpha
 from atlas.explore.state import Explorer
 
 __all__ = ["MapView", "class_lines", "FIGSIZE", "AXES_RECT"]
 
 _PI_TICKS = ["0", "π/2", "π", "3π/2", "2π"]
 _CURVE_COLORS = {"SS": "black", "II": "#0050ff"}
+#: the certified boundaries between the regions of a box layer
+_REGION_COLOR = "#6a3d9a"
 #: the map figure [in]: 640 x 460 px at 100 dpi, beside the controls (400 px) in a ~1,070 px
 #: notebook column
 FIGSIZE = (6.4, 4.6)
@@ -110,6 +112,8 @@ class MapView:
                 frameon=False,
             )
         title = p["layer"]
+        if is_box_layer(p["layer"]):
+            title += f"  ({p['model_box'].replace(',', ', ')})"
         if needs_alpha(p["layer"]):
             title += f"  (alpha = {p['alpha'] / math.pi:.3f} π)"
         ax.set_title(title, fontsize=10)
@@ -160,12 +164,15 @@ class MapView:
         if b is None:
             return [Line2D([], [], color="0.5", ls=":", label="certified boundaries: computing")]
         stroke = [patheffects.withStroke(linewidth=3, foreground="white")]
+        colors = {**_CURVE_COLORS, **{f: _REGION_COLOR for f in box_layers()}}
         for c in b.curves:
-            if c.field in _CURVE_COLORS and len(c.vertices):
+            if c.field in colors and len(c.vertices):
                 v = c.vertices
                 self.certified += self.ax.plot(
-                    v[:, 0], v[:, 1], color=_CURVE_COLORS[c.field], lw=1.3, path_effects=stroke
+                    v[:, 0], v[:, 1], color=colors[c.field], lw=1.3, path_effects=stroke
                 )
+        if is_box_layer(ex.params["layer"]):
+            return [Line2D([], [], color=_REGION_COLOR, lw=1.3, label="certified region boundary")]
         pts = np.array([(p.beta1, p.beta2) for p in b.points]).reshape(-1, 2)
         if len(pts):
             self.certified.append(

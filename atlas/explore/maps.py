@@ -1,7 +1,10 @@
 """The layers of the beta1-beta2 plane at any resolution, for one model ``(kappa, q1, q2)``.
 
 A layer is any output of the registry (:mod:`atlas.data.outputs`) with a point kernel: a newly
-registered output is a layer at once.  :func:`compute_map` runs the registry's kernels through
+registered output is a layer at once.  The verdicts over a box of contact models (the registry's
+outputs with :class:`atlas.core.verdicts.OverModels` codes, ``ss_over_models`` ...) are layers too
+(:func:`box_layers`): they do not depend on one model but on a model box (``model_box=``), and are
+computed, with their witness models, by the function the registry names for them.  :func:`compute_map` runs the registry's kernels through
 :func:`atlas.data.plane.plane_outputs` (the certified driver of every other caller, undecided
 values settled by :mod:`atlas.core.exact`).  Variable names, dimensions and stored types follow the data contract
 (SPEC §2), so a map equals the corresponding slice of an atlas from :func:`atlas.data.engine.generate`.
@@ -15,6 +18,7 @@ decided; a few damped ones may still leave ``consistent_II`` to the exact refere
 
 from __future__ import annotations
 
+import importlib
 import math
 import time
 
@@ -22,6 +26,8 @@ import numpy as np
 import xarray as xr
 
 from atlas.core import kernels
+from atlas.core.model_box import ModelBox
+from atlas.core.verdicts import OverModels
 from atlas.data.outputs import OUTPUTS, coord_attrs, kernel_outputs, to_storage, variable_attrs
 from atlas.data.plane import PLANE, map_dims, plane_outputs
 
@@ -35,19 +41,62 @@ __all__ = [
     "needs_model",
     "layers",
     "layer_groups",
+    "box_layers",
+    "map_layers",
+    "is_box_layer",
+    "witness_outputs",
+    "checked_box",
+    "box_values",
     "DEFAULT_LAYERS",
+    "WHOLE_BOX",
 ]
 
 DEFAULT_LAYERS = ("class_code", "stable_SS", "consistent_II", "stable_II")
 _MARGIN_COMMENT = "atlas.core.hurwitz.ss_margin: zero on the curved SS boundary"
+#: the whole model space ``kappa > 0``, ``q1, q2 >= 0`` as text (the box layers' default)
+WHOLE_BOX = str(ModelBox())
+#: the coordinates of a witness model, in the order of its registry outputs' last word
+WITNESS_VARS = ("kappa", "q1", "q2")
 
 
 def layers() -> tuple[str, ...]:
-    """Every layer: the outputs of the registry with a point kernel, in registry order."""
+    """Every layer of one model: the outputs of the registry with a point kernel, in registry
+    order."""
     return kernel_outputs()
 
 
+def box_layers() -> tuple[str, ...]:
+    """The layers over a box of models: the registry's outputs with
+    :class:`~atlas.core.verdicts.OverModels` codes (``ss_over_models`` ...), in registry order."""
+    return tuple(n for n, o in OUTPUTS.items() if o.enum is OverModels)
+
+
+def map_layers() -> tuple[str, ...]:
+    """Every layer the widget offers: :func:`layers`, then :func:`box_layers`."""
+    return layers() + box_layers()
+
+
+def is_box_layer(name: str) -> bool:
+    """Whether ``name`` is a verdict over a box of models (:func:`box_layers`)."""
+    return name in OUTPUTS and OUTPUTS[name].enum is OverModels
+
+
+def witness_outputs(name: str) -> dict[str, tuple[str, str, str]]:
+    """The witness models of box layer ``name`` as registry outputs: ``side -> (kappa, q1, q2)``
+    output names, from the names ``<prefix>_witness_<side>_<kappa|q1|q2>`` (``<prefix>_over_models``
+    the layer), sides in registry order (``ss_over_models``: ``stable``, ``unstable``)."""
+    prefix = name.removesuffix("_over_models") + "_witness_"
+    found: dict[str, dict] = {}
+    for n in OUTPUTS:
+        side, _, var = n.removeprefix(prefix).rpartition("_")
+        if n.startswith(prefix) and var in WITNESS_VARS and side:
+            found.setdefault(side, {})[var] = n
+    return {s: tuple(v[k] for k in WITNESS_VARS) for s, v in found.items() if len(v) == 3}
+
+
 def _params(name: str) -> tuple[str, ...]:
+    if OUTPUTS[name].kernel is None:  # a box layer or its witnesses
+        return tuple(OUTPUTS[name].depends)
     return kernels.KERNELS[OUTPUTS[name].kernel].params
 
 
@@ -61,20 +110,22 @@ def layer_groups() -> tuple[tuple[str, ...], ...]:
             group = tuple(r for r in batch if r in OUTPUTS and OUTPUTS[r].kernel == k.name)
             if group:
                 out.append(group)
+    for name in box_layers():
+        out.append((name, *(w for ws in witness_outputs(name).values() for w in ws)))
     return tuple(out)
 
 
 def check_layer(name: str, param: str = "layer") -> tuple[str, ...]:
     """The group of layer ``name`` (:func:`layer_groups`); a one-line ``ValueError`` naming
     ``param`` for an unknown name or an output that is not a map layer."""
+    for g in layer_groups():
+        if name in g:
+            return g
     if name in OUTPUTS and OUTPUTS[name].kernel is None:
         o = OUTPUTS[name]
         how = "a reduction over the model samples" if o.needs else f"computed by {o.computed_by}"
         raise ValueError(f"{param}: {name} is not a map layer ({how}, no point kernel)")
-    for g in layer_groups():
-        if name in g:
-            return g
-    raise ValueError(f"{param}: unknown layer {name!r} (known: {', '.join(layers())})")
+    raise ValueError(f"{param}: unknown layer {name!r} (known: {', '.join(map_layers())})")
 
 
 def needs_alpha(name: str) -> bool:
@@ -83,8 +134,41 @@ def needs_alpha(name: str) -> bool:
 
 
 def needs_model(name: str) -> bool:
-    """Whether layer ``name`` depends on the model ``(kappa, q1, q2)``."""
-    return "model" in _params(name)
+    """Whether layer ``name`` depends on the model ``(kappa, q1, q2)`` (a box layer depends on
+    the model box instead)."""
+    return "model" in _params(name) and OUTPUTS[name].kernel is not None
+
+
+def checked_box(model_box) -> str:
+    """A model box (a :class:`~atlas.core.model_box.ModelBox`, its text or a dict; ``None``: the
+    whole model space) as its canonical text; a one-line ``ValueError`` naming ``model_box``."""
+    from atlas.data.over_models import as_model_box  # noqa: PLC0415 - the box's parser
+
+    return WHOLE_BOX if model_box is None else str(as_model_box(model_box))
+
+
+def box_values(beta1, beta2, names, model_box=None, dtype="float64") -> xr.Dataset:
+    """The box layers ``names`` and their witness outputs on the grid ``beta1 x beta2`` [rad]
+    over ``model_box``, computed by the functions the registry names for them (``computed_by``,
+    called with a Dataset of the grid and the box); attributes ``n_undecided_fast`` (before the
+    settlement), ``n_undecided`` and ``model_box``."""
+    box = checked_box(model_box)
+    coords = {k: (k, np.atleast_1d(np.asarray(v, np.float64)), coord_attrs(k))
+              for k, v in zip(PLANE, (beta1, beta2))}  # fmt: skip
+    ds = xr.Dataset(coords=coords, attrs={"dtype": str(np.dtype(dtype))})
+    for fn in dict.fromkeys(OUTPUTS[n].computed_by for n in names):
+        module, _, attr = fn.rpartition(".")
+        ds = getattr(importlib.import_module(module), attr)(ds, box)
+    keep = [k for n in names for k in (n, *(w for ws in witness_outputs(n).values() for w in ws))]
+    out = ds[list(dict.fromkeys(keep))]
+    undecided = {k: int(v) for k, v in ds.attrs.items() if k.endswith("undecided")}
+    before = {k: int(v) for k, v in ds.attrs.items() if k.endswith("before_settlement")}
+    out.attrs = dict(
+        model_box=box,
+        n_undecided_fast=sum(before.values()),
+        n_undecided=sum(undecided.values()),
+    )
+    return out
 
 
 def beta_grid(n: int) -> np.ndarray:
@@ -166,8 +250,10 @@ def compute_map(
     beta=None,
     resolve: bool = True,
     max_resolve: int | None = None,
+    model_box=None,
 ) -> xr.Dataset:
-    """Layers of the beta1-beta2 plane for one model ``(kappa, q1, q2)`` (and one ``alpha``).
+    """Layers of the beta1-beta2 plane for one model ``(kappa, q1, q2)`` (and one ``alpha``), and
+    the box layers over one model box.
 
     Parameters
     ----------
@@ -190,18 +276,45 @@ def compute_map(
     resolve : bool
         Settle values the certified fast path leaves undecided with :mod:`atlas.core.exact` (at most
         ``max_resolve`` points of the spectral layers; the rest stay undecided = 3).
+    model_box : ModelBox, str or dict, optional
+        The box of models of the box layers (:func:`box_layers`; ``"kappa=0.01:100,q=0:1"``,
+        :func:`atlas.data.over_models.as_model_box`); default the whole model space.  Their
+        witness outputs come with them; they are always settled.
 
     Returns
     -------
     xarray.Dataset
         Variables with the dims and types of an atlas (``stable_SF`` spans ``beta1`` only, ...);
-        attributes ``n_undecided_fast``, ``n_undecided`` (spectral flags) and ``seconds``.
+        attributes ``n_undecided_fast``, ``n_undecided`` (spectral flags and box layers),
+        ``seconds`` and, with box layers, ``model_box``.
     """
     t0 = time.perf_counter()
     layers = _checked_layers(layers, alpha)
     model = checked_model(kappa, q1, q2)
     dt = _working_dtype(dtype)
+    boxed = [g[0] for g in layer_groups() if is_box_layer(g[0]) and set(g) & set(layers)]
+    box = checked_box(model_box) if boxed else None
     b = beta_grid(n) if beta is None else np.asarray(beta, np.float64).reshape(-1)
+    own = [k for k in layers if OUTPUTS[k].kernel is not None]
+    ds = _model_map(own, b, model, alpha, dt, resolve, max_resolve)
+    if box is not None:
+        extra = box_values(b, b, boxed, box, dt)
+        for k in extra.data_vars:
+            ds[k] = extra[k].variable
+        for k in ("n_undecided_fast", "n_undecided"):
+            ds.attrs[k] += extra.attrs[k]
+        ds.attrs["model_box"] = box
+    ds.attrs.update(dtype=str(dt), seconds=time.perf_counter() - t0)
+    return ds
+
+
+def _model_map(layers, b, model, alpha, dt, resolve, max_resolve) -> xr.Dataset:
+    """The layers of one model (:func:`compute_map` without the box layers)."""
+    if not layers:
+        return xr.Dataset(
+            coords={k: (k, b, coord_attrs(k)) for k in PLANE},
+            attrs=dict(n_undecided_fast=0, n_undecided=0),
+        )
     raw = plane_outputs(
         layers, b, model, alpha=alpha, dtype=dt, resolve=resolve, max_resolve=max_resolve
     )
@@ -209,9 +322,6 @@ def compute_map(
     out = {k: (map_dims(k), to_storage(k, v, dt)) for k, v in raw.items()}
     ds = _dataset(out, layers, _coords(b, model, alpha))
     ds.attrs.update(
-        n_undecided_fast=counts["undecided_before"],
-        n_undecided=counts["undecided_after"],
-        dtype=str(dt),
-        seconds=time.perf_counter() - t0,
+        n_undecided_fast=counts["undecided_before"], n_undecided=counts["undecided_after"]
     )
     return ds

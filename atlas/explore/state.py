@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from concurrent.futures import Future, ThreadPoolExecutor, wait
@@ -18,7 +19,9 @@ from atlas.explore.maps import (
     beta_grid,
     check_layer,
     check_model,
+    checked_box,
     compute_map,
+    is_box_layer,
     needs_alpha,
     needs_model,
 )
@@ -35,6 +38,9 @@ OVERLAYS = ("class boundaries", "SS boundary", "certified boundaries")
 #: cells a side of the grid :func:`atlas.data.boundaries.slice_boundaries` starts from for the
 #: "certified boundaries" overlay (its vertices are certified within 1e-10 rad whatever the grid)
 BOUNDARY_GRID = 64
+#: cells a side of the grid the region curves of a box layer start from (each vertex a proven
+#: bracket, bisected on proofs over the box: slower a vertex than the other curves)
+BOX_BOUNDARY_GRID = 32
 #: the name under which the explorer's kernels are kept (:func:`atlas.core.warm.keep_kernels`)
 RUN = "atlas.explore"
 #: the point ``(beta1, beta2)`` [rad] the background warm-up inspects (the widget's default point)
@@ -56,12 +62,19 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
     """The inspector's line for a click near a certified boundary: its kind, the certified
     bracket of the nearest vertex and the field's codes on its two sides (left | right of the
     direction of travel)."""
-    lab = FIELD_LABELS[curve.field]
+    lab = FIELD_LABELS.get(curve.field) or _box_labels(curve.field)
     return (
         f"near the certified {curve.kind} boundary ({distance:.3g} rad away; its vertex is "
         f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_left, curve.side_left)}"
         f" | {lab.get(curve.side_right, curve.side_right)}"
     )
+
+
+def _box_labels(name: str) -> dict:
+    """The codes of box layer ``name`` in words (its enumeration's labels)."""
+    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415
+
+    return {int(v): v.label for v in OUTPUTS[name].enum}
 
 
 def format_point(point: Point, distance: float) -> str:
@@ -104,6 +117,12 @@ class Explorer:
     of 0/1 labels are staircases of the grid, not boundaries; the point inspector gives every
     verdict at a point instead.
 
+    Box layers.  A verdict over a box of contact models (``ss_over_models``:
+    :func:`atlas.explore.maps.box_layers`) is drawn over ``model_box`` (text such as
+    ``"kappa=0.01:100,q1=0:1,q2=0:1"``; default the whole model space): moving kappa, q or alpha
+    recomputes nothing, changing the box does.  A click on such a layer adds its verdict at the
+    point and, where it depends on the model, the two witness models to the inspector.
+
     Start-up.  An :class:`Explorer` turns on :func:`keep_kernels` for its process, and
     :meth:`warm_up` (called by the widget once its first map is drawn) compiles the point
     inspector's kernels in a background thread; a click that arrives earlier waits for it.
@@ -125,6 +144,7 @@ class Explorer:
         resolve=True,
         max_resolve=LIVE_MAX_RESOLVE,
         overlays=("class boundaries",),
+        model_box=None,
     ):
         self.params = dict(
             kappa=float(kappa),
@@ -137,6 +157,7 @@ class Explorer:
             resolve=bool(resolve),
             max_resolve=max_resolve,
             overlays=tuple(overlays),
+            model_box=checked_box(model_box),
         )
         self.ds: xr.Dataset | None = None
         self.margin: xr.DataArray | None = None
@@ -177,6 +198,7 @@ class Explorer:
             raise ValueError(f"max_resolve: must be None or an integer >= 0, got {mr!r}")
         group = check_layer(p["layer"])
         check_model(float(p["kappa"]), float(p["q1"]), float(p["q2"]))
+        p["model_box"] = checked_box(p["model_box"])
         self.params = p
         key = self._key(group)
         compute = self.ds is None or key != self._last_key
@@ -224,6 +246,7 @@ class Explorer:
             alpha=p["alpha"] if any(needs_alpha(k) for k in group) else None,
             resolve=p["resolve"] if resolve is None else resolve,
             max_resolve=max_resolve,
+            model_box=p["model_box"] if is_box_layer(group[0]) else None,
         )
 
     def _margin_due(self) -> bool:
@@ -265,6 +288,8 @@ class Explorer:
 
     def _key(self, group):
         p = self.params
+        if is_box_layer(group[0]):  # the model box, not the model
+            return (group, p["n"], p["dtype"], p["model_box"])
         model = (p["kappa"], p["q1"], p["q2"]) if any(needs_model(k) for k in group) else ()
         alpha = (p["alpha"],) if any(needs_alpha(k) for k in group) else ()
         return (group, p["n"], p["dtype"], p["resolve"], p["max_resolve"]) + model + alpha
@@ -315,6 +340,7 @@ class Explorer:
             q1=p["q1"],
             q2=p["q2"],
             dtype=p["dtype"],
+            model_box=p["model_box"] if is_box_layer(p["layer"]) else None,
         )
         near = self.near(*point)
         self.point, self.last_inspection, self.last_near = point, info, near
@@ -341,16 +367,13 @@ class Explorer:
         p = self.params
         if "certified boundaries" not in p["overlays"]:
             return None
-        key = (p["kappa"], p["q1"], p["q2"])
+        key = self.boundary_key()
         fut = self._curves.get(key)
         if fut is None:
-            from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
-
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-boundaries")
-            grid = beta_grid(BOUNDARY_GRID)
             t0 = time.perf_counter()
-            fut = self._pool.submit(slice_boundaries, grid, grid, *key, dtype=p["dtype"])
+            fut = self._pool.submit(*_boundary_task(key, p["dtype"]))
 
             def done(f, key=key):
                 self.timings["boundaries_ms"] = 1e3 * (time.perf_counter() - t0)
@@ -360,6 +383,14 @@ class Explorer:
             fut.add_done_callback(done)
             self._curves[key] = fut
         return fut.result() if fut.done() else None  # an error in the worker raises here
+
+    def boundary_key(self) -> tuple:
+        """What the certified boundaries shown depend on: the slice ``(kappa, q1, q2)``, or for
+        a box layer ``(layer, model box)``."""
+        p = self.params
+        if is_box_layer(p["layer"]):
+            return (p["layer"], p["model_box"])
+        return (p["kappa"], p["q1"], p["q2"])
 
     def nearest_boundary(self, beta1, beta2, within=2 * math.pi / BOUNDARY_GRID):
         """``(curve, vertex index, distance [rad])`` of the certified boundary vertex nearest to
@@ -388,14 +419,20 @@ class Explorer:
         return (b.points[i], float(d[i])) if d[i] < within else None
 
     def status(self) -> str:
-        """The map's summary: layer, model (and alpha for the layers that depend on it), size,
-        times, undecided counts."""
+        """The map's summary: layer, model (and alpha for the layers that depend on it) or the
+        model box of a box layer, size, times, undecided counts."""
         p, ds = self.params, self.ds
         q = f"q = {p['q1']:g}" if p["q1"] == p["q2"] else f"q1 = {p['q1']:g}, q2 = {p['q2']:g}"
         if needs_alpha(p["layer"]):
             q += f", alpha = {p['alpha'] / math.pi:.3f} pi"
         und = ""
-        if ds is not None:
+        box = is_box_layer(p["layer"])
+        if ds is not None and box:
+            und = (
+                f"; undecided: {ds.attrs['n_undecided_fast']} before the settlement, "
+                f"{ds.attrs['n_undecided']} after"
+            )
+        elif ds is not None:
             und = (
                 f"; undecided: {ds.attrs['n_undecided_fast']} fast, "
                 f"{ds.attrs['n_undecided']} after exact settlement"
@@ -405,8 +442,11 @@ class Explorer:
                 und += " (drawn as undecided; 'settle undecided' settles them)"
         t = self.timings
         first = " (its kernels compiled or loaded first)" if self.first_of_kind else ""
+        where = (
+            f"over the model box {p['model_box']}" if box else f"at kappa = {p['kappa']:.4g}, {q}"
+        )
         return (
-            f"{p['layer']} at kappa = {p['kappa']:.4g}, {q}, {p['n']}^2 cells: "
+            f"{p['layer']} {where}, {p['n']}^2 cells: "
             f"compute {t.get('compute_ms', float('nan')) + t.get('margin_ms', 0.0):.0f} ms{first}, "
             f"render {t.get('render_ms', float('nan')):.0f} ms{und}"
         )
@@ -422,6 +462,26 @@ def _first_of_kind(kind: tuple, peek: bool = False) -> bool:
     if not peek:
         _SEEN.add(kind)
     return first
+
+
+def _boundary_task(key: tuple, dtype) -> tuple:
+    """``(function, *args)`` computing the certified boundaries of :meth:`Explorer.boundary_key`
+    ``key``: :func:`atlas.data.boundaries.slice_boundaries` on a :data:`BOUNDARY_GRID` grid, or
+    for a box layer :func:`atlas.data.region_curves.region_curves` on a
+    :data:`BOX_BOUNDARY_GRID` grid (small proof budget only)."""
+    if isinstance(key[0], str):
+        from atlas.data.over_models import as_model_box  # noqa: PLC0415 - on use
+        from atlas.data.region_curves import region_curves  # noqa: PLC0415
+
+        grid = beta_grid(BOX_BOUNDARY_GRID)
+        # without the settlement's budget: a bracket it would have to settle stops (its length
+        # shown), the overlay stays interactive on a bounded box
+        task = functools.partial(region_curves, settle=0)
+        return task, grid, grid, as_model_box(key[1]), key[0]
+    from atlas.data.boundaries import slice_boundaries  # noqa: PLC0415 - scipy: on use
+
+    grid = beta_grid(BOUNDARY_GRID)
+    return functools.partial(slice_boundaries, dtype=dtype), grid, grid, *key
 
 
 def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:

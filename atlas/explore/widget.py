@@ -14,7 +14,7 @@ import traceback
 
 from atlas.explore.inspector import format_inspection
 from atlas.explore.map_view import FIGSIZE, MapView
-from atlas.explore.maps import layers
+from atlas.explore.maps import map_layers
 from atlas.explore.state import LIVE_MAX_RESOLVE, OVERLAYS, Explorer
 
 __all__ = ["make_widget", "RESOLUTIONS"]
@@ -28,10 +28,11 @@ _STYLE = {"description_width": "100px"}
 #: the controls' column: sliders wide enough to aim (log10 kappa: ~0.025 decades a pixel)
 _WIDTH = "400px"
 #: controls whose change redraws the map through :meth:`_Callbacks.on_change`
-_WATCHED = ("kappa", "q", "q1", "q2", "alpha", "n", "layer", "overlays", "max_resolve")
+_WATCHED = ("kappa", "q", "q1", "q2", "alpha", "n", "layer", "model_box", "overlays")
+_WATCHED += ("max_resolve",)
 #: the controls, in the order shown
-_SHOWN = ("log10_kappa", "kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "overlays")
-_SHOWN += ("max_resolve", "settle")
+_SHOWN = ("log10_kappa", "kappa", "separate", "q", "q1", "q2", "alpha", "n", "layer", "model_box")
+_SHOWN += ("overlays", "max_resolve", "settle")
 #: put before the inspector's text when an inspection failed: it still describes the last point
 _FAILED = "<pre style='color:#b00020'>(the last inspection failed, see the status line; below: the point before)\n"
 _HINT = "<pre>click the map or enter beta1, beta2 and press 'inspect point'</pre>"
@@ -77,7 +78,8 @@ def _model_controls(W, p: dict) -> dict:
 
 
 def _map_controls(W, p: dict) -> dict:
-    """Resolution, layer, overlays, exact settlements per redraw, "settle undecided"."""
+    """Resolution, layer, model box (of the box layers), overlays, exact settlements per redraw,
+    "settle undecided"."""
     return {
         "n": W.Dropdown(
             options=sorted(set(RESOLUTIONS) | {p["n"]}),
@@ -86,7 +88,14 @@ def _map_controls(W, p: dict) -> dict:
             style=_STYLE,
         ),
         "layer": W.Dropdown(
-            options=list(layers()), value=p["layer"], description="layer", style=_STYLE
+            options=list(map_layers()), value=p["layer"], description="layer", style=_STYLE
+        ),
+        "model_box": W.Text(
+            value=p["model_box"],
+            description="model box",
+            continuous_update=False,  # applied on Enter, not at every key
+            style=_STYLE,
+            layout={"width": _WIDTH},
         ),
         "overlays": W.SelectMultiple(
             options=list(OVERLAYS),
@@ -239,10 +248,9 @@ class _Callbacks:
             toolbar.set_message(text)
 
     def on_boundaries(self, key):
-        """The certified boundaries of slice ``key`` are ready (worker thread): redraw if it is
-        still the slice shown."""
-        p = self.ex.params
-        if key == (p["kappa"], p["q1"], p["q2"]):
+        """The certified boundaries of ``key`` (a slice, or a box layer's box) are ready (worker
+        thread): redraw if they are still the ones shown."""
+        if key == self.ex.boundary_key():
             self._note = f", certified boundaries {self.ex.timings['boundaries_ms']:.0f} ms"
             self.render()
 
@@ -259,6 +267,7 @@ class _Callbacks:
             alpha=float(ctl["alpha"].value) * math.pi,
             n=int(ctl["n"].value),
             layer=ctl["layer"].value,
+            model_box=ctl["model_box"].value,
             overlays=tuple(ctl["overlays"].value),
             max_resolve=int(ctl["max_resolve"].value),
         )
@@ -364,7 +373,9 @@ def make_widget(explorer: Explorer | None = None, **initial):
     resolution, layer, overlays, exact settlements per redraw and a "settle undecided" button;
     the map redraws on every change; clicking the map fills the point inspector (needs an
     interactive matplotlib backend: ``%matplotlib widget`` with ipympl, the ``notebook`` extra),
-    as does entering beta1, beta2 and pressing "inspect point".  The kernels are kept for the
+    as does entering beta1, beta2 and pressing "inspect point".  The box layers
+    (``ss_over_models`` ...) are drawn over the "model box" text (``kappa=0.01:100,q1=0:1,q2=0:1``,
+    applied on Enter); a click on one shows the verdict there and its witness models.  The kernels are kept for the
     process (:func:`~atlas.explore.state.keep_kernels`); the inspector's compile in the
     background once the first map is drawn (:meth:`Explorer.warm_up`).
 

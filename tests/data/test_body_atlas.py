@@ -215,3 +215,70 @@ def test_cli_history_and_fixed_errors(tmp_path, capsys):
 def test_float16_refused():
     with pytest.raises(ValueError, match="^dtype: must be float32 or float64"):
         mechanism_atlas("ladder", theta="0.1:1:3", mu="0:1:3", dtype="float16")
+
+
+def _over_models_closed_form(beta1, beta2) -> np.ndarray:
+    """``ss_over_models`` over the whole model space (closed form of
+    :mod:`atlas.core.model_box`), decided exactly on the rounded directions of each body."""
+    from fractions import Fraction
+
+    from atlas.core import contact_modes as mech
+
+    out = np.empty(np.shape(beta1), np.int8)
+    for idx in np.ndindex(out.shape):
+        c1, s1 = (Fraction(float(v)) for v in mech.direction(beta1[idx]))
+        c2, s2 = (Fraction(float(v)) for v in mech.direction(beta2[idx]))
+        D = c1 * s2 - s1 * c2
+        out[idx] = (
+            0 if D < 0 or (c1 <= 0 and s2 <= 0) else 1 if c1 > 0 and s2 > 0 and s1 * c2 >= 0 else 2
+        )
+    return out
+
+
+def test_mechanism_over_a_model_box():
+    """``model_box=``: per body, ``ss_over_models`` over the whole model space equals the exact
+    closed form at the body's geometry (the ladder's classes give all three regions); over a
+    bounded box every witness model is on its side by the exact tier at that body."""
+    from atlas.core import contact_modes as mech
+    from atlas.core import exact
+    from atlas.core.model_box import WITNESS_NAMES
+
+    kw = dict(theta="0.05pi:0.45pi:9", mu="0:2:9")
+    ds = mechanism_atlas("ladder", model_box={}, **kw)
+    code = ds["ss_over_models"].values
+    b1, b2 = ds["beta1"].values, ds["beta2"].values
+    np.testing.assert_array_equal(code, _over_models_closed_form(b1, b2))
+    assert set(np.unique(code)) == {0, 1, 2} and ds["ss_over_models"].dims == ("theta", "mu")
+    assert ds.attrs["model_box"] == "kappa=0:inf,q1=0:inf,q2=0:inf"
+    assert "model_box='kappa=0:inf,q1=0:inf,q2=0:inf'" in ds.attrs["history"]
+    box = mechanism_atlas("ladder", model_box="kappa=0.1:10,q=0:1", **kw)
+    depends = np.argwhere(box["ss_over_models"].values == 2)
+    assert len(depends) > 0 and box.attrs["over_models_undecided"] == 0
+    for i, j in depends:
+        dirs = [float(v) for a in (b1[i, j], b2[i, j]) for v in mech.direction(a)]
+        w = [float(box[n][i, j]) for n in WITNESS_NAMES]
+        assert exact.ss_hurwitz(*dirs, *w[:3]) in (1, 2)  # stable or neutral
+        assert exact.ss_hurwitz(*dirs, *w[3:]) == 0  # unstable
+    assert "ss_over_models" not in mechanism_atlas("ladder", **kw)
+
+
+def test_cli_mechanism_model_box(tmp_path, capsys):
+    """``atlas mechanism --model-box``: written with the box in the history; a bad box is one
+    line naming model_box, exit 2, nothing written."""
+    import xarray as xr
+
+    from atlas.cli import main
+
+    out = tmp_path / "m.nc"
+    argv = ["mechanism", "ladder", "--theta", "0.1pi:0.4pi:3", "--mu", "0:1:3"]
+    assert main([*argv, "--model-box", "q=0:1", "--out", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["model_box"] == "kappa=0:inf,q=0:1"
+        assert "--model-box kappa=0:inf,q=0:1" in ds.attrs["history"]
+        assert ds["ss_over_models"].dtype == np.int8
+    capsys.readouterr()
+    bad = tmp_path / "bad.nc"
+    assert main([*argv, "--model-box", "kappa=-1:2", "--out", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("atlas: error: model_box: kappa: ") and err.count("\n") == 1, err
+    assert not bad.exists()

@@ -49,3 +49,35 @@ def test_parse_physical():
     for text, name in (("k1=1", "physical"), ("k1=1,k2=1,k1=2", "physical"), ("k1=x,k2=1", "k1")):
         with pytest.raises(ValueError, match=f"^{name}:"):
             parse_physical(text)
+
+
+@pytest.mark.parametrize(
+    "extra, option",
+    [
+        (["--store", "s.zarr"], "store"),
+        (["--scheduler", "local:1"], "scheduler"),
+        (["--resume", "--store", "s.zarr"], "store"),
+        (["--slab", "4"], "slab"),
+        (["--block2", "4"], "block2"),
+        (["--resume"], "resume"),
+    ],
+)
+def test_model_box_with_a_store_is_refused_in_one_line(
+    tmp_path, monkeypatch, capsys, extra, option
+):
+    """``--model-box`` with a store option (kept refused: the verdicts over the box are computed
+    in memory): one line naming model_box and the option given and saying what to do, exit 2,
+    nothing written, nothing computed."""
+    from atlas import cli
+    from atlas.data import generate_cli
+
+    monkeypatch.chdir(tmp_path)
+    ran = []
+    monkeypatch.setattr(generate_cli, "_run_store", lambda *a, **k: ran.append(a) or 0)
+    monkeypatch.setattr(generate_cli, "_run_over_models", lambda *a, **k: ran.append(a) or 0)
+    argv = ["generate", "--beta1", "0:1:2", "--beta2", "0:1:2", "--model-box", "q=0:1"]
+    assert cli.main([*argv, *extra, "--out", "a.nc"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"atlas: error: model_box: not with --{option} ("), err
+    assert "without a store" in err and err.count("\n") == 1, err
+    assert ran == [] and list(tmp_path.iterdir()) == []

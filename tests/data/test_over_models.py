@@ -106,4 +106,4 @@ def test_cli_model_box_refuses_a_store(tmp_path):
         ["generate", "--beta1", "0:1:2", "--beta2", "0:1:2", "--model-box", "q=0:1"]
         + ["--store", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "a.nc")]
     )
-    assert rc == 2 and "model_box: not with --scheduler" in err
+    assert rc == 2 and "model_box: not with --store" in err

@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 
+from atlas.core.verdicts import OverModels, Verdict
 from atlas.explore import inspector, maps
 
 ALPHA = 0.35 * math.pi
@@ -55,3 +56,32 @@ def test_margins_line_prints_no_negative_zero():
         line = next(s for s in inspector.format_inspection(info).splitlines() if "margins" in s)
         assert "a3 = +0," in line and "a1 = +0," in line, line
         assert not re.search(r"= -0(,|$)", line), line
+
+
+def test_inspector_shows_the_witness_models_where_the_verdict_depends():
+    """At a point of class 13 (``c1 > 0``, ``s2 > 0``, ``s1 c2 < 0``: SS depends on the model
+    over the whole model space, closed form of ``atlas.core.model_box``) the inspection over the
+    box says 'depends' and gives one model on each side, each on its side by the independent
+    sympy/mpmath reference, and the text prints both; at a point of class 12 (stable for every
+    model) no witness is shown; without a box nothing over models is shown."""
+    from reference_sympy import point_spectral
+
+    b1, b2 = 0.25 * math.pi, 0.6 * math.pi
+    d = (math.cos(b1), math.sin(b1), math.cos(b2), math.sin(b2))
+    assert d[0] > 0 and d[3] > 0 and d[1] * d[2] < 0 and d[0] * d[3] > d[1] * d[2]
+    info = inspector.inspect_point(b1, b2, ALPHA, model_box=maps.WHOLE_BOX)
+    v = info["over_models"]["verdicts"]["ss_over_models"]
+    assert v["code"] == OverModels.DEPENDS and set(v["witnesses"]) == {"stable", "unstable"}
+    text = inspector.format_inspection(info)
+    assert f"ss_over_models over the model box {maps.WHOLE_BOX}: depends on the model" in text
+    for side, w in v["witnesses"].items():
+        ref = int(point_spectral(*d, *w["model"])["stable_SS"])
+        assert (ref in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, w, ref)
+        assert w["exact"]["stable_SS"] == ref
+        k, q1, q2 = w["model"]
+        assert f"{side} witness: kappa = {k:.6g}, q1 = {q1:.6g}, q2 = {q2:.6g}" in text
+    info = inspector.inspect_point(0.1 * math.pi, 0.4 * math.pi, model_box="kappa=1:2")
+    v = info["over_models"]["verdicts"]["ss_over_models"]
+    assert v == {"code": OverModels.STABLE, "witnesses": {}}
+    assert "witness" not in inspector.format_inspection(info)
+    assert "over_models" not in inspector.inspect_point(b1, b2)

@@ -1,6 +1,7 @@
 """``notebooks/explore.ipynb`` as a person uses it: JupyterLab on 127.0.0.1 with its file browser
 open (the widget gets an 848 px column at 1280 px), Chromium driven by Playwright, Run All, then
-every advertised path: hover, clicks, each model control, each layer, 129^2 and 513^2 (the status
+every advertised path: hover, clicks, each model control, each layer (a click on the
+verdict over every model where it depends names both witness models), 129^2 and 513^2 (the status
 line's texts recorded while the 513^2 map is computed), each overlay, clicks next to each kind of
 certified curve and on a codimension-2 point, exact settlements, "settle undecided"; the
 inspector's text, the status line, the hover text, the canvas's pixels, the widget's output area
@@ -428,6 +429,8 @@ def _model_controls(nb: Notebook, times: dict):
 def _layers(nb: Notebook, times: dict):
     """Every layer: the status names it, the hover readout (pointer kept on the map) follows it
     without a mouse move, the categorical ones have a colour key."""
+    from atlas.explore import maps
+
     select = nb.widget("layer").locator("select")
     # the controls and the map in view together: selecting a layer scrolls nothing (a scroll
     # under a resting pointer moves it off the map)
@@ -439,7 +442,8 @@ def _layers(nb: Notebook, times: dict):
         if layer == select.input_value():
             continue
         _act(nb, lambda layer=layer: select.select_option(layer), False, timeout=120)
-        assert nb.status().startswith(f"{layer} at kappa"), nb.status()
+        where = "over the model box" if maps.is_box_layer(layer) else "at kappa"
+        assert nb.status().startswith(f"{layer} {where}"), nb.status()
         nb.page.wait_for_function(
             "([el, k]) => el.textContent.includes('| ' + k + ':')",
             arg=[
@@ -451,6 +455,31 @@ def _layers(nb: Notebook, times: dict):
         if layer in ("class_code", "subclass_code"):
             assert _legend_pixels(nb.pixels()) > 200, layer  # a colour key
     times["all_layers_s"] = time.perf_counter() - t
+    _act(nb, lambda: select.select_option("stable_SS"), False)
+
+
+def _box_layer(nb: Notebook, times: dict):
+    """The ``ss_over_models`` layer: a click where SS depends on the model (class 13 over the
+    whole model space) shows both witness models in the inspector, each on its side by the
+    exact reference; a new "model box" text recomputes the map over it."""
+    from atlas.core import exact
+    from atlas.core.verdicts import Verdict
+    from atlas.explore import maps
+
+    select = nb.widget("layer").locator("select")
+    _act(nb, lambda: select.select_option("ss_over_models"), False, timeout=120)
+    b1, b2 = 0.25 * PI, 0.6 * PI
+    times["click_depends_s"] = nb.click_map(b1, b2)
+    text = nb.inspector()
+    assert f"ss_over_models over the model box {maps.WHOLE_BOX}: depends" in text, text
+    d = (math.cos(b1), math.sin(b1), math.cos(b2), math.sin(b2))
+    for side in ("stable", "unstable"):
+        m = re.search(rf"{side} witness: kappa = (\S+), q1 = (\S+), q2 = (\S+) \(", text)
+        assert m, text
+        v = exact.point_spectral(*d, *(float(x) for x in m.groups()))["stable_SS"]
+        assert (v in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, m, v)
+    times["model_box_s"] = _act(nb, lambda: nb.set_text("model-box", "kappa=0.5:2,q=0:1"), False)
+    assert "over the model box kappa=0.5:2,q=0:1" in nb.status(), nb.status()
     _act(nb, lambda: select.select_option("stable_SS"), False)
 
 
@@ -525,6 +554,7 @@ def check_explorer(nb: Notebook, targets=None) -> dict:
     small = nb.widget("n").locator("select").input_value()
     _model_controls(nb, times)
     _layers(nb, times)
+    _box_layer(nb, times)
     _resolution(nb, times, small)
     if targets is not None:
         _certified(nb, targets, times)

@@ -4,9 +4,11 @@ recomputes, the capped settlement and the one-line errors; the kept kernels' swi
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from atlas.explore import maps, state
@@ -73,6 +75,8 @@ def test_capped_redraw_then_settle_equals_the_settled_map(bounded_det_b):
         (dict(kappa=0.0), "kappa"),
         (dict(q2=-0.1), "q2"),
         (dict(speed=1), "speed"),
+        (dict(model_box="kappa=2:1"), "model_box"),
+        (dict(layer="ss_over_models", model_box="q1=0:1,q=0:1"), "model_box"),
     ],
 )
 def test_bad_changes_name_the_parameter(changes, name):
@@ -81,3 +85,60 @@ def test_bad_changes_name_the_parameter(changes, name):
         ex.update(**changes)
     assert ex.ds is None  # nothing computed, parameters unchanged
     assert ex.params["layer"] == "stable_SS"
+
+
+def test_box_layer_follows_the_model_box_not_the_model():
+    """``ss_over_models`` is computed over the model box: moving kappa, q or alpha recomputes
+    nothing, a new box does; the status names the box; a click adds the verdict over the box
+    to the inspection (and only on a box layer)."""
+    ex = state.Explorer(n=9, layer="ss_over_models", overlays=())
+    ds = ex.update()
+    assert ds.attrs["model_box"] == maps.WHOLE_BOX
+    assert ex.status().startswith(f"ss_over_models over the model box {maps.WHOLE_BOX}, 9^2")
+    assert ex.update(kappa=3.0, q1=0.2, q2=0.7, alpha=1.0) is ds
+    assert ex.timings["compute_ms"] == 0.0
+    box = ex.update(model_box="kappa=0.5:2,q=0:1")
+    assert box is not ds and box.attrs["model_box"] == "kappa=0.5:2,q=0:1"
+    assert "over the model box kappa=0.5:2,q=0:1" in ex.status()
+    assert ex.inspect(0.25 * math.pi, 0.6 * math.pi)["over_models"]["model_box"] == (
+        "kappa=0.5:2,q=0:1"
+    )
+    ex.update(layer="stable_SS")
+    assert "over_models" not in ex.inspect(0.25 * math.pi, 0.6 * math.pi)
+
+
+def test_box_layer_certified_boundaries_and_a_click_next_to_one():
+    """With a box layer the "certified boundaries" overlay computes the region curves over the
+    model box (in the background); a click next to a closed vertex names its kind and the codes
+    on its two sides in words, which the exact closed form of the whole model space gives at the
+    vertex's bracket ends."""
+    from fractions import Fraction
+
+    from atlas.core import contact_modes as mech
+    from atlas.core.verdicts import OverModels
+
+    ex = state.Explorer(n=9, layer="ss_over_models", overlays=("certified boundaries",))
+    ex.update()
+    assert ex.boundary_key() == ("ss_over_models", maps.WHOLE_BOX)
+    ex.boundaries()  # starts the computation
+    b = ex._curves[ex.boundary_key()].result(timeout=900)
+    assert b.curves and {c.field for c in b.curves} == {"ss_over_models"}
+    c = max(b.curves, key=lambda c: int(np.sum(c.bracket <= 1e-8)))
+    i = int(np.flatnonzero(c.bracket <= 1e-8)[0])
+    v = c.vertices[i]
+    ex.inspect(v[0] + 1e-3, v[1] + 1e-3)
+    line = ex.last_near[-1]
+    left, right = OverModels(c.side_left).label, OverModels(c.side_right).label
+    assert "near the certified ss_over_models_region boundary" in line
+    assert f"{left} | {right}" in line, line
+
+    def closed_form(p):
+        c1, s1 = (Fraction(float(x)) for x in mech.direction(p[0]))
+        c2, s2 = (Fraction(float(x)) for x in mech.direction(p[1]))
+        if c1 * s2 - s1 * c2 < 0 or (c1 <= 0 and s2 <= 0):
+            return OverModels.UNSTABLE
+        return OverModels.STABLE if c1 > 0 and s2 > 0 and s1 * c2 >= 0 else OverModels.DEPENDS
+
+    got = ex.nearest_boundary(v[0] + 1e-3, v[1] + 1e-3)
+    lo, hi = got[0].ends[got[1]]
+    assert {closed_form(lo).label, closed_form(hi).label} == {left, right}

@@ -442,3 +442,56 @@ def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, nee
     second = result(start(tmp_path / "a"))
     assert (second["made"], second["warm_up"], second["click"]) == (0, 0, 0), second
     assert second["used"] > 0  # kept executables served it
+
+
+def test_box_layer_key_model_box_and_witnesses_on_click(need):
+    """The ``ss_over_models`` layer in the widget: its colour key names the verdicts over the box
+    present on the map (each in its colour), the title and status name the box, the "model box"
+    text changes it (a bad one says so in one line and keeps the map), and a click where the
+    verdict depends on the model shows the two witness models in the inspector, each on its side
+    by the exact reference."""
+    need("ipywidgets")
+    from atlas.core.verdicts import OverModels
+
+    box = widget.make_widget(n=33, layer="ss_over_models")
+    ex, c, ax = box.explorer, box.controls, box.figure.axes[0]
+    key = {
+        t.get_text(): h.get_facecolor()
+        for t, h in zip(ax.get_legend().texts, ax.get_legend().legend_handles)
+    }
+    want = [
+        OverModels.UNSTABLE,
+        OverModels.STABLE,
+        OverModels.DEPENDS,
+    ]  # all on the map, none undecided
+    assert list(key) == [v.label for v in want]
+    for v in want:
+        assert key[v.label] == to_rgba(v.color)
+    assert maps.WHOLE_BOX.replace(",", ", ") in ax.get_title()
+    assert "over the model box" in box.status.value
+    c["model_box"].value = "kappa=0.5:2,q=0:1"
+    assert ex.ds.attrs["model_box"] == "kappa=0.5:2,q=0:1" and "q=0:1" in ax.get_title()
+    ds = ex.ds
+    c["model_box"].value = "kappa=2:1"
+    assert "model_box: kappa: reversed range 2:1" in html.unescape(box.status.value)
+    assert ex.ds is ds
+    c["model_box"].value = maps.WHOLE_BOX
+    c["overlays"].value = ("certified boundaries",)  # the region curves over the box
+    curves = _wait_boundaries(ex).curves
+    assert curves and {cv.field for cv in curves} == {"ss_over_models"}
+    labels = [t.get_text() for t in ax.get_legend().texts]
+    assert labels[-1] == "certified region boundary", labels
+    drawn = [ln for ln in ax.lines if ln.get_color() == "#6a3d9a"]
+    assert len(drawn) == sum(1 for cv in curves if len(cv.vertices))
+    b1, b2 = 0.25 * math.pi, 0.6 * math.pi  # class 13: depends
+    _click(box, b1, b2)
+    text = html.unescape(box.inspector.value)
+    assert "ss_over_models over the model box" in text and ": depends on the model" in text
+    d = [np.cos(ex.point[0]), np.sin(ex.point[0]), np.cos(ex.point[1]), np.sin(ex.point[1])]
+    for side in ("stable", "unstable"):
+        m = re.search(rf"{side} witness: kappa = (\S+), q1 = (\S+), q2 = (\S+) \(", text)
+        assert m, text
+        model = ex.last_inspection["over_models"]["verdicts"]["ss_over_models"]["witnesses"][side]
+        np.testing.assert_allclose([float(x) for x in m.groups()], model["model"], rtol=1e-5)
+        v = exact.point_spectral(*d, *model["model"])["stable_SS"]
+        assert (v in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, model, v)
