@@ -60,7 +60,15 @@ from atlas.core import exact
 from atlas.core import expressions as ex
 from atlas.core.verdicts import OverModels, Verdict
 
-__all__ = ["ModelBox", "model_box", "parse_model_box", "ss_over_models", "WITNESS_NAMES"]
+__all__ = [
+    "ModelBox",
+    "model_box",
+    "parse_model_box",
+    "ss_over_models",
+    "sample_models",
+    "integers",
+    "WITNESS_NAMES",
+]
 
 #: the witness results of :func:`ss_over_models`, besides the code ``ss_over_models``
 WITNESS_NAMES = tuple(
@@ -237,7 +245,7 @@ def _template(piece: _Piece, box: ModelBox, name: str) -> bz.Template:
     return bz.Template(p, piece.axes)
 
 
-def _integers(gf) -> tuple[list, int]:
+def integers(gf) -> tuple[list, int]:
     """The direction components as integers over one power of two ``N`` (exact)."""
     ratios = [float(v).as_integer_ratio() for v in gf]
     N = max(d for _, d in ratios)
@@ -248,7 +256,7 @@ def _conditions(gf, box: ModelBox, piece: _Piece):
     """``[(coefficients, kind, implied_by)]`` whose conjunction is "stable or neutral" on
     ``piece`` (integer Bernstein coefficients; ``implied_by``: conditions that together imply
     it, tried first), or ``None`` where no model is (``D < 0``)."""
-    ints, N = _integers(gf)
+    ints, N = integers(gf)
     c1, s1, c2, s2 = ints
     D = c1 * s2 - s1 * c2
     if D < 0:
@@ -334,7 +342,7 @@ def _samples(lo: float, hi: float, open_lo: bool) -> np.ndarray:
     return np.unique(np.clip(np.array(vals), lo, hi))
 
 
-def _model_grid(box: ModelBox, fine: bool):
+def sample_models(box: ModelBox, fine: bool):
     """The sample models of the box, as flat ``(kappa, q1, q2)`` arrays (``fine``: every sample
     value, else about every third)."""
     pick = (lambda v: v) if fine else (lambda v: np.unique(np.append(v[::3], v[-1])))  # noqa: E731
@@ -363,7 +371,7 @@ def _score(c1, s1, c2, s2, kappa, q1, q2):
 
 def _search(geo, box: ModelBox, fine: bool, chunk: int = 256):
     """Per geometry (rows of ``geo``), the sample models of largest and smallest score."""
-    K, Q1, Q2 = _model_grid(box, fine)
+    K, Q1, Q2 = sample_models(box, fine)
     best = np.empty((len(geo), 2), dtype=np.int64)
     for i in range(0, len(geo), chunk):
         g = [geo[i : i + chunk, j, None] for j in range(4)]
