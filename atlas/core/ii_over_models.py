@@ -66,6 +66,7 @@ def witness_names(name: str) -> tuple:
     return tuple(f"{prefix}_witness_{s}_{v}" for s in SIDES[name] for v in ("kappa", "q1", "q2"))
 
 
+SIDES_CONS, SIDES_STAB = SIDES
 #: every result of :func:`ii_over_models`
 II_OUTPUTS = tuple(x for name in SIDES for x in (name, *witness_names(name)))
 BUDGET, SETTLE_BUDGET = 48, 512
@@ -149,31 +150,34 @@ def _sg(x) -> int:
     return int(x > 0) - int(x < 0)
 
 
+def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray]:
+    """``(consistency, never_stable)`` from the signs (arrays of -1, 0, 1) of ``c1, s1, c2, s2``
+    and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may depend on
+    the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``: ``gamma > 0``,
+    ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II."""
+    c1, s1, c2, s2, d = np.broadcast_arrays(*(np.asarray(v) for v in (c1, s1, c2, s2, d)))
+    valid = (d != 0) & (c2 * s1 != 0)
+    gpos, gneg = valid & (c2 == s1), valid & (c2 != s1)
+    first_q = (c1 >= 0) & (s2 >= 0)
+    cons = np.full(c1.shape, -1, np.int8)
+    cons[gpos & (c2 < 0)] = ~(first_q & (d > 0))[gpos & (c2 < 0)]
+    cons[gpos & (c2 > 0)] = ((c1 < 0) & (s2 < 0) & (d > 0))[gpos & (c2 > 0)]
+    cons[gneg & first_q] = 0
+    arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
+    fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
+    cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
+    return cons, gpos & (c2 > 0)
+
+
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
-    """II consistency decided by signs alone for every model (1 / 0), ``None`` where it may
-    depend on the model (the curve argument of :mod:`atlas.core.exact`; exact inputs, e.g. the
-    integers of :func:`atlas.core.model_box.integers`)."""
-    d = _sg(c1 * s2 - s1 * c2)
-    c1, s1, c2, s2 = map(_sg, (c1, s1, c2, s2))
-    if d == 0 or c2 * s1 == 0:
-        return None
-    if c2 == s1:  # gamma > 0: the II root is the crossing in QI (c2 < 0) or in QIII (c2 > 0)
-        if c2 < 0:
-            return int(not (c1 >= 0 and s2 >= 0 and d > 0))
-        return int(c1 < 0 and s2 < 0 and d > 0)
-    if c1 >= 0 and s2 >= 0:
-        return 0
-    if c1 < 0 and s2 < 0:
-        return None
-    arc = -1 if c1 < 0 else 1  # the quadrant of every positive root: QII (-1) or QIV (+1)
-    if arc * c2 > 0:
-        return 0
-    return 1 if d < 0 else None
+    """:func:`signs_rule`'s consistency of one geometry (exact inputs, e.g. the integers of
+    :func:`atlas.core.model_box.integers`): 1 / 0, ``None`` where it may depend on the model."""
+    cons = int(signs_rule(*map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2)))[0])
+    return None if cons < 0 else cons
 
 
 def never_stable_by_signs(c1, s1, c2, s2) -> bool:
-    """``gamma > 0``, ``c2 > 0``: an II root (in QIII) is followed by a larger root in QI, never
-    II, so II is unstable for every model (:mod:`atlas.core.exact`)."""
+    """:func:`signs_rule`'s ``never_stable`` of one geometry."""
     return _sg(c2) > 0 and _sg(s1) > 0
 
 
@@ -254,13 +258,18 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    sample = _sample(geo, box)
+    cons, never = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
+    codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
+    codes[SIDES_STAB][(cons == 0) | never] = _U
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
-    stats = {"points": len(geo), "undecided_before": 0, "undecided_after": 0}
-    for i in range(len(geo)):
+    todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
+    sample = _sample(geo[todo], box)
+    stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
+    stats.update(undecided_before=0, undecided_after=0)
+    for n, i in enumerate(todo):
         ints, N = mb.integers(tuple(geo[i].tolist()))
-        seen = {name: tuple(bool(j >= 0) for j in sample[name][i]) for name in SIDES}
+        seen = {name: tuple(bool(j >= 0) for j in sample[name][n]) for name in SIDES}
         got = _decide(ints, N, box, seen, BUDGET)
         if _X in got.values():
             stats["undecided_before"] += sum(v == _X for v in got.values())
@@ -269,7 +278,7 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
         for name, c in got.items():
             codes[name][i] = c
             if c == _D:
-                wit[name][i] = sample["models"][sample[name][i]].ravel()
+                wit[name][i] = sample["models"][sample[name][n]].ravel()
     stats["undecided_after"] = int(sum(np.sum(c == _X) for c in codes.values()))
     out = mb._Result()
     for name in SIDES:

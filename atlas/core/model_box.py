@@ -67,6 +67,7 @@ __all__ = [
     "ss_over_models",
     "sample_models",
     "integers",
+    "det_signs",
     "WITNESS_NAMES",
 ]
 
@@ -399,7 +400,7 @@ def _decide(gf, box: ModelBox, good, bad, budget: int):
     return int(OverModels.UNDECIDED), good, bad
 
 
-def _det_signs(geo: np.ndarray) -> np.ndarray:
+def det_signs(geo: np.ndarray) -> np.ndarray:
     """Exact signs of ``D = c1 s2 - s1 c2`` per row: the float difference where it exceeds its
     rounding bound, exact rationals elsewhere."""
     c1, s1, c2, s2 = geo.T
@@ -482,7 +483,7 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    code = _by_signs(geo, _det_signs(geo))
+    code = _by_signs(geo, det_signs(geo))
     wit = np.full((len(geo), 6), np.nan)
     open_idx = np.flatnonzero(code == int(OverModels.UNDECIDED))
     stats = {"points": len(geo), "by_signs": len(geo) - len(open_idx), "undecided_before": 0}

@@ -187,8 +187,8 @@ def test_sign_rules_agree_with_the_bernstein_proofs(text):
     box = mb.parse_model_box(text)
     c1, s1, c2, s2, _ = _per_class(1)
     geo = np.stack([c1, s1, c2, s2], axis=1)
-    signs = mb._by_signs(geo, mb._det_signs(geo))
-    decided = np.flatnonzero((signs != UND) & (mb._det_signs(geo) == 1))
+    signs = mb._by_signs(geo, mb.det_signs(geo))
+    decided = np.flatnonzero((signs != UND) & (mb.det_signs(geo) == 1))
     assert len(decided) >= 4
     for i in decided:
         code, _, _ = mb._decide(tuple(geo[i].tolist()), box, None, None, mb.SETTLE_BUDGET)
