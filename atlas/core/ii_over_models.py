@@ -193,9 +193,13 @@ def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
     step = max(1, chunk // len(K))
     for i in range(0, len(geo), step):
-        g = [geo[i : i + step, j, None] for j in range(4)]
+        block = geo[i : i + step]
+        size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
+        block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
+        g = [block[:, j, None] for j in range(4)]
         v = spectral_points(*g, K[None], Q1[None], Q2[None], names=("consistent_II", "stable_II"))
-        ci, si = np.asarray(v["consistent_II"]), np.asarray(v["stable_II"])
+        n = min(step, len(geo) - i)
+        ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
         sides = {
             "ii_consistent_over_models": (ci == 1, ci == 0),
             "ii_stable_over_models": (
@@ -205,7 +209,7 @@ def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
         }
         for name, (good, bad) in sides.items():
             for j, m in enumerate((good, bad)):
-                firsts[name][i : i + step, j] = np.where(m.any(1), np.argmax(m, 1), -1)
+                firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
     return {**firsts, "models": np.stack([K, Q1, Q2], 1)}
 
 
