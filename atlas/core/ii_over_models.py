@@ -67,6 +67,15 @@ def witness_names(name: str) -> tuple:
 
 
 SIDES_CONS, SIDES_STAB = SIDES
+
+
+def label(name: str, code: int) -> str:
+    """The words of a code of output ``name`` (``consistent for every model`` ...)."""
+    yes, no = SIDES[name]
+    words = {int(OverModels.STABLE): yes, int(OverModels.UNSTABLE): no}
+    return f"{words[code]} for every model" if code in words else OverModels(code).label
+
+
 #: every result of :func:`ii_over_models`
 II_OUTPUTS = tuple(x for name in SIDES for x in (name, *witness_names(name)))
 BUDGET, SETTLE_BUDGET = 48, 512

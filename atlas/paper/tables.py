@@ -45,6 +45,8 @@ __all__ = [
     "to_csv",
     "run_cli",
     "KAPPA_Q_SAMPLE",
+    "over_models_words",
+    "over_models_codes",
     "Row",
     "KEY",
 ]
@@ -280,9 +282,17 @@ _WORDS = {_YES: "stable", _NO: "unstable"}
 _MEMO: dict = {}
 
 
-def _over_models(c1, s1, c2, s2) -> dict:
-    """``ss_over_models`` and the II codes over the whole model space per geometry (1-D arrays),
-    with the II stability witnesses; memoised per geometry (``atlas paper`` asks twice)."""
+def over_models_codes(pts: np.ndarray, dtype=np.float64) -> list[dict]:
+    """Per point of ``pts`` (angles [rad]): ``SS`` (``ss_over_models``), the II codes over the
+    whole model space (:data:`atlas.core.ii_over_models.SIDES`), the II stability's unstable
+    witness, ``geometry`` (direction components) and ``beta`` (the angles); memoised per
+    geometry (``atlas paper`` asks twice)."""
+    (c1, s1), (c2, s2) = (contact_modes.direction(pts[:, j], dtype) for j in (0, 1))
+    res = _over_models(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
+    return [dict(r, beta=(float(a), float(b))) for r, (a, b) in zip(res, pts)]
+
+
+def _over_models(c1, s1, c2, s2) -> list[dict]:
     keys = list(zip(c1.tolist(), s1.tolist(), c2.tolist(), s2.tolist()))
     new = [k for k in dict.fromkeys(keys) if k not in _MEMO]
     if new:
@@ -315,8 +325,7 @@ def over_models_words(pts: np.ndarray, dtype=np.float64) -> dict:
     The II stability word is Table 2's: over the models where II is consistent.  Where
     consistency itself depends on the model, "model-dependent" needs an unstable witness at which
     II is consistent (checked by the exact tier), and "stable" is left open."""
-    (c1, s1), (c2, s2) = (contact_modes.direction(pts[:, j], dtype) for j in (0, 1))
-    res = _over_models(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
+    res = over_models_codes(pts, dtype)
     cons = {r["ii_consistent_over_models"] for r in res}
     marker = _class_word(set(cons))
     out = {"SS": _class_word({r["SS"] for r in res}), "II": None}
@@ -328,13 +337,13 @@ def over_models_words(pts: np.ndarray, dtype=np.float64) -> dict:
         if c == _NO:
             continue
         if c != _YES and code != _NO:
-            code = _DEP if code == _DEP and _consistent_unstable(r) else _UND
+            code = _DEP if code == _DEP and consistent_unstable(r) else _UND
         stab.add(code)
     out["II_stability"] = _class_word(stab) if stab else "-"
     return out
 
 
-def _consistent_unstable(r) -> bool:
+def consistent_unstable(r) -> bool:
     """Whether the unstable witness of a geometry has II consistent (exact tier)."""
     v = exact.point_spectral(*r["geometry"], *r["unstable_witness"])
     return int(v["consistent_II"]) == 1 and int(v["stable_II"]) != int(Verdict.STABLE)
