@@ -356,6 +356,29 @@ def sample_models(box: ModelBox, fine: bool):
     return K.ravel(), Q1.ravel(), Q2.ravel()
 
 
+def _dense_axis(rng, lo: float, hi: float, n: int) -> np.ndarray:
+    """``n`` seeded values of one axis inside ``[lo, hi]``, spread over many scales."""
+    if lo == hi:
+        return np.full(n, lo)
+    if hi == math.inf:
+        return lo + np.exp2(rng.uniform(-60, 60, n))
+    top = hi * np.exp2(rng.uniform(-40, 0, n)) if lo == 0 else np.geomspace(lo, hi, n)
+    vals = np.where(rng.random(n) < 0.5, rng.uniform(lo, hi, n), rng.permutation(top))
+    vals[::9] = lo
+    return np.clip(vals, lo, hi)
+
+
+def dense_models(box: ModelBox, n: int = 4096):
+    """``n`` seeded models of the box over many scales (the last search for witnesses;
+    candidates only), as flat ``(kappa, q1, q2)`` arrays."""
+    rng = np.random.default_rng(20261128)
+    k = _dense_axis(rng, *box.kappa, n)
+    k = np.where(k > 0, k, box.kappa[1] if box.kappa[1] < math.inf else 1.0)
+    q1 = _dense_axis(rng, *box.q1, n)
+    q2 = q1 if box.equal else _dense_axis(rng, *box.q2, n)
+    return k, q1, q2
+
+
 def _score(c1, s1, c2, s2, kappa, q1, q2):
     """A float margin, > 0 roughly where a model is stable or neutral (candidates only)."""
     D = c1 * s2 - s1 * c2
@@ -370,9 +393,9 @@ def _score(c1, s1, c2, s2, kappa, q1, q2):
     return np.where(D < 0, -1.0, good)
 
 
-def _search(geo, box: ModelBox, fine: bool, chunk: int = 256):
+def _search(geo, box: ModelBox, fine, chunk: int = 256):
     """Per geometry (rows of ``geo``), the sample models of largest and smallest score."""
-    K, Q1, Q2 = sample_models(box, fine)
+    K, Q1, Q2 = dense_models(box) if fine == "dense" else sample_models(box, fine)
     best = np.empty((len(geo), 2), dtype=np.int64)
     for i in range(0, len(geo), chunk):
         g = [geo[i : i + chunk, j, None] for j in range(4)]
@@ -460,10 +483,10 @@ def _verify(geo: np.ndarray, models) -> np.ndarray:
 
 def _witnesses(geo: np.ndarray, box: ModelBox) -> list:
     """Per geometry, ``(good, bad)``: checked sample models (``None`` where none was found): a
-    coarse sample first, the fine one where a side is missing."""
+    coarse sample first, the fine one where a side is missing, then :func:`dense_models`."""
     found = [[None, None] for _ in range(len(geo))]
     todo = np.arange(len(geo))
-    for fine in (False, True):
+    for fine in (False, True, "dense"):
         if not len(todo):
             break
         good_m, bad_m = _search(geo[todo], box, fine)
