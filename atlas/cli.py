@@ -169,8 +169,9 @@ def _add_generate(sub) -> None:
     g.add_argument(
         "--model-box",
         metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
-        help="add ss_over_models and its witness models: SS stable for every model of the box, "
-        "unstable for every model, or depends (q=LO:HI: equal damping; inf allowed; an axis not "
+        help="add ss_over_models, ii_consistent_over_models, ii_stable_over_models and their "
+        "witness models: SS stable (II consistent, stable) for every model of the box, the "
+        "opposite for every model, or depends (q=LO:HI: equal damping; inf allowed; an axis not "
         "given: its whole range)",
     )
     _add_limits(g)

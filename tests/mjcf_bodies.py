@@ -28,38 +28,47 @@ def mjcf(body, *, rho=0.01, rod=0.02, free=False):
         bits = f'contype="{1 << j}" conaffinity="{1 << j}" friction="{mu!r} 0 0"'
         name = f"c{j + 1}"
         if kind == "body_vertex":
-            world.append(f'<geom name="surf{j + 1}" type="plane" pos="{_v(r)}" '
-                         f'zaxis="{_v(n)}" size="0 0 1" {bits}/>')
+            world.append(
+                f'<geom name="surf{j + 1}" type="plane" pos="{_v(r)}" '
+                f'zaxis="{_v(n)}" size="0 0 1" {bits}/>'
+            )
             centre = (r[0] + rho * n[0], r[1] + rho * n[1])
-            parts.append(f'<geom name="{name}" type="sphere" size="{rho!r}" pos="{_v(centre)}" {bits}/>')
+            parts.append(
+                f'<geom name="{name}" type="sphere" size="{rho!r}" pos="{_v(centre)}" {bits}/>'
+            )
         else:
             centre = (r[0] - rho * n[0], r[1] - rho * n[1])
-            world.append(f'<geom name="edge{j + 1}" type="sphere" size="{rho!r}" '
-                         f'pos="{_v(centre)}" {bits}/>')
+            world.append(
+                f'<geom name="edge{j + 1}" type="sphere" size="{rho!r}" pos="{_v(centre)}" {bits}/>'
+            )
             t = (n[1], -n[0])
             axis = (r[0] + rod * n[0], r[1] + rod * n[1])
             a = (axis[0] - 0.3 * t[0], axis[1] - 0.3 * t[1])
             b = (axis[0] + 0.3 * t[0], axis[1] + 0.3 * t[1])
-            parts.append(f'<geom name="{name}" type="capsule" size="{rod!r}" '
-                         f'fromto="{_v(a)} {_v(b)}" {bits}/>')
+            parts.append(
+                f'<geom name="{name}" type="capsule" size="{rod!r}" '
+                f'fromto="{_v(a)} {_v(b)}" {bits}/>'
+            )
     vx, vy, w = body.twist
     if free:
         joints = '<freejoint name="free"/>'
         qvel = [vx, 0.0, vy, 0.0, -w, 0.0]
     else:
-        joints = ('<joint name="x" type="slide" axis="1 0 0"/>'
-                  '<joint name="z" type="slide" axis="0 0 1"/>'
-                  '<joint name="phi" type="hinge" axis="0 -1 0"/>')
+        joints = (
+            '<joint name="x" type="slide" axis="1 0 0"/>'
+            '<joint name="z" type="slide" axis="0 0 1"/>'
+            '<joint name="phi" type="hinge" axis="0 -1 0"/>'
+        )
         qvel = [vx, vy, w]
     g = body.g
     text = f"""<mujoco>
   <option gravity="{g[0]!r} 0 {g[1]!r}"/>
   <worldbody>
-    {' '.join(world)}
+    {" ".join(world)}
     <body name="body" pos="0 0 0">
       {joints}
       <inertial pos="0 0 0" mass="{body.m!r}" diaginertia="{body.I!r} {body.I!r} {body.I!r}"/>
-      {' '.join(parts)}
+      {" ".join(parts)}
     </body>
   </worldbody>
 </mujoco>"""

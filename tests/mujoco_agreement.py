@@ -41,13 +41,31 @@ TIMECONSTANTS = (0.002, 0.001)
 def _random_states(rng, n):
     out = []
     for _ in range(n):
-        out.append(Mechanism.ladder(theta=rng.uniform(0.3, 1.4), mu_floor=rng.uniform(0, 2),
-                                    mu_wall=rng.uniform(0, 1), speed=rng.uniform(0.2, 2)))
-        out.append(Mechanism.two_legged(h=rng.uniform(0.1, 1), mu1=rng.uniform(0, 2.5),
-                                        mu2=rng.uniform(0, 2.5), speed=rng.uniform(0.2, 2)))
-        out.append(Mechanism.leaning_rod(theta=rng.uniform(0.3, 1.3), e=rng.uniform(-0.4, 0.4),
-                                         mu_floor=rng.uniform(0, 1.5),
-                                         mu_edge=rng.uniform(0, 1.5), speed=rng.uniform(0.2, 2)))
+        out.append(
+            Mechanism.ladder(
+                theta=rng.uniform(0.3, 1.4),
+                mu_floor=rng.uniform(0, 2),
+                mu_wall=rng.uniform(0, 1),
+                speed=rng.uniform(0.2, 2),
+            )
+        )
+        out.append(
+            Mechanism.two_legged(
+                h=rng.uniform(0.1, 1),
+                mu1=rng.uniform(0, 2.5),
+                mu2=rng.uniform(0, 2.5),
+                speed=rng.uniform(0.2, 2),
+            )
+        )
+        out.append(
+            Mechanism.leaning_rod(
+                theta=rng.uniform(0.3, 1.3),
+                e=rng.uniform(-0.4, 0.4),
+                mu_floor=rng.uniform(0, 1.5),
+                mu_edge=rng.uniform(0, 1.5),
+                speed=rng.uniform(0.2, 2),
+            )
+        )
         ang = rng.uniform(0.25, 0.75, 2) * math.pi  # surfaces whose normals point up-ish
         try:
             out.append(Mechanism(

@@ -42,8 +42,18 @@ import numpy as np
 from atlas.core.contact_space import ContactSpace, contact_space
 
 __all__ = [
-    "INSTALL", "MissingExtra", "Contact", "MujocoContacts", "load", "touching", "contact_data",
-    "require", "state", "collide", "relative_jacobian", "same_contact",
+    "INSTALL",
+    "MissingExtra",
+    "Contact",
+    "MujocoContacts",
+    "load",
+    "touching",
+    "contact_data",
+    "require",
+    "state",
+    "collide",
+    "relative_jacobian",
+    "same_contact",
 ]
 
 #: the one line a user without the extra gets

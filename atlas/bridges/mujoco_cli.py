@@ -91,10 +91,15 @@ def meaning(rep) -> list[str]:
     return [
         f"both sliding (SS): {_yes(rep['consistent_SS'])}; stable for the approximate contact "
         f"model: {ss} (model-dependent: not a property of the rigid body)",
-        "lift-off consistent: " + (", ".join(lift) or "none")
-        + (" (a separation the engine shows in these modes is physical)" if lift else
-           " (a separation the engine shows here is an artefact of its contact model)"),
-        "jam consistent: " + (", ".join(jams) or "none")
+        "lift-off consistent: "
+        + (", ".join(lift) or "none")
+        + (
+            " (a separation the engine shows in these modes is physical)"
+            if lift
+            else " (a separation the engine shows here is an artefact of its contact model)"
+        ),
+        "jam consistent: "
+        + (", ".join(jams) or "none")
         + ("" if jams else " (a dead stop here is friction's, not a jam)"),
     ]
 

@@ -240,8 +240,9 @@ def _certified(b, kind, faces, left_out) -> bool:
 
 def prove_any(conds, axes, patterns=(), budget: int = 256):
     """Prove that on the box ``axes`` (minus the faces of ``patterns``) every point satisfies at
-    least one of ``conds`` (pairs ``(p, kind)``, kind in ``<0 <=0 >0 >=0``; ``p`` a
-    :class:`Poly` or its integer Bernstein coefficients on the box, e.g. from :class:`Template`).
+    least one of ``conds``: each a pair ``(p, kind)`` (kind in ``<0 <=0 >0 >=0``; ``p`` a
+    :class:`Poly` or its integer Bernstein coefficients on the box, e.g. from :class:`Template`)
+    or a list of such pairs, which must all hold (a conjunction; tighter than a product).
 
     ``patterns``: faces left out besides the open ends, each a dict ``{axis: side}`` (a face lies
     in it when its sides agree on those axes).  Returns ``("proved", None)``, ``("counterexample",
@@ -250,8 +251,12 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
     """
     n = len(axes)
     fixed = [a.fixed for a in axes]
-    polys = [p if isinstance(p, np.ndarray) else to_bernstein(p, axes) for p, _ in conds]
-    degs = [tuple(max(b.shape[i] - 1 for b in polys) for i in range(n))]
+    conds = [c if isinstance(c, list) else [c] for c in conds]
+    kinds = [[k for _, k in c] for c in conds]
+    polys = [
+        [p if isinstance(p, np.ndarray) else to_bernstein(p, axes) for p, _ in c] for c in conds
+    ]
+    degs = tuple(max(b.shape[i] - 1 for c in polys for b in c) for i in range(n))
     faces = _faces(n, fixed)
     queue = collections.deque([((Fraction(0),) * n, (Fraction(1),) * n, polys)])
     outs: dict = {}  # faces left out, per contact of the box with the whole box's faces
@@ -263,25 +268,31 @@ def prove_any(conds, axes, patterns=(), budget: int = 256):
         if on not in outs:
             outs[on] = _left_out(axes, patterns, on, faces)
         left_out = outs[on]
-        if any(_certified(b, k, faces, left_out) for b, (_, k) in zip(bs, conds)):
+        if any(
+            all(_certified(b, k, faces, left_out) for b, k in zip(bc, kc))
+            for bc, kc in zip(bs, kinds)
+        ):
             continue
-        v = _failing_vertex(bs, conds, faces, left_out)
+        v = _failing_vertex(bs, kinds, faces, left_out)
         if v is not None:
             return "counterexample", tuple(hi[i] if s else lo[i] for i, s in enumerate(v))
-        halves = _halves(lo, hi, bs, fixed, degs[0])
+        halves = _halves(lo, hi, bs, fixed, degs)
         if not halves:  # every condition constant here and not certified: it fails everywhere
             return "counterexample", tuple((a + b) / 2 for a, b in zip(lo, hi))
         queue.extend(halves)
     return ("proved", None) if not queue else ("unknown", None)
 
 
-def _failing_vertex(bs, conds, faces, left_out):
+def _failing_vertex(bs, kinds, faces, left_out):
     """A vertex of the box, inside the whole box, where every condition fails (exactly)."""
     for f, vs in faces:
         if None in f or f in left_out:
             continue
         at = tuple(-s for s in vs[0])
-        if all(not _sign_ok(b[at], k, k in ("<0", ">0")) for b, (_, k) in zip(bs, conds)):
+        if all(
+            any(not _sign_ok(b[at], k, k in ("<0", ">0")) for b, k in zip(bc, kc))
+            for bc, kc in zip(bs, kinds)
+        ):
             return vs[0]
     return None
 
@@ -307,10 +318,13 @@ def _halves(lo, hi, bs, fixed, degs):
         return []
     _, ax = max(widths)
     mid = (lo[ax] + hi[ax]) / 2
-    parts = [_split(b, ax) for b in bs]
+    parts = [[_split(b, ax) for b in bc] for bc in bs]
     lo2 = lo[:ax] + (mid,) + lo[ax + 1 :]
     hi1 = hi[:ax] + (mid,) + hi[ax + 1 :]
-    return [(lo, hi1, [p[0] for p in parts]), (lo2, hi, [p[1] for p in parts])]
+    return [
+        (lo, hi1, [[p[0] for p in pc] for pc in parts]),
+        (lo2, hi, [[p[1] for p in pc] for pc in parts]),
+    ]
 
 
 def point_of(axes, t) -> tuple[Fraction, ...]:

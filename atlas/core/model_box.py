@@ -60,7 +60,16 @@ from atlas.core import exact
 from atlas.core import expressions as ex
 from atlas.core.verdicts import OverModels, Verdict
 
-__all__ = ["ModelBox", "model_box", "parse_model_box", "ss_over_models", "WITNESS_NAMES"]
+__all__ = [
+    "ModelBox",
+    "model_box",
+    "parse_model_box",
+    "ss_over_models",
+    "sample_models",
+    "integers",
+    "det_signs",
+    "WITNESS_NAMES",
+]
 
 #: the witness results of :func:`ss_over_models`, besides the code ``ss_over_models``
 WITNESS_NAMES = tuple(
@@ -237,7 +246,7 @@ def _template(piece: _Piece, box: ModelBox, name: str) -> bz.Template:
     return bz.Template(p, piece.axes)
 
 
-def _integers(gf) -> tuple[list, int]:
+def integers(gf) -> tuple[list, int]:
     """The direction components as integers over one power of two ``N`` (exact)."""
     ratios = [float(v).as_integer_ratio() for v in gf]
     N = max(d for _, d in ratios)
@@ -248,7 +257,7 @@ def _conditions(gf, box: ModelBox, piece: _Piece):
     """``[(coefficients, kind, implied_by)]`` whose conjunction is "stable or neutral" on
     ``piece`` (integer Bernstein coefficients; ``implied_by``: conditions that together imply
     it, tried first), or ``None`` where no model is (``D < 0``)."""
-    ints, N = _integers(gf)
+    ints, N = integers(gf)
     c1, s1, c2, s2 = ints
     D = c1 * s2 - s1 * c2
     if D < 0:
@@ -334,7 +343,7 @@ def _samples(lo: float, hi: float, open_lo: bool) -> np.ndarray:
     return np.unique(np.clip(np.array(vals), lo, hi))
 
 
-def _model_grid(box: ModelBox, fine: bool):
+def sample_models(box: ModelBox, fine: bool):
     """The sample models of the box, as flat ``(kappa, q1, q2)`` arrays (``fine``: every sample
     value, else about every third)."""
     pick = (lambda v: v) if fine else (lambda v: np.unique(np.append(v[::3], v[-1])))  # noqa: E731
@@ -345,6 +354,29 @@ def _model_grid(box: ModelBox, fine: bool):
         return K.ravel(), Q.ravel(), Q.ravel()
     K, Q1, Q2 = np.meshgrid(k, q1, pick(_samples(*box.q2, False)), indexing="ij")
     return K.ravel(), Q1.ravel(), Q2.ravel()
+
+
+def _dense_axis(rng, lo: float, hi: float, n: int) -> np.ndarray:
+    """``n`` seeded values of one axis inside ``[lo, hi]``, spread over many scales."""
+    if lo == hi:
+        return np.full(n, lo)
+    if hi == math.inf:
+        return lo + np.exp2(rng.uniform(-60, 60, n))
+    top = hi * np.exp2(rng.uniform(-40, 0, n)) if lo == 0 else np.geomspace(lo, hi, n)
+    vals = np.where(rng.random(n) < 0.5, rng.uniform(lo, hi, n), rng.permutation(top))
+    vals[::9] = lo
+    return np.clip(vals, lo, hi)
+
+
+def dense_models(box: ModelBox, n: int = 4096):
+    """``n`` seeded models of the box over many scales (the last search for witnesses;
+    candidates only), as flat ``(kappa, q1, q2)`` arrays."""
+    rng = np.random.default_rng(20261128)
+    k = _dense_axis(rng, *box.kappa, n)
+    k = np.where(k > 0, k, box.kappa[1] if box.kappa[1] < math.inf else 1.0)
+    q1 = _dense_axis(rng, *box.q1, n)
+    q2 = q1 if box.equal else _dense_axis(rng, *box.q2, n)
+    return k, q1, q2
 
 
 def _score(c1, s1, c2, s2, kappa, q1, q2):
@@ -361,9 +393,9 @@ def _score(c1, s1, c2, s2, kappa, q1, q2):
     return np.where(D < 0, -1.0, good)
 
 
-def _search(geo, box: ModelBox, fine: bool, chunk: int = 256):
+def _search(geo, box: ModelBox, fine, chunk: int = 256):
     """Per geometry (rows of ``geo``), the sample models of largest and smallest score."""
-    K, Q1, Q2 = _model_grid(box, fine)
+    K, Q1, Q2 = dense_models(box) if fine == "dense" else sample_models(box, fine)
     best = np.empty((len(geo), 2), dtype=np.int64)
     for i in range(0, len(geo), chunk):
         g = [geo[i : i + chunk, j, None] for j in range(4)]
@@ -391,7 +423,7 @@ def _decide(gf, box: ModelBox, good, bad, budget: int):
     return int(OverModels.UNDECIDED), good, bad
 
 
-def _det_signs(geo: np.ndarray) -> np.ndarray:
+def det_signs(geo: np.ndarray) -> np.ndarray:
     """Exact signs of ``D = c1 s2 - s1 c2`` per row: the float difference where it exceeds its
     rounding bound, exact rationals elsewhere."""
     c1, s1, c2, s2 = geo.T
@@ -451,10 +483,10 @@ def _verify(geo: np.ndarray, models) -> np.ndarray:
 
 def _witnesses(geo: np.ndarray, box: ModelBox) -> list:
     """Per geometry, ``(good, bad)``: checked sample models (``None`` where none was found): a
-    coarse sample first, the fine one where a side is missing."""
+    coarse sample first, the fine one where a side is missing, then :func:`dense_models`."""
     found = [[None, None] for _ in range(len(geo))]
     todo = np.arange(len(geo))
-    for fine in (False, True):
+    for fine in (False, True, "dense"):
         if not len(todo):
             break
         good_m, bad_m = _search(geo[todo], box, fine)
@@ -474,7 +506,7 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    code = _by_signs(geo, _det_signs(geo))
+    code = _by_signs(geo, det_signs(geo))
     wit = np.full((len(geo), 6), np.nan)
     open_idx = np.flatnonzero(code == int(OverModels.UNDECIDED))
     stats = {"points": len(geo), "by_signs": len(geo) - len(open_idx), "undecided_before": 0}

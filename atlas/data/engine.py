@@ -633,7 +633,8 @@ def generate(scene: Scene, options: RunOptions | None = None, **changes) -> xr.D
         Options changed by name, e.g. ``generate(scene, dtype="float32")`` (see
         :class:`RunOptions`; an unknown name is refused).  ``model_box=`` (a
         :class:`atlas.core.model_box.ModelBox`, its text ``"kappa=0.01:100,q1=0:1,q2=0:1"`` or a
-        dict) adds ``ss_over_models`` and its witnesses (:mod:`atlas.data.over_models`).
+        dict) adds ``ss_over_models``, ``ii_consistent_over_models``, ``ii_stable_over_models``
+        and their witnesses (:mod:`atlas.data.over_models`).
 
     Returns
     -------
@@ -649,4 +650,4 @@ def generate(scene: Scene, options: RunOptions | None = None, **changes) -> xr.D
 
     box = over_models.as_model_box(box)  # refused before any work
     ds = run(scene, MemorySink(), RunOptions.of(options, **changes)).result
-    return over_models.add_over_models(ds, box)
+    return over_models.add_all_over_models(ds, box)

@@ -86,7 +86,8 @@ def run_cli(
 
 
 def _run_over_models(sc, opts, out, overwrite, screen, model_box) -> int:
-    """``--model-box``: the atlas in memory plus ``ss_over_models`` (:mod:`atlas.data.over_models`),
+    """``--model-box``: the atlas in memory plus ``ss_over_models`` and the II verdicts over the
+    box (:mod:`atlas.data.over_models`),
     written atomically."""
     from atlas.data import over_models  # noqa: PLC0415 - only on request
     from atlas.data.engine import generate  # noqa: PLC0415
@@ -105,7 +106,10 @@ def _run_over_models(sc, opts, out, overwrite, screen, model_box) -> int:
         f"atlas generate: {out}: over the model box {box}: "
         f"{ds.attrs['over_models_seconds']:.2f} s, undecided "
         f"{ds.attrs['over_models_undecided_before_settlement']} before, "
-        f"{ds.attrs['over_models_undecided']} after settlement",
+        f"{ds.attrs['over_models_undecided']} after settlement; II: "
+        f"{ds.attrs['ii_over_models_seconds']:.2f} s, undecided "
+        f"{ds.attrs['ii_over_models_undecided_before_settlement']} before, "
+        f"{ds.attrs['ii_over_models_undecided']} after",
         file=sys.stderr,
     )
     return 0

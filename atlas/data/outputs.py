@@ -35,6 +35,8 @@ import numpy as np
 
 from atlas.core import contact_modes as mech
 from atlas.core import kernels
+from atlas.core.ii_over_models import SIDES as II_SIDES
+from atlas.core.ii_over_models import witness_names as ii_witness_names
 from atlas.core.model_box import WITNESS_NAMES
 from atlas.core.verdicts import (
     CONSISTENCY,
@@ -409,7 +411,52 @@ def _over_models_outputs() -> list[Output]:
         codes=OVER_MODELS,
         in_atlas=False,
     )
-    return [code, *witness]
+    return [code, *witness, *_ii_over_models_outputs()]
+
+
+_II_OVER_MODELS = "atlas.data.over_models.add_ii_over_models"
+_II_WHAT = {"ii_consistent_over_models": "consistency", "ii_stable_over_models": "stability"}
+
+
+def _ii_over_models_outputs() -> list[Output]:
+    """Certified II consistency and stability over a box of models (on request: ``model_box``)."""
+    out = []
+    for name, (yes, no) in II_SIDES.items():
+        attrs = flag_attrs(OverModels, f"II {_II_WHAT[name]} over every model of the box (proven)")
+        attrs["flag_meanings"] = f"{no} {yes} depends undecided"
+        prefix = name.removesuffix("_over_models")
+        attrs["comment"] = (
+            f"{yes}: for every model of the box; {no}: for every model; depends: a certified "
+            f"witness model on each side ({prefix}_witness_*)"
+        )
+        out.append(
+            Output(
+                name,
+                _B1B2,
+                "int8",
+                attrs,
+                computed_by=_II_OVER_MODELS,
+                enum=OverModels,
+                in_atlas=False,
+            )  # fmt: skip
+        )
+        for w in ii_witness_names(name):
+            side = w.removeprefix(f"{prefix}_witness_").rsplit("_", 1)[0]
+            long_name = (
+                f"{w.rsplit('_', 1)[1]} of a model on the {side} side ({name} = depends; "
+                "certified by the point kernels)"
+            )
+            out.append(
+                Output(
+                    w,
+                    _B1B2,
+                    "float",
+                    {"long_name": long_name, "units": "1"},
+                    computed_by=_II_OVER_MODELS,
+                    in_atlas=False,
+                )  # fmt: skip
+            )
+    return out
 
 
 # --- declaration ---------------------------------------------------------------------------------

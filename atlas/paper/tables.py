@@ -7,6 +7,13 @@ over the class's sample of (beta1, beta2) and of the kappa-q sample :data:`KAPPA
 ``(x)`` model-dependent, ``-`` never; II also gets a stability word) and the CC marker (``?`` where the
 necessary condition ``b11 > 0, b22 > 0`` holds).
 
+The SS word, the II marker and the II stability word (the light shading: model-dependent) are then
+taken from the verdicts over *every* contact model (:mod:`atlas.core.model_box`,
+:mod:`atlas.core.ii_over_models`: proved, or witnessed on both sides) at the class's sample of
+geometries wherever those decide the word (:func:`over_models_words`); where they do not (a
+geometry left undecided), the finite sample's word stays and the row's ``notes`` say so, as they
+say where the two differ.
+
 Sampling: class interiors come from an offset grid of ``n x n`` angles (no grid point lies on an axis;
 those on ``beta2 = beta1`` or ``beta2 = beta1 + pi`` are left out), closed under the dual map; each subclass is sampled with ``n_alpha`` offset values of alpha.  Points the
 fast kernels leave undecided are settled by :mod:`atlas.core.exact`.
@@ -23,9 +30,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import checks, contact_modes
+from atlas.core import checks, contact_modes, exact
+from atlas.core import ii_over_models as iim
+from atlas.core import model_box as mb
 from atlas.core.points import spectral_points
-from atlas.core.verdicts import Consistency, Verdict
+from atlas.core.verdicts import Consistency, OverModels, Verdict
 
 __all__ = [
     "table2",
@@ -36,6 +45,8 @@ __all__ = [
     "to_csv",
     "run_cli",
     "KAPPA_Q_SAMPLE",
+    "over_models_words",
+    "over_models_codes",
     "Row",
     "KEY",
 ]
@@ -95,6 +106,7 @@ class Row:
     II: str = "-"
     II_stability: str = "-"
     CC: str = ""
+    notes: list = field(default_factory=list)  # where the words come from, where they differ
 
 
 def _grid(n):
@@ -183,8 +195,11 @@ def class_kernel(c1, s1, c2, s2, ca, sa):
     return dual, sub, cons
 
 
-def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float64) -> list[Row]:
-    """Regenerate Table 2 (all 24 classes) from the kernels."""
+def table2(
+    n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float64, over_models=True
+) -> list[Row]:
+    """Regenerate Table 2 (all 24 classes) from the kernels; ``over_models``: the SS and II words
+    from the verdicts over every model where they decide them (module docstring)."""
     n, per_class, n_alpha = (
         checks.positive_int(k, v)
         for k, v in (("n", n), ("per_class", per_class), ("n_alpha", n_alpha))
@@ -254,7 +269,103 @@ def table2(n: int = 96, per_class: int = 24, n_alpha: int = 720, dtype=np.float6
             else ("" if not np.any(contact_modes.cc_possible(c1, s2)) else "(?)")
         )
         rows.append(row)
+    if over_models:
+        _apply_over_models(rows, samples, dtype)
     return rows
+
+
+# --- the words over every contact model ---------------------------------------------------------
+
+_NO, _YES, _DEP, _UND = (int(v) for v in OverModels)
+_WORDS = {_YES: "stable", _NO: "unstable"}
+#: verdicts over the whole model space of geometries already computed (by their components)
+_MEMO: dict = {}
+
+
+def over_models_codes(pts: np.ndarray, dtype=np.float64) -> list[dict]:
+    """Per point of ``pts`` (angles [rad]): ``SS`` (``ss_over_models``), the II codes over the
+    whole model space (:data:`atlas.core.ii_over_models.SIDES`), the II stability's unstable
+    witness, ``geometry`` (direction components) and ``beta`` (the angles); memoised per
+    geometry (``atlas paper`` asks twice)."""
+    (c1, s1), (c2, s2) = (contact_modes.direction(pts[:, j], dtype) for j in (0, 1))
+    res = _over_models(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
+    return [dict(r, beta=(float(a), float(b))) for r, (a, b) in zip(res, pts)]
+
+
+def _over_models(c1, s1, c2, s2) -> list[dict]:
+    keys = list(zip(c1.tolist(), s1.tolist(), c2.tolist(), s2.tolist()))
+    new = [k for k in dict.fromkeys(keys) if k not in _MEMO]
+    if new:
+        g = np.array(new).T
+        box = mb.model_box()
+        ss = mb.ss_over_models(*g, box)
+        ii = iim.ii_over_models(*g, box, settle=False)
+        for n, k in enumerate(new):
+            _MEMO[k] = {"SS": int(ss["ss_over_models"][n])}
+            _MEMO[k].update({name: int(ii[name][n]) for name in iim.SIDES})
+            w = [float(ii[x][n]) for x in iim.witness_names("ii_stable_over_models")[3:]]
+            _MEMO[k]["unstable_witness"] = tuple(w)
+    return [dict(_MEMO[k], geometry=k) for k in keys]
+
+
+def _class_word(codes: set) -> str | None:
+    """``stable`` / ``unstable`` / ``model-dependent`` of a class from its geometries' codes
+    over every model; ``None`` where an undecided geometry leaves it open."""
+    if _DEP in codes or {_YES, _NO} <= codes:
+        return "model-dependent"
+    if _UND in codes or not codes:
+        return None
+    return _WORDS[codes.pop()]
+
+
+def over_models_words(pts: np.ndarray, dtype=np.float64) -> dict:
+    """``{"SS": word, "II": marker, "II_stability": word}`` of a class from the verdicts over
+    every model at its sample ``pts`` (angles [rad]); ``None`` where they leave one open.
+
+    The II stability word is Table 2's: over the models where II is consistent.  Where
+    consistency itself depends on the model, "model-dependent" needs an unstable witness at which
+    II is consistent (checked by the exact tier), and "stable" is left open."""
+    res = over_models_codes(pts, dtype)
+    cons = {r["ii_consistent_over_models"] for r in res}
+    marker = _class_word(set(cons))
+    out = {"SS": _class_word({r["SS"] for r in res}), "II": None}
+    if marker is not None:
+        out["II"] = {"stable": "x", "unstable": "-", "model-dependent": "(x)"}[marker]
+    stab = set()
+    for r in res:
+        code, c = r["ii_stable_over_models"], r["ii_consistent_over_models"]
+        if c == _NO:
+            continue
+        if c != _YES and code != _NO:
+            code = _DEP if code == _DEP and consistent_unstable(r) else _UND
+        stab.add(code)
+    out["II_stability"] = _class_word(stab) if stab else "-"
+    return out
+
+
+def consistent_unstable(r) -> bool:
+    """Whether the unstable witness of a geometry has II consistent (exact tier)."""
+    v = exact.point_spectral(*r["geometry"], *r["unstable_witness"])
+    return int(v["consistent_II"]) == 1 and int(v["stable_II"]) != int(Verdict.STABLE)
+
+
+def _apply_over_models(rows, samples, dtype) -> None:
+    """Replace the sample's SS word, II marker and II stability word of each row by the words
+    over every model where those decide them; notes where they do not, or differ."""
+    for row in rows:
+        words = over_models_words(samples[row.cls], dtype)
+        pairs = (("SS", row.stability["SS"]), ("II", row.II), ("II_stability", row.II_stability))
+        for key, old in pairs:
+            new = words[key]
+            if new is None:
+                row.notes.append(f"{key} {old}: from the model sample (open over every model)")
+                continue
+            if new != old:
+                row.notes.append(f"{key} {new} over every model (the model sample: {old})")
+            if key == "SS":
+                row.stability["SS"] = new
+            else:
+                setattr(row, key, new)
 
 
 def _marker(flags) -> str:
@@ -298,7 +409,11 @@ def to_markdown(rows: list[Row]) -> str:
         lines.append(
             f"| {r.cls} ({dual}) | " + " | ".join(cells) + f" | {r.IF} | {r.FI} | {ii} | {r.CC} |"
         )
-    return "\n".join(lines) + "\n\n" + KEY + "\n"
+    notes = [f"* {r.cls}: {n}" for r in rows for n in r.notes]
+    tail = "\n\nNotes (the words over every contact model, proved or witnessed):\n" + "\n".join(
+        notes
+    )
+    return "\n".join(lines) + "\n\n" + KEY + (tail if notes else "") + "\n"
 
 
 def to_csv(rows: list[Row]) -> str:

@@ -194,10 +194,13 @@ def test_spatial_body_matches_the_rigid_body_formulas(seed):
     for j in (0, 1):
         p = centres[j] - rho * normals[j]
         bits = f'contype="{1 << j}" conaffinity="{1 << j}" friction="{float(mu[j])!r} 0 0"'
-        world.append(f'<geom name="plane{j}" type="plane" size="0 0 1" pos="{_xyz(p)}" '
-                     f'zaxis="{_xyz(normals[j])}" {bits}/>')
-        parts.append(f'<geom name="s{j}" type="sphere" size="{rho}" pos="'
-                     f'{_xyz(local[j])}" {bits}/>')
+        world.append(
+            f'<geom name="plane{j}" type="plane" size="0 0 1" pos="{_xyz(p)}" '
+            f'zaxis="{_xyz(normals[j])}" {bits}/>'
+        )
+        parts.append(
+            f'<geom name="s{j}" type="sphere" size="{rho}" pos="{_xyz(local[j])}" {bits}/>'
+        )
     q = _xyz(quat / np.linalg.norm(quat))
     model = mujoco.MjModel.from_xml_string(f"""<mujoco><worldbody>{"".join(world)}
         <body pos="0 0 0" quat="{q}"><freejoint/><inertial pos="0 0 0" mass="{m}"

@@ -57,7 +57,9 @@ def test_text_report_and_single_contact(capsys):
     assert "consistent_S = True" in out and "B [1/kg] = [[0.0598017]]" in out
     args = ["mujoco", EXAMPLE, "--slip", "1,0,0;0,0,-1"]  # at rest: the directions given
     assert cli.main(args) == 0
-    assert "B [1/kg] = [[0.0598017, -0.0267456], [-7.89585e-05, 0.273532]]" in capsys.readouterr().out
+    assert (
+        "B [1/kg] = [[0.0598017, -0.0267456], [-7.89585e-05, 0.273532]]" in capsys.readouterr().out
+    )
 
 
 @needs_mujoco

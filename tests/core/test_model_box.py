@@ -187,8 +187,8 @@ def test_sign_rules_agree_with_the_bernstein_proofs(text):
     box = mb.parse_model_box(text)
     c1, s1, c2, s2, _ = _per_class(1)
     geo = np.stack([c1, s1, c2, s2], axis=1)
-    signs = mb._by_signs(geo, mb._det_signs(geo))
-    decided = np.flatnonzero((signs != UND) & (mb._det_signs(geo) == 1))
+    signs = mb._by_signs(geo, mb.det_signs(geo))
+    decided = np.flatnonzero((signs != UND) & (mb.det_signs(geo) == 1))
     assert len(decided) >= 4
     for i in decided:
         code, _, _ = mb._decide(tuple(geo[i].tolist()), box, None, None, mb.SETTLE_BUDGET)
@@ -205,3 +205,16 @@ def test_equal_damping_undamped_point_found_by_the_proof():
     w = [float(r[n]) for n in mb.WITNESS_NAMES]
     g = (c1, s1, c2, s2)
     assert _good(g, w[:3]) and not _good(g, w[3:])
+
+
+def test_near_tie_points_witnessed_without_settlement():
+    """``b1 = b2`` next to ``pi`` on the 361-point offset grid (``D = 0``: neutral or unstable by
+    the signs of ``a3``, ``a2``): its unstable models lie far out in the model space; the last
+    witness search over many scales finds one, so no proof is needed (was undecided before the
+    settlement); both witnesses on their side by the exact tier."""
+    b = (180 + 0.5) * 2 * np.pi / 361
+    c, s = direction(b)
+    r = mb.ss_over_models(c, s, c, s, mb.model_box(), settle=False)
+    assert r.stats["undecided_before"] == 0 and int(r["ss_over_models"]) == DEP
+    w = [float(r[n]) for n in mb.WITNESS_NAMES]
+    assert _good((c, s, c, s), w[:3]) and not _good((c, s, c, s), w[3:])

@@ -17,6 +17,7 @@ from atlas.core.model_box import WITNESS_NAMES
 from atlas.core.verdicts import OverModels, Verdict
 from atlas.data import outputs, over_models
 
+KQ = ("kappa", "q1", "q2")
 # an offset grid: no point on a class line, so the closed form's float signs are exact
 GRID = dict(beta1="0.1:6.2:9", beta2="0.05:6.25:9", kappa=0.5, q=0.0)
 
@@ -46,6 +47,25 @@ def test_generate_with_the_whole_model_space():
     assert ds.attrs["model_box"] == "kappa=0:inf,q1=0:inf,q2=0:inf"
     assert ds.attrs["over_models_undecided"] == 0
     assert "stable_SS" in ds  # the single-model atlas is still there
+    _check_ii(ds)
+
+
+def _check_ii(ds):
+    """The II verdicts over the box: registered variables, witnesses on their side (exact)."""
+    assert set(over_models.II_OVER_MODELS_OUTPUTS) <= set(ds.data_vars)
+    cons = ds["ii_consistent_over_models"]
+    assert cons.dtype == np.int8 and cons.dims == ("beta1", "beta2")
+    assert cons.attrs["flag_meanings"] == "inconsistent consistent depends undecided"
+    for name, key in (("ii_consistent", "consistent_II"), ("ii_stable", "stable_II")):
+        code = ds[f"{name}_over_models"].values
+        sides = over_models.iim.SIDES[f"{name}_over_models"]
+        for i, j in np.argwhere(code == int(OverModels.DEPENDS)):
+            (c1, s1), (c2, s2) = direction(ds.beta1.values[i]), direction(ds.beta2.values[j])
+            for side, want in zip(sides, (1, 0)):
+                m = [float(ds[f"{name}_witness_{side}_{v}"].values[i, j]) for v in KQ]
+                got = exact.point_spectral(c1, s1, c2, s2, *m)[key]
+                assert int(got == 1) == want, (name, side, m)
+        assert np.isnan(ds[f"{name}_witness_{sides[0]}_kappa"].values[code != 2]).all()
 
 
 def test_witnesses_hold_in_a_bounded_box():

@@ -29,7 +29,9 @@ def test_frictionless_ladder_leaves_the_wall_at_the_closed_form_angle(theta0):
     assert math.sin(theta) == pytest.approx(2 / 3 * math.sin(theta0), rel=1e-7)
     assert mo.forces[-1, 0] > 0 and abs(mo.forces[-1, 1]) < 1e-6 * mo.forces[0, 1]
     m, I = lad.m, lad.I
-    energy = m * G * mo.x[:, 1] + (m * (mo.v[:, 0] ** 2 + mo.v[:, 1] ** 2) + I * mo.v[:, 2] ** 2) / 2
+    energy = (
+        m * G * mo.x[:, 1] + (m * (mo.v[:, 0] ** 2 + mo.v[:, 1] ** 2) + I * mo.v[:, 2] ** 2) / 2
+    )
     np.testing.assert_allclose(energy, 0.0, atol=1e-7 * m * G * abs(lad.r1[1]))
 
 

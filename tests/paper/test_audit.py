@@ -166,3 +166,28 @@ def test_app_c_q1_over_every_model(monkeypatch):
         c = audit.CLAIMS["C1w"](ctx)
         assert c.status == status
         assert f"12: stable for every model, {flip.label};" in c.evidence
+
+
+def test_app_c_q2_q3_over_every_model(monkeypatch):
+    """C2w (II consistency over every model) is confirmed as computed and refuted by one point
+    of class 12 said consistent; C3w is refuted by an exactly verified witness in class 15 or 32
+    (II consistent, a complex pair dominant), as the audit's class-32 point shows."""
+    from atlas.paper import tables
+
+    ctx = audit.Context(ci=True)
+    c2 = audit.CLAIMS["C2w"](ctx)
+    assert c2.status == "confirmed", c2.evidence
+    c3 = audit.CLAIMS["C3w"](ctx)
+    assert c3.status == "refuted" and c3.counterexamples
+    assert all(cx.verified for cx in c3.counterexamples)
+    assert {cx.expect["class_code"] for cx in c3.counterexamples} <= {15, 32}
+    real = tables.over_models_codes
+
+    def mutated(pts, dtype="float64"):
+        out = real(pts, dtype)
+        if tables.contact_modes.class_code(*out[0]["geometry"]) == 12:
+            out[0] = dict(out[0], ii_consistent_over_models=1)
+        return out
+
+    monkeypatch.setattr(tables, "over_models_codes", mutated)
+    assert audit.CLAIMS["C2w"](ctx).status == "refuted"

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from atlas.core import contact_modes
+from atlas.core import ii_over_models as iim
 from atlas.core.verdicts import OverModels, Verdict
-from atlas.paper import figure_models
+from atlas.paper import figure_models, tables
 from atlas.paper.audit.context import KAPPAS_Q0
 from atlas.paper.audit.printed import SS_CURVED
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
@@ -284,6 +285,95 @@ def q1_every_model(ctx) -> Finding:
         )
         + f". Classes breaking the pattern: {fmt_classes(bad)}; with undecided cells or none: "
         f"{fmt_classes(undecided)}.",
+    )
+
+
+def _ii_over_models_by_class(ctx) -> tuple[dict, int]:
+    """``{class: the points' over-models records}`` (:func:`atlas.paper.tables.over_models_codes`)
+    at Table 2's class samples, and the points per class."""
+    per = max(ctx.sizes.per_class, 8)
+    samples = tables.class_samples(96, per)
+    return {c: tables.over_models_codes(samples[c]) for c in contact_modes.ALL_CLASSES}, per
+
+
+def _labels(records, name) -> str:
+    return ", ".join(iim.label(name, x) for x in sorted({r[name] for r in records}))
+
+
+@claim(
+    "C2w",
+    "App. C (Q != 0), Q2; Sec. 4.3",
+    "The Q = 0 answer to Q2 remains true for every model (kappa > 0, q1, q2 >= 0): II is "
+    "consistent in classes 15, 25, 32-35, 43, 44, in some cases in 14, 24 and their duals 31, 36 "
+    "(here: depends on the model), never elsewhere.",
+)
+def q2_every_model(ctx) -> Finding:
+    seen, per = _ii_over_models_by_class(ctx)
+    name = "ii_consistent_over_models"
+    yes, dep, no, und = (int(OverModels[k]) for k in ("STABLE", "DEPENDS", "UNSTABLE", "UNDECIDED"))
+    want = {c: {yes} if c in P2_ALWAYS else {dep} if c in P2_SOME | {31, 36} else {no}
+            for c in contact_modes.ALL_CLASSES}  # fmt: skip
+    codes = {c: {r[name] for r in v} for c, v in seen.items()}
+    bad = [c for c in codes if codes[c] - {und} and codes[c] - {und} != want[c]]
+    open_ = [c for c in codes if und in codes[c]]
+    return Finding(
+        "refuted" if bad else "imprecise" if open_ else "confirmed",
+        f"ii_consistent_over_models (atlas.core.ii_over_models: the geometry's signs, or a "
+        f"witness model on each side, checked by the point kernels) at {per} points of each "
+        "class (Table 2's samples), whole model space, per class: "
+        + "; ".join(f"{c}: {_labels(v, name)}" for c, v in seen.items())
+        + f". Classes breaking the pattern: {fmt_classes(bad)}; with undecided points: "
+        f"{fmt_classes(open_)}.",
+    )
+
+
+def _ii_stability_counterexamples(seen) -> list[Counterexample]:
+    """A consistent-but-unstable witness (exact tier) in each class where II stability depends."""
+    out = []
+    for c, recs in seen.items():
+        for r in recs:
+            if r["ii_stable_over_models"] == int(OverModels.DEPENDS) and tables.consistent_unstable(
+                r
+            ):
+                k, q1, q2 = r["unstable_witness"]
+                expect = {"consistent_II": 1, "stable_II": U, "class_code": c}
+                out.append(Counterexample(*r["beta"], k, q1, q2, expect,
+                                          "II consistent, not stable: a witness model of "
+                                          "ii_stable_over_models"))  # fmt: skip
+                break
+    return out
+
+
+@claim(
+    "C3w",
+    "App. C (Q != 0), Q3; Table 2",
+    "The Q = 0 answer to Q3 remains true for every model (kappa > 0, q1, q2 >= 0): the dominant "
+    "eigenvalue is an II root for every model in classes 15, 32-35, 43, 44; never in class 25.",
+)
+def q3_every_model(ctx) -> Finding:
+    seen, per = _ii_over_models_by_class(ctx)
+    name = "ii_stable_over_models"
+    st, un = int(OverModels.STABLE), int(OverModels.UNSTABLE)
+    cxs = _ii_stability_counterexamples({c: seen[c] for c in sorted(P2_ALWAYS - {25})})
+    c25 = {r[name] for r in seen[25]}
+    ok = {c for c in P2_ALWAYS - {25} if {r[name] for r in seen[c]} == {st}}
+    open_ = sorted(P2_ALWAYS - {25} - ok - {int(x.expect["class_code"]) for x in cxs})
+    refuted = bool(cxs) or c25 != {un}
+    return Finding(
+        "refuted" if refuted else "imprecise" if open_ else "confirmed",
+        f"ii_stable_over_models at {per} points of each class (Table 2's samples), whole model "
+        "space, per class: "
+        + "; ".join(f"{c}: {_labels(seen[c], name)}" for c in sorted(P2_ALWAYS))
+        + f". Proved stable for every model: {fmt_classes(sorted(ok))}; a model with II "
+        f"consistent but a dominant complex pair: {fmt_classes([x.expect['class_code'] for x in cxs])}"
+        f"; open (a sample never unstable, the proof over the unbounded model space not closed): "
+        f"{fmt_classes(open_)}; class 25: {', '.join(OverModels(x).label for x in sorted(c25))}.",
+        corrected="With damping II stability depends on the model in classes "
+        + fmt_classes([x.expect["class_code"] for x in cxs])
+        + " (a complex pair can overtake the II root); class 25 is unstable for every model."
+        if cxs
+        else "",
+        counterexamples=cxs,
     )
 
 

@@ -1,0 +1,304 @@
+"""II consistency and II stability over a box of contact models: for every model, for none, or
+depends (certified).
+
+**The question.**  For one geometry (direction components ``c1, s1, c2, s2``, SPEC §1) and a
+:class:`atlas.core.model_box.ModelBox`, is II consistent (a real eigenvalue ``l > 0`` of ``M``
+whose gap eigenvector has ``x1 x2 > 0``) for every model of the box, for none, or does it depend
+on the model; the same for II stability (the strictly dominant eigenvalue is such an eigenvalue;
+``stable_II`` is *unstable* wherever II is inconsistent, as in the point kernels).
+
+**The polynomials** (:mod:`atlas.core.exact`, paper eq. 9): with ``d1 = kappa + q1 l``,
+``d2 = 1 + q2 l``, ``h1 = l^2 + c1 d1``, ``h2 = l^2 + s2 d2``, ``gamma = c2 s1``, the characteristic
+polynomial is ``p = h1 h2 - gamma d1 d2`` and a positive root ``l`` is an II root iff
+``c2 h1(l) < 0``.  At a root ``h1 h2 = gamma d1 d2``, so ``h1 != 0`` when ``gamma != 0``.  At a
+simple root ``l``, ``p(l + x) = x (x^3 + b3 x^2 + b2 x + b1)`` with ``b1 = p'``, ``b2 = p''/2``,
+``b3 = p'''/6``; the other three roots have real part ``< l`` iff that cubic is Hurwitz, and it
+stops being Hurwitz only through ``b1 = 0`` (a double root at ``l``) or ``b3 b2 = b1``, i.e.
+``T = p' - p'' p''' / 12 = 0`` (a complex pair with real part ``l``; ``T`` of
+:func:`atlas.core.exact._tie_poly`).
+
+**The proof** (``gamma != 0``, ``D = det B != 0``, exact integers).  On the model box (connected)
+the roots of ``p`` move continuously; ``p(0) = kappa D != 0`` and ``p`` is monic, so a positive
+root appears or disappears only through a double root, and it cannot change from II to not II
+(``h1 != 0`` at a root).  Hence if no model of the box has an II root ``l`` with ``p'(l) = 0``,
+II consistency is the same for every model; if moreover none has an II root with
+``p'(l) T(l) = 0``, II stability is the same for every model (the dominant eigenvalue stays a
+simple, strictly dominant II root, or stays something else).  Both are proved by
+:func:`atlas.core.bernstein.prove_any` on the box ``l in (0, inf)`` times the model box: every
+sub-box has ``p > 0``, ``p < 0``, ``c2 h1 > 0`` or ``p' != 0`` (``p' T != 0``) with a certified
+sign.  Then one model decides for all of them: the first sample model, whose verdict the point
+kernels certify.  Where the geometry's signs alone decide consistency (the curve argument of
+:mod:`atlas.core.exact`: ``gamma > 0``, or ``gamma < 0`` with the arc's quadrant and ``D < 0``
+fixed by the signs of ``c1, s2, c2``), that is used instead of the first proof.
+
+**Tiers.**  (1) signs; (2) a fixed sample of models per geometry (:func:`atlas.core.model_box.
+sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
+where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
+witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
+not close, then (4) the settlement repeats it with a large budget (bounded boxes only).
+``gamma = 0`` or ``D = 0`` exactly (a direction on an axis, ``b2 = +-b1``) is decided by the
+sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from atlas.core import bernstein as bz
+from atlas.core import model_box as mb
+from atlas.core.verdicts import OverModels, Verdict
+
+__all__ = ["ii_over_models", "II_OUTPUTS", "SIDES"]
+
+#: the code outputs and the two sides of each (the witness names' middle word)
+SIDES = {
+    "ii_consistent_over_models": ("consistent", "inconsistent"),
+    "ii_stable_over_models": ("stable", "unstable"),
+}
+
+
+def witness_names(name: str) -> tuple:
+    """``<prefix>_witness_<side>_<kappa|q1|q2>`` of the code output ``<prefix>_over_models``."""
+    prefix = name.removesuffix("_over_models")
+    return tuple(f"{prefix}_witness_{s}_{v}" for s in SIDES[name] for v in ("kappa", "q1", "q2"))
+
+
+SIDES_CONS, SIDES_STAB = SIDES
+
+
+def label(name: str, code: int) -> str:
+    """The words of a code of output ``name`` (``consistent for every model`` ...)."""
+    yes, no = SIDES[name]
+    words = {int(OverModels.STABLE): yes, int(OverModels.UNSTABLE): no}
+    return f"{words[code]} for every model" if code in words else OverModels(code).label
+
+
+#: every result of :func:`ii_over_models`
+II_OUTPUTS = tuple(x for name in SIDES for x in (name, *witness_names(name)))
+BUDGET, SETTLE_BUDGET = 48, 512
+_U, _S, _D, _X = (int(OverModels[k]) for k in ("UNSTABLE", "STABLE", "DEPENDS", "UNDECIDED"))
+
+
+# --- exact polynomials in (l, kappa, q1, q2) or (l, kappa, q) -----------------------------------------
+
+
+def _dl(p: bz.Poly) -> bz.Poly:
+    """``dp/dl`` (``l`` is variable 0)."""
+    return bz.Poly({(e[0] - 1,) + e[1:]: c * e[0] for e, c in p.terms.items() if e[0]}, p.n)
+
+
+def _polys(ints, N: int, equal: bool) -> dict:
+    """``p``, ``c2 h1``, the derivatives ``p1 = p'``, ``p3 = p'''``, and ``T`` (each
+    times a positive constant) in ``(l, kappa, q1, q2)`` (``(l, kappa, q)`` with ``equal``), for
+    direction components ``ints / N`` (integers)."""
+    C1, S1, C2, S2 = ints
+    n = 3 if equal else 4
+    var = lambda i: bz.Poly.var(i, n)  # noqa: E731
+    l, k = var(0), var(1)
+    q1, q2 = (var(2), var(2)) if equal else (var(2), var(3))
+    d1, d2 = k + q1 * l, 1 + q2 * l
+    h1, h2 = N * l * l + C1 * d1, N * l * l + S2 * d2  # N h1, N h2
+    p = h1 * h2 + (-C2 * S1) * d1 * d2  # N^2 p
+    p1 = _dl(p)
+    p2 = _dl(p1)
+    p3 = _dl(p2)
+    T = 12 * N * N * p1 + (-1) * p2 * p3  # 12 N^4 T
+    return {"p": p, "c2h1": C2 * h1, "p1": p1, "p3": p3, "T": T}
+
+
+def _axes(box: mb.ModelBox) -> list:
+    """``l in (0, inf)`` and the box's axes (:class:`atlas.core.bernstein.Axis`)."""
+    lo_k, hi_k = box.kappa
+    ax = lambda lo, hi, open_lo=False: bz.Axis(lo, None if hi == math.inf else hi, open_lo)  # noqa: E731
+    out = [bz.Axis(0, None, True), ax(lo_k, hi_k, lo_k == 0), ax(*box.q1)]
+    return out if box.equal else out + [ax(*box.q2)]
+
+
+@functools.lru_cache(maxsize=256)
+def _proofs(ints: tuple, N: int, box: mb.ModelBox) -> dict:
+    """The condition lists of the proofs, by kind (module docstring): ``cons`` / ``stab``: no
+    model has an II root with ``p' = 0`` / ``p' T = 0`` (consistency / stability the same for every
+    model); ``no_cons``: no model has an II root; ``no_stab``: no model has a stable II root
+    (``p1 > 0``, ``p3 > 0``, ``T < 0``: the deflated cubic Hurwitz)."""
+    P = _polys(list(ints), N, box.equal)
+    axes = _axes(box)
+    bern = {k: bz.to_bernstein(v, axes) for k, v in P.items()}
+    root = [(bern["p"], ">0"), (bern["p"], "<0")]
+    ii = root + [(bern["c2h1"], ">0")]
+    T = [(bern["T"], "<0"), (bern["T"], ">0")]
+    if ints[2] < 0 < ints[2] * ints[1]:  # gamma > 0, c2 < 0: the II root is always simple
+        stab = ii + T
+    else:
+        stab = ii + [[(bern["p1"], a), t] for a in ("<0", ">0") for t in T]
+    return {
+        "cons": ii + [(bern["p1"], ">0"), (bern["p1"], "<0")],
+        "stab": stab,
+        "no_cons": root + [(bern["c2h1"], ">=0")],
+        "no_stab": root
+        + [(bern["c2h1"], ">=0"), (bern["p1"], "<=0"), (bern["p3"], "<=0"), (bern["T"], ">=0")],
+    }
+
+
+def _prove(ints, N: int, box: mb.ModelBox, kind: str, budget: int) -> bool:
+    """Whether proof ``kind`` (:func:`_proofs`) closes within ``budget`` boxes; ``False`` where it
+    does not apply (``gamma = 0`` or ``D = 0``)."""
+    C1, S1, C2, S2 = ints
+    if C2 * S1 == 0 or C1 * S2 == S1 * C2:
+        return False
+    conds = _proofs(tuple(ints), N, box)[kind]
+    return bz.prove_any(conds, _axes(box), (), budget)[0] == "proved"
+
+
+# --- the geometry's signs ---------------------------------------------------------------------------
+
+
+def _sg(x) -> int:
+    return int(x > 0) - int(x < 0)
+
+
+def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray]:
+    """``(consistency, never_stable)`` from the signs (arrays of -1, 0, 1) of ``c1, s1, c2, s2``
+    and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may depend on
+    the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``: ``gamma > 0``,
+    ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II."""
+    c1, s1, c2, s2, d = np.broadcast_arrays(*(np.asarray(v) for v in (c1, s1, c2, s2, d)))
+    valid = (d != 0) & (c2 * s1 != 0)
+    gpos, gneg = valid & (c2 == s1), valid & (c2 != s1)
+    first_q = (c1 >= 0) & (s2 >= 0)
+    cons = np.full(c1.shape, -1, np.int8)
+    cons[gpos & (c2 < 0)] = ~(first_q & (d > 0))[gpos & (c2 < 0)]
+    cons[gpos & (c2 > 0)] = ((c1 < 0) & (s2 < 0) & (d > 0))[gpos & (c2 > 0)]
+    cons[gneg & first_q] = 0
+    arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
+    fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
+    cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
+    return cons, gpos & (c2 > 0)
+
+
+def consistency_by_signs(c1, s1, c2, s2) -> int | None:
+    """:func:`signs_rule`'s consistency of one geometry (exact inputs, e.g. the integers of
+    :func:`atlas.core.model_box.integers`): 1 / 0, ``None`` where it may depend on the model."""
+    cons = int(signs_rule(*map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2)))[0])
+    return None if cons < 0 else cons
+
+
+def never_stable_by_signs(c1, s1, c2, s2) -> bool:
+    """:func:`signs_rule`'s ``never_stable`` of one geometry."""
+    return _sg(c2) > 0 and _sg(s1) > 0
+
+
+# --- the sample (certified point verdicts) -----------------------------------------------------------
+
+
+def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
+    """Per geometry and output, the index of the first sample model on each side (``-1``: none):
+    ``{name: (n, 2) int array, "models": (m, 3) array}``."""
+    from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
+
+    K, Q1, Q2 = mb.sample_models(box, False)
+    firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
+    step = max(1, chunk // len(K))
+    for i in range(0, len(geo), step):
+        block = geo[i : i + step]
+        size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
+        block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
+        g = [block[:, j, None] for j in range(4)]
+        v = spectral_points(*g, K[None], Q1[None], Q2[None], names=("consistent_II", "stable_II"))
+        n = min(step, len(geo) - i)
+        ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
+        sides = {
+            "ii_consistent_over_models": (ci == 1, ci == 0),
+            "ii_stable_over_models": (
+                si == int(Verdict.STABLE),
+                np.isin(si, (int(Verdict.UNSTABLE), int(Verdict.NEUTRAL))),
+            ),
+        }
+        for name, (good, bad) in sides.items():
+            for j, m in enumerate((good, bad)):
+                firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
+    return {**firsts, "models": np.stack([K, Q1, Q2], 1)}
+
+
+# --- the driver -------------------------------------------------------------------------------------
+
+
+def _contradiction(ints, N):
+    return RuntimeError(f"ii_over_models: the sample contradicts the signs at {ints} / {N}")
+
+
+def _decide(ints, N, box, seen: dict, budget: int) -> dict:
+    """Codes of one geometry from its sample (``seen[name]``: which sides were seen) and proofs."""
+    by_sign = consistency_by_signs(*ints)
+    sc, ss = seen["ii_consistent_over_models"], seen["ii_stable_over_models"]
+    prove = lambda *kinds: any(_prove(ints, N, box, k, budget) for k in kinds)  # noqa: E731
+    if by_sign is not None:
+        if sc[by_sign]:  # sides (consistent, inconsistent): by_sign 1 excludes side 1
+            raise _contradiction(ints, N)
+        cons = _S if by_sign else _U
+    elif all(sc):
+        cons = _D
+    elif sc[0] and prove("cons"):
+        cons = _S
+    elif sc[1] and prove("no_cons", "cons"):
+        cons = _U
+    else:
+        cons = _X
+    if all(ss):
+        stab = _D
+    elif cons == _U or never_stable_by_signs(*ints):
+        if ss[0]:
+            raise _contradiction(ints, N)
+        stab = _U
+    elif ss[1] and prove("no_stab", "stab"):
+        stab = _U
+    elif ss[0] and prove("stab"):
+        stab = _S
+    else:
+        stab = _X
+    return {"ii_consistent_over_models": cons, "ii_stable_over_models": stab}
+
+
+def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> dict:
+    """Certified II consistency and II stability over the model ``box`` (module docstring) for
+    broadcastable direction components: the codes of :data:`SIDES`
+    (:class:`atlas.core.verdicts.OverModels`: 1 consistent / stable for every model, 0 the
+    opposite for every model, 2 depends, 3 undecided; int8) and their witnesses
+    (:func:`witness_names`, float64, NaN where the code is not ``DEPENDS``).  ``settle=False``
+    leaves what the small budget did not decide ``UNDECIDED``; on a box with an unbounded axis
+    the settlement is skipped (its larger budget closed none of the 699 open codes of a 48^2
+    grid over the whole model space, in 172 s).  ``.stats``: counts."""
+    arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
+    shape = arrs[0].shape
+    geo = np.stack([a.ravel() for a in arrs], axis=1)
+    settle = settle and math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
+    cons, never = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
+    codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
+    codes[SIDES_STAB][(cons == 0) | never] = _U
+    wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
+    todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
+    sample = _sample(geo[todo], box)
+    stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
+    stats.update(undecided_before=0, undecided_after=0)
+    for n, i in enumerate(todo):
+        ints, N = mb.integers(tuple(geo[i].tolist()))
+        seen = {name: tuple(bool(j >= 0) for j in sample[name][n]) for name in SIDES}
+        got = _decide(ints, N, box, seen, BUDGET)
+        if _X in got.values():
+            stats["undecided_before"] += sum(v == _X for v in got.values())
+            if settle:
+                got = _decide(ints, N, box, seen, SETTLE_BUDGET)
+        for name, c in got.items():
+            codes[name][i] = c
+            if c == _D:
+                wit[name][i] = sample["models"][sample[name][n]].ravel()
+    stats["undecided_after"] = int(sum(np.sum(c == _X) for c in codes.values()))
+    out = mb._Result()
+    for name in SIDES:
+        out[name] = codes[name].reshape(shape)
+        out.update({w: wit[name][:, j].reshape(shape) for j, w in enumerate(witness_names(name))})
+    out.stats = stats
+    return out

@@ -1,0 +1,175 @@
+"""II consistency and stability over a box of contact models against independent checks: a dense
+sample of models through the exact tier (never contradicts a "for every model" verdict), the
+witnesses through the exact tier, and the paper's Appendix C / Table 2 classes."""
+
+import functools
+
+import numpy as np
+import pytest
+
+from atlas.core import exact
+from atlas.core import ii_over_models as iim
+from atlas.core import model_box as mb
+from atlas.core.contact_modes import ALL_CLASSES, class_code, direction
+from atlas.core.verdicts import OverModels, Verdict
+
+NO, YES, DEP, UND = (int(v) for v in OverModels)
+CONS, STAB = iim.SIDES
+# paper, App. C Q2 (Q = 0) and Sec. 4.3: II consistent always / in some regions (with the duals)
+ALWAYS = {15, 25, 32, 33, 34, 35, 43, 44}
+SOME = {14, 24, 31, 36}
+
+
+@functools.cache
+def _per_class(k: int = 1, seed: int = 3):
+    """``k`` random geometries of every class (direction components, class codes)."""
+    rng = np.random.default_rng(seed)
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, 6000))
+    c1, s1 = direction(b1)
+    c2, s2 = direction(b2)
+    cc = np.asarray(class_code(c1, s1, c2, s2))
+    idx = np.concatenate([np.flatnonzero(cc == c)[:k] for c in ALL_CLASSES])
+    return c1[idx], s1[idx], c2[idx], s2[idx], cc[idx]
+
+
+def _exact(g, m) -> tuple[int, int]:
+    """``(consistent_II, stable_II is STABLE)`` of model ``m`` at geometry ``g`` (exact tier)."""
+    v = exact.point_spectral(*g, *m)
+    return int(v["consistent_II"]), int(v["stable_II"] == int(Verdict.STABLE))
+
+
+def _dense(box: mb.ModelBox, n: int, seed: int = 0) -> list:
+    """``n`` random models of the box (log-uniform kappa and q where unbounded), q = 0 included."""
+    rng = np.random.default_rng(seed)
+
+    def axis(lo, hi, size):
+        if hi == np.inf or (lo > 0 and hi / lo > 100):
+            a, b = np.log(max(lo, 1e-4)), np.log(min(hi, 1e4))
+            return np.clip(np.exp(rng.uniform(a, b, size)), lo, hi)
+        return rng.uniform(lo, hi, size)
+
+    k = axis(*box.kappa, n)
+    q1 = axis(*box.q1, n)
+    q2 = q1 if box.equal else axis(*box.q2, n)
+    if box.has_undamped:
+        q1[::7] = 0.0
+        q2[::7] = 0.0
+    return list(zip(k.tolist(), q1.tolist(), q2.tolist()))
+
+
+def _in_box(box, m):
+    k, q1, q2 = m
+    inside = lambda v, r: r[0] <= v <= r[1]  # noqa: E731
+    ok = 0 < k and inside(k, box.kappa) and inside(q1, box.q1) and inside(q2, box.q2)
+    return ok and (q1 == q2 or not box.equal)
+
+
+def _check(r, geo, box, n_dense):
+    """Every "for every model" verdict holds on a dense exact sample; every witness is in the box
+    and on its side (exact tier).  Returns the codes seen."""
+    seen = {CONS: set(), STAB: set()}
+    models = _dense(box, n_dense)
+    for i, g in enumerate(geo):
+        for j, name in enumerate((CONS, STAB)):
+            code = int(r[name].ravel()[i])
+            seen[name].add(code)
+            if code in (NO, YES):
+                got = {_exact(g, m)[j] for m in models}
+                assert got == {int(code == YES)}, (name, g, code, got)
+            if code == DEP:
+                w = [r[x].ravel()[i] for x in iim.witness_names(name)]
+                good, bad = tuple(w[:3]), tuple(w[3:])
+                assert _in_box(box, good) and _in_box(box, bad)
+                assert _exact(g, good)[j] == 1 and _exact(g, bad)[j] == 0, (name, g, w)
+            else:
+                assert all(np.isnan(r[x].ravel()[i]) for x in iim.witness_names(name))
+    return seen
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "box",
+    [
+        mb.model_box(),
+        mb.model_box(kappa=(0.2, 5.0), q1=(0.0, 2.0), q2=(0.0, 2.0)),
+        mb.model_box(kappa=(0.5, 2.0), q=(0.1, 1.0)),
+    ],
+    ids=str,
+)
+def test_random_geometries_against_a_dense_exact_sample(box):
+    c1, s1, c2, s2, cc = _per_class()
+    r = iim.ii_over_models(c1, s1, c2, s2, box, settle=False)
+    seen = _check(r, list(zip(c1, s1, c2, s2)), box, 120)
+    assert {YES, NO} <= seen[CONS]
+    if box == mb.model_box():
+        assert DEP in seen[CONS] and DEP in seen[STAB]
+
+
+@pytest.mark.slow
+def test_paper_classes_over_the_whole_model_space():
+    """App. C, Q2: II consistent for every model in 15, 25, 32-35, 43, 44, for none outside
+    14, 24, 31, 36, and depends on the model there; class 25 never stable (Table 2, dark)."""
+    c1, s1, c2, s2, cc = _per_class(2)
+    r = iim.ii_over_models(c1, s1, c2, s2, mb.model_box(), settle=False)
+    cons, stab = r[CONS], r[STAB]
+    for c in ALL_CLASSES:
+        got = set(cons[cc == c].tolist())
+        assert got == ({YES} if c in ALWAYS else {DEP} if c in SOME else {NO}), (c, got)
+        if c not in ALWAYS | SOME or c == 25:
+            assert set(stab[cc == c].tolist()) == {NO}, c
+        if c in SOME:
+            assert DEP in set(stab[cc == c].tolist()), c
+
+
+@pytest.mark.slow
+def test_the_issue_point_is_model_dependent():
+    """The class-32 point of the audit: II consistent, stable for some models, a dominant complex
+    pair for others (kappa 0.1, q1 1, q2 0.01: the exact tier says unstable)."""
+    (c1, s1), (c2, s2) = direction(1.38541667 * np.pi), direction(0.40625 * np.pi)
+    r = iim.ii_over_models(c1, s1, c2, s2, mb.model_box(), settle=False)
+    assert int(r[CONS]) == YES and int(r[STAB]) == DEP
+    assert _exact((c1, s1, c2, s2), (0.1, 1.0, 0.01)) == (1, 0)
+
+
+def test_undamped_box_is_app_c_at_q0():
+    """``q = 0`` only (App. C's own case): the same consistency pattern, decided."""
+    c1, s1, c2, s2, cc = _per_class()
+    box = mb.model_box(q=0.0)
+    r = iim.ii_over_models(c1, s1, c2, s2, box, settle=False)
+    _check(r, list(zip(c1, s1, c2, s2)), box, 60)
+    for c, code in zip(cc, r[CONS]):
+        assert code in ({YES} if c in ALWAYS else {DEP, YES, NO} if c in SOME else {NO}), c
+
+
+def test_a_bounded_box_is_proved_stable():
+    """A class-33 geometry: II stable for every model of a bounded box, by a proof (the sample
+    alone cannot say it), confirmed by a dense exact sample."""
+    (c1, s1), (c2, s2) = direction(12.5 / 12 * np.pi), direction(6.5 / 12 * np.pi)
+    assert int(np.asarray(class_code(c1, s1, c2, s2))) == 33
+    box = mb.model_box(kappa=(0.1, 10.0), q1=(0.1, 1.0), q2=(0.1, 1.0))
+    r = iim.ii_over_models(c1, s1, c2, s2, box)
+    assert int(r[CONS]) == YES and int(r[STAB]) == YES
+    assert {_exact((c1, s1, c2, s2), m) for m in _dense(box, 200)} == {(1, 1)}
+
+
+@pytest.mark.parametrize(
+    "g, expect",
+    [
+        ((-0.6, -0.8, -0.8, 0.6), 1),  # gamma > 0, c2 < 0, not starting in QI above: consistent
+        ((0.9, -0.44, -0.6, 0.8), 0),  # gamma > 0, c2 < 0, c1, s2 >= 0 and D > 0: never
+        ((-0.6, -0.8, 0.6, -0.8), None),  # gamma < 0, c1, s2 < 0: the arc depends on the model
+        ((-0.3, -0.6, 0.6, 0.5), None),  # gamma < 0, arc in QII, D > 0: 0 or 2 crossings
+        ((-0.8, -0.6, 0.6, 0.8), 1),  # gamma < 0, arc in QII, D < 0: one crossing
+    ],
+)
+def test_consistency_by_signs(g, expect):
+    assert iim.consistency_by_signs(*g) == expect
+    if expect is not None:  # an independent check: the exact tier at a spread of models
+        box = mb.model_box()
+        assert {_exact(g, m)[0] for m in _dense(box, 60)} == {expect}
+
+
+def test_witness_names_follow_the_ss_pattern():
+    assert iim.witness_names(CONS)[0] == "ii_consistent_witness_consistent_kappa"
+    assert iim.witness_names(STAB)[-1] == "ii_stable_witness_unstable_q2"
+    assert len(iim.II_OUTPUTS) == 14
