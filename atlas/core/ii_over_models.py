@@ -296,7 +296,7 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
             if c == _D:
                 wit[name][i] = sample["models"][sample[name][n]].ravel()
     stats["undecided_after"] = int(sum(np.sum(c == _X) for c in codes.values()))
-    out = mb._Result()
+    out = mb.BoxResult()
     for name in SIDES:
         out[name] = codes[name].reshape(shape)
         out.update({w: wit[name][:, j].reshape(shape) for j, w in enumerate(witness_names(name))})

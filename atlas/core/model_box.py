@@ -62,6 +62,7 @@ from atlas.core.verdicts import OverModels, Verdict
 
 __all__ = [
     "ModelBox",
+    "BoxResult",
     "model_box",
     "parse_model_box",
     "ss_over_models",
@@ -523,13 +524,13 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
         if c == int(OverModels.DEPENDS):
             wit[i] = (*w_good, *w_bad)
     stats["undecided_after"] = int(np.sum(code == int(OverModels.UNDECIDED)))
-    out = _Result({"ss_over_models": code.reshape(shape)})
+    out = BoxResult({"ss_over_models": code.reshape(shape)})
     out.update({name: wit[:, j].reshape(shape) for j, name in enumerate(WITNESS_NAMES)})
     out.stats = stats
     return out
 
 
-class _Result(dict):
+class BoxResult(dict):
     """The results, with the run's counts in ``.stats``."""
 
     stats: dict

@@ -26,6 +26,8 @@ __all__ = [
     "VERDICT",
     "CONSISTENCY",
     "OVER_MODELS",
+    "over_models_codes",
+    "is_over_models",
     "flag_attrs",
     "UNDECIDED_FLAG",
     "UNDECIDED_CODE",
@@ -177,17 +179,40 @@ CONSISTENCY = Codes(
 )
 Consistency = CONSISTENCY.enum
 
+def over_models_codes(name: str, no: str, yes: str, doc: str = "") -> Codes:
+    """The codes of a verdict over a box of contact models (:mod:`atlas.core.model_box`):
+    ``0`` = ``no`` for every model, ``1`` = ``yes`` for every model, ``2`` depends on the model
+    (a witness model on each side), ``3`` undecided; the values and colours of every such output
+    (:func:`is_over_models`), the words its own."""
+    return Codes(
+        name,
+        (
+            Code(0, no, f"{no} for every model", "#f7f7f7"),
+            Code(1, yes, f"{yes} for every model", "#525252"),
+            Code(2, "depends", "depends on the model", "#fdae6b"),
+            Code(UNDECIDED_FLAG, "undecided", color=UNDECIDED_COLOR),
+        ),
+        undecided=UNDECIDED_FLAG,
+        doc=doc,
+    )
+
+
+def is_over_models(codes: Codes | None) -> bool:
+    """Whether ``codes`` are those of a verdict over a box of models (:func:`over_models_codes`)."""
+    return (
+        codes is not None
+        and codes.values == (0, 1, 2, UNDECIDED_FLAG)
+        and codes.code(2).meaning == "depends"
+        and codes.undecided == UNDECIDED_FLAG
+    )
+
+
 #: verdict over a box of contact models (:mod:`atlas.core.model_box`)
-OVER_MODELS = Codes(
+OVER_MODELS = over_models_codes(
     "OverModels",
-    (
-        Code(0, "unstable", "unstable for every model", "#f7f7f7"),
-        Code(1, "stable", "stable for every model", "#525252"),
-        Code(2, "depends", "depends on the model", "#fdae6b"),
-        Code(UNDECIDED_FLAG, "undecided", color=UNDECIDED_COLOR),
-    ),
-    undecided=UNDECIDED_FLAG,
-    doc="""Verdict over a box of contact models (:mod:`atlas.core.model_box`): the SS mode is stable
+    "unstable",
+    "stable",
+    """Verdict over a box of contact models (:mod:`atlas.core.model_box`): the SS mode is stable
     (neutral counted as stable, as :data:`Verdict.NEUTRAL` is drawn in Fig. 1) for every model of
     the box, unstable for every model, or depends on the model (witnesses on both sides).""",
 )

@@ -49,6 +49,7 @@ from atlas.core.verdicts import (
     Codes,
     Consistency,
     Verdict,
+    over_models_codes,
 )
 
 __all__ = [
@@ -422,23 +423,21 @@ def _ii_over_models_outputs() -> list[Output]:
     """Certified II consistency and stability over a box of models (on request: ``model_box``)."""
     out = []
     for name, (yes, no) in II_SIDES.items():
-        attrs = flag_attrs(OverModels, f"II {_II_WHAT[name]} over every model of the box (proven)")
-        attrs["flag_meanings"] = f"{no} {yes} depends undecided"
         prefix = name.removesuffix("_over_models")
-        attrs["comment"] = (
-            f"{yes}: for every model of the box; {no}: for every model; depends: a certified "
-            f"witness model on each side ({prefix}_witness_*)"
-        )
         out.append(
             Output(
                 name,
                 _B1B2,
                 "int8",
-                attrs,
+                _attrs(
+                    f"II {_II_WHAT[name]} over every model of the box (proven)",
+                    f"{yes}: for every model of the box; {no}: for every model; depends: a "
+                    f"certified witness model on each side ({prefix}_witness_*)",
+                ),
                 computed_by=_II_OVER_MODELS,
-                enum=OverModels,
+                codes=over_models_codes(f"{name.title().replace('_', '')}", no, yes),
                 in_atlas=False,
-            )  # fmt: skip
+            )
         )
         for w in ii_witness_names(name):
             side = w.removeprefix(f"{prefix}_witness_").rsplit("_", 1)[0]

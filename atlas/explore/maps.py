@@ -2,7 +2,7 @@
 
 A layer is any output of the registry (:mod:`atlas.data.outputs`) with a point kernel: a newly
 registered output is a layer at once.  The verdicts over a box of contact models (the registry's
-outputs with :class:`atlas.core.verdicts.OverModels` codes, ``ss_over_models`` ...) are layers too
+outputs with the codes of :func:`atlas.core.verdicts.over_models_codes`, ``ss_over_models`` ...) are layers too
 (:func:`box_layers`): they do not depend on one model but on a model box (``model_box=``), and are
 computed, with their witness models, by the function the registry names for them.  :func:`compute_map` runs the registry's kernels through
 :func:`atlas.data.plane.plane_outputs` (the certified driver of every other caller, undecided
@@ -27,7 +27,7 @@ import xarray as xr
 
 from atlas.core import kernels
 from atlas.core.model_box import ModelBox
-from atlas.core.verdicts import OverModels
+from atlas.core.verdicts import is_over_models
 from atlas.data.outputs import OUTPUTS, coord_attrs, kernel_outputs, to_storage, variable_attrs
 from atlas.data.plane import PLANE, map_dims, plane_outputs
 
@@ -67,8 +67,8 @@ def layers() -> tuple[str, ...]:
 
 def box_layers() -> tuple[str, ...]:
     """The layers over a box of models: the registry's outputs with
-    :class:`~atlas.core.verdicts.OverModels` codes (``ss_over_models`` ...), in registry order."""
-    return tuple(n for n, o in OUTPUTS.items() if o.enum is OverModels)
+    :func:`~atlas.core.verdicts.over_models_codes` (``ss_over_models`` ...), in registry order."""
+    return tuple(n for n, o in OUTPUTS.items() if is_over_models(o.codes))
 
 
 def map_layers() -> tuple[str, ...]:
@@ -78,7 +78,7 @@ def map_layers() -> tuple[str, ...]:
 
 def is_box_layer(name: str) -> bool:
     """Whether ``name`` is a verdict over a box of models (:func:`box_layers`)."""
-    return name in OUTPUTS and OUTPUTS[name].enum is OverModels
+    return name in OUTPUTS and is_over_models(OUTPUTS[name].codes)
 
 
 def witness_outputs(name: str) -> dict[str, tuple[str, str, str]]:
