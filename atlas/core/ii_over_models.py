@@ -51,7 +51,13 @@ from atlas.core import bernstein as bz
 from atlas.core import model_box as mb
 from atlas.core.verdicts import OverModels, Verdict
 
-__all__ = ["ii_over_models", "II_OUTPUTS", "SIDES"]
+__all__ = [
+    "ii_over_models",
+    "ii_consistent_over_models",
+    "ii_stable_over_models",
+    "II_OUTPUTS",
+    "SIDES",
+]
 
 #: the code outputs and the two sides of each (the witness names' middle word)
 SIDES = {
@@ -302,3 +308,8 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
         out.update({w: wit[name][:, j].reshape(shape) for j, w in enumerate(witness_names(name))})
     out.stats = stats
     return out
+
+
+#: the point functions of the two outputs, named like them (:mod:`atlas.data.box_points`): both
+#: are decided together
+ii_consistent_over_models = ii_stable_over_models = ii_over_models

@@ -38,14 +38,19 @@ from atlas.data.boundary_curves import Boundaries, Curve
 from atlas.data.box_points import box_outputs, point_values
 from atlas.data.marching import region_boundaries
 
-__all__ = ["region_curves", "point_codes", "run_cli", "TOL", "LABELS"]
+__all__ = ["region_curves", "point_codes", "run_cli", "TOL", "labels"]
 
 #: default length of a vertex's certified bracket [rad]
 TOL = 1e-8
 #: midpoints a run settles with the large budget (each can take seconds near a curved boundary)
 SETTLE = 256
-#: the region codes in words (:class:`atlas.core.verdicts.OverModels`)
-LABELS = {int(v): v.label for v in OverModels}
+
+
+def labels(name: str) -> dict[int, str]:
+    """The codes of box verdict ``name`` in words (its declared codes' labels)."""
+    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415
+
+    return {c.value: c.label for c in OUTPUTS[name].codes.codes}
 
 
 def point_codes(name: str, beta1, beta2, box, *, settle: bool, dtype="float64") -> np.ndarray:
@@ -234,9 +239,10 @@ def _write_netcdf(bd: Boundaries, path) -> None:
     from atlas.data.io import atomic_path  # noqa: PLC0415
 
     ds = bd.to_dataset()
+    words = json.dumps({f: labels(f) for f in bd.attrs["fields"].split(",")})
     for k in ("curve_side_left", "curve_side_right"):
-        ds[k].attrs["comment"] = "codes over the model box: " + json.dumps(LABELS)
-    ds.attrs.update(model_box=bd.attrs["model_box"], region_labels=json.dumps(LABELS))
+        ds[k].attrs["comment"] = "codes over the model box, per field: " + words
+    ds.attrs.update(model_box=bd.attrs["model_box"], region_labels=words)
     ds.attrs.update(stopped_brackets=int(bd.attrs["stopped"]), fields=bd.attrs["fields"])
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp)

@@ -13,6 +13,7 @@ import xarray as xr
 from atlas.core import warm
 from atlas.core.brackets import FIELD_LABELS
 from atlas.data.boundary_curves import Boundaries, Curve, Point
+from atlas.data.region_curves import labels
 from atlas.explore.colors import layer_rgba
 from atlas.explore.inspector import inspect_point
 from atlas.explore.maps import (
@@ -62,7 +63,7 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
     """The inspector's line for a click near a certified boundary: its kind, the certified
     bracket of the nearest vertex and the field's codes on its two sides (left | right of the
     direction of travel)."""
-    lab = FIELD_LABELS.get(curve.field) or _box_labels(curve.field)
+    lab = FIELD_LABELS.get(curve.field) or labels(curve.field)
     return (
         f"near the certified {curve.kind} boundary ({distance:.3g} rad away; its vertex is "
         f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_left, curve.side_left)}"
@@ -70,11 +71,6 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
     )
 
 
-def _box_labels(name: str) -> dict:
-    """The codes of box layer ``name`` in words (its enumeration's labels)."""
-    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415
-
-    return {int(v): v.label for v in OUTPUTS[name].enum}
 
 
 def format_point(point: Point, distance: float) -> str:

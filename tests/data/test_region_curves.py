@@ -111,7 +111,10 @@ def test_cli_writes_the_curves_and_refuses_bad_input(tmp_path, capsys):
     with xr.open_dataset(out) as ds:
         assert ds.attrs["model_box"] == "kappa=0.5:2,q=0.1:1"
         assert "depends on the model" in ds.attrs["region_labels"]
-        assert set(ds["curve_kind"].values) == {"ss_over_models_region"}
+        kinds = set(ds["curve_kind"].values)
+        assert "ss_over_models_region" in kinds
+        assert kinds <= {f"{n}_over_models_region" for n in ("ss", "ii_consistent", "ii_stable")}
+        assert "consistent for every model" in ds.attrs["region_labels"]
         assert ds.sizes["node"] == sum(1 for line in csv.read_text().splitlines()[1:])
     capsys.readouterr()
     for extra, name in (
