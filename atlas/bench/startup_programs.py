@@ -103,10 +103,10 @@ class _Listener(logging.Handler):
         """The program an event of this thread belongs to: the current kept kernel's, else a
         new one per (JAX name, its last lowered shapes) when XLA compiles it."""
         kernel = warm.current_kernel()
-        key = kernel or f"{threading.get_ident()}"
+        key = kernel or threading.get_ident()
         prog = self.open.get(key)
         if prog is None or (kernel is None and prog.compiles):
-            prog = Program(kernel or fun_name)
+            prog = Program(kernel[0] if kernel else fun_name)
             self.open[key] = prog
             self.programs.append(prog)
         return prog
@@ -122,7 +122,7 @@ class _Listener(logging.Handler):
                 prog.compiles += 1
                 prog.shapes = prog.shapes or self.shapes.get(kw.get("fun_name", ""), "")
                 if warm.current_kernel() is None:
-                    self.open.pop(f"{threading.get_ident()}", None)
+                    self.open.pop(threading.get_ident(), None)
 
     def emit(self, record):
         m = _SHAPES.match(record.getMessage())

@@ -42,6 +42,7 @@ import contextlib
 import functools
 import hashlib
 import importlib
+import itertools
 import os
 import pickle
 import platform
@@ -97,6 +98,7 @@ _SESSION: dict = {"stack": None, "run": None}
 #: per thread: the name of the :class:`Kernel` whose program is being exported, compiled or
 #: loaded (:func:`current_kernel`)
 _LOADING = threading.local()
+_LOADS = itertools.count()
 
 
 @contextlib.contextmanager
@@ -150,10 +152,11 @@ def keep_kernels(run: str) -> str | None:
     return _STATE["dir"]
 
 
-def current_kernel() -> str | None:
+def current_kernel() -> tuple[str, int] | None:
     """The name of the :class:`Kernel` this thread is exporting, compiling or loading a program
-    of (``module.function``), else ``None``: what a listener of JAX's compilation events
-    (:mod:`jax.monitoring`) attributes them to (:mod:`atlas.bench.startup_programs`)."""
+    of (``module.function``) and the serial number of that load, else ``None``: what a listener
+    of JAX's compilation events (:mod:`jax.monitoring`) attributes them to
+    (:mod:`atlas.bench.startup_programs`)."""
     return getattr(_LOADING, "name", None)
 
 
@@ -203,7 +206,7 @@ class Kernel:
         key = (where, _digest(self.module), self.code, avals, tuple(sorted(static.items())))
         call = self._calls.get(key)
         if call is None:
-            _LOADING.name = self.name
+            _LOADING.name = (self.name, next(_LOADS))
             try:
                 call = self._calls[key] = self._load(Path(where), key, args, static)
             finally:

@@ -29,15 +29,17 @@ def test_a_plain_jit_is_one_program_with_its_shapes():
 
 
 def test_a_kept_kernel_is_one_program_under_its_own_name(tmp_path):
-    """Exported (trace, lower), then compiled for its executable: one program, the kernel's."""
+    """Exported (trace, lower), then compiled for its executable: one program per shape, named
+    for the kernel."""
     kern = warm.Kernel(_twice)
     with warm.kernel_cache(str(tmp_path)), sp.recorded() as rec:
         np.asarray(kern(np.arange(7.0), np.ones(7)))
+        np.asarray(kern(np.arange(9.0), np.ones(9)))  # another shape: another program
     names = [p.name for p in rec.programs if p.compiles]
-    assert names == [f"{__name__}._twice"], names
-    assert rec.programs[0].shapes == "f64[7] f64[7]"
+    assert names == [f"{__name__}._twice"] * 2, names
+    assert [p.shapes for p in rec.programs] == ["f64[7] f64[7]", "f64[9] f64[9]"]
     s = sp.summary(rec.programs)
-    assert s["programs"] == 1 and s["compile_s"] > 0
+    assert s["programs"] == 2 and s["compile_s"] > 0
 
 
 class _Session:
