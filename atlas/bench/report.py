@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from atlas.bench import startup_programs
 from atlas.data.io import atomic_path
 
 __all__ = [
@@ -620,6 +621,7 @@ def startup_section(rows) -> list[str]:
         f"**Targets**: met in {met} of {len(targeted)} figures.\n",
         "Commands: " + "; ".join(commands) + ".\n",
         *([*notes, ""] if notes else []),
+        *startup_programs.program_tables(rows),
     ]
 
 

@@ -8,7 +8,9 @@ start (``ATLAS_KERNEL_EXECUTABLES=0``: the exported programs and the compilation
 ``ATLAS_KERNEL_CACHE=0``: the compilation cache alone); the 8.4-million-point atlas (:data:`LARGE`)
 against the seconds of its own summary line; ``atlas selftest`` and its disagreements; the
 explorer widget built headless (:data:`EXPLORER`: first map, one click); the refusal of a 1e14-point
-scene (:data:`HUGE`, exit 2).
+scene (:data:`HUGE`, exit 2); where the seconds of a cold run go (:data:`PROGRAMS`: each command in an
+empty cache, the programs it compiles with their shapes and their tracing, lowering and compilation
+seconds, :mod:`atlas.bench.startup_programs`).
 
 Every run uses one temporary ``ATLAS_JAX_CACHE`` that this module creates and deletes (the user's
 cache is neither read nor written) and writes its files into a temporary directory, its working
@@ -33,6 +35,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from atlas.bench import startup_programs
 from atlas.bench.config import CONFIG, FLAGS, mode_name
 from atlas.bench.suites import parse_summary
 from atlas.bench.timing import bench_json, log
@@ -42,6 +45,7 @@ __all__ = [
     "HUGE",
     "LARGE",
     "MEDIAN",
+    "PROGRAMS",
     "SMALL",
     "TARGETS",
     "Timed",
@@ -64,6 +68,16 @@ LARGE += ["--q1", "0.1,1", "--q2", "0.1,1", "--outputs", ",".join(FLAGS)]
 #: a 1e14-point scene (every output): refused with one line, exit 2, before any work (the suite
 #: proves "before any work" by counting, tests/test_cli.py; its seconds are reported here)
 HUGE = ["--beta1", "0:2pi:10000000", "--beta2", "0:2pi:10000000"]
+
+#: the cold commands whose compiled programs the section lists (:mod:`atlas.bench.startup_programs`):
+#: label, kind, arguments (``{work}``: the section's directory)
+PROGRAMS = (
+    ("atlas paper --quick", "cli", ["paper", "--quick", "--out", "{work}/paper"]),
+    ("atlas generate 16 x 16 x 2", "cli", ["generate", *SMALL, "--out", "{work}/small.nc",
+                                           "--overwrite"]),
+    ("explorer: first 513^2 map", "explorer-map", ["513"]),
+    ("explorer: first certified boundary overlay", "explorer-overlay", ["513"]),
+)  # fmt: skip
 
 #: the figure compared with a time target: the median wall time [s]
 MEDIAN = "median s"
@@ -402,6 +416,9 @@ def measure(cfg: dict, run=run_timed) -> list[dict]:
             rows += _selftest(s, cfg["selftest_runs"])
         if cfg["explorer_runs"]:
             rows += _explorer(s, cfg["explorer_runs"])
+        if cfg["cold_runs"]:
+            log("start-up: the programs of each cold command")
+            rows += startup_programs.measure(s, PROGRAMS)
     return rows
 
 

@@ -74,6 +74,11 @@ LATER_DTYPE = np.float64
 #: for 256 (float64, best of 300 calls), so a handful of points must not run padded to 256; each
 #: length is one trace and compilation (~3.5 s for the five programs) per process, so few lengths
 CHUNK_SIZES = (1 << 4, 1 << 8, 1 << 12)
+#: a first pass that leaves at most this many points open, with exact settlement on (and its
+#: budget holding them), sends them to the exact tier directly: it settles a handful of points in
+#: milliseconds (11 points of a 16 x 16 x 2 atlas: 2.8 ms), where the five later-tier programs
+#: cost seconds to compile (or to load) in each new process
+HOST_POINTS = 16
 _UND = UNDECIDED_FLAG
 
 
@@ -312,7 +317,10 @@ def spectral_points(
     backend.require_trusted()  # a backend that failed atlas selftest certifies nothing
     flags = [k for k in names if k != "spectral_abscissa"]
     undamped_q = (inputs.q1 == 0) & (inputs.q2 == 0)
-    out, open_idx = _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts)
+    host = HOST_POINTS if resolve and (max_resolve is None or max_resolve >= HOST_POINTS) else 0
+    out, open_idx, later = _fast_tiers(
+        inputs, shape, dtype, flags, undamped_q, chunk, counts, host_limit=host
+    )
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
     open_ = {k: out[k].reshape(-1)[open_idx] == _UND for k in flags}
@@ -321,17 +329,21 @@ def spectral_points(
     counts["undecided_before"] = int(und.sum())
     if resolve and und.any():
         _settle_exact(inputs, shape, out, flags, open_idx[und], max_resolve, counts)
+    if later is not None:  # the later tiers were left to the exact tier; where it failed, they try
+        still = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
+        later(open_idx[np.logical_or.reduce(still)])
     after = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
     counts["undecided_after"] = int(np.logical_or.reduce(after).sum()) if flags else 0
     return Verdicts(out, counts)
 
 
-def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts):
+def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts, host_limit=0):
     """Tiers 1-3 (first pass, tier 2, enclosures) for the verdicts ``flags``; returns the verdict
-    arrays and the flat indices the first pass left open (where every later tier works, and where
-    any undecided point lies)."""
+    arrays, the flat indices the first pass left open (where every later tier works, and where
+    any undecided point lies) and ``None``, or, when the first pass left at most ``host_limit``
+    points open, the later tiers not run (a function of flat indices, :data:`HOST_POINTS`)."""
     if not flags:
-        return {}, np.zeros(0, np.intp)
+        return {}, np.zeros(0, np.intp), None
     want_ss = "stable_SS" in flags
     want_ii = any(k in flags for k in ("consistent_II", "stable_II"))
     damped = True if not undamped_q.any() else (False if undamped_q.all() else None)
@@ -342,12 +354,17 @@ def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts):
     open_idx = np.flatnonzero(open_)
     undecided = [verdict[k].reshape(-1)[open_idx] == _UND for k in flags]
     open_idx = open_idx[np.logical_or.reduce(undecided)]
-    # every later tier works inside open_idx (small): no more passes over the whole grid
-    tier2_idx = open_idx[later.reshape(-1)[open_idx]]
-    _second_pass(inputs, shape, chunk, verdict, tier2_idx, counts, ss=want_ss, ii=want_ii)
-    if want_ii:
-        _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts)
-    return {k: verdict[k] for k in flags}, open_idx
+
+    def later_tiers(idx):  # every later tier works inside open_idx (small): no whole-grid pass
+        tier2_idx = idx[later.reshape(-1)[idx]]
+        _second_pass(inputs, shape, chunk, verdict, tier2_idx, counts, ss=want_ss, ii=want_ii)
+        if want_ii:
+            _roots_pass(inputs, shape, chunk, cons, stab, idx, counts)
+
+    if open_idx.size <= host_limit:
+        return {k: verdict[k] for k in flags}, open_idx, later_tiers
+    later_tiers(open_idx)
+    return {k: verdict[k] for k in flags}, open_idx, None
 
 
 def _fill(arr, idx, new):

@@ -41,6 +41,8 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
+import importlib
+import itertools
 import os
 import pickle
 import platform
@@ -57,6 +59,7 @@ from atlas.core import config
 
 __all__ = [
     "Kernel",
+    "current_kernel",
     "jit",
     "kernel_cache",
     "keep_kernels",
@@ -92,6 +95,10 @@ _STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}, "manifes
 _FRESH = threading.Lock()
 #: the :func:`kernel_cache` block :func:`keep_kernels` keeps open until the process exits
 _SESSION: dict = {"stack": None, "run": None}
+#: per thread: the name of the :class:`Kernel` whose program is being exported, compiled or
+#: loaded (:func:`current_kernel`)
+_LOADING = threading.local()
+_LOADS = itertools.count()
 
 
 @contextlib.contextmanager
@@ -145,6 +152,14 @@ def keep_kernels(run: str) -> str | None:
     return _STATE["dir"]
 
 
+def current_kernel() -> tuple[str, int] | None:
+    """The name of the :class:`Kernel` this thread is exporting, compiling or loading a program
+    of (``module.function``) and the serial number of that load, else ``None``: what a listener
+    of JAX's compilation events (:mod:`jax.monitoring`) attributes them to
+    (:mod:`atlas.bench.startup_programs`)."""
+    return getattr(_LOADING, "name", None)
+
+
 def _read_text(path: Path) -> str:
     try:
         return path.read_text()
@@ -191,7 +206,11 @@ class Kernel:
         key = (where, _digest(self.module), self.code, avals, tuple(sorted(static.items())))
         call = self._calls.get(key)
         if call is None:
-            call = self._calls[key] = self._load(Path(where), key, args, static)
+            _LOADING.name = (self.name, next(_LOADS))
+            try:
+                call = self._calls[key] = self._load(Path(where), key, args, static)
+            finally:
+                _LOADING.name = None
         return call(*args)
 
     def __getattr__(self, name):  # the rest of the jax.jit API: lower, trace, ...
@@ -403,13 +422,23 @@ def _digest(module: str) -> str:
         )
         h.update(str(bool(jax.config.jax_enable_x64)).encode())
         for name in sorted({*MODULES, module}):
-            mod = sys.modules.get(name)
+            # imported here: the digest must not depend on what the entry point (the CLI, the
+            # explorer, a script) happened to import before its first kernel call
+            mod = sys.modules.get(name) or _import(name)
             h.update(name.encode())
             for attr, value in sorted(vars(mod).items()) if mod else ():
                 h.update(attr.encode())
                 h.update(_value_digest(value, 3))
         got = _STATE["digests"][module] = h.hexdigest()
     return got
+
+
+def _import(name: str):
+    """The module ``name`` imported (``None`` if it cannot be)."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        return None
 
 
 def _code_digest(code: types.CodeType) -> bytes:

@@ -376,6 +376,7 @@ class Explorer:
                 if self.on_boundaries is not None:
                     self.on_boundaries(key)
 
+            fut.t0, fut.first = t0, not self._curves  # read by boundaries_pending
             fut.add_done_callback(done)
             self._curves[key] = fut
         return fut.result() if fut.done() else None  # an error in the worker raises here
@@ -387,6 +388,16 @@ class Explorer:
         if is_box_layer(p["layer"]):
             return (p["layer"], p["model_box"])
         return (p["kappa"], p["q1"], p["q2"])
+
+    def boundaries_pending(self) -> tuple[float, bool] | None:
+        """While the certified boundaries of the current slice are computed: the seconds since
+        they were requested and whether they are the session's first (their kernels compile or
+        load first); else ``None``."""
+        p = self.params
+        fut = self._curves.get(self.boundary_key())
+        if "certified boundaries" not in p["overlays"] or fut is None or fut.done():
+            return None
+        return time.perf_counter() - fut.t0, fut.first
 
     def nearest_boundary(self, beta1, beta2, within=2 * math.pi / BOUNDARY_GRID):
         """``(curve, vertex index, distance [rad])`` of the certified boundary vertex nearest to

@@ -161,6 +161,8 @@ class _Callbacks:
         self._note = ""
         self._draws = 0  # canvas draws done (ipympl)
         self._lock = threading.RLock()  # the boundaries' worker thread redraws too
+        self._busy = False  # the status line says what is being computed (busy)
+        self._ticker = None  # the timer counting the certified boundaries' seconds
 
     @contextlib.contextmanager
     def quiet(self):
@@ -212,7 +214,34 @@ class _Callbacks:
 
     def busy(self, text: str):
         """Say what the session is doing now (sent to the browser at once)."""
+        self._busy = True
         self.status.value = f"<tt>working -- {html.escape(text, quote=False)} ...</tt>"
+
+    def boundaries_note(self) -> str:
+        """While the certified boundaries are computed: what and for how long (else the note
+        of the last map)."""
+        pending = self.ex.boundaries_pending()
+        if pending is None:
+            return self._note
+        seconds, first = pending
+        what = " (the first: compiling or loading its kernels)" if first else ""
+        return f", working -- certified boundaries{what}: {seconds:.0f} s ..."
+
+    def tick(self):
+        """While the certified boundaries are computed, refresh the status line every second
+        (their seconds count up) unless a computation's step is shown."""
+        if self.ex.boundaries_pending() is None or self._ticker is not None:
+            return
+
+        def tock():
+            self._ticker = None
+            with self._lock:
+                if not self._busy and self.ex.boundaries_pending() is not None:
+                    self.show_status()
+
+        self._ticker = threading.Timer(1.0, tock)
+        self._ticker.daemon = True
+        self._ticker.start()
 
     def show_status(self):
         if self._requested is not None:
@@ -223,9 +252,10 @@ class _Callbacks:
             drawn = "drawn"
         else:
             drawn = f"repaint {self.ex.timings.get('draw_ms', float('nan')):.0f} ms"
-        self.status.value = (
-            f"<tt>{html.escape(self.ex.status(), quote=False)}, {drawn}{self._note}</tt>"
-        )
+        self._busy = False
+        note = html.escape(self.boundaries_note(), quote=False)
+        self.status.value = f"<tt>{html.escape(self.ex.status(), quote=False)}, {drawn}{note}</tt>"
+        self.tick()
 
     def render(self):
         with self._lock:

@@ -1,6 +1,7 @@
 """``atlas.bench.startup``: its pure parts (parsing, spread, met/missed) and the section run with
 made-up processes: one temporary cache, never the user's, each figure against its target."""
 
+import json
 import math
 import os
 from pathlib import Path
@@ -73,6 +74,12 @@ class FakeProcesses:
         (cache / f"entry{len(self.calls)}").write_text("x")
         Path(cwd, "written").write_text("x")
         text = " ".join(cmd)
+        if "atlas.bench.startup_programs" in cmd:  # a cold command's programs (its recording)
+            prog = dict(
+                name=cmd[4], shapes="f64[16]", compiles=1, trace_s=1, lower_s=1, compile_s=4
+            )
+            Path(cmd[3]).write_text(json.dumps(dict(rc=0, wall_s=7.0, programs=[prog])))
+            return Timed(8.0, 0)
         if cmd[-1] == "import atlas":
             return Timed(0.3, 0)
         if cmd[-1] == "--help":
@@ -136,7 +143,7 @@ def test_full_section_in_a_temporary_cache(user_cache, tmp_path):
     assert all(not Path(c["cwd"]).exists() and Path(cache).parent in Path(c["cwd"]).parents
                for c in procs.calls)  # fmt: skip
     # the cold run starts from an empty cache; the user's switches are not inherited
-    gen = [c for c in procs.calls if "0:2pi:16" in " ".join(c["cmd"])]
+    gen = [c for c in procs.calls if "0:2pi:16" in " ".join(c["cmd"]) and "-m" not in c["cmd"]]
     assert gen[0]["cache_before"] == [] and all(c["cache_before"] for c in gen[1:])
     switched = [(c["env"].get("ATLAS_KERNEL_CACHE"), c["env"].get("ATLAS_KERNEL_EXECUTABLES"))
                 for c in gen[1:]]  # fmt: skip
@@ -161,7 +168,14 @@ def test_full_section_in_a_temporary_cache(user_cache, tmp_path):
     assert (first["runs"], first["median_s"]) == (1, 8.0)
     explorer = [c for c in procs.calls if "make_widget" in " ".join(c["cmd"])]
     assert len(explorer) == 1 + CONFIG["full"]["startup"]["explorer_runs"]
+    # each cold command's programs, in an emptied cache
+    cold = [c for c in procs.calls if "atlas.bench.startup_programs" in c["cmd"]]
+    assert [c["cmd"][4] for c in cold] == [k for _, k, _ in startup.PROGRAMS]
+    assert all(c["cache_before"] == [] for c in cold)
+    paper = rows["cold, programs compiled: atlas paper --quick"]
+    assert (paper["value"], paper["median_s"]) == (1, 8.0)
     md = "\n".join(startup_section(list(rows.values())))
+    assert "| cli | f64[16] | 1 | 1.00 | 1.00 | 4.00 |" in md
     assert "**Targets**: met in 3 of 5 figures." in md
     assert "| atlas --help | 5 | 0.7 | 0.7 | 0.7 | - | median s | 0.7 | 0.5 | missed |" in md
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from atlas.core import contact_modes as me
-from atlas.core import exact
+from atlas.core import exact, warm
 from atlas.core.verdicts import Consistency, Verdict
 
 PI = np.pi
@@ -174,3 +174,15 @@ def test_if_fi_cc_conditions():
     assert int(me.consistent_FI(c2, s2)) == 1
     c1, s1, c2, s2 = vec(0.1 * PI, 0.3 * PI)
     assert bool(me.cc_possible(c1, s2))
+
+
+def test_the_verdicts_are_kept_kernels(tmp_path):
+    """Under the kernel cache the public verdicts are kept as exported programs (a later process
+    loads them instead of tracing and lowering them again), with the plain jit's results."""
+    g = np.linspace(0.1, 6.2, 9)
+    c1, s1, c2, s2 = np.cos(g), np.sin(g), np.cos(g[::-1]), np.sin(g[::-1])
+    want = np.asarray(me.class_code(c1, s1, c2, s2))
+    with warm.kernel_cache(str(tmp_path)):
+        got = np.asarray(me.class_code(c1, s1, c2, s2))
+    assert list(tmp_path.glob("atlas.core.contact_modes.class_code-*.jaxexport"))
+    np.testing.assert_array_equal(got, want)

@@ -368,3 +368,47 @@ def test_point_lists_stay_flat(monkeypatch):
     g = [np.broadcast_to(a, (20, 20, 3, 2, 2)).ravel() for a in model_grid(20)]
     points.spectral_points(*g, names=FLAGS, resolve=False)
     assert len(calls) == 1
+
+
+def _small_atlas():
+    """The 16 x 16 x 2 damped atlas of ``atlas generate``'s smallest example (q = 0.1)."""
+    g = np.arange(16) * (2 * np.pi / 16)
+    c, s = direction(g, np.float64)
+    kappa = np.array([0.5, 2.0])
+    return c[:, None, None], s[:, None, None], c[None, :, None], s[None, :, None], kappa, 0.1, 0.1
+
+
+def test_a_handful_of_open_points_goes_to_the_exact_tier_without_later_tiers():
+    """A first pass leaving at most ``HOST_POINTS`` open sends them to the exact tier: no tier-2
+    or enclosure program runs (nothing to compile), and every verdict equals the exact tier's."""
+    args = _small_atlas()
+    res = points.spectral_points(*args, names=FLAGS)
+    st = res.stats
+    assert 0 < st["undecided_before"] <= points.HOST_POINTS
+    assert st["tier2_points"] == st["roots_points"] == st["undecided_after"] == 0
+    shape = res["stable_SS"].shape
+    pts = dict(zip(KEYS, (np.broadcast_to(a, shape).ravel().astype(np.float64) for a in args)))
+    ref = exact.resolve(pts, names=FLAGS)
+    for k in FLAGS:
+        assert np.array_equal(res[k].ravel(), ref[k]), k
+    # a settlement budget below the open points keeps the later tiers
+    budget = points.spectral_points(*args, names=FLAGS, max_resolve=st["undecided_before"] - 1)
+    assert budget.stats["tier2_points"] > 0
+
+
+def test_where_the_exact_tier_fails_the_later_tiers_still_decide(monkeypatch):
+    """The exact tier failing on the handful of points: the later tiers run on them after all,
+    so the verdicts are those of the tiers without the host path (``HOST_POINTS = 0``)."""
+
+    def broken(points, names=()):
+        raise ArithmeticError("no convergence")
+
+    monkeypatch.setattr(exact, "resolve", broken)
+    args = _small_atlas()
+    got = points.spectral_points(*args, names=FLAGS)
+    monkeypatch.setattr(points, "HOST_POINTS", 0)
+    want = points.spectral_points(*args, names=FLAGS)
+    assert got.stats["tier2_points"] == want.stats["tier2_points"] > 0
+    assert got.stats["undecided_after"] == want.stats["undecided_after"]
+    for k in FLAGS:
+        assert np.array_equal(got[k], want[k]), k

@@ -267,9 +267,10 @@ def test_save_used_writes_the_run_list_before_the_block_ends(stored_dominance, t
 
 
 #: the programs a cold 16 x 16 x 2 ``atlas generate`` compiles (every output, damped): the first
-#: pass per point (``rootfree.codes``), the spectral abscissa, the axis and geometry kernels and
-#: the tier-2 / enclosure stages of the few points the first pass leaves open
-COLD_GENERATE_PROGRAMS = 10
+#: pass per point (``rootfree.codes``), the spectral abscissa and the axis and geometry kernels
+#: (``_b1``, ``_b2``, ``_b1b2``); the few points the first pass leaves open go to the exact tier
+#: directly (``points.HOST_POINTS``), no tier-2 or enclosure program
+COLD_GENERATE_PROGRAMS = 5
 COLD = """
 import json, sys, jax
 compiles = []
@@ -302,3 +303,26 @@ def test_a_cold_small_generate_compiles_no_more_programs(tmp_path):
     assert got["rc"] == 0 and programs, (got, p.stderr[-2000:])
     assert got["compiles"] == len(programs), (got, programs)
     assert len(programs) <= COLD_GENERATE_PROGRAMS, programs
+
+
+#: a kernel digest as an entry point sees it: after importing ``{imports}`` only
+_DIGEST = """
+import sys
+{imports}
+from atlas.core import warm
+print(warm._digest("atlas.core.points"))
+"""
+
+
+def test_the_kernel_digest_does_not_depend_on_what_the_entry_point_imported():
+    """The CLI imports lazily, the explorer everything: one kernel, one digest, whichever came
+    first (else every entry point exports and compiles its own copy of each program)."""
+    digests = set()
+    for imports in ("import atlas.core.points", "import atlas.explore.state"):
+        env = {**os.environ, "JAX_ENABLE_X64": "1"}
+        p = subprocess.run(
+            [sys.executable, "-c", _DIGEST.format(imports=imports)],
+            capture_output=True, text=True, env=env, timeout=300, check=True,
+        )  # fmt: skip
+        digests.add(p.stdout.strip().splitlines()[-1])
+    assert len(digests) == 1, digests

@@ -495,3 +495,34 @@ def test_box_layer_key_model_box_and_witnesses_on_click(need):
         np.testing.assert_allclose([float(x) for x in m.groups()], model["model"], rtol=1e-5)
         v = exact.point_spectral(*d, *model["model"])["stable_SS"]
         assert (v in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, model, v)
+
+
+def test_status_counts_the_certified_boundaries_seconds_until_they_are_drawn(need, monkeypatch):
+    """The first certified boundaries take seconds in the background (their kernels compile):
+    the status line says so and refreshes itself while they are computed, then gives their
+    time (a hang is ended by pytest-timeout, not by a clock in the test)."""
+    need("ipywidgets")
+    import threading
+
+    from atlas.data import boundaries
+
+    release, real = threading.Event(), boundaries.slice_boundaries
+    monkeypatch.setattr(
+        boundaries, "slice_boundaries", lambda *a, **k: release.wait() and real(*a, **k)
+    )
+    box = widget.make_widget(n=N, layer="stable_SS", kappa=0.5, q1=0.3)
+    seen = []
+    box.status.observe(lambda ch: seen.append(html.unescape(ch["new"])), names="value")
+    box.controls["overlays"].value = ("certified boundaries",)
+    working = "working -- certified boundaries (the first: compiling or loading its kernels): "
+    assert working in seen[-1] and seen[-1].startswith("<tt>stable_SS at kappa = 0.5"), seen
+    shown = len(seen)
+    while len(seen) == shown:  # refreshed by its timer while the worker runs
+        time.sleep(0.1)
+    assert working in seen[-1], seen
+    release.set()
+    _wait_boundaries(box.explorer)
+    while not re.search(r", certified boundaries \d+ ms</tt>$", seen[-1]):  # the worker's redraw
+        time.sleep(0.1)
+    assert box.explorer.boundaries_pending() is None
+    assert not any("working" in s for s in seen[seen.index(seen[-1]) :])
