@@ -172,21 +172,11 @@ def mechanism_atlas(
         axis: (axis, values[axis], {"units": units, "long_name": long_name})
         for axis, (_d, units, long_name, _s) in scene.axes.items()
     }
-    units = stored_units(scene)
     stored = dict(consts)
     stored.update(m=body["m"], I=body["I"], s1=body["s1"], s2=inv["s2"])
-    for k, v in stored.items():
-        v = np.asarray(v, np.float64)
-        v = np.broadcast_to(v, inv["beta1"].shape) if v.ndim else v
-        if v.ndim and np.all(v == v.flat[0]):
-            v = v.flat[0]
-        unit, long_name = units[k]
-        coords[k] = (dims if np.ndim(v) else (), v, {"units": unit, "long_name": long_name})
+    coords.update(_stored_coords(scene, stored, dims, inv["beta1"].shape))
     if history is None:
-        args = [f"{a}={values_spec!r}" for a, values_spec in _specs(scene, axes).items()]
-        args += [f"fixed={dict(fixed)!r}"] if fixed else []
-        args += [f"model_box={str(box)!r}"] if box is not None else []
-        history = f"atlas.mechanism_atlas({', '.join([repr(name), *args, f'dtype={dtype!r}'])})"
+        history = _call(name, _specs(scene, axes), fixed, box, dtype)
     attrs = {
         "Conventions": "CF-1.10",
         "title": f"painleve-atlas mechanism scene {name!r}: {scene.description}",
@@ -201,6 +191,29 @@ def mechanism_atlas(
     if box is not None:
         attrs.update(_add_box_verdicts(data, dims, inv, box, dtype))
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _stored_coords(scene, stored: dict, dims: tuple, shape: tuple) -> dict:
+    """The parameters that are no axis as coordinates with their units: a scalar where the
+    value is the same everywhere, else over the axes."""
+    units = stored_units(scene)
+    coords = {}
+    for k, v in stored.items():
+        v = np.asarray(v, np.float64)
+        v = np.broadcast_to(v, shape) if v.ndim else v
+        if v.ndim and np.all(v == v.flat[0]):
+            v = v.flat[0]
+        unit, long_name = units[k]
+        coords[k] = (dims if np.ndim(v) else (), v, {"units": unit, "long_name": long_name})
+    return coords
+
+
+def _call(name: str, specs: dict, fixed, box, dtype: str) -> str:
+    """The ``mechanism_atlas`` call that made the atlas (its ``history``)."""
+    args = [f"{a}={values_spec!r}" for a, values_spec in specs.items()]
+    args += [f"fixed={dict(fixed)!r}"] if fixed else []
+    args += [f"model_box={str(box)!r}"] if box is not None else []
+    return f"atlas.mechanism_atlas({', '.join([repr(name), *args, f'dtype={dtype!r}'])})"
 
 
 def _checked_box(model_box):
