@@ -1,6 +1,7 @@
 """Fixtures of tests/bench: a small made-up result set of an ``atlas bench`` run (no
 measurement), rows of every section with the keys the measuring code writes, numbers by hand."""
 
+import json
 import math
 
 import pytest
@@ -89,6 +90,21 @@ def fake_results(mode="full") -> Results:
             ("generate 512 points, cold", 20.0, "", "x warm", 8.0, "", ""),
         )
     ]  # fmt: skip
+    model_grids = [
+        dict(grid=g, dtype=dt, points=n, seconds=n * ns * 1e-9, ns_per_point=ns, over_2d=o,
+             f32_over_f64=f, first_pass=n, tier2=500, enclosures=6, exact=0, left=0)
+        for g, n, o in (("2-D 513^2", 263_169, 1.0), ("5-D 512^2 x 8 x 2 x 2", 8_388_608, 1.2))
+        for dt, ns, f in (("float32", 40.0, 0.6), ("float64", 66.0, ""))
+    ]  # fmt: skip
+    program = dict(name="rootfree._tier2_decide", shapes="f64[256]", compiles=1, trace_s=0.4,
+                   lower_s=0.3, compile_s=2.5)  # fmt: skip
+    startup += [
+        dict(figure=f"cold, programs compiled: {c}", command=c, runs=1, median_s=85.0,
+             min_s=85.0, max_s=85.0, in_run_s="", compared="programs", value=1, target="",
+             met="", note="tracing 6.4 s", programs=json.dumps([program]))
+        for c in ("atlas paper --quick", "atlas generate 16 x 16 x 2",
+                  "explorer: first 513^2 map", "explorer: first certified boundary overlay")
+    ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
     meta = dict(
         mode=mode, quick=mode != "full", start="2024-06-01T12:00:00+0000",
@@ -97,7 +113,8 @@ def fake_results(mode="full") -> Results:
                      jax="0.4", numpy="2.0", platform="Linux", jax_backend="cpu"),
     )  # fmt: skip
     return Results(
-        meta=meta, cfg=cfg, head=headline(wp, cfg), wp=wp, refs=refs, suites=suites,
+        meta=meta, cfg=cfg, head=headline(wp, cfg), model_grids=model_grids, wp=wp, refs=refs,
+        suites=suites,
         scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves, maps=maps,
         startup=startup, exact=dict(points=42, seconds=3.0, failures=0),
     )  # fmt: skip

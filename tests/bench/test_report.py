@@ -37,6 +37,7 @@ def test_sections_in_order(results):
     assert heads == [
         "# atlas bench: speed against error",
         "## Headline",
+        "### 2-D and 5-D grids",
         "### At 1e7 points (3163 x 3163 = 10,004,569 points)",
         "## Work-precision",
         "## Hard-case suites",
@@ -47,6 +48,7 @@ def test_sections_in_order(results):
         "## Simulation",
         "## Outcome maps: fast engine against the exact simulator",
         "## Start-up",
+        "### Where a cold run's seconds go",
         "## Notes, omissions",
     ]
     assert "Mode: **full**" in md and "total duration **1234 s**" in md
@@ -138,8 +140,9 @@ def test_outcome_maps_section_lists_every_disagreement(results):
     results.maps = [row, dict(row, map="other", agreement=1.0, disagreements="")]
     md = report.build_report(results)
     heads = [ln for ln in md.splitlines() if ln.startswith("#")]
-    assert heads[-3:] == ["## Outcome maps: fast engine against the exact simulator",
-                          "## Start-up", "## Notes, omissions"]  # fmt: skip
+    assert heads[-4:] == ["## Outcome maps: fast engine against the exact simulator",
+                          "## Start-up", "### Where a cold run's seconds go",
+                          "## Notes, omissions"]  # fmt: skip
     assert "| map | trajectories | workers | fast_seconds | fast_per_s | core_seconds |" in md
     assert "* 8x8, kappa=0.5, q=0, alpha=0.35pi: (1,2): reference IWC" in md
     assert "* other:" not in md
