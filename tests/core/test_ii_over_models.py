@@ -2,10 +2,10 @@
 sample of models through the exact tier (never contradicts a "for every model" verdict), the
 witnesses through the exact tier, and the paper's Appendix C / Table 2 classes."""
 
-import functools
 
 import numpy as np
 import pytest
+from samples import per_class
 
 from atlas.core import exact
 from atlas.core import ii_over_models as iim
@@ -20,16 +20,8 @@ ALWAYS = {15, 25, 32, 33, 34, 35, 43, 44}
 SOME = {14, 24, 31, 36}
 
 
-@functools.cache
 def _per_class(k: int = 1, seed: int = 3):
-    """``k`` random geometries of every class (direction components, class codes)."""
-    rng = np.random.default_rng(seed)
-    b1, b2 = rng.uniform(0, 2 * np.pi, (2, 6000))
-    c1, s1 = direction(b1)
-    c2, s2 = direction(b2)
-    cc = np.asarray(class_code(c1, s1, c2, s2))
-    idx = np.concatenate([np.flatnonzero(cc == c)[:k] for c in ALL_CLASSES])
-    return c1[idx], s1[idx], c2[idx], s2[idx], cc[idx]
+    return per_class(k, seed)
 
 
 def _exact(g, m) -> tuple[int, int]:

@@ -2,31 +2,23 @@
 whole model space (worked by hand, module docstring), a dense sample of models through the exact
 tier, single-model boxes against the exact tier, and the classes of the paper's Table 2."""
 
-import functools
 import math
 
 import numpy as np
 import pytest
+from samples import per_class
 
 from atlas.core import exact
 from atlas.core import model_box as mb
-from atlas.core.contact_modes import ALL_CLASSES, class_code, direction
+from atlas.core.contact_modes import class_code, direction
 from atlas.core.verdicts import OverModels, Verdict
 
 U, S, DEP, UND = (int(v) for v in OverModels)
 CURVED = (13, 14, 23, 31, 41, 46)
 
 
-@functools.cache
 def _per_class(k: int = 2, seed: int = 7):
-    """``k`` random geometries of every class (direction components and the class codes)."""
-    rng = np.random.default_rng(seed)
-    b1, b2 = rng.uniform(0, 2 * np.pi, (2, 6000))
-    c1, s1 = direction(b1)
-    c2, s2 = direction(b2)
-    cc = np.asarray(class_code(c1, s1, c2, s2))
-    idx = np.concatenate([np.flatnonzero(cc == c)[:k] for c in ALL_CLASSES])
-    return c1[idx], s1[idx], c2[idx], s2[idx], cc[idx]
+    return per_class(k, seed)
 
 
 def _good(g, m) -> bool:

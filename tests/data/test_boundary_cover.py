@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from samples import exact_code
 
-from atlas.core import contact_modes, exact
 from atlas.data import boundaries as bd
 from atlas.data import boundary_cover as bc
 from atlas.data.class_lines import LINE_GRADS, line_values
@@ -16,13 +16,7 @@ PI = math.pi
 GRID = np.arange(32) * 2 * PI / 32
 
 
-def _exact_code(field, b1, b2, model):
-    c1, s1 = (float(x) for x in contact_modes.direction(b1))
-    c2, s2 = (float(x) for x in contact_modes.direction(b2))
-    v = exact.point_spectral(c1, s1, c2, s2, *model)
-    if field == "SS":
-        return v["stable_SS"]
-    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+_exact_code = exact_code
 
 
 def _distance(points, curves) -> np.ndarray:

@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from samples import exact_code
 
-from atlas.core import contact_modes, exact
 from atlas.data import boundary_germs as bg
 from atlas.data import boundary_points as bp
 
@@ -16,13 +16,7 @@ PI = math.pi
 SLICES = [(0.5, 0.0, 0.0), (2.0, 0.1, 0.1), (2.0, 0.05, 0.3), (7.3, 0.8, 0.02)]
 
 
-def _code(field, b1, b2, model):
-    c1, s1 = (float(x) for x in contact_modes.direction(b1))
-    c2, s2 = (float(x) for x in contact_modes.direction(b2))
-    v = exact.point_spectral(c1, s1, c2, s2, *model)
-    if field == "SS":
-        return v["stable_SS"]
-    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+_code = exact_code
 
 
 def _point(m, beta, delta):

@@ -1,0 +1,31 @@
+"""Reference samples shared by several test modules (independent of the code under test)."""
+
+import functools
+
+import numpy as np
+
+from atlas.core import contact_modes, exact
+from atlas.core.contact_modes import ALL_CLASSES, class_code, direction
+
+
+@functools.cache
+def per_class(k: int, seed: int):
+    """``k`` random geometries of every class (direction components and the class codes)."""
+    rng = np.random.default_rng(seed)
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, 6000))
+    c1, s1 = direction(b1)
+    c2, s2 = direction(b2)
+    cc = np.asarray(class_code(c1, s1, c2, s2))
+    idx = np.concatenate([np.flatnonzero(cc == c)[:k] for c in ALL_CLASSES])
+    return c1[idx], s1[idx], c2[idx], s2[idx], cc[idx]
+
+
+def exact_code(field, b1, b2, model):
+    """The exact tier's boundary code of ``field`` at ``(b1, b2)`` [rad] for ``model`` =
+    ``(kappa, q1, q2)``: SS its ``stable_SS``; II 0 inconsistent, else ``1 + stable_II``."""
+    c1, s1 = (float(x) for x in contact_modes.direction(b1))
+    c2, s2 = (float(x) for x in contact_modes.direction(b2))
+    v = exact.point_spectral(c1, s1, c2, s2, *model)
+    if field == "SS":
+        return v["stable_SS"]
+    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
