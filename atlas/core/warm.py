@@ -9,9 +9,9 @@ it, every later one deserializes it and skips tracing and lowering; the compiled
 comes from the persistent compilation cache.
 
 Staleness.  A file's name holds a digest of the JAX and jaxlib versions, the backend, float64, and
-the *live* code of the kernel modules (the code objects, defaults, closures and constants of
-every module-level name of :data:`MODULES` and of the kernel's own module, as loaded in this
-process): an edited or monkeypatched kernel function gets new files, never an old program.
+the *live* code of the kernel's module and of every atlas module it imports at module level,
+transitively (:mod:`atlas.core.module_closure`; the code objects, defaults, closures and constants
+of their module-level names, as loaded in this process): an edited or monkeypatched kernel function gets new files, never an old program.
 
 Compiled executables.  Beside each program the first process also keeps its compiled executable
 (``.xlaexec``, :mod:`jax.experimental.serialize_executable`), so that a later process skips the
@@ -55,7 +55,7 @@ import jax
 import jaxlib
 import numpy as np
 
-from atlas.core import config
+from atlas.core import config, module_closure
 
 __all__ = [
     "Kernel",
@@ -64,26 +64,10 @@ __all__ = [
     "kernel_cache",
     "keep_kernels",
     "save_used",
-    "MODULES",
     "KERNEL_ENV",
     "EXECUTABLE_ENV",
 ]
 
-#: modules whose live code every kernel's digest covers (the kernels and what they call)
-MODULES = (
-    "atlas.core.signs",
-    "atlas.core.verdicts",
-    "atlas.core.contact_modes",
-    "atlas.core.invariants",
-    "atlas.core.expressions",
-    "atlas.core.hurwitz",
-    "atlas.core.enclosures",
-    "atlas.core.undamped",
-    "atlas.core.baseline",
-    "atlas.core.spectral",
-    "atlas.core.rootfree",
-    "atlas.core.points",
-)
 #: environment variable: ``0`` keeps :func:`kernel_cache` off
 KERNEL_ENV = "ATLAS_KERNEL_CACHE"
 #: environment variable: ``0`` keeps no compiled executables (the exported programs only)
@@ -411,8 +395,13 @@ def _concrete(a) -> bool:
 
 
 def _digest(module: str) -> str:
-    """Digest of the software, the backend and the live code of :data:`MODULES` and ``module``
-    (once per :func:`kernel_cache` block and module)."""
+    """Digest of the software, the backend and the live code of ``module`` and of every atlas
+    module it imports at module level, transitively (:func:`atlas.core.module_closure.closure`,
+    read from the sources: the same set whatever the entry point imported before); once per
+    :func:`kernel_cache` block and module.  A module-valued name is skipped (a package holds its
+    submodules as they happen to be imported; a module's own code is digested in its turn).
+    This module and :mod:`~atlas.core.module_closure` are left out: they choose a program's file,
+    not what a traced program computes."""
     got = _STATE["digests"].get(module)
     if got is None:
         h = hashlib.sha256()
@@ -421,14 +410,15 @@ def _digest(module: str) -> str:
             f"{jax.__version__} {jaxlib.__version__} {dev.platform} {dev.device_kind}".encode()
         )
         h.update(str(bool(jax.config.jax_enable_x64)).encode())
-        for name in sorted({*MODULES, module}):
-            # imported here: the digest must not depend on what the entry point (the CLI, the
-            # explorer, a script) happened to import before its first kernel call
+        for name in module_closure.closure(module):
+            if name in (__name__, module_closure.__name__):
+                continue
             mod = sys.modules.get(name) or _import(name)
             h.update(name.encode())
             for attr, value in sorted(vars(mod).items()) if mod else ():
-                h.update(attr.encode())
-                h.update(_value_digest(value, 3))
+                if not isinstance(value, types.ModuleType):
+                    h.update(attr.encode())
+                    h.update(_value_digest(value, 3))
         got = _STATE["digests"][module] = h.hexdigest()
     return got
 
