@@ -40,12 +40,30 @@ __all__ = [
     "cc_possible",
     "invariants",
     "ALL_CLASSES",
+    "CLASS_COLORS",
 ]
 
 TWO_PI = 2.0 * np.pi
 
 #: the 24 class codes ij in Table 2 order
 ALL_CLASSES = tuple(10 * i + j for i in range(1, 5) for j in range(1, 7))
+#: the colour of each class ij (Table 2 order; the ``class_code`` output declares them): colours of
+#: matplotlib's tab20 / tab20b / tab20c, assigned so that classes sharing an edge on the beta1-beta2
+#: plane differ by CIE76 Delta E >= 23 and any two classes by >= 10, in normal vision and for
+#: deutan, protan and tritan vision (Machado et al. 2009, severity 1), chosen by a local search
+#: over the 60 colours
+CLASS_COLORS = dict(
+    zip(
+        ALL_CLASSES,
+        (
+            "#c7e9c0", "#a55194", "#dbdb8d", "#74c476", "#843c39", "#e7ba52",
+            "#d62728", "#7b4173", "#e6550d", "#393b79", "#8c6d31", "#6baed6",
+            "#636363", "#e7969c", "#6b6ecf", "#bdbdbd", "#756bb1", "#bcbd22",
+            "#9edae5", "#bd9e39", "#a1d99b", "#5254a3", "#e377c2", "#31a354",
+        ),
+        strict=True,
+    )
+)  # fmt: skip
 
 
 def direction(angle, dtype=np.float64):

@@ -53,12 +53,14 @@ _HEX = re.compile(r"#[0-9a-fA-F]{6}")
 class Code:
     """One stored value: ``meaning`` is its CF flag meaning (one word), ``label`` its words in
     legends and the inspector (default: the meaning with spaces), ``color`` ``#rrggbb`` (``None``:
-    the explorer's palette picks one)."""
+    the explorer's palette picks one), ``damped_label`` its words on a map of a damped model
+    (``q1`` or ``q2`` > 0) where they differ."""
 
     value: int
     meaning: str
     label: str | None = None
     color: str | None = None
+    damped_label: str | None = None
 
 
 class _Coded(enum.IntEnum):
@@ -153,7 +155,7 @@ VERDICT = Codes(
     (
         Code(0, "unstable", color="#f7f7f7"),
         Code(1, "stable", color="#525252"),
-        Code(2, "neutral", "neutral (q = 0)", "#969696"),
+        Code(2, "neutral", "neutral (q = 0)", "#969696", damped_label="neutral (Re = 0)"),
         Code(UNDECIDED_FLAG, "undecided", color=UNDECIDED_COLOR),
     ),
     undecided=UNDECIDED_FLAG,
@@ -178,6 +180,7 @@ CONSISTENCY = Codes(
     doc="Consistency verdict (for ``consistent_II`` and the certified consistency flags).",
 )
 Consistency = CONSISTENCY.enum
+
 
 def over_models_codes(name: str, no: str, yes: str, doc: str = "") -> Codes:
     """The codes of a verdict over a box of contact models (:mod:`atlas.core.model_box`):

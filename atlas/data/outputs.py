@@ -27,6 +27,7 @@ in one line, not when it is first computed.
 
 from __future__ import annotations
 
+import colorsys
 import dataclasses
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
@@ -93,7 +94,9 @@ class Output:
     reduction of kernel results over the model samples.  ``computed_by``: the function computing a display layer.
     ``in_atlas``: :func:`atlas.generate` can compute it (``outputs=``).  ``default``: it is in the
     default set (generate without ``outputs``, the Fig. 1 map, the mechanism files, the
-    inspector); a new output joins it only by saying so.
+    inspector); a new output joins it only by saying so.  ``raw``: the codes of its kernel's raw
+    values where they say more than the stored ones (a boolean stored from a verdict: neutral,
+    undecided), the inspector's words for them.
     """
 
     name: str
@@ -107,6 +110,7 @@ class Output:
     codes: Codes | None = None
     in_atlas: bool = True
     default: bool = False
+    raw: Codes | None = None
 
     @property
     def enum(self) -> type | None:
@@ -142,21 +146,39 @@ def _attrs(long_name: str, comment: str | None = None) -> dict:
     return {"long_name": long_name, **({"comment": comment} if comment else {})}
 
 
-def _numbered(name: str, values: list[int], prefix: str) -> Codes:
+def _numbered(name: str, colors: Mapping[int, str], prefix: str) -> Codes:
     """Integer codes: ``-1`` undecided, ``0`` degenerate, then ``prefix_v`` for each value ``v``
-    (labelled ``prefix v``)."""
+    of ``colors`` (labelled ``prefix v``, in its colour)."""
     return Codes(
         name,
         (
             Code(UNDECIDED_CODE, "undecided", color=UNDECIDED_COLOR),
             Code(0, "degenerate", color="#ffffff"),
-            *(Code(v, f"{prefix}_{v}", f"{prefix} {v}") for v in values),
+            *(Code(v, f"{prefix}_{v}", f"{prefix} {v}", c) for v, c in colors.items()),
         ),
         undecided=UNDECIDED_CODE,
     )
 
 
-_SUBCLASSES = [10 * c + k for c in mech.ALL_CLASSES for k in range(1, 7)]
+#: shade of subclass ``ijk`` by ``k`` (negative: mixed towards black, positive: towards white)
+_SHADES = (-0.5, -0.32, -0.14, 0.14, 0.32, 0.5)
+
+
+def _subclass_colors() -> dict[int, str]:
+    """subclass ``ijk`` -> colour: the class ``ij`` (the ``i``-th of Table 2) takes the ``7 i``-th
+    of 24 hues (105 degrees apart; saturation 0.75, value 0.85), shaded by ``k`` (k = 1..3 darker,
+    4..6 lighter), so the subclasses of one class read as one family (144 shades pairwise
+    distinct, which shades of the class colours are not)."""
+    out = {}
+    n = len(mech.ALL_CLASSES)
+    for i, c in enumerate(mech.ALL_CLASSES):
+        hue = np.array(colorsys.hsv_to_rgb((7 * i % n) / n, 0.75, 0.85))
+        for k, t in enumerate(_SHADES, 1):
+            rgb = hue * (1 - abs(t)) + (t > 0) * abs(t)  # towards white (t > 0) or black
+            out[10 * c + k] = "#" + "".join(format(round(float(v) * 255), "02x") for v in rgb)
+    return out
+
+
 _B1B2 = ("beta1", "beta2")
 _B1B2A = ("beta1", "beta2", "alpha")
 _SPECTRAL = ("beta1", "beta2", "model")
@@ -171,6 +193,7 @@ def _table1(mode: str) -> Output:
         kernel="b1b2a",
         codes=_bool("inconsistent", "consistent"),
         default=True,
+        raw=CONSISTENCY,
     )
 
 
@@ -186,6 +209,7 @@ def _sliding(name: str, param: str, kernel: str, b: str) -> Output:
         kernel=kernel,
         codes=_bool("not_stable", "stable"),
         default=True,
+        raw=VERDICT,
     )
 
 
@@ -244,7 +268,7 @@ def _geometry_outputs() -> list[Output]:
             "int8",
             _attrs("class code ij (rank of beta1, beta2; paper Sec. 3)"),
             kernel="b1b2",
-            codes=_numbered("ClassCode", list(mech.ALL_CLASSES), "class"),
+            codes=_numbered("ClassCode", mech.CLASS_COLORS, "class"),
             default=True,
         ),
         Output(
@@ -253,7 +277,7 @@ def _geometry_outputs() -> list[Output]:
             "int16",
             _attrs("subclass code ijk (rank of alpha; paper Sec. 3)"),
             kernel="b1b2a",
-            codes=_numbered("SubclassCode", _SUBCLASSES, "subclass"),
+            codes=_numbered("SubclassCode", _subclass_colors(), "subclass"),
             default=True,
         ),
         *(_table1(m) for m in ("FF", "SF", "FS", "SS")),
@@ -483,6 +507,8 @@ def _check(o: Output) -> None:
         raise ValueError(
             f"kernel: {where} must declare exactly one of kernel, needs + state, computed_by"
         )
+    if o.raw is not None and o.kernel is None:
+        raise ValueError(f"raw: {where} declares raw codes but has no kernel")
     if o.kernel is not None:
         _check_kernel(o, where)
     elif how[1]:
@@ -542,6 +568,11 @@ def _check_kernel(o: Output, where: str) -> None:
             f"storage: {where} is stored as a boolean iff its kernel declares its true_code"
         )
     u = k.undecided.get(o.name)
+    if o.raw is not None and (
+        not isinstance(o.raw, Codes) or u not in (None, o.raw.undecided)
+        or k.true_code.get(o.name, o.raw.values[0]) not in o.raw.values
+    ):  # fmt: skip
+        raise ValueError(f"raw: {where} declares raw codes that disagree with kernel {o.kernel!r}")
     if o.storage not in ("bool", "float") and u != o.codes.undecided:
         raise ValueError(
             f"undecided: {where} declares undecided {o.codes.undecided}, "

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from atlas.core.verdicts import Consistency, Verdict
+from atlas.core.verdicts import CONSISTENCY
 from atlas.data.outputs import OUTPUTS
 
-__all__ = ["layer_rgba", "legend_entries", "value_label"]
+__all__ = ["layer_rgba", "legend_entries", "value_label", "raw_label"]
 
 
 def _hex_rgba(h: str) -> tuple:
@@ -20,55 +20,23 @@ def _hex_rgba(h: str) -> tuple:
     return tuple(int(h[i : i + 2], 16) / 255 for i in (0, 2, 4)) + (1.0,)
 
 
-_BOOL_COLORS = ("#f7f7f7", Consistency.CONSISTENT.color)
-
-
-#: the 24 classes ``ij``: colours of matplotlib's tab20 / tab20b / tab20c, assigned so that classes
-#: sharing an edge on the beta1-beta2 plane differ by CIE76 Delta E >= 23 and any two classes by
-#: >= 10, in normal vision and for deutan, protan and tritan vision (Machado et al. 2009,
-#: severity 1), chosen by a local search over the 60 colours
-CLASS_COLORS = {
-    11: "#c7e9c0", 12: "#a55194", 13: "#dbdb8d", 14: "#74c476", 15: "#843c39", 16: "#e7ba52",
-    21: "#d62728", 22: "#7b4173", 23: "#e6550d", 24: "#393b79", 25: "#8c6d31", 26: "#6baed6",
-    31: "#636363", 32: "#e7969c", 33: "#6b6ecf", 34: "#bdbdbd", 35: "#756bb1", 36: "#bcbd22",
-    41: "#9edae5", 42: "#bd9e39", 43: "#a1d99b", 44: "#5254a3", 45: "#e377c2", 46: "#31a354",
-}  # fmt: skip
+#: the colours of ``False`` and ``True`` of a boolean layer declared without colours
+_BOOL_COLORS = (CONSISTENCY.code(0).color, CONSISTENCY.code(1).color)
 
 
 def _code_palette(name: str) -> dict:
-    """code -> colour of the codes of an integer layer declared without a colour, none repeated.
-
-    The classes ``ij`` take :data:`CLASS_COLORS`; a code ``ijk`` whose ``ij`` is a class (the
-    subclasses) is the ``ij``-th of 24 hues 105 degrees apart (saturation 0.75, value 0.85) shaded
-    by ``k`` (k = 1..3 darker, 4..6 lighter), so the subclasses of one class read as one family;
-    other codes take hues 7/n of a turn apart.
-    """
+    """code -> colour of the codes of an integer layer declared without a colour, none repeated:
+    hues 7/n of a turn apart (saturation 0.75, value 0.85), n the number of such codes."""
     import colorsys
 
     import matplotlib
 
-    hue = lambda i, n: np.array(colorsys.hsv_to_rgb((7 * i % n) / n, 0.75, 0.85))  # noqa: E731
-    # the subclasses' families: 24 hues 105 degrees apart (144 shades pairwise distinct, which
-    # shades of the tab20 colours are not)
-    cls = {c: hue(i, 24) for i, c in enumerate(CLASS_COLORS)}
     codes = [c.value for c in OUTPUTS[name].codes.codes if c.color is None]
-    if name == "class_code":
-        cols = dict(CLASS_COLORS)
-    elif codes and all(c // 10 in cls and 1 <= c % 10 <= len(_SHADES) for c in codes):
-        cols = {}
-        for c in codes:
-            t = _SHADES[c % 10 - 1]
-            rgb = cls[c // 10] * (1 - abs(t)) + (t > 0) * abs(t)  # towards white (t > 0) or black
-            cols[c] = matplotlib.colors.to_hex(rgb)
-    else:
-        cols = {
-            c: matplotlib.colors.to_hex(hue(i, max(len(codes), 2))) for i, c in enumerate(codes)
-        }
-    return cols
-
-
-#: shade of subclass ``ijk`` by ``k`` (negative: mixed towards black, positive: towards white)
-_SHADES = (-0.5, -0.32, -0.14, 0.14, 0.32, 0.5)
+    n = max(len(codes), 2)
+    return {
+        c: matplotlib.colors.to_hex(colorsys.hsv_to_rgb((7 * i % n) / n, 0.75, 0.85))
+        for i, c in enumerate(codes)
+    }
 
 
 def _kind(name: str) -> str:
@@ -78,9 +46,9 @@ def _kind(name: str) -> str:
 
 def _category_colors(name: str) -> dict:
     """code -> colour for the categorical layers (integer codes: their declared colours)."""
-    if _kind(name) == "bool":
-        return {0: _BOOL_COLORS[0], 1: _BOOL_COLORS[1]}
     codes = OUTPUTS[name].codes.codes
+    if _kind(name) == "bool":
+        return {c.value: c.color or _BOOL_COLORS[c.value] for c in codes}
     palette = _code_palette(name) if any(c.color is None for c in codes) else {}
     return {c.value: c.color or palette[c.value] for c in codes}
 
@@ -94,21 +62,31 @@ def _undamped(ds: xr.Dataset | None) -> bool:
 
 def value_label(name: str, value, ds: xr.Dataset | None = None) -> str:
     """A layer's value in words: the declared label of a code (``stable``, ``class 23``),
-    true / false, or the number of a continuous layer.  On a damped map ``ds`` (q1 or q2 > 0) a neutral
-    verdict reads ``neutral (Re = 0)``: an eigenvalue on the imaginary axis, not the q = 0 case."""
+    true / false, or the number of a continuous layer.  On a damped map ``ds`` (q1 or q2 > 0) a
+    code's declared ``damped_label`` (a neutral verdict: ``neutral (Re = 0)``, an eigenvalue on the
+    imaginary axis, not the q = 0 case)."""
     kind = _kind(name)
     if kind == "float":
         return f"{float(value):+.4g}"
-    v = int(value)
     if kind == "enum":
-        enum = OUTPUTS[name].enum
-        if enum is Verdict and v == Verdict.NEUTRAL and not _undamped(ds):
-            return "neutral (Re = 0)"
-        try:
-            return enum(v).label
-        except ValueError:
-            return f"code {v}"
-    return "true" if v else "false"
+        return _code_label(OUTPUTS[name].codes, value, ds)
+    return "true" if int(value) else "false"
+
+
+def raw_label(name: str, raw, ds: xr.Dataset | None = None) -> str:
+    """A kernel's raw value of output ``name`` in words: by the output's declared raw codes where
+    it has them (a boolean stored from a verdict: ``neutral``, ``undecided``), else as stored
+    (:func:`value_label`)."""
+    raw_codes = OUTPUTS[name].raw
+    return value_label(name, raw, ds) if raw_codes is None else _code_label(raw_codes, raw, ds)
+
+
+def _code_label(codes, value, ds) -> str:
+    try:
+        code = codes.code(int(value))
+    except ValueError:
+        return f"code {int(value)}"
+    return code.damped_label if code.damped_label and not _undamped(ds) else code.label
 
 
 def _image_values(ds: xr.Dataset, name: str) -> np.ndarray:
@@ -146,7 +124,7 @@ def _category_rgba(v: np.ndarray, name: str) -> np.ndarray:
 
 def layer_rgba(ds: xr.Dataset, name: str) -> np.ndarray:
     """RGBA image ``(beta2, beta1, 4)`` of a layer (``imshow(origin='lower')``): categorical layers
-    in the colours of :mod:`atlas.core.verdicts`, continuous ones on a diverging map centred at 0."""
+    in their declared colours, continuous ones on a diverging map centred at 0."""
     v = _image_values(ds, name)
     return _diverging_rgba(v) if v.dtype.kind == "f" else _category_rgba(v, name)
 

@@ -16,9 +16,8 @@ import numpy as np
 from atlas.core import baseline, exact, expressions, hurwitz, points, spectral, warm
 from atlas.core import contact_modes as mech
 from atlas.core.rigid_body import verdicts_at
-from atlas.core.verdicts import Consistency, Verdict
 from atlas.data.outputs import OUTPUTS, verdict_outputs
-from atlas.explore.colors import value_label
+from atlas.explore.colors import raw_label, value_label
 from atlas.explore.maps import box_layers, box_values, checked_model, witness_outputs
 
 __all__ = ["inspect_point", "format_inspection", "format_roots", "over_models_at"]
@@ -46,13 +45,6 @@ _SOURCES = (
     ("spectral", "certified + exact"),
     ("spectral_exact", "exact reference"),
 )
-
-
-def _label(enum, code) -> str:
-    try:
-        return enum(int(code)).label
-    except ValueError:
-        return f"code {int(code)}"
 
 
 def _direction(angle, dt) -> tuple[np.ndarray, np.ndarray]:
@@ -149,20 +141,17 @@ def _spectrum(dirs: tuple, model: tuple, arr: dict, dt) -> dict:
 
 
 def _labels(out: dict) -> dict:
-    """The verdicts of an inspection in words."""
-    lab = {
-        "stable_SF": _label(Verdict, out["stable_SF"]),
-        "stable_FS": _label(Verdict, out["stable_FS"]),
-    }
+    """The verdicts of an inspection in words (the registry's declared words for each output's
+    raw codes, :func:`atlas.explore.colors.raw_label`)."""
+    lab = {k: raw_label(k, out[k]) for k in ("class_code", "stable_SF", "stable_FS")}
+    if out["subclass_code"] is not None:
+        lab["subclass_code"] = raw_label("subclass_code", out["subclass_code"])
     for src, _ in _SOURCES:
-        d = out[src]
-        lab[src] = {
-            "stable_SS": _label(Verdict, d["stable_SS"]),
-            "consistent_II": _label(Consistency, d["consistent_II"]),
-            "stable_II": _label(Verdict, d["stable_II"]),
-        }
+        lab[src] = {k: raw_label(k, v) for k, v in out[src].items()}
     if out["consistency"] is not None:
-        lab["consistency"] = {k: _label(Consistency, v) for k, v in out["consistency"].items()}
+        lab["consistency"] = {
+            k: raw_label(f"consistent_{k}", v) for k, v in out["consistency"].items()
+        }
     return lab
 
 
@@ -276,26 +265,33 @@ def format_roots(roots, digits: int = 6) -> str:
 def _codes_lines(info: dict) -> list[str]:
     """Point, model, class and subclass codes, Table 1 consistency."""
     pi = math.pi
+    ex, lab = info["exact_codes"], info["labels"]
     lines = [
         f"beta1 = {info['beta1']:.6g} ({info['beta1'] / pi:.4f} pi), "
         f"beta2 = {info['beta2']:.6g} ({info['beta2'] / pi:.4f} pi)"
         + ("" if info["alpha"] is None else f", alpha = {info['alpha'] / pi:.4f} pi"),
         f"kappa = {info['kappa']:.6g}, q1 = {info['q1']:.6g}, q2 = {info['q2']:.6g}",
-        f"class {info['class_code']} (exact {info['exact_codes']['class_code']})"
+        f"{_named('class_code', lab)} (exact {ex['class_code']})"
         + (
             ""
             if info["subclass_code"] is None
-            else f", subclass {info['subclass_code']} (exact {info['exact_codes']['subclass_code']})"
+            else f", {_named('subclass_code', lab)} (exact {ex['subclass_code']})"
         ),
     ]
     if info["consistency"] is not None:
-        ex, lab = info["exact_codes"], info["labels"]
         cons = ", ".join(
             f"{m}: {lab['consistency'][m]} (exact {bool(ex['consistent_' + m])})"
             for m in ("FF", "SF", "FS", "SS")
         )
         lines.append(f"Table 1 consistency -- {cons}")
     return lines
+
+
+def _named(name: str, labels: dict) -> str:
+    """The label of output ``name``, led by the name where the label does not say it (``class
+    23``, but ``class_code: degenerate``)."""
+    label = labels[name]
+    return label if label.split()[0] == name.split("_")[0] else f"{name}: {label}"
 
 
 def _stability_lines(info: dict) -> list[str]:
@@ -348,9 +344,9 @@ def _over_models_lines(info: dict) -> list[str]:
             e = w["exact"]
             lines.append(
                 f"  {side} witness: kappa = {k:.6g}, q1 = {q1:.6g}, q2 = {q2:.6g} (exact "
-                f"reference there: SS {_label(Verdict, e['stable_SS'])}, II "
-                f"{_label(Consistency, e['consistent_II'])}, II stability "
-                f"{_label(Verdict, e['stable_II'])})"
+                f"reference there: SS {raw_label('stable_SS', e['stable_SS'])}, II "
+                f"{raw_label('consistent_II', e['consistent_II'])}, II stability "
+                f"{raw_label('stable_II', e['stable_II'])})"
             )
     return lines
 

@@ -6,6 +6,7 @@ The dummy output ``aligned_b1b2`` is ``True`` iff ``b1 . b2 > 0``; its reference
 ``cos(beta1 - beta2) > 0`` evaluated in numpy on cells away from the ties (not the kernel).
 """
 
+import dataclasses
 from fractions import Fraction
 
 import jax.numpy as jnp
@@ -16,7 +17,7 @@ import xarray as xr
 from atlas import cli
 from atlas.core import bodies, kernels, rigid_body
 from atlas.core.contact_modes import direction
-from atlas.core.verdicts import Codes
+from atlas.core.verdicts import Code, Codes
 from atlas.data import outputs
 from atlas.data.engine import generate
 from atlas.data.scene import Scene
@@ -129,6 +130,8 @@ def _bad(**changes):
         ),
         (dict(default=True, in_atlas=False, kernel="aligned"), "default: .* atlas output"),
         (dict(name="two words"), "name: "),
+        (dict(raw=Codes("R", ((0, "no"), (2, "yes")))), "raw: .* disagree with kernel"),
+        (dict(raw=Codes("R", ((0, "no"), (1, "yes"))), kernel=None, computed_by="x.y"), "raw: "),
     ],
 )
 def test_an_incomplete_output_fails_at_declaration(changes, match):
@@ -339,3 +342,50 @@ def test_a_new_output_joins_the_defaults_only_by_saying_so():
         assert SIGN in outputs.atlas_outputs() and SIGN in maps.layers()
     finally:
         outputs.unregister(SIGN)
+
+
+# --- the class codes declared anew: the explorer's key and the inspector follow ------------------
+
+
+def test_a_class_declaration_reaches_the_explorer_key_and_the_inspector(monkeypatch):
+    """``class_code`` declared again with other words, a new colour for class 13 and a made-up
+    class 51 without a colour, and ``stable_SF``'s raw codes with another word for neutral: the
+    explorer's key and the inspector say what is declared (nothing in ``atlas/explore`` edited).
+    At ``beta1 = pi/2`` the direction is the exact axis vector: ``c1 = 0``, ``b11 = 0``, SF
+    neutral."""
+    cls = outputs.OUTPUTS["class_code"]
+    codes = [
+        dataclasses.replace(c, label=c.label.replace("class", "Klasse"))
+        if c.value != 13
+        else dataclasses.replace(c, label="Klasse 13", color="#010203")
+        for c in cls.codes.codes
+    ]
+    made_up = Codes("ClassCode", (*codes, Code(51, "class_51", "Klasse 51")), undecided=-1)
+    monkeypatch.setitem(outputs.OUTPUTS, "class_code", dataclasses.replace(cls, codes=made_up))
+    sf = outputs.OUTPUTS["stable_SF"]
+    raw = Codes(
+        "SF", tuple(dataclasses.replace(c, label="marginal") if c.value == 2 else c
+                    for c in sf.raw.codes), undecided=sf.raw.undecided,
+    )  # fmt: skip
+    monkeypatch.setitem(outputs.OUTPUTS, "stable_SF", dataclasses.replace(sf, raw=raw))
+
+    key = colors.legend_entries("class_code")
+    assert [lbl for _, lbl in key][:3] == ["undecided", "degenerate", "Klasse 11"]
+    assert key[-1][1] == "Klasse 51" and ("#010203", "Klasse 13") in key
+    assert len({c for c, _ in key}) == len(key)  # the made-up class has a colour of its own
+
+    # class 13: c1 > 0, s2 > 0, s1 c2 < 0 (beta1 = 0.3, beta2 = 2: cos 2 < 0 < sin 0.3)
+    text = inspector.format_inspection(inspector.inspect_point(0.3, 2.0))
+    assert text.splitlines()[2].startswith("class_code: Klasse 13 (exact 13)")
+    text = inspector.format_inspection(inspector.inspect_point(np.pi / 2, 2.0))
+    assert "SF: marginal (b11 = +0)" in text
+
+
+def test_the_class_colours_are_declared_once():
+    """The explorer draws each class in the colour the classification module declares."""
+    from atlas.core import contact_modes
+
+    key = dict((lbl, c) for c, lbl in colors.legend_entries("class_code"))
+    assert len(contact_modes.CLASS_COLORS) == 24
+    for code, color in contact_modes.CLASS_COLORS.items():
+        assert key[f"class {code}"] == color
