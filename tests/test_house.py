@@ -1,5 +1,6 @@
-"""House rules a tool checks: no private names used across modules (ruff and lint-imports are CI
-steps of ``.ci/run``, not tests)."""
+"""House rules a tool checks: no private names used across modules, no issue numbers outside the
+changelog, no swallowed options, no function over 80 lines or module over 900 (ruff and
+lint-imports are CI steps of ``.ci/run``, not tests)."""
 
 import ast
 import re
@@ -98,5 +99,41 @@ def test_no_parameter_swallows_unknown_options():
         f"{path.relative_to(ROOT)}:{line}"
         for path, tree in _modules()
         for line in _swallowing(tree)
+    ]
+    assert not offences, "\n".join(offences)
+
+
+#: the largest function and module of the package, in lines (decorators and docstrings counted)
+MAX_FUNCTION_LINES = 80
+MAX_MODULE_LINES = 900
+
+
+def _long_functions(tree, limit: int) -> list[str]:
+    return [
+        f"{node.lineno}: {node.name} ({n} lines)"
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+        for n in [
+            node.end_lineno - min([node.lineno, *(d.lineno for d in node.decorator_list)]) + 1
+        ]
+        if n > limit
+    ]
+
+
+def test_no_function_or_module_is_too_long():
+    body = lambda n: "".join(f"    x{i} = {i}\n" for i in range(n))  # noqa: E731
+    # the check can fail: a decorated function of 81 lines, not one of 80
+    assert _long_functions(ast.parse(f"@d\ndef f():\n{body(79)}"), 80)
+    assert not _long_functions(ast.parse(f"def f():\n{body(79)}"), 80)
+    offences = [
+        f"{path.relative_to(ROOT)}:{line}"
+        for path, tree in _modules()
+        for line in _long_functions(tree, MAX_FUNCTION_LINES)
+    ]
+    offences += [
+        f"{path.relative_to(ROOT)} ({n} lines)"
+        for path in sorted(PACKAGE.rglob("*.py"))
+        for n in [len(path.read_text().splitlines())]
+        if n > MAX_MODULE_LINES
     ]
     assert not offences, "\n".join(offences)
