@@ -16,13 +16,15 @@ import numpy as np
 from atlas.core import baseline, exact, expressions, hurwitz, points, spectral, warm
 from atlas.core import contact_modes as mech
 from atlas.core.rigid_body import verdicts_at
-from atlas.data.outputs import OUTPUTS, verdict_outputs
+from atlas.data.outputs import OUTPUTS, kernel_of, verdict_outputs
 from atlas.explore.colors import raw_label, value_label
 from atlas.explore.maps import box_layers, box_values, checked_model, witness_outputs
 
 __all__ = ["inspect_point", "format_inspection", "format_roots", "over_models_at"]
 
-_FLAGS = ("stable_SS", "consistent_II", "stable_II")
+#: the spectral verdicts (those the certified path may leave undecided: stable_SS, consistent_II,
+#: stable_II), from the registry
+_FLAGS = tuple(kernel_of("stable_SS").undecided)
 #: the outputs the inspector shows in its own lines; every other verdict of the registry is listed
 #: under ``others``
 _SHOWN = (

@@ -184,3 +184,26 @@ def test_display_margins_are_not_atlas_outputs(figure_map, explorer_map):
     assert (
         explorer_map["margin_SS"].attrs["long_name"] == figure_map["margin_SS"].attrs["long_name"]
     )
+
+
+def test_lists_that_name_outputs_agree_with_the_registry():
+    """The lists kept outside the registry that name its outputs: the spectral verdicts (the
+    results the spectral kernel may leave undecided, in its order) wherever they are spelled out,
+    and the layers and lines the explorer and inspector choose, all registered."""
+    from atlas.bench import config as bench_config
+    from atlas.core import brackets, exact, points, selftest
+    from atlas.explore import inspector, maps
+
+    flags = tuple(outputs.kernel_of("stable_SS").undecided)
+    assert flags == ("stable_SS", "consistent_II", "stable_II")  # SPEC §2's three verdicts of M
+    copies = {
+        "points.SPECTRAL_NAMES[:3]": points.SPECTRAL_NAMES[:3],
+        "selftest.NAMES": selftest.NAMES,
+        "exact._SPECTRAL": exact._SPECTRAL,
+        "bench.config.FLAGS": bench_config.FLAGS,
+        "brackets.FIELDS": sum(brackets.FIELDS.values(), ()),
+        "inspector._FLAGS": inspector._FLAGS,
+    }
+    assert {k: v for k, v in copies.items() if tuple(v) != flags} == {}
+    chosen = {*maps.DEFAULT_LAYERS, *inspector._SHOWN}
+    assert chosen <= set(outputs.OUTPUTS), chosen - set(outputs.OUTPUTS)
