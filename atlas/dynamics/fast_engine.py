@@ -21,8 +21,11 @@ sign ``s`` of ``f``::
 
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it and both gaps provably stay within ``10 scale``, so that the late-amplitude test made
-at the step ends cannot pass inside a longer step); the first
+2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
+stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
+costs many times the median lane); inside a step longer than ``H_S`` the gaps are sampled at
+most ``H_S`` apart (:func:`_sample_step`) for the late-amplitude test and the stop rule, unless
+both provably stay within ``10 scale``; the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
@@ -146,6 +149,7 @@ class State:
     horizon: np.ndarray
     rounding: np.ndarray
     imp: list
+    steps: np.ndarray
 
     @classmethod
     def start(cls, lanes: Lanes, g0, t_end, nbins):
@@ -161,7 +165,7 @@ class State:
             last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, RUNNING),
             code=np.full(n, -1, dtype=np.int8), decided_by=np.zeros(n, dtype=np.int8),
             scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)),
-            rounding=np.zeros(n, dtype=bool), imp=[],
+            rounding=np.zeros(n, dtype=bool), imp=[], steps=np.zeros(n, dtype=np.int64),
         )  # fmt: skip
 
     def impact_stats(self, n, fr, fc, v_fly):
@@ -300,6 +304,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0 = cols
         if ix.size == 0:
             return
+        st.steps[ix] += 1
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
@@ -316,7 +321,8 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
-        lo, hi, mon, M, Hw = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act)
+        lo, hi, mon, M, Hw, small = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
+                                              act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
@@ -335,6 +341,12 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
         step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
         t0 = t.copy()
+        # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
+        r = np.flatnonzero(keep & ~small & (step > H))
+        if r.size:
+            rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
+                                               mask, act, scale, tseg, width)  # fmt: skip
+            step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -433,20 +445,39 @@ def _stop_of(r, ix, mask, P, U, lam, scale, t0, t, tseg, H):
 def _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
     function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
-    the curvature bound ``M`` (both returned, for the stop rule's limits)."""
+    the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
+    (:func:`_window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
+    can cross within the shorter one (an event-free stretch: free flight, a settled contact)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
     aUE = np.abs(UE)
-    Hw = _window(H, lam, valid, p, aUE, scale)
-    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     A, Bd = np.maximum(s * f, 0.0), s * fp
+    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
+    Hw, small = _window(H, lam, valid, p, aUE, scale, WINDOWS)
+    lo, hi, M = _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
+    r = np.flatnonzero(_min_cols(lo) >= Hw)
+    if r.size:
+        w, sm = _window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+        r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
+        lo_r, hi_r, M_r = _bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
+                                   mon[r])  # fmt: skip
+        # both brackets hold (each within its window): the larger lower end, the smaller upper
+        longer = _min_cols(lo_r) > Hw[r]
+        r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
+        lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
+        M[r], Hw[r], small[r] = M_r, w, sm
+    return lo, hi, mon, M, Hw, small
+
+
+def _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
+    """``(lo, hi, M)`` of :func:`_brackets` within the window ``Hw`` (n,)."""
+    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     lo, hi = eb.safe_steps(A, Bd, M)
     flat = (A == 0) & (Bd == 0)
     if flat.any():  # a double zero (exactly zero state): the second derivative decides
         lo = np.where(flat, eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
-    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
     lo = np.where(mon, np.minimum(lo, Hw[:, None]), np.inf)
     hi = np.where(mon & (hi <= Hw[:, None]), hi, np.inf)
-    return lo, hi, mon, M, Hw
+    return lo, hi, M
 
 
 def _twins(first, mon, q):
@@ -459,31 +490,64 @@ def _twins(first, mon, q):
     return (np.arange(4)[None, :] == partner[:, None]) & (undamped[:, None] & mon)
 
 
-#: longest step in windows ``H_S``, where the growth over it stays within ``GROWTH`` and the gaps
-#: provably within ``SMALL`` times the scale
+#: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
+#: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
+#: longer step unless provably within ``SMALL`` times the scale
 WINDOWS = 4.0
+LONG = 64.0
 GROWTH = 2.0
 SMALL = 10.0
 
 
-def _window(H, lam, valid, p, aUE, scale):
-    """Step window (n,): ``WINDOWS H_S``, shortened so that no modal term grows by more than
-    ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``), but never
-    below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window is ``H_S``, and the
-    curvature bound uses that window's own growth factor); ``H_S``
-    unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
-    + GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
-    (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
+def _window(H, lam, valid, p, aUE, scale, windows):
+    """Step window (n,) and ``small`` (n,): ``windows H_S``, shortened so that no modal term grows
+    by more than ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0)
+    window)``), but never below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window
+    is ``H_S``, and the curvature bound uses that window's own growth factor); ``small`` where both
+    gaps provably stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2 +
+    GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)): elsewhere
+    a step longer than ``H_S`` is sampled (:func:`_sample_step`), so that the tests of the gaps at
+    the step ends (divergence, late amplitude ``> 10 scale``) see the gaps at most ``H_S`` apart."""
     grow = np.where(valid, lam.real, 0.0).max(axis=1)
     with np.errstate(divide="ignore"):
         cap = np.where(grow > 0, math.log(GROWTH) / grow, np.inf)
-    w = np.maximum(H, np.minimum(WINDOWS * H, cap))
+    w = np.maximum(H, np.minimum(windows * H, cap))
     a = np.abs(p)
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
     if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
         reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
-    return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
+    return w, np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale
+
+
+def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, tseg, width):
+    """The gaps inside the steps ``step`` (from ``tau0`` on the segment) of the rows ``r``, at
+    ``ceil(step / H) - 1`` equally spaced points (at most ``H`` apart, as steps of ``H`` would
+    end): their late amplitudes into ``st.amp`` and the stop rule (:func:`_stops_at`) there.
+    Returns the rows whose stop holds at a point, the point (from ``tau0``) and the point before
+    it (0 at the first): their steps end there, the stop is located between the two."""
+    n_in = np.minimum(np.ceil(step[r] / H[r]) - 1, LONG).astype(int)
+    r, n_in = r[n_in > 0], n_in[n_in > 0]
+    if r.size == 0:
+        return r, r * 0.0, r * 0.0
+    rr = np.repeat(np.arange(r.size), n_in)
+    j = np.arange(rr.size) - np.repeat(np.cumsum(n_in) - n_in, n_in) + 1
+    x = step[r][rr] * j / (n_in[rr] + 1)
+    rows = r[rr]
+    d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
+    hit = np.zeros(rr.size, dtype=bool)
+    hit[_stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
+                  scale[rows])] = True  # fmt: skip
+    first = np.full(r.size, np.iinfo(np.int64).max)
+    np.minimum.at(first, rr[hit], j[hit])
+    upto = j <= first[rr]  # the amplitudes up to a stop
+    b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
+    for c in range(2):
+        np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
+    cut = np.flatnonzero(first < np.iinfo(np.int64).max)
+    f, m = first[cut], n_in[cut] + 1
+    s_r = step[r[cut]]
+    return r[cut], s_r * f / m, s_r * (f - 1) / m
 
 
 #: largest ratio of a segment's terms to its gaps (or the run's scale, if larger): beyond it the
@@ -770,7 +834,8 @@ def _late_amplitude(st: State, n, width):
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
     ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
-    at), ``g_final`` (N, 4) the state there, ``n_events`` and ``within_rounding`` (a divergence
+    at), ``g_final`` (N, 4) the state there, ``n_events``, ``steps`` (steps of the engine's
+    batch the lane took part in; 0 for another stepper) and ``within_rounding`` (a divergence
     whose verdict sits within rounding, :func:`stop_rule.within_rounding`, of the engine that
     decided it: :func:`stop_rule.run_within_rounding` for the exact simulator's runs)."""
 
@@ -779,6 +844,7 @@ class FastResult:
     t_final: np.ndarray
     g_final: np.ndarray
     n_events: np.ndarray
+    steps: np.ndarray
     within_rounding: np.ndarray
 
     @classmethod
@@ -858,7 +924,9 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
                 ix = _classify_stopped(st, tables, ix, width, t_max, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
-    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events, st.rounding & ~fallback)
+    return FastResult(
+        st.code, st.decided_by, st.t, st.g, st.n_events, st.steps, st.rounding & ~fallback
+    )
 
 
 def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,
