@@ -290,7 +290,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         if not keep.all():
             gone = ix[~keep]
             pending.append(gone[(st.status[gone] != RUNNING) & ~fallback[gone]])
-            sel = np.flatnonzero(keep)
+            sel = _rows(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
@@ -308,7 +308,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
-        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        act = (mask[:, None] >> _BITS & 1).astype(bool)
         keep = np.ones(ix.size, dtype=bool)
 
         # the stop rule (divergence) at the step end, located inside the step; the horizon
@@ -319,13 +319,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         b = bins(t, width, nbins)
         st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
+        _leave(st, ix, t, g, s, keep, _rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         lo, hi, mon, M, Hw, small = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
                                               act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        r = _rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         if r.size:
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
@@ -342,7 +342,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
         t0 = t.copy()
         # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
-        r = np.flatnonzero(keep & ~small & (step > H))
+        r = _rows(keep & ~small & (step > H))
         if r.size:
             rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
                                                mask, act, scale, tseg, width)  # fmt: skip
@@ -355,7 +355,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
-        ev_r, dva = _stops_before_events(st, tables, stops, np.flatnonzero(ev), ix, t, t0, tseg,
+        ev_r, dva = _stops_before_events(st, tables, stops, _rows(ev), ix, t, t0, tseg,
                                          s, mask, act, P, U, lam, scale, H, keep)  # fmt: skip
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
@@ -398,7 +398,7 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
     twin = _twins(first, mon, q)
     other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-    r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
+    r = _rows(keep & ~ev & (h <= rem) & (other > h))
     if r.size:
         fr = first[r]
         a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
@@ -454,7 +454,7 @@ def _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
     mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
     Hw, small = _window(H, lam, valid, p, aUE, scale, WINDOWS)
     lo, hi, M = _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
-    r = np.flatnonzero(_min_cols(lo) >= Hw)
+    r = _rows(_min_cols(lo) >= Hw)
     if r.size:
         w, sm = _window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
         r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
@@ -485,7 +485,7 @@ def _twins(first, mon, q):
     force ``phi_i = -k_i d_i - q_i d_i'`` of a gap ``d_i`` with ``q_i = 0``, and that gap of the
     force (the same roots)."""
     i = first % 2
-    undamped = np.take_along_axis(q, i[:, None], axis=1)[:, 0] == 0
+    undamped = np.where(i == 0, q[:, 0], q[:, 1]) == 0
     partner = (first + 2) % 4
     return (np.arange(4)[None, :] == partner[:, None]) & (undamped[:, None] & mon)
 
@@ -544,7 +544,7 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
     for c in range(2):
         np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
-    cut = np.flatnonzero(first < np.iinfo(np.int64).max)
+    cut = _rows(first < np.iinfo(np.int64).max)
     f, m = first[cut], n_in[cut] + 1
     s_r = step[r[cut]]
     return r[cut], s_r * f / m, s_r * (f - 1) / m
@@ -564,6 +564,14 @@ def cancels(P, U, g, scale):
     size = np.maximum(np.abs(g[:, :2]).max(axis=1), scale)
     with np.errstate(invalid="ignore"):
         return ~(terms.max(axis=1) <= CANCEL_MAX * size)
+
+
+_BITS = np.arange(2)
+
+
+def _rows(x):
+    """``np.flatnonzero`` of a 1-D array, without its wrappers (called several times a step)."""
+    return x.nonzero()[0]
 
 
 def _all_cols(x):
@@ -595,7 +603,7 @@ def _stops_at(tables, ix, mask, act, g, scale):
     with np.errstate(invalid="ignore"):
         cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
         cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
-    r = np.flatnonzero(cand)
+    r = _rows(cand)
     if r.size:
         lx, mk = ix[r], mask[r]
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
@@ -648,7 +656,7 @@ def _limit_steps(d, v, M, scale, Hw):
     amp, pen = stop_rule.limits(scale)
     near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
     w = Hw[:, None]
-    r = np.flatnonzero((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    r = _rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
     if r.size == 0:
         return lo, hi
     Mg = np.concatenate([M[r, :2], M[r, :2]], axis=1)
@@ -666,7 +674,7 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
     st.code[ix[settle]] = np.array([OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
-    r = np.flatnonzero(iwc)
+    r = _rows(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
         s0 = early.reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
@@ -724,7 +732,7 @@ def _impact_log(st: State):
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
     order = np.lexsort((t, lane))
     lane, t, v, c = lane[order], t[order], v[order], c[order]
-    cuts = np.flatnonzero(np.diff(lane)) + 1
+    cuts = _rows(np.diff(lane)) + 1
     starts = np.concatenate([[0], cuts])
     return {int(lane[a]): (t[a:b], v[a:b], c[a:b])
             for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
@@ -774,7 +782,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
 
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
-    r = np.flatnonzero(iwc)
+    r = _rows(iwc)
     iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
@@ -885,7 +893,7 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         res = run_lanes(*arrays, **opts)
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
-    for i in np.flatnonzero(res.decided_by == 3):
+    for i in _rows(res.decided_by == 3):
         out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
         res.within_rounding[i] = stop_rule.run_within_rounding(run)
