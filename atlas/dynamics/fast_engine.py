@@ -720,6 +720,20 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     st.t[ix[rc]], st.g[ix[rc]], st.s[ix[rc]] = t[rc], g[cap], sn[cap]
     st.status[ix[rc]] = 1
     keep[rc] = False
+    rf = r[ok & ~cap & _leaves_free(mask[r], g, lanes.a[lanes_r], t[r] + H[r], st.horizon[lanes_r])]
+    st.t[ix[rf]], st.g[ix[rf]], st.s[ix[rf]] = t[rf], g[r.searchsorted(rf)], s[rf]
+    st.code[ix[rf]], st.decided_by[ix[rf]] = OUTCOME_OF_MASK[0], 1
+    keep[rf] = False
+
+
+def _leaves_free(mask, g, a, t_next, T):
+    """Lanes (n,) that enter free flight (FF, ``d'' = -a``) at an event with both gaps open or
+    opening (``d_i >= 0``, ``d_i' >= 0``, not both zero) and accelerating away (``-a_i > 0``):
+    no event can follow, and the exact simulator declares them settled at its next sub-step
+    (before ``t_next``, within the horizon ``T``), whatever limit the gaps reach later."""
+    d, v = g[:, :2], g[:, 2:]
+    away = (d >= 0) & (v >= 0) & ((d > 0) | (v > 0)) & (-a > 0)
+    return (mask == 0) & away[:, 0] & away[:, 1] & (t_next < T)
 
 
 # ----------------------------------------------------------------------------- outcomes

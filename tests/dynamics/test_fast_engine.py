@@ -332,3 +332,22 @@ def test_no_lane_takes_more_than_ten_times_the_median_steps():
     assert res.t_final[long_] == 1200.0 and res.n_events[long_] <= 2
     assert res.steps.max() <= 10 * np.median(res.steps)
     assert int(res.code[long_]) == int(_reference(b[6], b[2], alpha, k, q, g0[long_])[0])
+
+
+def test_free_flight_entered_leaving_settles_before_a_later_amplitude_stop():
+    """A lane of the random comparison (seed 45, lane 1652: beta1 = pi/2, beta2 = 3pi/2, det B =
+    0, its perturbed SS equilibrium ~1e16) enters free flight at t = 237.6 with both gaps opening
+    and accelerating away: the exact simulator stops there as settled (settles_FF) at its next
+    sub-step; the fast engine, stepping on, used to reach the amplitude limit first (t = 277.6,
+    undetermined)."""
+    from atlas.dynamics import engine_check as C
+
+    lanes = C.random_lanes(45, 2000)
+    i = 1652
+    k, q = (lanes.kappa[i], 1.0), (lanes.q[i], lanes.q[i])
+    res = F.run_lanes(*(np.array([x[i]]) for x in (lanes.beta1, lanes.beta2, lanes.alpha)),
+                      np.array([k]), np.array([q]), lanes.g0[i : i + 1])  # fmt: skip
+    out, run = S.simulate_outcome(lanes.beta1[i], lanes.beta2[i], lanes.alpha[i], k=k, q=q,
+                                  g0=lanes.g0[i], max_events=2000)  # fmt: skip
+    assert run.status == S.Status.SETTLED and out == S.Outcome.SETTLES_FF
+    assert int(res.code[0]) == int(out)
