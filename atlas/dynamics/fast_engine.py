@@ -53,6 +53,10 @@ x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their si
   collision (paper Sec. 4.3), decided only if the reference's divergence limit
   (``1e3 penetration_limit``) is provably passed within the current horizon.
 
+A lane entering free flight at an event with both gaps open or opening and accelerating away is
+``settles_FF`` there (:func:`_leaves_free`), as the exact simulator stops it at its next sub-step,
+before any limit its gaps reach later.
+
 Both are declared only where the reference's finite-horizon stops reach the same verdict
 (:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
 
