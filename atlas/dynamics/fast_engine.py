@@ -21,8 +21,11 @@ sign ``s`` of ``f``::
 
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it and both gaps provably stay within ``10 scale``, so that the late-amplitude test made
-at the step ends cannot pass inside a longer step); the first
+2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
+stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
+costs many times the median lane); inside a step longer than ``H_S`` the gaps are sampled at
+most ``H_S`` apart (:func:`_sample_step`) for the late-amplitude test and the stop rule, unless
+both provably stay within ``10 scale``; the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
 cross together, as in :func:`atlas.dynamics.simulate`).  Near a simple root the lower bound is a
 safeguarded Newton step from the safe side: the bracket shrinks quadratically.  A certified
@@ -49,6 +52,10 @@ x^2 / 2``, the remaining quadratic tested for positivity).  If all keep their si
   along it (its force to ``+inf``), every free gap open and driven away: an impact without
   collision (paper Sec. 4.3), decided only if the reference's divergence limit
   (``1e3 penetration_limit``) is provably passed within the current horizon.
+
+A lane entering free flight at an event with both gaps open or opening and accelerating away is
+``settles_FF`` there (:func:`_leaves_free`), as the exact simulator stops it at its next sub-step,
+before any limit its gaps reach later.
 
 Both are declared only where the reference's finite-horizon stops reach the same verdict
 (:func:`_settles_first`, :func:`aligned_at_stop`); otherwise the lane keeps stepping.
@@ -146,6 +153,7 @@ class State:
     horizon: np.ndarray
     rounding: np.ndarray
     imp: list
+    steps: np.ndarray
 
     @classmethod
     def start(cls, lanes: Lanes, g0, t_end, nbins):
@@ -161,7 +169,7 @@ class State:
             last_event=np.zeros(n), amp=np.zeros((n, nbins, 2)), status=np.full(n, RUNNING),
             code=np.full(n, -1, dtype=np.int8), decided_by=np.zeros(n, dtype=np.int8),
             scale=np.maximum(scale, 1e-300), horizon=np.full(n, float(t_end)),
-            rounding=np.zeros(n, dtype=bool), imp=[],
+            rounding=np.zeros(n, dtype=bool), imp=[], steps=np.zeros(n, dtype=np.int64),
         )  # fmt: skip
 
     def impact_stats(self, n, fr, fc, v_fly):
@@ -286,7 +294,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         if not keep.all():
             gone = ix[~keep]
             pending.append(gone[(st.status[gone] != RUNNING) & ~fallback[gone]])
-            sel = np.flatnonzero(keep)
+            sel = _rows(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
@@ -300,10 +308,11 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0 = cols
         if ix.size == 0:
             return
+        st.steps[ix] += 1
         tau = t - tseg
         d, v, acc, p, UE = eb.evaluate(P, U, lam, tau)
         g = np.concatenate([d, v], axis=1)
-        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        act = (mask[:, None] >> _BITS & 1).astype(bool)
         keep = np.ones(ix.size, dtype=bool)
 
         # the stop rule (divergence) at the step end, located inside the step; the horizon
@@ -314,12 +323,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         b = bins(t, width, nbins)
         st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        _leave(st, ix, t, g, s, keep, np.flatnonzero(keep & (t >= T)), 0)
+        _leave(st, ix, t, g, s, keep, _rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
-        lo, hi, mon, M, Hw = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act)
+        lo, hi, mon, M, Hw, small = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
+                                              act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = np.flatnonzero(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        r = _rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         if r.size:
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
@@ -335,6 +345,12 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
         step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
         t0 = t.copy()
+        # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
+        r = _rows(keep & ~small & (step > H))
+        if r.size:
+            rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
+                                               mask, act, scale, tseg, width)  # fmt: skip
+            step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -343,7 +359,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
-        ev_r, dva = _stops_before_events(st, tables, stops, np.flatnonzero(ev), ix, t, t0, tseg,
+        ev_r, dva = _stops_before_events(st, tables, stops, _rows(ev), ix, t, t0, tseg,
                                          s, mask, act, P, U, lam, scale, H, keep)  # fmt: skip
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
@@ -386,7 +402,7 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
     twin = _twins(first, mon, q)
     other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-    r = np.flatnonzero(keep & ~ev & (h <= rem) & (other > h))
+    r = _rows(keep & ~ev & (h <= rem) & (other > h))
     if r.size:
         fr = first[r]
         a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
@@ -433,20 +449,39 @@ def _stop_of(r, ix, mask, P, U, lam, scale, t0, t, tseg, H):
 def _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
     function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
-    the curvature bound ``M`` (both returned, for the stop rule's limits)."""
+    the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
+    (:func:`_window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
+    can cross within the shorter one (an event-free stretch: free flight, a settled contact)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
     aUE = np.abs(UE)
-    Hw = _window(H, lam, valid, p, aUE, scale)
-    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     A, Bd = np.maximum(s * f, 0.0), s * fp
+    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
+    Hw, small = _window(H, lam, valid, p, aUE, scale, WINDOWS)
+    lo, hi, M = _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
+    r = _rows(_min_cols(lo) >= Hw)
+    if r.size:
+        w, sm = _window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+        r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
+        lo_r, hi_r, M_r = _bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
+                                   mon[r])  # fmt: skip
+        # both brackets hold (each within its window): the larger lower end, the smaller upper
+        longer = _min_cols(lo_r) > Hw[r]
+        r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
+        lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
+        M[r], Hw[r], small[r] = M_r, w, sm
+    return lo, hi, mon, M, Hw, small
+
+
+def _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
+    """``(lo, hi, M)`` of :func:`_brackets` within the window ``Hw`` (n,)."""
+    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     lo, hi = eb.safe_steps(A, Bd, M)
     flat = (A == 0) & (Bd == 0)
     if flat.any():  # a double zero (exactly zero state): the second derivative decides
         lo = np.where(flat, eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
-    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
     lo = np.where(mon, np.minimum(lo, Hw[:, None]), np.inf)
     hi = np.where(mon & (hi <= Hw[:, None]), hi, np.inf)
-    return lo, hi, mon, M, Hw
+    return lo, hi, M
 
 
 def _twins(first, mon, q):
@@ -454,36 +489,69 @@ def _twins(first, mon, q):
     force ``phi_i = -k_i d_i - q_i d_i'`` of a gap ``d_i`` with ``q_i = 0``, and that gap of the
     force (the same roots)."""
     i = first % 2
-    undamped = np.take_along_axis(q, i[:, None], axis=1)[:, 0] == 0
+    undamped = np.where(i == 0, q[:, 0], q[:, 1]) == 0
     partner = (first + 2) % 4
     return (np.arange(4)[None, :] == partner[:, None]) & (undamped[:, None] & mon)
 
 
-#: longest step in windows ``H_S``, where the growth over it stays within ``GROWTH`` and the gaps
-#: provably within ``SMALL`` times the scale
+#: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
+#: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
+#: longer step unless provably within ``SMALL`` times the scale
 WINDOWS = 4.0
+LONG = 64.0
 GROWTH = 2.0
 SMALL = 10.0
 
 
-def _window(H, lam, valid, p, aUE, scale):
-    """Step window (n,): ``WINDOWS H_S``, shortened so that no modal term grows by more than
-    ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0) window)``), but never
-    below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window is ``H_S``, and the
-    curvature bound uses that window's own growth factor); ``H_S``
-    unless both gaps stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2
-    + GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)), so that the tests of the gaps at the step ends
-    (divergence, late amplitude ``> 10 scale``) cannot pass inside the window."""
+def _window(H, lam, valid, p, aUE, scale, windows):
+    """Step window (n,) and ``small`` (n,): ``windows H_S``, shortened so that no modal term grows
+    by more than ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0)
+    window)``), but never below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window
+    is ``H_S``, and the curvature bound uses that window's own growth factor); ``small`` where both
+    gaps provably stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2 +
+    GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)): elsewhere
+    a step longer than ``H_S`` is sampled (:func:`_sample_step`), so that the tests of the gaps at
+    the step ends (divergence, late amplitude ``> 10 scale``) see the gaps at most ``H_S`` apart."""
     grow = np.where(valid, lam.real, 0.0).max(axis=1)
     with np.errstate(divide="ignore"):
         cap = np.where(grow > 0, math.log(GROWTH) / grow, np.inf)
-    w = np.maximum(H, np.minimum(WINDOWS * H, cap))
+    w = np.maximum(H, np.minimum(windows * H, cap))
     a = np.abs(p)
     w2 = w[:, None]
     reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
     if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
         reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
-    return np.where(np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale, w, H)
+    return w, np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale
+
+
+def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, tseg, width):
+    """The gaps inside the steps ``step`` (from ``tau0`` on the segment) of the rows ``r``, at
+    ``ceil(step / H) - 1`` equally spaced points (at most ``H`` apart, as steps of ``H`` would
+    end): their late amplitudes into ``st.amp`` and the stop rule (:func:`_stops_at`) there.
+    Returns the rows whose stop holds at a point, the point (from ``tau0``) and the point before
+    it (0 at the first): their steps end there, the stop is located between the two."""
+    n_in = np.minimum(np.ceil(step[r] / H[r]) - 1, LONG).astype(int)
+    r, n_in = r[n_in > 0], n_in[n_in > 0]
+    if r.size == 0:
+        return r, r * 0.0, r * 0.0
+    rr = np.repeat(np.arange(r.size), n_in)
+    j = np.arange(rr.size) - np.repeat(np.cumsum(n_in) - n_in, n_in) + 1
+    x = step[r][rr] * j / (n_in[rr] + 1)
+    rows = r[rr]
+    d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
+    hit = np.zeros(rr.size, dtype=bool)
+    hit[_stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
+                  scale[rows])] = True  # fmt: skip
+    first = np.full(r.size, np.iinfo(np.int64).max)
+    np.minimum.at(first, rr[hit], j[hit])
+    upto = j <= first[rr]  # the amplitudes up to a stop
+    b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
+    for c in range(2):
+        np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
+    cut = _rows(first < np.iinfo(np.int64).max)
+    f, m = first[cut], n_in[cut] + 1
+    s_r = step[r[cut]]
+    return r[cut], s_r * f / m, s_r * (f - 1) / m
 
 
 #: largest ratio of a segment's terms to its gaps (or the run's scale, if larger): beyond it the
@@ -500,6 +568,14 @@ def cancels(P, U, g, scale):
     size = np.maximum(np.abs(g[:, :2]).max(axis=1), scale)
     with np.errstate(invalid="ignore"):
         return ~(terms.max(axis=1) <= CANCEL_MAX * size)
+
+
+_BITS = np.arange(2)
+
+
+def _rows(x):
+    """``np.flatnonzero`` of a 1-D array, without its wrappers (called several times a step)."""
+    return x.nonzero()[0]
 
 
 def _all_cols(x):
@@ -531,7 +607,7 @@ def _stops_at(tables, ix, mask, act, g, scale):
     with np.errstate(invalid="ignore"):
         cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
         cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
-    r = np.flatnonzero(cand)
+    r = _rows(cand)
     if r.size:
         lx, mk = ix[r], mask[r]
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
@@ -584,7 +660,7 @@ def _limit_steps(d, v, M, scale, Hw):
     amp, pen = stop_rule.limits(scale)
     near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
     w = Hw[:, None]
-    r = np.flatnonzero((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    r = _rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
     if r.size == 0:
         return lo, hi
     Mg = np.concatenate([M[r, :2], M[r, :2]], axis=1)
@@ -602,7 +678,7 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
     st.code[ix[settle]] = np.array([OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
-    r = np.flatnonzero(iwc)
+    r = _rows(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
         s0 = early.reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
@@ -648,6 +724,20 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     st.t[ix[rc]], st.g[ix[rc]], st.s[ix[rc]] = t[rc], g[cap], sn[cap]
     st.status[ix[rc]] = 1
     keep[rc] = False
+    rf = r[ok & ~cap & _leaves_free(mask[r], g, lanes.a[lanes_r], t[r] + H[r], st.horizon[lanes_r])]
+    st.t[ix[rf]], st.g[ix[rf]], st.s[ix[rf]] = t[rf], g[r.searchsorted(rf)], s[rf]
+    st.code[ix[rf]], st.decided_by[ix[rf]] = OUTCOME_OF_MASK[0], 1
+    keep[rf] = False
+
+
+def _leaves_free(mask, g, a, t_next, T):
+    """Lanes (n,) that enter free flight (FF, ``d'' = -a``) at an event with both gaps open or
+    opening (``d_i >= 0``, ``d_i' >= 0``, not both zero) and accelerating away (``-a_i > 0``):
+    no event can follow, and the exact simulator declares them settled at its next sub-step
+    (before ``t_next``, within the horizon ``T``), whatever limit the gaps reach later."""
+    d, v = g[:, :2], g[:, 2:]
+    away = (d >= 0) & (v >= 0) & ((d > 0) | (v > 0)) & (-a > 0)
+    return (mask == 0) & away[:, 0] & away[:, 1] & (t_next < T)
 
 
 # ----------------------------------------------------------------------------- outcomes
@@ -660,7 +750,7 @@ def _impact_log(st: State):
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
     order = np.lexsort((t, lane))
     lane, t, v, c = lane[order], t[order], v[order], c[order]
-    cuts = np.flatnonzero(np.diff(lane)) + 1
+    cuts = _rows(np.diff(lane)) + 1
     starts = np.concatenate([[0], cuts])
     return {int(lane[a]): (t[a:b], v[a:b], c[a:b])
             for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
@@ -710,7 +800,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
 
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
-    r = np.flatnonzero(iwc)
+    r = _rows(iwc)
     iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
@@ -770,7 +860,8 @@ def _late_amplitude(st: State, n, width):
 class FastResult:
     """Outcome per trajectory of :func:`run_batch`: ``code`` (int8, :class:`Outcome`),
     ``decided_by`` (int8 index into :data:`DECIDED_BY`), ``t_final`` (time reached or decided
-    at), ``g_final`` (N, 4) the state there, ``n_events`` and ``within_rounding`` (a divergence
+    at), ``g_final`` (N, 4) the state there, ``n_events``, ``steps`` (steps of the engine's
+    batch the lane took part in; 0 for another stepper) and ``within_rounding`` (a divergence
     whose verdict sits within rounding, :func:`stop_rule.within_rounding`, of the engine that
     decided it: :func:`stop_rule.run_within_rounding` for the exact simulator's runs)."""
 
@@ -779,6 +870,7 @@ class FastResult:
     t_final: np.ndarray
     g_final: np.ndarray
     n_events: np.ndarray
+    steps: np.ndarray
     within_rounding: np.ndarray
 
     @classmethod
@@ -819,7 +911,7 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         res = run_lanes(*arrays, **opts)
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
-    for i in np.flatnonzero(res.decided_by == 3):
+    for i in _rows(res.decided_by == 3):
         out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
         res.within_rounding[i] = stop_rule.run_within_rounding(run)
@@ -858,7 +950,9 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
                 ix = _classify_stopped(st, tables, ix, width, t_max, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
-    return FastResult(st.code, st.decided_by, st.t, st.g, st.n_events, st.rounding & ~fallback)
+    return FastResult(
+        st.code, st.decided_by, st.t, st.g, st.n_events, st.steps, st.rounding & ~fallback
+    )
 
 
 def outcomes(b1, b2, alpha, k, q, g0, reference, *, t_end=150.0, horizon_cap=8.0,

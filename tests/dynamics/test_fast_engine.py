@@ -200,8 +200,8 @@ def test_classify_many_matches_classify_stats(monkeypatch, n, kappa, q, alpha):
 def test_window_keeps_growth_and_gaps_within_their_bounds():
     """Segments d(t) = p0 + p1 t + p2 t^2 + Re sum u exp(lam t) with a growing real mode, an
     oscillation and a decaying mode: over the window every term grows by at most GROWTH (the
-    factor the curvature bound takes) and, where the window is longer than H, densely sampled
-    gaps stay within SMALL scale (closed form)."""
+    factor the curvature bound takes) and, where the window is called small (no sampling inside a
+    step), densely sampled gaps stay within SMALL scale (closed form)."""
     rng = np.random.default_rng(3)
     n = 64
     lam = np.tile(np.array([0.4, -0.2, 0.9j, -0.9j]), (n, 1))
@@ -211,15 +211,15 @@ def test_window_keeps_growth_and_gaps_within_their_bounds():
     U[:, :, 3] = U[:, :, 2].conj()
     p = rng.normal(size=(n, 2, 3)) * np.array([1.0, 0.3, 0.05])
     H, scale = np.full(n, 0.8), np.full(n, 0.5)
-    w = F._window(H, lam, valid, p, np.abs(U), scale)
-    assert np.all((w >= H) & (w <= F.WINDOWS * H))
-    assert np.all(np.exp(lam.real.max(axis=1) * w) <= F.GROWTH * (1 + 1e-12))
-    long_ = w > H
-    assert 0 < long_.sum() < n  # both cases occur
-    s = np.linspace(0.0, 1.0, 2001)[None, :] * w[:, None]  # (n, m)
-    d = (p[:, :, :1] + p[:, :, 1:2] * s[:, None] + p[:, :, 2:] * s[:, None] ** 2
-         + (U[:, :, :, None] * np.exp(lam[:, None, :, None] * s[:, None, None])).sum(2).real)  # fmt: skip
-    assert np.all(np.abs(d[long_]).max(axis=(1, 2)) <= F.SMALL * scale[long_])
+    for windows in (F.WINDOWS, F.LONG):
+        w, small = F._window(H, lam, valid, p, np.abs(U), scale, windows)
+        assert np.all((w >= H) & (w <= windows * H))
+        assert np.all(np.exp(lam.real.max(axis=1) * w) <= F.GROWTH * (1 + 1e-12))
+        assert 0 < (small & (w > H)).sum() < n  # both cases occur
+        s = np.linspace(0.0, 1.0, 2001)[None, :] * w[:, None]  # (n, m)
+        d = (p[:, :, :1] + p[:, :, 1:2] * s[:, None] + p[:, :, 2:] * s[:, None] ** 2
+             + (U[:, :, :, None] * np.exp(lam[:, None, :, None] * s[:, None, None])).sum(2).real)  # fmt: skip
+        assert np.all(np.abs(d[small]).max(axis=(1, 2)) <= F.SMALL * scale[small])
 
 
 def test_twins_are_the_force_and_gap_of_an_undamped_contact():
@@ -313,3 +313,41 @@ def test_a_gap_landing_on_the_amplitude_limit_steps_on():
     assert F.DECIDED_BY[res.decided_by[0]] == "stepped"
     assert int(res.code[0]) == int(_reference(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0),
                                               g0)[0]) == int(S.Outcome.GROWING_BOUNCING)  # fmt: skip
+
+
+def test_no_lane_takes_more_than_ten_times_the_median_steps():
+    """An 8 x 8 grid of the 0:2pi:8 directions (kappa 0.1, q 1.5, alpha 0.3pi) holds a long lane
+    without events: at beta1 = 3pi/2, beta2 = pi/2 (det B = 0, a closed form) both gaps sink
+    quadratically after one event until the horizon is doubled to 1200.  Event-free stretches
+    are crossed in steps of up to LONG H_S (sampled H_S apart), so its steps, and every lane's,
+    stay within 10 times the median lane's (counted, not timed); its outcome is the exact
+    simulator's."""
+    b = np.arange(8) * (PI / 4)
+    B1, B2 = (x.ravel() for x in np.meshgrid(b, b, indexing="ij"))
+    alpha, k, q = 0.3 * PI, (0.1, 1.0), (1.5, 1.5)
+    g0 = S.perturbed_initial_states(b, b, alpha, 0.1)[:, :, 0].reshape(-1, 4)
+    res = F.run_lanes(B1, B2, np.full(64, alpha), np.tile(k, (64, 1)), np.tile(q, (64, 1)), g0)
+    long_ = 6 * 8 + 2
+    assert (B1[long_], B2[long_]) == (b[6], b[2])
+    assert res.t_final[long_] == 1200.0 and res.n_events[long_] <= 2
+    assert res.steps.max() <= 10 * np.median(res.steps)
+    assert int(res.code[long_]) == int(_reference(b[6], b[2], alpha, k, q, g0[long_])[0])
+
+
+def test_free_flight_entered_leaving_settles_before_a_later_amplitude_stop():
+    """A lane of the random comparison (seed 45, lane 1652: beta1 = pi/2, beta2 = 3pi/2, det B =
+    0, its perturbed SS equilibrium ~1e16) enters free flight at t = 237.6 with both gaps opening
+    and accelerating away: the exact simulator stops there as settled (settles_FF) at its next
+    sub-step; the fast engine, stepping on, used to reach the amplitude limit first (t = 277.6,
+    undetermined)."""
+    from atlas.dynamics import engine_check as C
+
+    lanes = C.random_lanes(45, 2000)
+    i = 1652
+    k, q = (lanes.kappa[i], 1.0), (lanes.q[i], lanes.q[i])
+    res = F.run_lanes(*(np.array([x[i]]) for x in (lanes.beta1, lanes.beta2, lanes.alpha)),
+                      np.array([k]), np.array([q]), lanes.g0[i : i + 1])  # fmt: skip
+    out, run = S.simulate_outcome(lanes.beta1[i], lanes.beta2[i], lanes.alpha[i], k=k, q=q,
+                                  g0=lanes.g0[i], max_events=2000)  # fmt: skip
+    assert run.status == S.Status.SETTLED and out == S.Outcome.SETTLES_FF
+    assert int(res.code[0]) == int(out)
