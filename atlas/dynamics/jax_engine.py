@@ -9,14 +9,22 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
 
 * Per lane a :func:`jax.lax.while_loop` from event to event (:func:`_step`), ``vmap``-ped over the
   lanes and ``jit``-compiled once per batch size.  Everything inside is fixed-size: the root
-  location takes its ``_ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
-  closed form of a new segment is evaluated in all four configurations and selected.
+  location takes its ``ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
+  closed form of a new segment is evaluated in all four configurations and selected; the step
+  window (:func:`window`) and the cancellation test (:func:`cancels`) are the NumPy engine's on
+  either kind of array.
 * The modal forms (``numpy.linalg.eig`` of each configuration, its inverse, equilibria, step caps;
   :func:`atlas.dynamics.modal_form.modal_tables`) are computed on the host once per trajectory
-  and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The early IWC stop of the
-  reference (an active gap past ``1e3`` penetration limits, aligned with an unstable eigenvector)
-  expands the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the
-  same test on the same basis, rounding aside).
+  and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The alignment test of the stop
+  rule (an active gap past the penetration limit, aligned with an unstable eigenvector) expands
+  the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the same
+  test on the same basis, rounding aside).
+* The stop rule (:mod:`atlas.dynamics.stop_rule`) is tested at every step end and just before
+  every event in the kernel, its amplitude and deep-penetration limits bracketed like events
+  (:func:`atlas.dynamics.stop_rule.limit_steps`); a lane where it holds leaves the kernel with the
+  bracket of its last step, and the host locates the stop in it
+  (:func:`atlas.dynamics.fast_engine._locate_stops`, :func:`atlas.dynamics.stop_rule.locate`), as
+  the NumPy engine does: both stop at the same time for the same reason.
 * Lanes that finish leave the batch between kernel calls of at most ``steps`` steps each (the host
   gathers the running lanes into the next call), so the slowest trajectory does not set the cost
   of all.
@@ -24,31 +32,17 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   which give :func:`atlas.dynamics.classify`'s thirds exactly for runs stopped at their horizon
   (``t_end 2^j``, always a bin boundary).  Runs that reach the event cap stop at an arbitrary time:
   they are run by the exact simulator on the host, as are the fallback lanes of the NumPy engine
-  (near-singular modal forms, a stalled root location) and the degenerate directions the NumPy
-  engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`; ``ok`` False).
+  (near-singular modal forms, cancelling segments, a stalled root location) and the degenerate
+  directions the NumPy engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`;
+  ``ok`` False).
 
 Classification of the stopped runs and the horizon extension are the NumPy engine's
 (:func:`atlas.dynamics.fast_engine.run_batch`, on the host; a divergence within rounding,
 :func:`atlas.dynamics.stop_rule.within_rounding`, is flagged the same way).
 
-Where the kernel differs from the NumPy engines' stop rule (:mod:`atlas.dynamics.stop_rule`,
-located stops; not yet ported, so a verdict can differ where these matter):
-
-* the divergence limits (a non-finite state, a gap above ``1e4 scale`` or below ``-1e6 scale``)
-  are tested at the step ends only, in the configuration of the step that follows (after an
-  event: the new one), and the run stops there: at up to one step ``H_S`` after the located time
-  of :func:`atlas.dynamics.stop_rule.locate`, with the state of that step end;
-* no bracket of the amplitude and deep-penetration limits (:func:`stop_rule.limit_rows`): a
-  peak that passes a limit and comes back inside one step is not seen; steps are at most
-  ``H_S`` (the NumPy engine's windows up to ``4 H_S`` are not used, so the early decisions are
-  tried at other times: a run may be decided early by one engine and stepped by the other);
-* the aligned-penetration stop (an active gap below ``-1e3 scale``, aligned with an IWC
-  eigenvector) is tested only on the early-decision schedule (1, 2, 4, ... steps after an event),
-  not at every step end nor just before an event, with ``W x`` for the coordinates;
-* the undamped force and its gap (``q_i = 0``, the same roots) are not located as one.
-
-The early IWC is the NumPy engine's (aligned from now or from the reference's stop on, with the
-reference's sign conditions there).
+The steps, stops and early decisions are the NumPy engine's; what differs is only who runs a lane
+(the event cap and the closed forms above: the exact simulator) and rounding (XLA's ``exp`` and
+NumPy's differ in the last bits; the alignment's ``W x``).
 
 Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
 floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
