@@ -4,7 +4,8 @@ Sec. 4.1, eqs. 1, 6-8), ready for an accelerator.
 The algorithm is :mod:`atlas.dynamics.fast_engine`'s, step for step, written with the same
 functions: every piece that acts on arrays (segments in closed form, certified brackets
 :mod:`atlas.dynamics.event_bounds`, the safeguarded Newton root location, the early-decision
-certificates and the reference's stops, the sign switch at an event) serves both engines (NumPy or
+certificates, the stop rule's tests and limit brackets :mod:`atlas.dynamics.stop_rule`, the sign
+switch at an event) serves both engines (NumPy or
 JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only the batching:
 
 * Per lane a :func:`jax.lax.while_loop` from event to event (:func:`_step`), ``vmap``-ped over the
@@ -44,16 +45,17 @@ The steps, stops and early decisions are the NumPy engine's; what differs is onl
 (the event cap and the closed forms above: the exact simulator) and rounding (XLA's ``exp`` and
 NumPy's differ in the last bits; the alignment's ``W x``).
 
-Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
-floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
-across the ``1e-12 H`` tolerance; on a 128^2 map one cell of 16384 differed, where an impact and
-the amplitude-limit stop coincide within ``2e-12``.  On a 2-core CPU the NumPy engine stays the
-default (``--engine fast``): after 75-85 s of compilation (three batch sizes) the kernel ran 2.8x
-(64^2) to 6.8x (128^2) slower in the same run, since every lane of a batch does each step's whole
-work where NumPy does each piece only for the lanes that need it; the kernel is for accelerators.
-Measured on one call of 64 steps x 512 lanes (CPU, ~23 us per lane and step): the early-decision
-tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %, the
-root location ~4 %.
+Behind ``atlas simulate --engine jax``.  Outcomes and the way each run is decided equal the NumPy
+engine's run by run, and its stop times the exact simulator's to ``1e-9`` relative; a verdict
+that rounding can still move is one that :func:`atlas.dynamics.stop_rule.within_rounding` flags
+(a gap at ``9e-15`` against ``-6e-16`` in the exact simulator when a stop coincides with an
+event).  On a 2-core CPU the NumPy engine stays the default (``--engine fast``): after 75-85 s of
+compilation (three batch sizes, loaded) the kernel ran 2.8x (64^2) to 6.8x (128^2) slower in the
+same run, since every lane of a batch does each step's whole work where NumPy does each piece
+only for the lanes that need it; the kernel is for accelerators.  Measured on one call of 64
+steps x 512 lanes (CPU, ~23 us per lane and step, before the located stops): the early-decision
+tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %,
+the root location ~4 %.
 """
 
 from __future__ import annotations
