@@ -4,19 +4,28 @@ Sec. 4.1, eqs. 1, 6-8), ready for an accelerator.
 The algorithm is :mod:`atlas.dynamics.fast_engine`'s, step for step, written with the same
 functions: every piece that acts on arrays (segments in closed form, certified brackets
 :mod:`atlas.dynamics.event_bounds`, the safeguarded Newton root location, the early-decision
-certificates and the reference's stops, the sign switch at an event) serves both engines (NumPy or
+certificates, the stop rule's tests and limit brackets :mod:`atlas.dynamics.stop_rule`, the sign
+switch at an event) serves both engines (NumPy or
 JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only the batching:
 
 * Per lane a :func:`jax.lax.while_loop` from event to event (:func:`_step`), ``vmap``-ped over the
   lanes and ``jit``-compiled once per batch size.  Everything inside is fixed-size: the root
-  location takes its ``_ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
-  closed form of a new segment is evaluated in all four configurations and selected.
+  location takes its ``ROOT_ITER`` evaluations, the bisection of the IWC stop its 64 halvings, the
+  closed form of a new segment is evaluated in all four configurations and selected; the step
+  window (:func:`window`) and the cancellation test (:func:`cancels`) are the NumPy engine's on
+  either kind of array.
 * The modal forms (``numpy.linalg.eig`` of each configuration, its inverse, equilibria, step caps;
   :func:`atlas.dynamics.modal_form.modal_tables`) are computed on the host once per trajectory
-  and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The early IWC stop of the
-  reference (an active gap past ``1e3`` penetration limits, aligned with an unstable eigenvector)
-  expands the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the
-  same test on the same basis, rounding aside).
+  and passed in as arrays (``jnp.linalg.eig`` exists only on CPU).  The alignment test of the stop
+  rule (an active gap past the penetration limit, aligned with an unstable eigenvector) expands
+  the state in these eigenvectors (``W x`` instead of the reference's ``solve(V, x)``: the same
+  test on the same basis, rounding aside).
+* The stop rule (:mod:`atlas.dynamics.stop_rule`) is tested at every step end and just before
+  every event in the kernel, its amplitude and deep-penetration limits bracketed like events
+  (:func:`atlas.dynamics.stop_rule.limit_steps`); a lane where it holds leaves the kernel with the
+  bracket of its last step, and the host locates the stop in it
+  (:func:`atlas.dynamics.fast_engine._locate_stops`, :func:`atlas.dynamics.stop_rule.locate`), as
+  the NumPy engine does: both stop at the same time for the same reason.
 * Lanes that finish leave the batch between kernel calls of at most ``steps`` steps each (the host
   gathers the running lanes into the next call), so the slowest trajectory does not set the cost
   of all.
@@ -24,48 +33,36 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   which give :func:`atlas.dynamics.classify`'s thirds exactly for runs stopped at their horizon
   (``t_end 2^j``, always a bin boundary).  Runs that reach the event cap stop at an arbitrary time:
   they are run by the exact simulator on the host, as are the fallback lanes of the NumPy engine
-  (near-singular modal forms, a stalled root location) and the degenerate directions the NumPy
-  engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`; ``ok`` False).
+  (near-singular modal forms, cancelling segments, a stalled root location) and the degenerate
+  directions the NumPy engine serves in closed form (:func:`atlas.dynamics.modal_form.closed_segment`;
+  ``ok`` False).
 
 Classification of the stopped runs and the horizon extension are the NumPy engine's
 (:func:`atlas.dynamics.fast_engine.run_batch`, on the host; a divergence within rounding,
 :func:`atlas.dynamics.stop_rule.within_rounding`, is flagged the same way).
 
-Where the kernel differs from the NumPy engines' stop rule (:mod:`atlas.dynamics.stop_rule`,
-located stops; not yet ported, so a verdict can differ where these matter):
+The steps, stops and early decisions are the NumPy engine's; what differs is only who runs a lane
+(the event cap and the closed forms above: the exact simulator) and rounding (XLA's ``exp`` and
+NumPy's differ in the last bits; the alignment's ``W x``).
 
-* the divergence limits (a non-finite state, a gap above ``1e4 scale`` or below ``-1e6 scale``)
-  are tested at the step ends only, in the configuration of the step that follows (after an
-  event: the new one), and the run stops there: at up to one step ``H_S`` after the located time
-  of :func:`atlas.dynamics.stop_rule.locate`, with the state of that step end;
-* no bracket of the amplitude and deep-penetration limits (:func:`stop_rule.limit_rows`): a
-  peak that passes a limit and comes back inside one step is not seen; steps are at most
-  ``H_S`` (the NumPy engine's windows up to ``4 H_S`` are not used, so the early decisions are
-  tried at other times: a run may be decided early by one engine and stepped by the other);
-* the aligned-penetration stop (an active gap below ``-1e3 scale``, aligned with an IWC
-  eigenvector) is tested only on the early-decision schedule (1, 2, 4, ... steps after an event),
-  not at every step end nor just before an event, with ``W x`` for the coordinates;
-* the undamped force and its gap (``q_i = 0``, the same roots) are not located as one.
-
-The early IWC is the NumPy engine's (aligned from now or from the reference's stop on, with the
-reference's sign conditions there).
-
-Behind ``atlas simulate --engine jax``.  Outcomes equal the NumPy engine's cell by cell up to rounding: the
-floating-point ``exp`` of XLA and of NumPy differ in the last bits, which can move a located root
-across the ``1e-12 H`` tolerance; on a 128^2 map one cell of 16384 differed, where an impact and
-the amplitude-limit stop coincide within ``2e-12``.  On a 2-core CPU the NumPy engine stays the
-default (``--engine fast``): after 75-85 s of compilation (three batch sizes) the kernel ran 2.8x
-(64^2) to 6.8x (128^2) slower in the same run, since every lane of a batch does each step's whole
-work where NumPy does each piece only for the lanes that need it; the kernel is for accelerators.
-Measured on one call of 64 steps x 512 lanes (CPU, ~23 us per lane and step): the early-decision
-tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %, the
-root location ~4 %.
+Behind ``atlas simulate --engine jax``.  Outcomes and the way each run is decided equal the NumPy
+engine's run by run, and its stop times the exact simulator's to ``1e-9`` relative; a verdict
+that rounding can still move is one that :func:`atlas.dynamics.stop_rule.within_rounding` flags
+(a gap at ``9e-15`` against ``-6e-16`` in the exact simulator when a stop coincides with an
+event).  On a 2-core CPU the NumPy engine stays the default (``--engine fast``): after 75-85 s of
+compilation (three batch sizes, loaded) the kernel ran 2.8x (64^2) to 6.8x (128^2) slower in the
+same run, since every lane of a batch does each step's whole work where NumPy does each piece
+only for the lanes that need it; the kernel is for accelerators.  Measured on one call of 64
+steps x 512 lanes (CPU, ~23 us per lane and step, before the located stops): the early-decision
+tests take ~40 % of it, the closed forms of the next segment in all four configurations ~35 %,
+the root location ~4 %.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
@@ -75,6 +72,7 @@ from atlas.dynamics import early_decisions as early
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import fast_engine as fe
 from atlas.dynamics import modal_form as mf
+from atlas.dynamics import stop_rule
 from atlas.dynamics.system import Outcome, aligned_in_basis
 
 __all__ = ["run_batch", "kernel", "STEPS", "CHUNK", "NBINS"]
@@ -146,24 +144,22 @@ def _step(c, prm):
     """One step of :func:`atlas.dynamics.fast_engine._run_lanes` for the running lanes of
     ``c`` (the same tests in the same order)."""
     run, t, s, since, T = c["run"], c["t"], c["s"], c["since"], prm["T"]
-    t_max, max_events, width, nbins = (prm[x] for x in ("t_max", "max_events", "width", "nbins"))
+    t_max, width, nbins = (prm[x] for x in ("t_max", "width", "nbins"))
     k, q, scale = prm["k"], prm["q"], prm["scale"]
     mask = fe.mask_of(s)
     lam, valid, H = _pick(prm["lam"], mask), _pick(prm["valid"], mask), _pick(prm["H"], mask)
     P, U, tseg = c["P"], c["U"], c["tseg"]
     d, v, acc, p, UE = eb.evaluate(P, U, lam, t - tseg)
     g = jnp.concatenate([d, v], axis=1)
-    amp = _bin_max(c["amp"], fe.bins(t, width, nbins), jnp.abs(d), run)
-    # stops of the reference: divergence, horizon
-    div = ~jnp.isfinite(g).all(axis=1)
-    div |= (d.max(axis=1) > 1e4 * scale) | (d.min(axis=1) < -1e6 * scale)
     act = jnp.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+    # the stop rule at the step end (located inside the step on the host: _locate), the horizon
+    div = run & _stops(mask, g, prm)
+    keep = run & ~div
+    amp = _bin_max(c["amp"], fe.bins(t, width, nbins), jnp.abs(d), keep)
+    status = jnp.where(div, 2, jnp.where(keep & (t >= T), 0, c["status"]))
+    keep &= t < T
     sched = ((since & (since - 1)) == 0) & (since > 0)
-    deep = sched & ~div & (act & (d < -1e3 * scale[:, None])).any(axis=1)
-    div |= deep & _aligned_now(mask, g, prm, 1e-3)
-    status = jnp.where(run & div, 2, jnp.where(run & (t >= T), 0, c["status"]))
-    keep = run & ~div & (t < T)
-    lo, hi = _brackets(d, v, acc, p, UE, lam, H, k, q, s, act)
+    lo, hi, mon, M, Hw = _brackets(d, v, acc, p, UE, lam, valid, H, k, q, s, act, scale)
     # early decisions
     tryd = keep & sched & jnp.all(hi > (t_max - t)[:, None], axis=1)
     tryd &= early.may_decide(lam, valid, s, p, act, mask, t, T)
@@ -176,64 +172,118 @@ def _step(c, prm):
     keep &= ~(settle | iwc)
     rem = T - t
     xtol = fe.XTOL * H
-    ev, h, m, lo, hi = _first_crossing(lo, hi, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
-    step = jnp.where(ev, h, jnp.minimum(jnp.minimum(m, H), rem))
+    ev, h, m, lo, hi = _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
+    # a limit of the stop rule passed before the first crossing: step past it (certified)
+    lim_lo, lim_hi = stop_rule.limit_steps(d, v, M, scale, Hw)
+    ev &= h <= lim_lo
+    past = keep & ~ev & (lim_hi <= jnp.minimum(m, rem))
+    step = jnp.where(ev, h, jnp.minimum(jnp.minimum(jnp.minimum(m, Hw), rem), lim_lo))
+    step = jnp.where(past, jnp.maximum(lim_hi, xtol), step)
     t_new = jnp.where(keep, t + step, t)
-    since = since + 1
     # stalled root location (a grazing contact): the exact simulator takes over
     stall = jnp.where(step < 1e-9 * H, c["stall"] + 1, 0)
     fallback = c["fallback"] | (keep & (stall > fe.STALL))
     keep &= ~fallback
     ev &= keep
-    # events: switch, log, new segment
+    # the stop rule just before the events (in the configuration up to them)
     d2, v2, acc2, _, _ = eb.evaluate(P, U, lam, t_new - tseg)
+    g2 = jnp.concatenate([d2, v2], axis=1)
+    div2 = ev & _stops(mask, g2, prm)
+    ev &= ~div2
+    out = _events(c, prm, ev, lo, hi, h, xtol, t_new, s, d2, v2, acc2, amp, fallback)
+    out.update({
+        "run": keep & ~div2 & ~out["fallback"], "t": t_new,
+        "t0": jnp.where(run & ~div, t, c["t0"]),
+        "g": jnp.where(run[:, None], jnp.where(div2[:, None], g2, g), c["g"]),
+        "since": jnp.where(ev, 0, since + 1), "stall": stall,
+        "status": jnp.where(div2, 2, status), "code": code, "decided_by": decided_by,
+    })  # fmt: skip
+    return out
+
+
+def _events(c, prm, ev, lo, hi, h, xtol, t_new, s, d2, v2, acc2, amp, fallback):
+    """The lanes ``ev`` switch at their events at ``t_new`` (gaps, velocities, accelerations
+    ``d2, v2, acc2`` there, pre-event signs ``s``): impacts binned, new segment; as
+    :func:`atlas.dynamics.fast_engine._events`.  Returns the entries of the carry it changes."""
+    k, q, scale, width, nbins = (prm[x] for x in ("k", "q", "scale", "width", "nbins"))
     f2, fp2 = eb.event_functions(d2, v2, acc2, k, q)
     tol = (h + 1e3 * xtol)[:, None]
     sn, closing, n_ev = fe.switch(s, (hi <= tol) & (lo <= tol), f2, fp2, k, scale)
     closing &= ev[:, None]
     hit = closing.any(axis=1)
     ib = jnp.clip(jnp.floor(t_new / width).astype(int), 0, nbins - 1)
-    rows = jnp.arange(t.shape[0])
-    n_imp = c["n_imp"].at[rows, ib].add(closing.sum(axis=1))
-    v_imp = _bin_max(c["v_imp"], ib, jnp.where(closing, jnp.abs(v2), -np.inf).max(axis=1), hit)
-    c_imp = c["c_imp"].at[rows, ib].set(c["c_imp"][rows, ib] | closing)
+    rows = jnp.arange(t_new.shape[0])
     n_events = c["n_events"] + jnp.where(ev, n_ev, 0)
-    last_event = jnp.where(ev & (n_ev > 0), t_new, c["last_event"])
-    amp = _bin_max(amp, fe.bins(t_new, width, nbins), jnp.abs(d2), ev)
     s_new = jnp.where(ev[:, None], sn, s)
     mask_new = fe.mask_of(s_new)
-    Ps, Us = _segments(jnp.concatenate([d2, v2], axis=1), prm)
-    ok = _pick(prm["ok"], mask_new)
-    fallback |= ev & ~ok
+    g2 = jnp.concatenate([d2, v2], axis=1)
+    Ps, Us = _segments(g2, prm)
+    P_new, U_new = _select(Ps, mask_new), _select(Us, mask_new)
+    ok = _pick(prm["ok"], mask_new) & ~cancels(P_new, U_new, g2, scale)
     # event-cap runs stop at an arbitrary time (not a bin boundary): the exact simulator
-    fallback |= ev & ok & (n_events >= max_events)
-    keep &= ~fallback
+    fallback = fallback | (ev & ~ok) | (ev & ok & (n_events >= prm["max_events"]))
     return {
-        "run": keep, "t": t_new, "g": jnp.where(run[:, None], g, c["g"]), "s": s_new,
-        "P": jnp.where(ev[:, None, None], _select(Ps, mask_new), P),
-        "U": jnp.where(ev[:, None, None], _select(Us, mask_new), U),
-        "tseg": jnp.where(ev, t_new, tseg), "since": jnp.where(ev, 0, since), "stall": stall,
-        "n_events": n_events, "last_event": last_event, "amp": amp, "n_imp": n_imp,
-        "v_imp": v_imp, "c_imp": c_imp,
+        "s": s_new, "P": jnp.where(ev[:, None, None], P_new, c["P"]),
+        "U": jnp.where(ev[:, None, None], U_new, c["U"]),
+        "tseg": jnp.where(ev, t_new, c["tseg"]), "n_events": n_events,
+        "last_event": jnp.where(ev & (n_ev > 0), t_new, c["last_event"]),
+        "amp": _bin_max(amp, fe.bins(t_new, width, nbins), jnp.abs(d2), ev),
+        "n_imp": c["n_imp"].at[rows, ib].add(closing.sum(axis=1)),
+        "v_imp": _bin_max(c["v_imp"], ib, jnp.where(closing, jnp.abs(v2), -np.inf).max(axis=1),
+                          hit),
+        "c_imp": c["c_imp"].at[rows, ib].set(c["c_imp"][rows, ib] | closing),
         "t_first": jnp.where(hit, jnp.minimum(c["t_first"], t_new), c["t_first"]),
         "t_last": jnp.where(hit, jnp.maximum(c["t_last"], t_new), c["t_last"]),
-        "status": status, "code": code, "decided_by": decided_by, "fallback": fallback,
+        "fallback": fallback,
     }  # fmt: skip
 
 
-def _brackets(d, v, acc, p, UE, lam, H, k, q, s, act):
+def _stops(mask, g, prm):
+    """:func:`atlas.dynamics.stop_rule.stopped` of the states ``g`` (n, 4) in the
+    configurations ``mask`` (n,), the alignment on the modal tables (:func:`_aligned_now`)."""
+    amp, pen = stop_rule.limits(prm["scale"])
+    out, deep = stop_rule.beyond(g, mask, amp, pen)
+    return out | (deep & _aligned_now(mask, g, prm, stop_rule.ALIGN_TOL))
+
+
+def window(H, lam, valid, p, aUE, scale):
+    """:func:`atlas.dynamics.fast_engine._window` (the step window, n) on NumPy or JAX arrays
+    (segments of degree 2)."""
+    xp = eb.xp_of(H, lam, p, aUE)
+    grow = xp.where(valid, lam.real, 0.0).max(axis=1)
+    with np.errstate(divide="ignore"):
+        cap = xp.where(grow > 0, math.log(fe.GROWTH) / grow, np.inf)
+    w = xp.maximum(H, xp.minimum(fe.WINDOWS * H, cap))
+    a = xp.abs(p)
+    w2 = w[:, None]
+    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + fe.GROWTH * eb.sum4(aUE)
+    return xp.where(xp.maximum(reach[:, 0], reach[:, 1]) <= fe.SMALL * scale, w, H)
+
+
+def cancels(P, U, g, scale):
+    """:func:`atlas.dynamics.fast_engine.cancels` (bool (n,)) on NumPy or JAX arrays."""
+    xp = eb.xp_of(P, U, g, scale)
+    terms = xp.abs(P[:, :, 0]) + eb.sum4(xp.abs(U))
+    size = xp.maximum(xp.abs(g[:, :2]).max(axis=1), scale)
+    with np.errstate(invalid="ignore"):
+        return ~(terms.max(axis=1) <= fe.CANCEL_MAX * size)
+
+
+def _brackets(d, v, acc, p, UE, lam, valid, H, k, q, s, act, scale):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
-    function within ``H`` (as :func:`atlas.dynamics.fast_engine._brackets` with the window
-    ``H_S``)."""
+    function within the window ``Hw`` (:func:`window`), the monitored ones ``mon``, the
+    curvature bound ``M`` and ``Hw`` (as :func:`atlas.dynamics.fast_engine._brackets`)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
-    M = eb.curvature_bound(p, UE, lam, H, k, q)
+    aUE = jnp.abs(UE)
+    Hw = window(H, lam, valid, p, aUE, scale)
+    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     A, Bd = jnp.maximum(s * f, 0.0), s * fp
     lo, hi = eb.safe_steps(A, Bd, M)
-    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, H, k, q), lo)
+    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
     mon = jnp.concatenate([jnp.ones_like(act), s[:, :2] < 0], axis=1)
-    lo = jnp.where(mon, jnp.minimum(lo, H[:, None]), np.inf)
-    hi = jnp.where(mon & (hi <= H[:, None]), hi, np.inf)
-    return lo, hi
+    lo = jnp.where(mon, jnp.minimum(lo, Hw[:, None]), np.inf)
+    hi = jnp.where(mon & (hi <= Hw[:, None]), hi, np.inf)
+    return lo, hi, mon, M, Hw
 
 
 def _decisions(t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H, prm):
@@ -249,19 +299,22 @@ def _decisions(t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H, 
     return settle, iwc
 
 
-def _first_crossing(lo, hi, keep, rem, xtol, P, U, lam, tau, s, k, q):
+def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     """``(ev, h, m, lo, hi)``: the rows with an event in the next step, its time, the smallest
-    ``sigma_lo``, and the brackets with the one closed by :func:`locate_root` set to the event
-    (as :func:`atlas.dynamics.fast_engine._first_crossing`, without the undamped twin)."""
+    ``sigma_lo``, and the brackets with the one closed by :func:`locate_root` (and its twin's:
+    the force of an undamped contact is ``-k_i`` times its gap) set to the event (as
+    :func:`atlas.dynamics.fast_engine._first_crossing`)."""
     # smallest sigma_lo, ties to the tightest bracket
     m = lo.min(axis=1)
     tie_hi = jnp.where(lo <= m[:, None], hi, np.inf)
     first = jnp.where(jnp.isinf(tie_hi.min(axis=1)), jnp.argmin(lo, axis=1),
                       jnp.argmin(tie_hi, axis=1))  # fmt: skip
-    one = jnp.arange(4)[None, :] == first[:, None]
+    col = jnp.arange(4)[None, :]
+    one = col == first[:, None]
+    twin = (col == ((first + 2) % 4)[:, None]) & (eb.take(q, first % 2) == 0)[:, None] & mon
     h = jnp.where(one, hi, 0.0).sum(axis=1)
     ev = keep & (h - m <= xtol) & (h <= rem)
-    other = jnp.where(one, np.inf, lo).min(axis=1)
+    other = jnp.where(one | twin, np.inf, lo).min(axis=1)
     r = keep & ~ev & (h <= rem) & (other > h)
     lo_f, s_f = jnp.where(one, lo, 0.0).sum(axis=1), jnp.where(one, s, 0.0).sum(axis=1)
     a_r, b_r = fe.locate_root(P, U, lam, tau, jnp.where(r, lo_f, 0.0), jnp.where(r, h, 1.0),
@@ -269,8 +322,9 @@ def _first_crossing(lo, hi, keep, rem, xtol, P, U, lam, tau, s, k, q):
     done = r & (b_r - a_r <= xtol)
     h = jnp.where(done, b_r, h)
     m = jnp.where(r & ~done, a_r, m)
-    lo = jnp.where(done[:, None] & one, h[:, None], lo)
-    hi = jnp.where(done[:, None] & one, h[:, None], hi)
+    closed = done[:, None] & (one | twin)
+    lo = jnp.where(closed, h[:, None], lo)
+    hi = jnp.where(closed, h[:, None], hi)
     return ev | done, h, m, lo, hi
 
 
@@ -354,6 +408,7 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
     nbins = st.amp.shape[1]
     mask = fe.mask_of(st.s[ix])
     P, U, _, _, _, ok = mf.segments(lanes, tables, ix, mask, st.g[ix])
+    ok &= ~fe.cancels(P, U, st.g[ix], st.scale[ix])
     fallback[ix[~ok]] = True
     ix, P, U = ix[ok], P[ok], U[ok]
     n = ix.size
@@ -361,7 +416,7 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
         return
     c = {
         "run": np.ones(n, bool), "t": st.t[ix], "g": st.g[ix], "s": st.s[ix], "P": P, "U": U,
-        "tseg": st.t[ix], "since": np.zeros(n, int), "stall": np.zeros(n, int),
+        "tseg": st.t[ix], "t0": st.t[ix], "since": np.zeros(n, int), "stall": np.zeros(n, int),
         "n_events": st.n_events[ix], "last_event": st.last_event[ix], "amp": st.amp[ix],
         "n_imp": st.n_imp[ix], "v_imp": st.v_imp[ix], "c_imp": st.c_imp[ix],
         "t_first": st.t_first[ix], "t_last": st.t_last[ix], "status": np.full(n, fe.RUNNING),
@@ -405,6 +460,23 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
     for key in ("amp", "n_imp", "v_imp", "c_imp"):
         getattr(st, key)[ix] = c[key][:, :nbins]
     fallback[ix[c["fallback"]]] = True
+    _locate(st, tables, ix, c, prm, width)
+
+
+def _locate(st, tables, ix, c, prm, width):
+    """The stops of the lanes ``ix`` that diverged in the kernel, located inside their last
+    step (from ``max(t0, tseg)`` to ``t`` on the segment from ``tseg``) by the NumPy engine's
+    :func:`atlas.dynamics.fast_engine._locate_stops` (:func:`atlas.dynamics.stop_rule.locate`):
+    their time, state and amplitude into ``st``."""
+    r = np.flatnonzero(c["status"] == 2)
+    if r.size == 0:
+        return
+    mk = fe.mask_of(c["s"][r])
+    tseg = c["tseg"][r]
+    a = np.maximum(c["t0"][r], tseg) - tseg
+    rec = (ix[r], mk, c["P"][r], c["U"][r], prm["lam"][r, mk], prm["scale"][r], a,
+           c["t"][r] - tseg, fe.XTOL * prm["H"][r, mk], tseg)  # fmt: skip
+    fe._locate_stops(st, tables, [rec], width)
 
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,

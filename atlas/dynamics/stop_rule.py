@@ -21,10 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from atlas.dynamics.event_bounds import safe_steps, xp_of
 from atlas.dynamics.system import MODE_NAMES, Status, iwc_aligned_many
 
 __all__ = ["AMPLITUDE", "PENETRATION", "DEEP", "ALIGN_TOL", "ROUNDING_SHARE", "limits",
-           "limit_rows", "beyond", "stopped", "within_rounding", "run_within_rounding", "locate"]  # fmt: skip
+           "limit_rows", "limit_steps", "beyond", "stopped", "within_rounding", "run_within_rounding", "locate"]  # fmt: skip
 
 #: default limits relative to the run's length scale: amplitude, aligned penetration
 AMPLITUDE, PENETRATION = 1e4, 1e3
@@ -56,18 +57,41 @@ def limit_rows(amp, pen):
     return R
 
 
+def limit_steps(d, v, M, scale, Hw):
+    """``(sigma_lo, sigma_hi)`` (n,) of the limits of the stop rule on the gaps ``d`` (n, 2)
+    with velocities ``v`` and curvature bounds ``M`` (n, >= 2) of the gaps over the window ``Hw``
+    (n,) (amplitude, deep penetration; the rows of :func:`limit_rows`, bracketed as events by
+    :func:`atlas.dynamics.event_bounds.safe_steps`): no gap passes one before ``sigma_lo``, one
+    has passed by ``sigma_hi`` (``inf`` beyond ``Hw``); both ``inf`` where the bound cannot
+    reach a limit within ``Hw``.  NumPy or JAX arrays."""
+    xp = xp_of(d, v, M, scale, Hw)
+    amp, pen = limits(scale)
+    w = Hw[:, None]
+    reach = xp.abs(d) + w * (xp.abs(v) + 0.5 * w * M[:, :2])
+    near = (reach >= xp.minimum(amp, DEEP * pen)[:, None]).any(axis=1)
+    A = xp.concatenate([amp[:, None] - d, d + DEEP * pen[:, None]], axis=1)
+    Bd = xp.concatenate([-v, v], axis=1)
+    lo4, hi4 = safe_steps(xp.maximum(A, 0.0), Bd, xp.concatenate([M[:, :2], M[:, :2]], axis=1))
+    hi4 = xp.where(hi4 <= w, hi4, np.inf)
+    lo = xp.minimum(xp.minimum(lo4[:, 0], lo4[:, 1]), xp.minimum(lo4[:, 2], lo4[:, 3]))
+    hi = xp.minimum(xp.minimum(hi4[:, 0], hi4[:, 1]), xp.minimum(hi4[:, 2], hi4[:, 3]))
+    return xp.where(near, lo, np.inf), xp.where(near, hi, np.inf)
+
+
 def beyond(g, mask, amp, pen):
     """The stop rule without its alignment test (bool (n,)): a non-finite component, a gap past
     the amplitude or the deep-penetration limit, or an active gap past the penetration limit; a
-    necessary condition of :func:`stopped`, and ``(stop, penetrated)`` where it is sufficient."""
-    g = np.asarray(g, dtype=float)
-    mask = np.asarray(mask, dtype=int)
-    amp, pen = np.broadcast_to(amp, mask.shape), np.broadcast_to(pen, mask.shape)
-    out = ~np.isfinite(g).all(axis=1)
+    necessary condition of :func:`stopped`, and ``(stop, penetrated)`` where it is sufficient
+    (NumPy or JAX arrays)."""
+    xp = xp_of(g, mask, amp, pen)
+    g = xp.asarray(g, dtype=float)
+    mask = xp.asarray(mask, dtype=int)
+    amp, pen = xp.broadcast_to(amp, mask.shape), xp.broadcast_to(pen, mask.shape)
+    out = ~xp.isfinite(g).all(axis=1)
     with np.errstate(invalid="ignore"):
-        out |= np.max(g[:, :2], axis=1) > amp
-        out |= np.min(g[:, :2], axis=1) < -DEEP * pen
-        act = np.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
+        out |= xp.max(g[:, :2], axis=1) > amp
+        out |= xp.min(g[:, :2], axis=1) < -DEEP * pen
+        act = xp.stack([mask & 1, mask >> 1 & 1], axis=1).astype(bool)
         pen_ = ~out & (act & (g[:, :2] < -pen[:, None])).any(axis=1)
     return out, pen_
 

@@ -1,6 +1,7 @@
 """The JAX kernel of the event-to-event engine (atlas.dynamics.jax_engine) against the exact
 simulator (atlas.dynamics.simulate_outcome) and the NumPy engine (atlas.dynamics.fast_engine),
-cell by cell; its binned impact statistics against the logged ones; bad input."""
+cell by cell, and its located stops on the regression lanes; its step pieces against the NumPy
+engine's; its binned impact statistics against the logged ones; bad input."""
 
 import functools
 import math
@@ -12,6 +13,7 @@ from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
 from atlas.dynamics import jax_engine as J
 from atlas.dynamics import modal_form as mf
+from atlas.dynamics import stop_rule as SR
 from atlas.dynamics.outcomes import Dynamics
 
 PI = math.pi
@@ -57,9 +59,8 @@ def test_outcomes_equal_the_numpy_engine_cell_by_cell():
     fb = F.DECIDED_BY.index("fallback")
     want = np.where(closed & (jr.decided_by == fb), fb, by)
     np.testing.assert_array_equal(jr.decided_by == fb, want == fb)
-    # stepped or decided early: the schedule of the decisions (1, 2, 4, ... steps after an event)
-    # falls elsewhere with the NumPy engine's longer windows (jax_engine's docstring)
-    assert (jr.decided_by != want).sum() <= 0.02 * want.size
+    # stepped or decided early: the same steps, so the same lanes (none differs)
+    np.testing.assert_array_equal(jr.decided_by, want)
 
 
 @pytest.mark.slow
@@ -162,3 +163,124 @@ def test_outcome_map_with_the_jax_engine_equals_the_exact_simulator():
     b = S.outcome_map(b1, b2, engine="jax")
     np.testing.assert_array_equal(a["outcome"].values, b["outcome"].values)
     assert b.attrs["engine"] == "jax" and math.isfinite(b.attrs["trajectories_per_second"])
+
+
+def _regression_lanes():
+    """The lanes where the stops of the engines differed (the NumPy engine's regression tests):
+    a slow drift into an aligned penetration (IWC), an amplitude-limit crossing between steps, a
+    decoupled contact (diagonal ``B``), a near-defective configuration (``beta1 = pi/2 + 1e-8``,
+    two initial states); ``(beta1, beta2, alpha, kappa, q, g0)`` each."""
+    b1, b2 = S.outcome_grid(32)
+    out = [(b1[19], b2[4], 0.4 * PI, 0.02, 0.01,
+            S.perturbed_initial_states(b1, b2, 0.4 * PI, 0.02)[19, 4, 0])]  # fmt: skip
+    for x1, x2, alpha, kappa, q in [(1.75185, 3.57682, 0.58641, 0.05946, 0.03685),
+                                    (0.0, 1.5 * PI, 0.3 * PI, 0.1, 0.05)]:  # fmt: skip
+        g0 = S.perturbed_initial_states([x1], [x2], alpha, kappa)[0, 0, 0]
+        out.append((x1, x2, alpha, kappa, q, g0))
+    x1 = PI / 2 + 1e-8
+    for g0 in S.perturbed_initial_states([x1], [0.0], 0.3 * PI, 5.0, n_perturb=2)[0, 0]:
+        out.append((x1, 0.0, 0.3 * PI, 5.0, 1.5, g0))
+    return out
+
+
+def _batch(lanes):
+    """:func:`jax_engine.run_batch` of ``[(beta1, beta2, alpha, kappa, q, g0), ...]`` (one call)."""
+    b1, b2, alpha, kappa, q = (np.array([ln[i] for ln in lanes]) for i in range(5))
+    k = np.stack([kappa, np.ones_like(kappa)], axis=1)
+    return J.run_batch(b1, b2, alpha, k, np.stack([q, q], axis=1),
+                       np.array([ln[5] for ln in lanes]), reference=_reference)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_stops_are_located_as_in_the_exact_simulator_on_the_regression_lanes():
+    """On each regression lane the JAX engine gives the exact simulator's outcome and, where it
+    steps the run itself, stops at the exact simulator's time (to 1e-9 relative: the stop is
+    located, not taken at a step end up to ``H_S`` or an early-decision step later).  Slow for
+    the kernel's compilation (~40 s on a loaded 2-core machine; ~10 s with the compile cache)."""
+    lanes = _regression_lanes()
+    res = _batch(lanes)
+    fb = F.DECIDED_BY.index("fallback")
+    for i, (b1, b2, alpha, kappa, q, g0) in enumerate(lanes):
+        out, run = _reference(b1, b2, alpha, (kappa, 1.0), (q, q), g0)
+        assert int(res.code[i]) == int(out), i
+        if res.decided_by[i] != fb:
+            assert F.DECIDED_BY[res.decided_by[i]] == "stepped", i
+            assert res.t_final[i] == pytest.approx(run.t_final, rel=1e-9), i
+
+
+def _random_lanes(n, seed):
+    """``n`` runs over the whole parameter space (seeded): angles uniform in ``[0, 2 pi)``,
+    ``alpha`` in ``(0, pi/2)``, ``kappa`` log-uniform in ``[0.02, 5]``, ``q`` uniform in
+    ``[0, 1.5]`` (half of them 0), from the perturbed SS equilibrium."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        b1, b2 = rng.uniform(0, 2 * PI, 2)
+        alpha = rng.uniform(0.02, 0.48) * PI
+        kappa = math.exp(rng.uniform(math.log(0.02), math.log(5.0)))
+        q = rng.uniform(0, 1.5) if rng.uniform() < 0.5 else 0.0
+        g0 = S.perturbed_initial_states([b1], [b2], alpha, kappa,
+                                        seed=int(rng.integers(1 << 30)))[0, 0, 0]  # fmt: skip
+        out.append((b1, b2, alpha, kappa, q, g0))
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("n", "seed"), [(200, 44)])
+def test_random_runs_equal_the_exact_simulator_and_the_numpy_engine(n, seed):
+    """Seeded random runs over the parameter space: the JAX engine's outcomes equal the NumPy
+    engine's run by run, decided the same way (stepped, early, exact simulator) except where the
+    NumPy engine serves a degenerate direction in closed form, and equal the exact simulator's
+    except where the data flags the verdict as within rounding (``within_rounding``: seed 44 has
+    one, a gap at 9e-15 when an aligned penetration stops the run, at -6e-16 in the exact
+    simulator, which decides the free gap's sign test of IWC)."""
+    lanes = _random_lanes(n, seed)
+    res = _batch(lanes)
+    ref = [int(_reference(b1, b2, a, (kp, 1.0), (q, q), g0)[0]) for b1, b2, a, kp, q, g0 in lanes]
+    sure = ~res.within_rounding
+    assert sure.sum() >= 0.98 * n
+    np.testing.assert_array_equal(res.code[sure], np.array(ref)[sure])
+    b1, b2, alpha, kappa, q = (np.array([ln[i] for ln in lanes]) for i in range(5))
+    k, qq = np.stack([kappa, np.ones(n)], axis=1), np.stack([q, q], axis=1)
+    nr = F.run_batch(b1, b2, alpha, k, qq, np.array([ln[5] for ln in lanes]), reference=_reference)
+    np.testing.assert_array_equal(res.code, nr.code)
+    closed = mf.modal_tables(mf.Lanes.of(b1, b2, alpha, k, qq)).closed.any(axis=0)
+    np.testing.assert_array_equal(res.decided_by[~closed], nr.decided_by[~closed])
+
+
+def test_step_pieces_equal_the_numpy_engines():
+    """The kernel's step window, cancellation test and the stop rule's limit brackets and
+    ``beyond`` (NumPy or JAX arrays) give the NumPy engine's values bit for bit on random
+    inputs spanning the limits (gaps up to 1e7 scale, curvature 1e-2..1e6)."""
+    import jax.numpy as jnp
+
+    rng = np.random.default_rng(7)
+    n = 2000
+    d = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 7, (n, 2))
+    v = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 5, (n, 2))
+    M, scale = 10 ** rng.uniform(-2, 6, (n, 4)), 10 ** rng.uniform(-1, 1, n)
+    H = rng.uniform(0.1, 3, n)
+    want = F._limit_steps(d, v, M, scale, H)
+    assert np.isfinite(want[0]).sum() > n // 2 and np.isfinite(want[1]).sum() > n // 10
+    for xp in (np, jnp):
+        got = SR.limit_steps(*(xp.asarray(x) for x in (d, v, M, scale, H)))
+        for a, b in zip(got, want, strict=True):
+            np.testing.assert_array_equal(np.asarray(a), b)
+    g, mask = np.concatenate([d, v], axis=1), rng.integers(0, 4, n)
+    amp, pen = SR.limits(scale)
+    want = SR.beyond(g, mask, amp, pen)
+    assert want[0].any() and want[1].any()
+    got = SR.beyond(*(jnp.asarray(x) for x in (g, mask, amp, pen)))
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(np.asarray(a), b)
+    lam = rng.normal(size=(n, 4)) + 1j * rng.normal(size=(n, 4))
+    valid = rng.uniform(size=(n, 4)) < 0.7
+    p = rng.normal(size=(n, 2, 3)) * 10 ** rng.uniform(-3, 1, (n, 2, 1))
+    U = rng.normal(size=(n, 2, 4)) * 10 ** rng.uniform(-3, 7, (n, 2, 1)) + 0j
+    w = F._window(H, lam, valid, p, np.abs(U), scale)
+    assert (w > H).any() and (w == H).any()
+    for xp in (np, jnp):
+        args = (xp.asarray(x) for x in (H, lam, valid, p, np.abs(U), scale))
+        np.testing.assert_array_equal(np.asarray(J.window(*args)), w)
+        got = J.cancels(*(xp.asarray(x) for x in (p, U, g, scale)))
+        np.testing.assert_array_equal(np.asarray(got), F.cancels(p, U, g, scale))
