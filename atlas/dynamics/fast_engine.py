@@ -62,7 +62,7 @@ Both are declared only where the reference's finite-horizon stops reach the same
 
 Divergence (:mod:`atlas.dynamics.stop_rule`, the exact simulator's rule): tested at every step
 end and just before every event, and located inside the step by a search on the segment; the
-amplitude and deep-penetration limits are bracketed like events (:func:`_limit_steps`: no step
+amplitude and deep-penetration limits are bracketed like events (:func:`atlas.dynamics.step_windows.limit_steps`: no step
 passes one before its ``sigma_lo``, and a step to its ``sigma_hi`` where no event comes first),
 so a peak past a limit inside a step is not missed.  Early IWC also needs the reference's sign
 conditions at its stop (:func:`signs_from`).
@@ -100,6 +100,7 @@ import numpy as np
 
 from atlas.dynamics import early_decisions as early
 from atlas.dynamics import event_bounds as eb
+from atlas.dynamics import step_windows as sw
 from atlas.dynamics import stop_rule
 from atlas.dynamics.classification import (
     TrajectoryStats,
@@ -298,7 +299,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
-            _locate_stops(st, tables, stops, width)
+            locate_stops(st, tables, stops, width)
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max, fallback)
             pending = []
             if again.size:
@@ -317,7 +318,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
 
         # the stop rule (divergence) at the step end, located inside the step; the horizon
         div = _stops_at(tables, ix, mask, act, g, scale)
-        if div.size:  # located with the others of the next classification (_locate_stops)
+        if div.size:  # located with the others of the next classification (locate_stops)
             stops.append(_stop_of(div, ix, mask, P, U, lam, scale, t0, t, tseg, H))
             _leave(st, ix, t, g, s, keep, div, 2)
         b = bins(t, width, nbins)
@@ -325,8 +326,8 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, _rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
-        lo, hi, mon, M, Hw, small = _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
-                                              act)  # fmt: skip
+        lo, hi, mon, M, Hw, small = sw.brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
+                                                 act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = _rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
@@ -334,23 +335,9 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
             _leave(st, ix, t, g, s, keep, dec, RUNNING)
-        rem = T - t
-        xtol = XTOL * H
-        ev, h, m = _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
-        # a limit of the stop rule passed before the first crossing: step past it (certified)
-        # and locate it at the next step; steps never pass it unseen
-        lim_lo, lim_hi = _limit_steps(d, v, M, scale, Hw)
-        ev &= h <= lim_lo
-        past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
-        step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
-        step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
-        t0 = t.copy()
-        # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
-        r = _rows(keep & ~small & (step > H))
-        if r.size:
-            rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
-                                               mask, act, scale, tseg, width)  # fmt: skip
-            step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
+        ev, h, xtol, step, t0 = _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v,
+                                              t, T, tseg, P, U, lam, s, k, q, H, mask, act,
+                                              scale, width)  # fmt: skip
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -365,6 +352,31 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
                     H, s, mask, k, q, scale, since, max_events, width, keep, fallback)  # fmt: skip
         cols = (ix, t, g, s, mask, P, U, lam, valid, H, tseg, T, k, q, scale, stall, since, t0)
+
+
+def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, tseg, P, U, lam,
+                  s, k, q, H, mask, act, scale, width):
+    """The next step of every lane (:func:`_run_lanes`): ``(ev, h, xtol, step, t0)``, ``ev``
+    where it ends at a located event ``h`` away, ``step`` its length (to the first crossing, the
+    window, the horizon or a stop-rule limit) and ``t0`` its start for a stop located inside."""
+    rem = T - t
+    xtol = XTOL * H
+    ev, h, m = _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
+    # a limit of the stop rule passed before the first crossing: step past it (certified)
+    # and locate it at the next step; steps never pass it unseen
+    lim_lo, lim_hi = sw.limit_steps(d, v, M, scale, Hw)
+    ev &= h <= lim_lo
+    past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
+    step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
+    step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
+    t0 = t.copy()
+    # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
+    r = _rows(keep & ~small & (step > H))
+    if r.size:
+        rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
+                                           mask, act, scale, tseg, width)  # fmt: skip
+        step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
+    return ev, h, xtol, step, t0
 
 
 def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale,
@@ -441,47 +453,9 @@ def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act,
 
 def _stop_of(r, ix, mask, P, U, lam, scale, t0, t, tseg, H):
     """The record of rows ``r`` whose stop rule held at the end of their last step (from
-    ``max(t0, tseg)`` to ``t``), for :func:`_locate_stops` to locate inside that step."""
+    ``max(t0, tseg)`` to ``t``), for :func:`locate_stops` to locate inside that step."""
     a = np.maximum(t0[r], tseg[r]) - tseg[r]
     return (ix[r], mask[r], P[r], U[r], lam[r], scale[r], a, t[r] - tseg[r], XTOL * H[r], tseg[r])
-
-
-def _brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
-    """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
-    function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
-    the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
-    (:func:`_window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
-    can cross within the shorter one (an event-free stretch: free flight, a settled contact)."""
-    f, fp = eb.event_functions(d, v, acc, k, q)
-    aUE = np.abs(UE)
-    A, Bd = np.maximum(s * f, 0.0), s * fp
-    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
-    Hw, small = _window(H, lam, valid, p, aUE, scale, WINDOWS)
-    lo, hi, M = _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
-    r = _rows(_min_cols(lo) >= Hw)
-    if r.size:
-        w, sm = _window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
-        r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
-        lo_r, hi_r, M_r = _bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
-                                   mon[r])  # fmt: skip
-        # both brackets hold (each within its window): the larger lower end, the smaller upper
-        longer = _min_cols(lo_r) > Hw[r]
-        r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
-        lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
-        M[r], Hw[r], small[r] = M_r, w, sm
-    return lo, hi, mon, M, Hw, small
-
-
-def _bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
-    """``(lo, hi, M)`` of :func:`_brackets` within the window ``Hw`` (n,)."""
-    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
-    lo, hi = eb.safe_steps(A, Bd, M)
-    flat = (A == 0) & (Bd == 0)
-    if flat.any():  # a double zero (exactly zero state): the second derivative decides
-        lo = np.where(flat, eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
-    lo = np.where(mon, np.minimum(lo, Hw[:, None]), np.inf)
-    hi = np.where(mon & (hi <= Hw[:, None]), hi, np.inf)
-    return lo, hi, M
 
 
 def _twins(first, mon, q):
@@ -494,43 +468,13 @@ def _twins(first, mon, q):
     return (np.arange(4)[None, :] == partner[:, None]) & (undamped[:, None] & mon)
 
 
-#: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
-#: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
-#: longer step unless provably within ``SMALL`` times the scale
-WINDOWS = 4.0
-LONG = 64.0
-GROWTH = 2.0
-SMALL = 10.0
-
-
-def _window(H, lam, valid, p, aUE, scale, windows):
-    """Step window (n,) and ``small`` (n,): ``windows H_S``, shortened so that no modal term grows
-    by more than ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0)
-    window)``), but never below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window
-    is ``H_S``, and the curvature bound uses that window's own growth factor); ``small`` where both
-    gaps provably stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2 +
-    GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)): elsewhere
-    a step longer than ``H_S`` is sampled (:func:`_sample_step`), so that the tests of the gaps at
-    the step ends (divergence, late amplitude ``> 10 scale``) see the gaps at most ``H_S`` apart."""
-    grow = np.where(valid, lam.real, 0.0).max(axis=1)
-    with np.errstate(divide="ignore"):
-        cap = np.where(grow > 0, math.log(GROWTH) / grow, np.inf)
-    w = np.maximum(H, np.minimum(windows * H, cap))
-    a = np.abs(p)
-    w2 = w[:, None]
-    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
-    if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
-        reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
-    return w, np.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale
-
-
 def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, tseg, width):
     """The gaps inside the steps ``step`` (from ``tau0`` on the segment) of the rows ``r``, at
     ``ceil(step / H) - 1`` equally spaced points (at most ``H`` apart, as steps of ``H`` would
     end): their late amplitudes into ``st.amp`` and the stop rule (:func:`_stops_at`) there.
     Returns the rows whose stop holds at a point, the point (from ``tau0``) and the point before
     it (0 at the first): their steps end there, the stop is located between the two."""
-    n_in = np.minimum(np.ceil(step[r] / H[r]) - 1, LONG).astype(int)
+    n_in = np.minimum(np.ceil(step[r] / H[r]) - 1, sw.LONG).astype(int)
     r, n_in = r[n_in > 0], n_in[n_in > 0]
     if r.size == 0:
         return r, r * 0.0, r * 0.0
@@ -615,7 +559,7 @@ def _stops_at(tables, ix, mask, act, g, scale):
     return r
 
 
-def _locate_stops(st, tables, stops, width):
+def locate_stops(st, tables, stops, width):
     """Locate the collected stops ``[(lanes, mask, P, U, lam, scale, a, b, xtol, tseg)]`` (each
     between ``a`` and ``b`` on its segment) in one :func:`_locate_stop`; their time, state and
     amplitude into ``st``."""
@@ -648,28 +592,6 @@ def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
         return out | penetrated
 
     return stop_rule.locate(state_at, holds, a, b, xtol, near)
-
-
-def _limit_steps(d, v, M, scale, Hw):
-    """``(sigma_lo, sigma_hi)`` (n,) of the limits of the stop rule on the gaps (amplitude, deep
-    penetration; :func:`stop_rule.limit_rows`): no gap passes one before ``sigma_lo``, one has
-    passed by ``sigma_hi`` (``inf`` beyond the window ``Hw``); computed only where the curvature
-    bound ``M`` lets a gap reach one within ``Hw``."""
-    n = d.shape[0]
-    lo, hi = np.full(n, np.inf), np.full(n, np.inf)
-    amp, pen = stop_rule.limits(scale)
-    near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
-    w = Hw[:, None]
-    r = _rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
-    if r.size == 0:
-        return lo, hi
-    Mg = np.concatenate([M[r, :2], M[r, :2]], axis=1)
-    A = np.concatenate([amp[r, None] - d[r], d[r] + stop_rule.DEEP * pen[r, None]], axis=1)
-    Bd = np.concatenate([-v[r], v[r]], axis=1)
-    lo4, hi4 = eb.safe_steps(np.maximum(A, 0.0), Bd, Mg)
-    lo[r] = _min_cols(lo4)
-    hi[r] = _min_cols(np.where(hi4 <= w[r], hi4, np.inf))
-    return lo, hi
 
 
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):

@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 
 import jax
 import jax.numpy as jnp
@@ -72,6 +71,7 @@ from atlas.dynamics import early_decisions as early
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import fast_engine as fe
 from atlas.dynamics import modal_form as mf
+from atlas.dynamics import step_windows as sw
 from atlas.dynamics import stop_rule
 from atlas.dynamics.system import Outcome, aligned_in_basis
 
@@ -247,17 +247,10 @@ def _stops(mask, g, prm):
 
 
 def window(H, lam, valid, p, aUE, scale):
-    """:func:`atlas.dynamics.fast_engine._window` (the step window, n) on NumPy or JAX arrays
-    (segments of degree 2)."""
-    xp = eb.xp_of(H, lam, p, aUE)
-    grow = xp.where(valid, lam.real, 0.0).max(axis=1)
-    with np.errstate(divide="ignore"):
-        cap = xp.where(grow > 0, math.log(fe.GROWTH) / grow, np.inf)
-    w = xp.maximum(H, xp.minimum(fe.WINDOWS * H, cap))
-    a = xp.abs(p)
-    w2 = w[:, None]
-    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + fe.GROWTH * eb.sum4(aUE)
-    return xp.where(xp.maximum(reach[:, 0], reach[:, 1]) <= fe.SMALL * scale, w, H)
+    """The JAX engine's step window (n): :func:`atlas.dynamics.step_windows.window` of ``WINDOWS
+    H_S`` where the gaps stay small over it, else ``H_S`` (this engine samples no long step)."""
+    w, small = sw.window(H, lam, valid, p, aUE, scale, sw.WINDOWS)
+    return eb.xp_of(H, lam, p, aUE).where(small, w, H)
 
 
 def cancels(P, U, g, scale):
@@ -272,17 +265,13 @@ def cancels(P, U, g, scale):
 def _brackets(d, v, acc, p, UE, lam, valid, H, k, q, s, act, scale):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
     function within the window ``Hw`` (:func:`window`), the monitored ones ``mon``, the
-    curvature bound ``M`` and ``Hw`` (as :func:`atlas.dynamics.fast_engine._brackets`)."""
+    curvature bound ``M`` and ``Hw`` (as :func:`atlas.dynamics.step_windows.brackets` within the short window)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
     aUE = jnp.abs(UE)
     Hw = window(H, lam, valid, p, aUE, scale)
-    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
     A, Bd = jnp.maximum(s * f, 0.0), s * fp
-    lo, hi = eb.safe_steps(A, Bd, M)
-    lo = jnp.where((A == 0) & (Bd == 0), eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
     mon = jnp.concatenate([jnp.ones_like(act), s[:, :2] < 0], axis=1)
-    lo = jnp.where(mon, jnp.minimum(lo, Hw[:, None]), np.inf)
-    hi = jnp.where(mon & (hi <= Hw[:, None]), hi, np.inf)
+    lo, hi, M = sw.bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
     return lo, hi, mon, M, Hw
 
 
@@ -476,7 +465,7 @@ def _locate(st, tables, ix, c, prm, width):
     a = np.maximum(c["t0"][r], tseg) - tseg
     rec = (ix[r], mk, c["P"][r], c["U"][r], prm["lam"][r, mk], prm["scale"][r], a,
            c["t"][r] - tseg, fe.XTOL * prm["H"][r, mk], tseg)  # fmt: skip
-    fe._locate_stops(st, tables, [rec], width)
+    fe.locate_stops(st, tables, [rec], width)
 
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,

@@ -197,31 +197,6 @@ def test_classify_many_matches_classify_stats(monkeypatch, n, kappa, q, alpha):
     assert np.array_equal(got, want)
 
 
-def test_window_keeps_growth_and_gaps_within_their_bounds():
-    """Segments d(t) = p0 + p1 t + p2 t^2 + Re sum u exp(lam t) with a growing real mode, an
-    oscillation and a decaying mode: over the window every term grows by at most GROWTH (the
-    factor the curvature bound takes) and, where the window is called small (no sampling inside a
-    step), densely sampled gaps stay within SMALL scale (closed form)."""
-    rng = np.random.default_rng(3)
-    n = 64
-    lam = np.tile(np.array([0.4, -0.2, 0.9j, -0.9j]), (n, 1))
-    lam[:, 0] *= rng.uniform(0.0, 1.5, n)  # some with a negligible growth rate
-    valid = np.ones((n, 4), dtype=bool)
-    U = (rng.normal(size=(n, 2, 4)) * rng.uniform(0.0, 1.0, (n, 1, 1))).astype(complex)
-    U[:, :, 3] = U[:, :, 2].conj()
-    p = rng.normal(size=(n, 2, 3)) * np.array([1.0, 0.3, 0.05])
-    H, scale = np.full(n, 0.8), np.full(n, 0.5)
-    for windows in (F.WINDOWS, F.LONG):
-        w, small = F._window(H, lam, valid, p, np.abs(U), scale, windows)
-        assert np.all((w >= H) & (w <= windows * H))
-        assert np.all(np.exp(lam.real.max(axis=1) * w) <= F.GROWTH * (1 + 1e-12))
-        assert 0 < (small & (w > H)).sum() < n  # both cases occur
-        s = np.linspace(0.0, 1.0, 2001)[None, :] * w[:, None]  # (n, m)
-        d = (p[:, :, :1] + p[:, :, 1:2] * s[:, None] + p[:, :, 2:] * s[:, None] ** 2
-             + (U[:, :, :, None] * np.exp(lam[:, None, :, None] * s[:, None, None])).sum(2).real)  # fmt: skip
-        assert np.all(np.abs(d[small]).max(axis=(1, 2)) <= F.SMALL * scale[small])
-
-
 def test_twins_are_the_force_and_gap_of_an_undamped_contact():
     """phi_i = -k_i d_i - q_i d_i' is -k_i d_i exactly when q_i = 0 (the same roots): the twin of
     the first function is its partner only then, and only if monitored."""

@@ -1,0 +1,118 @@
+"""The step window of the event-to-event engines and the certified event brackets within it
+(paper Sec. 4.1): one definition for the NumPy engine (:mod:`atlas.dynamics.fast_engine`) and the
+JAX engine (:mod:`atlas.dynamics.jax_engine`), on NumPy or JAX arrays
+(:func:`atlas.dynamics.event_bounds.xp_of`).
+
+A step is at most ``WINDOWS H_S`` long, or ``LONG H_S`` over an event-free stretch (the NumPy
+engine), and never so long that a modal term grows by more than ``GROWTH`` over it; the gaps are
+tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
+the scale (``small``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from atlas.dynamics import event_bounds as eb
+from atlas.dynamics import stop_rule
+
+__all__ = ["GROWTH", "LONG", "SMALL", "WINDOWS", "bounded", "brackets", "limit_steps", "window"]
+
+#: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
+#: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
+#: longer step unless provably within ``SMALL`` times the scale
+WINDOWS = 4.0
+LONG = 64.0
+GROWTH = 2.0
+SMALL = 10.0
+
+
+def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
+    """Step window (n,) and ``small`` (n,): ``windows H_S``, shortened so that no modal term grows
+    by more than ``GROWTH`` over it (the curvature bound's factor ``exp(max(Re lambda, 0)
+    window)``), but never below ``H_S`` (where the growth over ``H_S`` exceeds ``GROWTH`` the window
+    is ``H_S``, and the curvature bound uses that window's own growth factor); ``small`` where both
+    gaps provably stay within ``SMALL scale`` over the window (bound ``|p0| + |p1| s + |p2| s^2 +
+    GROWTH sum |u|``, and ``|p3| s^3 + |p4| s^4`` of a quartic, ``aUE = |u|`` (n, 2, 4)): elsewhere
+    a step longer than ``H_S`` is sampled, so that the tests of the gaps at the step ends
+    (divergence, late amplitude ``> 10 scale``) see the gaps at most ``H_S`` apart."""
+    xp = eb.xp_of(H, lam, p, aUE)
+    grow = xp.where(valid, lam.real, 0.0).max(axis=1)
+    with np.errstate(divide="ignore"):
+        cap = xp.where(grow > 0, math.log(GROWTH) / grow, np.inf)
+    w = xp.maximum(H, xp.minimum(windows * H, cap))
+    a = xp.abs(p)
+    w2 = w[:, None]
+    reach = a[:, :, 0] + w2 * (a[:, :, 1] + w2 * a[:, :, 2]) + GROWTH * eb.sum4(aUE)
+    if p.shape[2] > 3:  # a quartic (closed forms of degenerate directions)
+        reach = reach + w2**3 * (a[:, :, 3] + w2 * a[:, :, 4])
+    return w, xp.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale
+
+
+def bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
+    """``(lo, hi, M)``: certified brackets (n, 4) of the next crossing of each monitored (``mon``)
+    event function with value bound ``A`` and slope ``Bd`` (:func:`eb.safe_steps`) within the
+    window ``Hw`` (n,), under the curvature bound ``M`` over it (:func:`eb.curvature_bound`);
+    ``lo`` at most ``Hw``, ``hi`` ``inf`` beyond it or unmonitored."""
+    xp = eb.xp_of(A, Bd, p, UE, Hw)
+    M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
+    lo, hi = eb.safe_steps(A, Bd, M)
+    flat = (A == 0) & (Bd == 0)
+    if xp is not np or flat.any():  # a double zero (exactly zero state): the second derivative
+        lo = xp.where(flat, eb.flat_step(s, p, UE, lam, Hw, k, q), lo)
+    lo = xp.where(mon, xp.minimum(lo, Hw[:, None]), np.inf)
+    hi = xp.where(mon & (hi <= Hw[:, None]), hi, np.inf)
+    return lo, hi, M
+
+
+def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
+    """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
+    function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
+    the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
+    (:func:`window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
+    can cross within the shorter one (an event-free stretch: free flight, a settled contact).
+    NumPy arrays (the JAX engine keeps the short window)."""
+    f, fp = eb.event_functions(d, v, acc, k, q)
+    aUE = np.abs(UE)
+    A, Bd = np.maximum(s * f, 0.0), s * fp
+    mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
+    Hw, small = window(H, lam, valid, p, aUE, scale, WINDOWS)
+    lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
+    r = _rows(_min_cols(lo) >= Hw)
+    if r.size:
+        w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+        r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
+        lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
+                                mon[r])  # fmt: skip
+        # both brackets hold (each within its window): the larger lower end, the smaller upper
+        longer = _min_cols(lo_r) > Hw[r]
+        r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
+        lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
+        M[r], Hw[r], small[r] = M_r, w, sm
+    return lo, hi, mon, M, Hw, small
+
+
+def limit_steps(d, v, M, scale, Hw):
+    """:func:`stop_rule.limit_steps` (``(sigma_lo, sigma_hi)`` (n,)), computed only where the
+    curvature bound ``M`` lets a gap reach a limit within ``Hw`` (``inf`` elsewhere)."""
+    n = d.shape[0]
+    lo, hi = np.full(n, np.inf), np.full(n, np.inf)
+    amp, pen = stop_rule.limits(scale)
+    near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
+    w = Hw[:, None]
+    r = _rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    if r.size:
+        lo[r], hi[r] = stop_rule.limit_steps(d[r], v[r], M[r], scale[r], Hw[r])
+    return lo, hi
+
+
+def _rows(x):
+    """``np.flatnonzero`` of a 1-D array."""
+    return x.nonzero()[0]
+
+
+def _min_cols(x):
+    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
+    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
