@@ -254,10 +254,10 @@ def _classify_stopped(st: State, tables, n, width, t_max, fallback):
     """Classify the lanes ``n`` that stopped (horizon, event cap, divergence); those that
     :func:`atlas.dynamics.needs_longer_run` would run again get the horizon doubled and are
     returned; a divergence whose verdict sits within rounding (:func:`stop_rule.within_rounding`)
-    is flagged (``st.rounding``) and, on a lane with a closed configuration (whose ``B`` the closed
-    form changed within rounding, :func:`atlas.dynamics.modal_form.closed_segment`), goes to the
-    exact simulator (``fallback``); elsewhere both engines integrate the same ``B`` and place the
-    gaps at an event on the same side of their roots."""
+    is flagged (``st.rounding``) and goes to the exact simulator (``fallback``): the signs of its
+    residues are the integrator's (e.g. a gap at ``+3e-16`` here and ``-3e-16`` there beside one
+    at ``-4e5``), and on a closed configuration the closed form changed ``B`` within rounding
+    (:func:`atlas.dynamics.modal_form.closed_segment`); the exact simulator's run then flags it."""
     st.code[n] = _classify_many(st, tables, n, width)
     div = n[st.status[n] == 2]
     if div.size:
@@ -265,7 +265,7 @@ def _classify_stopped(st: State, tables, n, width, t_max, fallback):
         E, zq = stack_table(tables, "E", div, mk), z_eq(tables, div, mk)
         near = div[stop_rule.within_rounding(st.g[div], mk, E, zq)]
         st.rounding[near] = True
-        fallback[near[tables.closed[:, near].any(axis=0)]] = True
+        fallback[near] = True
     again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
               & (st.n_events[n] > 0) & (2 * st.horizon[n] <= t_max * (1 + 1e-12))]  # fmt: skip
     st.horizon[again] *= 2
