@@ -445,3 +445,28 @@ def test_where_the_exact_tier_fails_the_later_tiers_still_decide(monkeypatch):
     assert got.stats["undecided_after"] == want.stats["undecided_after"]
     for k in FLAGS:
         assert np.array_equal(got[k], want[k]), k
+
+
+def test_compiled_programs_serve_every_small_point_set(monkeypatch):
+    """After :func:`points.compile_programs` (the explorer's background warm-up), point sets
+    of 100 and 3,000 points whose open points reach tier 2 compile no program: the flat first
+    pass and the later tiers run at the shared buckets.  Counted, not timed."""
+    import jax
+
+    pts, _ = _near_singular_points()
+    monkeypatch.setattr(points, "HOST_POINTS", 0)
+    points.compile_programs("float64")
+    compiles = []
+
+    def listen(event, seconds, **kw):
+        compiles.append(event) if event.endswith("backend_compile_duration") else None
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    try:
+        for n in (100, 3000):
+            some = {k: np.resize(np.broadcast_to(v, pts["c1"].shape), n) for k, v in pts.items()}
+            st = points.spectral_points(*some.values(), names=FLAGS, resolve=False).stats
+            assert st["tier2_points"] > 0, st
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listen)
+    assert compiles == []
