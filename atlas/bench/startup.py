@@ -77,6 +77,8 @@ PROGRAMS = (
                                            "--overwrite"]),
     ("explorer: first 513^2 map", "explorer-map", ["513"]),
     ("explorer: first certified boundary overlay", "explorer-overlay", ["513"]),
+    ("explorer: first certified boundary overlay after the warm-up", "explorer-overlay-warm",
+     ["513"]),
 )  # fmt: skip
 
 #: the figure compared with a time target: the median wall time [s]

@@ -10,8 +10,10 @@ own name; any other program (a plain ``jax.jit``, an eager operation) keeps JAX'
 
 ``python -m atlas.bench.startup_programs OUT.json KIND [ARGS...]`` runs one command in this
 process and writes its programs to ``OUT.json``: ``cli ARGS`` (``atlas ARGS``), ``explorer-map N``
-(the explorer's first ``N x N`` map, headless), ``explorer-overlay`` (the first certified
-boundary overlay of the explorer's default slice).  :func:`measure` runs the commands of the
+(the explorer's first ``N x N`` map, headless), ``explorer-overlay N`` (the first certified
+boundary overlay of the explorer's default slice, asked for as soon as the first map is drawn and
+the widget's background warm-up started), ``explorer-overlay-warm N`` (the same, asked for once
+the warm-up has ended: a user who looked at the map first).  :func:`measure` runs the commands of the
 Start-up section in fresh processes with an empty cache and returns its rows.
 """
 
@@ -187,8 +189,9 @@ def program_lines(command: str, programs, top: int = 12) -> list[str]:
 
 
 #: the explorer of a notebook's first session, headless (a script: the bench layer does not
-#: import the explorer): its first map (``first_map()``) and its certified boundary overlay
-#: (``overlay()``: waits for the worker thread)
+#: import the explorer): its first map (``first_map()``), the first map and the background
+#: warm-up the widget starts then (``map_and_warm_up()``; ``map_then_warm_up()`` waits for it)
+#: and its certified boundary overlay (``overlay()``: waits for the worker thread)
 _EXPLORER = """
 import time
 from atlas.explore.state import Explorer
@@ -197,6 +200,14 @@ ex = Explorer(n={n})
 def first_map():
     ex.update()
     return 0
+
+def map_and_warm_up():
+    ex.update()
+    ex.warm_up()
+
+def map_then_warm_up():
+    ex.update()
+    ex.warm_up().result()
 
 def overlay():
     ex.update(overlays=("class boundaries", "certified boundaries"))
@@ -212,15 +223,18 @@ def _command(kind: str, args: list[str]):
     if kind == "cli":  # the entry point, as ``atlas ARGS`` runs it (bench sits below the CLI)
         cli = importlib.import_module("atlas.cli")
         return (lambda: None), (lambda: cli.main(args))
-    if kind in ("explorer-map", "explorer-overlay"):
+    setups = {
+        "explorer-map": None,
+        "explorer-overlay": "map_and_warm_up",
+        "explorer-overlay-warm": "map_then_warm_up",
+    }
+    if kind in setups:
         names: dict = {}
         exec(_EXPLORER.format(n=int(args[0]) if args else 513), names)  # noqa: S102 - ours
         if kind == "explorer-map":
             return (lambda: None), names["first_map"]
-        return names["first_map"], names["overlay"]
-    raise SystemExit(
-        f"startup_programs: unknown kind {kind!r} (cli, explorer-map, explorer-overlay)"
-    )
+        return names[setups[kind]], names["overlay"]
+    raise SystemExit(f"startup_programs: unknown kind {kind!r} ({', '.join(['cli', *setups])})")
 
 
 def main(argv=None) -> int:

@@ -15,9 +15,11 @@ each on the points the previous one left ``UNDECIDED``:
 
 Compacted points are gathered by index into each input's own (broadcast) shape, never through a
 materialized ``broadcast_to``.  ``spectral_abscissa`` (the largest real part, for display) needs the
-roots of every damped point and is computed only when asked.  Batches of the later tiers have one
-of a few lengths (:data:`CHUNK_SIZES`, :data:`CHUNK`; padding with a harmless point), so each kernel
-is traced and compiled a few times per dtype.
+roots of every damped point and is computed only when asked.  Shape buckets shared by every
+caller: small point sets run in flat batches of :data:`FLAT_BATCH` points, tiers 2 and 3 in
+batches of :data:`LATER_BATCH` points (padding with a harmless point), so each of these kernels
+is one program per dtype whichever command, figure or explorer overlay calls it
+(:func:`compile_programs` compiles or loads them ahead of use).
 """
 
 from __future__ import annotations
@@ -39,6 +41,9 @@ __all__ = [
     "CHUNK",
     "CHUNK_SIZES",
     "BLOCK",
+    "FLAT_BATCH",
+    "LATER_BATCH",
+    "compile_programs",
     "PAD",
 ]
 
@@ -57,23 +62,28 @@ class Verdicts(dict):
         self.stats = stats
 
 
-#: length of the padded chunks of the later tiers
+#: length of the full batches of the spectral abscissa's enclosures (:func:`_abscissa`)
 CHUNK = 1 << 16
 #: largest number of points the first-pass kernel sees at once (bounds its temporaries)
 BLOCK = 1 << 22
-#: the padded lengths of small point sets (:func:`_flat_columns`, :func:`_run_chunked`): one
-#: compilation per length, kind and dtype
-FLAT_SIZES = (1 << 12, CHUNK)
+#: the one padded length of the flat first pass (small grids and point lists run in batches of
+#: it, :func:`_on_flat`): one compilation per dtype for every small input of every caller
+FLAT_BATCH = 1 << 12
+#: the padded lengths of small point sets (:func:`_flat_columns`)
+FLAT_SIZES = (FLAT_BATCH,)
 #: grids of one model and at most this many points are evaluated as flat columns (:func:`_flat`)
 FLAT_LIMIT = CHUNK
 #: the dtype of tiers 2 and 3 whatever the input dtype: float32 inputs convert exactly, the tiers
 #: see few points (their cost is mostly fixed), and float64 bounds decide more of them
 LATER_DTYPE = np.float64
-#: the padded lengths of later-tier batches: a batch of n points runs at the first length >= n.
-#: Tier 2 and the enclosures (five programs) take about 0.15 ms for 16 padded points and 0.6 ms
-#: for 256 (float64, best of 300 calls), so a handful of points must not run padded to 256; each
-#: length is one trace and compilation (~3.5 s for the five programs) per process, so few lengths
-CHUNK_SIZES = (1 << 4, 1 << 8, 1 << 12)
+#: the one length of later-tier batches (tier 2 and the enclosures: five programs), shared by
+#: every caller (atlas, paper, explorer overlay): each length is one trace and compilation (~3.5 s
+#: for the five programs, cold) or one load per process, while a batch takes about 0.6 ms
+#: (float64, best of 300 calls; 0.15 ms padded to 16 points), so one length: a set of 5,000
+#: points runs in 20 batches (~12 ms), a handful in one
+LATER_BATCH = 1 << 8
+#: the padded lengths of later-tier batches (:func:`_batches`)
+CHUNK_SIZES = (LATER_BATCH,)
 #: a first pass that leaves at most this many points open, with exact settlement on (and its
 #: budget holding them), sends them to the exact tier directly: it settles a handful of points in
 #: milliseconds (11 points of a 16 x 16 x 2 atlas: 2.8 ms), where the five later-tier programs
@@ -106,14 +116,26 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     return warm.Kernel(lambda *a: {n: v for n, v in fn(*a).items() if n in names})
 
 
-def _batches(n: int, chunk: int):
+def compile_programs(dtype="float64") -> None:
+    """Compile (or load) ahead of use the programs shared by every caller's small inputs and
+    later tiers: the flat first pass (:data:`FLAT_BATCH` points of ``dtype``), tier 2 and the
+    enclosures (:data:`LATER_BATCH` points, :data:`LATER_DTYPE`), each run once on padding
+    points (e.g. in a background thread while a first map is shown)."""
+    flat = [np.full(FLAT_BATCH, pad, np.dtype(dtype)) for pad in PAD]
+    _kernel("codes", ss=True, ii=True, damped=None)(*flat)
+    later = [np.full(LATER_BATCH, pad, LATER_DTYPE) for pad in PAD]
+    _kernel("tier2", ss=True, ii=True)(*later)
+    _kernel("roots", ("consistent_II", "stable_II"))(*later)
+
+
+def _batches(n: int, chunk: int, sizes=CHUNK_SIZES):
     """``(start, stop, length)`` of the padded batches of ``n`` points.
 
-    Full batches of ``chunk``; the rest runs at the first of :data:`CHUNK_SIZES` (or ``chunk``)
+    Full batches of ``chunk``; the rest runs at the first of ``sizes`` (or ``chunk``)
     that holds it, except that a rest above the largest size below ``chunk`` runs in batches of
     that size where ``chunk`` is more than 4 times longer (a rest of 4,696 points: two batches of
     4,096, not one of 65,536)."""
-    small = [m for m in CHUNK_SIZES if m < chunk]
+    small = [m for m in sizes if m < chunk]
     start = 0
     while start < n:
         rest = n - start
@@ -125,12 +147,12 @@ def _batches(n: int, chunk: int):
         start += length
 
 
-def _run_chunked(kernel, cols, dtype, chunk):
+def _run_chunked(kernel, cols, dtype, chunk, sizes=CHUNK_SIZES):
     """``kernel`` on 1-D columns in padded batches (:func:`_batches`); returns a dict (or tuple)
     of 1-D numpy arrays."""
     n = cols[0].size
     out = None
-    for start, stop, length in _batches(n, chunk):
+    for start, stop, length in _batches(n, chunk, sizes):
         args = []
         for a, pad in zip(cols, PAD):
             c = np.full(length, pad, dtype)
@@ -187,10 +209,10 @@ def _bucket(n: int) -> int:
 
 
 def _flat_columns(inputs, shape):
-    """The inputs of a small broadcast ``shape`` as flat columns of one of :data:`FLAT_SIZES`
-    points each (padded with the last point)."""
+    """The inputs of a small broadcast ``shape`` as flat columns, their length a multiple of
+    :data:`FLAT_BATCH` (padded with the last point)."""
     n = math.prod(shape)
-    size = next(m for m in FLAT_SIZES if m >= n)
+    size = -(-n // FLAT_BATCH) * FLAT_BATCH
     cols = []
     for a in inputs:
         flat = np.broadcast_to(a.reshape((1,) * (len(shape) - a.ndim) + a.shape), shape).ravel()
@@ -202,8 +224,14 @@ def _flat_columns(inputs, shape):
 
 def _on_flat(kernel, inputs, shape):
     """``kernel`` (elementwise, one array out) on a grid of at most ``CHUNK`` points through
-    :func:`_flat_columns`; returns the result in ``shape``."""
-    return np.asarray(kernel(*_flat_columns(inputs, shape)))[: math.prod(shape)].reshape(shape)
+    :func:`_flat_columns`, in batches of :data:`FLAT_BATCH` points; returns the result in
+    ``shape``."""
+    cols = _flat_columns(inputs, shape)
+    parts = [
+        np.asarray(kernel(*(c[i : i + FLAT_BATCH] for c in cols)))
+        for i in range(0, cols[0].size, FLAT_BATCH)
+    ]
+    return np.concatenate(parts)[: math.prod(shape)].reshape(shape)
 
 
 def _flat(inputs, shape) -> bool:
@@ -319,7 +347,7 @@ def spectral_points(
     undamped_q = (inputs.q1 == 0) & (inputs.q2 == 0)
     host = HOST_POINTS if resolve and (max_resolve is None or max_resolve >= HOST_POINTS) else 0
     out, open_idx, later = _fast_tiers(
-        inputs, shape, dtype, flags, undamped_q, chunk, counts, host_limit=host
+        inputs, shape, dtype, flags, undamped_q, counts, host_limit=host
     )
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
@@ -337,7 +365,7 @@ def spectral_points(
     return Verdicts(out, counts)
 
 
-def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts, host_limit=0):
+def _fast_tiers(inputs, shape, dtype, flags, undamped_q, counts, host_limit=0):
     """Tiers 1-3 (first pass, tier 2, enclosures) for the verdicts ``flags``; returns the verdict
     arrays, the flat indices the first pass left open (where every later tier works, and where
     any undecided point lies) and ``None``, or, when the first pass left at most ``host_limit``
@@ -357,9 +385,9 @@ def _fast_tiers(inputs, shape, dtype, flags, undamped_q, chunk, counts, host_lim
 
     def later_tiers(idx):  # every later tier works inside open_idx (small): no whole-grid pass
         tier2_idx = idx[later.reshape(-1)[idx]]
-        _second_pass(inputs, shape, chunk, verdict, tier2_idx, counts, ss=want_ss, ii=want_ii)
+        _second_pass(inputs, shape, verdict, tier2_idx, counts)
         if want_ii:
-            _roots_pass(inputs, shape, chunk, cons, stab, idx, counts)
+            _roots_pass(inputs, shape, cons, stab, idx, counts)
 
     if open_idx.size <= host_limit:
         return {k: verdict[k] for k in flags}, open_idx, later_tiers
@@ -373,19 +401,18 @@ def _fill(arr, idx, new):
     flat[idx] = np.where(flat[idx] == _UND, new, flat[idx])
 
 
-def _second_pass(inputs, shape, chunk, verdict, idx, counts, *, ss, ii):
+def _second_pass(inputs, shape, verdict, idx, counts):
     """Tier 2 (:func:`atlas.core.rootfree.tier2`) on the flat indices ``idx`` flagged by the first
     pass, in place."""
     counts["tier2_points"] = int(idx.size)
-    if idx.size:
-        small = idx.size <= FLAT_SIZES[0]  # one compilation for every output choice
-        kern = _kernel("tier2", ss=ss or small, ii=ii or small)
-        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, chunk)
+    if idx.size:  # both verdicts whatever was asked: one program pair for every caller
+        kern = _kernel("tier2", ss=True, ii=True)
+        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, LATER_BATCH)
         for i, k in enumerate(("stable_SS", "consistent_II", "stable_II")):
             _fill(verdict[k], idx, res[i])
 
 
-def _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts):
+def _roots_pass(inputs, shape, cons, stab, open_idx, counts):
     """Tier 3: root enclosures where an II verdict is still undecided (inside the flat indices
     ``open_idx``), in place."""
     still = (cons.reshape(-1)[open_idx] == _UND) | (stab.reshape(-1)[open_idx] == _UND)
@@ -393,7 +420,7 @@ def _roots_pass(inputs, shape, chunk, cons, stab, open_idx, counts):
     counts["roots_points"] = int(idx.size)
     if idx.size:
         kern = _kernel("roots", ("consistent_II", "stable_II"))
-        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, chunk)
+        res = _run_chunked(kern, _gather(inputs, shape, idx), LATER_DTYPE, LATER_BATCH)
         _fill(cons, idx, res["consistent_II"])
         _fill(stab, idx, res["stable_II"])
 
@@ -410,7 +437,8 @@ def _abscissa(inputs, shape, dtype, chunk, undamped_q):
             absc[...] = np.broadcast_to(np.asarray(kern(*inputs)["spectral_abscissa"]), shape)
     idx = np.flatnonzero(~und)
     if idx.size:
-        res = _run_chunked(enclosures.abscissa, _gather(inputs, shape, idx), dtype, chunk)
+        cols = _gather(inputs, shape, idx)
+        res = _run_chunked(enclosures.abscissa, cols, dtype, chunk, (FLAT_BATCH,))
         absc.reshape(-1)[idx] = res[0]
     return absc
 

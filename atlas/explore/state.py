@@ -121,7 +121,9 @@ class Explorer:
 
     Start-up.  An :class:`Explorer` turns on :func:`keep_kernels` for its process, and
     :meth:`warm_up` (called by the widget once its first map is drawn) compiles the point
-    inspector's kernels in a background thread; a click that arrives earlier waits for it.
+    inspector's kernels and the programs of the certified boundaries' small point sets
+    (:func:`atlas.core.points.compile_programs`: the shape buckets every caller shares) in a
+    background thread; a click or a first overlay that arrives earlier waits for it.
 
     The widget's sliders redraw when released (``continuous_update=False``): a redraw of the II
     layers with damping takes a few hundred milliseconds at 513 x 513, and a drag would otherwise
@@ -369,7 +371,7 @@ class Explorer:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-boundaries")
             t0 = time.perf_counter()
-            fut = self._pool.submit(*_boundary_task(key, p["dtype"]))
+            fut = self._pool.submit(_after, self._warm, *_boundary_task(key, p["dtype"]))
 
             def done(f, key=key):
                 self.timings["boundaries_ms"] = 1e3 * (time.perf_counter() - t0)
@@ -498,6 +500,17 @@ def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:
 
 
 def _warm_up(**model) -> None:
-    """:meth:`Explorer.warm_up`'s work: one inspection, then the kept kernels' list saved."""
+    """:meth:`Explorer.warm_up`'s work: one inspection and the shared point-set programs
+    (:func:`atlas.core.points.compile_programs`), then the kept kernels' list saved."""
+    from atlas.core import points  # noqa: PLC0415 - imported by the inspector already
+
     inspect_point(*WARM_POINT, **model)
+    points.compile_programs(model["dtype"])
     warm.save_used()
+
+
+def _after(first: Future | None, fn, *args):
+    """``fn(*args)`` once ``first`` (the warm-up, compiling the same programs) has ended."""
+    if first is not None:
+        wait([first])
+    return fn(*args)

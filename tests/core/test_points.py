@@ -231,6 +231,38 @@ def test_near_singular_B_decided_by_the_fast_tiers():
         assert np.array_equal(got[k], ref[k]), k
 
 
+@pytest.mark.parametrize("det_known", [True, False])
+def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch, det_known):
+    """Tier 2 (``det B`` certified) and the enclosures (not: simulated) see batches of one
+    length whatever the number of points they get, 8, 100 or 600: one program each for every
+    caller (an atlas, a paper figure, the explorer's overlay), compiled once per process."""
+    pts, _ = _near_singular_points()
+    if not det_known:
+        unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
+        monkeypatch.setattr(rootfree, "det2_sign", unknown)
+    monkeypatch.setattr(points, "HOST_POINTS", 0)
+    kernel = functools.cache(points._kernel.__wrapped__)
+    cols = [np.broadcast_to(v, pts["c1"].shape) for v in pts.values()]
+    code = np.asarray(kernel("codes", ss=True, ii=True, damped=None)(*cols))
+    pts = {k: v[rootfree.unpack(code)[4]] for k, v in zip(pts, cols)}  # the open points
+    seen = {}
+
+    def recording(kind, *a, **k):
+        kern = kernel(kind, *a, **k)
+        if kind not in ("tier2", "roots"):
+            return kern
+        return lambda *cols: seen.setdefault(kind, set()).add(cols[0].shape) or kern(*cols)
+
+    monkeypatch.setattr(points, "_kernel", recording)
+    tier = "tier2_points" if det_known else "roots_points"
+    for n in (8, 100, 600):
+        some = {k: np.resize(v, n) for k, v in pts.items()}
+        st = points.spectral_points(*some.values(), names=FLAGS, resolve=False).stats
+        assert st[tier] > 0, (n, st)
+    (length,) = seen["tier2" if det_known else "roots"]  # one length (the old code: 16, 256, 4096)
+    assert length == (points.LATER_BATCH,)
+
+
 def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
     """Where ``sign det B`` is not certified (an input not a normal number; simulated here
     everywhere), damped points go from the first pass straight to the enclosures: tier 2 could not
@@ -248,19 +280,19 @@ def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
 
 
 @pytest.mark.parametrize(
-    "n, chunk, lengths",
+    "n, chunk, sizes, lengths",
     [
-        (1, 1 << 16, [16]),  # a handful of points never runs padded to 256
-        (17, 1 << 16, [256]),
-        (257, 1 << 16, [4096]),
-        (4696, 1 << 16, [4096, 4096]),  # not one batch of 65,536 (14x padding)
-        (70000, 1 << 16, [1 << 16, 4096, 4096]),
-        (100, 64, [64, 64]),  # never longer than the chunk asked for
-        (70, 64, [64, 16]),
+        (1, 1 << 16, (4096,), [4096]),
+        (4696, 1 << 16, (4096,), [4096, 4096]),  # not one batch of 65,536 (14x padding)
+        (70000, 1 << 16, (4096,), [1 << 16, 4096, 4096]),
+        (100, 64, (16,), [64, 64]),  # never longer than the chunk asked for
+        (70, 64, (16,), [64, 16]),
+        (1, 256, (256,), [256]),  # the later tiers: one length
+        (600, 256, (256,), [256] * 3),
     ],
 )
-def test_batches_pad_little(n, chunk, lengths):
-    got = list(points._batches(n, chunk))
+def test_batches_pad_little(n, chunk, sizes, lengths):
+    got = list(points._batches(n, chunk, sizes))
     assert [b[2] for b in got] == lengths
     assert got[0][0] == 0 and got[-1][1] == n
     assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
@@ -413,3 +445,28 @@ def test_where_the_exact_tier_fails_the_later_tiers_still_decide(monkeypatch):
     assert got.stats["undecided_after"] == want.stats["undecided_after"]
     for k in FLAGS:
         assert np.array_equal(got[k], want[k]), k
+
+
+def test_compiled_programs_serve_every_small_point_set(monkeypatch):
+    """After :func:`points.compile_programs` (the explorer's background warm-up), point sets
+    of 100 and 3,000 points whose open points reach tier 2 compile no program: the flat first
+    pass and the later tiers run at the shared buckets.  Counted, not timed."""
+    import jax
+
+    pts, _ = _near_singular_points()
+    monkeypatch.setattr(points, "HOST_POINTS", 0)
+    points.compile_programs("float64")
+    compiles = []
+
+    def listen(event, seconds, **kw):
+        compiles.append(event) if event.endswith("backend_compile_duration") else None
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    try:
+        for n in (100, 3000):
+            some = {k: np.resize(np.broadcast_to(v, pts["c1"].shape), n) for k, v in pts.items()}
+            st = points.spectral_points(*some.values(), names=FLAGS, resolve=False).stats
+            assert st["tier2_points"] > 0, st
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listen)
+    assert compiles == []

@@ -142,3 +142,20 @@ def test_box_layer_certified_boundaries_and_a_click_next_to_one():
     got = ex.nearest_boundary(v[0] + 1e-3, v[1] + 1e-3)
     lo, hi = got[0].ends[got[1]]
     assert {closed_form(lo).label, closed_form(hi).label} == {left, right}
+
+
+def test_a_first_overlay_waits_for_the_warm_up(monkeypatch):
+    """The certified overlay's computation starts once the background warm-up (which compiles
+    the shared point-set programs it uses) has ended: no second copy of a program compiled."""
+    import threading
+
+    gate, order = threading.Event(), []
+    monkeypatch.setattr(state, "_warm_up", lambda **m: gate.wait(60) and order.append("warm-up"))
+    task = lambda: order.append("overlay") or "curves"  # noqa: E731
+    monkeypatch.setattr(state, "_boundary_task", lambda key, dtype: (task,))
+    ex = state.Explorer(n=9, overlays=("certified boundaries",))
+    ex.warm_up()
+    assert ex.boundaries() is None  # computing
+    gate.set()
+    assert ex._curves[ex.boundary_key()].result(timeout=60) == "curves"
+    assert order == ["warm-up", "overlay"]
