@@ -15,7 +15,9 @@ def _closed_form_shares(n: int) -> dict:
     d = c1 * s2 - s1 * c2
     unstable = (d < 0) | ((c1 <= 0) & (s2 <= 0))
     stable = ~unstable & (c1 > 0) & (s2 > 0) & (s1 * c2 >= 0)
-    return dict(stable=stable.mean(), unstable=unstable.mean(), depends=1 - (stable | unstable).mean())
+    return dict(
+        stable=stable.mean(), unstable=unstable.mean(), depends=1 - (stable | unstable).mean()
+    )
 
 
 def test_tiny_row_and_section():
