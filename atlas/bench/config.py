@@ -81,6 +81,8 @@ CONFIG = {
         dtypes=("float32", "float64"),
         # 2-D grids at one model and a 5-D grid over the model axes (atlas.bench.model_axes)
         model_grids=dict(two_d=(513, 2048), five_d=512),
+        # the Fig. 1 plane's verdicts over every contact model (atlas.bench.model_box_map)
+        model_box_map=dict(n=360, fields=("SS", "II"), repeats=1),
         ref_factor=4,
         cases=CASES,
         sample=300,
@@ -119,6 +121,7 @@ CONFIG = {
         res=(32, 64),
         dtypes=("float32", "float64"),
         model_grids=dict(two_d=(65,), five_d=16),
+        model_box_map=dict(n=48, fields=("SS", "II"), repeats=1),
         ref_factor=2,
         cases=CASES[:2],
         sample=15,
@@ -159,6 +162,7 @@ CONFIG["tiny"] = dict(
     res=(16,),
     dtypes=("float64",),
     model_grids=dict(two_d=(9,), five_d=8),
+    model_box_map=dict(n=8, fields=("SS",), repeats=1),
     sample=8,
     sample_small=8,
     disagree_cap=5,

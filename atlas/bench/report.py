@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from atlas.bench import startup_programs
+from atlas.bench import model_box_map, startup_programs
 from atlas.data.io import atomic_path
 
 __all__ = [
@@ -49,6 +49,8 @@ class Results:
     startup: list = field(default_factory=list)
     #: 2-D and 5-D grids through the certified driver (:mod:`atlas.bench.model_axes`)
     model_grids: list = field(default_factory=list)
+    #: the Fig. 1 plane over every contact model (:mod:`atlas.bench.model_box_map`)
+    model_box_map: list = field(default_factory=list)
     #: the exact reference: distinct ``points`` evaluated, ``seconds``, ``failures``
     exact: dict = field(default_factory=lambda: dict(points=0, seconds=0.0, failures=0))
 
@@ -641,6 +643,7 @@ def build_report(r: Results) -> str:
         *header_section(r.meta),
         *headline_section(r.head, r.cfg),
         *model_grids_section(r.model_grids),
+        *model_box_map.section(r.model_box_map),
         *large_section(r.large, r.cfg),
         *work_precision_section(r.wp, r.refs, r.cfg),
         *suites_section(r.suites, r.cfg),

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import distributed, model_axes, plots, startup, suites
+from atlas.bench import distributed, model_axes, model_box_map, plots, startup, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
@@ -87,6 +87,7 @@ def _measure(cfg, meta) -> Results:
     with np.errstate(all="ignore"):
         wp, refs = suites.work_precision(cfg, cache, rng)
         model_grids = model_axes.measure(cfg)
+        box_map = model_box_map.measure(cfg)
         large = suites.large_grid(cfg, cache, rng)
         hard = suites.hard_case_suites(cfg, cache, rng)
         scaling = suites.scaling(cfg)
@@ -108,6 +109,7 @@ def _measure(cfg, meta) -> Results:
         sim=sim,
         large=large,
         model_grids=model_grids,
+        model_box_map=box_map,
         atlases=atlases,
         curves=curve_rows,
         maps=maps,
@@ -124,7 +126,8 @@ def _write(out: Path, r: Results, t_start: float):
     plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
     r.meta["duration"] = time.perf_counter() - t_start
     js = dict(
-        meta=r.meta, headline=r.head, model_grids=r.model_grids, large=r.large,
+        meta=r.meta, headline=r.head, model_grids=r.model_grids,
+        model_box_map=r.model_box_map, large=r.large,
         atlases=r.atlases, outcome_maps=r.maps, startup=r.startup,
     )  # fmt: skip
     atomic_write_text(out / "bench_headline.json", json.dumps(js, indent=1, default=_json_default))

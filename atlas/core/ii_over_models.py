@@ -31,8 +31,22 @@ kernels certify.  Where the geometry's signs alone decide consistency (the curve
 :mod:`atlas.core.exact`: ``gamma > 0``, or ``gamma < 0`` with the arc's quadrant and ``D < 0``
 fixed by the signs of ``c1, s2, c2``), that is used instead of the first proof.
 
-**Tiers.**  (1) signs; (2) a fixed sample of models per geometry (:func:`atlas.core.model_box.
-sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
+**Perron-Frobenius** (``c1 <= 0``, ``s2 <= 0``, ``c2 < 0``, ``s1 < 0``: both directions in the
+third quadrant, classes 34 and 35).  ``p`` is the characteristic polynomial of
+``A = [[0, I], [-B diag(kappa, 1), -B diag(q1, q2)]]`` (state ``(x1, x2, x1', x2')``; an
+eigenvalue ``l`` has the eigenvector ``(x, l x)`` with ``(l^2 + B diag(d1, d2)) x = 0``,
+``x2 / x1 = -h1 / (c2 d2)``).  Its off-diagonal entries are ``1``, ``0``, ``-c1 kappa``,
+``-s2``, ``-c2``, ``-s1 kappa``, ``-c2 q2``, ``-s1 q1``, all ``>= 0``: ``A`` is Metzler, and
+irreducible for every model (the cycle ``x1 <- x1' <- x2 <- x2' <- x1`` uses ``1, -c2, 1,
+-s1 kappa > 0`` only).  So (Perron-Frobenius, ``A + s I`` primitive for ``s`` large) its largest
+real eigenvalue is simple, every other eigenvalue has a strictly smaller real part, and no other
+eigenvalue has a nonnegative eigenvector.  An II root ``l > 0`` (``x1 x2 > 0``) has the positive
+eigenvector ``(x, l x)`` (up to sign): it *is* that eigenvalue.  Hence II is stable exactly where
+it is consistent, for every model, and the signs decide both (no search, no sample).  Where
+``c1 > 0`` or ``s2 > 0`` (classes 33, 43, 44) ``A`` is not Metzler and this does not apply.
+
+**Tiers.**  (1) signs (with Perron-Frobenius); (2) a fixed sample of models per geometry
+(:func:`atlas.core.model_box.sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
 witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
 not close, then (4) the settlement repeats it with a large budget (bounded boxes only).
@@ -165,11 +179,13 @@ def _sg(x) -> int:
     return int(x > 0) - int(x < 0)
 
 
-def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray]:
-    """``(consistency, never_stable)`` from the signs (arrays of -1, 0, 1) of ``c1, s1, c2, s2``
-    and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may depend on
-    the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``: ``gamma > 0``,
-    ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II."""
+def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(consistency, never_stable, metzler)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
+    c2, s2`` and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may
+    depend on the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``:
+    ``gamma > 0``, ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II;
+    ``metzler``: ``c1, s2 <= 0`` and ``c2, s1 < 0``, II stable exactly where consistent
+    (Perron-Frobenius, module docstring)."""
     c1, s1, c2, s2, d = np.broadcast_arrays(*(np.asarray(v) for v in (c1, s1, c2, s2, d)))
     valid = (d != 0) & (c2 * s1 != 0)
     gpos, gneg = valid & (c2 == s1), valid & (c2 != s1)
@@ -181,7 +197,7 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray]:
     arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
     fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
     cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
-    return cons, gpos & (c2 > 0)
+    return cons, gpos & (c2 > 0), (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
 
 
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
@@ -194,6 +210,13 @@ def consistency_by_signs(c1, s1, c2, s2) -> int | None:
 def never_stable_by_signs(c1, s1, c2, s2) -> bool:
     """:func:`signs_rule`'s ``never_stable`` of one geometry."""
     return _sg(c2) > 0 and _sg(s1) > 0
+
+
+def stable_by_signs(c1, s1, c2, s2) -> bool:
+    """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
+    ``metzler``) at one geometry (exact inputs)."""
+    metzler = _sg(c1) <= 0 and _sg(s2) <= 0 and _sg(c2) < 0 and _sg(s1) < 0
+    return consistency_by_signs(c1, s1, c2, s2) == 1 and metzler
 
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
@@ -280,10 +303,11 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
     settle = settle and math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
-    cons, never = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    cons, never, metzler = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
+    codes[SIDES_STAB][(cons == 1) & metzler] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
     todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
     sample = _sample(geo[todo], box)
