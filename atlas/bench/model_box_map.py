@@ -78,15 +78,16 @@ def _row(field: str, n: int, repeats: int) -> dict:
 
 
 def measure(cfg) -> list[dict]:
-    """The rows of ``cfg["model_box_map"]`` (``n``: cells per axis, ``fields``: ``SS`` / ``II``,
-    ``repeats``); none where the configuration leaves it out."""
+    """The rows of ``cfg["model_box_map"]`` (``n``: cells per axis, one number or one per field,
+    ``fields``: ``SS`` / ``II``, ``repeats``); none where the configuration leaves it out."""
     spec = cfg.get("model_box_map")
     if not spec:
         return []
     rows = []
     for field in spec["fields"]:
-        log(f"model-box map {field}, {spec['n']}^2 Fig. 1 plane, whole model space")
-        rows.append(_row(field, spec["n"], spec.get("repeats", 2)))
+        n = spec["n"][field] if isinstance(spec["n"], dict) else spec["n"]
+        log(f"model-box map {field}, {n}^2 Fig. 1 plane, whole model space")
+        rows.append(_row(field, n, spec.get("repeats", 2)))
     return rows
 
 
