@@ -49,8 +49,8 @@ def _on_line_code(field, point, model):
 
 
 def _check_labels(b, model, per_piece=4, seed=0):
-    """At up to ``per_piece`` segments of every piece, both ends stepped ``side_step`` off the
-    segment (normal computed here) to the left and to the right carry the piece's ``side_left``
+    """At up to ``per_piece`` segments of every piece, both ends stepped ``side_step`` (or the
+    piece's smaller ``side_offset``) off the segment (normal computed here) to the left and to the right carry the piece's ``side_left``
     and ``side_right`` in exact arithmetic (but at a spliced codimension-2 point); on a class line, the line's own exact code is
     ``side_on`` if that is set, else one of the two sides."""
     rng = np.random.default_rng(seed)
@@ -59,6 +59,7 @@ def _check_labels(b, model, per_piece=4, seed=0):
     for c in (c for c in b.curves if c.field != "class"):
         assert c.side_left > c.side_right  # oriented: the higher code on the left
         v = c.vertices
+        off = c.side_offset if np.isfinite(c.side_offset) else step  # proven closer to the line
         for k in rng.choice(len(v) - 1, min(per_piece, len(v) - 1), replace=False):
             t = (v[k + 1] - v[k]) / np.hypot(*(v[k + 1] - v[k]))
             n = np.array([-t[1], t[0]])
@@ -66,8 +67,8 @@ def _check_labels(b, model, per_piece=4, seed=0):
                 if j in c.spliced:  # a proven codimension-2 point: three codes meet there
                     continue
                 end = v[j]
-                assert _code_at(c.field, end + step * n, model) == c.side_left
-                assert _code_at(c.field, end - step * n, model) == c.side_right
+                assert _code_at(c.field, end + off * n, model) == c.side_left
+                assert _code_at(c.field, end - off * n, model) == c.side_right
                 if c.on_class_line:
                     on = _on_line_code(c.field, end, model)
                     if on is None:
