@@ -121,3 +121,25 @@ def test_labels_hold_off_every_piece_damped():
         if c.field == "SS" and c.on_class_line and np.ptp(c.vertices[:, 0]) > 1e-3
     ]
     assert len(diag) >= 3 and all((c.side_left, c.side_right, c.side_on) == (1, 0, 2) for c in diag)
+
+
+@pytest.mark.parametrize("model", [(2.0, 0.1, 0.1), (7.3, 0.8, 0.02)])
+def test_diagonal_pieces_carry_the_neutral_code_up_to_the_corner(model):
+    """Damped SS on beta2 = beta1: the exact code on the line (``c1 = c2``, ``s1 = s2``, at each
+    vertex's beta1) is neutral, different from both sides, and every piece on it says so, up to
+    the corner (0, 0): a 2e-8 rad piece there, traced a nudge past 2 pi on beta2 = beta1 + 2 pi
+    (no column of the lines), had ``side_on = -1`` (its vertices taken as on beta2 = 2 pi)."""
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=1e-4)
+    diag = [
+        c
+        for c in b.curves
+        if c.on_class_line
+        and (np.abs((c.vertices[:, 1] - c.vertices[:, 0] + PI) % (2 * PI) - PI) < 1e-9).all()
+    ]
+    assert any(np.hypot(*c.vertices.T).min() < 1e-6 for c in diag)  # the corner piece
+    for c in diag:
+        for x in c.vertices[:, 0]:
+            cx, sx = (float(v) for v in contact_modes.direction(x))
+            on = _exact_code("SS", cx, sx, cx, sx, model)
+            assert on not in (c.side_left, c.side_right) and c.side_on == on
