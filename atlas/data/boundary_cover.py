@@ -18,7 +18,9 @@ as the gaps left in :func:`cover_lines`).
 A stretch is covered where a curve segment of the field has both ends within ``distance`` of the
 line (every point of the line between their projections is then within ``distance`` of it); the
 uncovered parts are measured and added as curves on the line, exactly on it (bracket 0), with
-their certified side codes.
+their certified side codes: ``4 tol`` off the line where they hold there, else (a needle: another
+boundary runs closer to the line, as near a tangency) at the offset :func:`proven_offset` proves
+at each vertex, the curve's ``side_offset``, its ends at breaks spliced proven points.
 """
 
 from __future__ import annotations
