@@ -506,11 +506,14 @@ def _output_rules(args) -> None:
 
 def _refuse_early(args) -> None:
     """The checks that need no heavy import, before any (a refusal costs no JAX start-up):
-    ``atlas boundaries``' ``--tol``, ``--chord``, ``--check`` and ``--fields`` (with
-    ``--model-box`` the region curves check their own: chord and check do not apply there)."""
+    ``atlas boundaries``' ``--kappa``, ``--q``, ``--q1``, ``--q2`` written as numbers, ``--tol``,
+    ``--chord``, ``--check`` and ``--fields`` (with ``--model-box`` the region curves check their
+    own: chord and check do not apply there)."""
     if args.command == "boundaries" and getattr(args, "model_box", None) is None:
-        from atlas.data.boundary_args import check_args
+        from atlas.data.boundary_args import check_args, check_model_text
 
+        for name in ("kappa", "q", "q1", "q2"):
+            check_model_text(name, getattr(args, name, None))
         check_args(args.tol, args.chord, args.check, 2, args.fields)
 
 

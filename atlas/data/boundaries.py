@@ -669,7 +669,7 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
             "line_pieces_added": len(added),
             "line_intervals_unproven": unproven,
             "lines_complete": int(unproven == 0),
-            "points_attached": spliced,
+            "points_attached": spliced + sum(len(c.spliced) for c in added),
             "points_off_curves": _off_curves(proven, curves, 2 * distance),
             "max_bracket": max_bracket,
         },

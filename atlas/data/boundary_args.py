@@ -4,6 +4,10 @@ only), so that the command line refuses a bad argument before it imports JAX or 
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from atlas.core import checks
 
 __all__ = [
@@ -18,6 +22,7 @@ __all__ = [
     "TOL",
     "check_args",
     "check_memory",
+    "check_model_text",
 ]
 
 #: default certified vertex tolerance (bracket length) [rad]
@@ -36,7 +41,9 @@ FIELD_NAMES = ("SS", "II")
 #: the slice [1]; ``beta1, beta2`` [rad]; ``bracket`` the vertex's certified bracket length [rad]
 #: (``nan``: a point where the curve crosses a seam, interpolated on its segment);
 #: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1;
-#: ``spliced`` 0/1: the vertex is a proven codimension-2 point (:attr:`atlas.data.boundary_curves.Curve.spliced`)
+#: ``spliced`` 0/1: the vertex is a proven codimension-2 point (:attr:`atlas.data.boundary_curves.Curve.spliced`);
+#: ``side_offset`` the curve's offset [rad] at which its side codes are proven (empty: the side
+#: step, 4 tol; :attr:`atlas.data.boundary_curves.Curve.side_offset`)
 CSV_COLUMNS = (
     "record",
     "curve",
@@ -55,6 +62,7 @@ CSV_COLUMNS = (
     "uncertainty",
     "proven",
     "spliced",
+    "side_offset",
 )
 
 
@@ -121,3 +129,22 @@ def check_args(tol, chord, check, max_levels, fields, shape=(2, 2)) -> tuple[str
             f"(limit {MEMORY_LIMIT / 2**30:.0f} GiB); use a smaller check or grid"
         )
     return fields
+
+
+def check_model_text(name: str, text) -> None:
+    """The command line's refusal of a bad ``--kappa``/``--q``/``--q1``/``--q2`` written as plain
+    numbers (one, or a comma list), without the range parser of :mod:`atlas.data.scene` (which
+    imports JAX): the one-line ``ValueError`` of :func:`atlas.core.checks.model_values`
+    (``kappa > 0``, ``q >= 0``, finite).  A range or an expression is left to the parser."""
+    if text is None:
+        return
+    items = str(text).split(",")
+    if len(items) > 1 and not items[-1].strip():
+        items = items[:-1]  # "0.5," is a one-value range
+    try:
+        values = [float(p) for p in items]
+    except ValueError:
+        return
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"{name}: must be finite, got {str(text).strip()!r}")
+    checks.model_values(name, np.array(values))

@@ -18,7 +18,9 @@ as the gaps left in :func:`cover_lines`).
 A stretch is covered where a curve segment of the field has both ends within ``distance`` of the
 line (every point of the line between their projections is then within ``distance`` of it); the
 uncovered parts are measured and added as curves on the line, exactly on it (bracket 0), with
-their certified side codes.
+their certified side codes: ``4 tol`` off the line where they hold there, else (a needle: another
+boundary runs closer to the line, as near a tangency) at the offset :func:`proven_offset` proves
+at each vertex, the curve's ``side_offset``, its ends at breaks spliced proven points.
 """
 
 from __future__ import annotations
@@ -137,11 +139,13 @@ def _grad(m) -> tuple[float, float]:
 
 def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
     """The class-line stretches of ``fld`` (:func:`line_stretches`) not covered by ``curves``
-    within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line
-    (:func:`_pulled` ends); returns them, the pieces still uncovered as points (kind
-    ``uncovered_class_line`` at their middle, not proven), and the stats ``(stretches,
-    uncovered length [rad], length still uncovered [rad], unproven intervals, pieces)``, the
-    pieces still uncovered as ``[beta1, beta2]`` of their two ends [rad].  A gap no
+    within ``distance`` [rad] (:func:`uncovered`), as new curves exactly on the line: where the
+    codes :func:`atlas.data.boundary_sides.side_step` off the line are the stretch's, one curve
+    between :func:`_pulled` ends; the rest of each gap (a needle of another boundary closer to
+    the line than the side step) as :func:`_needle` curves.  Returns them, the pieces still
+    uncovered as points (kind ``uncovered_class_line`` at their middle, not proven), and the
+    stats ``(stretches, uncovered length [rad], length still uncovered [rad], unproven intervals,
+    pieces)``, the pieces still uncovered as ``[beta1, beta2]`` of their two ends [rad].  A gap no
     longer than ``distance`` next to a covered part is left (each of its points is within ``2
     distance`` of a curve).  ``roots``: the germ roots of ``fld``
     (:func:`atlas.data.boundary_germs.germ_roots`)."""
@@ -161,18 +165,83 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
         return [], [], (len(stretches), length, 0.0, unproven, [])
     ends, ok = _pulled(fld, gaps, model, tol, dtype)
     added, left, left_over, pieces = [], [], 0.0, []
-    for (m, base, d, a0, b0, lft, rgt), (a, b), good in zip(gaps, ends, ok):
+    for gap, (a, b), good in zip(gaps, ends, ok):
+        m, base, d, a0, b0, lft, rgt = gap
         if good and b > a:
             xy = _on_torus(m, base + np.array([[a], [b]]) * d)
             added.append(_line_curve(fld, xy, m, lft, rgt, model, dtype))
         rest = [(a0, a), (b, b0)] if good and b > a else [(a0, b0)]
         for u, v in rest:
-            if (v - u) * math.hypot(*d) > 2 * tol:
-                left_over += (v - u) * math.hypot(*d)
-                at = _on_torus(m, base[None] + np.array([[u], [0.5 * (u + v)], [v]]) * d[None])
-                left.append(Point(*at[1], "uncovered_class_line", math.nan, *model, field=fld))
-                pieces.append(at[[0, 2]].tolist())
+            if (v - u) * math.hypot(*d) <= 2 * tol:
+                continue
+            needle = _needle(fld, gap, u, v, model, roots, tol, dtype)
+            if needle is not None:
+                added.append(needle)
+                continue
+            left_over += (v - u) * math.hypot(*d)
+            at = _on_torus(m, base[None] + np.array([[u], [0.5 * (u + v)], [v]]) * d[None])
+            left.append(Point(*at[1], "uncovered_class_line", math.nan, *model, field=fld))
+            pieces.append(at[[0, 2]].tolist())
     return added, left, (len(stretches), length, left_over, unproven, pieces)
+
+
+#: offsets [rad] off a class line tried for the side labels of a :func:`_needle` piece, largest
+#: first: 2^-43 (:data:`TIP_OFFSET`) to 2^-47, each above eight times the rounding of a
+#: coordinate near ``2 pi`` (8.9e-16), so that a sample there lies on its side
+NEEDLE_OFFSETS = 2.0 ** -np.arange(43, 48)
+
+
+def proven_offset(fld, model, m, beta) -> float:
+    """The largest of :data:`NEEDLE_OFFSETS` within half of which
+    :func:`atlas.data.boundary_germs.clear` proves that no boundary of ``fld`` comes near frame
+    ``m`` at parameter ``beta`` [rad] (so the codes at that offset are those arbitrarily close
+    to the line there); 0 where none is."""
+    line = _TORUS_LINE.get(m, m)
+    for e in NEEDLE_OFFSETS:
+        if boundary_germs.clear(fld, model, line, float(beta), 2 * float(e)):
+            return float(e)
+    return 0.0
+
+
+def _break_radius(m, t, roots):
+    """The proven distance [rad] from the vertex at parameter ``t`` of frame ``m`` (as
+    :func:`_on_torus` places it) to the break it stands for: a germ root whose ball's middle is
+    ``t`` (the ball's radius), or a multiple of ``pi/2``; plus the rounding of the parameter and
+    of the coordinates (two units in the last place of ``2 pi`` along the line, times ``sqrt 2``
+    on a diagonal, and one for the clipping below ``2 pi``).  ``None`` where ``t`` is no break."""
+    line, ulp = _TORUS_LINE.get(m, m), math.ulp(TWO_PI)
+    speed = math.sqrt(2.0) if m >= 10 else 1.0
+    for k, b, _ in roots:
+        if k == line and abs(float(b.mid()) - t) <= ulp:
+            return speed * (float(b.rad()) + 2 * ulp) + ulp
+    if abs(t - round(t / (math.pi / 2)) * (math.pi / 2)) <= ulp:
+        return speed * 2 * ulp + ulp
+    return None
+
+
+def _needle(fld, gap, u, v, model, roots, tol, dtype) -> Curve | None:
+    """A piece of the class-line stretch of ``gap`` from parameter ``u`` to ``v`` where the codes
+    a side step off the line are not the stretch's (another boundary runs closer to the line),
+    as a curve whose labels hold at its ``side_offset``: an end at a break (a germ root or a
+    multiple of ``pi/2``: a proven codimension-2 point, :func:`_break_radius` within ``tol / 2``)
+    is a spliced vertex; every other vertex
+    (the other ends, and the middle where both ends are breaks) has its labels proven
+    :func:`proven_offset` off the line, the smallest of those is the curve's ``side_offset``.
+    The stretch's codes are those arbitrarily close to the line along the whole interval between
+    its breaks (:mod:`atlas.data.boundary_germs`).  ``None`` where a vertex has no proven
+    offset."""
+    m, base, d, _, _, lft, rgt = gap
+    radius = [_break_radius(m, t, roots) for t in (u, v)]
+    radius = [r if r is not None and 2 * r <= tol else None for r in radius]
+    ts = [u, v] if None in radius else [u, 0.5 * (u + v), v]
+    radius = radius if None in radius else [radius[0], None, radius[1]]
+    offsets = [proven_offset(fld, model, m, t) for t, r in zip(ts, radius) if r is None]
+    if min(offsets) <= 0.0:
+        return None
+    xy = _on_torus(m, base + np.array(ts)[:, None] * d)
+    bracket = np.array([0.0 if r is None else 2 * r for r in radius])
+    spliced = tuple(k for k, r in enumerate(radius) if r is not None)
+    return _line_curve(fld, xy, m, lft, rgt, model, dtype, bracket, spliced, min(offsets))
 
 
 def _codes_at(fld, gaps, u, step, model, dtype):
@@ -236,14 +305,18 @@ def _on_torus(m, xy) -> np.ndarray:
     return xy
 
 
-def _line_curve(fld, xy, m, left, right, model, dtype) -> Curve:
-    """A curve on class line ``m`` from ``xy[0]`` to ``xy[1]`` with codes ``left``/``right``
-    (of the direction of travel), reversed if needed so that the higher code is on the left;
-    ``side_on`` the code on the line where it differs from both (:mod:`boundary_sides`)."""
-    mid = 0.5 * (xy[:1] + xy[1:])
+def _line_curve(fld, xy, m, left, right, model, dtype, bracket=None, spliced=(), offset=math.nan):
+    """A curve on class line ``m`` through ``xy`` with codes ``left``/``right`` (of the direction
+    of travel), reversed if needed so that the higher code is on the left; ``side_on`` the code
+    on the line where it differs from both (:mod:`boundary_sides`); ``bracket`` per vertex (0:
+    exactly on the line), ``spliced`` the vertices that are proven points, ``offset`` the
+    curve's ``side_offset``."""
+    mid = 0.5 * (xy[:1] + xy[-1:])
     on = int(boundary_sides.on_line_codes(fld, mid, np.array([m]), model, dtype)[0])
+    bracket = np.zeros(len(xy)) if bracket is None else bracket
     if left < right:
-        xy, left, right = xy[::-1], right, left
+        xy, bracket, left, right = xy[::-1], bracket[::-1], right, left
+        spliced = tuple(sorted(len(xy) - 1 - k for k in spliced))
     third = boundary_sides.NO_CODE if on in (left, right) else on
     kind = str(brackets.boundary_kind(fld, left, right)[()])
-    return Curve(fld, kind, left, right, xy, np.zeros(2), True, *model, None, third)
+    return Curve(fld, kind, left, right, xy, bracket, True, *model, None, third, spliced, offset)

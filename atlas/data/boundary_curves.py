@@ -42,7 +42,10 @@ class Curve:
     ``None`` for class lines; ``spliced``: the indices of vertices that are proven
     codimension-2 points spliced in after labelling (:func:`atlas.data.boundary_points.attach_points`:
     ``bracket`` twice the point's proven radius, ``ends`` NaN; three codes meet there, so the side
-    labels hold next to them, not at them).
+    labels hold next to them, not at them); ``side_offset``: NaN where the side labels hold the
+    run's side step off every vertex (:func:`atlas.data.boundary_sides.side_step`), else the
+    smaller offset [rad] at which they are proven (a class-line piece along which another
+    boundary runs closer to the line than the side step: :func:`atlas.data.boundary_cover.cover_lines`).
     """
 
     field: str
@@ -58,6 +61,7 @@ class Curve:
     ends: np.ndarray | None = None
     side_on: int = -1
     spliced: tuple[int, ...] = ()
+    side_offset: float = math.nan
 
 
 @dataclass
@@ -112,15 +116,16 @@ class Boundaries:
                 f"vertex,{i},{c.field},{c.kind},{c.side_left},{c.side_right},{c.side_on},"
                 f"{int(c.on_class_line)},{float(c.kappa)!r},{float(c.q1)!r},{float(c.q2)!r}"
             )
+            off = "" if math.isnan(c.side_offset) else repr(float(c.side_offset))
             rows += [
-                f"{head},{x!r},{y!r},{w!r},,,{int(k in c.spliced)}"
+                f"{head},{x!r},{y!r},{w!r},,,{int(k in c.spliced)},{off}"
                 for k, ((x, y), w) in enumerate(zip(c.vertices.tolist(), c.bracket.tolist()))
             ]
         for p in self.points:
             unc = "" if not p.proven else repr(float(p.uncertainty))
             rows.append(
                 f"point,,{p.field},{p.kind},,,,,{float(p.kappa)!r},{float(p.q1)!r},"
-                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)},"
+                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)},,"
             )
         atomic_write_text(path, "\n".join(rows) + "\n")
 
@@ -165,6 +170,7 @@ def _curve_props(c: Curve) -> dict:
         "q2": c.q2,
         "max_bracket": float(np.nanmax(c.bracket, initial=0.0)),
         "spliced": [int(k) for k in c.spliced],
+        "side_offset": c.side_offset,
     }
     return _json(props)
 
@@ -252,6 +258,16 @@ def _curve_vars(cs) -> dict:
             "curve",
             per("on_class_line").astype(np.int8),
             _GEO | _FLAG | {"long_name": "the curve lies on a class line"},
+        ),
+        "curve_side_offset": (
+            "curve",
+            per("side_offset").astype(float),
+            _GEO
+            | _RAD
+            | {
+                "long_name": "offset at which the side codes are proven",
+                "comment": "NaN: the side step (4 tolerance) off every vertex",
+            },
         ),
     } | _model_vars("curve", cs)
 

@@ -102,10 +102,13 @@ def label_pieces(fld, curves, model, tol, near, dtype="float64") -> tuple[list[C
     la, lb, ra, rb = np.split(_codes(fld, pts, model, dtype), 4)
     on_line = np.concatenate([np.full(len(c.vertices) - 1, c.on_class_line) for c in segs])
     ends = np.concatenate([a, b])
-    m = np.where(np.tile(on_line, 2), line_labels(ends, near), -1)
+    # the line of a vertex from its coordinates on the torus: the grid reaches a nudge past
+    # 2 pi, where beta2 = beta1 + 2 pi (beta2 = beta1 on the torus) is no column of the lines
+    torus = np.mod(ends, 2 * math.pi)
+    m = np.where(np.tile(on_line, 2), line_labels(torus, near), -1)
     on = np.full(len(ends), NO_CODE, np.int8)
     if (m >= 0).any():
-        on[m >= 0] = on_line_codes(fld, ends[m >= 0], m[m >= 0], model, dtype)
+        on[m >= 0] = on_line_codes(fld, torus[m >= 0], m[m >= 0], model, dtype)
     on_a, on_b = np.split(on, 2)
     m_a, m_b = np.split(m, 2)
     good = (la == lb) & (ra == rb) & (on_a == on_b) & (m_a == m_b) & (la != ra)

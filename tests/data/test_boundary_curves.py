@@ -111,3 +111,28 @@ def test_spliced_points_are_marked_in_every_file(tmp_path):
     b.to_geojson(tmp_path / "b.json")
     feats = json.loads((tmp_path / "b.json").read_text())["features"]
     assert [f["properties"].get("spliced") for f in feats[:2]] == [[1], []]
+
+
+def test_side_offset_is_stored_in_every_file(tmp_path):
+    """A class-line piece labelled closer to the line than the side step (``side_offset``
+    2^-43 rad on the II piece) says so in the netCDF (``curve_side_offset``, NaN: the side
+    step), the CSV (``side_offset`` on each of its vertex rows, empty otherwise) and the GeoJSON
+    (``side_offset``, null otherwise)."""
+    b = _boundaries()
+    b.curves[1].side_offset = 2.0**-43
+    b.to_netcdf(tmp_path / "b.nc")
+    with xr.open_dataset(tmp_path / "b.nc") as ds:
+        got = ds["curve_side_offset"].values
+        assert (
+            np.isnan(got[0])
+            and got[1] == 2.0**-43
+            and ds["curve_side_offset"].attrs["units"] == "rad"
+        )
+    b.to_csv(tmp_path / "b.csv")
+    rows = [r.split(",") for r in (tmp_path / "b.csv").read_text().splitlines()]
+    col = rows[0].index("side_offset")
+    assert [r[col] for r in rows[1:]] == ["", "", "", repr(2.0**-43), repr(2.0**-43), ""]
+    assert all(len(r) == len(CSV_COLUMNS) for r in rows)
+    b.to_geojson(tmp_path / "b.json")
+    feats = json.loads((tmp_path / "b.json").read_text())["features"]
+    assert [f["properties"].get("side_offset") for f in feats[:2]] == [None, 2.0**-43]

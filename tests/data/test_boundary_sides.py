@@ -49,8 +49,8 @@ def _on_line_code(field, point, model):
 
 
 def _check_labels(b, model, per_piece=4, seed=0):
-    """At up to ``per_piece`` segments of every piece, both ends stepped ``side_step`` off the
-    segment (normal computed here) to the left and to the right carry the piece's ``side_left``
+    """At up to ``per_piece`` segments of every piece, both ends stepped ``side_step`` (or the
+    piece's smaller ``side_offset``) off the segment (normal computed here) to the left and to the right carry the piece's ``side_left``
     and ``side_right`` in exact arithmetic (but at a spliced codimension-2 point); on a class line, the line's own exact code is
     ``side_on`` if that is set, else one of the two sides."""
     rng = np.random.default_rng(seed)
@@ -59,6 +59,7 @@ def _check_labels(b, model, per_piece=4, seed=0):
     for c in (c for c in b.curves if c.field != "class"):
         assert c.side_left > c.side_right  # oriented: the higher code on the left
         v = c.vertices
+        off = c.side_offset if np.isfinite(c.side_offset) else step  # proven closer to the line
         for k in rng.choice(len(v) - 1, min(per_piece, len(v) - 1), replace=False):
             t = (v[k + 1] - v[k]) / np.hypot(*(v[k + 1] - v[k]))
             n = np.array([-t[1], t[0]])
@@ -66,8 +67,8 @@ def _check_labels(b, model, per_piece=4, seed=0):
                 if j in c.spliced:  # a proven codimension-2 point: three codes meet there
                     continue
                 end = v[j]
-                assert _code_at(c.field, end + step * n, model) == c.side_left
-                assert _code_at(c.field, end - step * n, model) == c.side_right
+                assert _code_at(c.field, end + off * n, model) == c.side_left
+                assert _code_at(c.field, end - off * n, model) == c.side_right
                 if c.on_class_line:
                     on = _on_line_code(c.field, end, model)
                     if on is None:
@@ -120,3 +121,25 @@ def test_labels_hold_off_every_piece_damped():
         if c.field == "SS" and c.on_class_line and np.ptp(c.vertices[:, 0]) > 1e-3
     ]
     assert len(diag) >= 3 and all((c.side_left, c.side_right, c.side_on) == (1, 0, 2) for c in diag)
+
+
+@pytest.mark.parametrize("model", [(2.0, 0.1, 0.1), (7.3, 0.8, 0.02)])
+def test_diagonal_pieces_carry_the_neutral_code_up_to_the_corner(model):
+    """Damped SS on beta2 = beta1: the exact code on the line (``c1 = c2``, ``s1 = s2``, at each
+    vertex's beta1) is neutral, different from both sides, and every piece on it says so, up to
+    the corner (0, 0): a 2e-8 rad piece there, traced a nudge past 2 pi on beta2 = beta1 + 2 pi
+    (no column of the lines), had ``side_on = -1`` (its vertices taken as on beta2 = 2 pi)."""
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=1e-4)
+    diag = [
+        c
+        for c in b.curves
+        if c.on_class_line
+        and (np.abs((c.vertices[:, 1] - c.vertices[:, 0] + PI) % (2 * PI) - PI) < 1e-9).all()
+    ]
+    assert any(np.hypot(*c.vertices.T).min() < 1e-6 for c in diag)  # the corner piece
+    for c in diag:
+        for x in c.vertices[:, 0]:
+            cx, sx = (float(v) for v in contact_modes.direction(x))
+            on = _exact_code("SS", cx, sx, cx, sx, model)
+            assert on not in (c.side_left, c.side_right) and c.side_on == on
