@@ -355,7 +355,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
 
 
 def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, tseg, P, U, lam,
-                  s, k, q, H, mask, act, scale, width):
+                  s, k, q, H, mask, act, scale, width):  # fmt: skip
     """The next step of every lane (:func:`_run_lanes`): ``(ev, h, xtol, step, t0)``, ``ev``
     where it ends at a located event ``h`` away, ``step`` its length (to the first crossing, the
     window, the horizon or a stop-rule limit) and ``t0`` its start for a stop located inside."""
