@@ -230,10 +230,12 @@ def _random_lanes(n, seed):
 @pytest.mark.parametrize(("n", "seed"), [(200, 44)])
 def test_random_runs_equal_the_exact_simulator_and_the_numpy_engine(n, seed):
     """Seeded random runs over the parameter space: the JAX engine's outcomes equal the NumPy
-    engine's run by run, decided the same way (stepped, early, exact simulator) except where the
-    NumPy engine serves a degenerate direction in closed form, and equal the exact simulator's
-    except where the data flags the verdict as within rounding (``within_rounding``: seed 44 has
-    one, a gap at 9e-15 when an aligned penetration stops the run, at -6e-16 in the exact
+    engine's run by run, run by the same engine (the exact simulator or not) except where the
+    NumPy engine serves a degenerate direction in closed form (whether a run is decided early or
+    stepped to its end may differ: the NumPy engine tries the early decisions 1, 2, 4, ... steps
+    after an event, and its steps over event-free stretches are longer), and equal the exact
+    simulator's except where the data flags the verdict as within rounding (``within_rounding``:
+    seed 44 has one, a gap at 9e-15 when an aligned penetration stops the run, at -6e-16 in the exact
     simulator, which decides the free gap's sign test of IWC)."""
     lanes = _random_lanes(n, seed)
     res = _batch(lanes)
@@ -246,7 +248,9 @@ def test_random_runs_equal_the_exact_simulator_and_the_numpy_engine(n, seed):
     nr = F.run_batch(b1, b2, alpha, k, qq, np.array([ln[5] for ln in lanes]), reference=_reference)
     np.testing.assert_array_equal(res.code, nr.code)
     closed = mf.modal_tables(mf.Lanes.of(b1, b2, alpha, k, qq)).closed.any(axis=0)
-    np.testing.assert_array_equal(res.decided_by[~closed], nr.decided_by[~closed])
+    fallback = F.DECIDED_BY.index("fallback")
+    np.testing.assert_array_equal((res.decided_by == fallback)[~closed],
+                                  (nr.decided_by == fallback)[~closed])  # fmt: skip
 
 
 def test_step_pieces_equal_the_numpy_engines():
