@@ -96,6 +96,13 @@ def fake_results(mode="full") -> Results:
         for g, n, o in (("2-D 513^2", 263_169, 1.0), ("5-D 512^2 x 8 x 2 x 2", 8_388_608, 1.2))
         for dt, ns, f in (("float32", 40.0, 0.6), ("float64", 66.0, ""))
     ]  # fmt: skip
+    model_box = [
+        dict(field=f, points=129_600, seconds=s, ns_per_point=s / 129_600 * 1e9,
+             one_model_ns_per_point=12.0, over_one_model=s / 129_600 * 1e9 / 12.0,
+             undecided_before=u, undecided_after=u, stable=0.06, unstable=0.69, depends=0.25,
+             undecided=u / 129_600)
+        for f, s, u in (("SS", 1.2, 0), ("II", 60.0, 300))
+    ]  # fmt: skip
     program = dict(name="rootfree._tier2_decide", shapes="f64[256]", compiles=1, trace_s=0.4,
                    lower_s=0.3, compile_s=2.5)  # fmt: skip
     startup += [
@@ -103,7 +110,8 @@ def fake_results(mode="full") -> Results:
              min_s=85.0, max_s=85.0, in_run_s="", compared="programs", value=1, target="",
              met="", note="tracing 6.4 s", programs=json.dumps([program]))
         for c in ("atlas paper --quick", "atlas generate 16 x 16 x 2",
-                  "explorer: first 513^2 map", "explorer: first certified boundary overlay")
+                  "explorer: first 513^2 map", "explorer: first certified boundary overlay",
+                  "explorer: first certified boundary overlay after the warm-up")
     ]  # fmt: skip
     refs = {c[0]: dict(settled=4, left=0) for c in cfg["cases"]}
     meta = dict(
@@ -116,7 +124,7 @@ def fake_results(mode="full") -> Results:
         meta=meta, cfg=cfg, head=headline(wp, cfg), model_grids=model_grids, wp=wp, refs=refs,
         suites=suites,
         scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves, maps=maps,
-        startup=startup, exact=dict(points=42, seconds=3.0, failures=0),
+        startup=startup, exact=dict(points=42, seconds=3.0, failures=0), model_box_map=model_box,
     )  # fmt: skip
 
 

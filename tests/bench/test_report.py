@@ -38,6 +38,7 @@ def test_sections_in_order(results):
         "# atlas bench: speed against error",
         "## Headline",
         "### 2-D and 5-D grids",
+        "### Model-dependence map of the Fig. 1 plane",
         "### At 1e7 points (3163 x 3163 = 10,004,569 points)",
         "## Work-precision",
         "## Hard-case suites",
