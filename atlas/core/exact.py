@@ -6,7 +6,7 @@ decides every verdict without rounding: it never returns ``UNDECIDED`` and raise
 non-finite input.  It settles the points the fast kernels leave undecided and is the reference
 of the tests and benchmarks.
 
-**Scaling.**  With every input ``v = V / N`` (``N = 2^E`` the common denominator, ``V`` integer) and
+**Scaling.**  With every input ``v = V / N`` (``N`` the common denominator, ``2^E`` for floats; ``V`` integer) and
 ``x = N^2 l``, the characteristic polynomial (paper eq. 9; conventions of :mod:`atlas.core.spectral`)
 
     p(l) = det(l^2 I + B (K + l Q)) = h1 h2 - c2 s1 d1 d2,
@@ -49,6 +49,7 @@ multiple ``l*``, and non-physical inputs.
 
 from __future__ import annotations
 
+import math
 import operator
 from fractions import Fraction
 from typing import NamedTuple
@@ -153,12 +154,15 @@ class _Scaled(NamedTuple):
 
 
 def _scaled(c1, s1, c2, s2, kappa, q1, q2) -> _Scaled:
-    try:  # exact: floats are dyadic rationals n / d, d = 2^e
-        ratios = [float(v).as_integer_ratio() for v in (c1, s1, c2, s2, kappa, q1, q2)]
+    try:  # exact: floats are dyadic rationals n / d, d = 2^e; a Fraction is taken as it is
+        ratios = [
+            v.as_integer_ratio() if isinstance(v, Fraction) else float(v).as_integer_ratio()
+            for v in (c1, s1, c2, s2, kappa, q1, q2)
+        ]
     except (ValueError, OverflowError):
         args = (c1, s1, c2, s2, kappa, q1, q2)
         raise ValueError(f"exact: inputs must be finite, got {args}") from None
-    N = max(d for _, d in ratios)
+    N = math.lcm(*(d for _, d in ratios))  # the largest d when all are powers of two
     C1, S1, C2, S2, K, Q1, Q2 = [n * (N // d) for n, d in ratios]
     k1, k2 = _stiffness(K, N)
     (h1q, h1k), (h2q, h2k) = ex.h_coefficients(C1, S2, k1, k2, Q1, Q2, sub=_SUB)

@@ -667,8 +667,9 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
             "line_length_left_uncovered": left_over,
             "uncovered_pieces": pieces,
             "line_pieces_added": len(added),
-            "line_intervals_unproven": unproven,
-            "lines_complete": int(unproven == 0),
+            "line_intervals_unproven": len(unproven),
+            "unproven_intervals": unproven,
+            "lines_complete": int(not unproven),
             "points_attached": spliced + sum(len(c.spliced) for c in added),
             "points_off_curves": _off_curves(proven, curves, 2 * distance),
             "max_bracket": max_bracket,
@@ -768,7 +769,7 @@ def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
 
 def _completeness(slices) -> dict:
     """``complete``: 1 when every class-line stretch of every field and slice is proven covered
-    (:mod:`atlas.data.boundary_cover`; SS only: II is checked, not proven), else 0; and the
+    (:mod:`atlas.data.boundary_cover`), else 0; and the
     class-line length [rad] still uncovered, summed."""
     left = [v for s in slices for k, v in s.items() if k.endswith("_line_length_left_uncovered")]
     proven = [v for s in slices for k, v in s.items() if k.endswith("_lines_complete")]

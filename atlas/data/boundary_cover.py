@@ -77,13 +77,16 @@ def _frames(box):
     return [f for f in frames if not (f[0] in (4, 9) and f[0] - 4 in have)]
 
 
-def line_stretches(fld, box, model, roots, tol, dtype="float64") -> tuple[list[tuple], int]:
-    """The intervals of the class lines in ``box`` where the codes beside the line differ on its
-    two sides: ``(m, base, direction, lo, hi, left, right)``, points ``base + t direction`` for
-    ``lo <= t <= hi``, ``left``/``right`` the codes :data:`TIP_OFFSET` off it to the left and
-    the right of ``direction`` (``beta2`` moved on a diagonal); and the number of intervals whose
-    codes are not proven to be those of the whole side (module docstring)."""
-    rows, lefts, rights, unproven = [], [], [], 0
+def line_stretches(fld, box, model, roots, tol, dtype="float64") -> tuple[list[tuple], list]:
+    """The intervals of the class lines in ``box`` where the codes arbitrarily close to the line
+    differ on its two sides: ``(m, base, direction, lo, hi, left, right)``, points ``base + t
+    direction`` for ``lo <= t <= hi``, ``left``/``right`` the codes to the left and the right of
+    ``direction`` (``beta2`` moved on a diagonal); and the intervals whose codes are not proven
+    (module docstring), as ``[beta1, beta2]`` of their two ends [rad].  The codes are those
+    :data:`TIP_OFFSET` off the line where :func:`atlas.data.boundary_germs.clear` proves them the
+    side's, else the exact ones closer to it (:func:`atlas.data.boundary_germs.near_side_codes`:
+    a boundary running closer to the line than the tip offset)."""
+    rows, lefts, rights, fixed, unproven = [], [], [], {}, []
     for m, base, direction, _, t0, t1 in _frames(box):
         t = _breaks(m, t0, t1, roots)
         mid = 0.5 * (t[:-1] + t[1:])
@@ -92,17 +95,23 @@ def line_stretches(fld, box, model, roots, tol, dtype="float64") -> tuple[list[t
         on = np.asarray(base) + mid[:, None] * d
         lefts.append(on + TIP_OFFSET * off)
         rights.append(on - TIP_OFFSET * off)
-        rows += [(m, base, direction, lo, hi) for lo, hi in zip(t[:-1], t[1:])]
         line = _TORUS_LINE.get(m, m)
-        unproven += sum(
-            hi - lo > 2 * tol and not boundary_germs.clear(fld, model, line, u, 2 * TIP_OFFSET)
-            for lo, hi, u in zip(t[:-1], t[1:], mid)
-        )  # fmt: skip
+        for lo, hi, u in zip(t[:-1], t[1:], mid):
+            if hi - lo <= 2 * tol or boundary_germs.clear(fld, model, line, u, 2 * TIP_OFFSET):
+                pass
+            elif (near := boundary_germs.near_side_codes(fld, model, line, float(u))) is not None:
+                fixed[len(rows)] = near[:2] if m < 5 else near[1::-1]  # delta < 0: left of d
+            else:
+                ends = _on_torus(m, np.asarray(base, float) + np.array([[lo], [hi]]) * d)
+                unproven.append(ends.tolist())
+            rows.append((m, base, direction, lo, hi))
     if not rows:
         return [], unproven
     xy = np.concatenate(lefts + rights)
     codes = brackets.field_codes(fld, xy[:, 0], xy[:, 1], *model, dtype=dtype)
-    lft, rgt = np.split(codes, 2)
+    lft, rgt = (c.astype(int) for c in np.split(codes, 2))
+    for k, (a, b) in fixed.items():
+        lft[k], rgt[k] = a, b
     return [(*r, int(a), int(b)) for r, a, b in zip(rows, lft, rgt) if a != b], unproven
 
 
@@ -143,13 +152,15 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
     codes :func:`atlas.data.boundary_sides.side_step` off the line are the stretch's, one curve
     between :func:`_pulled` ends; the rest of each gap (a needle of another boundary closer to
     the line than the side step) as :func:`_needle` curves.  Returns them, the pieces still
-    uncovered as points (kind ``uncovered_class_line`` at their middle, not proven), and the
+    uncovered and the line intervals whose codes are not proven as points (kinds
+    ``uncovered_class_line`` and ``unproven_class_line`` at their middle, not proven), and the
     stats ``(stretches, uncovered length [rad], length still uncovered [rad], unproven intervals,
-    pieces)``, the pieces still uncovered as ``[beta1, beta2]`` of their two ends [rad].  A gap no
+    pieces)``, intervals and pieces as ``[beta1, beta2]`` of their two ends [rad].  A gap no
     longer than ``distance`` next to a covered part is left (each of its points is within ``2
     distance`` of a curve).  ``roots``: the germ roots of ``fld``
     (:func:`atlas.data.boundary_germs.germ_roots`)."""
     stretches, unproven = line_stretches(fld, box, model, roots, tol, dtype)
+    marks = [_mark(fld, ends, "unproven_class_line", model) for ends in unproven]
     gaps, length = [], 0.0
     for m, base, direction, lo, hi, left, right in stretches:
         d = np.asarray(direction, float)
@@ -162,9 +173,9 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
             length += size
             gaps.append((m, np.asarray(base, float), d, a, b, left, right))
     if not gaps:
-        return [], [], (len(stretches), length, 0.0, unproven, [])
+        return [], marks, (len(stretches), length, 0.0, unproven, [])
     ends, ok = _pulled(fld, gaps, model, tol, dtype)
-    added, left, left_over, pieces = [], [], 0.0, []
+    added, left, left_over, pieces = [], marks, 0.0, []
     for gap, (a, b), good in zip(gaps, ends, ok):
         m, base, d, a0, b0, lft, rgt = gap
         if good and b > a:
@@ -179,10 +190,17 @@ def cover_lines(fld, box, model, curves, roots, distance, tol, dtype="float64"):
                 added.append(needle)
                 continue
             left_over += (v - u) * math.hypot(*d)
-            at = _on_torus(m, base[None] + np.array([[u], [0.5 * (u + v)], [v]]) * d[None])
-            left.append(Point(*at[1], "uncovered_class_line", math.nan, *model, field=fld))
-            pieces.append(at[[0, 2]].tolist())
+            pieces.append(_on_torus(m, base[None] + np.array([[u], [v]]) * d[None]).tolist())
+            left.append(_mark(fld, pieces[-1], "uncovered_class_line", model))
     return added, left, (len(stretches), length, left_over, unproven, pieces)
+
+
+def _mark(fld, ends, kind, model) -> Point:
+    """A point (not proven) of ``kind`` at the middle of a class-line piece with ``ends``
+    ``[[beta1, beta2], [beta1, beta2]]`` [rad] (the shorter way round the torus)."""
+    a, b = np.asarray(ends, float)
+    mid = a + 0.5 * ((b - a + math.pi) % TWO_PI - math.pi)
+    return Point(*(mid % TWO_PI), kind, math.nan, *model, field=fld)
 
 
 #: offsets [rad] off a class line tried for the side labels of a :func:`_needle` piece, largest
@@ -195,9 +213,12 @@ def proven_offset(fld, model, m, beta) -> float:
     """The largest of :data:`NEEDLE_OFFSETS` within half of which
     :func:`atlas.data.boundary_germs.clear` proves that no boundary of ``fld`` comes near frame
     ``m`` at parameter ``beta`` [rad] (so the codes at that offset are those arbitrarily close
-    to the line there); 0 where none is."""
+    to the line there), else the largest ``2 atan(2^-k)`` (``k`` in
+    :data:`atlas.data.boundary_germs.NEAR_EXPONENTS`, below ``2^-47``: a sample there is exact
+    rational directions, not float coordinates) within which it proves it; 0 where none is."""
     line = _TORUS_LINE.get(m, m)
-    for e in NEEDLE_OFFSETS:
+    smaller = [2 * math.atan(2.0**-k) for k in boundary_germs.NEAR_EXPONENTS if k > 47]
+    for e in [*NEEDLE_OFFSETS, *smaller]:
         if boundary_germs.clear(fld, model, line, float(beta), 2 * float(e)):
             return float(e)
     return 0.0

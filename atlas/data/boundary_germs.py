@@ -40,10 +40,11 @@ from fractions import Fraction
 
 import flint
 
+from atlas.core import brackets, exact
 from atlas.core import expressions as ex
 from atlas.data.boundary_points import TORUS_LINES, angle_from_tan_half, real_roots
 
-__all__ = ["boundary_polynomials", "clear", "germ_roots", "germs"]
+__all__ = ["boundary_polynomials", "clear", "germ_roots", "germs", "near_side_codes"]
 
 _CTX = flint.fmpq_mpoly_ctx.get(("t", "e", "l"), "lex")
 _T, _E, _L = _CTX.gens()
@@ -185,6 +186,19 @@ def germ_roots(fld, model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]
     return out
 
 
+def _dominated(fld, model, m, t_mid, t_box, e_max) -> bool:
+    """Whether ``|g_0(t)| > sum_{b >= 1} |g_b(t)| e_max^b`` over the ball ``t_box`` (middle
+    ``t_mid``) for every boundary polynomial of ``fld`` near line ``m`` (256-bit balls)."""
+    for rows in germs(fld, m, model):
+        polys = [flint.arb_poly(list(r.coeffs())) for r in rows]
+        # mean-value form: a ball argument in Horner's scheme loses the cancellation
+        g0 = polys[0](t_mid) + polys[0].derivative()(t_box) * (t_box - t_mid)
+        rest = sum((abs(p(t_box)) * e_max**k for k, p in enumerate(polys) if k), flint.arb(0))
+        if not abs(g0).lower() > rest.upper():
+            return False
+    return True
+
+
 def clear(fld, model, m, beta: float, delta_max: float, slack: float = 1e-14) -> bool:
     """Whether no branch of a boundary of ``fld`` comes within ``delta_max`` [rad] (angle off the
     line, module docstring) of line ``m`` at free angle ``beta`` [rad] (+- ``slack``): ``|g_0(t)|
@@ -196,11 +210,47 @@ def clear(fld, model, m, beta: float, delta_max: float, slack: float = 1e-14) ->
             return False
         t_box, t_mid = (b / 2).tan(), (flint.arb(beta) / 2).tan()
         e_max = flint.arb(math.tan(0.5 * delta_max) * (1 + 1e-6))
-        for rows in germs(fld, m, model):
-            polys = [flint.arb_poly(list(r.coeffs())) for r in rows]
-            # mean-value form: a ball argument in Horner's scheme loses the cancellation
-            g0 = polys[0](t_mid) + polys[0].derivative()(t_box) * (t_box - t_mid)
-            rest = sum((abs(p(t_box)) * e_max**k for k, p in enumerate(polys) if k), flint.arb(0))
-            if not abs(g0).lower() > rest.upper():
-                return False
-    return True
+        return _dominated(fld, model, m, t_mid, t_box, e_max)
+
+
+#: the exponents ``k`` of the offsets ``e = tan(delta / 2) = 2^-k`` tried by
+#: :func:`near_side_codes`, largest offset first (``2^-43`` is the tip offset, ``2^-160`` below
+#: any boundary branch the grid's angles could tell from the line)
+NEAR_EXPONENTS = tuple(range(43, 161, 3))
+
+
+def _value_at(r, t, e) -> Fraction:
+    """A direction component ``r`` (``_Rat2`` or a rational) at rationals ``(t, e)``, exactly."""
+    if not isinstance(r, _Rat2):
+        return Fraction(r)
+    v = r.num(flint.fmpq(t.numerator, t.denominator), flint.fmpq(e.numerator, e.denominator), 0)
+    w = (1 + t * t) ** r.i * (1 + e * e) ** r.j
+    return Fraction(int(v.p), int(v.q)) / w
+
+
+def near_side_codes(fld, model, m, beta: float) -> tuple[int, int, float] | None:
+    """The codes of ``fld`` arbitrarily close to class line ``m`` at free angle ``beta`` [rad],
+    on the side ``delta < 0`` and ``delta > 0`` (module docstring), proven: at ``t`` the float
+    nearest ``tan(beta / 2)`` (an exact dyadic rational), the largest ``e = 2^-k`` (``k`` in
+    :data:`NEAR_EXPONENTS`) with no branch of a boundary polynomial for ``|e'| <= e``
+    (:func:`_dominated`), and the exact codes (:func:`atlas.core.exact.point_spectral`) at the
+    exactly rational unit directions of ``(t, +-e)``.  Returns ``(code at -e, code at +e, delta
+    [rad])`` (``delta = 2 atan(e)``), or ``None`` where no offset is proven."""
+    model = tuple(float(v) for v in model)
+    t = Fraction(math.tan(0.5 * beta))
+    with flint.ctx.workprec(256):
+        t_ball = flint.arb(flint.fmpq(t.numerator, t.denominator))
+        k = next(
+            (k for k in NEAR_EXPONENTS
+             if _dominated(fld, model, m, t_ball, t_ball, flint.arb(2) ** -k)),
+            None,
+        )  # fmt: skip
+    if k is None:
+        return None
+    kappa, q1, q2 = (Fraction(v) for v in model)
+    codes = []
+    for e in (-Fraction(1, 2**k), Fraction(1, 2**k)):
+        dirs = [_value_at(r, t, e) for r in _directions(m)]
+        verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
+        codes.append(int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0]))
+    return codes[0], codes[1], 2 * math.atan(2.0**-k)

@@ -35,6 +35,7 @@ _MARKERS = {
     "SS_meets_II": "m*",
     "end": "kx",
     "uncovered_class_line": "co",  # a class-line stretch no curve covers (proven = 0)
+    "unproven_class_line": "cx",  # a class-line interval whose side codes are not proven
 }
 
 
