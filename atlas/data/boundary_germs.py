@@ -252,5 +252,7 @@ def near_side_codes(fld, model, m, beta: float) -> tuple[int, int, float] | None
     for e in (-Fraction(1, 2**k), Fraction(1, 2**k)):
         dirs = [_value_at(r, t, e) for r in _directions(m)]
         verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
-        codes.append(int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0]))
+        codes.append(
+            int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])
+        )
     return codes[0], codes[1], 2 * math.atan(2.0**-k)
