@@ -81,6 +81,7 @@ from atlas.data import (
     boundary_germs,
     boundary_paths,
     boundary_points,
+    boundary_roots,
     boundary_sides,
     boundary_tips,
     limits,
@@ -637,6 +638,9 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
         attrs["line_points"] = sum(p.proven for p in pts)
     distance = max(chord, near)
     roots = boundary_germs.germ_roots(fld, model)
+    if fld == "SS":  # every algebraic root accounted for
+        counts, undecided = boundary_roots.ss_root_account(model, roots, dtype)
+        attrs, pts = attrs | counts, pts + undecided
     added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )
