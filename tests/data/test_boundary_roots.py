@@ -1,0 +1,90 @@
+"""Every algebraic root of the SS line restrictions accounted for.  The verdict ``not_boundary`` is
+checked independently: the exact tier's codes on a small circle around the root are one code on
+each side of the line (no boundary but the line itself comes near it)."""
+
+import math
+
+import numpy as np
+import pytest
+from samples import exact_code
+
+from atlas.data import boundaries as bd
+from atlas.data import boundary_germs, boundary_points, boundary_roots
+
+PI = math.pi
+Q0 = (0.5, 0.0, 0.0)
+DAMPED = (2.0, 0.1, 0.1)
+
+
+def _account(model):
+    roots = boundary_points.line_roots(model)
+    codes = boundary_points.root_codes("SS", roots, model)
+    listed = (codes != codes[:, :, :1]).any(axis=(1, 2))
+    germs = boundary_germs.germ_roots("SS", model)
+    return roots, listed, boundary_roots.account_roots("SS", model, roots, germs, listed)
+
+
+@pytest.mark.parametrize("model, n", [(Q0, 28), (DAMPED, 44)])
+def test_every_root_has_a_verdict(model, n):
+    """Each root gets one verdict; a listed proven point is a ``point``; both seam tangencies
+    at q = 0, ``(0, pi/6)`` and ``(0, 5 pi/6)``, are points; crossings of class lines are
+    multiples of ``pi/2``."""
+    roots, listed, verdicts = _account(model)
+    assert len(verdicts) == len(roots) == n
+    assert set(verdicts) <= set(boundary_roots.KINDS)
+    assert all(v == "point" for v, on in zip(verdicts, listed) if on)
+    for (m, ball, _), v in zip(roots, verdicts):
+        beta = float(ball.mid())
+        if v == "class_crossing":
+            assert abs(beta / (PI / 2) - round(beta / (PI / 2))) < 1e-12
+        if m == 0 and model == Q0 and min(abs(beta - PI / 6), abs(beta - 5 * PI / 6)) < 1e-12:
+            assert v == "point"
+    assert verdicts.count("not_boundary") >= 8
+
+
+def _point(m, beta):
+    if m < 5:
+        return np.array([m * PI / 2, beta]), np.array([1.0, 0.0])
+    if m < 10:
+        return np.array([beta, (m - 5) * PI / 2]), np.array([0.0, 1.0])
+    return np.array([beta, beta + (m - 11) * PI]), np.array([-1.0, 1.0]) / math.sqrt(2)
+
+
+@pytest.mark.parametrize("model", [Q0, DAMPED])
+def test_not_boundary_roots_have_one_code_per_side(model):
+    """Around each ``not_boundary`` root, 24 points on a circle of radius 1e-7 rad (off the line
+    by more than a tenth of it) and 1e-12 off the line 1e-7 along it on both sides (inside a
+    needle a tangent boundary would leave): the exact tier's code is the same on all of one
+    side."""
+    roots, _, verdicts = _account(model)
+    checked = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary":
+            continue
+        at, normal = _point(m, float(ball.mid()))
+        sides = {1: set(), -1: set()}
+        along = np.array([normal[1], -normal[0]])
+        near = [s * 1e-7 * along + r * 1e-12 * normal for s in (-1, 1) for r in (-1, 1)]
+        ring = [1e-7 * np.array([math.cos(a), math.sin(a)]) for a in np.arange(24) * PI / 12]
+        for off in near + ring:
+            side = off @ normal
+            if abs(side) > 1e-13:
+                sides[int(np.sign(side))].add(exact_code("SS", *(at + off), model))
+        assert len(sides[1]) == 1 and len(sides[-1]) == 1, (m, float(ball.mid()), sides)
+        checked += 1
+    assert checked == verdicts.count("not_boundary")
+
+
+def test_undecided_roots_are_listed_as_points():
+    """The undecided roots of a slice are its ``undecided_line_root`` points (not proven), stored
+    with the other points; the counts per verdict add up to the algebraic count."""
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *Q0, fields=("SS",), check=0)
+    counts = [b.attrs[f"SS_line_roots_{k}"] for k in boundary_roots.KINDS]
+    assert sum(counts) == b.attrs["SS_line_roots"] == 28
+    assert b.attrs["SS_line_roots_point"] == b.attrs["SS_line_points"] == 10
+    left = [p for p in b.points if p.kind == "undecided_line_root"]
+    assert len(left) == b.attrs["SS_line_roots_undecided"]
+    assert all(not p.proven and math.isnan(p.uncertainty) for p in left)
+    kinds = b.to_dataset()["point_kind"].values.tolist()
+    assert kinds.count("undecided_line_root") == len(left)
