@@ -11,8 +11,10 @@ a root, so along each interval between breaks the codes beside the line are cons
 certified evaluation on each side, at the interval's middle, decides whether the whole interval is
 a boundary stretch.  Each sample is taken :data:`TIP_OFFSET` off the line (along ``beta2`` on a
 diagonal) where :func:`atlas.data.boundary_germs.clear` proves that no boundary passes between
-it and the line: then the classification of the interval is proven; an interval where that fails
-is counted (``unproven``), unless it is shorter than ``2 tol`` (below the vertices' resolution,
+it and the line: then the classification of the interval is proven.  Where that fails (a boundary
+runs closer to the line, as at vanishing damping) the samples are taken closer, in exact
+arithmetic (:func:`atlas.data.boundary_germs.near_side_codes`); an interval where that fails too
+is listed (``unproven``), unless it is shorter than ``2 tol`` (below the vertices' resolution,
 as the gaps left in :func:`cover_lines`).
 
 A stretch is covered where a curve segment of the field has both ends within ``distance`` of the

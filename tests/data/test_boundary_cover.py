@@ -101,7 +101,10 @@ def test_what_is_left_uncovered_is_listed(monkeypatch):
     codes 1e-13 rad off the line's two sides (1e-9 off it both are in the needle a tangent
     boundary leaves along the line).  Run without the offsets that label the needles (all are
     covered with them)."""
+    from atlas.data import boundary_germs
+
     monkeypatch.setattr(bc, "NEEDLE_OFFSETS", np.zeros(0))
+    monkeypatch.setattr(boundary_germs, "NEAR_EXPONENTS", ())
     g = np.arange(64) * 2 * PI / 64
     q0 = bd.slice_boundaries(g, g, 0.5, 0.0, 0.0, fields=("SS",), check=0)
     left = [p for p in q0.points if p.kind == "uncovered_class_line"]
