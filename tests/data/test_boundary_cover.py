@@ -278,3 +278,16 @@ def test_paper_slices_are_complete():
     b = bd.boundaries(Scene(beta1="0:2pi:32", beta2="0:2pi:32", kappa=0.5, q="0,1e-6"), check=0)
     assert b.attrs["complete"] == 1 and b.attrs["uncovered_line_length"] == 0
     assert not [p for p in b.points if p.kind in ("unproven_class_line", "uncovered_class_line")]
+    # labels proven below float resolution (exact near-line samples) hold there: mpmath reference
+    for c in b.curves:
+        if not c.side_offset < 2.0**-47:
+            continue
+        v = c.vertices
+        w = (v[:, 1] - v[:, 0]) % (2 * PI)
+        assert c.field == "II" and np.allclose(w, PI, atol=1e-12)  # on beta2 = beta1 + pi
+        up = 1 if v[-1, 0] > v[0, 0] else -1  # left of the direction of travel: beta2 up
+        k = round(-math.log2(math.tan(c.side_offset / 2)))
+        model = (c.kappa, c.q1, c.q2)
+        for j in set(range(len(v))) - set(c.spliced):
+            got = tuple(_rational_code(v[j, 0], s, "beta2=beta1+pi", model, k) for s in (up, -up))
+            assert got == (c.side_left, c.side_right)
