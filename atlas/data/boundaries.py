@@ -641,6 +641,8 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
     if fld == "SS":  # every algebraic root accounted for
         counts, undecided = boundary_roots.ss_root_account(model, roots, dtype)
         attrs, pts = attrs | counts, pts + undecided
+    else:
+        attrs |= boundary_roots.ii_root_account(model, roots)
     added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )

@@ -32,7 +32,7 @@ import numpy as np
 from atlas.data import boundary_germs, boundary_points
 from atlas.data.boundary_curves import Point
 
-__all__ = ["KINDS", "account_roots", "ss_root_account"]
+__all__ = ["KINDS", "account_roots", "distinct", "ii_root_account", "ss_root_account"]
 
 #: the verdicts of :func:`account_roots`
 KINDS = ("point", "not_boundary", "class_crossing", "undecided")
@@ -126,3 +126,22 @@ def _xy(m, beta) -> tuple[float, float]:
         (fixed, beta) if m < 5 else (beta, fixed) if m < 10 else (beta, beta + (m - 11) * math.pi)
     )
     return x % (2 * math.pi), y % (2 * math.pi)
+
+
+def distinct(roots) -> list:
+    """``roots`` (``(m, beta ball, multiplicity)``) with those whose balls overlap an earlier one
+    on the same line left out (a root of several boundary polynomials, counted once)."""
+    out = []
+    for m, ball, mult in roots:
+        if not any(k == m and b.overlaps(ball) for k, b, _ in out):
+            out.append((m, ball, mult))
+    return out
+
+
+def ii_root_account(model, germ_roots) -> dict:
+    """Every distinct germ root of the II boundary polynomials on the class lines
+    (:func:`distinct`) with its verdict (:func:`account_roots`, none listed: the II points are
+    not stored): ``line_roots`` (the algebraic count) and ``line_roots_<verdict>``."""
+    roots = distinct(germ_roots)
+    verdicts = account_roots("II", model, roots, germ_roots, [False] * len(roots))
+    return {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}

@@ -50,13 +50,32 @@ def _point(m, beta):
     return np.array([beta, beta + (m - 11) * PI]), np.array([-1.0, 1.0]) / math.sqrt(2)
 
 
-@pytest.mark.parametrize("model", [Q0, DAMPED])
-def test_not_boundary_roots_have_one_code_per_side(model):
+def _account_ii(model):
+    roots = boundary_roots.distinct(boundary_germs.germ_roots("II", model))
+    germs = boundary_germs.germ_roots("II", model)
+    return (
+        roots,
+        None,
+        boundary_roots.account_roots("II", model, roots, germs, [False] * len(roots)),
+    )
+
+
+def test_ii_roots_are_counted_once_with_a_verdict():
+    """II: the germ roots of the discriminant and the tie resultant, each distinct root once
+    (76 -> 72 at kappa 2, q 0.1), every one with a verdict."""
+    germs = boundary_germs.germ_roots("II", DAMPED)
+    counts = boundary_roots.ii_root_account(DAMPED, germs)
+    assert len(germs) == 76 and counts["line_roots"] == 72
+    assert sum(counts[f"line_roots_{k}"] for k in boundary_roots.KINDS) == 72
+
+
+@pytest.mark.parametrize("field, model", [("SS", Q0), ("SS", DAMPED), ("II", DAMPED)])
+def test_not_boundary_roots_have_one_code_per_side(field, model):
     """Around each ``not_boundary`` root, 24 points on a circle of radius 1e-7 rad (off the line
     by more than a tenth of it) and 1e-12 off the line 1e-7 along it on both sides (inside a
     needle a tangent boundary would leave): the exact tier's code is the same on all of one
     side."""
-    roots, _, verdicts = _account(model)
+    roots, _, verdicts = (_account if field == "SS" else _account_ii)(model)
     checked = 0
     for (m, ball, _), v in zip(roots, verdicts):
         if v != "not_boundary":
@@ -69,7 +88,7 @@ def test_not_boundary_roots_have_one_code_per_side(model):
         for off in near + ring:
             side = off @ normal
             if abs(side) > 1e-13:
-                sides[int(np.sign(side))].add(exact_code("SS", *(at + off), model))
+                sides[int(np.sign(side))].add(exact_code(field, *(at + off), model))
         assert len(sides[1]) == 1 and len(sides[-1]) == 1, (m, float(ball.mid()), sides)
         checked += 1
     assert checked == verdicts.count("not_boundary")
