@@ -295,7 +295,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         if not keep.all():
             gone = ix[~keep]
             pending.append(gone[(st.status[gone] != RUNNING) & ~fallback[gone]])
-            sel = _rows(keep)
+            sel = eb.rows(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
@@ -324,13 +324,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         b = bins(t, width, nbins)
         st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        _leave(st, ix, t, g, s, keep, _rows(keep & (t >= T)), 0)
+        _leave(st, ix, t, g, s, keep, eb.rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         lo, hi, mon, M, Hw, small = sw.brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
                                                  act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = _rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        r = eb.rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         if r.size:
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
@@ -346,7 +346,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
-        ev_r, dva = _stops_before_events(st, tables, stops, _rows(ev), ix, t, t0, tseg,
+        ev_r, dva = _stops_before_events(st, tables, stops, eb.rows(ev), ix, t, t0, tseg,
                                          s, mask, act, P, U, lam, scale, H, keep)  # fmt: skip
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
@@ -371,7 +371,7 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
     step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
     t0 = t.copy()
     # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
-    r = _rows(keep & ~small & (step > H))
+    r = eb.rows(keep & ~small & (step > H))
     if r.size:
         rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
                                            mask, act, scale, tseg, width)  # fmt: skip
@@ -403,9 +403,9 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo``; ``lo``, ``hi``
     of a bracket closed by :func:`locate_root` (and its twin's) set to the event (in place)."""
     # smallest sigma_lo, ties to the tightest bracket
-    m = _min_cols(lo)
+    m = eb.min_cols(lo)
     tie_hi = np.where(lo <= m[:, None], hi, np.inf)
-    first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
+    first = np.where(np.isinf(eb.min_cols(tie_hi)), np.argmin(lo, axis=1),
                      np.argmin(tie_hi, axis=1))  # fmt: skip
     h = hi[np.arange(first.size), first]
     ev = keep & (h - m <= xtol) & (h <= rem)
@@ -413,8 +413,8 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     # first crossing is in it, located on that function alone (:func:`locate_root`); the
     # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
     twin = _twins(first, mon, q)
-    other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-    r = _rows(keep & ~ev & (h <= rem) & (other > h))
+    other = eb.min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
+    r = eb.rows(keep & ~ev & (h <= rem) & (other > h))
     if r.size:
         fr = first[r]
         a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
@@ -492,7 +492,7 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
     for c in range(2):
         np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
-    cut = _rows(first < np.iinfo(np.int64).max)
+    cut = eb.rows(first < np.iinfo(np.int64).max)
     f, m = first[cut], n_in[cut] + 1
     s_r = step[r[cut]]
     return r[cut], s_r * f / m, s_r * (f - 1) / m
@@ -517,19 +517,9 @@ def cancels(P, U, g, scale):
 _BITS = np.arange(2)
 
 
-def _rows(x):
-    """``np.flatnonzero`` of a 1-D array, without its wrappers (called several times a step)."""
-    return x.nonzero()[0]
-
-
 def _all_cols(x):
     """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
     return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
-
-
-def _min_cols(x):
-    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
-    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
 
 
 def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
@@ -551,7 +541,7 @@ def _stops_at(tables, ix, mask, act, g, scale):
     with np.errstate(invalid="ignore"):
         cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
         cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
-    r = _rows(cand)
+    r = eb.rows(cand)
     if r.size:
         lx, mk = ix[r], mask[r]
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
@@ -600,7 +590,7 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
     st.code[ix[settle]] = np.array([OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
-    r = _rows(iwc)
+    r = eb.rows(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
         s0 = early.reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
@@ -672,7 +662,7 @@ def _impact_log(st: State):
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
     order = np.lexsort((t, lane))
     lane, t, v, c = lane[order], t[order], v[order], c[order]
-    cuts = _rows(np.diff(lane)) + 1
+    cuts = eb.rows(np.diff(lane)) + 1
     starts = np.concatenate([[0], cuts])
     return {int(lane[a]): (t[a:b], v[a:b], c[a:b])
             for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
@@ -722,7 +712,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
 
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
-    r = _rows(iwc)
+    r = eb.rows(iwc)
     iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
@@ -833,7 +823,7 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         res = run_lanes(*arrays, **opts)
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
-    for i in _rows(res.decided_by == 3):
+    for i in eb.rows(res.decided_by == 3):
         out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
         res.within_rounding[i] = stop_rule.run_within_rounding(run)
