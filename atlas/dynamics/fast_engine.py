@@ -127,6 +127,8 @@ __all__ = ["FastResult", "run_batch", "run_lanes", "outcomes", "locate_root"]
 XTOL = 1e-12
 STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
 ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
+SUBSTEPS = 4  # further certified safe steps within one step's window (:func:`_safe_substeps`)
+SUBSTEP_MIN = 0.05  # shortest of them, in H_S
 
 #: how a trajectory of :func:`outcomes` was decided
 DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
@@ -369,6 +371,11 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
     past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
     step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
     step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
+    # a step cut short by a sigma_lo with no crossing certified in the window: more safe steps
+    cap = np.minimum(np.minimum(Hw, rem), lim_lo)
+    r = eb.rows(keep & ~ev & ~past & (step == m) & (step < cap) & np.isinf(eb.min_cols(hi)))
+    if r.size:
+        step[r] = _safe_substeps(r, step, cap, P, U, lam, t - tseg, s, k, q, M, mon, H)
     t0 = t.copy()
     # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
     r = eb.rows(keep & ~small & (step > H))
@@ -377,6 +384,32 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
                                            mask, act, scale, tseg, width)  # fmt: skip
         step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
     return ev, h, xtol, step, t0
+
+
+def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
+    """Steps (of the rows ``r``) continued by up to ``SUBSTEPS`` further certified safe steps
+    (:func:`eb.safe_steps` from the event functions at the step's end, under the same curvature
+    bound ``M``, valid over the whole window), each at least ``SUBSTEP_MIN H_S``, never past
+    ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified: no monitored
+    function changes sign over the longer step.  An oscillating gap far from its contact is
+    then crossed in one step of the window rather than several of its curvature's ``sigma_lo``."""
+    out = step[r].copy()
+    live = np.arange(r.size)
+    for _ in range(SUBSTEPS):
+        rr = r[live]
+        d, v, acc = eb.evaluate(P[rr], U[rr], lam[rr], tau[rr] + out[live])[:3]
+        f, fp = eb.event_functions(d, v, acc, k[rr], q[rr])
+        A, Bd = s[rr] * f, s[rr] * fp
+        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, M[rr])
+        m_on = mon[rr]
+        inc = eb.min_cols(np.where(m_on, lo, np.inf))
+        ok = (~(m_on & ((A <= 0) | np.isfinite(hi))).any(axis=1)) & (inc >= SUBSTEP_MIN * H[rr])
+        live = live[ok]
+        out[live] = np.minimum(out[live] + inc[ok], cap[r[live]])
+        live = live[out[live] < cap[r[live]]]
+        if live.size == 0:
+            break
+    return out
 
 
 def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale,
