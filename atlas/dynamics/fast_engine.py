@@ -23,7 +23,10 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
 2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
 stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
-costs many times the median lane); inside a step longer than ``H_S`` the gaps are sampled at
+costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
+certified in the window goes on with further safe steps from its end under the same bound
+(:func:`_safe_substeps`: an oscillation far from its contacts crosses the window in one step);
+inside a step longer than ``H_S`` the gaps are sampled at
 most ``H_S`` apart (:func:`_sample_step`) for the late-amplitude test and the stop rule, unless
 both provably stay within ``10 scale``; the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
