@@ -29,3 +29,15 @@ def exact_code(field, b1, b2, model):
     if field == "SS":
         return v["stable_SS"]
     return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+
+
+def limit_bracket_inputs(n: int = 2000, seed: int = 7):
+    """Random inputs ``(d, v, M, scale, H)`` of the stop rule's limit brackets spanning the limits:
+    gaps (n, 2) up to 1e7 scale, velocities up to 1e5, curvature bounds (n, 4) 1e-2..1e6, scales
+    0.1..10, windows 0.1..3."""
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 7, (n, 2))
+    v = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 5, (n, 2))
+    M, scale = 10 ** rng.uniform(-2, 6, (n, 4)), 10 ** rng.uniform(-1, 1, n)
+    H = rng.uniform(0.1, 3, n)
+    return d, v, M, scale, H

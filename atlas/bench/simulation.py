@@ -139,12 +139,13 @@ def outcome_maps(cfg) -> list[dict]:
                 )
         ref_s = time.perf_counter() - t0
         a = ds.attrs
+        used = int(a.get("workers", workers))  # fewer if the processes only took turns
         fast_rate = a["trajectories"] / a["seconds"]
         core_rate = one.attrs["trajectories"] / one.attrs["seconds"]
         ref_rate = cells.size / ref_s
         rows.append(dict(
             map=f"{n}x{n}, kappa={kappa:g}, q={q:g}, alpha={alpha / math.pi:.3g}pi",
-            trajectories=a["trajectories"], workers=workers, fast_seconds=a["seconds"],
+            trajectories=a["trajectories"], workers=used, fast_seconds=a["seconds"],
             fast_per_s=fast_rate, core_seconds=one.attrs["seconds"], core_per_s=core_rate,
             identical=identical, ref_cells=int(cells.size), ref_per_s=ref_rate,
             speedup=core_rate / ref_rate,
@@ -155,7 +156,7 @@ def outcome_maps(cfg) -> list[dict]:
             agreement=1 - len(bad) / cells.size, disagreements="; ".join(bad),
         ))  # fmt: skip
         log(
-            f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s on {workers} cores, "
+            f"outcome map {rows[-1]['map']}: {fast_rate:.0f}/s on {used} cores, "
             f"{core_rate:.0f}/s on one, {ref_rate:.1f}/s exact"
         )
     return rows

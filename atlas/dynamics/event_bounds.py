@@ -18,6 +18,8 @@ __all__ = [
     "take",
     "NEUTRAL",
     "sum4",
+    "rows",
+    "min_cols",
     "re_sum4",
     "evaluate",
     "taylor",
@@ -67,6 +69,17 @@ def sum4(x):
     if x.shape[-1] != 4:
         return x.sum(axis=-1)
     return ((x[..., 0] + x[..., 1]) + x[..., 2]) + x[..., 3]
+
+
+def rows(x):
+    """``np.flatnonzero`` of a 1-D NumPy array, without its wrappers (called several times a
+    step by the engines)."""
+    return x.nonzero()[0]
+
+
+def min_cols(x):
+    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
+    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
 
 
 def re_sum4(z):

@@ -23,7 +23,10 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
 2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
 stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
-costs many times the median lane); inside a step longer than ``H_S`` the gaps are sampled at
+costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
+certified in the window goes on with further safe steps from its end under the same bound
+(:func:`_safe_substeps`: an oscillation far from its contacts crosses the window in one step);
+inside a step longer than ``H_S`` the gaps are sampled at
 most ``H_S`` apart (:func:`_sample_step`) for the late-amplitude test and the stop rule, unless
 both provably stay within ``10 scale``; the first
 crossing is the function whose bracket ``[sigma_lo, sigma_hi]`` is narrower than ``1e-12 H_S`` (functions within ``1e3`` times that of it
@@ -127,6 +130,8 @@ __all__ = ["FastResult", "run_batch", "run_lanes", "outcomes", "locate_root"]
 XTOL = 1e-12
 STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
 ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
+SUBSTEPS = 4  # further certified safe steps within one step's window (:func:`_safe_substeps`)
+SUBSTEP_MIN = 0.05  # shortest of them, in H_S
 
 #: how a trajectory of :func:`outcomes` was decided
 DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
@@ -295,7 +300,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         if not keep.all():
             gone = ix[~keep]
             pending.append(gone[(st.status[gone] != RUNNING) & ~fallback[gone]])
-            sel = _rows(keep)
+            sel = eb.rows(keep)
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
@@ -324,13 +329,13 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         b = bins(t, width, nbins)
         st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
-        _leave(st, ix, t, g, s, keep, _rows(keep & (t >= T)), 0)
+        _leave(st, ix, t, g, s, keep, eb.rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
         lo, hi, mon, M, Hw, small = sw.brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
                                                  act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = _rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        r = eb.rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
         if r.size:
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
@@ -346,7 +351,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         fallback[ix[st_lane]] = True
         keep &= ~st_lane
         ev &= keep
-        ev_r, dva = _stops_before_events(st, tables, stops, _rows(ev), ix, t, t0, tseg,
+        ev_r, dva = _stops_before_events(st, tables, stops, eb.rows(ev), ix, t, t0, tseg,
                                          s, mask, act, P, U, lam, scale, H, keep)  # fmt: skip
         if ev_r.size:
             _events(lanes, tables, st, ix, ev_r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid,
@@ -369,14 +374,45 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
     past = keep & ~ev & (lim_hi <= np.minimum(m, rem))
     step = np.where(ev, h, np.minimum(np.minimum(np.minimum(m, Hw), rem), lim_lo))
     step = np.where(past, np.maximum(lim_hi, xtol), step)  # a gap exactly at a limit
+    # a step cut short by a sigma_lo with no crossing certified in the window: more safe steps
+    cap = np.minimum(np.minimum(Hw, rem), lim_lo)
+    r = eb.rows(keep & ~ev & ~past & (step == m) & (step < cap) & np.isinf(eb.min_cols(hi)))
+    if r.size:
+        step[r] = _safe_substeps(r, step, cap, P, U, lam, t - tseg, s, k, q, M, mon, H)
     t0 = t.copy()
     # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop
-    r = _rows(keep & ~small & (step > H))
+    r = eb.rows(keep & ~small & (step > H))
     if r.size:
         rc, s_cut, s_before = _sample_step(st, tables, ix, r, t - tseg, step, H, P, U, lam,
                                            mask, act, scale, tseg, width)  # fmt: skip
         step[rc], t0[rc], ev[rc] = s_cut, t[rc] + s_before, False
     return ev, h, xtol, step, t0
+
+
+def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
+    """Steps (of the rows ``r``) continued by up to ``SUBSTEPS`` further certified safe steps
+    (:func:`eb.safe_steps` from the event functions at the step's end, under the same curvature
+    bound ``M``, valid over the whole window), each at least ``SUBSTEP_MIN H_S``, never past
+    ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified: no monitored
+    function changes sign over the longer step.  An oscillating gap far from its contact is
+    then crossed in one step of the window rather than several of its curvature's ``sigma_lo``."""
+    out = step[r].copy()
+    live = np.arange(r.size)
+    for _ in range(SUBSTEPS):
+        rr = r[live]
+        d, v, acc = eb.evaluate(P[rr], U[rr], lam[rr], tau[rr] + out[live])[:3]
+        f, fp = eb.event_functions(d, v, acc, k[rr], q[rr])
+        A, Bd = s[rr] * f, s[rr] * fp
+        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, M[rr])
+        m_on = mon[rr]
+        inc = eb.min_cols(np.where(m_on, lo, np.inf))
+        ok = (~(m_on & ((A <= 0) | np.isfinite(hi))).any(axis=1)) & (inc >= SUBSTEP_MIN * H[rr])
+        live = live[ok]
+        out[live] = np.minimum(out[live] + inc[ok], cap[r[live]])
+        live = live[out[live] < cap[r[live]]]
+        if live.size == 0:
+            break
+    return out
 
 
 def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale,
@@ -403,9 +439,9 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo``; ``lo``, ``hi``
     of a bracket closed by :func:`locate_root` (and its twin's) set to the event (in place)."""
     # smallest sigma_lo, ties to the tightest bracket
-    m = _min_cols(lo)
+    m = eb.min_cols(lo)
     tie_hi = np.where(lo <= m[:, None], hi, np.inf)
-    first = np.where(np.isinf(_min_cols(tie_hi)), np.argmin(lo, axis=1),
+    first = np.where(np.isinf(eb.min_cols(tie_hi)), np.argmin(lo, axis=1),
                      np.argmin(tie_hi, axis=1))  # fmt: skip
     h = hi[np.arange(first.size), first]
     ev = keep & (h - m <= xtol) & (h <= rem)
@@ -413,8 +449,8 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     # first crossing is in it, located on that function alone (:func:`locate_root`); the
     # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
     twin = _twins(first, mon, q)
-    other = _min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-    r = _rows(keep & ~ev & (h <= rem) & (other > h))
+    other = eb.min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
+    r = eb.rows(keep & ~ev & (h <= rem) & (other > h))
     if r.size:
         fr = first[r]
         a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
@@ -492,7 +528,7 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
     for c in range(2):
         np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
-    cut = _rows(first < np.iinfo(np.int64).max)
+    cut = eb.rows(first < np.iinfo(np.int64).max)
     f, m = first[cut], n_in[cut] + 1
     s_r = step[r[cut]]
     return r[cut], s_r * f / m, s_r * (f - 1) / m
@@ -517,19 +553,9 @@ def cancels(P, U, g, scale):
 _BITS = np.arange(2)
 
 
-def _rows(x):
-    """``np.flatnonzero`` of a 1-D array, without its wrappers (called several times a step)."""
-    return x.nonzero()[0]
-
-
 def _all_cols(x):
     """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
     return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
-
-
-def _min_cols(x):
-    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
-    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))
 
 
 def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
@@ -551,7 +577,7 @@ def _stops_at(tables, ix, mask, act, g, scale):
     with np.errstate(invalid="ignore"):
         cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
         cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
-    r = _rows(cand)
+    r = eb.rows(cand)
     if r.size:
         lx, mk = ix[r], mask[r]
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
@@ -600,7 +626,7 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
     settle, iwc, l1 = early.decisions(t, T, t_max, s, mask, p, UE, lam, valid, k, q, scale, act, H)
     st.code[ix[settle]] = np.array([OUTCOME_OF_MASK[m] for m in range(4)])[mask[settle]]
     st.decided_by[ix[settle]] = 1
-    r = _rows(iwc)
+    r = eb.rows(iwc)
     if r.size:
         c = modal_coordinates(tables, ix[r], mask[r], g[r])
         s0 = early.reach_time(p[r], UE[r], lam[r], T[r] - t[r], scale[r])
@@ -672,7 +698,7 @@ def _impact_log(st: State):
     lane, t, v, c = (np.concatenate(x) for x in zip(*st.imp, strict=True))
     order = np.lexsort((t, lane))
     lane, t, v, c = lane[order], t[order], v[order], c[order]
-    cuts = _rows(np.diff(lane)) + 1
+    cuts = eb.rows(np.diff(lane)) + 1
     starts = np.concatenate([[0], cuts])
     return {int(lane[a]): (t[a:b], v[a:b], c[a:b])
             for a, b in zip(starts, np.append(cuts, lane.size), strict=True)}  # fmt: skip
@@ -722,7 +748,7 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
 
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
-    r = _rows(iwc)
+    r = eb.rows(iwc)
     iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
@@ -833,7 +859,7 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         res = run_lanes(*arrays, **opts)
     else:
         res = FastResult.gather(pool.map(run_lanes, arrays, opts), n)
-    for i in _rows(res.decided_by == 3):
+    for i in eb.rows(res.decided_by == 3):
         out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
         res.within_rounding[i] = stop_rule.run_within_rounding(run)

@@ -10,6 +10,12 @@ by every batch; they import NumPy and the engine only (no JAX, no xarray), so st
 about half a second on a quiet machine, which counts in the wall time of the batch that
 starts them: that batch gives the calling process ``START_LANES`` more lanes than an even split
 (half of them at two processes), so that the processes finish together.
+
+The number of processes is chosen by what helps: at most the usable cores (:func:`usable_cores`:
+the affinity less the load), and after every batch on several processes the CPU they got
+together is measured (:func:`helped`: CPU seconds of the chunks over the batch's wall time,
+the start of the processes included); where it is under ``MIN_GAIN`` cores, the processes only took turns (a machine busy with
+other work), and the pool runs the later batches in the calling process alone.
 """
 
 from __future__ import annotations
@@ -18,10 +24,20 @@ import concurrent.futures
 import math
 import multiprocessing
 import os
+import time
 
 import numpy as np
 
-__all__ = ["usable_cores", "check_workers", "chunks", "LanePool", "MIN_LANES", "START_LANES"]
+__all__ = [
+    "usable_cores",
+    "check_workers",
+    "chunks",
+    "helped",
+    "LanePool",
+    "MIN_LANES",
+    "MIN_GAIN",
+    "START_LANES",
+]
 
 
 def usable_cores() -> int:
@@ -64,6 +80,24 @@ MIN_LANES = 4096
 
 #: lanes the calling process runs while the others start (~0.3 s of stepping)
 START_LANES = 4096
+
+
+#: cores' worth of CPU the processes of a batch must get together for more than one to help
+MIN_GAIN = 1.2
+
+
+def helped(cpu, wall) -> bool:
+    """Whether a batch's processes ran side by side: the CPU seconds of its chunks ``cpu``
+    (sequence) sum to at least ``MIN_GAIN`` times the batch's wall time ``wall`` [s]: more CPU
+    than one process could have had over that time."""
+    return float(sum(cpu)) >= MIN_GAIN * float(wall)
+
+
+def _timed(fn, *arrays, **kwargs):
+    """``(fn(*arrays, **kwargs), CPU seconds)`` of one chunk, in its process."""
+    c = time.process_time()
+    out = fn(*arrays, **kwargs)
+    return out, time.process_time() - c
 
 
 def chunks(n: int, w: int, extra: int = 0) -> list[np.ndarray]:
@@ -109,19 +143,23 @@ class LanePool:
         w = max(1, min(self.workers, n // self.min_lanes))
         if w == 1:
             return [(np.arange(n), fn(*arrays, **kwargs))]
-        starting = self._executor is None
+        starting, wall = self._executor is None, time.perf_counter()
         if starting:
             self._executor = concurrent.futures.ProcessPoolExecutor(
                 max_workers=self.workers - 1, mp_context=multiprocessing.get_context("spawn")
             )
         idx = chunks(n, w, START_LANES * (w - 1) // w if starting else 0)
-        futures = [self._executor.submit(fn, *(a[i] for a in arrays), **kwargs) for i in idx[1:]]
+        futures = [self._executor.submit(_timed, fn, *(a[i] for a in arrays), **kwargs)
+                   for i in idx[1:]]  # fmt: skip
         try:
-            first = fn(*(a[idx[0]] for a in arrays), **kwargs)
-            rest = [f.result() for f in futures]
+            parts = [_timed(fn, *(a[idx[0]] for a in arrays), **kwargs)]
+            parts += [f.result() for f in futures]
         except BaseException:
             for f in futures:
                 f.cancel()
             self.close()
             raise
-        return list(zip(idx, [first, *rest], strict=True))
+        if not helped([p[1] for p in parts], time.perf_counter() - wall):
+            self.workers = 1  # the processes took turns: the later batches here alone
+            self.close()
+        return list(zip(idx, [p[0] for p in parts], strict=True))

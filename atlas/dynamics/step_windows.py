@@ -80,14 +80,14 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
     mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
     Hw, small = window(H, lam, valid, p, aUE, scale, WINDOWS)
     lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
-    r = _rows(_min_cols(lo) >= Hw)
+    r = eb.rows(eb.min_cols(lo) >= Hw)
     if r.size:
         w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
         r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
         lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
                                 mon[r])  # fmt: skip
         # both brackets hold (each within its window): the larger lower end, the smaller upper
-        longer = _min_cols(lo_r) > Hw[r]
+        longer = eb.min_cols(lo_r) > Hw[r]
         r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
         lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
         M[r], Hw[r], small[r] = M_r, w, sm
@@ -102,17 +102,7 @@ def limit_steps(d, v, M, scale, Hw):
     amp, pen = stop_rule.limits(scale)
     near = np.minimum(amp, stop_rule.DEEP * pen)[:, None]
     w = Hw[:, None]
-    r = _rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
+    r = eb.rows((np.abs(d) + w * (np.abs(v) + 0.5 * w * M[:, :2]) >= near).any(axis=1))
     if r.size:
         lo[r], hi[r] = stop_rule.limit_steps(d[r], v[r], M[r], scale[r], Hw[r])
     return lo, hi
-
-
-def _rows(x):
-    """``np.flatnonzero`` of a 1-D array."""
-    return x.nonzero()[0]
-
-
-def _min_cols(x):
-    """``x.min(axis=1)`` of an ``(n, 4)`` array, as elementwise minima (NaN propagates)."""
-    return np.minimum(np.minimum(x[:, 0], x[:, 1]), np.minimum(x[:, 2], x[:, 3]))

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from samples import limit_bracket_inputs
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
@@ -259,12 +260,8 @@ def test_step_pieces_equal_the_numpy_engines():
     inputs spanning the limits (gaps up to 1e7 scale, curvature 1e-2..1e6)."""
     import jax.numpy as jnp
 
-    rng = np.random.default_rng(7)
-    n = 2000
-    d = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 7, (n, 2))
-    v = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 5, (n, 2))
-    M, scale = 10 ** rng.uniform(-2, 6, (n, 4)), 10 ** rng.uniform(-1, 1, n)
-    H = rng.uniform(0.1, 3, n)
+    d, v, M, scale, H = limit_bracket_inputs()
+    rng, n = np.random.default_rng(8), d.shape[0]
     want = SR.limit_steps(d, v, M, scale, H)
     assert np.isfinite(want[0]).sum() > n // 2 and np.isfinite(want[1]).sum() > n // 10
     for xp in (np, jnp):

@@ -3,13 +3,14 @@ bit for bit for any number of processes; bad ``workers``: one line naming it."""
 
 import dataclasses
 import math
+import time
 
 import numpy as np
 import pytest
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
-from atlas.dynamics.lane_pool import LanePool, check_workers, chunks, usable_cores
+from atlas.dynamics.lane_pool import MIN_GAIN, LanePool, check_workers, chunks, helped, usable_cores
 
 PI = math.pi
 
@@ -45,6 +46,36 @@ def test_any_number_of_processes_gives_the_same_result_bit_for_bit():
             for field in dataclasses.fields(F.FastResult):
                 a, b = getattr(one, field.name), getattr(res, field.name)
                 assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True), field.name
+
+
+def _idle_double(x):
+    """A chunk that takes wall time but no CPU (a process given no core)."""
+    time.sleep(0.2)
+    return x * 2
+
+
+def test_processes_that_only_take_turns_are_given_up():
+    """A batch whose processes together got less CPU than ``MIN_GAIN`` cores over its wall time
+    (here none: the chunks sleep) runs the later batches in this process alone; the result is
+    complete either way."""
+    with LanePool(2, min_lanes=1) as pool:
+        parts = pool.map(_idle_double, (np.arange(10),), {})
+        assert pool.workers == 1 and pool._executor is None
+        got = np.empty(10, dtype=int)
+        for idx, res in parts:
+            got[idx] = res
+        assert np.array_equal(got, 2 * np.arange(10)) and len(parts) == 2
+        assert len(pool.map(_idle_double, (np.arange(10),), {})) == 1
+
+
+@pytest.mark.parametrize(("cpu", "wall", "expected"), [
+    ([1.0, 1.0], 1.0, True), ([MIN_GAIN / 2] * 2, 1.0, True), ([0.5, 0.5], 1.0, False),
+    ([0.9, 0.0, 0.0], 1.0, False), ([0.4, 0.4, 0.4], 0.5, True),
+])  # fmt: skip
+def test_processes_help_when_they_get_more_than_one_core(cpu, wall, expected):
+    """CPU seconds of the chunks against the batch's wall time: more than one core's worth
+    (``MIN_GAIN``) of CPU in that time, else one process would have done as well."""
+    assert helped(cpu, wall) is expected
 
 
 def test_small_batches_stay_in_this_process():

@@ -2,6 +2,7 @@
 dense sampling of closed-form segments; the limit brackets against the stop rule's own."""
 
 import numpy as np
+from samples import limit_bracket_inputs
 
 from atlas.dynamics import step_windows as sw
 from atlas.dynamics import stop_rule as SR
@@ -35,12 +36,8 @@ def test_window_keeps_growth_and_gaps_within_their_bounds():
 def test_limit_steps_are_the_stop_rules_on_the_rows_near_a_limit():
     """The engine's row-restricted limit brackets equal :func:`stop_rule.limit_steps` on every
     row (``inf`` where no gap can reach a limit within the window), with both cases present."""
-    rng = np.random.default_rng(7)
-    n = 2000
-    d = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 7, (n, 2))
-    v = rng.normal(size=(n, 2)) * 10 ** rng.uniform(0, 5, (n, 2))
-    M, scale = 10 ** rng.uniform(-2, 6, (n, 4)), 10 ** rng.uniform(-1, 1, n)
-    H = rng.uniform(0.1, 3, n)
+    d, v, M, scale, H = limit_bracket_inputs()
+    n = d.shape[0]
     got = sw.limit_steps(d, v, M, scale, H)
     want = SR.limit_steps(d, v, M, scale, H)
     assert np.isfinite(got[0]).sum() > n // 2 and (~np.isfinite(got[0])).sum() > 0
