@@ -376,6 +376,14 @@ def _add_paper(sub) -> None:
         "are replaced)",
     )
     pp.add_argument("--quick", action="store_true", help="low resolution (seconds, for CI)")
+    pp.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="processes: 1, or 2 to run the independent steps beside the others (default: 2 "
+        "where two cores are idle); the files are the same bytes either way",
+    )
 
 
 def _add_simulate(sub) -> None:

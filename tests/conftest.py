@@ -77,7 +77,7 @@ def paper_run(tmp_path_factory):
     try:
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(audit, "run_audit", keep_claims)
-            timings = paper.run(out=out, ci=True, progress=lambda m: None)
+            timings = paper.run(out=out, ci=True, progress=lambda m: None, jobs=1)
         got = {"timings": timings, "claims": seen["claims"]}
     except BaseException as e:
         got = f"{type(e).__name__}: {e}"

@@ -775,7 +775,7 @@ def test_an_interrupted_run_names_the_files_it_completed(tmp_path, monkeypatch, 
 
     from atlas.data.io import atomic_write_text
 
-    def run(out, quick):
+    def run(out, quick, jobs):
         atomic_write_text(os.path.join(out, "table2.md"), "done\n")
         with open(os.path.join(out, "partial.tmp"), "w"):
             pass

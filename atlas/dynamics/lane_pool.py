@@ -58,9 +58,9 @@ def usable_cores() -> int:
     return int(min(n, max(1, math.floor(idle + 0.5))))
 
 
-def check_workers(workers) -> int:
+def check_workers(workers, name: str = "workers") -> int:
     """``workers`` as an ``int >= 1`` (``None``: :func:`usable_cores`), or a one-line
-    ``ValueError`` naming it."""
+    ``ValueError`` naming it (as ``name``)."""
     if workers is None:
         return usable_cores()
     ok = not isinstance(workers, (bool, np.bool_, str, bytes, float))
@@ -69,7 +69,7 @@ def check_workers(workers) -> int:
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:
-        raise ValueError(f"workers: must be an integer >= 1, got {workers!r}")
+        raise ValueError(f"{name}: must be an integer >= 1, got {workers!r}")
     return int(workers)
 
 

@@ -15,7 +15,15 @@ from pathlib import Path
 from atlas.core import config
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_path, atomic_write_text
-from atlas.paper import figure_boundaries, figure_ladder, figure_models, realisability, runlog
+from atlas.dynamics.lane_pool import check_workers
+from atlas.paper import (
+    figure_boundaries,
+    figure_ladder,
+    figure_models,
+    realisability,
+    runlog,
+    side_process,
+)
 
 __all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
 
@@ -98,51 +106,89 @@ def _write_realisability(path) -> None:
     atomic_write_text(path, realisability.markdown(found, stats))
 
 
-def run(out: str = "outputs", quick: bool = False, progress=None, ci: bool = False) -> dict:
+def run(
+    out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, jobs=None
+) -> dict:
     """Regenerate Fig. 1 (classes, stability map, variants), Table 2 (md, csv, png), the audit,
     Fig. 2 (if :mod:`atlas.paper.figures_dynamics` is available) and ``fig1_map.nc`` into ``out``.
 
-    Returns a dict ``{step: seconds}``; also writes ``out/README.md`` listing the files.  The files
-    are a pure function of the code and ``quick`` / ``ci``: dates, seconds, host and command line
-    go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
+    ``jobs``: processes (1 or 2; default: 2 where two cores are idle,
+    :func:`atlas.dynamics.lane_pool.usable_cores`).  With 2, the steps that need nothing from the
+    others (the boundary curves, Fig. 1's classes, the realisability search, the ladder, Fig. 2
+    and the outcome distribution) run in a second process beside the rest; the files are the
+    same bytes either way.  Returns a dict ``{step: seconds}``; also writes ``out/README.md``
+    listing the files.  The files are a pure function of the code and ``quick`` / ``ci``: dates,
+    seconds, host and command line go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
     """
+    jobs = min(2, check_workers(jobs, "jobs"))
     use_compile_cache()
-    say = progress or (lambda msg: print(f"[atlas paper] {msg}", file=sys.stderr, flush=True))
+    say = progress or say_stderr
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with runlog.RunLog(out):
-        step = _Steps(say)
+        step = Steps(say)
         t_all = time.perf_counter()
-        _run_steps(step, out, quick or ci, ci)  # ci: the CI test's size (smallest grids)
+        runlog.record("processes", jobs)
+        _run_steps(step, out, quick or ci, ci, jobs)  # ci: the CI test's size (smallest grids)
         total = time.perf_counter() - t_all
         runlog.record("total seconds", total)
     say(f"all done in {total:.1f} s -> {out}")
     return dict(step.timings, total=total)
 
 
-def _run_steps(step: _Steps, out: Path, quick: bool, ci: bool) -> None:
-    """The steps of :func:`run`, each file written into ``out``."""
+def say_stderr(msg: str) -> None:
+    """The default progress: ``[atlas paper] msg`` on standard error."""
+    print(f"[atlas paper] {msg}", file=sys.stderr, flush=True)
+
+
+def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, jobs: int) -> None:
+    """The steps of :func:`run`, each file written into ``out``; :func:`_side_steps` in a second
+    process when ``jobs`` is 2."""
     from atlas.paper import audit, figures, plots, tables
 
-    n_map, n_var = (41, 41) if ci else (121, 61) if quick else (361, 201)  # odd: no beta1* cells
-    rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
-    step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
-    step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
-    step("table2.png", lambda: plots.plot_table2(out / "table2.png", rows))
-    ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
-    curves = step(
-        "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
-    )
-    fig1_curves = figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])
+    n_map, n_var = _sizes(quick, ci)
+    live = step.say is say_stderr
+    side = side_process.start(_side_steps, out, quick, ci, live) if jobs > 1 else None
+    try:
+        rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
+        step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
+        step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
+        step("table2.png", lambda: plots.plot_table2(out / "table2.png", rows))
+        ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
+        fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
+        call = f"atlas.paper.run(quick={quick}, ci={ci})"
+        step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
+        claims = step(
+            "audit (compute)",
+            lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
+        )
+        step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
+        _outcome_map_step(step, out, quick, ds)
+        fig1_curves, models, notes = (
+            _side_steps(step, out, quick, ci) if side is None else side_process.join(side, step)
+        )
+    finally:
+        side_process.stop(side)
     step(
         "fig1_stability.png",
         lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
-    fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
-    call = f"atlas.paper.run(quick={quick}, ci={ci})"
-    step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
-    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
+    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds, models)
+
+
+def _sizes(quick: bool, ci: bool) -> tuple[int, int]:
+    """Cells per axis of the Fig. 1 map and of its variants (odd: no cell on beta1 = beta1*)."""
+    return (41, 41) if ci else (121, 61) if quick else (361, 201)
+
+
+def _side_steps(step: Steps, out: Path, quick: bool, ci: bool):
+    """The steps that need no other step's result: Fig. 1 over every model and at other models,
+    the boundary curves, Fig. 1's classes, the realisability search, the ladder, Fig. 2 and the
+    outcome distribution.  Returns the curves of Fig. 1's slice, the model-dependence shares and
+    the README notes."""
+    from atlas.paper import figures, plots
+
+    n_var = _sizes(quick, ci)[1]
     (models,) = step(
         "fig1_models.png",
         lambda: figure_models.plot_model_dependence(
@@ -159,20 +205,30 @@ def _run_steps(step: _Steps, out: Path, quick: bool, ci: bool) -> None:
         "fig1_stability_variants.png",
         lambda: plots.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
     )
-    claims = step(
-        "audit (compute)",
-        lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
+    curves = step(
+        "fig1_boundaries.png",
+        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
     )
-    step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
+    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
     step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
     step(
         "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
     )
-    notes = _dynamics_steps(step, out, quick, ds)
-    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds, models)
+    dyn, notes = _dynamics()
+    if dyn is not None and quick:
+        notes.append("fig2.png skipped in quick mode (simulation).")
+    elif dyn is not None:
+        step("fig2.png", lambda: dyn.plot_fig2(out))
+    if dyn is not None:
+        n, runs = dyn.PAPER_DISTRIBUTION[not quick]
+        step(
+            "outcome_distribution.png",
+            lambda: dyn.outcome_distribution_files(out, n, runs),
+        )
+    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0]), models, notes
 
 
-class _Steps:
+class Steps:
     """The steps of :func:`run`: ``step(name, fn)`` announces ``name``, calls ``fn`` and records its
     wall time [s] in ``timings``."""
 
@@ -190,29 +246,25 @@ class _Steps:
         return res
 
 
-def _dynamics_steps(step: _Steps, out: Path, quick: bool, ds) -> list[str]:
-    """Fig. 2 (not in quick mode) and the outcome map beside the Fig. 1 map ``ds``, if
-    :mod:`atlas.paper.figures_dynamics` imports; returns notes for the README."""
-    notes: list[str] = []
+def _dynamics():
+    """:mod:`atlas.paper.figures_dynamics` and no note, or ``None`` and the README note saying
+    why it is missing (it is optional here)."""
     try:
-        from atlas.paper.figures_dynamics import (
-            PAPER_DISTRIBUTION,
-            PAPER_MAP_N,
-            outcome_distribution_files,
-            outcome_map_files,
-            plot_fig2,
-        )
+        from atlas.paper import figures_dynamics
     except ImportError as e:  # another module of the package; optional here
-        notes.append(f"fig2.png not made: atlas.paper.figures_dynamics not importable ({e}).")
-        return notes
-    if quick:
-        notes.append("fig2.png skipped in quick mode (simulation).")
-    else:
-        step("fig2.png", lambda: plot_fig2(out))
-    step("outcome_map.nc", lambda: outcome_map_files(out, PAPER_MAP_N[not quick], theory=ds))
-    n, runs = PAPER_DISTRIBUTION[not quick]
-    step("outcome_distribution.png", lambda: outcome_distribution_files(out, n, runs))
-    return notes
+        return None, [f"fig2.png not made: atlas.paper.figures_dynamics not importable ({e})."]
+    return figures_dynamics, []
+
+
+def _outcome_map_step(step: Steps, out: Path, quick: bool, ds) -> None:
+    """The outcome map beside the Fig. 1 map ``ds``, if :mod:`atlas.paper.figures_dynamics`
+    imports (else nothing: :func:`_side_steps` gives the note)."""
+    dyn, _ = _dynamics()
+    if dyn is not None:
+        step(
+            "outcome_map.nc",
+            lambda: dyn.outcome_map_files(out, dyn.PAPER_MAP_N[not quick], theory=ds),
+        )
 
 
 def _audit_counts(claims) -> dict:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from atlas.data.io import atomic_write_text
 
-__all__ = ["LOG", "VOLATILE", "RunLog", "fixed", "record"]
+__all__ = ["LOG", "VOLATILE", "RunLog", "extend", "fixed", "record"]
 
 #: the run log's file name in the output directory (never a tracked file)
 LOG = "run.log"
@@ -36,10 +36,14 @@ _ACTIVE: list[RunLog] = []
 class RunLog:
     """``with RunLog(out) as log:`` collects :func:`record` lines of the block and writes them,
     after the run's date, host and command line, to ``out/run.log`` when the block ends (also
-    when it fails: what was recorded until then)."""
+    when it fails: what was recorded until then).  ``RunLog(None)`` only collects the lines (a
+    second process of the run: :mod:`atlas.paper.side_process`)."""
 
     def __init__(self, out):
-        self.path = Path(out) / LOG
+        self.path = None if out is None else Path(out) / LOG
+        self.lines: list[str] = []
+        if out is None:
+            return
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
         self.lines = [
             f"date: {now}",
@@ -60,13 +64,20 @@ class RunLog:
 
     def __exit__(self, *exc) -> None:
         _ACTIVE.remove(self)
-        atomic_write_text(self.path, "\n".join(self.lines) + "\n")
+        if self.path is not None:
+            atomic_write_text(self.path, "\n".join(self.lines) + "\n")
 
 
 def record(what: str, value) -> None:
     """Add ``what: value`` to the active :class:`RunLog` (nothing without one)."""
     if _ACTIVE:
         _ACTIVE[-1].add(what, value)
+
+
+def extend(lines) -> None:
+    """Add finished ``what: value`` lines (another process's :class:`RunLog`) to the active one."""
+    if _ACTIVE:
+        _ACTIVE[-1].lines.extend(lines)
 
 
 def fixed(ds, name: str):

@@ -470,3 +470,27 @@ def test_compiled_programs_serve_every_small_point_set(monkeypatch):
     finally:
         jax.monitoring.unregister_event_duration_listener(listen)
     assert compiles == []
+
+
+@pytest.mark.parametrize(
+    "extra, lengths",
+    [
+        (-1, [256] * 64),  # below the bulk threshold: the one shared length
+        (300, [4096] * 4 + [256, 256]),  # the bulk in large batches, the rest in the shared length
+    ],
+)
+def test_large_later_sets_run_their_bulk_in_large_batches(extra, lengths):
+    """Tier 2 and the enclosures see :data:`LATER_BATCH` points except the bulk of a set of at
+    least :data:`LATER_BULK_FROM` points (a 5-D grid's tier 2), which runs in :data:`LATER_BULK`
+    batches; every point comes back in its place."""
+    n = points.LATER_BULK_FROM + extra
+    seen = []
+
+    def kernel(*cols):
+        seen.append(cols[0].size)
+        return cols[0] * 2.0, cols[1]
+
+    cols = [np.arange(n, dtype=np.float64) + i for i in range(len(points.PAD))]
+    got = points._run_later(kernel, cols)
+    assert seen == lengths
+    assert np.array_equal(got[0], 2.0 * cols[0]) and np.array_equal(got[1], cols[1])

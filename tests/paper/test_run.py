@@ -53,9 +53,13 @@ def test_run_quick(tmp_path):
 def test_a_second_run_elsewhere_writes_the_same_bytes(paper_run, tmp_path):
     """The files ``atlas paper`` writes are a pure function of the code and its inputs: a second
     CI-sized run, in another process (another hash seed, time zone, working directory and output
-    path, a later time), gives every file byte for byte; dates and seconds are in the run log."""
+    path, a later time, its independent steps in a second process where the shared run has one),
+    gives every file byte for byte; dates and seconds are in the run log."""
     env = dict(os.environ, PYTHONHASHSEED="7", TZ="Asia/Tokyo")
-    code = "import sys; from atlas import paper; paper.run(sys.argv[1], ci=True, progress=print)"
+    code = (
+        "import sys; from atlas import paper; "
+        "paper.run(sys.argv[1], ci=True, progress=print, jobs=2)"
+    )
     out = tmp_path / "again"
     subprocess.run([sys.executable, "-c", code, str(out)], env=env, cwd=tmp_path, check=True)
     differ = [
@@ -66,3 +70,4 @@ def test_a_second_run_elsewhere_writes_the_same_bytes(paper_run, tmp_path):
     assert differ == []
     log = (out / LOG).read_text()
     assert "date: " in log and "total seconds: " in log and str(out) in log
+    assert "processes: 2" in log and "step fig1_boundaries.png seconds: " in log
