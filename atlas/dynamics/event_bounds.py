@@ -20,6 +20,8 @@ __all__ = [
     "sum4",
     "rows",
     "min_cols",
+    "all_cols",
+    "bins",
     "re_sum4",
     "evaluate",
     "taylor",
@@ -372,3 +374,14 @@ def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):
     carry = (a, *g(a), a, b, 2 * (b - a), xp.zeros(j.size, dtype=bool))
     a, b = fori(max_iter, newton, carry, until=lambda c: not ((c[4] - c[3]) > xtol).any())[3:5]
     return a, b
+
+
+def all_cols(x):
+    """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
+    return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
+
+
+def bins(t, width, nbins):
+    """The amplitude bin [0, nbins) of times ``t`` [H_S] in bins of ``width``."""
+    xp = xp_of(t)
+    return xp.minimum(xp.maximum(xp.ceil(t / width).astype(int) - 1, 0), nbins - 1)

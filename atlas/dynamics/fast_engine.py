@@ -104,6 +104,7 @@ import numpy as np
 from atlas.dynamics import early_decisions as early
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import step_windows as sw
+from atlas.dynamics import stop_location as sl
 from atlas.dynamics import stop_rule
 from atlas.dynamics.classification import (
     TrajectoryStats,
@@ -236,11 +237,6 @@ def switch(s, cross, f, fp, k, scale):
     return sn, closing, n_ev
 
 
-def bins(t, width, nbins):
-    xp = eb.xp_of(t)
-    return xp.minimum(xp.maximum(xp.ceil(t / width).astype(int) - 1, 0), nbins - 1)
-
-
 def _admit(lanes, tables, st: State, ix, fallback):
     """The per-lane arrays of :func:`_run_lanes` for the lanes ``ix`` starting from their state
     in ``st`` (time, state, signs, horizon); lanes the modal form cannot serve fall back."""
@@ -304,7 +300,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             cols = tuple(x.take(sel, axis=0) for x in cols)
             ix = cols[0]
         if pending and (ix.size < _READMIT_NOW or it % _READMIT == 0):
-            locate_stops(st, tables, stops, width)
+            sl.locate_stops(st, tables, stops, width)
             again = _classify_stopped(st, tables, np.concatenate(pending), width, t_max, fallback)
             pending = []
             if again.size:
@@ -322,11 +318,11 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         keep = np.ones(ix.size, dtype=bool)
 
         # the stop rule (divergence) at the step end, located inside the step; the horizon
-        div = _stops_at(tables, ix, mask, act, g, scale)
+        div = sl.stops_at(tables, ix, mask, act, g, scale)
         if div.size:  # located with the others of the next classification (locate_stops)
             stops.append(_stop_of(div, ix, mask, P, U, lam, scale, t0, t, tseg, H))
             _leave(st, ix, t, g, s, keep, div, 2)
-        b = bins(t, width, nbins)
+        b = eb.bins(t, width, nbins)
         st.amp[ix, b] = np.where(keep[:, None], np.maximum(st.amp[ix, b], np.abs(d)), st.amp[ix, b])
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, eb.rows(keep & (t >= T)), 0)
@@ -335,7 +331,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
                                                  act)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
-        r = eb.rows(keep & sched & _all_cols(hi > (t_max - t)[:, None]))
+        r = eb.rows(keep & sched & eb.all_cols(hi > (t_max - t)[:, None]))
         if r.size:
             dec = _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid,
                                  k, q, scale, act, H)  # fmt: skip
@@ -476,7 +472,7 @@ def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act,
         return ev_r, None
     dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
     ge = np.concatenate(dva[:2], axis=1)
-    sr = _stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
+    sr = sl.stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
     if sr.size:
         rs = ev_r[sr]
         stops.append(_stop_of(rs, ix, mask, P, U, lam, scale, t0, t, tseg, H))
@@ -489,7 +485,7 @@ def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act,
 
 def _stop_of(r, ix, mask, P, U, lam, scale, t0, t, tseg, H):
     """The record of rows ``r`` whose stop rule held at the end of their last step (from
-    ``max(t0, tseg)`` to ``t``), for :func:`locate_stops` to locate inside that step."""
+    ``max(t0, tseg)`` to ``t``), for :func:`atlas.dynamics.stop_location.locate_stops` to locate inside that step."""
     a = np.maximum(t0[r], tseg[r]) - tseg[r]
     return (ix[r], mask[r], P[r], U[r], lam[r], scale[r], a, t[r] - tseg[r], XTOL * H[r], tseg[r])
 
@@ -507,7 +503,7 @@ def _twins(first, mon, q):
 def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, tseg, width):
     """The gaps inside the steps ``step`` (from ``tau0`` on the segment) of the rows ``r``, at
     ``ceil(step / H) - 1`` equally spaced points (at most ``H`` apart, as steps of ``H`` would
-    end): their late amplitudes into ``st.amp`` and the stop rule (:func:`_stops_at`) there.
+    end): their late amplitudes into ``st.amp`` and the stop rule (:func:`atlas.dynamics.stop_location.stops_at`) there.
     Returns the rows whose stop holds at a point, the point (from ``tau0``) and the point before
     it (0 at the first): their steps end there, the stop is located between the two."""
     n_in = np.minimum(np.ceil(step[r] / H[r]) - 1, sw.LONG).astype(int)
@@ -520,12 +516,12 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     rows = r[rr]
     d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
     hit = np.zeros(rr.size, dtype=bool)
-    hit[_stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
+    hit[sl.stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
                   scale[rows])] = True  # fmt: skip
     first = np.full(r.size, np.iinfo(np.int64).max)
     np.minimum.at(first, rr[hit], j[hit])
     upto = j <= first[rr]  # the amplitudes up to a stop
-    b = bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
+    b = eb.bins(tseg[rows] + tau0[rows] + x, width, st.amp.shape[1])
     for c in range(2):
         np.maximum.at(st.amp[:, :, c], (ix[rows][upto], b[upto]), np.abs(d[upto, c]))
     cut = eb.rows(first < np.iinfo(np.int64).max)
@@ -553,11 +549,6 @@ def cancels(P, U, g, scale):
 _BITS = np.arange(2)
 
 
-def _all_cols(x):
-    """``x.all(axis=1)`` of a boolean ``(n, 4)`` array, as elementwise ``&``."""
-    return (x[:, 0] & x[:, 1]) & (x[:, 2] & x[:, 3])
-
-
 def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
     """Lanes ``sel`` (rows) leave the batch: their time, state, signs and status into ``st``
     (``rows``: their rows when ``g`` holds the states of ``sel`` alone, in order)."""
@@ -567,57 +558,6 @@ def _leave(st, ix, t, g, s, keep, sel, status, rows=None):
     st.t[ix[r]], st.g[ix[r]], st.s[ix[r]] = t[r], g[sel], s[r]
     st.status[ix[r]] = status
     keep[r] = False
-
-
-def _stops_at(tables, ix, mask, act, g, scale):
-    """Rows where the stop rule (:func:`stop_rule.stopped`) holds at the states ``g`` (n, 4);
-    the alignment is computed only where a penetration passes its limit."""
-    amp, pen = stop_rule.limits(scale)
-    d = g[:, :2]
-    with np.errstate(invalid="ignore"):
-        cand = ~_all_cols(np.isfinite(g)) | (np.maximum(d[:, 0], d[:, 1]) > amp)
-        cand |= ((act | (d < -stop_rule.DEEP * pen[:, None])) & (d < -pen[:, None])).any(axis=1)
-    r = eb.rows(cand)
-    if r.size:
-        lx, mk = ix[r], mask[r]
-        r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
-                                amp[r], pen[r])]  # fmt: skip
-    return r
-
-
-def locate_stops(st, tables, stops, width):
-    """Locate the collected stops ``[(lanes, mask, P, U, lam, scale, a, b, xtol, tseg)]`` (each
-    between ``a`` and ``b`` on its segment) in one :func:`_locate_stop`; their time, state and
-    amplitude into ``st``."""
-    if not stops:
-        return
-    lx, mk, P, U, lam, scale, a, b, xtol, tseg = (np.concatenate(x) for x in zip(*stops))
-    stops.clear()
-    tau, g = _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol)
-    t = tseg + tau
-    st.t[lx], st.g[lx] = t, g
-    bb = bins(t, width, st.amp.shape[1])
-    st.amp[lx, bb] = np.maximum(st.amp[lx, bb], np.abs(g[:, :2]))
-
-
-def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
-    """:func:`stop_rule.locate` on the segments ``P, U, lam`` of lanes ``lx`` in configurations
-    ``mk``: the first ``tau`` in ``(a, b]`` at which the stop holds and the state there."""
-    E, zq = stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk)
-    amp, pen = stop_rule.limits(scale)
-
-    def state_at(tau, rows):
-        d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau)[:2]
-        return np.concatenate([d, v], axis=1)
-
-    def holds(g, rows):
-        return stop_rule.stopped(g, mk[rows], E[rows], zq[rows], amp[rows], pen[rows])
-
-    def near(g, rows):
-        out, penetrated = stop_rule.beyond(g, mk[rows], amp[rows], pen[rows])
-        return out | penetrated
-
-    return stop_rule.locate(state_at, holds, a, b, xtol, near)
 
 
 def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale, act, H):
@@ -654,7 +594,7 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     st.n_events[lanes_r] += n_ev
     has = n_ev > 0
     st.last_event[lanes_r[has]] = t[r][has]
-    b = bins(t[r], width, st.amp.shape[1])
+    b = eb.bins(t[r], width, st.amp.shape[1])
     st.amp[lanes_r, b] = np.maximum(st.amp[lanes_r, b], np.abs(d))
     s[r] = sn
     mask[r] = mask_of(sn)

@@ -24,7 +24,7 @@ JAX arrays, :func:`atlas.dynamics.event_bounds.xp_of`).  What differs is only th
   every event in the kernel, its amplitude and deep-penetration limits bracketed like events
   (:func:`atlas.dynamics.stop_rule.limit_steps`); a lane where it holds leaves the kernel with the
   bracket of its last step, and the host locates the stop in it
-  (:func:`atlas.dynamics.fast_engine._locate_stops`, :func:`atlas.dynamics.stop_rule.locate`), as
+  (:func:`atlas.dynamics.stop_location.locate_stops`, :func:`atlas.dynamics.stop_rule.locate`), as
   the NumPy engine does: both stop at the same time for the same reason.
 * Lanes that finish leave the batch between kernel calls of at most ``steps`` steps each (the host
   gathers the running lanes into the next call), so the slowest trajectory does not set the cost
@@ -72,6 +72,7 @@ from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import fast_engine as fe
 from atlas.dynamics import modal_form as mf
 from atlas.dynamics import step_windows as sw
+from atlas.dynamics import stop_location as sl
 from atlas.dynamics import stop_rule
 from atlas.dynamics.system import Outcome, aligned_in_basis
 
@@ -155,7 +156,7 @@ def _step(c, prm):
     # the stop rule at the step end (located inside the step on the host: _locate), the horizon
     div = run & _stops(mask, g, prm)
     keep = run & ~div
-    amp = _bin_max(c["amp"], fe.bins(t, width, nbins), jnp.abs(d), keep)
+    amp = _bin_max(c["amp"], eb.bins(t, width, nbins), jnp.abs(d), keep)
     status = jnp.where(div, 2, jnp.where(keep & (t >= T), 0, c["status"]))
     keep &= t < T
     sched = ((since & (since - 1)) == 0) & (since > 0)
@@ -227,7 +228,7 @@ def _events(c, prm, ev, lo, hi, h, xtol, t_new, s, d2, v2, acc2, amp, fallback):
         "U": jnp.where(ev[:, None, None], U_new, c["U"]),
         "tseg": jnp.where(ev, t_new, c["tseg"]), "n_events": n_events,
         "last_event": jnp.where(ev & (n_ev > 0), t_new, c["last_event"]),
-        "amp": _bin_max(amp, fe.bins(t_new, width, nbins), jnp.abs(d2), ev),
+        "amp": _bin_max(amp, eb.bins(t_new, width, nbins), jnp.abs(d2), ev),
         "n_imp": c["n_imp"].at[rows, ib].add(closing.sum(axis=1)),
         "v_imp": _bin_max(c["v_imp"], ib, jnp.where(closing, jnp.abs(v2), -np.inf).max(axis=1),
                           hit),
@@ -455,7 +456,7 @@ def _run_round(lanes, tables, st, ix, t_max, max_events, width, fallback):
 def _locate(st, tables, ix, c, prm, width):
     """The stops of the lanes ``ix`` that diverged in the kernel, located inside their last
     step (from ``max(t0, tseg)`` to ``t`` on the segment from ``tseg``) by the NumPy engine's
-    :func:`atlas.dynamics.fast_engine._locate_stops` (:func:`atlas.dynamics.stop_rule.locate`):
+    :func:`atlas.dynamics.stop_location.locate_stops` (:func:`atlas.dynamics.stop_rule.locate`):
     their time, state and amplitude into ``st``."""
     r = np.flatnonzero(c["status"] == 2)
     if r.size == 0:
@@ -465,7 +466,7 @@ def _locate(st, tables, ix, c, prm, width):
     a = np.maximum(c["t0"][r], tseg) - tseg
     rec = (ix[r], mk, c["P"][r], c["U"][r], prm["lam"][r, mk], prm["scale"][r], a,
            c["t"][r] - tseg, fe.XTOL * prm["H"][r, mk], tseg)  # fmt: skip
-    fe.locate_stops(st, tables, [rec], width)
+    sl.locate_stops(st, tables, [rec], width)
 
 
 def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, max_events=2000,
