@@ -44,6 +44,9 @@ BOUNDARY_GRID = 64
 BOX_BOUNDARY_GRID = 32
 #: the name under which the explorer's kernels are kept (:func:`atlas.core.warm.keep_kernels`)
 RUN = "atlas.explore"
+#: open points per call the first overlay of a session settles exactly, without waiting for the
+#: later-tier programs (:func:`atlas.core.points.host_first`)
+HOST_POINTS = 128
 #: the point ``(beta1, beta2)`` [rad] the background warm-up inspects (the widget's default point)
 WARM_POINT = (0.25 * math.pi, 0.75 * math.pi)
 #: a click closer than this to a codimension-2 point [rad] names the point (two cells of the
@@ -69,8 +72,6 @@ def format_boundary(curve: Curve, i: int, distance: float) -> str:
         f"bracketed within {curve.bracket[i]:.2g} rad): {lab.get(curve.side_left, curve.side_left)}"
         f" | {lab.get(curve.side_right, curve.side_right)}"
     )
-
-
 
 
 def format_point(point: Point, distance: float) -> str:
@@ -123,7 +124,9 @@ class Explorer:
     :meth:`warm_up` (called by the widget once its first map is drawn) compiles the point
     inspector's kernels and the programs of the certified boundaries' small point sets
     (:func:`atlas.core.points.compile_programs`: the shape buckets every caller shares) in a
-    background thread; a click or a first overlay that arrives earlier waits for it.
+    background thread; a click that arrives earlier waits for it.  A certified overlay does not:
+    while the later tiers' programs are not compiled yet, its small open point sets (up to
+    :data:`HOST_POINTS` a call) go to the exact tier (the same curves).
 
     The widget's sliders redraw when released (``continuous_update=False``): a redraw of the II
     layers with damping takes a few hundred milliseconds at 513 x 513, and a drag would otherwise
@@ -371,7 +374,7 @@ class Explorer:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-boundaries")
             t0 = time.perf_counter()
-            fut = self._pool.submit(_after, self._warm, *_boundary_task(key, p["dtype"]))
+            fut = self._pool.submit(_host_first, *_boundary_task(key, p["dtype"]))
 
             def done(f, key=key):
                 self.timings["boundaries_ms"] = 1e3 * (time.perf_counter() - t0)
@@ -509,8 +512,11 @@ def _warm_up(**model) -> None:
     warm.save_used()
 
 
-def _after(first: Future | None, fn, *args):
-    """``fn(*args)`` once ``first`` (the warm-up, compiling the same programs) has ended."""
-    if first is not None:
-        wait([first])
-    return fn(*args)
+def _host_first(fn, *args):
+    """``fn(*args)`` with the small point sets of a first session settled by the exact tier
+    (:func:`atlas.core.points.host_first`, :data:`HOST_POINTS`): the overlay needs none of the
+    later-tier programs the warm-up compiles meanwhile (the curves are the same either way)."""
+    from atlas.core import points  # noqa: PLC0415 - imported by the inspector already
+
+    with points.host_first(HOST_POINTS):
+        return fn(*args)

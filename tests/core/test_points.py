@@ -494,3 +494,27 @@ def test_large_later_sets_run_their_bulk_in_large_batches(extra, lengths):
     got = points._run_later(kernel, cols)
     assert seen == lengths
     assert np.array_equal(got[0], 2.0 * cols[0]) and np.array_equal(got[1], cols[1])
+
+
+def test_host_first_settles_small_open_sets_exactly_until_the_later_tiers_have_run(monkeypatch):
+    """Under :func:`points.host_first` (a first session's overlay), a first pass leaving more
+    than ``HOST_POINTS`` but at most the limit open sends them to the exact tier while the later
+    tiers have not run in this process: no later-tier program is needed, the verdicts are the
+    exact tier's; once both have run, the later tiers take them again."""
+    pts, _ = _near_singular_points()
+    some = {k: np.resize(np.broadcast_to(v, pts["c1"].shape), 100) for k, v in pts.items()}
+    monkeypatch.setattr(points, "_LATER_RAN", set())
+    plain = points.spectral_points(*some.values(), names=FLAGS)
+    assert plain.stats["tier2_points"] > 0  # the first pass leaves more than HOST_POINTS open
+    monkeypatch.setattr(points, "_LATER_RAN", set())
+    with points.host_first(128):
+        cold = points.spectral_points(*some.values(), names=FLAGS)
+    assert cold.stats["tier2_points"] == cold.stats["roots_points"] == 0
+    assert points.HOST_POINTS < cold.stats["undecided_before"] <= 128
+    ref = exact.resolve({k: v.astype(np.float64) for k, v in some.items()}, names=FLAGS)
+    for k in FLAGS:
+        assert np.array_equal(cold[k], ref[k]) and np.array_equal(plain[k], ref[k]), k
+    points.compile_programs("float64")  # both later tiers run: the usual limit again
+    with points.host_first(128):
+        warm = points.spectral_points(*some.values(), names=FLAGS)
+    assert warm.stats["tier2_points"] == plain.stats["tier2_points"]

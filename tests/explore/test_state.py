@@ -144,18 +144,30 @@ def test_box_layer_certified_boundaries_and_a_click_next_to_one():
     assert {closed_form(lo).label, closed_form(hi).label} == {left, right}
 
 
-def test_a_first_overlay_waits_for_the_warm_up(monkeypatch):
-    """The certified overlay's computation starts once the background warm-up (which compiles
-    the shared point-set programs it uses) has ended: no second copy of a program compiled."""
+def test_a_first_overlay_does_not_wait_for_the_warm_up(monkeypatch):
+    """The certified overlay is computed while the background warm-up still compiles the later
+    tiers' programs: its small open point sets go to the exact tier meanwhile
+    (:func:`atlas.core.points.host_first` with :data:`state.HOST_POINTS`)."""
     import threading
+
+    from atlas.core import points
 
     gate, order = threading.Event(), []
     monkeypatch.setattr(state, "_warm_up", lambda **m: gate.wait(60) and order.append("warm-up"))
-    task = lambda: order.append("overlay") or "curves"  # noqa: E731
+
+    def task():
+        order.append(("overlay", points._host_limit(True, None)))
+        return "curves"
+
+    monkeypatch.setattr(points, "_LATER_RAN", set())
     monkeypatch.setattr(state, "_boundary_task", lambda key, dtype: (task,))
     ex = state.Explorer(n=9, overlays=("certified boundaries",))
-    ex.warm_up()
-    assert ex.boundaries() is None  # computing
-    gate.set()
-    assert ex._curves[ex.boundary_key()].result(timeout=60) == "curves"
-    assert order == ["warm-up", "overlay"]
+    warm = ex.warm_up()
+    try:
+        ex.boundaries()  # starts the computation
+        assert ex._curves[ex.boundary_key()].result(timeout=60) == "curves"
+        assert order == [("overlay", state.HOST_POINTS)]  # the warm-up still waits
+    finally:
+        gate.set()
+    warm.result(timeout=60)
+    assert order[-1] == "warm-up"
