@@ -114,9 +114,8 @@ def run(
 
     ``jobs``: processes (1 or 2; default: 2 where two cores are idle,
     :func:`atlas.dynamics.lane_pool.usable_cores`).  With 2, the steps that need nothing from the
-    others (the boundary curves, Fig. 1's classes, the realisability search, the ladder, Fig. 2
-    and the outcome distribution) run in a second process beside the rest; the files are the
-    same bytes either way.  Returns a dict ``{step: seconds}``; also writes ``out/README.md``
+    others (:func:`_side_steps`) run in a second process beside the rest
+    (:mod:`atlas.paper.side_process`); the files are the same bytes either way.  Returns a dict ``{step: seconds}``; also writes ``out/README.md``
     listing the files.  The files are a pure function of the code and ``quick`` / ``ci``: dates,
     seconds, host and command line go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
     """
