@@ -167,25 +167,21 @@ def generate_distributed(
         :class:`atlas.data.io.NetCDFSink` (atomic; same file as ``io.write_netcdf(generate(scene))``).
     overwrite_netcdf : bool
         Replace an existing netCDF file.
-    model_box : atlas.core.model_box.ModelBox, its text or a dict, optional
-        Add the verdicts over this box of contact models, as ``atlas.generate(scene,
-        model_box=...)`` does (:mod:`atlas.data.box_tiles`); the box is part of the store's plan.
+    model_box : ModelBox, its text or a dict, optional
+        Add the verdicts over it as ``atlas.generate`` does (:mod:`atlas.data.box_tiles`).
 
     Returns
     -------
     dict
-        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
-        (``None``: beta2 not split), ``points``,
-        ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
-        ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates, ``"attributes"``:
-        found damaged on resume and rewritten), ``seconds``, ``points_per_second``,
-        ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
-        computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``;
-        over a model box also ``over_models`` (the store's ``model_box`` and its counts).
+        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2`` (``None``:
+        beta2 not split), ``points``, ``computed`` (tiles computed by this call), ``verified``
+        (kept), ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates,
+        ``"attributes"``: rewritten), ``seconds``, ``points_per_second``, ``tile_seconds`` /
+        ``tile_cpu_seconds`` (wall / CPU time of each computed tile on its worker, compilation
+        included), ``tile_points``, ``undecided_fast``, ``undecided``, ``over_models`` (box counts).
     """
     t0 = time.perf_counter()
-    opts = RunOptions.of(options, **changes)
-    job = _job(scene, store, scheduler, slab, block2, opts, model_box)
+    job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes), model_box)
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
     with store_guard.held(job.store, ours=tile_store.is_atlas_store):

@@ -172,3 +172,14 @@ def test_cli_store_with_a_model_box(stored, reference, tmp_path):
     for box in ("kappa=1:2,q=0.1:1", "kappa=2:1"):
         rc, err = _main([*args, "--model-box", box, "--store", str(store), "--resume"])
         assert rc == 2 and err.count("\n") == 1 and err.startswith("atlas: error: model_box: "), err
+
+
+@pytest.mark.e2e
+def test_a_local_cluster_gives_the_same_store(stored, tmp_path):
+    """Tiles on a dask worker process (the box pickled to it): the in-process store's bytes."""
+    pytest.importorskip("distributed")
+    summary = generate_distributed(
+        scene(), tmp_path / "c.zarr", scheduler="local:1", model_box=BOX, **TILES
+    )
+    assert summary["workers"] == 1 and summary["computed"] == list(range(6))
+    same_dataset(open_store(tmp_path / "c.zarr").load(), open_store(stored[0] / "a.zarr").load())
