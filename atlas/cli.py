@@ -172,7 +172,7 @@ def _add_generate(sub) -> None:
         help="add ss_over_models, ii_consistent_over_models, ii_stable_over_models and their "
         "witness models: SS stable (II consistent, stable) for every model of the box, the "
         "opposite for every model, or depends (q=LO:HI: equal damping; inf allowed; an axis not "
-        "given: its whole range)",
+        "given: its whole range; with --store/--scheduler: in every tile)",
     )
     _add_limits(g)
     _add_distributed(g)

@@ -37,7 +37,7 @@ import time
 import xarray as xr
 
 from atlas.core import interrupts
-from atlas.data import store_guard, tile_store
+from atlas.data import box_tiles, over_models, store_guard, tile_store
 from atlas.data import tiles as tiling
 from atlas.data.cluster import check_scheduler, executor
 from atlas.data.engine import MemorySink, RunOptions, Schema, progress_bar, run, schema
@@ -51,19 +51,23 @@ __all__ = ["generate_distributed", "verify_store", "compute_tile"]
 # --- the tile tasks (run on the workers, or in process) -----------------------------------------
 
 
-def compute_tile(scene: Scene, tile, options: RunOptions) -> tuple[xr.Dataset, dict]:
+def compute_tile(
+    scene: Scene, tile, options: RunOptions, model_box=None
+) -> tuple[xr.Dataset, dict]:
     """One tile of the atlas and its run diagnostics, in this process, without progress bar (a
     separate function: tests slow it down, and :mod:`atlas.bench.distributed` warms the kernels
-    with it)."""
+    with it); with ``model_box`` the verdicts over it on the tile's block too
+    (:mod:`atlas.data.box_tiles`)."""
     opts = dataclasses.replace(options, progress=False, history=None)
-    return run(tiling.sub_scene(scene, tile), MemorySink(), opts)
+    ds, stats = run(tiling.sub_scene(scene, tile), MemorySink(), opts)
+    return (ds if model_box is None else box_tiles.add_to_tile(ds, model_box)), stats
 
 
-def _run_tile(store: str, scene: Scene, i: int, tile, opts: RunOptions) -> dict:
+def _run_tile(store: str, scene: Scene, i: int, tile, opts: RunOptions, box=None) -> dict:
     """Compute tile ``i``, write the regions it owns, read them back, then write its record."""
     tile_store.drop_record(store, i)
     t0, c0 = time.perf_counter(), time.process_time()
-    ds, stats = compute_tile(scene, tile, opts)
+    ds, stats = compute_tile(scene, tile, opts, box)
     run = {
         "exact_failures": stats.get("exact_failures", []),
         "points": stats["points"],
@@ -126,6 +130,7 @@ def generate_distributed(
     overwrite: bool = False,
     to_netcdf=None,
     overwrite_netcdf: bool = False,
+    model_box=None,
     **changes,
 ) -> dict:
     """Generate an atlas tile by tile (on dask workers or in process) into a resumable zarr store.
@@ -162,20 +167,21 @@ def generate_distributed(
         :class:`atlas.data.io.NetCDFSink` (atomic; same file as ``io.write_netcdf(generate(scene))``).
     overwrite_netcdf : bool
         Replace an existing netCDF file.
+    model_box : ModelBox, its text or a dict, optional
+        Add the verdicts over it as ``atlas.generate`` does (:mod:`atlas.data.box_tiles`).
 
     Returns
     -------
     dict
-        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2``
-        (``None``: beta2 not split), ``points``,
-        ``computed`` (tiles computed by this call), ``verified`` (kept after verification),
-        ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates, ``"attributes"``:
-        found damaged on resume and rewritten), ``seconds``, ``points_per_second``,
-        ``tile_seconds`` / ``tile_cpu_seconds`` (worker-side wall / CPU time of generating each
-        computed tile, compilation included), ``tile_points``, ``undecided_fast``, ``undecided``.
+        ``store``, ``netcdf``, ``scheduler``, ``workers``, ``tiles``, ``slab``, ``block2`` (``None``:
+        beta2 not split), ``points``, ``computed`` (tiles computed by this call), ``verified``
+        (kept), ``missing`` / ``corrupt`` (found on resume), ``repaired`` (coordinates,
+        ``"attributes"``: rewritten), ``seconds``, ``points_per_second``, ``tile_seconds`` /
+        ``tile_cpu_seconds`` (wall / CPU time of each computed tile on its worker, compilation
+        included), ``tile_points``, ``undecided_fast``, ``undecided``, ``over_models`` (box counts).
     """
     t0 = time.perf_counter()
-    job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes))
+    job = _job(scene, store, scheduler, slab, block2, RunOptions.of(options, **changes), model_box)
     if to_netcdf is not None:
         check_output_path(to_netcdf, overwrite_netcdf)
     with store_guard.held(job.store, ours=tile_store.is_atlas_store):
@@ -197,7 +203,8 @@ def generate_distributed(
 @dataclasses.dataclass(frozen=True)
 class _Job:
     """One checked call of :func:`generate_distributed`: the scene, the store (absolute path),
-    the tiles, the schema of the full atlas, the :func:`atlas.generate` options and the plan."""
+    the tiles, the schema of the full atlas, the :func:`atlas.generate` options, the plan and the
+    model box (``None``: none)."""
 
     scene: Scene
     store: str
@@ -205,6 +212,7 @@ class _Job:
     sch: Schema
     opts: RunOptions
     plan: dict
+    box: object = None
 
     @property
     def slab(self) -> int:
@@ -218,17 +226,22 @@ class _Job:
         return first[3] - first[2] if len(first) == 4 else None
 
 
-def _job(scene, store, scheduler, slab, block2, opts: RunOptions):
+def _job(scene, store, scheduler, slab, block2, opts: RunOptions, model_box=None):
     """The checked arguments of :func:`generate_distributed` (one-line errors naming the
     parameter), its tiles, schema and plan."""
     if not isinstance(scene, Scene):
         raise ValueError("scene: expected an atlas.Scene")
+    box = None if model_box is None else over_models.as_model_box(model_box)
     check_scheduler(scheduler)
     store = store_guard.check_place(store)
     tiles = tile_plan(scene, slab, block2)
     sch = schema(scene, opts)
-    plan = tile_store.make_plan(scene, sch, tiles, opts.stored())
-    return _Job(scene, store, tiles, sch, opts, plan)
+    stored = opts.stored()
+    if box is not None:
+        sch = box_tiles.with_box(sch, opts.tile_points)
+        stored["model_box"] = str(box)
+    plan = tile_store.make_plan(scene, sch, tiles, stored)
+    return _Job(scene, store, tiles, sch, opts, plan, box)
 
 
 def _prepare_store(job: _Job, resume: bool, overwrite: bool) -> bool:
@@ -267,7 +280,7 @@ def _run_tiles(ex, job: _Job, resumed: bool, bar):
     todo = [i for i in range(len(job.tiles)) if i not in recs]
     if bar is not None:
         bar.update(len(recs))
-    calls = [(i, (job.store, job.scene, i, job.tiles[i], job.opts)) for i in todo]
+    calls = [(i, (job.store, job.scene, i, job.tiles[i], job.opts, job.box)) for i in todo]
     computed = {}
     for i, rec in ex.map(_run_tile, calls):
         interrupts.check()  # a stop signal lost in a gc callback still ends the run here
@@ -301,6 +314,7 @@ def _summary(job: _Job, ex, netcdf, report, recs, computed, totals, seconds) -> 
         "tile_points": [computed[i]["points"] for i in sorted(computed)],
         "undecided_fast": totals["attrs"]["undecided_fast"],
         "undecided": totals["attrs"]["undecided_after_resolve"],
+        **({"over_models": totals["box"]} if totals["box"] else {}),
     }
 
 
@@ -340,13 +354,15 @@ def _finalize(store, sch, plan, tiles, recs, computed, resumed) -> dict:
     if failures:
         attrs["exact_failures"] = len(failures)
         attrs["exact_failure_example"] = repr(tuple(failures[0]))
+    box = box_tiles.total_counts(plan.get("model_box"), [recs[i].get("box_counts") for i in recs])
+    attrs.update(box)
     interrupts.check()  # no store is marked complete after a stop signal
     history = tile_store.stored_history(store, sch.attrs["history"])
     if resumed:
         now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
         history += f"\n{now}: resumed, {len(computed)} of {len(tiles)} tiles recomputed"
     tile_store.mark_complete(store, {**attrs, "history": history}, var_attrs)
-    return {"attrs": attrs, "var_attrs": var_attrs, "history": history}
+    return {"attrs": attrs, "var_attrs": var_attrs, "history": history, "box": box}
 
 
 def _to_netcdf(job: _Job, recs: dict, totals: dict, path, overwrite):

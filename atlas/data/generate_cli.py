@@ -2,7 +2,8 @@
 :class:`~atlas.data.engine.RunOptions` -> a streamed netCDF4 file
 (:func:`atlas.data.io.generate_to_file`) or, with ``--scheduler``/``--store``/``--resume``/
 ``--slab``/``--block2``, tiles into a resumable zarr store
-(:func:`atlas.data.distributed.generate_distributed`) and then netCDF.
+(:func:`atlas.data.distributed.generate_distributed`) and then netCDF; ``--model-box`` adds the
+verdicts over a box of models either way.
 
 Every refusal is one line naming the option (``ValueError``/``OSError``, exit 2 from
 :mod:`atlas.cli`), raised before any computation; a killed or failed store run says that
@@ -56,19 +57,11 @@ def run_cli(
     sc = scene_from_options(scene, physical, outputs, **ranges)
     opts = RunOptions(method, dtype, resolve, tile_points, progress, history)
     screen = (dry_run, no_size_check)
-    if model_box is not None:
-        where = dict(scheduler=scheduler, store=store, slab=slab, block2=block2)
-        given = [k for k, v in where.items() if v is not None] + ["resume"] * bool(resume)
-        if given:
-            raise ValueError(
-                f"model_box: not with --{given[0]} (the verdicts over the box are computed in "
-                "memory and span beta1 x beta2 only: write them apart with --model-box, the "
-                "same --beta1 --beta2 and one model, without a store)"
-            )
-        return _run_over_models(sc, opts, out, overwrite, screen, model_box)
     if resume or any(a is not None for a in (scheduler, store, slab, block2)):
         where = dict(scheduler=scheduler, store=store, resume=resume, slab=slab, block2=block2)
-        return _run_store(sc, opts, out, overwrite, screen, **where)
+        return _run_store(sc, opts, out, overwrite, screen, model_box=model_box, **where)
+    if model_box is not None:
+        return _run_over_models(sc, opts, out, overwrite, screen, model_box)
     out = out if out is not None else f"{sc.name}.nc"
     check_output_path(out, overwrite)  # fail before any computation
     estimate = generate_estimate(sc, dtype=opts.dtype, tile_points=opts.tile_points, outputs=[out])
@@ -177,8 +170,15 @@ def parse_physical(text: str) -> dict:
 # --- tiles into a zarr store --------------------------------------------------------------------
 
 
-def _run_store(sc, opts, out, overwrite, screen, *, scheduler, store, resume, slab, block2) -> int:
-    """``--scheduler/--store/--resume``: tiles into a zarr store, then netCDF."""
+def _run_store(
+    sc, opts, out, overwrite, screen, *, scheduler, store, resume, slab, block2, model_box=None
+) -> int:
+    """``--scheduler/--store/--resume``: tiles into a zarr store, then netCDF (with
+    ``--model-box`` the verdicts over the box in every tile, :mod:`atlas.data.box_tiles`)."""
+    if model_box is not None:
+        from atlas.data.over_models import as_model_box  # noqa: PLC0415 - only on request
+
+        model_box = as_model_box(model_box)  # refused before any work
     scheduler = scheduler_arg(scheduler or "inprocess")
     _require_dask(scheduler)
     store = _store_path(sc, out, store, resume, overwrite)
@@ -210,6 +210,7 @@ def _run_store(sc, opts, out, overwrite, screen, *, scheduler, store, resume, sl
             overwrite=overwrite,
             to_netcdf=out,
             overwrite_netcdf=overwrite,
+            model_box=model_box,
         )
     except KeyboardInterrupt:
         if not os.path.isdir(store):
@@ -281,6 +282,17 @@ def _summary(s: dict) -> str:
         f"verified, {len(s['missing'])} missing and {len(s['corrupt'])} corrupt before; "
         + (f"repaired {', '.join(s['repaired'])}; " if s.get("repaired") else "")
         + f"undecided {s['undecided_fast']} before, {s['undecided']} after exact resolution"
+        + (_box_summary(s["over_models"]) if "over_models" in s else "")
+    )
+
+
+def _box_summary(a: dict) -> str:
+    """The part of :func:`_summary` about the verdicts over a model box (their counts)."""
+    return (
+        f"; over the model box {a['model_box']}: undecided "
+        f"{a['over_models_undecided_before_settlement']} before, {a['over_models_undecided']} "
+        f"after settlement; II: undecided {a['ii_over_models_undecided_before_settlement']} "
+        f"before, {a['ii_over_models_undecided']} after"
     )
 
 

@@ -15,7 +15,8 @@ A tile writes its variables into its region (``beta1`` in ``[start, stop)``, and
 ``[start2, stop2)`` for 2-D blocks; zarr chunks are aligned with the tiles, so concurrent tiles
 never touch the same chunk), reads the region back, and only then writes its record
 (:func:`write_tile`): the SHA-256 of the raw bytes (dtype, shape, data) of every variable's region,
-the undecided counts and timings, with a checksum of the record itself.  A variable lacking a split
+the undecided counts (over a model box also its counts, :mod:`atlas.data.box_tiles`) and timings,
+with a checksum of the record itself.  A variable lacking a split
 dimension is written by the tile that owns it (:func:`atlas.data.tiles.owns`); the checksums of the
 tiles sharing it (``shared`` in the record) must agree.
 
@@ -41,6 +42,7 @@ import xarray as xr
 from atlas.core import interrupts
 from atlas.data import store_guard
 from atlas.data import tiles as tiling
+from atlas.data.box_tiles import tile_counts
 from atlas.data.engine import Schema, block_shape
 from atlas.data.tiles import TilePlan
 
@@ -169,6 +171,12 @@ def check_resumable(store: str, plan: dict) -> None:
             f"store: {store} is not an atlas store, or its root metadata and their record are "
             "both damaged (start again with --overwrite)"
         )
+    if old.get("model_box") != plan.get("model_box"):
+        was, now = (p.get("model_box") or "no model box" for p in (old, plan))
+        raise ValueError(
+            f"model_box: store {store} was made over {was}, this run asks for {now} (give the "
+            "store's --model-box to resume it, or name a new store)"
+        )
     diff = [k for k in plan if k != "hash" and old.get(k) != plan[k]] or ["hash"]
     raise ValueError(
         f"store: {store} was created for a different atlas (differs in {', '.join(diff)})"
@@ -245,11 +253,12 @@ def _counted(ds):
 def write_tile(store: str, i: int, tile, ds: xr.Dataset, run: dict) -> dict:
     """Write the regions tile ``i`` owns of its atlas ``ds``, read them back, then write and
     return its record (``run``: ``exact_failures``, ``points``, ``seconds``, ``cpu_seconds`` of
-    computing it)."""
+    computing it; over a model box also the tile's ``box_counts``, :mod:`atlas.data.box_tiles`)."""
     import zarr
 
     split = tiling.ranges("beta1" in ds.dims, tile)
     names = list(ds.data_vars)
+    box_counts = tile_counts(ds)
     digests = {k: digest(ds[k].values) for k in names}
     owned = [k for k in names if tiling.owns(ds[k].dims, split)]
     t1 = time.perf_counter()
@@ -276,6 +285,7 @@ def write_tile(store: str, i: int, tile, ds: xr.Dataset, run: dict) -> dict:
         "undecided": {k: int(v.attrs["undecided"]) for k, v in _counted(ds)},
         "total_undecided_fast": int(ds.attrs["undecided_fast"]),
         "total_undecided": int(ds.attrs["undecided_after_resolve"]),
+        **({"box_counts": box_counts} if box_counts else {}),
         "exact_failures": [list(p) for p in run["exact_failures"]],
         "points": int(run["points"]),
         "seconds": run["seconds"],

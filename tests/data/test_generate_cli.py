@@ -52,32 +52,39 @@ def test_parse_physical():
 
 
 @pytest.mark.parametrize(
-    "extra, option",
+    "extra, where",
     [
-        (["--store", "s.zarr"], "store"),
-        (["--scheduler", "local:1"], "scheduler"),
-        (["--resume", "--store", "s.zarr"], "store"),
-        (["--slab", "4"], "slab"),
-        (["--block2", "4"], "block2"),
-        (["--resume"], "resume"),
+        (["--store", "s.zarr"], dict(store="s.zarr")),
+        (["--scheduler", "local:1"], dict(scheduler="local:1")),
+        (["--resume", "--store", "s.zarr"], dict(resume=True, store="s.zarr")),
+        (["--slab", "4"], dict(slab=4)),
+        (["--block2", "4"], dict(block2=4)),
     ],
 )
-def test_model_box_with_a_store_is_refused_in_one_line(
-    tmp_path, monkeypatch, capsys, extra, option
-):
-    """``--model-box`` with a store option (kept refused: the verdicts over the box are computed
-    in memory): one line naming model_box and the option given and saying what to do, exit 2,
-    nothing written, nothing computed."""
+def test_model_box_with_a_store_runs_tile_by_tile(tmp_path, monkeypatch, extra, where):
+    """``--model-box`` with a store option takes the store path, the box passed on (nothing
+    computed here: the store path is replaced)."""
     from atlas import cli
     from atlas.data import generate_cli
 
     monkeypatch.chdir(tmp_path)
     ran = []
-    monkeypatch.setattr(generate_cli, "_run_store", lambda *a, **k: ran.append(a) or 0)
-    monkeypatch.setattr(generate_cli, "_run_over_models", lambda *a, **k: ran.append(a) or 0)
+    monkeypatch.setattr(generate_cli, "_run_store", lambda *a, **k: ran.append(k) or 0)
+    monkeypatch.setattr(generate_cli, "_run_over_models", lambda *a, **k: ran.append("memory") or 0)
     argv = ["generate", "--beta1", "0:1:2", "--beta2", "0:1:2", "--model-box", "q=0:1"]
-    assert cli.main([*argv, *extra, "--out", "a.nc"]) == 2
+    assert cli.main([*argv, *extra, "--out", "a.nc"]) == 0
+    assert len(ran) == 1 and ran[0]["model_box"] == "q=0:1", ran
+    assert {k: ran[0][k] for k in where} == where
+
+
+@pytest.mark.parametrize("box", ["kappa=2:1", "q1=-1:1", "kappa=1:2,zeta=0:1"])
+def test_a_bad_model_box_with_a_store_is_refused_in_one_line(tmp_path, capsys, box):
+    """Refused before any work: one line naming model_box, exit 2, nothing written."""
+    from atlas import cli
+
+    argv = ["generate", "--beta1", "0:1:2", "--beta2", "0:1:2", "--model-box", box]
+    store, out = tmp_path / "s.zarr", tmp_path / "a.nc"
+    assert cli.main([*argv, "--store", str(store), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"atlas: error: model_box: not with --{option} ("), err
-    assert "without a store" in err and err.count("\n") == 1, err
-    assert ran == [] and list(tmp_path.iterdir()) == []
+    assert err.startswith("atlas: error: model_box: ") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []

@@ -119,11 +119,3 @@ def test_cli_bad_boxes(tmp_path, box):
     ])  # fmt: skip
     assert rc == 2 and err.count("\n") == 1 and "model_box" in err
     assert not out.exists()
-
-
-def test_cli_model_box_refuses_a_store(tmp_path):
-    rc, err = _main(
-        ["generate", "--beta1", "0:1:2", "--beta2", "0:1:2", "--model-box", "q=0:1"]
-        + ["--store", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "a.nc")]
-    )
-    assert rc == 2 and "model_box: not with --store" in err
