@@ -52,6 +52,20 @@ def characteristic_poly(c1, s1, c2, s2, kappa, q1, q2) -> sympy.Poly:
     return a11 * a22 - a12 * a21
 
 
+def characteristic_coeffs_mp(c1, s1, c2, s2, kappa, q1, q2) -> list:
+    """The coefficients ``[1, a3, a2, a1, a0]`` (highest power first) of
+    ``p(l) = (l^2 + c1 d1)(l^2 + s2 d2) - c2 s1 d1 d2`` (``d1 = kappa + q1 l``, ``d2 = 1 + q2 l``,
+    paper eq. 9) in mpmath at its current precision, from mpmath numbers given by the caller."""
+    cross = [q1 * q2, kappa * q2 + q1, kappa]
+    return [
+        mpmath.mpf(1),
+        c1 * q1 + s2 * q2,
+        c1 * kappa + s2 + c1 * s2 * q1 * q2 - c2 * s1 * cross[0],
+        c1 * s2 * (kappa * q2 + q1) - c2 * s1 * cross[1],
+        c1 * s2 * kappa - c2 * s1 * cross[2],
+    ]
+
+
 def _imag_axis_roots(p: sympy.Poly) -> int:
     """Number of roots of ``p`` on the imaginary axis (with multiplicity), exactly.
 

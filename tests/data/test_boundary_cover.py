@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from reference_sympy import characteristic_coeffs_mp
 from samples import exact_code
 
 from atlas.data import boundaries as bd
@@ -185,16 +186,7 @@ def _mp_ii_code(c1, s1, c2, s2, kappa, q1, q2) -> int:
     c1, s1, c2, s2, k, q1, q2 = (mp.mpf(x.numerator) / x.denominator for x in
                                  (c1, s1, c2, s2, kappa, q1, q2))  # fmt: skip
 
-    def mul(a, b):
-        out = [mp.mpf(0)] * (len(a) + len(b) - 1)
-        for i, x in enumerate(a):
-            for j, y in enumerate(b):
-                out[i + j] += x * y
-        return out
-
-    h = mul([1, c1 * q1, c1 * k], [1, s2 * q2, s2])
-    cross = mul([q1, k], [q2, 1])
-    p = [h[i] - (c2 * s1 * cross[i - 2] if i >= 2 else 0) for i in range(5)]
+    p = characteristic_coeffs_mp(c1, s1, c2, s2, k, q1, q2)
     roots = mp.polyroots(p, maxsteps=400, extraprec=400)
     eps = mp.mpf(10) ** -80
     real = [mp.re(z) for z in roots if abs(mp.im(z)) < eps and mp.re(z) > 0]

@@ -7,6 +7,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 import shapely
+from reference_sympy import characteristic_coeffs_mp
 
 from atlas.core import contact_modes, exact
 from atlas.data import boundaries as bd
@@ -35,17 +36,7 @@ def _minors(m, beta, kappa, q1, q2):
     c1, s1, c2, s2 = _on_line(m, beta)
     kappa, q1, q2 = (mp.mpf(float(v)) for v in (kappa, q1, q2))
 
-    def mul(a, b):
-        out = [mp.mpf(0)] * (len(a) + len(b) - 1)
-        for i, x in enumerate(a):
-            for j, y in enumerate(b):
-                out[i + j] += x * y
-        return out
-
-    d1, d2 = [kappa, q1], [mp.mpf(1), q2]
-    h1 = [c1 * d1[0], c1 * d1[1], mp.mpf(1)]
-    h2 = [s2 * d2[0], s2 * d2[1], mp.mpf(1)]
-    p = [x - c2 * s1 * y for x, y in zip(mul(h1, h2), mul(d1, d2) + [0, 0])]
+    p = characteristic_coeffs_mp(c1, s1, c2, s2, kappa, q1, q2)[::-1]
     a0, a1, a2, a3 = p[:4]
     if q1 == 0 and q2 == 0:
         return [a2, a2 * a2 - 4 * a0]
