@@ -749,6 +749,22 @@ def test_simulate_dry_run_time_grows_with_t_end(capsys):
     assert 60 < long / base < 73  # 1e4 / 150 = 66.7, both printed to 2 significant digits
 
 
+@pytest.mark.parametrize("where", [[], ["--store", "box.zarr"]])
+def test_generate_dry_run_counts_the_model_box(where, capsys):
+    """``--model-box`` adds its verdicts' bytes (3 int8 codes, 18 float64 witness parameters per
+    (beta1, beta2) point, SPEC §2) and their time (the II verdicts: milliseconds per point) to the
+    estimate, in memory and with a store."""
+    args = ["generate", "--beta1", "0:2pi:64", "--beta2", "0:2pi:64", "--kappa", "1", *where]
+    box = ["--model-box", "kappa=0.5:2,q=0.1:1"]
+    plain = _dry_run_seconds(args, capsys)
+    assert _dry_run_seconds([*args, *box], capsys) > plain + 64 * 64 * 1e-3
+    kib = []
+    for extra in ([], box):
+        assert cli.main([*args, *extra, "--dry-run"]) == 0
+        kib.append(float(re.search(r"output ~(\S+) KiB", capsys.readouterr().out).group(1)))
+    assert kib[1] - kib[0] == pytest.approx(64 * 64 * 147 / 1024, abs=0.11)  # 588.0 KiB
+
+
 def test_negative_range_start_needs_no_equals_sign(capsys):
     args = ["generate", "--beta1", "-0.5pi:0.5pi:8", "--beta2", "-pi:pi:4", "--kappa", "2"]
     assert cli.main([*args, "--q", "-0", "--dry-run"]) == 0

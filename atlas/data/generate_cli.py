@@ -89,7 +89,9 @@ def _run_over_models(sc, opts, out, overwrite, screen, model_box) -> int:
     box = over_models.as_model_box(model_box)  # refused before any work
     out = out if out is not None else f"{sc.name}.nc"
     check_output_path(out, overwrite)
-    estimate = generate_estimate(sc, dtype=opts.dtype, tile_points=opts.tile_points, outputs=[out])
+    estimate = generate_estimate(
+        sc, dtype=opts.dtype, tile_points=opts.tile_points, outputs=[out], model_box=True
+    )
     if estimate.screen(*screen):
         return 0
     use_compile_cache()
@@ -192,6 +194,7 @@ def _run_store(
         distributed=True,
         workers=_local_workers(scheduler),
         outputs=outs,
+        model_box=model_box is not None,
     )
     if estimate.screen(*screen):
         return 0

@@ -38,6 +38,10 @@ __all__ = [
 #: rough single-core cost of the certified atlas kernels per point and output group [ns]
 #: (outputs/bench.md: ~13 ns float32, ~21 ns float64 for all verdicts of a damped grid)
 NS_PER_POINT = {"float32": 15.0, "float64": 25.0}
+#: rough single-core cost of the verdicts over a box of models per (beta1, beta2) point [ns]
+#: (outputs/bench.md, model-dependence map: SS ~16 us; II ~5 ms over the unbounded box, about
+#: 20 ms over a bounded box whose open cells are settled)
+BOX_NS_PER_GEOMETRY = {"ss": 2.0e4, "ii": 2.0e7}
 #: working bytes per point of a kernel tile (inputs, padded results, exact-tier bookkeeping)
 TILE_BYTES_PER_POINT = 160
 #: bytes per stored value a zarr tile holds at peak (the tile, its read-back copy, checksums)
@@ -172,6 +176,16 @@ def _output_bytes(scene, dtype: str) -> tuple[int, int]:
     return total, md
 
 
+def _box_cost(scene, dtype: str) -> tuple[int, float]:
+    """``(output bytes, seconds)`` of the verdicts over a box of models on the scene's
+    ``(beta1, beta2)`` points (:mod:`atlas.data.over_models`, every ``*_over_models`` output and
+    its witnesses)."""
+    geometry = math.prod(scene.axes[d].size for d in ("beta1", "beta2") if scene.axes[d].is_dim)
+    box = [o for o in OUTPUTS.values() if o.computed_by and "over_models" in o.computed_by]
+    nbytes = geometry * sum(storage_dtype(o.name, dtype).itemsize for o in box)
+    return nbytes, geometry * sum(BOX_NS_PER_GEOMETRY.values()) * 1e-9
+
+
 def generate_estimate(
     scene,
     *,
@@ -180,11 +194,15 @@ def generate_estimate(
     distributed: bool = False,
     workers: int = 1,
     outputs=(),
+    model_box: bool = False,
 ) -> Estimate:
     """The cost of ``atlas generate`` of ``scene`` (streamed to netCDF, or tiles into a zarr
-    store with ``distributed``; the store and the netCDF file both count at the destination)."""
+    store with ``distributed``; the store and the netCDF file both count at the destination;
+    ``model_box``: with the verdicts over a box of models, :func:`_box_cost`)."""
     points = scene.points()
     out_bytes, md = _output_bytes(scene, dtype)
+    box_bytes, box_seconds = _box_cost(scene, dtype) if model_box else (0, 0.0)
+    out_bytes += box_bytes
     axes = sum(a.size for a in scene.axes.values()) * 8 * 4  # coordinates and their directions
     tile = min(tile_points, points) * TILE_BYTES_PER_POINT
     if distributed:
@@ -194,7 +212,8 @@ def generate_estimate(
         written = out_bytes  # the store, and as much again for a netCDF copy
         mem_hint = "use a coarser grid or smaller tiles (--slab, --block2)"
     else:
-        peak = axes + tile + md  # model_dependent_* accumulate over (beta1, beta2) in memory
+        # model_dependent_* accumulate over (beta1, beta2) in memory; so do the box verdicts
+        peak = axes + tile + md + box_bytes
         written = out_bytes
         mem_hint = (
             "use a coarser (beta1, beta2) grid or --outputs without model_dependent_*"
@@ -206,7 +225,8 @@ def generate_estimate(
         points,
         written,
         int(peak),
-        points * NS_PER_POINT.get(dtype, 25.0) * 1e-9 * len(scene.output_names) ** 0.5,
+        points * NS_PER_POINT.get(dtype, 25.0) * 1e-9 * len(scene.output_names) ** 0.5
+        + box_seconds,
         tuple(os.fspath(o) for o in outputs),
         memory_hint=mem_hint,
         disk_hint="use a coarser grid or fewer --outputs",

@@ -21,6 +21,20 @@ def test_output_bytes_equal_the_atlas(dtype):
     assert est.output_bytes == sum(v.nbytes for v in ds.data_vars.values())
 
 
+def test_output_bytes_count_the_verdicts_over_a_model_box():
+    """With a model box the estimate holds the box's codes and witnesses too (SPEC §2: three
+    int8 codes and 18 float64 witness parameters per (beta1, beta2) point), and they are what the
+    atlas holds."""
+    scene = Scene(beta1="0:2pi:4", beta2="0:2pi:3", kappa="0.5,2", q="0.1")
+    ds = generate(scene, resolve=False, model_box="kappa=0.5:2,q=0.1:1")
+    plain = limits.generate_estimate(scene)
+    est = limits.generate_estimate(scene, model_box=True)
+    assert est.output_bytes - plain.output_bytes == 4 * 3 * (3 * 1 + 18 * 8)
+    assert est.output_bytes == sum(v.nbytes for v in ds.data_vars.values())
+    assert est.peak_bytes - plain.peak_bytes == 4 * 3 * (3 * 1 + 18 * 8)
+    assert est.seconds > plain.seconds + 4 * 3 * 1e-3  # the II verdicts: ms per geometry
+
+
 def test_huge_scene_refused_at_once(tmp_path, monkeypatch):
     """The estimate and its refusal do no work beyond parsing the scene: no function of the
     modules that compute is called and under 1 MB is allocated."""
