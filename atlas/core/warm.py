@@ -180,6 +180,7 @@ class Kernel:
         #: the function's own code, closure and bound options (lambdas share a name)
         self.code = hashlib.sha256(_value_digest(fn, 3)).hexdigest()
         self._calls: dict = {}
+        self._lock = threading.Lock()
         functools.update_wrapper(self, fn)
 
     def __call__(self, *args, **static):
@@ -190,11 +191,14 @@ class Kernel:
         key = (where, _digest(self.module), self.code, avals, tuple(sorted(static.items())))
         call = self._calls.get(key)
         if call is None:
-            _LOADING.name = (self.name, next(_LOADS))
-            try:
-                call = self._calls[key] = self._load(Path(where), key, args, static)
-            finally:
-                _LOADING.name = None
+            with self._lock:  # threads asking at once (a warm-up and a first use) load it once
+                call = self._calls.get(key)
+                if call is None:
+                    _LOADING.name = (self.name, next(_LOADS))
+                    try:
+                        call = self._calls[key] = self._load(Path(where), key, args, static)
+                    finally:
+                        _LOADING.name = None
         return call(*args)
 
     def __getattr__(self, name):  # the rest of the jax.jit API: lower, trace, ...

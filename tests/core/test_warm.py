@@ -40,6 +40,34 @@ def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypat
     assert sorted(p.name for p in tmp_path.iterdir()) == files
 
 
+def test_threads_asking_at_once_load_a_kernel_once(tmp_path, monkeypatch):
+    """A first use and a background warm-up asking for the same program at the same time: one
+    of them exports and compiles it, the other waits and shares it (both compiled it before,
+    which doubled the first overlay's compilation)."""
+    kernel = warm.Kernel(lambda x: x * 2.0)
+    started, loads = threading.Event(), []
+    real = warm.Kernel._load
+
+    def slow_load(self, *a):
+        loads.append(threading.current_thread().name)
+        started.set()
+        threading.Event().wait(0.2)  # the other thread asks meanwhile
+        return real(self, *a)
+
+    monkeypatch.setattr(warm.Kernel, "_load", slow_load)
+    x = np.arange(4.0)
+    out = {}
+    with warm.kernel_cache(str(tmp_path)):
+        other = threading.Thread(target=lambda: out.setdefault("other", kernel(x)), name="other")
+        other.start()
+        started.wait()
+        out["main"] = kernel(x)
+        other.join()
+    assert loads == ["other"]
+    np.testing.assert_array_equal(np.asarray(out["main"]), 2 * x)
+    np.testing.assert_array_equal(np.asarray(out["other"]), 2 * x)
+
+
 def test_exported_first_pass_is_one_loop_fusion(tmp_path):
     """Soundness of the first pass (rootfree module docstring: each sign code computed once per
     point) holds for the exported program too: its compiled form has one per-point fusion."""
