@@ -459,8 +459,11 @@ def _add_simulate(sub) -> None:
 
 def _add_table(sub) -> None:
     pt = sub.add_parser("table", help=HELP["table"])
-    pt.add_argument("--format", choices=["markdown", "csv"], default="markdown")
-    pt.add_argument("--out", metavar="FILE", help="output file .md or .csv (default: stdout)")
+    pt.add_argument(
+        "--format", choices=["markdown", "csv"], default=None,
+        help="default: the ending of --out (.md, .csv), else markdown",
+    )  # fmt: skip
+    pt.add_argument("--out", metavar="FILE", help="output file .md, .csv or .txt (default: stdout)")
     pt.add_argument("--overwrite", action="store_true", help="replace an existing output file")
 
 
@@ -619,6 +622,10 @@ def _dispatch_estimate(args):
         n1, n2 = scene.axes["beta1"].size, scene.axes["beta2"].size
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
         return limits.boundaries_estimate(n1, n2, args.check, slices, outputs=outs)
+    if args.command == "simulate" and not args.outcome_map:
+        for name in ("dry_run", "no_size_check"):
+            if getattr(args, name):  # one trajectory: no grid to estimate
+                raise ValueError(f"{name.replace('_', '-')}: only with --map")
     if args.command == "simulate" and args.outcome_map:
         from atlas.paper.simulate import map_dynamics, map_scene, scene_options
 

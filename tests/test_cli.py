@@ -177,6 +177,27 @@ def test_simulate_and_table_run(tmp_path, capsys):
     assert len(out.strip().splitlines()) == 25  # header + 24 classes
 
 
+@pytest.mark.parametrize(
+    "name, fmt, first",
+    [("t.csv", [], "class,"), ("t.md", [], "| class"), ("t.txt", [], "| class"),
+     ("t.txt", ["--format", "csv"], "class,"), ("t.csv", ["--format", "csv"], "class,")],
+)  # fmt: skip
+def test_table_out_ending_names_the_format(name, fmt, first, tmp_path, capsys):
+    """``atlas table --out t.csv`` writes CSV and ``t.md`` Markdown (both wrote Markdown
+    before); ``--format`` picks where the ending does not (``.txt``)."""
+    out = tmp_path / name
+    assert cli.main(["table", "--out", str(out), *fmt]) == 0, capsys.readouterr().err
+    assert out.read_text().startswith(first)
+
+
+def test_table_format_against_the_ending_is_refused(tmp_path, capsys):
+    out = tmp_path / "t.md"
+    assert cli.main(["table", "--format", "csv", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("atlas: error: format: --format csv but --out")
+    assert not out.exists()
+
+
 def test_dispatch_passes_options(monkeypatch):
     import types
 
@@ -187,6 +208,7 @@ def test_dispatch_passes_options(monkeypatch):
     monkeypatch.setitem(cli._DISPATCH, "table", ("atlas._fake_table", "run_cli"))
     assert cli.main(["table", "--format", "csv"]) == 0
     assert seen == {"format": "csv", "out": None, "overwrite": False}
+    assert cli.main(["table"]) == 0 and seen["format"] is None  # the ending or Markdown decides
 
 
 def test_no_subcommand_is_usage_error(capsys):
@@ -737,6 +759,22 @@ def _dry_run_seconds(args, capsys) -> float:
     out = capsys.readouterr().out
     value, unit = re.search(r"~(\S+) (s|min|h|days|years) on one core", out).groups()
     return float(value) * {"s": 1, "min": 60, "h": 3600, "days": 86400, "years": 31536000}[unit]
+
+
+@pytest.mark.parametrize(
+    "extra, name",
+    [(["--dry-run"], "dry-run"), (["--no-size-check"], "no-size-check"), (["--n", "8"], "n"),
+     (["--n-perturb", "4"], "n-perturb"), (["--no-theory"], "no-theory")],
+)  # fmt: skip
+def test_simulate_map_options_without_map_are_refused(extra, name, tmp_path, capsys):
+    """An option of the outcome map given to one trajectory is one line naming it, exit 2, and
+    nothing simulated or written (``--dry-run`` simulated and wrote before)."""
+    out = tmp_path / "s.csv"
+    with counted() as work:
+        rc = cli.main(["simulate", "--case", "fig2b", "--t-end", "1", "--out", str(out), *extra])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith(f"atlas: error: {name}: only with --map")
+    assert not out.exists() and not work.calls["dynamics/simulator.py"], work
 
 
 def test_simulate_dry_run_time_grows_with_t_end(capsys):

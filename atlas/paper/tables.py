@@ -24,6 +24,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
 from dataclasses import dataclass, field
 
 import jax
@@ -435,11 +436,20 @@ def to_csv(rows: list[Row]) -> str:
     return buf.getvalue()
 
 
-def run_cli(format: str = "markdown", out: str | None = None, overwrite: bool = False):
-    """``atlas table``: print Table 2 (Markdown) or write CSV (an existing ``out`` is replaced
-    only with ``overwrite``)."""
+#: the format each ending of ``atlas table --out`` names (``.txt``: whichever ``--format`` says)
+_FORMAT_OF = {".md": "markdown", ".csv": "csv"}
+
+
+def run_cli(format: str | None = None, out: str | None = None, overwrite: bool = False):
+    """``atlas table``: print Table 2 or write it to ``out`` (an existing file is replaced only
+    with ``overwrite``), as Markdown or CSV: ``format``, else the ending of ``out`` (``.md``,
+    ``.csv``), else Markdown; a ``format`` the ending contradicts is refused."""
     from atlas.data.io import atomic_write_text, check_output_path
 
+    named = _FORMAT_OF.get(os.path.splitext(out)[1].lower()) if out else None
+    if format is not None and named is not None and format != named:
+        raise ValueError(f"format: --format {format} but --out {out} names {named}")
+    format = format or named or "markdown"
     if out:
         check_output_path(out, overwrite)
     rows = table2()
