@@ -332,7 +332,12 @@ def _add_boundaries(sub) -> None:
     )
     for name in ("beta1", "beta2", "kappa", "q", "q1", "q2"):
         pb.add_argument(f"--{name}", metavar="RANGE", help=f"{name} (as for generate)")
-    pb.add_argument("--fields", default="SS,II", help="SS, II or SS,II (default)")
+    pb.add_argument(
+        "--fields",
+        default=None,
+        help="SS, II or SS,II (default); with --model-box also the names of the verdicts over "
+        "the box (ss_over_models, ii_consistent_over_models, ii_stable_over_models)",
+    )
     pb.add_argument(
         "--tol",
         type=_number("tol"),
@@ -342,13 +347,13 @@ def _add_boundaries(sub) -> None:
     pb.add_argument(
         "--chord",
         type=_number("chord"),
-        default=CHORD,
+        default=None,
         help=f"chord sagitta [rad], in [max(tol, {MIN_CHORD:g}), 0.1] ({CHORD})",
     )
     pb.add_argument(
         "--check",
         type=int,
-        default=2,
+        default=None,
         help=f"resample cells N x finer for hidden branches, 0..{MAX_CHECK}; 0 or 1: no check; "
         "refused if the refined grids may need more than 4 GiB (2)",
     )
@@ -360,8 +365,9 @@ def _add_boundaries(sub) -> None:
     pb.add_argument(
         "--model-box",
         metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
-        help="instead: the certified curves between the regions of ss_over_models over this box "
-        "(stable / unstable for every model, depends; no --kappa/--q; atlas.data.region_curves)",
+        help="instead: the certified curves between the regions of the verdicts over this box "
+        "(ss_over_models and the II ones: for every model / for none / depends; no --kappa/--q, "
+        "--chord, --check; atlas.data.region_curves)",
     )
     _add_limits(pb)
 
@@ -521,8 +527,12 @@ def _refuse_early(args) -> None:
     ``--chord``, ``--check`` and ``--fields`` (with ``--model-box`` the region curves check their
     own: chord and check do not apply there)."""
     if args.command == "boundaries" and getattr(args, "model_box", None) is None:
-        from atlas.data.boundary_args import check_args, check_model_text
+        from atlas.data.boundary_args import CHORD, check_args, check_model_text
 
+        # the defaults of a slice's curves (left unset on the parser: --model-box refuses them)
+        for name, default in (("chord", CHORD), ("check", 2), ("fields", "SS,II")):
+            if getattr(args, name) is None:
+                setattr(args, name, default)
         for name in ("kappa", "q", "q1", "q2"):
             check_model_text(name, getattr(args, name, None))
         check_args(args.tol, args.chord, args.check, 2, args.fields)
@@ -613,15 +623,19 @@ def _dispatch_estimate(args):
         from atlas.data.boundary_args import MAX_CHECK
         from atlas.data.scene import Scene
 
-        if not 0 <= args.check <= MAX_CHECK:
+        box = getattr(args, "model_box", None) is not None
+        if not box and not 0 <= args.check <= MAX_CHECK:
             return None  # refused by the boundaries' own check, which names the limit
 
         axes = {k: getattr(args, k) for k in ("beta1", "beta2", "kappa", "q", "q1", "q2")}
-        scene = Scene(**{k: v for k, v in axes.items() if v is not None})
-        slices = math.prod(scene.axes[m].size for m in scene.model_names)
+        scene = Scene(
+            **{k: v for k, v in axes.items() if v is not None and (k[0] == "b" or not box)}
+        )
+        # a box: one unchecked slice per verdict over it (rough: a vertex there costs more)
+        slices = 3 if box else math.prod(scene.axes[m].size for m in scene.model_names)
         n1, n2 = scene.axes["beta1"].size, scene.axes["beta2"].size
         outs = [p for p in (args.out, args.csv, args.geojson) if p]
-        return limits.boundaries_estimate(n1, n2, args.check, slices, outputs=outs)
+        return limits.boundaries_estimate(n1, n2, 0 if box else args.check, slices, outputs=outs)
     if args.command == "simulate" and not args.outcome_map:
         for name in ("dry_run", "no_size_check"):
             if getattr(args, name):  # one trajectory: no grid to estimate

@@ -171,16 +171,20 @@ def region_curves(
 
 
 def _fields(fields: str | None) -> tuple[str, ...]:
-    """The box verdicts to trace: ``fields`` (comma-separated output names) or, for ``None`` or
-    the SS/II fields of ``atlas boundaries`` (its default), every one
-    (:func:`atlas.data.box_points.box_outputs`); one-line errors."""
+    """The box verdicts to trace: ``fields`` (comma-separated output names, or the fields of
+    ``atlas boundaries``: ``SS`` for ``ss_over_models``, ``II`` for the II verdicts) or, for
+    ``None``, every one (:func:`atlas.data.box_points.box_outputs`); one-line errors."""
     known = box_outputs()
-    names = [f.strip() for f in (fields or "").split(",") if f.strip()]
-    if not names or set(names) <= {"SS", "II"}:
-        return known
+    names = []
+    for f in (fields or ",".join(known)).split(","):
+        f = f.strip()
+        if f in ("SS", "II"):
+            names += [n for n in known if n.startswith(f.lower() + "_")]
+        elif f:
+            names.append(f)
     bad = [n for n in names if n not in known]
-    if bad:
-        raise ValueError(f"fields: with --model-box, among {', '.join(known)}; got {bad}")
+    if bad or not names:
+        raise ValueError(f"fields: with --model-box, SS, II or among {', '.join(known)}; got {bad}")
     return tuple(dict.fromkeys(names))
 
 
@@ -198,9 +202,10 @@ def run_cli(
     **ignored,
 ) -> int:
     """``atlas boundaries --model-box BOX --beta1 R --beta2 R [--tol T] [--out F.nc] [--csv F]
-    [--geojson F]``: the region boundaries of every box verdict (:func:`region_curves`); the
-    model axes (``--kappa``, ``--q`` ...) are refused, the box replaces them; ``--chord`` and
-    ``--check`` do not apply."""
+    [--geojson F] [--fields F]``: the region boundaries of the box verdicts ``fields``
+    (:func:`_fields`; default every one, :func:`region_curves`); the model axes (``--kappa``,
+    ``--q`` ...) are refused, the box replaces them, and so are ``--chord`` and ``--check``,
+    which do not apply."""
     from atlas.data.boundary_curves import summary  # noqa: PLC0415
     from atlas.data.io import check_output_path  # noqa: PLC0415
     from atlas.data.over_models import as_model_box  # noqa: PLC0415
@@ -209,6 +214,9 @@ def run_cli(
     for name in ("kappa", "q", "q1", "q2"):
         if ignored.get(name) is not None:
             raise ValueError(f"{name}: not with --model-box (the model box replaces the model)")
+    for name in ("chord", "check"):
+        if ignored.get(name) is not None:
+            raise ValueError(f"{name}: not with --model-box (region curves are not refined)")
     box = as_model_box(model_box)
     names = _fields(fields)
     paths = [p for p in (out, csv, geojson) if p is not None]

@@ -98,6 +98,22 @@ def test_bounded_box_curves_against_the_exact_tier_on_sampled_models():
     assert closed > bd.attrs["stopped"]
 
 
+def test_cli_fields_pick_the_verdicts(tmp_path, capsys):
+    """``--fields SS`` traces ``ss_over_models`` alone (every verdict was traced before), and
+    ``II`` names the two II verdicts of SPEC §2."""
+    from atlas.cli import main
+
+    out = tmp_path / "r.nc"
+    axes = ["--beta1", "0.1:6.2:6", "--beta2", "0.1:6.2:6", "--tol", "1e-3"]
+    argv = ["boundaries", "--model-box", "kappa=0.5:2,q=0.1:1", *axes, "--fields", "SS"]
+    assert main([*argv, "--out", str(out)]) == 0, capsys.readouterr().err
+    with xr.open_dataset(out) as ds:
+        assert set(ds["curve_kind"].values) == {"ss_over_models_region"}
+    assert rc._fields("II") == ("ii_consistent_over_models", "ii_stable_over_models")
+    assert rc._fields("SS,ii_stable_over_models") == ("ss_over_models", "ii_stable_over_models")
+    assert len(rc._fields(None)) == 3
+
+
 def test_cli_writes_the_curves_and_refuses_bad_input(tmp_path, capsys):
     """``atlas boundaries --model-box`` writes the curves (netCDF with the box and the codes'
     meanings, CSV); the model axes, a bad box and an unknown field are one-line refusals (exit
@@ -121,6 +137,8 @@ def test_cli_writes_the_curves_and_refuses_bad_input(tmp_path, capsys):
         (["--kappa", "1"], "kappa"),
         (["--model-box", "kappa=2:1"], "model_box"),
         (["--fields", "stable_SS"], "fields"),
+        (["--chord", "1e-3"], "chord"),  # were ignored: region curves are not refined
+        (["--check", "1"], "check"),
     ):
         bad = tmp_path / "bad.nc"
         args = ["boundaries", "--model-box", "q=0:1", *axes, *extra, "--out", str(bad)]
