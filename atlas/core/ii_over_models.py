@@ -42,10 +42,26 @@ irreducible for every model (the cycle ``x1 <- x1' <- x2 <- x2' <- x1`` uses ``1
 real eigenvalue is simple, every other eigenvalue has a strictly smaller real part, and no other
 eigenvalue has a nonnegative eigenvector.  An II root ``l > 0`` (``x1 x2 > 0``) has the positive
 eigenvector ``(x, l x)`` (up to sign): it *is* that eigenvalue.  Hence II is stable exactly where
-it is consistent, for every model, and the signs decide both (no search, no sample).  Where
-``c1 > 0`` or ``s2 > 0`` (classes 33, 43, 44) ``A`` is not Metzler and this does not apply.
+it is consistent, for every model, and the signs decide both (no search, no sample).
 
-**Tiers.**  (1) signs (with Perron-Frobenius); (2) a fixed sample of models per geometry
+**A symmetric pencil** (``gamma > 0`` and ``D < 0``: classes 33, 34, 43, 44, where ``c1 > 0`` or
+``s2 > 0`` leaves ``A`` not Metzler).  With ``B^-1`` the eigenvalue problem is
+``l^2 M x = (l Q + K) x``, ``M = -B^-1 = [[s2, -c2], [-s1, c1]] / |D|``, ``K = diag(kappa, 1)``,
+``Q = diag(q1, q2)``.  ``M``'s off-diagonal entries have the product ``gamma / D^2 > 0``, so
+``S = diag(1, t)``, ``t^2 = c2 / s1``, makes ``M' = S M S^-1`` symmetric (``S`` commutes with
+``K``, ``Q``), with ``det M' = 1 / D < 0``: one positive and one negative eigenvalue.  For an
+eigenvalue ``l`` with eigenvector ``y`` of ``l^2 M' y = (l Q + K) y``, the real numbers
+``m = y* M' y``, ``r = y* Q y >= 0``, ``k = y* K y > 0`` give ``m l^2 - r l - k = 0``: for
+``m > 0`` both roots are real, for ``m <= 0`` every root has ``Re l <= 0``.  So every eigenvalue
+with ``Re l > 0`` is real.  A real ``l > 0`` is one iff
+``f(l) = max_y y' M' y / y' (K / l^2 + Q / l) y = 1``, and ``f`` (a maximum of ratios that
+strictly increase with ``l`` where the numerator is positive) strictly increases, with
+``f'(l) > 0`` (the maximiser's ratio): exactly one positive eigenvalue, simple
+(``p(0) = kappa D < 0``, ``p`` monic), and every other eigenvalue has ``Re l <= 0``.  It is
+the strictly dominant eigenvalue, so again II is stable exactly where it is consistent, for every
+model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
+
+**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of models per geometry
 (:func:`atlas.core.model_box.sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
 witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
@@ -180,12 +196,13 @@ def _sg(x) -> int:
 
 
 def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(consistency, never_stable, metzler)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
+    """``(consistency, never_stable, dominant)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
     c2, s2`` and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may
     depend on the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``:
     ``gamma > 0``, ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II;
-    ``metzler``: ``c1, s2 <= 0`` and ``c2, s1 < 0``, II stable exactly where consistent
-    (Perron-Frobenius, module docstring)."""
+    ``dominant``: II stable exactly where consistent, for every model: ``c1, s2 <= 0`` and
+    ``c2, s1 < 0`` (Perron-Frobenius) or ``gamma > 0`` and ``D < 0`` (the symmetric pencil;
+    module docstring)."""
     c1, s1, c2, s2, d = np.broadcast_arrays(*(np.asarray(v) for v in (c1, s1, c2, s2, d)))
     valid = (d != 0) & (c2 * s1 != 0)
     gpos, gneg = valid & (c2 == s1), valid & (c2 != s1)
@@ -197,7 +214,8 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
     fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
     cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
-    return cons, gpos & (c2 > 0), (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
+    metzler = (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
+    return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
 
 
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
@@ -214,9 +232,10 @@ def never_stable_by_signs(c1, s1, c2, s2) -> bool:
 
 def stable_by_signs(c1, s1, c2, s2) -> bool:
     """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
-    ``metzler``) at one geometry (exact inputs)."""
-    metzler = _sg(c1) <= 0 and _sg(s2) <= 0 and _sg(c2) < 0 and _sg(s1) < 0
-    return consistency_by_signs(c1, s1, c2, s2) == 1 and metzler
+    ``dominant``) at one geometry (exact inputs)."""
+    signs = map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2))
+    cons, _, dominant = signs_rule(*signs)
+    return int(cons) == 1 and bool(dominant)
 
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
@@ -303,11 +322,11 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
     settle = settle and math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
-    cons, never, metzler = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    cons, never, dominant = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
-    codes[SIDES_STAB][(cons == 1) & metzler] = _S
+    codes[SIDES_STAB][(cons == 1) & dominant] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
     todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
     sample = _sample(geo[todo], box)

@@ -167,24 +167,31 @@ def test_witness_names_follow_the_ss_pattern():
     assert len(iim.II_OUTPUTS) == 14
 
 
-# --- Perron-Frobenius: the classes with both directions in the third quadrant -------------------
+# --- the signs prove II stable wherever consistent: Perron-Frobenius (both directions in the third
+# quadrant, 34, 35) and the symmetric pencil (gamma > 0, det B < 0: 33, 34, 43, 44) ----------------
 
 METZLER = (34, 35)
+DOMINANT = (33, 34, 35, 43, 44)
 
 
-def _dominant_is_ii(g, models) -> np.ndarray:
-    """Independent float64 check (numpy eigenvalues of the state matrix, one per model): 1 where
-    the eigenvalue of largest real part is real, positive, strictly dominant and II
-    (``x1 x2 > 0``), 0 where it clearly is not, -1 where a margin is within 1e-6 (relative)."""
+def _state(g, k, q1, q2) -> np.ndarray:
+    """The state matrices ``[[0, I], [-B diag(k, 1), -B diag(q1, q2)]]`` (SPEC §1), one per model."""
     c1, s1, c2, s2 = g
-    k, q1, q2 = np.asarray(models, float).T
+    k, q1, q2 = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, float)) for v in (k, q1, q2)))
     A = np.zeros((len(k), 4, 4))
     A[:, 0, 2] = A[:, 1, 3] = 1.0
     A[:, 2:, 0] = -np.array([c1, s1]) * k[:, None]
     A[:, 2:, 1] = -np.array([c2, s2])
     A[:, 2:, 2] = -np.array([c1, s1]) * q1[:, None]
     A[:, 2:, 3] = -np.array([c2, s2]) * q2[:, None]
-    w, v = np.linalg.eig(A)
+    return A
+
+
+def _dominant_is_ii(g, models) -> np.ndarray:
+    """Independent float64 check (numpy eigenvalues of the state matrix, one per model): 1 where
+    the eigenvalue of largest real part is real, positive, strictly dominant and II
+    (``x1 x2 > 0``), 0 where it clearly is not, -1 where a margin is within 1e-6 (relative)."""
+    w, v = np.linalg.eig(_state(g, *np.asarray(models, float).T))
     order = np.argsort(-w.real, axis=1)
     w = np.take_along_axis(w, order, 1)
     x = np.take_along_axis(v, order[:, None, :], 2)[:, :2, 0]
@@ -198,21 +205,52 @@ def _dominant_is_ii(g, models) -> np.ndarray:
 
 
 @pytest.mark.parametrize("seed", [5, 11])
-def test_metzler_classes_are_stable_for_every_model(seed):
-    """Classes 34, 35 over the whole model space: II consistent and stable for every model
-    (decided, no undecided left), and 4000 log-spread models per geometry (kappa, q1, q2 in
-    1e-4..1e4, q = 0 included) checked by numpy eigenvalues never contradict it."""
+def test_dominant_classes_are_stable_for_every_model(seed):
+    """Classes 33, 34, 35, 43, 44 over the whole model space: II consistent and stable for every
+    model (decided by the signs, no undecided left), and 4000 log-spread models per geometry
+    (kappa, q1, q2 in 1e-4..1e4, q = 0 included) checked by numpy eigenvalues never contradict
+    it."""
     c1, s1, c2, s2, cc = per_class(4, seed)
-    keep = np.isin(cc, METZLER)
+    keep = np.isin(cc, DOMINANT)
     geo = [g for g, k in zip(zip(c1, s1, c2, s2), keep) if k]
-    assert len(geo) == 4 * len(METZLER)
+    assert len(geo) == 4 * len(DOMINANT)
     box = mb.model_box()
     r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
     assert set(r[CONS].tolist()) == {YES} and set(r[STAB].tolist()) == {YES}
-    assert r.stats["undecided_after"] == 0
+    assert r.stats["undecided_after"] == 0 and r.stats["by_signs"] == len(geo)
     for g in geo:
         got = _dominant_is_ii(g, _dense(box, 4000, seed))
         assert 0 not in got and np.mean(got == 1) > 0.9, g
+
+
+@pytest.mark.parametrize("c", (33, 43, 44))
+def test_pencil_classes_against_the_exact_tier(c):
+    """Random geometries of 33, 43, 44: "stable for every model" over the whole box and two
+    bounded ones, never contradicted by a dense sample of models through the exact tier."""
+    c1, s1, c2, s2, cc = per_class(2, 13)
+    geo = [g for g, k in zip(zip(c1, s1, c2, s2), cc == c) if k]
+    for box in (mb.model_box(), mb.model_box(kappa=(0.5, 50.0), q=(0.0, 3.0))):
+        r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
+        assert set(r[STAB].tolist()) == {YES}, (c, box)
+        _check(r, geo, box, 40)
+
+
+def test_a_closed_form_class_43_case():
+    """``b1 = (3, -4) / 5``, ``b2 = (-4, 3) / 5`` (class 43, ``B`` symmetric, eigenvalues
+    ``-1/5`` on ``(1, 1)`` and ``7/5`` on ``(1, -1)``).  With ``kappa = 1``, ``q1 = q2 = q`` the
+    eigenvalues solve ``l^2 + mu (q l + 1) = 0``: ``l = (q + sqrt(q^2 + 20)) / 10`` on the II
+    vector ``(1, 1)`` (1 at ``q = 4``, ``1 / sqrt(5)`` at ``q = 0``), and ``-1/5`` or two roots
+    with ``Re l <= 0``: II stable at each such model (by hand), as proved for every model."""
+    g = (0.6, -0.8, -0.8, 0.6)
+    assert int(np.asarray(class_code(*g))) == 43
+    r = iim.ii_over_models(*g, mb.model_box(), settle=False)
+    assert (int(r[CONS]), int(r[STAB])) == (YES, YES)
+    assert iim.stable_by_signs(3, -4, -4, 3)
+    for q in (0.0, 0.5, 4.0, 30.0):
+        lam = (q + np.sqrt(q * q + 20.0)) / 10
+        w = np.linalg.eigvals(_state(g, 1.0, q, q))[0]
+        assert np.isclose(w.real.max(), lam) and np.sum(w.real > 1e-9) == 1  # float check
+        assert _exact(g, (1.0, q, q)) == (1, 1)
 
 
 def test_the_numpy_check_sees_an_unstable_ii():
@@ -222,10 +260,12 @@ def test_the_numpy_check_sees_an_unstable_ii():
     assert iim.stable_by_signs(c1, s1, c2, s2) is False
 
 
-@pytest.mark.parametrize("c", (33, 34, 35, 43, 44))
-def test_stable_by_signs_in_the_metzler_classes(c):
-    """Only where the state matrix is Metzler (34, 35); not in 33, 43, 44 (c1 > 0 or s2 > 0)."""
+@pytest.mark.parametrize("c", (15, 32, 33, 34, 35, 43, 44))
+def test_stable_by_signs_in_the_dominant_classes(c):
+    """Where the state matrix is Metzler (34, 35) or the pencil symmetric with ``det B < 0`` (33,
+    34, 43, 44); not in 15, 32 (``gamma < 0``: a complex pair can overtake the II root)."""
     c1, s1, c2, s2, cc = per_class(3, 7)
     for g in zip(c1[cc == c], s1[cc == c], c2[cc == c], s2[cc == c]):
-        assert iim.stable_by_signs(*g) is (c in METZLER)
-        assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (1, 1)
+        assert iim.stable_by_signs(*g) is (c in DOMINANT)
+        if c in DOMINANT:
+            assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (1, 1)
