@@ -2,7 +2,6 @@
 sample of models through the exact tier (never contradicts a "for every model" verdict), the
 witnesses through the exact tier, and the paper's Appendix C / Table 2 classes."""
 
-
 import numpy as np
 import pytest
 from samples import per_class
@@ -268,4 +267,7 @@ def test_stable_by_signs_in_the_dominant_classes(c):
     for g in zip(c1[cc == c], s1[cc == c], c2[cc == c], s2[cc == c]):
         assert iim.stable_by_signs(*g) is (c in DOMINANT)
         if c in DOMINANT:
-            assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (1, 1)
+            assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (
+                1,
+                1,
+            )
