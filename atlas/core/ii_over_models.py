@@ -66,8 +66,12 @@ model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
 witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
 not close, then (4) the settlement repeats it with a large budget (bounded boxes only).
-``gamma = 0`` or ``D = 0`` exactly (a direction on an axis, ``b2 = +-b1``) is decided by the
-sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
+``D = 0`` exactly (``b2 = t b1``): ``p = l^2 (l^2 + a3 l + kappa c1 + s2)`` and every eigenvalue
+``l != 0`` has the eigenvector ``b1``, so II is inconsistent for every model where ``c1 s1 <= 0``;
+for ``t > 0`` and ``c1 s1 > 0`` it is consistent (and stable, Perron-Frobenius) for every model
+in the third quadrant (``kappa c1 + s2 < 0``: one positive root) and inconsistent in the first
+(every coefficient ``>= 0``).  ``gamma = 0`` (a direction on an axis) and ``b2 = -b1`` are
+decided by the sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
 """
 
 from __future__ import annotations
@@ -198,7 +202,8 @@ def _sg(x) -> int:
 def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(consistency, never_stable, dominant)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
     c2, s2`` and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may
-    depend on the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``:
+    depend on the model (the curve argument of :mod:`atlas.core.exact`; ``D = 0``: the module
+    docstring); ``never_stable``:
     ``gamma > 0``, ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II;
     ``dominant``: II stable exactly where consistent, for every model: ``c1, s2 <= 0`` and
     ``c2, s1 < 0`` (Perron-Frobenius) or ``gamma > 0`` and ``D < 0`` (the symmetric pencil;
@@ -214,6 +219,12 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
     fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
     cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
+    # D = 0, b2 = t b1: p = l^2 (l^2 + a3 l + kappa c1 + s2) and every eigenvalue l != 0 has the
+    # eigenvector b1: no II root where c1 s1 <= 0; for t > 0 one positive root iff c1 < 0
+    zero = d == 0
+    along = zero & (c1 * s1 > 0)
+    cons[zero & ~along] = 0
+    cons[along & (c2 == c1)] = (c1 < 0)[along & (c2 == c1)]
     metzler = (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
     return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
 
@@ -240,13 +251,34 @@ def stable_by_signs(c1, s1, c2, s2) -> bool:
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
 
+#: the exponents ``e`` of :func:`far_models`
+FAR_EXPONENTS = (48, 200, 800)
+
+
+def far_models(box: mb.ModelBox) -> tuple:
+    """The models of the box among ``(2^e, 0, 2^(e/4))`` and their duals ``(2^-e, 2^(-e/4), 0)``
+    (``e`` in :data:`FAR_EXPONENTS`), as flat ``(kappa, q1, q2)`` arrays: candidates (never a
+    decision) for a complex pair overtaking the II root where ``gamma < 0`` and ``D < 0``.  With
+    ``kappa -> inf``, ``q1 = 0``, ``1 << q2 << sqrt(kappa)``, contact 1 is a fast oscillator
+    ``l ~ +-i sqrt(c1 kappa)`` whose real part tends to ``-gamma q2 / (2 c1)`` and the real root
+    to ``-D q2 / c1``: the pair overtakes it where ``3 |gamma| > 2 c1 |s2|`` (``c1 > 0``; class 15;
+    the duals, ``kappa -> 0``: ``3 |gamma| > 2 s2 |c1|``, class 32)."""
+    e = np.array(FAR_EXPONENTS, np.float64)
+    far = np.stack([np.exp2(e), np.zeros_like(e), np.exp2(e / 4)], 1)
+    dual = np.stack([np.exp2(-e), np.exp2(-e / 4), np.zeros_like(e)], 1)
+    m = np.concatenate([far, dual])
+    inside = lambda v, r: (r[0] <= v) & (v <= r[1])  # noqa: E731
+    keep = inside(m[:, 0], box.kappa) & inside(m[:, 1], box.q1) & inside(m[:, 2], box.q2)
+    keep &= (m[:, 1] == m[:, 2]) | (not box.equal)
+    return tuple(m[keep].T)
+
 
 def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
     """Per geometry and output, the index of the first sample model on each side (``-1``: none):
     ``{name: (n, 2) int array, "models": (m, 3) array}``."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
-    K, Q1, Q2 = mb.sample_models(box, False)
+    K, Q1, Q2 = (np.append(a, b) for a, b in zip(mb.sample_models(box, False), far_models(box)))
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
     step = max(1, chunk // len(K))
     for i in range(0, len(geo), step):

@@ -271,3 +271,44 @@ def test_stable_by_signs_in_the_dominant_classes(c):
                 1,
                 1,
             )
+
+
+def test_det_b_zero_is_decided():
+    """``b2 = +-b1`` exactly (``det B = 0``, the diagonal of every offset grid): no II root
+    unless ``b1`` is in the first or third quadrant, one strictly dominant II root for every model
+    with both in the third, none with both in the first, and the model decides with ``b2 = -b1``;
+    a dense exact sample never contradicts it and its witnesses are on their sides."""
+    geo = [(c, s, t * c, t * s) for c, s in ((0.6, 0.8), (-0.28, 0.96)) for t in (1, -1)]
+    geo += [(-c, -s, t * -c, t * -s) for c, s in ((0.6, 0.8), (-0.28, 0.96)) for t in (1, -1)]
+    box = mb.model_box()
+    r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
+    assert r[CONS].tolist() == [NO, DEP, NO, NO, YES, DEP, NO, NO]
+    assert r[STAB].tolist() == [NO, DEP, NO, NO, YES, DEP, NO, NO]
+    _check(r, geo, box, 60)
+
+
+def _near_threshold(n: int, cls: int, seed: int = 4) -> np.ndarray:
+    """``n`` random class-15 geometries with ``3 < c1 |s2| / |D| < 3.02`` (or their class-32
+    duals ``(s2, c2, s1, c1)``)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        b1 = rng.uniform(0, np.pi / 2)
+        (c1, s1), (c2, s2) = direction(b1), direction(rng.uniform(b1 + np.pi, 1.5 * np.pi))
+        if 3 < c1 * abs(s2) / abs(c1 * s2 - s1 * c2) < 3.02:
+            out.append((c1, s1, c2, s2) if cls == 15 else (s2, c2, s1, c1))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("cls", (15, 32))
+def test_a_fast_pair_overtakes_near_the_threshold(cls):
+    """Just above ``3 |gamma| = 2 |c1 s2|`` a complex pair overtakes the II root only for far
+    models (``kappa -> inf``, ``q1 = 0``, ``1 << q2 << sqrt(kappa)``, or the duals): II stability
+    depends on the model, with both witnesses on their sides by the exact tier."""
+    geo = _near_threshold(6, cls)
+    assert set(np.asarray(class_code(*geo.T)).tolist()) == {cls}
+    r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert set(r[STAB].tolist()) == {DEP}
+    for i, g in enumerate(geo):
+        w = [float(r[x][i]) for x in iim.witness_names(STAB)]
+        assert _exact(tuple(g), tuple(w[:3])) == (1, 1) and _exact(tuple(g), tuple(w[3:])) == (1, 0)
