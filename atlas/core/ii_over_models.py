@@ -61,11 +61,15 @@ strictly increase with ``l`` where the numerator is positive) strictly increases
 the strictly dominant eigenvalue, so again II is stable exactly where it is consistent, for every
 model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 
-**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of models per geometry
-(:func:`atlas.core.model_box.sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
+**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of
+models per geometry (:func:`_staged_sample`: a coarse one first, all of it where a side is still
+missing, then :func:`far_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
 witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
-not close, then (4) the settlement repeats it with a large budget (bounded boxes only).
+not close, then (4) the settlement repeats it with a large budget.  (3) and (4) run on bounded
+boxes only: on a box with an unbounded axis the subdivision of ``l in (0, inf)`` times the model
+box did not close one code (72 geometries, 3 per class, in four such boxes, budget 48; 699 open
+codes of a 48^2 grid, budget 512), so there the sample's open codes stay ``UNDECIDED`` at once.
 ``D = 0`` exactly (``b2 = t b1``): ``p = l^2 (l^2 + a3 l + kappa c1 + s2)`` and every eigenvalue
 ``l != 0`` has the eigenvector ``b1``, so II is inconsistent for every model where ``c1 s1 <= 0``;
 for ``t > 0`` and ``c1 s1 > 0`` it is consistent (and stable, Perron-Frobenius) for every model
@@ -186,7 +190,7 @@ def _prove(ints, N: int, box: mb.ModelBox, kind: str, budget: int) -> bool:
     """Whether proof ``kind`` (:func:`_proofs`) closes within ``budget`` boxes; ``False`` where it
     does not apply (``gamma = 0`` or ``D = 0``)."""
     C1, S1, C2, S2 = ints
-    if C2 * S1 == 0 or C1 * S2 == S1 * C2:
+    if budget <= 0 or C2 * S1 == 0 or C1 * S2 == S1 * C2:
         return False
     conds = _proofs(tuple(ints), N, box)[kind]
     return bz.prove_any(conds, _axes(box), (), budget)[0] == "proved"
@@ -273,12 +277,13 @@ def far_models(box: mb.ModelBox) -> tuple:
     return tuple(m[keep].T)
 
 
-def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
-    """Per geometry and output, the index of the first sample model on each side (``-1``: none):
-    ``{name: (n, 2) int array, "models": (m, 3) array}``."""
+def _sample(geo: np.ndarray, models: np.ndarray, chunk: int = 1 << 21) -> dict:
+    """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``) on each side (certified
+    point verdicts) at each geometry: ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool,
+    ``models`` ``(n, 2, 3)`` (NaN where not seen)."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
-    K, Q1, Q2 = (np.append(a, b) for a, b in zip(mb.sample_models(box, False), far_models(box)))
+    K, Q1, Q2 = models.T
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
     step = max(1, chunk // len(K))
     for i in range(0, len(geo), step):
@@ -299,7 +304,41 @@ def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
         for name, (good, bad) in sides.items():
             for j, m in enumerate((good, bad)):
                 firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
-    return {**firsts, "models": np.stack([K, Q1, Q2], 1)}
+    padded = np.concatenate([models, np.full((1, 3), np.nan)])  # index -1: NaN
+    return {name: (f >= 0, padded[f]) for name, f in firsts.items()}
+
+
+def _merge(out: dict, rows: np.ndarray, more: dict) -> None:
+    """Add the sides ``more`` saw at ``rows`` of ``out`` (both :func:`_sample` results)."""
+    for name, (seen, models) in out.items():
+        new = ~seen[rows] & more[name][0]
+        seen[rows] |= new
+        models[rows] = np.where(new[..., None], more[name][1], models[rows])
+
+
+def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
+    """:func:`_sample` with every eighth model of :func:`atlas.core.model_box.sample_models`, then
+    all of them where a side is missing (of the consistency only where the signs' ``cons`` does
+    not decide it), then :func:`far_models` where the stability's unstable side is still missing
+    and ``3 |gamma| > 1.9 |c1 s2|`` (the far models' limit, with room: a choice of candidates,
+    never a decision; the far models mostly need the exact tier)."""
+    grid = np.stack(mb.sample_models(box, False), 1)
+    out = _sample(geo, grid[::8])
+
+    def missing():
+        full = {name: out[name][0].all(1) for name in SIDES}
+        return ~full[SIDES_STAB] | ((cons < 0) & ~full[SIDES_CONS])
+
+    rest = np.flatnonzero(missing())
+    if len(rest):
+        _merge(out, rest, _sample(geo[rest], grid))
+    c1, s1, c2, s2 = geo.T
+    near = 3 * np.abs(c2 * s1) > 1.9 * np.abs(c1 * s2)
+    far = np.stack(far_models(box), 1)
+    rest = np.flatnonzero(missing() & ~out[SIDES_STAB][0][:, 1] & near)
+    if len(rest) and len(far):
+        _merge(out, rest, _sample(geo[rest], far))
+    return out
 
 
 # --- the driver -------------------------------------------------------------------------------------
@@ -341,6 +380,36 @@ def _decide(ints, N, box, seen: dict, budget: int) -> dict:
     return {"ii_consistent_over_models": cons, "ii_stable_over_models": stab}
 
 
+def _sample_codes(cons: np.ndarray, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
+    """Tier 2 for all open geometries at once: their codes from the signs' consistency ``cons``
+    (1, 0, -1) and the sides the sample saw (``sc``, ``ss``: ``(n, 2)`` bool, sides
+    :data:`SIDES`); ``UNDECIDED`` where one side only was seen and the signs do not decide."""
+    n = np.arange(len(cons))
+    bad = (cons >= 0) & sc[n, np.clip(cons, 0, 1)]  # side 1 seen where the signs say 1, ...
+    c = np.where(cons >= 0, np.where(cons == 1, _S, _U), np.where(sc.all(1), _D, _X))
+    bad |= (c == _U) & ss[:, 0]
+    if bad.any():
+        raise _contradiction(*mb.integers(tuple(geo[np.argmax(bad)].tolist())))
+    st = np.where(ss.all(1), _D, np.where(c == _U, _U, _X))
+    return {SIDES_CONS: c.astype(np.int8), SIDES_STAB: st.astype(np.int8)}
+
+
+def _proved_codes(geo, box: mb.ModelBox, sc, ss, settle: bool) -> tuple[list, int]:
+    """Tiers 3 and 4 for the geometries ``geo`` the sample left open (bounded boxes): their
+    codes (one dict each) and the codes left open by the small budget."""
+    out, before = [], 0
+    for g, c, s in zip(geo, sc, ss):
+        ints, N = mb.integers(tuple(g.tolist()))
+        seen = {SIDES_CONS: tuple(c), SIDES_STAB: tuple(s)}
+        got = _decide(ints, N, box, seen, BUDGET)
+        if _X in got.values():
+            before += sum(v == _X for v in got.values())
+            if settle:
+                got = _decide(ints, N, box, seen, SETTLE_BUDGET)
+        out.append(got)
+    return out, before
+
+
 def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> dict:
     """Certified II consistency and II stability over the model ``box`` (module docstring) for
     broadcastable direction components: the codes of :data:`SIDES`
@@ -348,12 +417,11 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     opposite for every model, 2 depends, 3 undecided; int8) and their witnesses
     (:func:`witness_names`, float64, NaN where the code is not ``DEPENDS``).  ``settle=False``
     leaves what the small budget did not decide ``UNDECIDED``; on a box with an unbounded axis
-    the settlement is skipped (its larger budget closed none of the 699 open codes of a 48^2
-    grid over the whole model space, in 172 s).  ``.stats``: counts."""
+    no proof is tried (module docstring, Tiers).  ``.stats``: counts."""
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    settle = settle and math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
+    bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
     cons, never, dominant = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
@@ -361,21 +429,22 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     codes[SIDES_STAB][(cons == 1) & dominant] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
     todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
-    sample = _sample(geo[todo], box)
+    sample = _staged_sample(geo[todo], box, cons[todo])
+    sc, ss = (sample[name][0] for name in SIDES)
+    got = _sample_codes(cons[todo], sc, ss, geo[todo])
     stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
-    stats.update(undecided_before=0, undecided_after=0)
-    for n, i in enumerate(todo):
-        ints, N = mb.integers(tuple(geo[i].tolist()))
-        seen = {name: tuple(bool(j >= 0) for j in sample[name][n]) for name in SIDES}
-        got = _decide(ints, N, box, seen, BUDGET)
-        if _X in got.values():
-            stats["undecided_before"] += sum(v == _X for v in got.values())
-            if settle:
-                got = _decide(ints, N, box, seen, SETTLE_BUDGET)
-        for name, c in got.items():
-            codes[name][i] = c
-            if c == _D:
-                wit[name][i] = sample["models"][sample[name][n]].ravel()
+    stats["undecided_before"] = int(sum(np.sum(v == _X) for v in got.values()))
+    open_ = np.flatnonzero((got[SIDES_CONS] == _X) | (got[SIDES_STAB] == _X))
+    if bounded and len(open_):
+        proved, stats["undecided_before"] = _proved_codes(
+            geo[todo[open_]], box, sc[open_], ss[open_], settle
+        )
+        for name in SIDES:
+            got[name][open_] = [r[name] for r in proved]
+    for name in SIDES:
+        codes[name][todo] = got[name]
+        dep = np.flatnonzero(got[name] == _D)
+        wit[name][todo[dep]] = sample[name][1][dep].reshape(len(dep), 6)
     stats["undecided_after"] = int(sum(np.sum(c == _X) for c in codes.values()))
     out = mb.BoxResult()
     for name in SIDES:
