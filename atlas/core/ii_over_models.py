@@ -277,21 +277,26 @@ def far_models(box: mb.ModelBox) -> tuple:
     return tuple(m[keep].T)
 
 
-def _sample(geo: np.ndarray, models: np.ndarray, chunk: int = 1 << 21) -> dict:
-    """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``) on each side (certified
-    point verdicts) at each geometry: ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool,
-    ``models`` ``(n, 2, 3)`` (NaN where not seen)."""
+def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 21) -> dict:
+    """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``; at geometry ``i``
+    times ``scale[i]`` if given) on each side (certified point verdicts) at each geometry:
+    ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool, ``models`` ``(n, 2, 3)`` (NaN where not
+    seen)."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
     K, Q1, Q2 = models.T
+    scale = np.ones((len(geo), 3)) if scale is None else scale
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
     step = max(1, chunk // len(K))
     for i in range(0, len(geo), step):
         block = geo[i : i + step]
         size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
         block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
+        sc = scale[i : i + step]
+        sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
         g = [block[:, j, None] for j in range(4)]
-        v = spectral_points(*g, K[None], Q1[None], Q2[None], names=("consistent_II", "stable_II"))
+        m = [v[None] * sc[:, j, None] for j, v in enumerate((K, Q1, Q2))]
+        v = spectral_points(*g, *m, names=("consistent_II", "stable_II"))
         n = min(step, len(geo) - i)
         ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
         sides = {
@@ -305,7 +310,17 @@ def _sample(geo: np.ndarray, models: np.ndarray, chunk: int = 1 << 21) -> dict:
             for j, m in enumerate((good, bad)):
                 firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
     padded = np.concatenate([models, np.full((1, 3), np.nan)])  # index -1: NaN
-    return {name: (f >= 0, padded[f]) for name, f in firsts.items()}
+    return {name: (f >= 0, padded[f] * scale[:, None]) for name, f in firsts.items()}
+
+
+def scaled(c1, s2) -> np.ndarray:
+    """``(kappa, q1, q2)`` multipliers ``(|s2| / |c1|, sqrt|s2| / |c1|, 1 / sqrt|s2|)``: ``p`` (and
+    so every verdict: the II condition ``c2 h1 < 0`` keeps its sign) at the model times them and
+    geometry ``c1, s1, c2, s2`` is ``s2^2`` times ``p`` at the model and geometry
+    ``sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2``, ``l`` scaled by ``sqrt|s2|``: the sample of a geometry with ``|c1|`` or ``|s2|`` far
+    from 1 is the unit one's moved there (``c1 s2 != 0``)."""
+    C, S = np.abs(c1), np.abs(s2)
+    return np.stack([S / C, np.sqrt(S) / C, 1 / np.sqrt(S)], -1)
 
 
 def _merge(out: dict, rows: np.ndarray, more: dict) -> None:
@@ -321,7 +336,9 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     all of them where a side is missing (of the consistency only where the signs' ``cons`` does
     not decide it), then :func:`far_models` where the stability's unstable side is still missing
     and ``3 |gamma| > 1.9 |c1 s2|`` (the far models' limit, with room: a choice of candidates,
-    never a decision; the far models mostly need the exact tier)."""
+    never a decision; the far models mostly need the exact tier), and on the whole model space,
+    where ``|c1|`` or ``|s2| < 2^-20`` and a side is still missing, the sample scaled to the
+    geometry (:func:`scaled`), then the fine one."""
     grid = np.stack(mb.sample_models(box, False), 1)
     out = _sample(geo, grid[::8])
 
@@ -338,6 +355,13 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     rest = np.flatnonzero(missing() & ~out[SIDES_STAB][0][:, 1] & near)
     if len(rest) and len(far):
         _merge(out, rest, _sample(geo[rest], far))
+    C, S = np.abs(c1), np.abs(s2)
+    rest = np.flatnonzero(missing() & (np.minimum(C, S) < 2.0**-20) & (box == mb.ModelBox()))
+    for fine in (False, True):
+        rest = rest[missing()[rest]]
+        if len(rest):
+            models = np.stack(mb.sample_models(box, fine), 1)
+            _merge(out, rest, _sample(geo[rest], models, scaled(c1[rest], s2[rest])))
     return out
 
 

@@ -312,3 +312,29 @@ def test_a_fast_pair_overtakes_near_the_threshold(cls):
     for i, g in enumerate(geo):
         w = [float(r[x][i]) for x in iim.witness_names(STAB)]
         assert _exact(tuple(g), tuple(w[:3])) == (1, 1) and _exact(tuple(g), tuple(w[3:])) == (1, 0)
+
+
+def test_the_scaling_law():
+    """The exact tier at ``(kappa, q1, q2)`` times :func:`scaled` equals it at the unit geometry
+    ``(sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2)`` with the model unscaled (``p``
+    times ``s2^2``, the II condition ``c2 h1 < 0`` unchanged)."""
+    rng = np.random.default_rng(8)
+    for _ in range(12):
+        g = tuple(rng.uniform(-1, 1, 4) * np.exp2(rng.integers(-30, 3, 4)))
+        c1, s1, c2, s2 = g
+        unit = (np.sign(c1), np.sign(s1), np.sign(c2) * abs(c2 * s1 / (c1 * s2)), np.sign(s2))
+        m = tuple(np.exp2(rng.uniform(-8, 8, 3)))
+        mm = tuple((np.array(m) * iim.scaled(c1, s2)).tolist())
+        assert _exact(g, mm) == _exact(unit, m), (g, m)
+
+
+def test_a_direction_next_to_an_axis():
+    """``b2 = (-1, -2^-52)`` (the ``beta2 = pi`` row of an odd offset grid, class 14): II
+    consistency and stability depend on the model, witnessed only far out (the sample moved by
+    :func:`scaled`), each witness on its side by the exact tier."""
+    (c1, s1), (c2, s2) = direction(0.5), (-1.0, -(2.0**-52))
+    geo = [(c1, s1, c2, s2)]
+    assert int(np.asarray(class_code(c1, s1, c2, s2))) == 14
+    r = iim.ii_over_models(*np.array(geo).T, mb.model_box(), settle=False)
+    assert (int(r[CONS][0]), int(r[STAB][0])) == (DEP, DEP)
+    _check(r, geo, mb.model_box(), 0)
