@@ -82,7 +82,7 @@ CONFIG = {
         # 2-D grids at one model and a 5-D grid over the model axes (atlas.bench.model_axes)
         model_grids=dict(two_d=(513, 2048), five_d=512),
         # the Fig. 1 plane's verdicts over every contact model (atlas.bench.model_box_map)
-        model_box_map=dict(n={"SS": 360, "II": 48}, fields=("SS", "II"), repeats=1),
+        model_box_map=dict(n={"SS": 360, "II": 360}, fields=("SS", "II"), repeats=1),
         ref_factor=4,
         cases=CASES,
         sample=300,

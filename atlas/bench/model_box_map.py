@@ -101,7 +101,7 @@ def section(rows) -> list[str]:
         "### Model-dependence map of the Fig. 1 plane\n",
         "Verdicts over every contact model (kappa > 0, q1, q2 >= 0) on the offset grid of the "
         "Fig. 1 plane: `ss_over_models` (SS) and `ii_over_models` (II consistency and stability, "
-        "shares of II stability), with settlement (II: skipped over unbounded boxes), warm "
+        "shares of II stability), with settlement (II: no proofs over unbounded boxes), warm "
         "(minimum of repeats after a first call); the single-model kernel on the same plane in "
         f"the same run at kappa, q1, q2 = {ONE_MODEL} (`ss_verdict`; `spectral_points` for "
         "II). Undecided = codes left open before / after settlement; shares of the plane in "

@@ -42,16 +42,40 @@ irreducible for every model (the cycle ``x1 <- x1' <- x2 <- x2' <- x1`` uses ``1
 real eigenvalue is simple, every other eigenvalue has a strictly smaller real part, and no other
 eigenvalue has a nonnegative eigenvector.  An II root ``l > 0`` (``x1 x2 > 0``) has the positive
 eigenvector ``(x, l x)`` (up to sign): it *is* that eigenvalue.  Hence II is stable exactly where
-it is consistent, for every model, and the signs decide both (no search, no sample).  Where
-``c1 > 0`` or ``s2 > 0`` (classes 33, 43, 44) ``A`` is not Metzler and this does not apply.
+it is consistent, for every model, and the signs decide both (no search, no sample).
 
-**Tiers.**  (1) signs (with Perron-Frobenius); (2) a fixed sample of models per geometry
-(:func:`atlas.core.model_box.sample_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
+**A symmetric pencil** (``gamma > 0`` and ``D < 0``: classes 33, 34, 43, 44, where ``c1 > 0`` or
+``s2 > 0`` leaves ``A`` not Metzler).  With ``B^-1`` the eigenvalue problem is
+``l^2 M x = (l Q + K) x``, ``M = -B^-1 = [[s2, -c2], [-s1, c1]] / |D|``, ``K = diag(kappa, 1)``,
+``Q = diag(q1, q2)``.  ``M``'s off-diagonal entries have the product ``gamma / D^2 > 0``, so
+``S = diag(1, t)``, ``t^2 = c2 / s1``, makes ``M' = S M S^-1`` symmetric (``S`` commutes with
+``K``, ``Q``), with ``det M' = 1 / D < 0``: one positive and one negative eigenvalue.  For an
+eigenvalue ``l`` with eigenvector ``y`` of ``l^2 M' y = (l Q + K) y``, the real numbers
+``m = y* M' y``, ``r = y* Q y >= 0``, ``k = y* K y > 0`` give ``m l^2 - r l - k = 0``: for
+``m > 0`` both roots are real, for ``m <= 0`` every root has ``Re l <= 0``.  So every eigenvalue
+with ``Re l > 0`` is real.  A real ``l > 0`` is one iff
+``f(l) = max_y y' M' y / y' (K / l^2 + Q / l) y = 1``, and ``f`` (a maximum of ratios that
+strictly increase with ``l`` where the numerator is positive) strictly increases, with
+``f'(l) > 0`` (the maximiser's ratio): exactly one positive eigenvalue, simple
+(``p(0) = kappa D < 0``, ``p`` monic), and every other eigenvalue has ``Re l <= 0``.  It is
+the strictly dominant eigenvalue, so again II is stable exactly where it is consistent, for every
+model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
+
+**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of
+models per geometry (:func:`_staged_sample`: a coarse one first, all of it where a side is still
+missing, then :func:`far_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
 witnesses; (3) one value seen: the proof above with a small budget, ``UNDECIDED`` where it does
-not close, then (4) the settlement repeats it with a large budget (bounded boxes only).
-``gamma = 0`` or ``D = 0`` exactly (a direction on an axis, ``b2 = +-b1``) is decided by the
-sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
+not close, then (4) the settlement repeats it with a large budget.  (3) and (4) run on bounded
+boxes only: on a box with an unbounded axis the subdivision of ``l in (0, inf)`` times the model
+box did not close one code (72 geometries, 3 per class, in four such boxes, budget 48; 699 open
+codes of a 48^2 grid, budget 512), so there the sample's open codes stay ``UNDECIDED`` at once.
+``D = 0`` exactly (``b2 = t b1``): ``p = l^2 (l^2 + a3 l + kappa c1 + s2)`` and every eigenvalue
+``l != 0`` has the eigenvector ``b1``, so II is inconsistent for every model where ``c1 s1 <= 0``;
+for ``t > 0`` and ``c1 s1 > 0`` it is consistent (and stable, Perron-Frobenius) for every model
+in the third quadrant (``kappa c1 + s2 < 0``: one positive root) and inconsistent in the first
+(every coefficient ``>= 0``).  ``gamma = 0`` (a direction on an axis) and ``b2 = -b1`` are
+decided by the sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
 """
 
 from __future__ import annotations
@@ -166,7 +190,7 @@ def _prove(ints, N: int, box: mb.ModelBox, kind: str, budget: int) -> bool:
     """Whether proof ``kind`` (:func:`_proofs`) closes within ``budget`` boxes; ``False`` where it
     does not apply (``gamma = 0`` or ``D = 0``)."""
     C1, S1, C2, S2 = ints
-    if C2 * S1 == 0 or C1 * S2 == S1 * C2:
+    if budget <= 0 or C2 * S1 == 0 or C1 * S2 == S1 * C2:
         return False
     conds = _proofs(tuple(ints), N, box)[kind]
     return bz.prove_any(conds, _axes(box), (), budget)[0] == "proved"
@@ -180,12 +204,14 @@ def _sg(x) -> int:
 
 
 def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(consistency, never_stable, metzler)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
+    """``(consistency, never_stable, dominant)`` from the signs (arrays of -1, 0, 1) of ``c1, s1,
     c2, s2`` and ``D = det B``: consistency ``1`` / ``0`` for every model or ``-1`` where it may
-    depend on the model (the curve argument of :mod:`atlas.core.exact`); ``never_stable``:
+    depend on the model (the curve argument of :mod:`atlas.core.exact`; ``D = 0``: the module
+    docstring); ``never_stable``:
     ``gamma > 0``, ``c2 > 0``, an II root (in QIII) is followed by a larger root in QI, never II;
-    ``metzler``: ``c1, s2 <= 0`` and ``c2, s1 < 0``, II stable exactly where consistent
-    (Perron-Frobenius, module docstring)."""
+    ``dominant``: II stable exactly where consistent, for every model: ``c1, s2 <= 0`` and
+    ``c2, s1 < 0`` (Perron-Frobenius) or ``gamma > 0`` and ``D < 0`` (the symmetric pencil;
+    module docstring)."""
     c1, s1, c2, s2, d = np.broadcast_arrays(*(np.asarray(v) for v in (c1, s1, c2, s2, d)))
     valid = (d != 0) & (c2 * s1 != 0)
     gpos, gneg = valid & (c2 == s1), valid & (c2 != s1)
@@ -197,7 +223,14 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     arc = np.where(c1 < 0, -1, 1)  # the quadrant of every positive root: QII (-1) or QIV (+1)
     fixed = gneg & ~first_q & ~((c1 < 0) & (s2 < 0))
     cons[fixed] = np.where(arc * c2 > 0, 0, np.where(d < 0, 1, -1))[fixed]
-    return cons, gpos & (c2 > 0), (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
+    # D = 0, b2 = t b1: p = l^2 (l^2 + a3 l + kappa c1 + s2) and every eigenvalue l != 0 has the
+    # eigenvector b1: no II root where c1 s1 <= 0; for t > 0 one positive root iff c1 < 0
+    zero = d == 0
+    along = zero & (c1 * s1 > 0)
+    cons[zero & ~along] = 0
+    cons[along & (c2 == c1)] = (c1 < 0)[along & (c2 == c1)]
+    metzler = (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
+    return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
 
 
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
@@ -214,28 +247,56 @@ def never_stable_by_signs(c1, s1, c2, s2) -> bool:
 
 def stable_by_signs(c1, s1, c2, s2) -> bool:
     """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
-    ``metzler``) at one geometry (exact inputs)."""
-    metzler = _sg(c1) <= 0 and _sg(s2) <= 0 and _sg(c2) < 0 and _sg(s1) < 0
-    return consistency_by_signs(c1, s1, c2, s2) == 1 and metzler
+    ``dominant``) at one geometry (exact inputs)."""
+    signs = map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2))
+    cons, _, dominant = signs_rule(*signs)
+    return int(cons) == 1 and bool(dominant)
 
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
 
+#: the exponents ``e`` of :func:`far_models`
+FAR_EXPONENTS = (48, 200, 800)
 
-def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
-    """Per geometry and output, the index of the first sample model on each side (``-1``: none):
-    ``{name: (n, 2) int array, "models": (m, 3) array}``."""
+
+def far_models(box: mb.ModelBox) -> tuple:
+    """The models of the box among ``(2^e, 0, 2^(e/4))`` and their duals ``(2^-e, 2^(-e/4), 0)``
+    (``e`` in :data:`FAR_EXPONENTS`), as flat ``(kappa, q1, q2)`` arrays: candidates (never a
+    decision) for a complex pair overtaking the II root where ``gamma < 0`` and ``D < 0``.  With
+    ``kappa -> inf``, ``q1 = 0``, ``1 << q2 << sqrt(kappa)``, contact 1 is a fast oscillator
+    ``l ~ +-i sqrt(c1 kappa)`` whose real part tends to ``-gamma q2 / (2 c1)`` and the real root
+    to ``-D q2 / c1``: the pair overtakes it where ``3 |gamma| > 2 c1 |s2|`` (``c1 > 0``; class 15;
+    the duals, ``kappa -> 0``: ``3 |gamma| > 2 s2 |c1|``, class 32)."""
+    e = np.array(FAR_EXPONENTS, np.float64)
+    far = np.stack([np.exp2(e), np.zeros_like(e), np.exp2(e / 4)], 1)
+    dual = np.stack([np.exp2(-e), np.exp2(-e / 4), np.zeros_like(e)], 1)
+    m = np.concatenate([far, dual])
+    inside = lambda v, r: (r[0] <= v) & (v <= r[1])  # noqa: E731
+    keep = inside(m[:, 0], box.kappa) & inside(m[:, 1], box.q1) & inside(m[:, 2], box.q2)
+    keep &= (m[:, 1] == m[:, 2]) | (not box.equal)
+    return tuple(m[keep].T)
+
+
+def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 21) -> dict:
+    """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``; at geometry ``i``
+    times ``scale[i]`` if given) on each side (certified point verdicts) at each geometry:
+    ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool, ``models`` ``(n, 2, 3)`` (NaN where not
+    seen)."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
-    K, Q1, Q2 = mb.sample_models(box, False)
+    K, Q1, Q2 = models.T
+    scale = np.ones((len(geo), 3)) if scale is None else scale
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
     step = max(1, chunk // len(K))
     for i in range(0, len(geo), step):
         block = geo[i : i + step]
         size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
         block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
+        sc = scale[i : i + step]
+        sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
         g = [block[:, j, None] for j in range(4)]
-        v = spectral_points(*g, K[None], Q1[None], Q2[None], names=("consistent_II", "stable_II"))
+        m = [v[None] * sc[:, j, None] for j, v in enumerate((K, Q1, Q2))]
+        v = spectral_points(*g, *m, names=("consistent_II", "stable_II"))
         n = min(step, len(geo) - i)
         ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
         sides = {
@@ -248,7 +309,60 @@ def _sample(geo: np.ndarray, box: mb.ModelBox, chunk: int = 1 << 21) -> dict:
         for name, (good, bad) in sides.items():
             for j, m in enumerate((good, bad)):
                 firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
-    return {**firsts, "models": np.stack([K, Q1, Q2], 1)}
+    padded = np.concatenate([models, np.full((1, 3), np.nan)])  # index -1: NaN
+    return {name: (f >= 0, padded[f] * scale[:, None]) for name, f in firsts.items()}
+
+
+def scaled(c1, s2) -> np.ndarray:
+    """``(kappa, q1, q2)`` multipliers ``(|s2| / |c1|, sqrt|s2| / |c1|, 1 / sqrt|s2|)``: ``p`` (and
+    so every verdict: the II condition ``c2 h1 < 0`` keeps its sign) at the model times them and
+    geometry ``c1, s1, c2, s2`` is ``s2^2`` times ``p`` at the model and geometry
+    ``sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2``, ``l`` scaled by ``sqrt|s2|``: the sample of a geometry with ``|c1|`` or ``|s2|`` far
+    from 1 is the unit one's moved there (``c1 s2 != 0``)."""
+    C, S = np.abs(c1), np.abs(s2)
+    return np.stack([S / C, np.sqrt(S) / C, 1 / np.sqrt(S)], -1)
+
+
+def _merge(out: dict, rows: np.ndarray, more: dict) -> None:
+    """Add the sides ``more`` saw at ``rows`` of ``out`` (both :func:`_sample` results)."""
+    for name, (seen, models) in out.items():
+        new = ~seen[rows] & more[name][0]
+        seen[rows] |= new
+        models[rows] = np.where(new[..., None], more[name][1], models[rows])
+
+
+def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
+    """:func:`_sample` with every eighth model of :func:`atlas.core.model_box.sample_models`, then
+    all of them where a side is missing (of the consistency only where the signs' ``cons`` does
+    not decide it), then :func:`far_models` where the stability's unstable side is still missing
+    and ``3 |gamma| > 1.9 |c1 s2|`` (the far models' limit, with room: a choice of candidates,
+    never a decision; the far models mostly need the exact tier), and on the whole model space,
+    where ``|c1|`` or ``|s2| < 2^-20`` and a side is still missing, the sample scaled to the
+    geometry (:func:`scaled`), then the fine one."""
+    grid = np.stack(mb.sample_models(box, False), 1)
+    out = _sample(geo, grid[::8])
+
+    def missing():
+        full = {name: out[name][0].all(1) for name in SIDES}
+        return ~full[SIDES_STAB] | ((cons < 0) & ~full[SIDES_CONS])
+
+    rest = np.flatnonzero(missing())
+    if len(rest):
+        _merge(out, rest, _sample(geo[rest], grid))
+    c1, s1, c2, s2 = geo.T
+    near = 3 * np.abs(c2 * s1) > 1.9 * np.abs(c1 * s2)
+    far = np.stack(far_models(box), 1)
+    rest = np.flatnonzero(missing() & ~out[SIDES_STAB][0][:, 1] & near)
+    if len(rest) and len(far):
+        _merge(out, rest, _sample(geo[rest], far))
+    C, S = np.abs(c1), np.abs(s2)
+    rest = np.flatnonzero(missing() & (np.minimum(C, S) < 2.0**-20) & (box == mb.ModelBox()))
+    for fine in (False, True):
+        rest = rest[missing()[rest]]
+        if len(rest):
+            models = np.stack(mb.sample_models(box, fine), 1)
+            _merge(out, rest, _sample(geo[rest], models, scaled(c1[rest], s2[rest])))
+    return out
 
 
 # --- the driver -------------------------------------------------------------------------------------
@@ -290,6 +404,36 @@ def _decide(ints, N, box, seen: dict, budget: int) -> dict:
     return {"ii_consistent_over_models": cons, "ii_stable_over_models": stab}
 
 
+def _sample_codes(cons: np.ndarray, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
+    """Tier 2 for all open geometries at once: their codes from the signs' consistency ``cons``
+    (1, 0, -1) and the sides the sample saw (``sc``, ``ss``: ``(n, 2)`` bool, sides
+    :data:`SIDES`); ``UNDECIDED`` where one side only was seen and the signs do not decide."""
+    n = np.arange(len(cons))
+    bad = (cons >= 0) & sc[n, np.clip(cons, 0, 1)]  # side 1 seen where the signs say 1, ...
+    c = np.where(cons >= 0, np.where(cons == 1, _S, _U), np.where(sc.all(1), _D, _X))
+    bad |= (c == _U) & ss[:, 0]
+    if bad.any():
+        raise _contradiction(*mb.integers(tuple(geo[np.argmax(bad)].tolist())))
+    st = np.where(ss.all(1), _D, np.where(c == _U, _U, _X))
+    return {SIDES_CONS: c.astype(np.int8), SIDES_STAB: st.astype(np.int8)}
+
+
+def _proved_codes(geo, box: mb.ModelBox, sc, ss, settle: bool) -> tuple[list, int]:
+    """Tiers 3 and 4 for the geometries ``geo`` the sample left open (bounded boxes): their
+    codes (one dict each) and the codes left open by the small budget."""
+    out, before = [], 0
+    for g, c, s in zip(geo, sc, ss):
+        ints, N = mb.integers(tuple(g.tolist()))
+        seen = {SIDES_CONS: tuple(c), SIDES_STAB: tuple(s)}
+        got = _decide(ints, N, box, seen, BUDGET)
+        if _X in got.values():
+            before += sum(v == _X for v in got.values())
+            if settle:
+                got = _decide(ints, N, box, seen, SETTLE_BUDGET)
+        out.append(got)
+    return out, before
+
+
 def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> dict:
     """Certified II consistency and II stability over the model ``box`` (module docstring) for
     broadcastable direction components: the codes of :data:`SIDES`
@@ -297,34 +441,34 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     opposite for every model, 2 depends, 3 undecided; int8) and their witnesses
     (:func:`witness_names`, float64, NaN where the code is not ``DEPENDS``).  ``settle=False``
     leaves what the small budget did not decide ``UNDECIDED``; on a box with an unbounded axis
-    the settlement is skipped (its larger budget closed none of the 699 open codes of a 48^2
-    grid over the whole model space, in 172 s).  ``.stats``: counts."""
+    no proof is tried (module docstring, Tiers).  ``.stats``: counts."""
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
-    settle = settle and math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
-    cons, never, metzler = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
+    cons, never, dominant = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
-    codes[SIDES_STAB][(cons == 1) & metzler] = _S
+    codes[SIDES_STAB][(cons == 1) & dominant] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
     todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
-    sample = _sample(geo[todo], box)
+    sample = _staged_sample(geo[todo], box, cons[todo])
+    sc, ss = (sample[name][0] for name in SIDES)
+    got = _sample_codes(cons[todo], sc, ss, geo[todo])
     stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
-    stats.update(undecided_before=0, undecided_after=0)
-    for n, i in enumerate(todo):
-        ints, N = mb.integers(tuple(geo[i].tolist()))
-        seen = {name: tuple(bool(j >= 0) for j in sample[name][n]) for name in SIDES}
-        got = _decide(ints, N, box, seen, BUDGET)
-        if _X in got.values():
-            stats["undecided_before"] += sum(v == _X for v in got.values())
-            if settle:
-                got = _decide(ints, N, box, seen, SETTLE_BUDGET)
-        for name, c in got.items():
-            codes[name][i] = c
-            if c == _D:
-                wit[name][i] = sample["models"][sample[name][n]].ravel()
+    stats["undecided_before"] = int(sum(np.sum(v == _X) for v in got.values()))
+    open_ = np.flatnonzero((got[SIDES_CONS] == _X) | (got[SIDES_STAB] == _X))
+    if bounded and len(open_):
+        proved, stats["undecided_before"] = _proved_codes(
+            geo[todo[open_]], box, sc[open_], ss[open_], settle
+        )
+        for name in SIDES:
+            got[name][open_] = [r[name] for r in proved]
+    for name in SIDES:
+        codes[name][todo] = got[name]
+        dep = np.flatnonzero(got[name] == _D)
+        wit[name][todo[dep]] = sample[name][1][dep].reshape(len(dep), 6)
     stats["undecided_after"] = int(sum(np.sum(c == _X) for c in codes.values()))
     out = mb.BoxResult()
     for name in SIDES:

@@ -2,7 +2,6 @@
 sample of models through the exact tier (never contradicts a "for every model" verdict), the
 witnesses through the exact tier, and the paper's Appendix C / Table 2 classes."""
 
-
 import numpy as np
 import pytest
 from samples import per_class
@@ -167,24 +166,31 @@ def test_witness_names_follow_the_ss_pattern():
     assert len(iim.II_OUTPUTS) == 14
 
 
-# --- Perron-Frobenius: the classes with both directions in the third quadrant -------------------
+# --- the signs prove II stable wherever consistent: Perron-Frobenius (both directions in the third
+# quadrant, 34, 35) and the symmetric pencil (gamma > 0, det B < 0: 33, 34, 43, 44) ----------------
 
 METZLER = (34, 35)
+DOMINANT = (33, 34, 35, 43, 44)
 
 
-def _dominant_is_ii(g, models) -> np.ndarray:
-    """Independent float64 check (numpy eigenvalues of the state matrix, one per model): 1 where
-    the eigenvalue of largest real part is real, positive, strictly dominant and II
-    (``x1 x2 > 0``), 0 where it clearly is not, -1 where a margin is within 1e-6 (relative)."""
+def _state(g, k, q1, q2) -> np.ndarray:
+    """The state matrices ``[[0, I], [-B diag(k, 1), -B diag(q1, q2)]]`` (SPEC §1), one per model."""
     c1, s1, c2, s2 = g
-    k, q1, q2 = np.asarray(models, float).T
+    k, q1, q2 = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, float)) for v in (k, q1, q2)))
     A = np.zeros((len(k), 4, 4))
     A[:, 0, 2] = A[:, 1, 3] = 1.0
     A[:, 2:, 0] = -np.array([c1, s1]) * k[:, None]
     A[:, 2:, 1] = -np.array([c2, s2])
     A[:, 2:, 2] = -np.array([c1, s1]) * q1[:, None]
     A[:, 2:, 3] = -np.array([c2, s2]) * q2[:, None]
-    w, v = np.linalg.eig(A)
+    return A
+
+
+def _dominant_is_ii(g, models) -> np.ndarray:
+    """Independent float64 check (numpy eigenvalues of the state matrix, one per model): 1 where
+    the eigenvalue of largest real part is real, positive, strictly dominant and II
+    (``x1 x2 > 0``), 0 where it clearly is not, -1 where a margin is within 1e-6 (relative)."""
+    w, v = np.linalg.eig(_state(g, *np.asarray(models, float).T))
     order = np.argsort(-w.real, axis=1)
     w = np.take_along_axis(w, order, 1)
     x = np.take_along_axis(v, order[:, None, :], 2)[:, :2, 0]
@@ -198,21 +204,52 @@ def _dominant_is_ii(g, models) -> np.ndarray:
 
 
 @pytest.mark.parametrize("seed", [5, 11])
-def test_metzler_classes_are_stable_for_every_model(seed):
-    """Classes 34, 35 over the whole model space: II consistent and stable for every model
-    (decided, no undecided left), and 4000 log-spread models per geometry (kappa, q1, q2 in
-    1e-4..1e4, q = 0 included) checked by numpy eigenvalues never contradict it."""
+def test_dominant_classes_are_stable_for_every_model(seed):
+    """Classes 33, 34, 35, 43, 44 over the whole model space: II consistent and stable for every
+    model (decided by the signs, no undecided left), and 4000 log-spread models per geometry
+    (kappa, q1, q2 in 1e-4..1e4, q = 0 included) checked by numpy eigenvalues never contradict
+    it."""
     c1, s1, c2, s2, cc = per_class(4, seed)
-    keep = np.isin(cc, METZLER)
+    keep = np.isin(cc, DOMINANT)
     geo = [g for g, k in zip(zip(c1, s1, c2, s2), keep) if k]
-    assert len(geo) == 4 * len(METZLER)
+    assert len(geo) == 4 * len(DOMINANT)
     box = mb.model_box()
     r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
     assert set(r[CONS].tolist()) == {YES} and set(r[STAB].tolist()) == {YES}
-    assert r.stats["undecided_after"] == 0
+    assert r.stats["undecided_after"] == 0 and r.stats["by_signs"] == len(geo)
     for g in geo:
         got = _dominant_is_ii(g, _dense(box, 4000, seed))
         assert 0 not in got and np.mean(got == 1) > 0.9, g
+
+
+@pytest.mark.parametrize("c", (33, 43, 44))
+def test_pencil_classes_against_the_exact_tier(c):
+    """Random geometries of 33, 43, 44: "stable for every model" over the whole box and two
+    bounded ones, never contradicted by a dense sample of models through the exact tier."""
+    c1, s1, c2, s2, cc = per_class(2, 13)
+    geo = [g for g, k in zip(zip(c1, s1, c2, s2), cc == c) if k]
+    for box in (mb.model_box(), mb.model_box(kappa=(0.5, 50.0), q=(0.0, 3.0))):
+        r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
+        assert set(r[STAB].tolist()) == {YES}, (c, box)
+        _check(r, geo, box, 40)
+
+
+def test_a_closed_form_class_43_case():
+    """``b1 = (3, -4) / 5``, ``b2 = (-4, 3) / 5`` (class 43, ``B`` symmetric, eigenvalues
+    ``-1/5`` on ``(1, 1)`` and ``7/5`` on ``(1, -1)``).  With ``kappa = 1``, ``q1 = q2 = q`` the
+    eigenvalues solve ``l^2 + mu (q l + 1) = 0``: ``l = (q + sqrt(q^2 + 20)) / 10`` on the II
+    vector ``(1, 1)`` (1 at ``q = 4``, ``1 / sqrt(5)`` at ``q = 0``), and ``-1/5`` or two roots
+    with ``Re l <= 0``: II stable at each such model (by hand), as proved for every model."""
+    g = (0.6, -0.8, -0.8, 0.6)
+    assert int(np.asarray(class_code(*g))) == 43
+    r = iim.ii_over_models(*g, mb.model_box(), settle=False)
+    assert (int(r[CONS]), int(r[STAB])) == (YES, YES)
+    assert iim.stable_by_signs(3, -4, -4, 3)
+    for q in (0.0, 0.5, 4.0, 30.0):
+        lam = (q + np.sqrt(q * q + 20.0)) / 10
+        w = np.linalg.eigvals(_state(g, 1.0, q, q))[0]
+        assert np.isclose(w.real.max(), lam) and np.sum(w.real > 1e-9) == 1  # float check
+        assert _exact(g, (1.0, q, q)) == (1, 1)
 
 
 def test_the_numpy_check_sees_an_unstable_ii():
@@ -222,10 +259,82 @@ def test_the_numpy_check_sees_an_unstable_ii():
     assert iim.stable_by_signs(c1, s1, c2, s2) is False
 
 
-@pytest.mark.parametrize("c", (33, 34, 35, 43, 44))
-def test_stable_by_signs_in_the_metzler_classes(c):
-    """Only where the state matrix is Metzler (34, 35); not in 33, 43, 44 (c1 > 0 or s2 > 0)."""
+@pytest.mark.parametrize("c", (15, 32, 33, 34, 35, 43, 44))
+def test_stable_by_signs_in_the_dominant_classes(c):
+    """Where the state matrix is Metzler (34, 35) or the pencil symmetric with ``det B < 0`` (33,
+    34, 43, 44); not in 15, 32 (``gamma < 0``: a complex pair can overtake the II root)."""
     c1, s1, c2, s2, cc = per_class(3, 7)
     for g in zip(c1[cc == c], s1[cc == c], c2[cc == c], s2[cc == c]):
-        assert iim.stable_by_signs(*g) is (c in METZLER)
-        assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (1, 1)
+        assert iim.stable_by_signs(*g) is (c in DOMINANT)
+        if c in DOMINANT:
+            assert _exact(g, (0.01, 100.0, 0.0)) == (1, 1) and _exact(g, (100.0, 0.0, 5.0)) == (
+                1,
+                1,
+            )
+
+
+def test_det_b_zero_is_decided():
+    """``b2 = +-b1`` exactly (``det B = 0``, the diagonal of every offset grid): no II root
+    unless ``b1`` is in the first or third quadrant, one strictly dominant II root for every model
+    with both in the third, none with both in the first, and the model decides with ``b2 = -b1``;
+    a dense exact sample never contradicts it and its witnesses are on their sides."""
+    geo = [(c, s, t * c, t * s) for c, s in ((0.6, 0.8), (-0.28, 0.96)) for t in (1, -1)]
+    geo += [(-c, -s, t * -c, t * -s) for c, s in ((0.6, 0.8), (-0.28, 0.96)) for t in (1, -1)]
+    box = mb.model_box()
+    r = iim.ii_over_models(*np.array(geo).T, box, settle=False)
+    assert r[CONS].tolist() == [NO, DEP, NO, NO, YES, DEP, NO, NO]
+    assert r[STAB].tolist() == [NO, DEP, NO, NO, YES, DEP, NO, NO]
+    _check(r, geo, box, 60)
+
+
+def _near_threshold(n: int, cls: int, seed: int = 4) -> np.ndarray:
+    """``n`` random class-15 geometries with ``3 < c1 |s2| / |D| < 3.02`` (or their class-32
+    duals ``(s2, c2, s1, c1)``)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        b1 = rng.uniform(0, np.pi / 2)
+        (c1, s1), (c2, s2) = direction(b1), direction(rng.uniform(b1 + np.pi, 1.5 * np.pi))
+        if 3 < c1 * abs(s2) / abs(c1 * s2 - s1 * c2) < 3.02:
+            out.append((c1, s1, c2, s2) if cls == 15 else (s2, c2, s1, c1))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("cls", (15, 32))
+def test_a_fast_pair_overtakes_near_the_threshold(cls):
+    """Just above ``3 |gamma| = 2 |c1 s2|`` a complex pair overtakes the II root only for far
+    models (``kappa -> inf``, ``q1 = 0``, ``1 << q2 << sqrt(kappa)``, or the duals): II stability
+    depends on the model, with both witnesses on their sides by the exact tier."""
+    geo = _near_threshold(6, cls)
+    assert set(np.asarray(class_code(*geo.T)).tolist()) == {cls}
+    r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert set(r[STAB].tolist()) == {DEP}
+    for i, g in enumerate(geo):
+        w = [float(r[x][i]) for x in iim.witness_names(STAB)]
+        assert _exact(tuple(g), tuple(w[:3])) == (1, 1) and _exact(tuple(g), tuple(w[3:])) == (1, 0)
+
+
+def test_the_scaling_law():
+    """The exact tier at ``(kappa, q1, q2)`` times :func:`scaled` equals it at the unit geometry
+    ``(sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2)`` with the model unscaled (``p``
+    times ``s2^2``, the II condition ``c2 h1 < 0`` unchanged)."""
+    rng = np.random.default_rng(8)
+    for _ in range(12):
+        g = tuple(rng.uniform(-1, 1, 4) * np.exp2(rng.integers(-30, 3, 4)))
+        c1, s1, c2, s2 = g
+        unit = (np.sign(c1), np.sign(s1), np.sign(c2) * abs(c2 * s1 / (c1 * s2)), np.sign(s2))
+        m = tuple(np.exp2(rng.uniform(-8, 8, 3)))
+        mm = tuple((np.array(m) * iim.scaled(c1, s2)).tolist())
+        assert _exact(g, mm) == _exact(unit, m), (g, m)
+
+
+def test_a_direction_next_to_an_axis():
+    """``b2 = (-1, -2^-52)`` (the ``beta2 = pi`` row of an odd offset grid, class 14): II
+    consistency and stability depend on the model, witnessed only far out (the sample moved by
+    :func:`scaled`), each witness on its side by the exact tier."""
+    (c1, s1), (c2, s2) = direction(0.5), (-1.0, -(2.0**-52))
+    geo = [(c1, s1, c2, s2)]
+    assert int(np.asarray(class_code(c1, s1, c2, s2))) == 14
+    r = iim.ii_over_models(*np.array(geo).T, mb.model_box(), settle=False)
+    assert (int(r[CONS][0]), int(r[STAB][0])) == (DEP, DEP)
+    _check(r, geo, mb.model_box(), 0)
