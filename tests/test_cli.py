@@ -777,6 +777,22 @@ def test_simulate_map_options_without_map_are_refused(extra, name, tmp_path, cap
     assert not out.exists() and not work.calls["dynamics/simulator.py"], work
 
 
+@pytest.mark.e2e
+def test_simulate_map_with_the_jax_engine_equals_the_exact_simulator(tmp_path, capsys):
+    """``atlas simulate --map --engine jax`` (no other CI test runs that engine: its own tests
+    are slow) gives the exact simulator's (``--engine numpy``) outcome in every cell."""
+
+    got = {}
+    for engine in ("jax", "numpy"):
+        out = tmp_path / f"{engine}.nc"
+        args = ["simulate", "--map", "--n", "3", "--no-theory", "--workers", "1"]
+        assert cli.main([*args, "--engine", engine, "--out", str(out)]) == 0
+        with xr.open_dataset(out) as ds:
+            got[engine] = (ds["outcome"].values.copy(), ds.attrs["engine"])
+    assert got["jax"][1] == "jax" and got["numpy"][1] == "numpy"
+    np.testing.assert_array_equal(got["jax"][0], got["numpy"][0])
+
+
 def test_simulate_dry_run_time_grows_with_t_end(capsys):
     """``simulate --map --dry-run``'s time is proportional to ``--t-end`` over the default
     horizon 150 (it predicted the same time for every ``--t-end``)."""
