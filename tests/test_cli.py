@@ -592,6 +592,22 @@ def test_the_work_counter_sees_a_tiny_run(tmp_path):
     assert work.calls["core/points.py"] > 0 and work.peak_bytes > 0, work
 
 
+def test_no_size_check_runs_what_the_estimate_refuses(tmp_path, monkeypatch, capsys):
+    """With no memory to spare a tiny run is refused (``size:``, exit 2, nothing written); with
+    ``--no-size-check`` it runs and writes the same atlas as with room to spare."""
+    import atlas.data.limits as limits
+
+    roomy = tmp_path / "roomy.nc"
+    assert cli.main([*TINY_RUN, "--out", str(roomy)]) == 0
+    monkeypatch.setattr(limits, "available_memory", lambda: 2048)  # > an axis, < the run
+    out = tmp_path / "a.nc"
+    assert cli.main([*TINY_RUN, "--out", str(out)]) == 2
+    assert "size: " in capsys.readouterr().err and not out.exists()
+    assert cli.main([*TINY_RUN, "--out", str(out), "--no-size-check"]) == 0
+    with xr.open_dataset(roomy) as a, xr.open_dataset(out) as b:
+        xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
+
+
 def test_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "a.nc"
     assert cli.main([*TINY_RUN, "--out", str(out), "--dry-run"]) == 0
