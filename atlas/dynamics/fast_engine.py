@@ -327,8 +327,9 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, eb.rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
+        mu = stack_table(tables, "mu", ix, mask)
         lo, hi, mon, M, Hw, small = sw.brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
-                                                 act)  # fmt: skip
+                                                 act, mu)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = eb.rows(keep & sched & eb.all_cols(hi > (t_max - t)[:, None]))

@@ -361,3 +361,25 @@ def test_a_divergence_within_rounding_takes_the_exact_simulators_verdict():
     out, run = _reference(lanes.beta1[i], lanes.beta2[i], lanes.alpha[i], k, q, lanes.g0[i])
     assert run.status == S.Status.DIVERGED and stop_rule.run_within_rounding(run)
     assert int(res.code[0]) == int(out) and res.within_rounding[0]
+
+
+def test_lanes_where_modal_terms_cancel_step_by_the_size_of_their_curvature():
+    """Three lanes that run into penetration (IWC) near a degenerate direction: beta1 0.009 from
+    3pi/2 (random comparison seed 46, lane 9), beta2 on 3pi/2 (lane 286) and the 64^2 bench map's
+    cell (29, 29) (beta1 ~ beta2, det B small).  Their modal terms are large and cancel, so the
+    modal curvature bound is 1e2-1e4 times |f''| and cut steps to ~1e-3 H_S (104, 226 and 188
+    steps); the flow's bound (:func:`atlas.dynamics.event_bounds.flow_curvature_bound`) within a
+    shorter window sets the step instead: at most 30 steps each (counted, not timed), and the
+    exact simulator's outcome."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    b1, b2 = S.outcome_grid(64)
+    g0 = S.perturbed_initial_states(b1, b2, 0.35 * PI, 0.5)[29, 29, 0]
+    cases = [(L.beta1[i], L.beta2[i], L.alpha[i], (L.kappa[i], 1.0), (L.q[i], L.q[i]), L.g0[i])
+             for i in (9, 286)] + [(b1[29], b2[29], 0.35 * PI, (0.5, 1.0), (0.0, 0.0), g0)]  # fmt: skip
+    for x1, x2, alpha, k, q, g in cases:
+        res = F.run_lanes(np.array([x1]), np.array([x2]), np.array([alpha]), np.array([k]),
+                          np.array([q]), g[None])  # fmt: skip
+        assert res.steps[0] <= 30, (x1, x2, res.steps[0])
+        assert int(res.code[0]) == int(_reference(x1, x2, alpha, k, q, g)[0]) == int(S.Outcome.IWC)
