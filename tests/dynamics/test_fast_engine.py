@@ -383,3 +383,26 @@ def test_lanes_where_modal_terms_cancel_step_by_the_size_of_their_curvature():
                           np.array([q]), g[None])  # fmt: skip
         assert res.steps[0] <= 30, (x1, x2, res.steps[0])
         assert int(res.code[0]) == int(_reference(x1, x2, alpha, k, q, g)[0]) == int(S.Outcome.IWC)
+
+
+def test_no_lane_takes_more_steps_than_its_events_and_time_allow():
+    """The lane bound in events and time, counted (not timed) on 300 lanes of the random
+    comparison (seed 46): every lane takes at most 10 times the median lane's steps, plus 2 per
+    event, plus one per ``4 H_S`` of its run (``H_S`` the shortest of its configurations; the step
+    window of an oscillation between events).  Lanes with 44-120 events take more than 10 times
+    the median lane, as each event costs a step or two; the lanes near the 3pi/2 axis whose
+    modal terms cancel (lanes 9 and 286, 104 and 226 steps for 3 and 2 events before the
+    flow's curvature bound) broke this bound."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    sel = np.arange(300)
+    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)[sel]
+    q = np.stack([L.q, L.q], axis=1)[sel]
+    res = F.run_lanes(L.beta1[sel], L.beta2[sel], L.alpha[sel], k, q, L.g0[sel])
+    H = mf.modal_tables(mf.Lanes.of(L.beta1[sel], L.beta2[sel], L.alpha[sel], k, q)).H.min(axis=0)
+    ok = res.decided_by != 3
+    steps, events, t = res.steps[ok], res.n_events[ok], res.t_final[ok]
+    bound = 10 * np.median(steps) + 2 * events + t / (4 * H[ok])
+    assert np.all(steps <= bound), np.flatnonzero(steps > bound)
+    assert ok.mean() >= 0.98
