@@ -24,6 +24,7 @@ __all__ = [
     "bins",
     "re_sum4",
     "evaluate",
+    "gaps_at",
     "taylor",
     "event_functions",
     "curvature_bound",
@@ -100,18 +101,34 @@ def evaluate(P, U, lam, tau):
     tau)`` (n, 2, 4)."""
     xp = xp_of(P, U, lam, tau)
     UE = U * xp.exp(lam * tau[:, None])[:, None, :]
-    p = taylor(P, tau)
+    p = _taylor(P, tau)
+    d, v, acc = _gaps(p, UE, lam)
+    return d, v, acc, xp.stack(p, axis=2), UE
+
+
+def gaps_at(P, U, lam, tau):
+    """The gaps, velocities and accelerations of :func:`evaluate` alone (the same arithmetic),
+    without stacking the Taylor coefficients."""
+    xp = xp_of(P, U, lam, tau)
+    return _gaps(_taylor(P, tau), U * xp.exp(lam * tau[:, None])[:, None, :], lam)
+
+
+def _gaps(p, UE, lam):
     lUE = UE * lam[:, None, :]
-    d = p[:, :, 0] + re_sum4(UE)
-    v = p[:, :, 1] + re_sum4(lUE)
-    acc = 2 * p[:, :, 2] + re_sum4(lUE * lam[:, None, :])
-    return d, v, acc, p, UE
+    d = p[0] + re_sum4(UE)
+    v = p[1] + re_sum4(lUE)
+    acc = 2 * p[2] + re_sum4(lUE * lam[:, None, :])
+    return d, v, acc
 
 
 def taylor(P, tau):
     """Taylor coefficients (n, m, 3; or 5 for a quartic ``P`` (n, m, 5)) at ``tau`` (n,) of the
     polynomials ``P`` (coefficients of ``1, t, t^2, ...``)."""
-    xp = xp_of(P, tau)
+    return xp_of(P, tau).stack(_taylor(P, tau), axis=2)
+
+
+def _taylor(P, tau):
+    """:func:`taylor`'s coefficients as a list of (n, m) arrays."""
     t1 = tau[:, None]
     p = [P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]), P[:, :, 1] + 2 * t1 * P[:, :, 2],
          P[:, :, 2]]  # fmt: skip
@@ -121,7 +138,7 @@ def taylor(P, tau):
         p[1] = p[1] + t1**2 * (3 * P3 + 4 * t1 * P4)
         p[2] = p[2] + t1 * (3 * P3 + 6 * t1 * P4)
         p += [P3 + 4 * t1 * P4, P4]
-    return xp.stack(p, axis=2)
+    return p
 
 
 def _poly_bounds(p, H):

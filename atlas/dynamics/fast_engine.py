@@ -393,22 +393,23 @@ def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
     ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified: no monitored
     function changes sign over the longer step.  An oscillating gap far from its contact is
     then crossed in one step of the window rather than several of its curvature's ``sigma_lo``."""
-    out = step[r].copy()
+    out, c = step[r].copy(), cap[r]
+    x = (P[r], U[r], lam[r], tau[r], s[r], k[r], q[r], M[r], mon[r], SUBSTEP_MIN * H[r])
     live = np.arange(r.size)
     for _ in range(SUBSTEPS):
-        rr = r[live]
-        d, v, acc = eb.evaluate(P[rr], U[rr], lam[rr], tau[rr] + out[live])[:3]
-        f, fp = eb.event_functions(d, v, acc, k[rr], q[rr])
-        A, Bd = s[rr] * f, s[rr] * fp
-        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, M[rr])
-        m_on = mon[rr]
-        inc = eb.min_cols(np.where(m_on, lo, np.inf))
-        ok = (~(m_on & ((A <= 0) | np.isfinite(hi))).any(axis=1)) & (inc >= SUBSTEP_MIN * H[rr])
+        Pl, Ul, ll, tl, sl_, kl, ql, Ml, ml, short = x
+        f, fp = eb.event_functions(*eb.gaps_at(Pl, Ul, ll, tl + out[live]), kl, ql)
+        A, Bd = sl_ * f, sl_ * fp
+        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, Ml)
+        inc = eb.min_cols(np.where(ml, lo, np.inf))
+        ok = ~(ml & ((A <= 0) | (hi < np.inf))).any(axis=1) & (inc >= short)
         live = live[ok]
-        out[live] = np.minimum(out[live] + inc[ok], cap[r[live]])
-        live = live[out[live] < cap[r[live]]]
+        out[live] = np.minimum(out[live] + inc[ok], c[live])
+        ok[ok] = out[live] < c[live]
+        live = live[out[live] < c[live]]
         if live.size == 0:
             break
+        x = tuple(a[ok] for a in x)
     return out
 
 
@@ -471,7 +472,7 @@ def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act,
     that switch and their gaps, velocities and accelerations."""
     if ev_r.size == 0:
         return ev_r, None
-    dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
+    dva = eb.gaps_at(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])
     ge = np.concatenate(dva[:2], axis=1)
     sr = sl.stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
     if sr.size:
@@ -515,7 +516,7 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     j = np.arange(rr.size) - np.repeat(np.cumsum(n_in) - n_in, n_in) + 1
     x = step[r][rr] * j / (n_in[rr] + 1)
     rows = r[rr]
-    d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
+    d, v = eb.gaps_at(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
     hit = np.zeros(rr.size, dtype=bool)
     hit[sl.stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
                   scale[rows])] = True  # fmt: skip

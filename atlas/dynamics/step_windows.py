@@ -79,23 +79,22 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
     the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
     (:func:`window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
     can cross within the shorter one (an event-free stretch: free flight, a settled contact).
-    The curvature bound is the smaller of the modal terms' and the flow's
-    (:func:`eb.flow_curvature_bound`, ``mu`` (n,) the logarithmic norms of the configurations).
+    A step cut far below its window is bracketed again within a shorter one under the smaller of
+    the modal terms' bound and the flow's (:func:`_shorter`, ``mu`` (n,) the logarithmic norms of
+    the configurations).
     NumPy arrays (the JAX engine keeps the short window and the modal bound)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
     aUE = np.abs(UE)
     A, Bd = np.maximum(s * f, 0.0), s * fp
     mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
     Hw, small = window(H, lam, valid, p, aUE, scale, WINDOWS)
-    C, zn = eb.flow_curvature_bound(p, UE, lam, acc, H, k, q)
-    Czn = C * zn[:, None]
-    lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon, (Czn, mu))
+    lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
     r = eb.rows(eb.min_cols(lo) >= Hw)
     if r.size:
         w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
         r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
         lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
-                                  mon[r], (Czn[r], mu[r]))  # fmt: skip
+                                  mon[r])  # fmt: skip
         # both brackets hold (each within its window): the larger lower end, the smaller upper
         longer = eb.min_cols(lo_r) > Hw[r]
         r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
@@ -103,21 +102,27 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
         M[r], Hw[r], small[r] = M_r, w, sm
     r = eb.rows(eb.min_cols(lo) < SHORT * Hw)
     if r.size:
-        _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, Czn, mu)
+        _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu)
     return lo, hi, mon, M, Hw, small
 
 
-def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, Czn, mu):
-    """Rows ``r`` whose step is cut far below the window: the brackets again within a shorter
-    window ``W`` (twice the smallest ``sigma_lo`` under the flow's bound at the step's start,
-    :func:`eb.flow_curvature_bound`, whose growth ``exp(mu W)`` then stays near 1), kept where
-    they allow a longer step (``lo``, ``hi``, ``M``, ``Hw`` replaced in place).  Where large
-    modal terms cancel, or the flow's bound grows fast over the full window, the step is then
-    set by the size of ``f''`` near ``tau``."""
-    lo0, _ = eb.safe_steps(A[r], Bd[r], Czn[r])
+def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu):
+    """Rows ``r`` whose step is cut far below the window: the brackets again under the smaller of
+    the modal bound and the flow's (:func:`eb.flow_curvature_bound`, at the step's start) within
+    a shorter window ``W`` (twice the smallest ``sigma_lo`` under the flow's bound at the start,
+    so that its growth ``exp(mu W)`` stays near 1), kept where they allow a longer step (``lo``,
+    ``hi``, ``M``, ``Hw`` replaced in place); tried where the flow's bound at the start is below a
+    quarter of the modal one.  Where large modal terms cancel the step is then set by the size of
+    ``f''`` near ``tau``."""
+    C, zn = eb.flow_curvature_bound(p[r], UE[r], lam[r], acc[r], H[r], k[r], q[r])
+    Czn = C * zn[:, None]
+    # only where the flow's bound at the start is well below the modal one (terms cancelling)
+    below = eb.rows((mon[r] & (Czn < 0.25 * M[r])).any(axis=1))
+    r, Czn = r[below], Czn[below]
+    lo0, _ = eb.safe_steps(A[r], Bd[r], Czn)
     w = np.minimum(Hw[r], 2 * eb.min_cols(np.where(mon[r], lo0, np.inf)))
     lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
-                              mon[r], (Czn[r], mu[r]))  # fmt: skip
+                              mon[r], (Czn, mu[r]))  # fmt: skip
     better = eb.min_cols(lo_r) > eb.min_cols(lo[r])
     r, lo_r, hi_r, M_r, w = (x[better] for x in (r, lo_r, hi_r, M_r, w))
     lo[r], hi[r], M[r], Hw[r] = lo_r, hi_r, M_r, w
