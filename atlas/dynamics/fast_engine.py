@@ -19,6 +19,13 @@ sign ``s`` of ``f``::
     s f(tau + sigma) >= s f + s f' sigma - M sigma^2 / 2     (no crossing before its root sigma_lo)
     s f(tau + sigma) <= s f + s f' sigma + M sigma^2 / 2     (a crossing by its root sigma_hi)
 
+Where large modal terms cancel (near-defective modal forms, e.g. near the ``3 pi / 2`` axis) that
+``M`` is orders of magnitude above ``|f''|``; a step cut below ``1/8`` of its window is then
+bracketed again under the flow's bound (:func:`eb.flow_curvature_bound`: ``z'' = (d'', d''')``
+obeys ``z' = A z``, so ``|D z''|`` grows at most by ``exp(mu s)``, ``mu`` the logarithmic norm of
+the configuration, :func:`atlas.dynamics.modal_form.log_norm`) within a shorter window
+(:func:`atlas.dynamics.step_windows.brackets`).
+
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
 2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
