@@ -27,8 +27,8 @@ the configuration, :func:`atlas.dynamics.modal_form.log_norm`) within a shorter 
 (:func:`atlas.dynamics.step_windows.brackets`).
 
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
-``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
+``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``8 H_S`` where no modal term grows by more than
+2 over it, and up to ``64 H_S`` where no function can cross within ``8 H_S``: an event-free
 stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
 costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
 certified in the window goes on with further safe steps from its end under the same bound
@@ -138,7 +138,7 @@ __all__ = ["FastResult", "run_batch", "run_lanes", "outcomes", "locate_root"]
 XTOL = 1e-12
 STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
 ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
-SUBSTEPS = 4  # further certified safe steps within one step's window (:func:`_safe_substeps`)
+SUBSTEPS = 8  # further certified safe steps within one step's window (:func:`_safe_substeps`)
 SUBSTEP_MIN = 0.05  # shortest of them, in H_S
 
 #: how a trajectory of :func:`outcomes` was decided

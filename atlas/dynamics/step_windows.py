@@ -3,9 +3,9 @@
 JAX engine (:mod:`atlas.dynamics.jax_engine`), on NumPy or JAX arrays
 (:func:`atlas.dynamics.event_bounds.xp_of`).
 
-A step is at most ``WINDOWS H_S`` long, or ``LONG H_S`` over an event-free stretch (the NumPy
-engine), and never so long that a modal term grows by more than ``GROWTH`` over it; the gaps are
-tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
+A step is at most ``WINDOWS H_S`` long (``WIDE H_S`` in the NumPy engine), or ``LONG H_S`` over
+an event-free stretch (the NumPy engine), and never so long that a modal term grows by more than
+``GROWTH`` over it; the gaps are tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
 the scale (``small``).
 """
 
@@ -18,7 +18,19 @@ import numpy as np
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import stop_rule
 
-__all__ = ["GROWTH", "LONG", "SMALL", "WINDOWS", "bounded", "brackets", "limit_steps", "window"]
+__all__ = [
+    "CANCELLING",
+    "GROWTH",
+    "LONG",
+    "SHORT",
+    "SMALL",
+    "WIDE",
+    "WINDOWS",
+    "bounded",
+    "brackets",
+    "limit_steps",
+    "window",
+]
 
 #: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
 #: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
@@ -27,8 +39,13 @@ WINDOWS = 4.0
 LONG = 64.0
 GROWTH = 2.0
 SMALL = 10.0
-#: a step below ``SHORT`` times its window is bracketed again within a shorter window
+#: the NumPy engine's window in ``H_S`` (its safe sub-steps cross an oscillation's window in one
+#: step, :func:`atlas.dynamics.fast_engine._safe_substeps`); the JAX engine keeps ``WINDOWS``
+WIDE = 8.0
+#: a step below ``SHORT`` times its window is bracketed again within a shorter window, where the
+#: flow's curvature bound is below ``CANCELLING`` times the modal one
 SHORT = 0.125
+CANCELLING = 0.5
 
 
 def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
@@ -77,7 +94,7 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
     function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
     the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
-    (:func:`window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
+    (:func:`window`).  The window is ``WIDE H_S`` at most, or ``LONG H_S`` where no function
     can cross within the shorter one (an event-free stretch: free flight, a settled contact).
     A step cut far below its window is bracketed again within a shorter one under the smaller of
     the modal terms' bound and the flow's (:func:`_shorter`, ``mu`` (n,) the logarithmic norms of
@@ -87,7 +104,7 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
     aUE = np.abs(UE)
     A, Bd = np.maximum(s * f, 0.0), s * fp
     mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
-    Hw, small = window(H, lam, valid, p, aUE, scale, WINDOWS)
+    Hw, small = window(H, lam, valid, p, aUE, scale, WIDE)
     lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
     r = eb.rows(eb.min_cols(lo) >= Hw)
     if r.size:
@@ -111,13 +128,13 @@ def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu)
     the modal bound and the flow's (:func:`eb.flow_curvature_bound`, at the step's start) within
     a shorter window ``W`` (twice the smallest ``sigma_lo`` under the flow's bound at the start,
     so that its growth ``exp(mu W)`` stays near 1), kept where they allow a longer step (``lo``,
-    ``hi``, ``M``, ``Hw`` replaced in place); tried where the flow's bound at the start is below a
-    quarter of the modal one.  Where large modal terms cancel the step is then set by the size of
+    ``hi``, ``M``, ``Hw`` replaced in place); tried where the flow's bound at the start is below
+    ``CANCELLING`` times the modal one.  Where large modal terms cancel the step is then set by the size of
     ``f''`` near ``tau``."""
     C, zn = eb.flow_curvature_bound(p[r], UE[r], lam[r], acc[r], H[r], k[r], q[r])
     Czn = C * zn[:, None]
     # only where the flow's bound at the start is well below the modal one (terms cancelling)
-    below = eb.rows((mon[r] & (Czn < 0.25 * M[r])).any(axis=1))
+    below = eb.rows((mon[r] & (Czn < CANCELLING * M[r])).any(axis=1))
     r, Czn = r[below], Czn[below]
     lo0, _ = eb.safe_steps(A[r], Bd[r], Czn)
     w = np.minimum(Hw[r], 2 * eb.min_cols(np.where(mon[r], lo0, np.inf)))
