@@ -24,9 +24,11 @@ __all__ = [
     "bins",
     "re_sum4",
     "evaluate",
+    "gaps_at",
     "taylor",
     "event_functions",
     "curvature_bound",
+    "flow_curvature_bound",
     "flat_step",
     "safe_steps",
     "positive_quadratic",
@@ -99,18 +101,34 @@ def evaluate(P, U, lam, tau):
     tau)`` (n, 2, 4)."""
     xp = xp_of(P, U, lam, tau)
     UE = U * xp.exp(lam * tau[:, None])[:, None, :]
-    p = taylor(P, tau)
+    p = _taylor(P, tau)
+    d, v, acc = _gaps(p, UE, lam)
+    return d, v, acc, xp.stack(p, axis=2), UE
+
+
+def gaps_at(P, U, lam, tau):
+    """The gaps, velocities and accelerations of :func:`evaluate` alone (the same arithmetic),
+    without stacking the Taylor coefficients."""
+    xp = xp_of(P, U, lam, tau)
+    return _gaps(_taylor(P, tau), U * xp.exp(lam * tau[:, None])[:, None, :], lam)
+
+
+def _gaps(p, UE, lam):
     lUE = UE * lam[:, None, :]
-    d = p[:, :, 0] + re_sum4(UE)
-    v = p[:, :, 1] + re_sum4(lUE)
-    acc = 2 * p[:, :, 2] + re_sum4(lUE * lam[:, None, :])
-    return d, v, acc, p, UE
+    d = p[0] + re_sum4(UE)
+    v = p[1] + re_sum4(lUE)
+    acc = 2 * p[2] + re_sum4(lUE * lam[:, None, :])
+    return d, v, acc
 
 
 def taylor(P, tau):
     """Taylor coefficients (n, m, 3; or 5 for a quartic ``P`` (n, m, 5)) at ``tau`` (n,) of the
     polynomials ``P`` (coefficients of ``1, t, t^2, ...``)."""
-    xp = xp_of(P, tau)
+    return xp_of(P, tau).stack(_taylor(P, tau), axis=2)
+
+
+def _taylor(P, tau):
+    """:func:`taylor`'s coefficients as a list of (n, m) arrays."""
     t1 = tau[:, None]
     p = [P[:, :, 0] + t1 * (P[:, :, 1] + t1 * P[:, :, 2]), P[:, :, 1] + 2 * t1 * P[:, :, 2],
          P[:, :, 2]]  # fmt: skip
@@ -120,7 +138,7 @@ def taylor(P, tau):
         p[1] = p[1] + t1**2 * (3 * P3 + 4 * t1 * P4)
         p[2] = p[2] + t1 * (3 * P3 + 6 * t1 * P4)
         p += [P3 + 4 * t1 * P4, P4]
-    return xp.stack(p, axis=2)
+    return p
 
 
 def _poly_bounds(p, H):
@@ -153,6 +171,30 @@ def curvature_bound(p, UE, lam, H, k, q, aUE=None):
     m2 = 2 * xp.abs(p[:, :, 2]) + sum4(a * lr[:, None, :] ** 2) + e2
     m3 = sum4(a * lr[:, None, :] ** 3) + e3
     return xp.concatenate([m2, k * m2 + q * m3], axis=1)
+
+
+def flow_curvature_bound(p, UE, lam, acc, H, k, q):
+    """``(C, zn)``: ``C zn exp(max(mu, 0) s) >= |f''|`` (n, 4) at ``tau + s``, from the flow ``z' =
+    A z`` of the gaps and velocities instead of the modal terms.  ``z'' = (d'', d''')`` obeys it
+    too, so ``|D z''(tau + s)| <= exp(mu s) |D z''(tau)|`` with ``mu`` the logarithmic norm of ``D A
+    D^-1`` (:func:`atlas.dynamics.modal_form.log_norm`, ``D = diag(1, 1, 1 / w, 1 / w)``, ``w = 1 /
+    H_S``); then ``|d_i''| <= |D z''|`` and ``|phi_i''| = |k_i d_i'' + q_i d_i'''| <= (k_i^2 +
+    q_i^2 w^2)^(1/2) |D z''|``.  The size ``zn = |D z''(tau)|`` is that of the accelerations and
+    jerks at ``tau``, not of the modal terms: tight where large terms cancel (near-defective modal
+    forms).  ``d''`` is ``acc`` (n, 2), ``d'''`` summed from the modal terms, both with a margin
+    of ``1e-13`` of their terms' moduli for rounding.  NumPy arrays."""
+    lam3 = lam[:, None, :] ** 3
+    jerk = re_sum4(UE * lam3)
+    aUE = np.abs(UE)
+    err2 = 1e-13 * (sum4(aUE * np.abs(lam[:, None, :]) ** 2) + np.abs(p[:, :, 2]))
+    err3 = 1e-13 * sum4(aUE * np.abs(lam3))
+    if p.shape[2] > 3:  # a quartic's third derivative
+        jerk = jerk + 6 * p[:, :, 3]
+    w = 1.0 / H
+    zn = np.sqrt(((np.abs(acc) + err2) ** 2).sum(axis=1)
+                 + (((np.abs(jerk) + err3) / w[:, None]) ** 2).sum(axis=1))  # fmt: skip
+    C = np.concatenate([np.ones_like(k), np.sqrt(k * k + (q * w[:, None]) ** 2)], axis=1)
+    return C, zn
 
 
 def flat_step(s, p, UE, lam, H, k, q):

@@ -19,9 +19,16 @@ sign ``s`` of ``f``::
     s f(tau + sigma) >= s f + s f' sigma - M sigma^2 / 2     (no crossing before its root sigma_lo)
     s f(tau + sigma) <= s f + s f' sigma + M sigma^2 / 2     (a crossing by its root sigma_hi)
 
+Where large modal terms cancel (near-defective modal forms, e.g. near the ``3 pi / 2`` axis) that
+``M`` is orders of magnitude above ``|f''|``; a step cut below ``1/8`` of its window is then
+bracketed again under the flow's bound (:func:`eb.flow_curvature_bound`: ``z'' = (d'', d''')``
+obeys ``z' = A z``, so ``|D z''|`` grows at most by ``exp(mu s)``, ``mu`` the logarithmic norm of
+the configuration, :func:`atlas.dynamics.modal_form.log_norm`) within a shorter window
+(:func:`atlas.dynamics.step_windows.brackets`).
+
 Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at most the window
-``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``4 H_S`` where no modal term grows by more than
-2 over it, and up to ``64 H_S`` where no function can cross within ``4 H_S``: an event-free
+``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``8 H_S`` where no modal term grows by more than
+2 over it, and up to ``64 H_S`` where no function can cross within ``8 H_S``: an event-free
 stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
 costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
 certified in the window goes on with further safe steps from its end under the same bound
@@ -131,7 +138,7 @@ __all__ = ["FastResult", "run_batch", "run_lanes", "outcomes", "locate_root"]
 XTOL = 1e-12
 STALL = 64  # steps below 1e-9 H_S in a row before a lane is handed to the exact simulator
 ROOT_ITER = 8  # evaluations per root location; an unfinished one resumes at the next step
-SUBSTEPS = 4  # further certified safe steps within one step's window (:func:`_safe_substeps`)
+SUBSTEPS = 8  # further certified safe steps within one step's window (:func:`_safe_substeps`)
 SUBSTEP_MIN = 0.05  # shortest of them, in H_S
 
 #: how a trajectory of :func:`outcomes` was decided
@@ -327,8 +334,9 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
         sched = ((since & (since - 1)) == 0) & (since > 0)  # 1, 2, 4, ... steps after an event
         _leave(st, ix, t, g, s, keep, eb.rows(keep & (t >= T)), 0)
         # next step: certified brackets of the monitored event functions
+        mu = stack_table(tables, "mu", ix, mask)
         lo, hi, mon, M, Hw, small = sw.brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale,
-                                                 act)  # fmt: skip
+                                                 act, mu)  # fmt: skip
         # early decisions (on the same schedule): no event can follow; not tried where a crossing
         # is certified (sigma_hi) before t_max, which no certificate can pass
         r = eb.rows(keep & sched & eb.all_cols(hi > (t_max - t)[:, None]))
@@ -392,22 +400,23 @@ def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
     ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified: no monitored
     function changes sign over the longer step.  An oscillating gap far from its contact is
     then crossed in one step of the window rather than several of its curvature's ``sigma_lo``."""
-    out = step[r].copy()
+    out, c = step[r].copy(), cap[r]
+    x = (P[r], U[r], lam[r], tau[r], s[r], k[r], q[r], M[r], mon[r], SUBSTEP_MIN * H[r])
     live = np.arange(r.size)
     for _ in range(SUBSTEPS):
-        rr = r[live]
-        d, v, acc = eb.evaluate(P[rr], U[rr], lam[rr], tau[rr] + out[live])[:3]
-        f, fp = eb.event_functions(d, v, acc, k[rr], q[rr])
-        A, Bd = s[rr] * f, s[rr] * fp
-        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, M[rr])
-        m_on = mon[rr]
-        inc = eb.min_cols(np.where(m_on, lo, np.inf))
-        ok = (~(m_on & ((A <= 0) | np.isfinite(hi))).any(axis=1)) & (inc >= SUBSTEP_MIN * H[rr])
+        Pl, Ul, ll, tl, sl_, kl, ql, Ml, ml, short = x
+        f, fp = eb.event_functions(*eb.gaps_at(Pl, Ul, ll, tl + out[live]), kl, ql)
+        A, Bd = sl_ * f, sl_ * fp
+        lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, Ml)
+        inc = eb.min_cols(np.where(ml, lo, np.inf))
+        ok = ~(ml & ((A <= 0) | (hi < np.inf))).any(axis=1) & (inc >= short)
         live = live[ok]
-        out[live] = np.minimum(out[live] + inc[ok], cap[r[live]])
-        live = live[out[live] < cap[r[live]]]
+        out[live] = np.minimum(out[live] + inc[ok], c[live])
+        ok[ok] = out[live] < c[live]
+        live = live[out[live] < c[live]]
         if live.size == 0:
             break
+        x = tuple(a[ok] for a in x)
     return out
 
 
@@ -470,7 +479,7 @@ def _stops_before_events(st, tables, stops, ev_r, ix, t, t0, tseg, s, mask, act,
     that switch and their gaps, velocities and accelerations."""
     if ev_r.size == 0:
         return ev_r, None
-    dva = eb.evaluate(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])[:3]
+    dva = eb.gaps_at(P[ev_r], U[ev_r], lam[ev_r], t[ev_r] - tseg[ev_r])
     ge = np.concatenate(dva[:2], axis=1)
     sr = sl.stops_at(tables, ix[ev_r], mask[ev_r], act[ev_r], ge, scale[ev_r])
     if sr.size:
@@ -514,7 +523,7 @@ def _sample_step(st, tables, ix, r, tau0, step, H, P, U, lam, mask, act, scale, 
     j = np.arange(rr.size) - np.repeat(np.cumsum(n_in) - n_in, n_in) + 1
     x = step[r][rr] * j / (n_in[rr] + 1)
     rows = r[rr]
-    d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
+    d, v = eb.gaps_at(P[rows], U[rows], lam[rows], tau0[rows] + x)[:2]
     hit = np.zeros(rr.size, dtype=bool)
     hit[sl.stops_at(tables, ix[rows], mask[rows], act[rows], np.concatenate([d, v], 1),
                   scale[rows])] = True  # fmt: skip

@@ -36,7 +36,7 @@ from atlas.dynamics.system import Mode, System
 __all__ = [
     "Lanes", "ModalTable", "ModalTables", "modal_tables", "light_system", "segments", "segment",
     "stack_table", "stack_tables", "z_eq", "modal_coordinates", "modal_coords", "cond_bound",
-    "ROUNDING", "closed_configurations", "closed_segment",
+    "ROUNDING", "closed_configurations", "closed_segment", "log_norm",
 ]  # fmt: skip
 
 _COND_MAX = 1e4  # eigenvector condition beyond which a configuration falls back
@@ -96,7 +96,8 @@ class ModalTable:
 
 class ModalTables(list):
     """The four :class:`ModalTable` of the lanes (``tables[mask]``) and their entries ``lam``,
-    ``valid``, ``d_eq``, ``H``, ``ok``, ``E`` stacked by configuration (4, N, ...) as attributes
+    ``valid``, ``d_eq``, ``H``, ``ok``, ``E``, ``mu`` (:func:`log_norm` in units ``1 / H``)
+    stacked by configuration (4, N, ...) as attributes
     (each table's entry is a view of one slice), for one gather ``x[mask, ix]`` over mixed
     configurations (:func:`stack_table`)."""
 
@@ -115,7 +116,7 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         "lam": np.zeros((4, n, 4), dtype=complex), "valid": np.zeros((4, n, 4), dtype=bool),
         "d_eq": np.full((4, n, 2), np.nan), "H": np.empty((4, n)), "ok": np.ones((4, n), bool),
         "E": _augmented(lanes.B, lanes.a, lanes.k, lanes.q, np.arange(4)[:, None]),
-        "closed": np.zeros((4, n), bool),
+        "closed": np.zeros((4, n), bool), "mu": np.empty((4, n)),
     }  # fmt: skip
     out = []
     for mask in range(4):
@@ -143,8 +144,22 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         rho = np.abs(lam).max(axis=1)
         H = st["H"][mask]
         H[:] = 1.0 / np.maximum(rho, 0.25 * omega)
+        st["mu"][mask] = log_norm(E, 1.0 / H)
         out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E, st["closed"][mask]))
     return ModalTables(out, st)
+
+
+def log_norm(E, w):
+    """Logarithmic 2-norm ``mu`` (N,) of ``D A D^-1`` (``A = E[:, :4, :4]`` the flow of all four
+    gaps and velocities, ``D = diag(1, 1, 1 / w, 1 / w)``, velocities in units of the rate ``w``
+    (N,)): ``|D z(t)| <= exp(mu t) |D z(0)|`` for ``z' = A z`` (Dahlquist), whatever the
+    conditioning of the eigenvectors; the largest eigenvalue of the symmetric part, raised by
+    ``1e-12`` of its norm for rounding."""
+    d = np.concatenate([np.ones((w.size, 2)), np.repeat(w[:, None], 2, axis=1)], axis=1)
+    M = E[:, :4, :4] * (d[:, None, :] / d[:, :, None])
+    S = 0.5 * (M + M.transpose(0, 2, 1))
+    lam = np.linalg.eigvalsh(S)
+    return lam[:, -1] + 1e-12 * np.abs(lam).max(axis=1)
 
 
 def closed_configurations(lanes: Lanes, mask: int) -> np.ndarray:

@@ -3,9 +3,9 @@
 JAX engine (:mod:`atlas.dynamics.jax_engine`), on NumPy or JAX arrays
 (:func:`atlas.dynamics.event_bounds.xp_of`).
 
-A step is at most ``WINDOWS H_S`` long, or ``LONG H_S`` over an event-free stretch (the NumPy
-engine), and never so long that a modal term grows by more than ``GROWTH`` over it; the gaps are
-tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
+A step is at most ``WINDOWS H_S`` long (``WIDE H_S`` in the NumPy engine), or ``LONG H_S`` over
+an event-free stretch (the NumPy engine), and never so long that a modal term grows by more than
+``GROWTH`` over it; the gaps are tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
 the scale (``small``).
 """
 
@@ -18,7 +18,19 @@ import numpy as np
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import stop_rule
 
-__all__ = ["GROWTH", "LONG", "SMALL", "WINDOWS", "bounded", "brackets", "limit_steps", "window"]
+__all__ = [
+    "CANCELLING",
+    "GROWTH",
+    "LONG",
+    "SHORT",
+    "SMALL",
+    "WIDE",
+    "WINDOWS",
+    "bounded",
+    "brackets",
+    "limit_steps",
+    "window",
+]
 
 #: longest step in windows ``H_S`` (``LONG`` where no event can come within ``WINDOWS``), where the
 #: growth over it stays within ``GROWTH``; the gaps are sampled at most ``H_S`` apart inside a
@@ -27,6 +39,13 @@ WINDOWS = 4.0
 LONG = 64.0
 GROWTH = 2.0
 SMALL = 10.0
+#: the NumPy engine's window in ``H_S`` (its safe sub-steps cross an oscillation's window in one
+#: step, :func:`atlas.dynamics.fast_engine._safe_substeps`); the JAX engine keeps ``WINDOWS``
+WIDE = 8.0
+#: a step below ``SHORT`` times its window is bracketed again within a shorter window, where the
+#: flow's curvature bound is below ``CANCELLING`` times the modal one
+SHORT = 0.125
+CANCELLING = 0.5
 
 
 def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
@@ -51,13 +70,17 @@ def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
     return w, xp.maximum(reach[:, 0], reach[:, 1]) <= SMALL * scale
 
 
-def bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
+def bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon, flow=None):
     """``(lo, hi, M)``: certified brackets (n, 4) of the next crossing of each monitored (``mon``)
     event function with value bound ``A`` and slope ``Bd`` (:func:`eb.safe_steps`) within the
     window ``Hw`` (n,), under the curvature bound ``M`` over it (:func:`eb.curvature_bound`);
-    ``lo`` at most ``Hw``, ``hi`` ``inf`` beyond it or unmonitored."""
+    ``lo`` at most ``Hw``, ``hi`` ``inf`` beyond it or unmonitored.  ``flow``: ``(C zn (n, 4),
+    mu (n,))`` of :func:`eb.flow_curvature_bound`, a second bound (the smaller is used)."""
     xp = eb.xp_of(A, Bd, p, UE, Hw)
     M = eb.curvature_bound(p, UE, lam, Hw, k, q, aUE)
+    if flow is not None:
+        Czn, mu = flow
+        M = xp.minimum(M, Czn * xp.exp(xp.maximum(mu, 0.0) * Hw)[:, None])
     lo, hi = eb.safe_steps(A, Bd, M)
     flat = (A == 0) & (Bd == 0)
     if xp is not np or flat.any():  # a double zero (exactly zero state): the second derivative
@@ -67,31 +90,59 @@ def bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon):
     return lo, hi, M
 
 
-def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act):
+def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
     """Certified brackets ``(lo, hi)`` (n, 4) of the next crossing of each monitored event
     function (``mon``: every force, the falling gaps), within the step window ``Hw`` and under
     the curvature bound ``M`` (both returned, for the stop rule's limits), and ``small``
-    (:func:`window`).  The window is ``WINDOWS H_S`` at most, or ``LONG H_S`` where no function
+    (:func:`window`).  The window is ``WIDE H_S`` at most, or ``LONG H_S`` where no function
     can cross within the shorter one (an event-free stretch: free flight, a settled contact).
-    NumPy arrays (the JAX engine keeps the short window)."""
+    A step cut far below its window is bracketed again within a shorter one under the smaller of
+    the modal terms' bound and the flow's (:func:`_shorter`, ``mu`` (n,) the logarithmic norms of
+    the configurations).
+    NumPy arrays (the JAX engine keeps the short window and the modal bound)."""
     f, fp = eb.event_functions(d, v, acc, k, q)
     aUE = np.abs(UE)
     A, Bd = np.maximum(s * f, 0.0), s * fp
     mon = np.concatenate([np.ones_like(act), s[:, :2] < 0], axis=1)
-    Hw, small = window(H, lam, valid, p, aUE, scale, WINDOWS)
+    Hw, small = window(H, lam, valid, p, aUE, scale, WIDE)
     lo, hi, M = bounded(A, Bd, s, p, UE, lam, k, q, aUE, Hw, mon)
     r = eb.rows(eb.min_cols(lo) >= Hw)
     if r.size:
         w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
         r, w, sm = r[w > Hw[r]], w[w > Hw[r]], sm[w > Hw[r]]
         lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
-                                mon[r])  # fmt: skip
+                                  mon[r])  # fmt: skip
         # both brackets hold (each within its window): the larger lower end, the smaller upper
         longer = eb.min_cols(lo_r) > Hw[r]
         r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
         lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
         M[r], Hw[r], small[r] = M_r, w, sm
+    r = eb.rows(eb.min_cols(lo) < SHORT * Hw)
+    if r.size:
+        _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu)
     return lo, hi, mon, M, Hw, small
+
+
+def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu):
+    """Rows ``r`` whose step is cut far below the window: the brackets again under the smaller of
+    the modal bound and the flow's (:func:`eb.flow_curvature_bound`, at the step's start) within
+    a shorter window ``W`` (twice the smallest ``sigma_lo`` under the flow's bound at the start,
+    so that its growth ``exp(mu W)`` stays near 1), kept where they allow a longer step (``lo``,
+    ``hi``, ``M``, ``Hw`` replaced in place); tried where the flow's bound at the start is below
+    ``CANCELLING`` times the modal one.  Where large modal terms cancel the step is then set by the size of
+    ``f''`` near ``tau``."""
+    C, zn = eb.flow_curvature_bound(p[r], UE[r], lam[r], acc[r], H[r], k[r], q[r])
+    Czn = C * zn[:, None]
+    # only where the flow's bound at the start is well below the modal one (terms cancelling)
+    below = eb.rows((mon[r] & (Czn < CANCELLING * M[r])).any(axis=1))
+    r, Czn = r[below], Czn[below]
+    lo0, _ = eb.safe_steps(A[r], Bd[r], Czn)
+    w = np.minimum(Hw[r], 2 * eb.min_cols(np.where(mon[r], lo0, np.inf)))
+    lo_r, hi_r, M_r = bounded(A[r], Bd[r], s[r], p[r], UE[r], lam[r], k[r], q[r], aUE[r], w,
+                              mon[r], (Czn, mu[r]))  # fmt: skip
+    better = eb.min_cols(lo_r) > eb.min_cols(lo[r])
+    r, lo_r, hi_r, M_r, w = (x[better] for x in (r, lo_r, hi_r, M_r, w))
+    lo[r], hi[r], M[r], Hw[r] = lo_r, hi_r, M_r, w
 
 
 def limit_steps(d, v, M, scale, Hw):

@@ -51,7 +51,7 @@ def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
     amp, pen = stop_rule.limits(scale)
 
     def state_at(tau, rows):
-        d, v = eb.evaluate(P[rows], U[rows], lam[rows], tau)[:2]
+        d, v = eb.gaps_at(P[rows], U[rows], lam[rows], tau)[:2]
         return np.concatenate([d, v], axis=1)
 
     def holds(g, rows):

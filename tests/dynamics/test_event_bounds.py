@@ -86,3 +86,46 @@ def test_may_keep_signs_never_rejects_a_certified_lane():
     assert cert.sum() > 200
     assert np.all(may[cert])
     assert (~may).sum() > 0.3 * (~cert).sum()
+
+
+def test_flow_curvature_bound_holds_where_modal_terms_cancel():
+    """The flow's curvature bound ``C zn exp(max(mu, 0) s)`` is above ``|f''|`` of each event
+    function at ``tau + s``, ``s`` in ``[0, 4 H_S]``, with ``f''`` from ``scipy.linalg.expm`` of
+    the exact simulator's matrices (``d'' = (E z)_v``, ``d''' = (E^2 z)_v``); on lanes near the
+    3pi/2 axis (``b_11 <= 1e-2``, large cancelling modal terms) it is far below the modal bound
+    (:func:`eb.curvature_bound`) over a short window (``H_S / 10``)."""
+    from scipy.linalg import expm
+
+    from atlas.dynamics import modal_form as mf
+    from atlas.dynamics import system as SY
+
+    rng = np.random.default_rng(5)
+    n = 16
+    b1 = np.where(np.arange(n) < 8, 1.5 * math.pi - 10 ** rng.uniform(-4, -2, n),
+                  rng.uniform(0, 2 * math.pi, n))  # fmt: skip
+    b2 = rng.uniform(0, 2 * math.pi, n)
+    k, q = np.tile((2.0, 1.0), (n, 1)), np.tile((0.3, 0.3), (n, 1))
+    lanes = mf.Lanes.of(b1, b2, 0.3 * math.pi, k, q)
+    tables = mf.modal_tables(lanes)
+    mask = np.ones(n, int)  # SF: contact 1 closed, gap 2 driven by its force
+    g = rng.normal(size=(n, 4)) * 1e-2
+    ix = np.arange(n)
+    P, U, lam, valid, H, ok = mf.segments(lanes, tables, ix, mask, g)
+    d, v, acc, p, UE = eb.evaluate(P, U, lam, np.zeros(n))
+    C, zn = eb.flow_curvature_bound(p, UE, lam, acc, H, k, q)
+    mu = tables.mu[mask, ix]
+    modal = eb.curvature_bound(p, UE, lam, 0.1 * H, k, q)
+    narrower = 0
+    for r in np.flatnonzero(ok):
+        E = SY.build_system(b1[r], b2[r], 0.3 * math.pi, tuple(k[r]), tuple(q[r]), (1, 1), 1.0,
+                            0.1).modes[1].E  # fmt: skip
+        z1 = np.concatenate([g[r], [1.0]])
+        for s in np.linspace(0, 4 * H[r], 9):
+            z = expm(E * s) @ z1
+            d2, d3 = (E @ z)[2:4], (E @ E @ z)[2:4]
+            f2 = np.concatenate([d2, -k[r] * d2 - q[r] * d3])
+            bound = C[r] * zn[r] * np.exp(max(mu[r], 0.0) * s)
+            assert np.all(np.abs(f2) <= bound * (1 + 1e-9)), (r, s, f2, bound)
+        short = C[r] * zn[r] * np.exp(max(mu[r], 0.0) * 0.1 * H[r])
+        narrower += r < 8 and np.all(short < 1e-2 * modal[r, [1, 3]].min())
+    assert narrower >= 4
