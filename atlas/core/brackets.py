@@ -224,6 +224,23 @@ def _first_changes(field, pts, vp, kappa, q1, q2, dtype) -> np.ndarray:
     return out
 
 
+def _section_step(field, p, q, vp, vq, kappa, q1, q2, ratio, dtype):
+    """One step of :func:`bisect` on brackets still ``ratio`` times too long: ``k - 1`` samples
+    split each into ``k`` parts (:func:`_sections`); returns the new ``(p, q, vq)``."""
+    k = _sections(len(p), ratio)
+    t = np.arange(1, k) / k
+    pts = p[:, None, :] + t[None, :, None] * (q - p)[:, None, :]  # (m, k - 1, 2)
+    v = _first_changes(field, pts, vp, kappa, q1, q2, dtype)
+    differs = (v != vp[:, None]) & (v != NO_CODE)
+    differs = np.concatenate([differs, np.ones((len(p), 1), bool)], axis=1)
+    i = differs.argmax(1)  # the first settled sample off vp's code (k - 1: q itself)
+    r, inner = np.arange(len(p)), i < k - 1
+    new_q = np.where(inner[:, None], pts[r, np.minimum(i, k - 2)], q)
+    vq = np.where(inner, v[r, np.minimum(i, k - 2)], vq).astype(np.int8)
+    p = np.where((i > 0)[:, None], pts[r, np.maximum(i - 1, 0)], p)
+    return p, new_q, vq
+
+
 def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float64"):
     """Shrink brackets ``[p, q]`` (``(m, 2)`` arrays of ``(beta1, beta2)`` [rad], codes ``vp != vq``)
     to a length ``<= tol`` [rad]; returns ``(p, q, vp, vq)``.
@@ -235,7 +252,10 @@ def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float6
     ``vp`` and it), the point before it (settled, of code ``vp``) ``p``.  The points the fast
     tiers leave undecided are settled exactly only as a bisection over the sample positions
     needs them (:func:`_search`): the first change of code along the bracket where it changes
-    once.  Repeated until every bracket is ``<= tol`` long.
+    once.  Repeated until every bracket is ``<= tol`` long; a bracket is left alone once it is
+    (only the longer ones are sampled: the samples of a bracket far below ``tol`` are all next
+    to the boundary, where the exact tier decides most of them, and its result no longer
+    depends on which other brackets share the calls).
     """
     p, q = np.array(p, np.float64), np.array(q, np.float64)
     vp, vq = np.array(vp, np.int8), np.array(vq, np.int8)
@@ -245,23 +265,13 @@ def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float6
         raise ValueError(f"tol: must be positive, got {tol!r}")
     if len(p) == 0:
         return p, q, vp, vq
-    r = np.arange(len(p))
     for _ in range(4 * 64):  # each call shrinks by at least 2 while the floats can
-        longest = float(np.max(np.hypot(*(q - p).T)))
-        if longest <= tol:
+        length = np.hypot(*(q - p).T)
+        a = np.flatnonzero(length > tol)  # a bracket <= tol is done
+        if not a.size:
             return p, q, vp, vq
-        k = _sections(len(p), longest / tol)
-        t = np.arange(1, k) / k
-        pts = p[:, None, :] + t[None, :, None] * (q - p)[:, None, :]  # (m, k - 1, 2)
-        v = _first_changes(field, pts, vp, kappa, q1, q2, dtype)
-        differs = (v != vp[:, None]) & (v != NO_CODE)
-        differs = np.concatenate([differs, np.ones((len(p), 1), bool)], axis=1)
-        i = differs.argmax(1)  # the first settled sample off vp's code (k - 1: q itself)
-        inner = i < k - 1
-        new_q = np.where(inner[:, None], pts[r, np.minimum(i, k - 2)], q)
-        vq = np.where(inner, v[r, np.minimum(i, k - 2)], vq).astype(np.int8)
-        p = np.where((i > 0)[:, None], pts[r, np.maximum(i - 1, 0)], p)
-        q = new_q
+        p[a], q[a], vq[a] = _section_step(field, p[a], q[a], vp[a], vq[a], kappa, q1, q2,
+                                          float(length[a].max()) / tol, dtype)  # fmt: skip
     raise RuntimeError(f"tol: brackets did not shrink to {tol!r} rad (float resolution)")
 
 

@@ -153,3 +153,19 @@ def test_first_change_codes_mark_the_unsettled_samples(monkeypatch):
     assert 2 <= known.sum() <= 5
     want = [_exact_code("II", x, y, *model) for x, y in pts[known]]
     assert got[known].tolist() == want
+
+
+def test_bisect_leaves_a_bracket_once_within_tol():
+    """A bracket already ``<= tol`` is returned as given (none of its samples, which only the
+    exact tier decides, is evaluated), while a longer one sharing the calls is shrunk to
+    ``tol``."""
+    p, q, model = HARD_II
+    u = (q - p) / np.hypot(*(q - p))
+    far_p, far_q = p - 1e-6 * u, q + 1e-6 * u
+    assert brackets.field_codes("II", *np.stack([far_p, far_q]).T, *model).tolist() == [0, 2]
+    P, Q, vp, vq = brackets.bisect(
+        "II", np.stack([p, far_p]), np.stack([q, far_q]), [0, 0], [2, 2], *model, tol=1e-9
+    )
+    np.testing.assert_array_equal(P[0], p)
+    np.testing.assert_array_equal(Q[0], q)
+    assert vq[0] == 2 and 1e-9 / 64 < np.hypot(*(Q[1] - P[1])) <= 1e-9
