@@ -87,11 +87,18 @@ def _batch_codes(field, b1, b2, kappa, q1, q2, dtype) -> np.ndarray:
     return direction_codes(field, c1, s1, c2, s2, kappa, q1, q2, dtype=dtype)
 
 
-def direction_codes(field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64") -> np.ndarray:
+def direction_codes(
+    field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64", first_change=None
+) -> np.ndarray:
     """Certified codes of ``field`` at 1-D arrays of at most ``MAX_BATCH`` direction vectors
     ``(c1, s1)``, ``(c2, s2)`` [1] (e.g. exactly on a class line: ``(c2, s2) = -(c1, s1)`` on
     ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``MIN_BATCH`` or ``MAX_BATCH``
-    points (two batch sizes: two compilations per kernel); every point settled exactly."""
+    points (two batch sizes: two compilations per kernel); every point settled exactly.
+
+    ``first_change``: the codes ``vp`` of rows of samples (the points, row after row, ``n /
+    len(vp)`` a row, in order along a bracket from an end of code ``vp``): per row, only the
+    samples a search for a change of code needs are settled (:func:`_search`), the others are
+    :data:`NO_CODE`."""
     _check_field(field)
     n = np.size(c1)
     pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
@@ -102,13 +109,77 @@ def direction_codes(field: str, c1, s1, c2, s2, kappa, q1, q2, *, dtype="float64
     s1, s2 = (
         np.pad(np.asarray(v, dtype), (0, pad), constant_values=ps[i]) for i, v in ((0, s1), (1, s2))
     )
+    needed = None if first_change is None else _row_needs(field, np.asarray(first_change), n)
     res = spectral_points(
-        c1, s1, c2, s2, kappa, q1, q2, names=FIELDS[field], dtype=dtype, resolve=True
-    )
+        c1, s1, c2, s2, kappa, q1, q2, names=FIELDS[field], dtype=dtype, resolve=True,
+        needed=needed,
+    )  # fmt: skip
     res = {k: v[:n] for k, v in res.items()}
+    codes = codes_of(field, res)
+    if first_change is not None:
+        vp = np.asarray(first_change)
+        settled, differs = _known(field, res, np.repeat(vp, n // vp.size))
+        if _search(settled, differs, vp.size)[0].any():  # a window left open
+            raise RuntimeError("field_codes: a point stayed undecided after exact settlement")
+        return np.where(settled, codes, NO_CODE).astype(np.int8)
     if any((v == UNDECIDED_FLAG).any() for v in res.values()):  # the exact tier never leaves one
         raise RuntimeError("field_codes: a point stayed undecided after exact settlement")
-    return codes_of(field, res)
+    return codes
+
+
+#: the code of a sample left unsettled (:func:`direction_codes` with ``first_change``)
+NO_CODE = -1
+
+
+def _known(field: str, verdicts: dict, vp) -> tuple[np.ndarray, np.ndarray]:
+    """Per point, whether its code of ``field`` is settled by the (partly undecided) verdicts,
+    and whether it is known to differ from ``vp`` (settled and different, or II consistent
+    against an inconsistent ``vp``)."""
+    if field == "SS":
+        ss = np.asarray(verdicts["stable_SS"])
+        settled = ss != UNDECIDED_FLAG
+        return settled, settled & (ss != vp)
+    cons = np.asarray(verdicts["consistent_II"])
+    stab = np.asarray(verdicts["stable_II"])
+    settled = (cons == 0) | ((cons == 1) & (stab != UNDECIDED_FLAG))
+    code = np.where(cons == 1, 1 + stab, 0)
+    return settled, (settled & (code != vp)) | ((cons == 1) & (vp == 0))
+
+
+def _search(settled, differs, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """The state of the search for a change of code along each of ``rows`` rows of samples
+    (flat ``settled`` and ``differs``, :func:`_known`): per sample, whether it lies in its row's
+    window ``(lo, hi)`` or is ``hi`` unsettled, and whether it is the window's middle.
+
+    ``hi`` is the first sample known to differ from the row's ``vp`` (the bracket's far end
+    after the last sample), ``lo`` the last settled sample of code ``vp`` before it (the near
+    end before the first): the samples between are unsettled, and ``[lo, hi]`` is a bracket.
+    Settling the middle one halves the window (a bisection on the row's sample positions); it
+    ends on the row's first change of code where the codes along the row change once (then
+    identical to settling every sample), else on another change (a bracket all the same)."""
+    settled, differs = settled.reshape(rows, -1), differs.reshape(rows, -1)
+    s = settled.shape[1]
+    j = np.arange(s)
+    hi = np.where(differs.any(1), differs.argmax(1), s)[:, None]
+    lo = np.max(np.where(settled & ~differs & (j < hi), j, -1), axis=1, keepdims=True)
+    window = ((j > lo) & (j < hi)) | ((j == hi) & ~settled)
+    middle = ((j == (lo + hi) // 2) & (hi - lo > 1)) | ((j == hi) & ~settled)
+    return window.ravel(), middle.ravel()
+
+
+def _row_needs(field: str, vp: np.ndarray, n: int):
+    """The ``needed`` filter of :func:`atlas.core.points.spectral_points` for rows of samples
+    (:func:`direction_codes`): the samples in each row's window (:func:`_search`) for tiers 2 and
+    3, its middle for each round of exact settlement; never the padding."""
+    vp_each = np.repeat(vp, n // vp.size)
+
+    def needed(idx, verdicts, exact):
+        head = {k: v[:n] for k, v in verdicts.items()}
+        window, middle = _search(*_known(field, head, vp_each), vp.size)
+        want = middle if exact else window
+        return (idx < n) & want[np.minimum(idx, n - 1)]
+
+    return needed
 
 
 def codes_of(field: str, verdicts: dict) -> np.ndarray:
@@ -134,15 +205,57 @@ def _sections(n: int, ratio: float) -> int:
     return int(min(MAX_SECTIONS, fill, need))
 
 
+def _first_changes(field, pts, vp, kappa, q1, q2, dtype) -> np.ndarray:
+    """Codes ``(m, s)`` of the samples ``pts`` ``(m, s, 2)`` [rad] of ``m`` brackets from ends
+    of codes ``vp``: certified where a search for a change of code along the row needed them
+    (:func:`_search`), :data:`NO_CODE` elsewhere; rows in batches of at most :data:`MAX_BATCH`
+    points (:func:`direction_codes` with ``first_change``)."""
+    m, s = pts.shape[:2]
+    out = np.empty((m, s), np.int8)
+    rows = max(1, MAX_BATCH // s)
+    for start in range(0, m, rows):
+        part = slice(start, min(start + rows, m))
+        c1, s1 = contact_modes.direction(pts[part, :, 0].ravel(), dtype)
+        c2, s2 = contact_modes.direction(pts[part, :, 1].ravel(), dtype)
+        codes = direction_codes(
+            field, c1, s1, c2, s2, kappa, q1, q2, dtype=dtype, first_change=vp[part]
+        )
+        out[part] = codes.reshape(-1, s)
+    return out
+
+
+def _section_step(field, p, q, vp, vq, kappa, q1, q2, ratio, dtype):
+    """One step of :func:`bisect` on brackets still ``ratio`` times too long: ``k - 1`` samples
+    split each into ``k`` parts (:func:`_sections`); returns the new ``(p, q, vq)``."""
+    k = _sections(len(p), ratio)
+    t = np.arange(1, k) / k
+    pts = p[:, None, :] + t[None, :, None] * (q - p)[:, None, :]  # (m, k - 1, 2)
+    v = _first_changes(field, pts, vp, kappa, q1, q2, dtype)
+    differs = (v != vp[:, None]) & (v != NO_CODE)
+    differs = np.concatenate([differs, np.ones((len(p), 1), bool)], axis=1)
+    i = differs.argmax(1)  # the first settled sample off vp's code (k - 1: q itself)
+    r, inner = np.arange(len(p)), i < k - 1
+    new_q = np.where(inner[:, None], pts[r, np.minimum(i, k - 2)], q)
+    vq = np.where(inner, v[r, np.minimum(i, k - 2)], vq).astype(np.int8)
+    p = np.where((i > 0)[:, None], pts[r, np.maximum(i - 1, 0)], p)
+    return p, new_q, vq
+
+
 def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float64"):
     """Shrink brackets ``[p, q]`` (``(m, 2)`` arrays of ``(beta1, beta2)`` [rad], codes ``vp != vq``)
     to a length ``<= tol`` [rad]; returns ``(p, q, vp, vq)``.
 
     Each kernel call evaluates ``k - 1`` points splitting every bracket into ``k`` equal parts
     (``k = 2``: bisection; larger where few brackets leave the batch mostly padding,
-    :func:`_sections`); the first point whose certified code differs from ``vp`` becomes ``q``
-    (with its code: a third code makes the bracket straddle the boundary between ``vp`` and
-    it), the point before it ``p``.  Repeated until every bracket is ``<= tol`` long.
+    :func:`_sections`); the first settled point whose certified code differs from ``vp``
+    becomes ``q`` (with its code: a third code makes the bracket straddle the boundary between
+    ``vp`` and it), the point before it (settled, of code ``vp``) ``p``.  The points the fast
+    tiers leave undecided are settled exactly only as a bisection over the sample positions
+    needs them (:func:`_search`): the first change of code along the bracket where it changes
+    once.  Repeated until every bracket is ``<= tol`` long; a bracket is left alone once it is
+    (only the longer ones are sampled: the samples of a bracket far below ``tol`` are all next
+    to the boundary, where the exact tier decides most of them, and its result no longer
+    depends on which other brackets share the calls).
     """
     p, q = np.array(p, np.float64), np.array(q, np.float64)
     vp, vq = np.array(vp, np.int8), np.array(vq, np.int8)
@@ -152,22 +265,13 @@ def bisect(field: str, p, q, vp, vq, kappa, q1, q2, *, tol: float, dtype="float6
         raise ValueError(f"tol: must be positive, got {tol!r}")
     if len(p) == 0:
         return p, q, vp, vq
-    r = np.arange(len(p))
     for _ in range(4 * 64):  # each call shrinks by at least 2 while the floats can
-        longest = float(np.max(np.hypot(*(q - p).T)))
-        if longest <= tol:
+        length = np.hypot(*(q - p).T)
+        a = np.flatnonzero(length > tol)  # a bracket <= tol is done
+        if not a.size:
             return p, q, vp, vq
-        k = _sections(len(p), longest / tol)
-        t = np.arange(1, k) / k
-        pts = p[:, None, :] + t[None, :, None] * (q - p)[:, None, :]  # (m, k - 1, 2)
-        v = field_codes(field, pts[..., 0], pts[..., 1], kappa, q1, q2, dtype=dtype)
-        differs = np.concatenate([v != vp[:, None], np.ones((len(p), 1), bool)], axis=1)
-        i = differs.argmax(1)  # the first sample off vp's code (k - 1: q itself)
-        inner = i < k - 1
-        new_q = np.where(inner[:, None], pts[r, np.minimum(i, k - 2)], q)
-        vq = np.where(inner, v[r, np.minimum(i, k - 2)], vq).astype(np.int8)
-        p = np.where((i > 0)[:, None], pts[r, np.maximum(i - 1, 0)], p)
-        q = new_q
+        p[a], q[a], vq[a] = _section_step(field, p[a], q[a], vp[a], vq[a], kappa, q1, q2,
+                                          float(length[a].max()) / tol, dtype)  # fmt: skip
     raise RuntimeError(f"tol: brackets did not shrink to {tol!r} rad (float resolution)")
 
 

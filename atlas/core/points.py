@@ -332,6 +332,7 @@ def spectral_points(
     resolve: bool = True,
     max_resolve: int | None = None,
     chunk: int = CHUNK,
+    needed=None,
 ) -> Verdicts:
     """Verdicts for broadcastable arrays of points: numpy arrays of the broadcast shape by name,
     with the call's diagnostics in ``.stats`` (:class:`Verdicts`).
@@ -348,6 +349,14 @@ def spectral_points(
         Certified kernels (default) or the uncertified batched-``eig`` baseline.
     resolve : bool
         Settle ``UNDECIDED`` points exactly (at most ``max_resolve`` of them; the rest stay 3).
+    needed : callable, optional
+        ``needed(idx, verdicts, exact) -> bool mask``: which of the flat indices ``idx`` (points
+        some verdict of which is still undecided) the caller wants decided next, given the
+        verdict arrays so far (flat, by name).  Asked before tiers 2 and 3 (``exact`` False) and,
+        with ``exact`` True, in rounds of exact settlement until it wants none of the undecided
+        points not yet tried (e.g. one sample a bracket and round: a bisection's search,
+        :func:`atlas.core.brackets.bisect`).  The points it never wants stay undecided (counted
+        in ``stats["unneeded_points"]``); ``max_resolve`` then bounds each round.
     """
     names = tuple(names)
     bad = set(names) - set(SPECTRAL_NAMES)
@@ -371,8 +380,9 @@ def spectral_points(
     flags = [k for k in names if k != "spectral_abscissa"]
     undamped_q = (inputs.q1 == 0) & (inputs.q2 == 0)
     host = _host_limit(resolve, max_resolve)
+    keep = _needed_filter(needed, flags)
     out, open_idx, later = _fast_tiers(
-        inputs, shape, dtype, flags, undamped_q, counts, host_limit=host
+        inputs, shape, dtype, flags, undamped_q, counts, host_limit=host, keep=keep
     )
     if "spectral_abscissa" in names:
         out["spectral_abscissa"] = _abscissa(inputs, shape, dtype, chunk, undamped_q)
@@ -381,13 +391,47 @@ def spectral_points(
     und = np.logical_or.reduce(list(open_.values())) if flags else open_idx.astype(bool)
     counts["undecided_before"] = int(und.sum())
     if resolve and und.any():
-        _settle_exact(inputs, shape, out, flags, open_idx[und], max_resolve, counts)
+        _exact_rounds(inputs, shape, out, flags, open_idx[und], max_resolve, counts, keep)
     if later is not None:  # the later tiers were left to the exact tier; where it failed, they try
         still = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
         later(open_idx[np.logical_or.reduce(still)])
     after = [out[k].reshape(-1)[open_idx] == _UND for k in flags]
-    counts["undecided_after"] = int(np.logical_or.reduce(after).sum()) if flags else 0
+    after = np.logical_or.reduce(after) if flags else np.zeros(0, bool)
+    wanted = keep(open_idx[after], out, exact=False)
+    counts["undecided_after"] = int(wanted.sum())
+    counts["unneeded_points"] = int(wanted.size - wanted.sum())
     return Verdicts(out, counts)
+
+
+def _needed_filter(needed, flags):
+    """``keep(idx, verdicts, exact=False)``: the mask of the flat indices ``idx`` that
+    ``needed`` (the caller's, :func:`spectral_points`) wants decided next, all of them without
+    one (``exact``: for the next round of exact settlement, else for tiers 2 and 3)."""
+
+    def keep(idx, verdicts, exact=False):
+        if needed is None or not idx.size:
+            return np.ones(idx.size, bool)
+        flat = {k: verdicts[k].reshape(-1) for k in flags}
+        return np.asarray(needed(idx, flat, exact), bool).reshape(idx.shape)
+
+    return keep
+
+
+def _exact_rounds(inputs, shape, out, flags, idx, max_resolve, counts, keep):
+    """Tier 4 in rounds at the undecided flat indices ``idx``: each round settles the points
+    ``keep`` wants (:func:`_needed_filter`) that no round tried yet, until there are none (one
+    round, every point, without a ``needed``)."""
+    tried = np.zeros(idx.size, bool)
+    counts["exact_rounds"] = 0
+    while True:
+        still = np.logical_or.reduce([out[k].reshape(-1)[idx] == _UND for k in flags])
+        todo = np.flatnonzero(still & ~tried)
+        todo = todo[keep(idx[todo], out, exact=True)]
+        if not todo.size:
+            return
+        _settle_exact(inputs, shape, out, flags, idx[todo], max_resolve, counts)
+        tried[todo] = True
+        counts["exact_rounds"] += 1
 
 
 @contextlib.contextmanager
@@ -417,11 +461,12 @@ def _host_limit(resolve: bool, max_resolve) -> int:
     return max(fits, default=0)
 
 
-def _fast_tiers(inputs, shape, dtype, flags, undamped_q, counts, host_limit=0):
+def _fast_tiers(inputs, shape, dtype, flags, undamped_q, counts, host_limit=0, keep=None):
     """Tiers 1-3 (first pass, tier 2, enclosures) for the verdicts ``flags``; returns the verdict
     arrays, the flat indices the first pass left open (where every later tier works, and where
     any undecided point lies) and ``None``, or, when the first pass left at most ``host_limit``
-    points open, the later tiers not run (a function of flat indices, :data:`HOST_POINTS`)."""
+    points open, the later tiers not run (a function of flat indices, :data:`HOST_POINTS`).
+    ``keep`` (:func:`_needed_filter`) narrows the points each later tier sees."""
     if not flags:
         return {}, np.zeros(0, np.intp), None
     want_ss = "stable_SS" in flags
@@ -436,9 +481,13 @@ def _fast_tiers(inputs, shape, dtype, flags, undamped_q, counts, host_limit=0):
     open_idx = open_idx[np.logical_or.reduce(undecided)]
 
     def later_tiers(idx):  # every later tier works inside open_idx (small): no whole-grid pass
+        if keep is not None:
+            idx = idx[keep(idx, verdict)]
         tier2_idx = idx[later.reshape(-1)[idx]]
         _second_pass(inputs, shape, verdict, tier2_idx, counts)
         if want_ii:
+            if keep is not None:
+                idx = idx[keep(idx, verdict)]
             _roots_pass(inputs, shape, cons, stab, idx, counts)
 
     if open_idx.size <= host_limit:

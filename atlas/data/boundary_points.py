@@ -288,7 +288,9 @@ def _on_segments(xy, c: Curve) -> tuple[float, int, float, np.ndarray]:
     if len(c.vertices) < 2:
         return math.inf, -1, 0.0, np.asarray(xy, float)
     a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
-    img = a + (np.asarray(xy) - a + math.pi) % TWO_PI - math.pi  # per segment, nearest image
+    xy = np.asarray(xy, float)
+    near = a + (xy - a + math.pi) % TWO_PI - math.pi  # per segment, the nearest image
+    img = xy + TWO_PI * np.round((near - xy) / TWO_PI)  # as xy + 2 pi n: xy itself where n = 0
     t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
     dist = np.hypot(*(a + t[:, None] * d - img).T)
     k = int(dist.argmin())

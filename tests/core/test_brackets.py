@@ -98,3 +98,74 @@ def test_boundary_kind():
         "II_stability",
     ]
     assert brackets.boundary_kind("SS", 0, 2)[()] == "SS_stability"
+
+
+#: a bracket 1.4e-14 rad long across the II consistency boundary next to ``beta2 = beta1 + pi``
+#: at kappa 2, q 0.1 (met by a slice's bisection): no fast tier decides its inner points
+HARD_II = (
+    np.array([1.1069434970966943, 4.24853613984915]),
+    np.array([1.1069434970966843, 4.2485361398491595]),
+    (2.0, 0.1, 0.1),
+)
+
+
+def _counting_exact(monkeypatch) -> list:
+    """Patch the exact tier to record how many points each of its calls receives."""
+    sizes, resolve = [], exact.resolve
+
+    def counted(pts, names=None, **kw):
+        sizes.append(len(pts["c1"]))
+        return resolve(pts, names=names, **kw)
+
+    monkeypatch.setattr(exact, "resolve", counted)
+    return sizes
+
+
+def test_bisect_settles_a_search_not_every_sample(monkeypatch):
+    """A 64-section step of a bracket whose 63 samples all need the exact tier settles at most
+    7 of them (a bisection over the sample positions), and lands on the first change of code
+    that settling every sample finds (the codes change once along this bracket)."""
+    p, q, model = HARD_II
+    length = float(np.hypot(*(q - p)))
+    sizes = _counting_exact(monkeypatch)
+    pts = p + (np.arange(1, 64) / 64)[:, None] * (q - p)
+    every = brackets.field_codes("II", pts[:, 0], pts[:, 1], *model)
+    settled_all, sizes[:] = sum(sizes), []
+    first = int(np.argmax(every != 0))
+    assert (every[first:] != 0).all() and 0 < first  # one change: the reference is unique
+    P, Q, vp, vq = brackets.bisect("II", p[None], q[None], [0], [2], *model, tol=length / 60)
+    assert sum(sizes) <= 7 < settled_all
+    np.testing.assert_array_equal(P[0], pts[first - 1])
+    np.testing.assert_array_equal(Q[0], pts[first])
+    assert vq[0] == every[first]
+    assert _exact_code("II", *P[0], *model) == 0 and _exact_code("II", *Q[0], *model) == vq[0]
+
+
+def test_first_change_codes_mark_the_unsettled_samples(monkeypatch):
+    """``direction_codes`` with ``first_change`` settles a bisection's samples of a row and
+    marks the rest ``NO_CODE``; the settled ones equal the exact tier's codes."""
+    p, q, model = HARD_II
+    pts = p + (np.arange(1, 16) / 16)[:, None] * (q - p)
+    c1, s1 = contact_modes.direction(pts[:, 0])
+    c2, s2 = contact_modes.direction(pts[:, 1])
+    got = brackets.direction_codes("II", c1, s1, c2, s2, *model, first_change=np.array([0]))
+    known = got != brackets.NO_CODE
+    assert 2 <= known.sum() <= 5
+    want = [_exact_code("II", x, y, *model) for x, y in pts[known]]
+    assert got[known].tolist() == want
+
+
+def test_bisect_leaves_a_bracket_once_within_tol():
+    """A bracket already ``<= tol`` is returned as given (none of its samples, which only the
+    exact tier decides, is evaluated), while a longer one sharing the calls is shrunk to
+    ``tol``."""
+    p, q, model = HARD_II
+    u = (q - p) / np.hypot(*(q - p))
+    far_p, far_q = p - 1e-6 * u, q + 1e-6 * u
+    assert brackets.field_codes("II", *np.stack([far_p, far_q]).T, *model).tolist() == [0, 2]
+    P, Q, vp, vq = brackets.bisect(
+        "II", np.stack([p, far_p]), np.stack([q, far_q]), [0, 0], [2, 2], *model, tol=1e-9
+    )
+    np.testing.assert_array_equal(P[0], p)
+    np.testing.assert_array_equal(Q[0], q)
+    assert vq[0] == 2 and 1e-9 / 64 < np.hypot(*(Q[1] - P[1])) <= 1e-9

@@ -518,3 +518,35 @@ def test_host_first_settles_small_open_sets_exactly_until_the_later_tiers_have_r
     with points.host_first(128):
         warm = points.spectral_points(*some.values(), names=FLAGS)
     assert warm.stats["tier2_points"] == plain.stats["tier2_points"]
+
+
+def test_needed_leaves_unwanted_points_undecided():
+    """``needed`` narrows the later tiers: points it never wants stay undecided and are
+    counted; a point wanted in the exact rounds is settled as the exact tier alone settles it."""
+    from atlas.core.verdicts import UNDECIDED_FLAG
+
+    b1 = np.full(8, 1.1069434970966943) - np.arange(8) * 1.25e-15  # across an II boundary
+    b2 = np.full(8, 4.24853613984915) + np.arange(8) * 1.25e-15  # that no fast tier decides
+    c1, s1 = direction(b1)
+    c2, s2 = direction(b2)
+    model, names = (2.0, 0.1, 0.1), ("consistent_II", "stable_II")
+    full = points.spectral_points(c1, s1, c2, s2, *model, names=names)
+    none = points.spectral_points(
+        c1, s1, c2, s2, *model, names=names, needed=lambda idx, v, e: np.zeros(idx.size, bool)
+    )
+    open_ = np.flatnonzero(none["consistent_II"] == UNDECIDED_FLAG)
+    assert open_.size >= 4  # a hard case for the fast tiers
+    assert none.stats["exact_rounds"] == 0 and none.stats["tier2_points"] == 0
+    assert none.stats["unneeded_points"] == full.stats["undecided_before"] == open_.size
+    rounds = []
+
+    def one(idx, verdicts, exact_round):
+        rounds.append(exact_round)
+        return idx == open_[0]
+
+    got = points.spectral_points(c1, s1, c2, s2, *model, names=names, needed=one)
+    assert True in rounds and False in rounds
+    assert got.stats["exact_rounds"] == 1 and got.stats["unneeded_points"] == open_.size - 1
+    want = exact.point_spectral(*(float(v[open_[0]]) for v in (c1, s1, c2, s2)), *model)
+    assert got["consistent_II"][open_[0]] == want["consistent_II"]
+    assert (got["consistent_II"][open_[1:]] == UNDECIDED_FLAG).all()

@@ -206,3 +206,20 @@ def test_proven_points_lie_on_the_curves_at_every_chord(chord):
             if seg <= 2 * b.attrs["SS_cover_distance"]:
                 d = (c.vertices - (p.beta1, p.beta2) + PI) % (2 * PI) - PI
                 assert np.hypot(*d.T).min() <= bd.TOL / 2 or seg <= bd.TOL
+
+
+def test_nearest_segment_keeps_the_point_exact_off_the_seams():
+    """The image of a point on the torus is the point plus ``2 pi n``: the point itself where
+    no seam lies between it and the segment (``a + ((x - a + pi) mod 2 pi) - pi`` rounds ``x =
+    5.003289068692397`` to ``5.003289068692396`` with ``a = 5.017081365127511``: a proven
+    point spliced 1 ulp off its enclosure's midpoint, onto the other side of a root)."""
+    x, a = 5.003289068692397, 5.017081365127511
+    curve = bd.Curve(
+        "SS", "SS_stability", 1, 0, np.array([[a, a], [a - 0.03, a - 0.03]]),
+        np.full(2, 1e-10), True, 2.0, 0.1, 0.1,
+    )  # fmt: skip
+    dist, i, k, t, img = bp.nearest_segment((x, x), [curve])
+    assert (i, k) == (0, 0) and dist < 1e-15
+    assert img.tolist() == [x, x]
+    far = bp.nearest_segment((x - 2 * math.pi, x), [curve])[4]  # across a seam: shifted 2 pi
+    assert far.tolist() == [x - 2 * math.pi + 2 * math.pi, x]
