@@ -16,6 +16,11 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
   smooth branch through it (implicit function theorem), the two sectors on each side of the line
   reach the two neighbouring intervals, and both carry the same code: no code changes near ``r``
   off the line (proven);
+* ``not_boundary`` (SS) also where a coefficient of ``p`` (paper eq. 9) is negative at ``r`` (its
+  ball excludes 0): then it is negative on a neighbourhood of ``r``, and a polynomial whose roots
+  all have ``Re <= 0`` has no negative coefficient (a product of ``l + a`` and ``l^2 + 2 a l + b``
+  with ``a, b >= 0``), so every point there is SS unstable: one code, whatever boundary
+  polynomials vanish at ``r`` and however often (proven);
 * ``class_crossing``: ``r`` is a multiple of ``pi/2``, where class lines cross (a vertex of the
   closed-form class lines; the codes around it are not examined here);
 * ``undecided``: anything else (a multiple root, roots of two polynomials overlapping, or a
@@ -70,6 +75,15 @@ def _simple_single(fld, model, m, ball) -> bool:
         return vanishing == 1
 
 
+def _unstable_near(model, m, ball) -> bool:
+    """Whether a coefficient of ``p`` can be proven negative at the root ``ball`` [rad] of line
+    ``m`` (256-bit balls; module docstring)."""
+    with flint.ctx.workprec(256):
+        t = (ball / 2).tan()
+        polys = boundary_germs.coefficients_on_line(m, model)
+        return any(flint.arb_poly(list(a.coeffs()))(t) < 0 for a in polys)
+
+
 def _verdict(fld, model, m, ball, listed, others) -> str:
     """The verdict of one root (module docstring)."""
     if listed:
@@ -82,6 +96,8 @@ def _verdict(fld, model, m, ball, listed, others) -> str:
     if _at_crossing(ball):
         return "class_crossing"
     if None not in near and _simple_single(fld, model, m, ball):
+        return "not_boundary"
+    if fld == "SS" and _unstable_near(model, m, ball):
         return "not_boundary"
     return "undecided"
 

@@ -107,3 +107,43 @@ def test_undecided_roots_are_listed_as_points():
     assert all(not p.proven and math.isnan(p.uncertainty) for p in left)
     kinds = b.to_dataset()["point_kind"].values.tolist()
     assert kinds.count("undecided_line_root") == len(left)
+
+
+#: the issue's four slices and the paper's vanishing damping
+SLICES = [Q0, (0.5, 1e-6, 1e-6), DAMPED, (2.0, 0.05, 0.3), (7.3, 0.8, 0.02)]
+
+
+def _abscissa(b1, b2, model, dps=60):
+    """The largest real part of the roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)``
+    [rad], by mpmath at ``dps`` digits (an independent reference)."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        kappa, q1, q2 = (mpmath.mpf(v) for v in model)
+        b1, b2 = mpmath.mpf(b1), mpmath.mpf(b2)
+        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+        D = c1 * s2 - s1 * c2
+        coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
+                  kappa * D]  # fmt: skip
+        return max(mpmath.re(z) for z in mpmath.polyroots(coeffs, maxsteps=200, extraprec=200))
+
+
+@pytest.mark.parametrize("model", SLICES)
+def test_no_ss_root_is_left_undecided(model):
+    """Every root of the SS line restrictions has a decided verdict on the five slices (each had
+    two undecided: a double root, or three boundary polynomials vanishing at once on a
+    diagonal).  Each ``not_boundary`` root where several boundary polynomials vanish or one
+    vanishes twice is checked against mpmath at 60 digits: on a ring of radius 1e-7 rad around
+    it (24 points, none on the line) the largest real part is positive (SS unstable all round)."""
+    roots, _, verdicts = _account(model)
+    assert "undecided" not in verdicts
+    hard = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._simple_single("SS", model, m, ball):
+            continue
+        hard += 1
+        at, _ = _point(m, float(ball.mid()))
+        for a in (np.arange(24) + 0.5) * PI / 12:
+            x, y = at + 1e-7 * np.array([math.cos(a), math.sin(a)])
+            assert _abscissa(x, y, model) > 0, (m, float(ball.mid()), a)
+    assert hard >= 2
