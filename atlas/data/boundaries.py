@@ -642,7 +642,9 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
         counts, undecided = boundary_roots.ss_root_account(model, roots, dtype)
         attrs, pts = attrs | counts, pts + undecided
     else:
-        attrs |= boundary_roots.ii_root_account(model, roots)
+        counts, ii_points = boundary_roots.ii_root_account(model, roots)
+        pts = boundary_roots.superseded(pts, ii_points, cell) + ii_points
+        attrs |= counts | {"line_points": sum(p.proven for p in ii_points)}
     added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )
