@@ -113,9 +113,9 @@ def test_undecided_roots_are_listed_as_points():
 SLICES = [Q0, (0.5, 1e-6, 1e-6), DAMPED, (2.0, 0.05, 0.3), (7.3, 0.8, 0.02)]
 
 
-def _abscissa(b1, b2, model, dps=60):
-    """The largest real part of the roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)``
-    [rad], by mpmath at ``dps`` digits (an independent reference)."""
+def _roots(b1, b2, model, dps=60):
+    """The roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)`` [rad], by mpmath at ``dps``
+    digits (an independent reference)."""
     import mpmath
 
     with mpmath.workdps(dps):
@@ -125,7 +125,12 @@ def _abscissa(b1, b2, model, dps=60):
         D = c1 * s2 - s1 * c2
         coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
                   kappa * D]  # fmt: skip
-        return max(mpmath.re(z) for z in mpmath.polyroots(coeffs, maxsteps=200, extraprec=200))
+        return mpmath.polyroots(coeffs, maxsteps=200, extraprec=200)
+
+
+def _abscissa(b1, b2, model):
+    """The largest real part of the roots of ``p`` at ``(b1, b2)`` [rad] (:func:`_roots`)."""
+    return max(float(z.real) for z in _roots(b1, b2, model))
 
 
 @pytest.mark.parametrize("model", SLICES)
@@ -183,7 +188,7 @@ def _exact_ii(m, beta, e, model):
 def test_ii_points_are_stored_proven(model):
     """The II roots with verdict ``point`` are stored as proven points of field II (one per
     root, radius below 1e-13 rad) in the netCDF; the undecided ones as ``undecided_line_root``
-    points, not proven.  Independently, in the exact tier at rational points: 1e-6 rad before
+    points, not proven, and no estimated crossing of a class line is left.  Independently, in the exact tier at rational points: 1e-6 rad before
     and after each point along its line, at some offset ``2 atan(2^-k)`` off it (k = 40, 80,
     120, 160) on one side, the II codes differ."""
     g = np.arange(32) * 2 * PI / 32
@@ -194,6 +199,8 @@ def test_ii_points_are_stored_proven(model):
     left = [p for p in b.points if p.kind == "undecided_line_root"]
     assert len(left) == b.attrs["II_line_roots_undecided"]
     assert not any(p.proven for p in left)
+    line = ("crosses_class_line", "leaves_class_line")
+    assert not any(p.kind in line and not p.proven for p in b.points)  # estimates replaced
     ds = b.to_dataset()
     assert ((ds["point_proven"].values == 1) & (ds["point_field"].values == "II")).sum() >= len(ii)
     for p in ii:
@@ -214,3 +221,22 @@ def _line_of(x, y):
         if abs(y - m * PI / 2) < 1e-12 or (m == 0 and abs(y - 2 * PI) < 1e-12):
             return m + 5, x
     return (11 if abs((y - x + PI) % (2 * PI) - PI) < 1e-12 else 12), x
+
+
+def test_ii_roots_with_no_positive_root_of_p_are_decided():
+    """At q = 0 the II roots where no boundary polynomial vanishes simply but every coefficient
+    of ``p`` is positive are ``not_boundary`` (none was before); checked against mpmath at 60
+    digits: on a ring of radius 1e-7 rad around each (24 points) ``p`` has no real root ``l > 0``
+    (II inconsistent all round)."""
+    roots, _, verdicts = _account_ii(Q0)
+    assert verdicts.count("undecided") <= 12
+    hard = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._simple_single("II", Q0, m, ball):
+            continue
+        hard += 1
+        at, _ = _point(m, float(ball.mid()))
+        for a in (np.arange(24) + 0.5) * PI / 12:
+            zs = _roots(*(at + 1e-7 * np.array([math.cos(a), math.sin(a)])), Q0)
+            assert not any(abs(z.imag) < 1e-40 and z.real > 0 for z in zs), (m, a, zs)
+    assert hard >= 10
