@@ -43,6 +43,7 @@ from atlas.data.boundary_curves import Point
 __all__ = [
     "KINDS",
     "account_roots",
+    "attach_off_lines",
     "distinct",
     "ii_root_account",
     "ss_root_account",
@@ -231,3 +232,17 @@ def superseded(points, proven, reach) -> list[Point]:
         return bool((np.hypot(*np.minimum(d, 2 * math.pi - d).T) <= reach).any())
 
     return [p for p in points if p.proven or p.kind not in kinds or not near(p)]
+
+
+def attach_off_lines(curves, points, reach, within, near, tol) -> tuple[list, int]:
+    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into the curves not on
+    a class line only (the pieces on the lines end at their breaks already,
+    :mod:`atlas.data.boundary_cover`; a piece ending next to a point would be stretched over the
+    piece that reaches it).  Returns the curves (same order) and the number of splices."""
+    idx = [i for i, c in enumerate(curves) if not c.on_class_line]
+    got, n = boundary_points.attach_points([curves[i] for i in idx], points, reach, within, near,
+                                           tol)  # fmt: skip
+    out = list(curves)
+    for i, c in zip(idx, got):
+        out[i] = c
+    return out, n
