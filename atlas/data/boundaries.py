@@ -642,13 +642,16 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
         counts, undecided = boundary_roots.ss_root_account(model, roots, dtype)
         attrs, pts = attrs | counts, pts + undecided
     else:
-        attrs |= boundary_roots.ii_root_account(model, roots)
+        counts, ii_points = boundary_roots.ii_root_account(model, roots)
+        pts = boundary_roots.superseded(pts, ii_points, cell) + ii_points
+        attrs |= counts | {"line_points": sum(p.proven for p in ii_points)}
     added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )
     curves += added
     proven = [p for p in pts if p.proven]
-    curves, spliced = boundary_points.attach_points(curves, proven, tol, cell, 2 * distance, tol)
+    attach = boundary_points.attach_points if fld == "SS" else boundary_roots.attach_off_lines
+    curves, spliced = attach(curves, proven, tol, cell, 2 * distance, tol)
     reached = np.concatenate([polys.xy] + [c.vertices for c in added])
     max_bracket = float(polys.width.max(initial=0.0))
     if max_bracket > tol:  # bisect shrinks every bracket to <= tol

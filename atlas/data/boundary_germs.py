@@ -44,7 +44,14 @@ from atlas.core import brackets, exact
 from atlas.core import expressions as ex
 from atlas.data.boundary_points import TORUS_LINES, angle_from_tan_half, real_roots
 
-__all__ = ["boundary_polynomials", "clear", "germ_roots", "germs", "near_side_codes"]
+__all__ = [
+    "boundary_polynomials",
+    "clear",
+    "coefficients_on_line",
+    "germ_roots",
+    "germs",
+    "near_side_codes",
+]
 
 _CTX = flint.fmpq_mpoly_ctx.get(("t", "e", "l"), "lex")
 _T, _E, _L = _CTX.gens()
@@ -142,6 +149,23 @@ def _ii_polynomials(c1, s1, c2, s2, kappa, q1, q2) -> list:
         - 20 * W * W * _L**3
     )
     return [p.discriminant("l"), p.resultant(T, "l")]
+
+
+@functools.lru_cache(maxsize=16)
+def coefficients_on_line(m, model) -> tuple:
+    """``(a3, a2, a1, a0)`` of ``p`` (paper eq. 9) on class line ``m``, each as the numerator
+    (``flint.fmpq_poly`` in ``t``) of its restriction, over a positive denominator: the signs of
+    the coefficients along the line; ``model = (kappa, q1, q2)``."""
+    kappa, q1, q2 = (flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in model)
+    c1, s1, c2, s2 = _directions(m)
+    D = ex.det(c1, s1, c2, s2, sub=operator.sub)
+    comps = ex.coefficients(c1, s1, c2, s2, kappa, 1, q1, q2, D, sub=operator.sub)
+    out = []
+    for c in comps:
+        F = c.num if isinstance(c, _Rat2) else _CTX.from_dict({(0, 0, 0): c} if c else {})
+        row = {a: v for (a, b, _), v in zip(F.monoms(), F.coeffs()) if b == 0}
+        out.append(flint.fmpq_poly([row.get(a, 0) for a in range(max(row, default=-1) + 1)]))
+    return tuple(out)
 
 
 def boundary_polynomials(fld, m, model) -> tuple:

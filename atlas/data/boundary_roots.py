@@ -16,6 +16,14 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
   smooth branch through it (implicit function theorem), the two sectors on each side of the line
   reach the two neighbouring intervals, and both carry the same code: no code changes near ``r``
   off the line (proven);
+* ``not_boundary`` (SS) also where a coefficient of ``p`` (paper eq. 9) is negative at ``r`` (its
+  ball excludes 0): then it is negative on a neighbourhood of ``r``, and a polynomial whose roots
+  all have ``Re <= 0`` has no negative coefficient (a product of ``l + a`` and ``l^2 + 2 a l + b``
+  with ``a, b >= 0``), so every point there is SS unstable: one code, whatever boundary
+  polynomials vanish at ``r`` and however often (proven); II also where every coefficient of
+  ``p`` is positive at ``r`` or vanishes on the whole slice (``a3``, ``a1`` at ``q1 = q2 = 0``):
+  then ``p(l) > 0`` for ``l > 0`` on a neighbourhood of ``r``, no real root ``l > 0``, every
+  point there II inconsistent (proven);
 * ``class_crossing``: ``r`` is a multiple of ``pi/2``, where class lines cross (a vertex of the
   closed-form class lines; the codes around it are not examined here);
 * ``undecided``: anything else (a multiple root, roots of two polynomials overlapping, or a
@@ -32,7 +40,15 @@ import numpy as np
 from atlas.data import boundary_germs, boundary_points
 from atlas.data.boundary_curves import Point
 
-__all__ = ["KINDS", "account_roots", "distinct", "ii_root_account", "ss_root_account"]
+__all__ = [
+    "KINDS",
+    "account_roots",
+    "attach_off_lines",
+    "distinct",
+    "ii_root_account",
+    "ss_root_account",
+    "superseded",
+]
 
 #: the verdicts of :func:`account_roots`
 KINDS = ("point", "not_boundary", "class_crossing", "undecided")
@@ -70,20 +86,57 @@ def _simple_single(fld, model, m, ball) -> bool:
         return vanishing == 1
 
 
-def _verdict(fld, model, m, ball, listed, others) -> str:
-    """The verdict of one root (module docstring)."""
+def _unstable_near(model, m, ball) -> bool:
+    """Whether a coefficient of ``p`` can be proven negative at the root ``ball`` [rad] of line
+    ``m`` (256-bit balls; module docstring)."""
+    with flint.ctx.workprec(256):
+        t = (ball / 2).tan()
+        polys = boundary_germs.coefficients_on_line(m, model)
+        return any(flint.arb_poly(list(a.coeffs()))(t) < 0 for a in polys)
+
+
+def _inconsistent_near(model, m, ball) -> bool:
+    """Whether every coefficient of ``p`` can be proven positive at the root ``ball`` [rad] of
+    line ``m``, or vanishes on the whole slice (256-bit balls; module docstring)."""
+    undamped = model[1] == 0 and model[2] == 0
+    with flint.ctx.workprec(256):
+        t = (ball / 2).tan()
+        polys = boundary_germs.coefficients_on_line(m, model)
+        return all(
+            (undamped and k in (0, 2)) or flint.arb_poly(list(a.coeffs()))(t) > 0
+            for k, a in enumerate(polys)
+        )
+
+
+def _verdict(fld, model, m, ball, listed, others) -> tuple[str, tuple[bool, bool] | None]:
+    """The verdict of one root (module docstring) and, for a ``point`` found from the codes next
+    to the line, per side (``delta < 0``, ``> 0``) whether they change across the root."""
     if listed:
-        return "point"
+        return "point", None
     beta = float(ball.mid())
     h = 0.25 * _neighbours(beta, others)
     near = [boundary_germs.near_side_codes(fld, model, m, beta + s * h) for s in (-1, 1)]
     if None not in near and near[0][:2] != near[1][:2]:
-        return "point"
+        return "point", (near[0][0] != near[1][0], near[0][1] != near[1][1])
     if _at_crossing(ball):
-        return "class_crossing"
+        return "class_crossing", None
     if None not in near and _simple_single(fld, model, m, ball):
-        return "not_boundary"
-    return "undecided"
+        return "not_boundary", None
+    if fld == "SS" and _unstable_near(model, m, ball):
+        return "not_boundary", None
+    if fld == "II" and _inconsistent_near(model, m, ball):
+        return "not_boundary", None
+    return "undecided", None
+
+
+def _account(fld, model, roots, germ_roots, listed) -> list[tuple]:
+    """:func:`account_roots` with each verdict's side changes (:func:`_verdict`)."""
+    model = tuple(float(v) for v in model)
+    breaks = [*roots, *germ_roots]
+    return [
+        _verdict(fld, model, m, ball, bool(on), [float(b.mid()) for k, b, _ in breaks if k == m])
+        for (m, ball, _), on in zip(roots, listed)
+    ]
 
 
 def account_roots(fld, model, roots, germ_roots, listed) -> list[str]:
@@ -92,11 +145,16 @@ def account_roots(fld, model, roots, germ_roots, listed) -> list[str]:
     docstring); ``germ_roots``: the field's germ roots
     (:func:`atlas.data.boundary_germs.germ_roots`), breaks of the lines; ``listed``: per root,
     whether a proven point stands at it."""
-    model = tuple(float(v) for v in model)
-    breaks = [*roots, *germ_roots]
+    return [v for v, _ in _account(fld, model, roots, germ_roots, listed)]
+
+
+def _undecided(fld, model, roots, verdicts) -> list[Point]:
+    """The undecided roots as points (kind ``undecided_line_root``, not proven, at the root's
+    middle)."""
     return [
-        _verdict(fld, model, m, ball, bool(on), [float(b.mid()) for k, b, _ in breaks if k == m])
-        for (m, ball, _), on in zip(roots, listed)
+        Point(*_xy(m, float(ball.mid())), "undecided_line_root", math.nan, *model, field=fld)
+        for (m, ball, _), v in zip(roots, verdicts)
+        if v == "undecided"
     ]
 
 
@@ -111,12 +169,7 @@ def ss_root_account(model, germ_roots, dtype="float64") -> tuple[dict, list[Poin
     listed = (codes != codes[:, :, :1]).any(axis=(1, 2))
     verdicts = account_roots("SS", model, roots, germ_roots, listed)
     counts = {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
-    undecided = [
-        Point(*_xy(m, float(ball.mid())), "undecided_line_root", math.nan, *model, field="SS")
-        for (m, ball, _), v in zip(roots, verdicts)
-        if v == "undecided"
-    ]
-    return counts, undecided
+    return counts, _undecided("SS", model, roots, verdicts)
 
 
 def _xy(m, beta) -> tuple[float, float]:
@@ -138,10 +191,58 @@ def distinct(roots) -> list:
     return out
 
 
-def ii_root_account(model, germ_roots) -> dict:
+def ii_root_account(model, germ_roots) -> tuple[dict, list[Point]]:
     """Every distinct germ root of the II boundary polynomials on the class lines
-    (:func:`distinct`) with its verdict (:func:`account_roots`, none listed: the II points are
-    not stored): ``line_roots`` (the algebraic count) and ``line_roots_<verdict>``."""
+    (:func:`distinct`) with its verdict (:func:`account_roots`): ``line_roots`` (the algebraic
+    count) and ``line_roots_<verdict>``; and the points: each ``point`` proven (kind
+    ``crosses_class_line`` where the codes next to the line change across it on both sides,
+    else ``leaves_class_line``; the uncertainty bounds the distance to the true point as in
+    :func:`atlas.data.boundary_points.ss_line_points`), each undecided root not proven
+    (:func:`_undecided`)."""
+    model = tuple(float(v) for v in model)
     roots = distinct(germ_roots)
-    verdicts = account_roots("II", model, roots, germ_roots, [False] * len(roots))
-    return {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
+    found = _account("II", model, roots, germ_roots, [False] * len(roots))
+    verdicts = [v for v, _ in found]
+    points = [
+        Point(*_xy(m, float(ball.mid())), ("leaves_class_line", "crosses_class_line")[all(ch)],
+              _radius(m, ball), *model, proven=True, field="II")
+        for (m, ball, _), (v, ch) in zip(roots, found)
+        if v == "point"
+    ]  # fmt: skip
+    counts = {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
+    return counts, points + _undecided("II", model, roots, verdicts)
+
+
+def _radius(m, ball) -> float:
+    """A proven bound [rad] on the distance from the stated point of the root ``ball`` of line
+    ``m`` (:func:`_xy`) to the true one: the ball's radius plus the rounding of the
+    coordinates, times ``sqrt 2`` on a diagonal (both coordinates move)."""
+    return (float(ball.rad()) + 4 * math.ulp(2 * math.pi)) * (math.sqrt(2) if m >= 10 else 1.0)
+
+
+def superseded(points, proven, reach) -> list[Point]:
+    """``points`` without the estimated (not proven) ``leaves_class_line`` and
+    ``crosses_class_line`` points within ``reach`` [rad] of one of ``proven`` (the same point,
+    found from the algebra with a proven enclosure)."""
+    kinds = ("leaves_class_line", "crosses_class_line")
+    xy = np.array([[p.beta1, p.beta2] for p in proven if p.proven]).reshape(-1, 2)
+
+    def near(p):
+        d = np.abs(xy - (p.beta1, p.beta2))
+        return bool((np.hypot(*np.minimum(d, 2 * math.pi - d).T) <= reach).any())
+
+    return [p for p in points if p.proven or p.kind not in kinds or not near(p)]
+
+
+def attach_off_lines(curves, points, reach, within, near, tol) -> tuple[list, int]:
+    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into the curves not on
+    a class line only (the pieces on the lines end at their breaks already,
+    :mod:`atlas.data.boundary_cover`; a piece ending next to a point would be stretched over the
+    piece that reaches it).  Returns the curves (same order) and the number of splices."""
+    idx = [i for i, c in enumerate(curves) if not c.on_class_line]
+    got, n = boundary_points.attach_points([curves[i] for i in idx], points, reach, within, near,
+                                           tol)  # fmt: skip
+    out = list(curves)
+    for i, c in zip(idx, got):
+        out[i] = c
+    return out, n

@@ -64,7 +64,7 @@ def test_ii_roots_are_counted_once_with_a_verdict():
     """II: the germ roots of the discriminant and the tie resultant, each distinct root once
     (76 -> 72 at kappa 2, q 0.1), every one with a verdict."""
     germs = boundary_germs.germ_roots("II", DAMPED)
-    counts = boundary_roots.ii_root_account(DAMPED, germs)
+    counts, _ = boundary_roots.ii_root_account(DAMPED, germs)
     assert len(germs) == 76 and counts["line_roots"] == 72
     assert sum(counts[f"line_roots_{k}"] for k in boundary_roots.KINDS) == 72
 
@@ -107,3 +107,136 @@ def test_undecided_roots_are_listed_as_points():
     assert all(not p.proven and math.isnan(p.uncertainty) for p in left)
     kinds = b.to_dataset()["point_kind"].values.tolist()
     assert kinds.count("undecided_line_root") == len(left)
+
+
+#: the issue's four slices and the paper's vanishing damping
+SLICES = [Q0, (0.5, 1e-6, 1e-6), DAMPED, (2.0, 0.05, 0.3), (7.3, 0.8, 0.02)]
+
+
+def _roots(b1, b2, model, dps=60):
+    """The roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)`` [rad], by mpmath at ``dps``
+    digits (an independent reference)."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        kappa, q1, q2 = (mpmath.mpf(v) for v in model)
+        b1, b2 = mpmath.mpf(b1), mpmath.mpf(b2)
+        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+        D = c1 * s2 - s1 * c2
+        coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
+                  kappa * D]  # fmt: skip
+        return mpmath.polyroots(coeffs, maxsteps=200, extraprec=200)
+
+
+def _abscissa(b1, b2, model):
+    """The largest real part of the roots of ``p`` at ``(b1, b2)`` [rad] (:func:`_roots`)."""
+    return max(float(z.real) for z in _roots(b1, b2, model))
+
+
+@pytest.mark.parametrize("model", SLICES)
+def test_no_ss_root_is_left_undecided(model):
+    """Every root of the SS line restrictions has a decided verdict on the five slices (each had
+    two undecided: a double root, or three boundary polynomials vanishing at once on a
+    diagonal).  Each ``not_boundary`` root where several boundary polynomials vanish or one
+    vanishes twice is checked against mpmath at 60 digits: on a ring of radius 1e-7 rad around
+    it (24 points, none on the line) the largest real part is positive (SS unstable all round)."""
+    roots, _, verdicts = _account(model)
+    assert "undecided" not in verdicts
+    hard = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._simple_single("SS", model, m, ball):
+            continue
+        hard += 1
+        at, _ = _point(m, float(ball.mid()))
+        for a in (np.arange(24) + 0.5) * PI / 12:
+            x, y = at + 1e-7 * np.array([math.cos(a), math.sin(a)])
+            assert _abscissa(x, y, model) > 0, (m, float(ball.mid()), a)
+    assert hard >= 2
+
+
+def _unit(t):
+    """The exact unit direction ``(cos, sin)`` of the angle ``2 atan(t)``, ``t`` rational."""
+    return (1 - t * t) / (1 + t * t), 2 * t / (1 + t * t)
+
+
+def _turn(u, v):
+    return u[0] * v[0] - u[1] * v[1], u[0] * v[1] + u[1] * v[0]
+
+
+def _exact_ii(m, beta, e, model):
+    """The exact tier's II code at free angle ``beta`` [rad] of torus line ``m`` (``t`` the
+    float nearest ``tan(beta / 2)``), moved off the line by the angle ``2 atan(e)`` (the fixed
+    angle, or ``beta2`` on a diagonal), in rational arithmetic."""
+    from fractions import Fraction
+
+    from atlas.core import exact
+
+    free, off = _unit(Fraction(math.tan(0.5 * beta))), _unit(Fraction(e))
+    axis = [(1, 0), (0, 1), (-1, 0), (0, -1)]
+    if m < 5:
+        dirs = (*_turn(axis[m], off), *free)
+    elif m < 10:
+        dirs = (*free, *_turn(axis[m - 5], off))
+    else:
+        sign = 1 if m == 11 else -1
+        dirs = (*free, *_turn((sign * free[0], sign * free[1]), off))
+    v = exact.point_spectral(*dirs, *(Fraction(x) for x in model))
+    return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]
+
+
+@pytest.mark.parametrize("model", [Q0, DAMPED])
+def test_ii_points_are_stored_proven(model):
+    """The II roots with verdict ``point`` are stored as proven points of field II (one per
+    root, radius below 1e-13 rad) in the netCDF; the undecided ones as ``undecided_line_root``
+    points, not proven, and no estimated crossing of a class line is left.  Independently, in the exact tier at rational points: 1e-6 rad before
+    and after each point along its line, at some offset ``2 atan(2^-k)`` off it (k = 40, 80,
+    120, 160) on one side, the II codes differ."""
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, fields=("II",), check=0)
+    ii = [p for p in b.points if p.field == "II" and p.proven and p.kind.endswith("class_line")]
+    assert len(ii) == b.attrs["II_line_roots_point"] == b.attrs["II_line_points"] > 0
+    assert all(0 < p.uncertainty < 1e-13 for p in ii)
+    left = [p for p in b.points if p.kind == "undecided_line_root"]
+    assert len(left) == b.attrs["II_line_roots_undecided"]
+    assert not any(p.proven for p in left)
+    line = ("crosses_class_line", "leaves_class_line")
+    assert not any(p.kind in line and not p.proven for p in b.points)  # estimates replaced
+    ds = b.to_dataset()
+    assert ((ds["point_proven"].values == 1) & (ds["point_field"].values == "II")).sum() >= len(ii)
+    for p in ii:
+        m, beta = _line_of(p.beta1, p.beta2)
+        assert any(
+            _exact_ii(m, beta - 1e-6, e, model) != _exact_ii(m, beta + 1e-6, e, model)
+            for k in (40, 80, 120, 160)
+            for e in (2.0**-k, -(2.0**-k))
+        ), (p.beta1, p.beta2, p.kind)
+
+
+def _line_of(x, y):
+    """``(m, free angle)`` of the torus class line through ``(x, y)`` [rad] (the first one)."""
+    for m in range(4):
+        if abs(x - m * PI / 2) < 1e-12 or (m == 0 and abs(x - 2 * PI) < 1e-12):
+            return m, y
+    for m in range(4):
+        if abs(y - m * PI / 2) < 1e-12 or (m == 0 and abs(y - 2 * PI) < 1e-12):
+            return m + 5, x
+    return (11 if abs((y - x + PI) % (2 * PI) - PI) < 1e-12 else 12), x
+
+
+def test_ii_roots_with_no_positive_root_of_p_are_decided():
+    """At q = 0 the II roots where no boundary polynomial vanishes simply but every coefficient
+    of ``p`` is positive are ``not_boundary`` (none was before); checked against mpmath at 60
+    digits: on a ring of radius 1e-7 rad around each (24 points) ``p`` has no real root ``l > 0``
+    (II inconsistent all round)."""
+    roots, _, verdicts = _account_ii(Q0)
+    assert verdicts.count("undecided") <= 12
+    hard = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._simple_single("II", Q0, m, ball):
+            continue
+        hard += 1
+        at, _ = _point(m, float(ball.mid()))
+        for a in (np.arange(24) + 0.5) * PI / 12:
+            zs = _roots(*(at + 1e-7 * np.array([math.cos(a), math.sin(a)])), Q0)
+            assert not any(abs(z.imag) < 1e-40 and z.real > 0 for z in zs), (m, a, zs)
+    assert hard >= 10
