@@ -358,12 +358,7 @@ def spectral_points(
         :func:`atlas.core.brackets.bisect`).  The points it never wants stay undecided (counted
         in ``stats["unneeded_points"]``); ``max_resolve`` then bounds each round.
     """
-    names = tuple(names)
-    bad = set(names) - set(SPECTRAL_NAMES)
-    if bad:
-        raise ValueError(f"names: unknown output(s) {sorted(bad)}")
-    if method not in ("certified", "eig"):
-        raise ValueError(f"method: must be 'certified' or 'eig', not {method!r}")
+    names = _checked_names(names, method)
     dtype = np.dtype(dtype)
     inputs = Invariants(*(np.asarray(a, dtype) for a in (c1, s1, c2, s2, kappa, q1, q2)))
     shape = np.broadcast_shapes(*(a.shape for a in inputs))
@@ -401,6 +396,17 @@ def spectral_points(
     counts["undecided_after"] = int(wanted.sum())
     counts["unneeded_points"] = int(wanted.size - wanted.sum())
     return Verdicts(out, counts)
+
+
+def _checked_names(names, method) -> tuple[str, ...]:
+    """``names`` as a tuple, or a one-line ``ValueError`` for an unknown name or ``method``."""
+    names = tuple(names)
+    bad = set(names) - set(SPECTRAL_NAMES)
+    if bad:
+        raise ValueError(f"names: unknown output(s) {sorted(bad)}")
+    if method not in ("certified", "eig"):
+        raise ValueError(f"method: must be 'certified' or 'eig', not {method!r}")
+    return names
 
 
 def _needed_filter(needed, flags):
