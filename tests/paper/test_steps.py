@@ -1,0 +1,28 @@
+"""``atlas.paper.steps``: the steps of ``atlas paper`` and what its second process starts from."""
+
+import subprocess
+import sys
+
+from atlas.paper import runlog
+from atlas.paper.steps import Steps
+
+
+def test_a_step_is_announced_timed_and_logged(tmp_path):
+    said = []
+    step = Steps(said.append)
+    with runlog.RunLog(tmp_path) as log:
+        assert step("one", lambda: 7) == 7
+    assert said == ["one ...", f"one done in {step.timings['one']:.1f} s"]
+    assert f"step one seconds: {step.timings['one']:.3f}" in log.lines
+
+
+def test_the_driver_starts_its_second_process_before_importing_jax():
+    """``atlas paper`` spawns its second process before it imports its steps' modules, so both
+    import at once: the driver, the steps and the second process's module import no JAX, xarray
+    or matplotlib (counted in a fresh interpreter)."""
+    code = (
+        "import sys; import atlas.paper.run, atlas.paper.steps, atlas.paper.side_process; "
+        "print(sorted(m for m in ('jax', 'xarray', 'matplotlib') if m in sys.modules))"
+    )
+    got = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert got.stdout.strip() == "[]"
