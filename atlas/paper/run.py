@@ -13,7 +13,16 @@ from pathlib import Path
 
 from atlas.dynamics.lane_pool import check_workers
 from atlas.paper import side_process
-from atlas.paper.steps import Steps, dynamics, say_stderr, side_steps, sizes
+from atlas.paper.steps import (
+    Shared,
+    Steps,
+    dynamics,
+    notes,
+    say_stderr,
+    shared_steps,
+    side_steps,
+    sizes,
+)
 
 #: ``atomic_write_text``: from :mod:`atlas.data.io` on first use (module ``__getattr__``)
 __all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]  # noqa: F822
@@ -123,9 +132,9 @@ def run(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quick = quick or ci  # ci: the CI test's size (smallest grids)
-    side = (
-        side_process.start(side_steps, out, quick, ci, live=say is say_stderr) if jobs > 1 else None
-    )
+    shared = Shared()
+    live = say is say_stderr
+    side = side_process.start(side_steps, out, quick, ci, live, shared) if jobs > 1 else None
     try:  # the second process imports its steps' modules while this one imports its own
         from atlas.core.config import use_compile_cache
         from atlas.paper import runlog
@@ -134,7 +143,7 @@ def run(
         with runlog.RunLog(out):
             step = Steps(say)
             runlog.record("processes", jobs)
-            _run_steps(step, out, quick, ci, side)
+            _run_steps(step, out, quick, ci, side, shared)
             total = time.perf_counter() - t_all
             runlog.record("total seconds", total)
     finally:
@@ -143,10 +152,11 @@ def run(
     return dict(step.timings, total=total)
 
 
-def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side) -> None:
+def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side, shared: Shared) -> None:
     """The steps of :func:`run`, each file written into ``out``;
     :func:`atlas.paper.steps.side_steps` here, or in the second process ``side``
-    (:func:`atlas.paper.side_process.start`) if not ``None``."""
+    (:func:`atlas.paper.side_process.start`) if not ``None``: then the steps of ``shared`` it
+    has not claimed yet run here once this process's own steps are done."""
     from atlas.data.io import atomic_write_text
     from atlas.paper import audit, figures, plots, tables
 
@@ -165,14 +175,16 @@ def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side) -> None:
     )
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
     _outcome_map_step(step, out, quick, ds)
-    fig1_curves, models, notes = (
-        side_steps(step, out, quick, ci) if side is None else side_process.join(side, step)
-    )
+    if side is None:
+        fig1_curves, models = side_steps(step, out, quick, ci, shared)
+    else:
+        shared_steps(step, out, quick, ci, shared)
+        fig1_curves, models = side_process.join(side, step)
     step(
         "fig1_stability.png",
         lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
-    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds, models)
+    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes(quick), ds, models)
 
 
 def _outcome_map_step(step: Steps, out: Path, quick: bool, ds) -> None:

@@ -25,13 +25,13 @@ class _RemoteTraceback(Exception):
         return self.args[0]
 
 
-def start(steps, out, quick: bool, ci: bool, live: bool):
-    """Run ``steps(step, out, quick, ci)`` in a spawned process; ``live``: it prints its own
-    progress (else :func:`join` hands its messages to the calling run's ``say``)."""
+def start(steps, out, quick: bool, ci: bool, live: bool, *args):
+    """Run ``steps(step, out, quick, ci, *args)`` in a spawned process; ``live``: it prints its
+    own progress (else :func:`join` hands its messages to the calling run's ``say``)."""
     ctx = multiprocessing.get_context("spawn")
     receive, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(
-        target=_main, args=(send, steps, out, quick, ci, live), name="atlas-paper-steps"
+        target=_main, args=(send, steps, out, quick, ci, live, args), name="atlas-paper-steps"
     )
     proc.start()
     send.close()
@@ -88,7 +88,7 @@ def stop(side, grace: float = 10.0) -> None:
     receive.close()
 
 
-def _main(send, steps, out, quick, ci, live) -> None:
+def _main(send, steps, out, quick, ci, live, args) -> None:
     """The second process: the steps under a collecting run log; sends the result or the error."""
     from atlas.data import io
     from atlas.paper.steps import Steps, say_stderr
@@ -101,7 +101,7 @@ def _main(send, steps, out, quick, ci, live) -> None:
         step = Steps(say_stderr if live else said.append)
         use_compile_cache()
         with runlog.RunLog(None) as log:
-            result = steps(step, out, quick, ci)
+            result = steps(step, out, quick, ci, *args)
         send.send(("done", io.COMMITTED, result, step.timings, log.lines, said))
     except BaseException as e:  # noqa: BLE001 - every error goes to the calling run
         text = traceback.format_exc()

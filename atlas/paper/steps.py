@@ -1,5 +1,5 @@
-"""The steps of ``atlas paper``: :class:`Steps` times them, :func:`say_stderr` reports them, and
-:func:`side_steps` are those that need no other step's result.
+"""The steps of ``atlas paper``: :class:`Steps` times them, :func:`say_stderr` reports them,
+:func:`side_steps` and the :data:`SHARED` steps are those that need no other step's result.
 
 Light on purpose (no JAX, no xarray, no matplotlib at import; each step imports what it uses):
 the second process of a run (:mod:`atlas.paper.side_process`) starts from here, so the calling
@@ -12,7 +12,17 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["Steps", "dynamics", "say_stderr", "side_steps", "sizes"]
+__all__ = [
+    "SHARED",
+    "Shared",
+    "Steps",
+    "dynamics",
+    "notes",
+    "say_stderr",
+    "shared_steps",
+    "side_steps",
+    "sizes",
+]
 
 
 def say_stderr(msg: str) -> None:
@@ -56,14 +66,30 @@ def dynamics():
     return figures_dynamics, []
 
 
-def side_steps(step: Steps, out: Path, quick: bool, ci: bool):
-    """The steps that need no other step's result: Fig. 1 over every model and at other models,
-    the boundary curves, Fig. 1's classes, the realisability search, the ladder, Fig. 2 and the
-    outcome distribution.  Returns the curves of Fig. 1's slice, the model-dependence shares and
-    the README notes."""
-    from atlas.paper import figure_boundaries, figure_ladder, figure_models, figures, plots
+class Shared:
+    """The steps either process may run (:data:`SHARED`), each claimed once: ``claim()`` gives
+    the index of the next unclaimed one (``len(SHARED)`` when none is left).  A counter in
+    shared memory: the second process gets it when it is spawned, so whichever process is free
+    first takes the next step and the two halves end together."""
 
-    n_var = sizes(quick, ci)[1]
+    def __init__(self):
+        import multiprocessing
+
+        self._next = multiprocessing.get_context("spawn").Value("i", 0)
+
+    def claim(self) -> int:
+        with self._next.get_lock():
+            i = self._next.value
+            self._next.value = i + 1
+        return i
+
+
+def side_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared):
+    """The steps that need no other step's result and give one: Fig. 1 over every model and the
+    boundary curves, then the :data:`SHARED` steps ``shared`` leaves.  Returns the curves of
+    Fig. 1's slice and the model-dependence shares."""
+    from atlas.paper import figure_boundaries, figure_models
+
     (models,) = step(
         "fig1_models.png",
         lambda: figure_models.plot_model_dependence(
@@ -72,6 +98,31 @@ def side_steps(step: Steps, out: Path, quick: bool, ci: bool):
             boxes=figure_models.BOXES[:1],
         ),
     )
+    curves = step(
+        "fig1_boundaries.png",
+        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
+    )
+    shared_steps(step, out, quick, ci, shared)
+    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0]), models
+
+
+def shared_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared) -> None:
+    """The :data:`SHARED` steps left in ``shared``, one at a time until none is left."""
+    while (i := shared.claim()) < len(SHARED):
+        SHARED[i](step, out, quick, ci)
+
+
+def notes(quick: bool) -> list[str]:
+    """The README notes on Fig. 2 (skipped in quick mode, or not made)."""
+    dyn, said = dynamics()
+    return said + (["fig2.png skipped in quick mode (simulation)."] if dyn and quick else [])
+
+
+def _variants(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    """Fig. 1 at other models (:data:`atlas.paper.figures.VARIANTS`)."""
+    from atlas.paper import figures, plots
+
+    n_var = sizes(quick, ci)[1]
     maps = step(
         "fig1 variants (compute)",
         lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
@@ -80,34 +131,38 @@ def side_steps(step: Steps, out: Path, quick: bool, ci: bool):
         "fig1_stability_variants.png",
         lambda: plots.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
     )
-    curves = step(
-        "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
-    )
-    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
-    step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
-    step(
-        "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
-    )
-    notes = _dynamics_steps(step, out, quick)
-    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0]), models, notes
 
 
-def _dynamics_steps(step: Steps, out: Path, quick: bool) -> list[str]:
-    """Fig. 2 (not in quick mode) and the outcome distribution, if
-    :mod:`atlas.paper.figures_dynamics` imports; returns the README notes."""
-    dyn, notes = dynamics()
-    if dyn is not None and quick:
-        notes.append("fig2.png skipped in quick mode (simulation).")
-    elif dyn is not None:
-        step("fig2.png", lambda: dyn.plot_fig2(out))
+def _distribution(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    """The outcome distribution (if :mod:`atlas.paper.figures_dynamics` imports)."""
+    dyn, _ = dynamics()
     if dyn is not None:
         n, runs = dyn.PAPER_DISTRIBUTION[not quick]
-        step(
-            "outcome_distribution.png",
-            lambda: dyn.outcome_distribution_files(out, n, runs),
-        )
-    return notes
+        step("outcome_distribution.png", lambda: dyn.outcome_distribution_files(out, n, runs))
+
+
+def _fig2(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    """Fig. 2's simulations (not in quick mode)."""
+    dyn, _ = dynamics()
+    if dyn is not None and not quick:
+        step("fig2.png", lambda: dyn.plot_fig2(out))
+
+
+def _classes(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    from atlas.paper import plots
+
+    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
+
+
+def _realisability(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
+
+
+def _ladder(step: Steps, out: Path, quick: bool, ci: bool) -> None:
+    from atlas.paper import figure_ladder
+
+    n = 41 if quick else 181
+    step("ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=n))
 
 
 def _write_realisability(path) -> None:
@@ -119,3 +174,8 @@ def _write_realisability(path) -> None:
     for key in ("seconds_search", "seconds_verify"):
         runlog.record(f"realisability {key}", stats[key])
     atomic_write_text(path, realisability.markdown(found, stats))
+
+
+#: the steps either process may run (each writes its files and gives nothing to another step),
+#: the longest first so that the last one claimed is short
+SHARED = (_distribution, _variants, _classes, _fig2, _realisability, _ladder)

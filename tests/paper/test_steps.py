@@ -3,8 +3,8 @@
 import subprocess
 import sys
 
-from atlas.paper import runlog
-from atlas.paper.steps import Steps
+from atlas.paper import runlog, side_process
+from atlas.paper.steps import Shared, Steps
 
 
 def test_a_step_is_announced_timed_and_logged(tmp_path):
@@ -26,3 +26,19 @@ def test_the_driver_starts_its_second_process_before_importing_jax():
     )
     got = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert got.stdout.strip() == "[]"
+
+
+def _claim_many(step, out, quick, ci, shared):
+    return [shared.claim() for _ in range(200)]
+
+
+def test_each_shared_step_is_claimed_once_by_the_two_processes(tmp_path):
+    """Both processes claim from one :class:`Shared` at once: every index is given exactly once."""
+    shared = Shared()
+    side = side_process.start(_claim_many, tmp_path, True, False, False, shared)
+    try:
+        here = [shared.claim() for _ in range(200)]
+        there = side_process.join(side, Steps(lambda m: None))
+    finally:
+        side_process.stop(side)
+    assert sorted(here + there) == list(range(400))
