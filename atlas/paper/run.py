@@ -123,19 +123,32 @@ def run(
     others (:func:`atlas.paper.steps.side_steps`) run in a second process beside the rest
     (:mod:`atlas.paper.side_process`), started before this one imports its own steps' modules;
     the files are the same bytes either way.  Returns a dict ``{step: seconds}``; also writes
-    ``out/README.md`` listing the files.  The files are a pure function of the code and ``quick`` / ``ci``: dates,
-    seconds, host and command line go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
+    ``out/README.md`` listing the files.  The files are a pure function of the code and
+    ``quick`` / ``ci``: dates, seconds, host and command line go to ``out/run.log``
+    (:mod:`atlas.paper.runlog`).
     """
     jobs = min(2, check_workers(jobs, "jobs"))
-    t_all = time.perf_counter()
     say = progress or say_stderr
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quick = quick or ci  # ci: the CI test's size (smallest grids)
-    shared = Shared()
-    live = say is say_stderr
-    side = side_process.start(side_steps, out, quick, ci, live, shared) if jobs > 1 else None
-    try:  # the second process imports its steps' modules while this one imports its own
+    with Shared() as shared:
+        total, step = _run_processes(out, quick, ci, jobs, shared, say)
+    say(f"all done in {total:.1f} s -> {out}")
+    return dict(step.timings, total=total)
+
+
+def _run_processes(out: Path, quick: bool, ci: bool, jobs: int, shared: Shared, say):
+    """:func:`_run_steps` under the run log, in ``jobs`` processes: the second one spawned
+    before this one imports what its own steps use, so both import at once.  Returns the
+    seconds and the :class:`Steps`."""
+    t_all = time.perf_counter()
+    side = (
+        side_process.start(side_steps, out, quick, ci, say is say_stderr, shared)
+        if jobs > 1
+        else None
+    )
+    try:
         from atlas.core.config import use_compile_cache
         from atlas.paper import runlog
 
@@ -148,8 +161,7 @@ def run(
             runlog.record("total seconds", total)
     finally:
         side_process.stop(side)
-    say(f"all done in {total:.1f} s -> {out}")
-    return dict(step.timings, total=total)
+    return total, step
 
 
 def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side, shared: Shared) -> None:

@@ -8,7 +8,10 @@ run can spawn it before it imports its own steps' modules, and both import at on
 
 from __future__ import annotations
 
+import os
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -68,20 +71,32 @@ def dynamics():
 
 class Shared:
     """The steps either process may run (:data:`SHARED`), each claimed once: ``claim()`` gives
-    the index of the next unclaimed one (``len(SHARED)`` when none is left).  A counter in
-    shared memory: the second process gets it when it is spawned, so whichever process is free
-    first takes the next step and the two halves end together."""
+    the index of the next unclaimed one (``len(SHARED)`` and beyond when none is left), so
+    whichever process is free first takes the next step and the two halves end together.
+
+    A claim is a file created exclusively (``O_EXCL``) in a private temporary directory: atomic
+    between processes, no lock (a lock of a spawned process is a semaphore the interpreter
+    reports as leaked at exit).  ``with Shared() as shared:`` removes the directory at the end.
+    """
 
     def __init__(self):
-        import multiprocessing
-
-        self._next = multiprocessing.get_context("spawn").Value("i", 0)
+        self.path = tempfile.mkdtemp(prefix="atlas-paper-steps-")
+        self._next = 0
 
     def claim(self) -> int:
-        with self._next.get_lock():
-            i = self._next.value
-            self._next.value = i + 1
-        return i
+        while True:
+            i, self._next = self._next, self._next + 1
+            try:
+                os.close(os.open(os.path.join(self.path, str(i)), os.O_CREAT | os.O_EXCL))
+            except FileExistsError:  # the other process took it
+                continue
+            return i
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        shutil.rmtree(self.path, ignore_errors=True)
 
 
 def side_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared):

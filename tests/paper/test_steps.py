@@ -1,5 +1,6 @@
 """``atlas.paper.steps``: the steps of ``atlas paper`` and what its second process starts from."""
 
+import os
 import subprocess
 import sys
 
@@ -34,11 +35,12 @@ def _claim_many(step, out, quick, ci, shared):
 
 def test_each_shared_step_is_claimed_once_by_the_two_processes(tmp_path):
     """Both processes claim from one :class:`Shared` at once: every index is given exactly once."""
-    shared = Shared()
-    side = side_process.start(_claim_many, tmp_path, True, False, False, shared)
-    try:
-        here = [shared.claim() for _ in range(200)]
-        there = side_process.join(side, Steps(lambda m: None))
-    finally:
-        side_process.stop(side)
+    with Shared() as shared:
+        side = side_process.start(_claim_many, tmp_path, True, False, False, shared)
+        try:
+            here = [shared.claim() for _ in range(200)]
+            there = side_process.join(side, Steps(lambda m: None))
+        finally:
+            side_process.stop(side)
     assert sorted(here + there) == list(range(400))
+    assert not os.path.exists(shared.path)
