@@ -8,24 +8,24 @@ set it to ``0`` to disable) so repeated runs skip the ~20 s compile of each kern
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
-from atlas.core import config
-from atlas.core.config import use_compile_cache
-from atlas.data.io import atomic_path, atomic_write_text
 from atlas.dynamics.lane_pool import check_workers
-from atlas.paper import (
-    figure_boundaries,
-    figure_ladder,
-    figure_models,
-    realisability,
-    runlog,
-    side_process,
+from atlas.paper import side_process
+from atlas.paper.steps import (
+    Shared,
+    Steps,
+    dynamics,
+    notes,
+    say_stderr,
+    shared_steps,
+    side_steps,
+    sizes,
 )
 
-__all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]
+#: ``atomic_write_text``: from :mod:`atlas.data.io` on first use (module ``__getattr__``)
+__all__ = ["FILES", "FIG2_FILES", "files", "run", "atomic_write_text", "write_netcdf"]  # noqa: F822
 
 #: the files Fig. 2's simulations add (not in quick mode)
 FIG2_FILES = ("fig2.md", "fig2.png")
@@ -64,10 +64,24 @@ REFERENCE = (
 )
 
 
+def __getattr__(name: str):
+    """``atomic_write_text`` (:mod:`atlas.data.io`), imported on first use: this module imports
+    no JAX until :func:`run` has started its second process."""
+    if name == "atomic_write_text":
+        from atlas.data.io import atomic_write_text
+
+        return atomic_write_text
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def write_netcdf(ds, path, call: str = "atlas.paper.run") -> Path:
     """Atomic netCDF4 write with the SPEC §2 encodings (no ``_FillValue`` on ints or coords);
     ``history`` is ``call`` (no time stamp: :mod:`atlas.paper.runlog`)."""
     import numpy as np
+
+    from atlas.core import config
+    from atlas.data.io import atomic_path
+    from atlas.paper import runlog
 
     ds = runlog.fixed(ds, Path(path).name)
     ds.attrs.update(
@@ -98,14 +112,6 @@ def write_netcdf(ds, path, call: str = "atlas.paper.run") -> Path:
     return path
 
 
-def _write_realisability(path) -> None:
-    """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
-    found, stats = realisability.search(1 << 19)
-    for key in ("seconds_search", "seconds_verify"):
-        runlog.record(f"realisability {key}", stats[key])
-    atomic_write_text(path, realisability.markdown(found, stats))
-
-
 def run(
     out: str = "outputs", quick: bool = False, progress=None, ci: bool = False, jobs=None
 ) -> dict:
@@ -114,151 +120,89 @@ def run(
 
     ``jobs``: processes (1 or 2; default: 2 where two cores are idle,
     :func:`atlas.dynamics.lane_pool.usable_cores`).  With 2, the steps that need nothing from the
-    others (:func:`_side_steps`) run in a second process beside the rest
-    (:mod:`atlas.paper.side_process`); the files are the same bytes either way.  Returns a dict ``{step: seconds}``; also writes ``out/README.md``
-    listing the files.  The files are a pure function of the code and ``quick`` / ``ci``: dates,
-    seconds, host and command line go to ``out/run.log`` (:mod:`atlas.paper.runlog`).
+    others (:func:`atlas.paper.steps.side_steps`) run in a second process beside the rest
+    (:mod:`atlas.paper.side_process`), started before this one imports its own steps' modules;
+    the files are the same bytes either way.  Returns a dict ``{step: seconds}``; also writes
+    ``out/README.md`` listing the files.  The files are a pure function of the code and
+    ``quick`` / ``ci``: dates, seconds, host and command line go to ``out/run.log``
+    (:mod:`atlas.paper.runlog`).
     """
     jobs = min(2, check_workers(jobs, "jobs"))
-    use_compile_cache()
     say = progress or say_stderr
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    with runlog.RunLog(out):
-        step = Steps(say)
-        t_all = time.perf_counter()
-        runlog.record("processes", jobs)
-        _run_steps(step, out, quick or ci, ci, jobs)  # ci: the CI test's size (smallest grids)
-        total = time.perf_counter() - t_all
-        runlog.record("total seconds", total)
+    quick = quick or ci  # ci: the CI test's size (smallest grids)
+    with Shared() as shared:
+        total, step = _run_processes(out, quick, ci, jobs, shared, say)
     say(f"all done in {total:.1f} s -> {out}")
     return dict(step.timings, total=total)
 
 
-def say_stderr(msg: str) -> None:
-    """The default progress: ``[atlas paper] msg`` on standard error."""
-    print(f"[atlas paper] {msg}", file=sys.stderr, flush=True)
-
-
-def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, jobs: int) -> None:
-    """The steps of :func:`run`, each file written into ``out``; :func:`_side_steps` in a second
-    process when ``jobs`` is 2."""
-    from atlas.paper import audit, figures, plots, tables
-
-    n_map, n_var = _sizes(quick, ci)
-    live = step.say is say_stderr
-    side = side_process.start(_side_steps, out, quick, ci, live) if jobs > 1 else None
+def _run_processes(out: Path, quick: bool, ci: bool, jobs: int, shared: Shared, say):
+    """:func:`_run_steps` under the run log, in ``jobs`` processes: the second one spawned
+    before this one imports what its own steps use, so both import at once.  Returns the
+    seconds and the :class:`Steps`."""
+    t_all = time.perf_counter()
+    side = (
+        side_process.start(side_steps, out, quick, ci, say is say_stderr, shared)
+        if jobs > 1
+        else None
+    )
     try:
-        rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
-        step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
-        step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
-        step("table2.png", lambda: plots.plot_table2(out / "table2.png", rows))
-        ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
-        fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
-        call = f"atlas.paper.run(quick={quick}, ci={ci})"
-        step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
-        claims = step(
-            "audit (compute)",
-            lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
-        )
-        step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
-        _outcome_map_step(step, out, quick, ds)
-        fig1_curves, models, notes = (
-            _side_steps(step, out, quick, ci) if side is None else side_process.join(side, step)
-        )
+        from atlas.core.config import use_compile_cache
+        from atlas.paper import runlog
+
+        use_compile_cache()
+        with runlog.RunLog(out):
+            step = Steps(say)
+            runlog.record("processes", jobs)
+            _run_steps(step, out, quick, ci, side, shared)
+            total = time.perf_counter() - t_all
+            runlog.record("total seconds", total)
     finally:
         side_process.stop(side)
+    return total, step
+
+
+def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side, shared: Shared) -> None:
+    """The steps of :func:`run`, each file written into ``out``;
+    :func:`atlas.paper.steps.side_steps` here, or in the second process ``side``
+    (:func:`atlas.paper.side_process.start`) if not ``None``: then the steps of ``shared`` it
+    has not claimed yet run here once this process's own steps are done."""
+    from atlas.data.io import atomic_write_text
+    from atlas.paper import audit, figures, plots, tables
+
+    n_map, n_var = sizes(quick, ci)
+    rows = step("table2", lambda: tables.table2(n=96, per_class=8 if quick else 24))
+    step("table2.md", lambda: atomic_write_text(out / "table2.md", tables.to_markdown(rows)))
+    step("table2.csv", lambda: atomic_write_text(out / "table2.csv", tables.to_csv(rows)))
+    step("table2.png", lambda: plots.plot_table2(out / "table2.png", rows))
+    ds = step("fig1 map (compute)", lambda: figures.stability_map(n_map, 0.5, 0.0, 0.0))
+    fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
+    call = f"atlas.paper.run(quick={quick}, ci={ci})"
+    step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
+    claims = step(
+        "audit (compute)",
+        lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
+    )
+    step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
+    _outcome_map_step(step, out, quick, ds)
+    if side is None:
+        fig1_curves, models = side_steps(step, out, quick, ci, shared)
+    else:
+        shared_steps(step, out, quick, ci, shared)
+        fig1_curves, models = side_process.join(side, step)
     step(
         "fig1_stability.png",
         lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
-    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes, ds, models)
-
-
-def _sizes(quick: bool, ci: bool) -> tuple[int, int]:
-    """Cells per axis of the Fig. 1 map and of its variants (odd: no cell on beta1 = beta1*)."""
-    return (41, 41) if ci else (121, 61) if quick else (361, 201)
-
-
-def _side_steps(step: Steps, out: Path, quick: bool, ci: bool):
-    """The steps that need no other step's result: Fig. 1 over every model and at other models,
-    the boundary curves, Fig. 1's classes, the realisability search, the ladder, Fig. 2 and the
-    outcome distribution.  Returns the curves of Fig. 1's slice, the model-dependence shares and
-    the README notes."""
-    from atlas.paper import figures, plots
-
-    n_var = _sizes(quick, ci)[1]
-    (models,) = step(
-        "fig1_models.png",
-        lambda: figure_models.plot_model_dependence(
-            out / "fig1_models.png",
-            n=figure_models.N_MODELS[ci + quick],
-            boxes=figure_models.BOXES[:1],
-        ),
-    )
-    maps = step(
-        "fig1 variants (compute)",
-        lambda: [figures.stability_map(n_var, *v) for v in figures.VARIANTS],
-    )
-    step(
-        "fig1_stability_variants.png",
-        lambda: plots.plot_fig1_variants(out / "fig1_stability_variants.png", maps),
-    )
-    curves = step(
-        "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
-    )
-    step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
-    step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
-    step(
-        "ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=41 if quick else 181)
-    )
-    dyn, notes = _dynamics()
-    if dyn is not None and quick:
-        notes.append("fig2.png skipped in quick mode (simulation).")
-    elif dyn is not None:
-        step("fig2.png", lambda: dyn.plot_fig2(out))
-    if dyn is not None:
-        n, runs = dyn.PAPER_DISTRIBUTION[not quick]
-        step(
-            "outcome_distribution.png",
-            lambda: dyn.outcome_distribution_files(out, n, runs),
-        )
-    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0]), models, notes
-
-
-class Steps:
-    """The steps of :func:`run`: ``step(name, fn)`` announces ``name``, calls ``fn`` and records its
-    wall time [s] in ``timings``."""
-
-    def __init__(self, say):
-        self.say = say
-        self.timings: dict[str, float] = {}
-
-    def __call__(self, name, fn):
-        self.say(f"{name} ...")
-        t = time.perf_counter()
-        res = fn()
-        self.timings[name] = time.perf_counter() - t
-        runlog.record(f"step {name} seconds", self.timings[name])
-        self.say(f"{name} done in {self.timings[name]:.1f} s")
-        return res
-
-
-def _dynamics():
-    """:mod:`atlas.paper.figures_dynamics` and no note, or ``None`` and the README note saying
-    why it is missing (it is optional here)."""
-    try:
-        from atlas.paper import figures_dynamics
-    except ImportError as e:  # another module of the package; optional here
-        return None, [f"fig2.png not made: atlas.paper.figures_dynamics not importable ({e})."]
-    return figures_dynamics, []
+    _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes(quick), ds, models)
 
 
 def _outcome_map_step(step: Steps, out: Path, quick: bool, ds) -> None:
     """The outcome map beside the Fig. 1 map ``ds``, if :mod:`atlas.paper.figures_dynamics`
-    imports (else nothing: :func:`_side_steps` gives the note)."""
-    dyn, _ = _dynamics()
+    imports (else nothing: :func:`atlas.paper.steps.side_steps` gives the note)."""
+    dyn, _ = dynamics()
     if dyn is not None:
         step(
             "outcome_map.nc",
@@ -277,6 +221,9 @@ def _audit_counts(claims) -> dict:
 def _write_readme(out, quick, n_map, n_var, counts, notes, ds, models):
     """``out/README.md``: how the files were made, their sizes, the figures inline (no dates or
     seconds: those are in ``run.log``)."""
+    from atlas.data.io import atomic_write_text
+    from atlas.paper import runlog
+
     lines = [
         "# Regenerated figures and tables (`atlas paper`)",
         "",
@@ -303,6 +250,8 @@ def _write_readme(out, quick, n_map, n_var, counts, notes, ds, models):
 
 def _models_section(models) -> list[str]:
     """README section: the model-dependence panel and the share of the plane in each region."""
+    from atlas.paper import figure_models
+
     return [
         "## Fig. 1 plane over every contact model",
         "",
@@ -321,12 +270,14 @@ def _models_section(models) -> list[str]:
 def _file_rows(out: Path) -> list[str]:
     """README table rows ``| file | size |`` of the files in ``out`` but the README, the run
     log and ``atlas bench``'s."""
+    from atlas.paper.runlog import LOG
+
     files = sorted(
         p.name
         for p in out.iterdir()
         if p.is_file()
         and not p.name.startswith("bench")
-        and p.name not in ("README.md", runlog.LOG)
+        and p.name not in ("README.md", LOG)
         and ".tmp" not in p.name
     )
     return [f"| [{f}]({f}) | {(out / f).stat().st_size / 1024:.0f} kB |" for f in files]

@@ -4,7 +4,8 @@
 waits for its result and folds its step timings, run-log lines and (when the run is not printing
 live) its messages into the calling run, :func:`stop` ends it if the calling run failed first (an interrupt, which it answers with
 the files it completed, as an interrupted ``atlas paper`` names them).
-The files the group writes are written atomically by its steps, as in one process.
+The files the group writes are written atomically by its steps, as in one process.  This module
+imports no JAX until it is used (the calling run starts its second process first).
 """
 
 from __future__ import annotations
@@ -13,9 +14,6 @@ import multiprocessing
 import os
 import signal
 import traceback
-
-from atlas.data import io
-from atlas.paper import runlog
 
 __all__ = ["start", "join", "stop"]
 
@@ -27,13 +25,13 @@ class _RemoteTraceback(Exception):
         return self.args[0]
 
 
-def start(steps, out, quick: bool, ci: bool, live: bool):
-    """Run ``steps(step, out, quick, ci)`` in a spawned process; ``live``: it prints its own
-    progress (else :func:`join` hands its messages to the calling run's ``say``)."""
+def start(steps, out, quick: bool, ci: bool, live: bool, *args):
+    """Run ``steps(step, out, quick, ci, *args)`` in a spawned process; ``live``: it prints its
+    own progress (else :func:`join` hands its messages to the calling run's ``say``)."""
     ctx = multiprocessing.get_context("spawn")
     receive, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(
-        target=_main, args=(send, steps, out, quick, ci, live), name="atlas-paper-steps"
+        target=_main, args=(send, steps, out, quick, ci, live, args), name="atlas-paper-steps"
     )
     proc.start()
     send.close()
@@ -43,6 +41,9 @@ def start(steps, out, quick: bool, ci: bool, live: bool):
 def join(side, step):
     """The result of the steps of ``side`` (:func:`start`); their timings go into ``step``, their
     run-log lines into the active :class:`atlas.paper.runlog.RunLog`; their error is raised here."""
+    from atlas.data import io
+    from atlas.paper import runlog
+
     proc, receive = side
     try:
         kind, committed, *got = receive.recv()
@@ -71,6 +72,8 @@ def stop(side, grace: float = 10.0) -> None:
     ``grace`` seconds [s], a ``SIGTERM``."""
     if side is None:
         return
+    from atlas.data import io
+
     proc, receive = side
     if proc.is_alive() and proc.pid is not None:
         try:
@@ -85,19 +88,20 @@ def stop(side, grace: float = 10.0) -> None:
     receive.close()
 
 
-def _main(send, steps, out, quick, ci, live) -> None:
+def _main(send, steps, out, quick, ci, live, args) -> None:
     """The second process: the steps under a collecting run log; sends the result or the error."""
-    import importlib
-
-    from atlas.core.config import use_compile_cache
+    from atlas.data import io
+    from atlas.paper.steps import Steps, say_stderr
 
     said: list[str] = []
     try:
-        run = importlib.import_module("atlas.paper.run")  # ``atlas.paper.run`` is the function
-        step = run.Steps(run.say_stderr if live else said.append)
+        from atlas.core.config import use_compile_cache
+        from atlas.paper import runlog
+
+        step = Steps(say_stderr if live else said.append)
         use_compile_cache()
         with runlog.RunLog(None) as log:
-            result = steps(step, out, quick, ci)
+            result = steps(step, out, quick, ci, *args)
         send.send(("done", io.COMMITTED, result, step.timings, log.lines, said))
     except BaseException as e:  # noqa: BLE001 - every error goes to the calling run
         text = traceback.format_exc()

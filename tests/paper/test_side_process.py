@@ -8,7 +8,7 @@ import pytest
 from atlas import paper
 from atlas.data import io
 from atlas.paper import runlog, side_process
-from atlas.paper.run import Steps
+from atlas.paper.steps import Steps
 
 
 def _steps_ok(step, out, quick, ci):
