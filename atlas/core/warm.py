@@ -60,6 +60,7 @@ from atlas.core import config, module_closure
 __all__ = [
     "Kernel",
     "current_kernel",
+    "active_cache",
     "jit",
     "kernel_cache",
     "keep_kernels",
@@ -74,7 +75,9 @@ KERNEL_ENV = "ATLAS_KERNEL_CACHE"
 EXECUTABLE_ENV = "ATLAS_KERNEL_EXECUTABLES"
 #: values of each argument kept as the canary input of a stored executable
 CANARY = 256
-_STATE: dict = {"dir": None, "digests": {}, "used": [], "prefetch": {}, "manifest": None}
+_STATE: dict = {
+    "dir": None, "run": None, "digests": {}, "used": [], "prefetch": {}, "manifest": None
+}  # fmt: skip
 #: held while the compilation cache is switched off for a fresh compilation
 _FRESH = threading.Lock()
 #: the :func:`kernel_cache` block :func:`keep_kernels` keeps open until the process exits
@@ -99,7 +102,9 @@ def kernel_cache(where: str | None = None, run: str | None = None):
     manifest = None
     if where is not None and run is not None and os.environ.get(EXECUTABLE_ENV, "") != "0":
         manifest = Path(where) / f"run-{hashlib.sha256(run.encode()).hexdigest()[:24]}.txt"
-    _STATE.update(dir=where, digests={}, used=[], prefetch=_prefetch(manifest), manifest=manifest)
+    _STATE.update(
+        dir=where, run=run, digests={}, used=[], prefetch=_prefetch(manifest), manifest=manifest
+    )
     try:
         yield where
     finally:
@@ -107,6 +112,12 @@ def kernel_cache(where: str | None = None, run: str | None = None):
             future.cancel()
         save_used()
         _STATE.update(before)
+
+
+def active_cache() -> tuple[str | None, str | None]:
+    """``(where, run)`` of the active :func:`kernel_cache` block (``(None, None)``: none), for a
+    helper process to open its own block on the same kept kernels."""
+    return _STATE["dir"], _STATE["run"]
 
 
 def save_used() -> None:

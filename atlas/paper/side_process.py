@@ -10,9 +10,11 @@ imports no JAX until it is used (the calling run starts its second process first
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import signal
+import sys
 import traceback
 
 __all__ = ["start", "join", "stop"]
@@ -30,8 +32,12 @@ def start(steps, out, quick: bool, ci: bool, live: bool, *args):
     own progress (else :func:`join` hands its messages to the calling run's ``say``)."""
     ctx = multiprocessing.get_context("spawn")
     receive, send = ctx.Pipe(duplex=False)
+    warm = sys.modules.get("atlas.core.warm")  # kept kernels only if the caller has JAX already
+    kept = warm.active_cache() if warm is not None else (None, None)
     proc = ctx.Process(
-        target=_main, args=(send, steps, out, quick, ci, live, args), name="atlas-paper-steps"
+        target=_main,
+        args=(send, steps, out, quick, ci, live, args, kept),
+        name="atlas-paper-steps",
     )
     proc.start()
     send.close()
@@ -88,19 +94,24 @@ def stop(side, grace: float = 10.0) -> None:
     receive.close()
 
 
-def _main(send, steps, out, quick, ci, live, args) -> None:
-    """The second process: the steps under a collecting run log; sends the result or the error."""
+def _main(send, steps, out, quick, ci, live, args, kept) -> None:
+    """The second process: the steps under a collecting run log and, when the calling run keeps
+    its kernels (``kept``: :func:`atlas.core.warm.active_cache`), under a kernel cache of its
+    own name in the same place; sends the result or the error."""
     from atlas.data import io
     from atlas.paper.steps import Steps, say_stderr
 
     said: list[str] = []
     try:
+        from atlas.core import warm
         from atlas.core.config import use_compile_cache
         from atlas.paper import runlog
 
         step = Steps(say_stderr if live else said.append)
         use_compile_cache()
-        with runlog.RunLog(None) as log:
+        where, name = kept
+        block = warm.kernel_cache(where, run=f"{name} (second process)" if name else None)
+        with block if where else contextlib.nullcontext(), runlog.RunLog(None) as log:
             result = steps(step, out, quick, ci, *args)
         send.send(("done", io.COMMITTED, result, step.timings, log.lines, said))
     except BaseException as e:  # noqa: BLE001 - every error goes to the calling run

@@ -12,8 +12,10 @@ from atlas.paper.steps import Steps
 
 
 def _steps_ok(step, out, quick, ci):
+    from atlas.core import warm
+
     runlog.record("side line", 1.5)
-    return step("a step", lambda: (str(out), quick, ci, os.getpid()))
+    return step("a step", lambda: (str(out), quick, ci, os.getpid(), warm.active_cache()))
 
 
 def _steps_fail(step, out, quick, ci):
@@ -38,13 +40,18 @@ def _join(steps, tmp_path, step):
         side_process.stop(side)
 
 
-def test_the_result_timings_log_lines_and_messages_come_back(tmp_path):
+def test_the_result_timings_log_lines_messages_and_kept_kernels_come_back(tmp_path):
     said = []
     step = Steps(said.append)
-    with runlog.RunLog(tmp_path) as log:
-        out, quick, ci, pid = _join(_steps_ok, tmp_path, step)
+    from atlas.core import warm
+
+    kept = str(tmp_path / "kernels")
+    with warm.kernel_cache(kept, run="a run"), runlog.RunLog(tmp_path) as log:
+        out, quick, ci, pid, cache = _join(_steps_ok, tmp_path, step)
     assert (out, quick, ci) == (str(tmp_path), True, False)
     assert pid != os.getpid()
+    # the calling run's kept kernels serve the second process too, under a name of its own
+    assert cache == (kept, "a run (second process)")
     assert said == ["a step ...", f"a step done in {step.timings['a step']:.1f} s"]
     assert "side line: 1.500" in log.lines
     assert any(line.startswith("step a step seconds: ") for line in log.lines)
