@@ -16,6 +16,8 @@ from atlas.core.warm import KERNEL_ENV  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
+pytest_plugins = ["cpu_report"]  # --cpu-durations=N: the tests that used the most CPU seconds
+
 # One persistent compilation cache for the whole run, shared by both xdist workers, the CLI
 # subprocesses and the notebook kernels (which inherit the variable).  Every compilation is kept
 # (no minimum time): a program one worker compiled is loaded by the other when it comes to it;

@@ -21,7 +21,7 @@ def prepare_notebook(src: Path, dst: Path, n: int | None = None) -> Path:
         0,
         nbformat.v4.new_code_cell(
             "from atlas.core.config import use_compile_cache\n"
-            "use_compile_cache(min_compile_seconds=0.2)"
+            "use_compile_cache(min_compile_seconds=0.0)"
         ),
     )
     nbformat.write(nb, dst)
