@@ -82,6 +82,7 @@ from __future__ import annotations
 
 import functools
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -233,6 +234,31 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
 
 
+def below_threshold(geo: np.ndarray) -> np.ndarray:
+    """Exact ``3 |gamma| <= 2 |c1 s2|`` per row of ``geo`` (``c1, s1, c2, s2``): the float
+    comparison where it exceeds its rounding bound, exact rationals elsewhere."""
+    c1, s1, c2, s2 = np.asarray(geo, np.float64).T
+    g, c = np.abs(c2 * s1), np.abs(c1 * s2)
+    diff = 2 * c - 3 * g
+    bound = 8 * np.finfo(np.float64).eps * (3 * g + 2 * c) + 1e-300
+    out = diff > 0
+    for i in np.flatnonzero(np.abs(diff) <= bound):
+        a, b, t, e = (Fraction(float(v)) for v in np.asarray(geo, np.float64)[i])
+        out[i] = 3 * abs(t * b) <= 2 * abs(a * e)
+    return out
+
+
+def threshold_rule(geo: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``gamma < 0``, ``D < 0`` (exact signs ``d``) and ``3 |gamma| <= 2 |c1 s2|``: the strictly
+    dominant eigenvalue is a simple positive root for every model (module docstring, the
+    threshold rule), so II is stable exactly where it is consistent."""
+    geo = np.asarray(geo, np.float64)
+    gneg = geo[:, 2] * geo[:, 1] < 0
+    out = gneg & (d < 0)
+    out[out] = below_threshold(geo[out])
+    return out
+
+
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
     """:func:`signs_rule`'s consistency of one geometry (exact inputs, e.g. the integers of
     :func:`atlas.core.model_box.integers`): 1 / 0, ``None`` where it may depend on the model."""
@@ -248,9 +274,11 @@ def never_stable_by_signs(c1, s1, c2, s2) -> bool:
 def stable_by_signs(c1, s1, c2, s2) -> bool:
     """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
     ``dominant``) at one geometry (exact inputs)."""
-    signs = map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2))
-    cons, _, dominant = signs_rule(*signs)
-    return int(cons) == 1 and bool(dominant)
+    c1, s1, c2, s2 = (Fraction(v if isinstance(v, int) else float(v)) for v in (c1, s1, c2, s2))
+    d = c1 * s2 - s1 * c2
+    cons, _, dominant = signs_rule(*map(_sg, (c1, s1, c2, s2, d)))
+    below = c2 * s1 < 0 and d < 0 and 3 * abs(c2 * s1) <= 2 * abs(c1 * s2)
+    return int(cons) == 1 and (bool(dominant) or below)
 
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
@@ -446,7 +474,9 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
     bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
-    cons, never, dominant = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    sd = mb.det_signs(geo)
+    cons, never, dominant = signs_rule(*np.sign(geo.T), sd)
+    dominant = dominant | threshold_rule(geo, sd)
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
