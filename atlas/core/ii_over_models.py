@@ -61,7 +61,25 @@ strictly increase with ``l`` where the numerator is positive) strictly increases
 the strictly dominant eigenvalue, so again II is stable exactly where it is consistent, for every
 model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 
-**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of
+**The threshold rule** (``gamma < 0``, ``D < 0``: classes 15 and 32, ``c1 s2 < 0``; II
+consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaled`) the verdict
+depends only on ``e = |D| / |c1 s2|`` in ``(0, 1)``; class 32 is class 15 under
+``l = sqrt(kappa) m``, ``(kappa, q1, q2) -> (1 / kappa, q2 / sqrt(kappa), q1 / sqrt(kappa))``.
+Unit class 15: ``p = (l^2 + d1)(l^2 - d2) + (1 - e) d1 d2``, ``p(0) = -e kappa < 0``.  Where
+``e >= 1/3`` (``3 |gamma| <= 2 |c1 s2|``, compared exactly: :func:`below_threshold`) the largest
+real root ``L`` is simple and every other root has real part ``< L``, for every model: the set
+of models where this holds is open, contains ``(1, 0, 0)`` (``p = l^4 - e``), and its boundary
+in the (connected) model space would need a model with roots ``L, -rho, L +- i sqrt(b)`` (a tie;
+the fourth root is negative as ``p(0) < 0``) or ``L, L, w, -rho`` with ``0 < w <= L`` (a double
+top root; the other two are real and of opposite signs, as ``p(0) < 0``).  Matching the coefficients of ``l^0, l^3, l^1`` fixes ``kappa, q1, q2`` rationally
+and the ``l^2`` one leaves ``H(L, rho, b or w, e) = 0``; on every region of ``u = L rho``
+(``< 1/3``, ``[1/3, 1/2)``, ``>= 1/2``) either ``q1 >= 0``, ``q2 >= 0`` are incompatible or
+``-H`` is a nonnegative combination of them plus a polynomial with nonnegative coefficients and a
+positive term (exact identities, ``tests/core/test_ii_over_models_threshold.py``).  So no such
+model exists, and II (every positive root is II here) is stable exactly where it is consistent.
+Above the threshold a fast pair overtakes the II root at far models (:func:`far_models`).
+
+**Tiers.**  (1) signs (with Perron-Frobenius, the symmetric pencil and the threshold rule); (2) a fixed sample of
 models per geometry (:func:`_staged_sample`: a coarse one first, all of it where a side is still
 missing, then :func:`far_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
@@ -272,8 +290,9 @@ def never_stable_by_signs(c1, s1, c2, s2) -> bool:
 
 
 def stable_by_signs(c1, s1, c2, s2) -> bool:
-    """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
-    ``dominant``) at one geometry (exact inputs)."""
+    """Whether the signs prove II stable for every model (consistent by :func:`signs_rule` and
+    ``dominant``, or the threshold rule: ``gamma < 0``, ``D < 0``, ``3 |gamma| <= 2 |c1 s2|``) at
+    one geometry (ints or floats, compared exactly)."""
     c1, s1, c2, s2 = (Fraction(v if isinstance(v, int) else float(v)) for v in (c1, s1, c2, s2))
     d = c1 * s2 - s1 * c2
     cons, _, dominant = signs_rule(*map(_sg, (c1, s1, c2, s2, d)))

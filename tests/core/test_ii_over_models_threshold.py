@@ -1,8 +1,8 @@
 """The threshold rule of :mod:`atlas.core.ii_over_models` (classes 15 / 32, ``gamma < 0``,
 ``det B < 0``, ``3 |gamma| <= 2 |c1 s2|``: II stable for every model), certified in exact
 rational arithmetic (sympy): the two events through which the stability could change (module
-docstring) have no model, by polynomial identities with nonnegative coefficients; and against
-numpy eigenvalues of a dense model sample.
+docstring) have no model, by polynomial identities with nonnegative coefficients (the code's
+verdicts against numpy eigenvalues: ``test_ii_over_models.py``).
 
 Unit class 15 (the scaling law): ``p = (l^2 + d1)(l^2 - d2) + (1 - e) d1 d2``, ``d1 = kappa + q1 l``,
 ``d2 = 1 + q2 l``, ``e = |D| / |c1 s2|`` in ``[1/3, 1)``.  An event model is one whose roots are
@@ -12,7 +12,6 @@ and the ``l^2`` one leaves ``H = 0``.  Each region of ``u = L rho`` is either in
 combination of ``q1 >= 0``, ``q2 >= 0`` with nonnegative multipliers is negative) or has ``-H``
 equal to such a combination plus a polynomial with nonnegative coefficients and a positive term."""
 
-import numpy as np
 import pytest
 
 sp = pytest.importorskip("sympy")
