@@ -104,3 +104,16 @@ def test_the_certificates_can_fail():
     Q1, Q2, mH = _region(_event(TIE), sub, G)
     rest = sp.Poly(mH.as_expr() - _combination((Q1, Q2), [(1, (2, 0, 1, 0), 6)], G), *G)
     assert not _nonneg(rest, (v, f))
+
+
+def test_class_32_is_class_15():
+    """Unit class 32, ``p = (l^2 - d1)(l^2 + d2) + (1 - e) d1 d2``, at ``l = K m`` and the model
+    ``(K^2, q1, q2)`` is ``K^4`` times unit class 15 at ``m`` and ``(1 / K^2, q2 / K, q1 / K)``."""
+    K, m = sp.symbols("K m", positive=True)
+
+    def unit(sign, x, kap, a1, a2):
+        d1, d2 = kap + a1 * x, 1 + a2 * x
+        return (x**2 + sign * d1) * (x**2 - sign * d2) + (1 - e) * d1 * d2
+
+    lhs = unit(-1, K * m, K**2, q1, q2)
+    assert sp.expand(lhs - K**4 * unit(1, m, 1 / K**2, q2 / K, q1 / K)) == 0
