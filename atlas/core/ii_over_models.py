@@ -61,7 +61,25 @@ strictly increase with ``l`` where the numerator is positive) strictly increases
 the strictly dominant eigenvalue, so again II is stable exactly where it is consistent, for every
 model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 
-**Tiers.**  (1) signs (with Perron-Frobenius and the symmetric pencil); (2) a fixed sample of
+**The threshold rule** (``gamma < 0``, ``D < 0``: classes 15 and 32, ``c1 s2 < 0``; II
+consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaled`) the verdict
+depends only on ``e = |D| / |c1 s2|`` in ``(0, 1)``; class 32 is class 15 under
+``l = sqrt(kappa) m``, ``(kappa, q1, q2) -> (1 / kappa, q2 / sqrt(kappa), q1 / sqrt(kappa))``.
+Unit class 15: ``p = (l^2 + d1)(l^2 - d2) + (1 - e) d1 d2``, ``p(0) = -e kappa < 0``.  Where
+``e >= 1/3`` (``3 |gamma| <= 2 |c1 s2|``, compared exactly: :func:`below_threshold`) the largest
+real root ``L`` is simple and every other root has real part ``< L``, for every model: the set
+of models where this holds is open, contains ``(1, 0, 0)`` (``p = l^4 - e``), and its boundary
+in the (connected) model space would need a model with roots ``L, -rho, L +- i sqrt(b)`` (a tie;
+the fourth root is negative as ``p(0) < 0``) or ``L, L, w, -rho`` with ``0 < w <= L`` (a double
+top root; the other two are real and of opposite signs, as ``p(0) < 0``).  Matching the coefficients of ``l^0, l^3, l^1`` fixes ``kappa, q1, q2`` rationally
+and the ``l^2`` one leaves ``H(L, rho, b or w, e) = 0``; on every region of ``u = L rho``
+(``< 1/3``, ``[1/3, 1/2)``, ``>= 1/2``) either ``q1 >= 0``, ``q2 >= 0`` are incompatible or
+``-H`` is a nonnegative combination of them plus a polynomial with nonnegative coefficients and a
+positive term (exact identities, ``tests/core/test_ii_over_models_threshold.py``).  So no such
+model exists, and II (every positive root is II here) is stable exactly where it is consistent.
+Above the threshold a fast pair overtakes the II root at far models (:func:`far_models`).
+
+**Tiers.**  (1) signs (with Perron-Frobenius, the symmetric pencil and the threshold rule); (2) a fixed sample of
 models per geometry (:func:`_staged_sample`: a coarse one first, all of it where a side is still
 missing, then :func:`far_models`), certified verdicts of :func:`atlas.core.points.spectral_points` (exact tier
 where the float kernel cannot decide): both values seen -> ``DEPENDS`` with those two models as
@@ -82,6 +100,7 @@ from __future__ import annotations
 
 import functools
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -233,6 +252,31 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
 
 
+def below_threshold(geo: np.ndarray) -> np.ndarray:
+    """Exact ``3 |gamma| <= 2 |c1 s2|`` per row of ``geo`` (``c1, s1, c2, s2``): the float
+    comparison where it exceeds its rounding bound, exact rationals elsewhere."""
+    c1, s1, c2, s2 = np.asarray(geo, np.float64).T
+    g, c = np.abs(c2 * s1), np.abs(c1 * s2)
+    diff = 2 * c - 3 * g
+    bound = 8 * np.finfo(np.float64).eps * (3 * g + 2 * c) + 1e-300
+    out = diff > 0
+    for i in np.flatnonzero(np.abs(diff) <= bound):
+        a, b, t, e = (Fraction(float(v)) for v in np.asarray(geo, np.float64)[i])
+        out[i] = 3 * abs(t * b) <= 2 * abs(a * e)
+    return out
+
+
+def threshold_rule(geo: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``gamma < 0``, ``D < 0`` (exact signs ``d``) and ``3 |gamma| <= 2 |c1 s2|``: the strictly
+    dominant eigenvalue is a simple positive root for every model (module docstring, the
+    threshold rule), so II is stable exactly where it is consistent."""
+    geo = np.asarray(geo, np.float64)
+    gneg = geo[:, 2] * geo[:, 1] < 0
+    out = gneg & (d < 0)
+    out[out] = below_threshold(geo[out])
+    return out
+
+
 def consistency_by_signs(c1, s1, c2, s2) -> int | None:
     """:func:`signs_rule`'s consistency of one geometry (exact inputs, e.g. the integers of
     :func:`atlas.core.model_box.integers`): 1 / 0, ``None`` where it may depend on the model."""
@@ -246,11 +290,14 @@ def never_stable_by_signs(c1, s1, c2, s2) -> bool:
 
 
 def stable_by_signs(c1, s1, c2, s2) -> bool:
-    """Whether :func:`signs_rule` proves II stable for every model (consistent by the signs and
-    ``dominant``) at one geometry (exact inputs)."""
-    signs = map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2))
-    cons, _, dominant = signs_rule(*signs)
-    return int(cons) == 1 and bool(dominant)
+    """Whether the signs prove II stable for every model (consistent by :func:`signs_rule` and
+    ``dominant``, or the threshold rule: ``gamma < 0``, ``D < 0``, ``3 |gamma| <= 2 |c1 s2|``) at
+    one geometry (ints or floats, compared exactly)."""
+    c1, s1, c2, s2 = (Fraction(v if isinstance(v, int) else float(v)) for v in (c1, s1, c2, s2))
+    d = c1 * s2 - s1 * c2
+    cons, _, dominant = signs_rule(*map(_sg, (c1, s1, c2, s2, d)))
+    below = c2 * s1 < 0 and d < 0 and 3 * abs(c2 * s1) <= 2 * abs(c1 * s2)
+    return int(cons) == 1 and (bool(dominant) or below)
 
 
 # --- the sample (certified point verdicts) -----------------------------------------------------------
@@ -446,7 +493,9 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
     bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
-    cons, never, dominant = signs_rule(*np.sign(geo.T), mb.det_signs(geo))
+    sd = mb.det_signs(geo)
+    cons, never, dominant = signs_rule(*np.sign(geo.T), sd)
+    dominant = dominant | threshold_rule(geo, sd)
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
