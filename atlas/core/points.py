@@ -132,15 +132,20 @@ def _kernel(kind: str, names: tuple[str, ...] = (), **static):
     return warm.Kernel(lambda *a: {n: v for n, v in fn(*a).items() if n in names})
 
 
-def compile_programs(dtype="float64") -> None:
+def compile_programs(dtype="float64", before_each=None) -> None:
     """Compile (or load) ahead of use the programs shared by every caller's small inputs and
     later tiers: the flat first pass (:data:`FLAT_BATCH` points of ``dtype``), tier 2 and the
     enclosures (:data:`LATER_BATCH` points, :data:`LATER_DTYPE`), each run once on padding
-    points (e.g. in a background thread while a first map is shown)."""
+    points (e.g. in a background thread while a first map is shown; ``before_each()`` is called
+    before each program, e.g. to wait while the foreground is busy)."""
+    wait = before_each or (lambda: None)
     flat = [np.full(FLAT_BATCH, pad, np.dtype(dtype)) for pad in PAD]
+    wait()
     _kernel("codes", ss=True, ii=True, damped=None)(*flat)
     later = [np.full(LATER_BATCH, pad, LATER_DTYPE) for pad in PAD]
+    wait()
     _kernel("tier2", ss=True, ii=True)(*later)
+    wait()
     _kernel("roots", ("consistent_II", "stable_II"))(*later)
     _LATER_RAN.update(("tier2", "roots"))
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 import time
-from concurrent.futures import Future, ThreadPoolExecutor, wait
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
@@ -182,6 +183,7 @@ class Explorer:
         self._curves: dict[tuple, Future] = {}
         self._pool: ThreadPoolExecutor | None = None
         self._warm: Future | None = None
+        self._inspector_ready = threading.Event()  # the warm-up's inspection ended
         keep_kernels()
 
     def update(self, **changes) -> xr.Dataset:
@@ -314,6 +316,7 @@ class Explorer:
             pool = ThreadPoolExecutor(1, thread_name_prefix="atlas-warm-up")
             self._warm = pool.submit(
                 _warm_up,
+                ready=self._inspector_ready.set,
                 alpha=p["alpha"],
                 kappa=p["kappa"],
                 q1=p["q1"],
@@ -325,13 +328,14 @@ class Explorer:
 
     def inspect(self, beta1, beta2) -> dict:
         """The point inspector at ``(beta1, beta2)`` [rad] with the current model and alpha
-        (after the :meth:`warm_up` if one is running: its kernels, not a second compilation;
-        an error of the warm-up is not raised here, the inspection's own would be).
+        (after the inspection of the :meth:`warm_up` if one is running: its kernels, not a second
+        compilation; an error of the warm-up is not raised here, the inspection's own would be).
 
         All or nothing: ``point``, ``last_inspection`` and ``last_near`` (the lines of
         :meth:`near`) change together, or not at all when the inspection raises."""
-        if self._warm is not None:
-            wait([self._warm])
+        while self._warm is not None and not self._warm.done():  # its inspection part only
+            if self._inspector_ready.wait(0.05):
+                break
         p = self.params
         point = (float(beta1) % (2 * math.pi), float(beta2) % (2 * math.pi))
         info = inspect_point(
@@ -502,14 +506,26 @@ def _torus_distance(xy: np.ndarray, beta1: float, beta2: float) -> np.ndarray:
     return np.hypot(d[:, 0], d[:, 1])
 
 
-def _warm_up(**model) -> None:
-    """:meth:`Explorer.warm_up`'s work: one inspection and the shared point-set programs
-    (:func:`atlas.core.points.compile_programs`), then the kept kernels' list saved."""
+def _warm_up(ready=None, **model) -> None:
+    """:meth:`Explorer.warm_up`'s work: one inspection (then ``ready()``, also on an error) and
+    the shared point-set programs (:func:`atlas.core.points.compile_programs`; before each it
+    waits while a certified overlay is computed, :data:`_NO_OVERLAY`), then the kept kernels'
+    list saved."""
     from atlas.core import points  # noqa: PLC0415 - imported by the inspector already
 
-    inspect_point(*WARM_POINT, **model)
-    points.compile_programs(model["dtype"])
+    try:
+        inspect_point(*WARM_POINT, **model)
+    finally:
+        if ready is not None:
+            ready()
+    points.compile_programs(model["dtype"], before_each=_NO_OVERLAY.wait)
     warm.save_used()
+
+
+#: set while no certified overlay is computed: the warm-up's tracing holds the interpreter
+#: lock, so it waits meanwhile (the overlay needs none of its later-tier programs)
+_NO_OVERLAY = threading.Event()
+_NO_OVERLAY.set()
 
 
 def _host_first(fn, *args):
@@ -518,5 +534,9 @@ def _host_first(fn, *args):
     later-tier programs the warm-up compiles meanwhile (the curves are the same either way)."""
     from atlas.core import points  # noqa: PLC0415 - imported by the inspector already
 
-    with points.host_first(HOST_POINTS):
-        return fn(*args)
+    _NO_OVERLAY.clear()
+    try:
+        with points.host_first(HOST_POINTS):
+            return fn(*args)
+    finally:
+        _NO_OVERLAY.set()

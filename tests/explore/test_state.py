@@ -171,3 +171,42 @@ def test_a_first_overlay_does_not_wait_for_the_warm_up(monkeypatch):
         gate.set()
     warm.result(timeout=60)
     assert order[-1] == "warm-up"
+
+
+def test_the_warm_up_waits_while_a_first_overlay_is_computed(monkeypatch):
+    """The warm-up's later-tier programs wait for the overlay (their tracing holds the
+    interpreter lock the overlay needs); its inspection does not, and a click waits for that
+    inspection only."""
+    import threading
+    import time
+
+    from atlas.core import points
+
+    started, inspected, order = threading.Event(), threading.Event(), []
+
+    def fake_inspect(*a, **k):
+        order.append("inspection")
+        inspected.set()
+        return {}
+
+    def fake_programs(dtype, before_each):
+        before_each()
+        order.append("programs")
+
+    def task():
+        started.set()
+        inspected.wait(60)
+        time.sleep(0.2)  # room for a warm-up that does not wait to run its programs first
+        order.append("overlay")
+        return "curves"
+
+    monkeypatch.setattr(state, "inspect_point", fake_inspect)
+    monkeypatch.setattr(points, "compile_programs", fake_programs)
+    monkeypatch.setattr(state, "_boundary_task", lambda key, dtype: (task,))
+    ex = state.Explorer(n=9, overlays=("certified boundaries",))
+    ex.boundaries()
+    started.wait(60)
+    warm = ex.warm_up()
+    assert ex._curves[ex.boundary_key()].result(timeout=60) == "curves"
+    warm.result(timeout=60)
+    assert order == ["inspection", "overlay", "programs"]
