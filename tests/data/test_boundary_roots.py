@@ -24,6 +24,22 @@ def _account(model):
     return roots, listed, boundary_roots.account_roots("SS", model, roots, germs, listed)
 
 
+def _rings(field, model, roots, verdicts):
+    """``(m, ball, ring)`` of each ``not_boundary`` root of ``field`` that is not a simple root
+    of one boundary polynomial; ``ring``: 24 ``(angle, (beta1, beta2))`` on a circle of radius
+    1e-7 rad around it (none on the line)."""
+    out = []
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._simple_single(field, model, m, ball):
+            continue
+        at, _ = _point(m, float(ball.mid()))
+        angles = (np.arange(24) + 0.5) * PI / 12
+        out.append(
+            (m, ball, [(a, at + 1e-7 * np.array([math.cos(a), math.sin(a)])) for a in angles])
+        )
+    return out
+
+
 @pytest.mark.parametrize("model, n", [(Q0, 28), (DAMPED, 44)])
 def test_every_root_has_a_verdict(model, n):
     """Each root gets one verdict; a listed proven point is a ``point``; both seam tangencies
@@ -142,16 +158,11 @@ def test_no_ss_root_is_left_undecided(model):
     it (24 points, none on the line) the largest real part is positive (SS unstable all round)."""
     roots, _, verdicts = _account(model)
     assert "undecided" not in verdicts
-    hard = 0
-    for (m, ball, _), v in zip(roots, verdicts):
-        if v != "not_boundary" or boundary_roots._simple_single("SS", model, m, ball):
-            continue
-        hard += 1
-        at, _ = _point(m, float(ball.mid()))
-        for a in (np.arange(24) + 0.5) * PI / 12:
-            x, y = at + 1e-7 * np.array([math.cos(a), math.sin(a)])
+    rings = _rings("SS", model, roots, verdicts)
+    for m, ball, ring in rings:
+        for a, (x, y) in ring:
             assert _abscissa(x, y, model) > 0, (m, float(ball.mid()), a)
-    assert hard >= 2
+    assert len(rings) >= 2
 
 
 def _unit(t):
@@ -230,13 +241,9 @@ def test_ii_roots_with_no_positive_root_of_p_are_decided():
     (II inconsistent all round)."""
     roots, _, verdicts = _account_ii(Q0)
     assert verdicts.count("undecided") <= 12
-    hard = 0
-    for (m, ball, _), v in zip(roots, verdicts):
-        if v != "not_boundary" or boundary_roots._simple_single("II", Q0, m, ball):
-            continue
-        hard += 1
-        at, _ = _point(m, float(ball.mid()))
-        for a in (np.arange(24) + 0.5) * PI / 12:
-            zs = _roots(*(at + 1e-7 * np.array([math.cos(a), math.sin(a)])), Q0)
+    rings = _rings("II", Q0, roots, verdicts)
+    for m, _, ring in rings:
+        for a, (x, y) in ring:
+            zs = _roots(x, y, Q0)
             assert not any(abs(z.imag) < 1e-40 and z.real > 0 for z in zs), (m, a, zs)
-    assert hard >= 10
+    assert len(rings) >= 10
