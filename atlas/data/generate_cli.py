@@ -90,7 +90,7 @@ def _run_over_models(sc, opts, out, overwrite, screen, model_box) -> int:
     out = out if out is not None else f"{sc.name}.nc"
     check_output_path(out, overwrite)
     estimate = generate_estimate(
-        sc, dtype=opts.dtype, tile_points=opts.tile_points, outputs=[out], model_box=True
+        sc, dtype=opts.dtype, tile_points=opts.tile_points, outputs=[out], model_box=box
     )
     if estimate.screen(*screen):
         return 0
@@ -194,7 +194,7 @@ def _run_store(
         distributed=True,
         workers=_local_workers(scheduler),
         outputs=outs,
-        model_box=model_box is not None,
+        model_box=model_box,
     )
     if estimate.screen(*screen):
         return 0

@@ -38,10 +38,10 @@ __all__ = [
 #: rough single-core cost of the certified atlas kernels per point and output group [ns]
 #: (outputs/bench.md: ~13 ns float32, ~21 ns float64 for all verdicts of a damped grid)
 NS_PER_POINT = {"float32": 15.0, "float64": 25.0}
-#: rough single-core cost of the verdicts over a box of models per (beta1, beta2) point [ns]
-#: (outputs/bench.md, model-dependence map: SS ~16 us; II ~5 ms over the unbounded box, about
-#: 20 ms over a bounded box whose open cells are settled)
-BOX_NS_PER_GEOMETRY = {"ss": 2.0e4, "ii": 2.0e7}
+#: rough single-core cost of the verdicts over a box of models per (beta1, beta2) point [ns]:
+#: SS ~16 us (outputs/bench.md, model-dependence map); II ~13 ms over a bounded box whose open
+#: cells are settled, ~76 us over a box with an unbounded axis (361^2 first call; 6 us warm)
+BOX_NS_PER_GEOMETRY = {"ss": 2.0e4, "ii bounded": 2.0e7, "ii unbounded": 1.0e5}
 #: working bytes per point of a kernel tile (inputs, padded results, exact-tier bookkeeping)
 TILE_BYTES_PER_POINT = 160
 #: bytes per stored value a zarr tile holds at peak (the tile, its read-back copy, checksums)
@@ -176,14 +176,15 @@ def _output_bytes(scene, dtype: str) -> tuple[int, int]:
     return total, md
 
 
-def _box_cost(scene, dtype: str) -> tuple[int, float]:
-    """``(output bytes, seconds)`` of the verdicts over a box of models on the scene's
-    ``(beta1, beta2)`` points (:mod:`atlas.data.over_models`, every ``*_over_models`` output and
-    its witnesses)."""
+def _box_cost(scene, dtype: str, bounded: bool) -> tuple[int, float]:
+    """``(output bytes, seconds)`` of the verdicts over a box of models (``bounded``: every axis
+    finite) on the scene's ``(beta1, beta2)`` points (:mod:`atlas.data.over_models`, every
+    ``*_over_models`` output and its witnesses)."""
     geometry = math.prod(scene.axes[d].size for d in ("beta1", "beta2") if scene.axes[d].is_dim)
     box = [o for o in OUTPUTS.values() if o.computed_by and "over_models" in o.computed_by]
     nbytes = geometry * sum(storage_dtype(o.name, dtype).itemsize for o in box)
-    return nbytes, geometry * sum(BOX_NS_PER_GEOMETRY.values()) * 1e-9
+    ii = BOX_NS_PER_GEOMETRY["ii bounded" if bounded else "ii unbounded"]
+    return nbytes, geometry * (BOX_NS_PER_GEOMETRY["ss"] + ii) * 1e-9
 
 
 def generate_estimate(
@@ -194,14 +195,18 @@ def generate_estimate(
     distributed: bool = False,
     workers: int = 1,
     outputs=(),
-    model_box: bool = False,
+    model_box=None,
 ) -> Estimate:
     """The cost of ``atlas generate`` of ``scene`` (streamed to netCDF, or tiles into a zarr
     store with ``distributed``; the store and the netCDF file both count at the destination;
-    ``model_box``: with the verdicts over a box of models, :func:`_box_cost`)."""
+    ``model_box``: with the verdicts over this :class:`~atlas.core.model_box.ModelBox`,
+    :func:`_box_cost`)."""
     points = scene.points()
     out_bytes, md = _output_bytes(scene, dtype)
-    box_bytes, box_seconds = _box_cost(scene, dtype) if model_box else (0, 0.0)
+    box_bytes, box_seconds = (0, 0.0)
+    if model_box is not None:
+        bounded = all(math.isfinite(getattr(model_box, a)[1]) for a in ("kappa", "q1", "q2"))
+        box_bytes, box_seconds = _box_cost(scene, dtype, bounded)
     out_bytes += box_bytes
     axes = sum(a.size for a in scene.axes.values()) * 8 * 4  # coordinates and their directions
     tile = min(tile_points, points) * TILE_BYTES_PER_POINT

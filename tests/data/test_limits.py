@@ -6,6 +6,7 @@ from work_count import counted
 
 from atlas.data import limits
 from atlas.data.engine import generate
+from atlas.data.over_models import as_model_box
 from atlas.data.scene import Scene
 from atlas.data.tiles import TilePlan, tile_plan
 
@@ -28,11 +29,13 @@ def test_output_bytes_count_the_verdicts_over_a_model_box():
     scene = Scene(beta1="0:2pi:4", beta2="0:2pi:3", kappa="0.5,2", q="0.1")
     ds = generate(scene, resolve=False, model_box="kappa=0.5:2,q=0.1:1")
     plain = limits.generate_estimate(scene)
-    est = limits.generate_estimate(scene, model_box=True)
+    est = limits.generate_estimate(scene, model_box=as_model_box("kappa=0.5:2,q=0.1:1"))
     assert est.output_bytes - plain.output_bytes == 4 * 3 * (3 * 1 + 18 * 8)
     assert est.output_bytes == sum(v.nbytes for v in ds.data_vars.values())
     assert est.peak_bytes - plain.peak_bytes == 4 * 3 * (3 * 1 + 18 * 8)
     assert est.seconds > plain.seconds + 4 * 3 * 1e-3  # the II verdicts: ms per geometry
+    whole = limits.generate_estimate(scene, model_box=as_model_box({}))  # nothing to settle
+    assert whole.output_bytes == est.output_bytes and plain.seconds < whole.seconds < est.seconds
 
 
 def test_huge_scene_refused_at_once(tmp_path, monkeypatch):
