@@ -92,7 +92,21 @@ codes of a 48^2 grid, budget 512), so there the sample's open codes stay ``UNDEC
 ``l != 0`` has the eigenvector ``b1``, so II is inconsistent for every model where ``c1 s1 <= 0``;
 for ``t > 0`` and ``c1 s1 > 0`` it is consistent (and stable, Perron-Frobenius) for every model
 in the third quadrant (``kappa c1 + s2 < 0``: one positive root) and inconsistent in the first
-(every coefficient ``>= 0``).  ``gamma = 0`` (a direction on an axis) and ``b2 = -b1`` are
+(every coefficient ``>= 0``).
+
+**A direction on an axis** (``gamma = c2 s1 = 0``, ``D = c1 s2 != 0``; :func:`_axis_rule`).  Then
+``p = h1 h2``.  With ``s1 = 0``, ``c2 != 0`` the second row of ``(l^2 + B diag(d1, d2)) x = 0``
+reads ``h2 x2 = 0``: a root of ``h1`` alone has ``x2 = 0`` (not II), and a root ``L`` of ``h2``
+has ``x1 / x2 = -c2 d2 / h1(L)``, II iff ``c2 h1(L) < 0`` (a common root has ``x2 = 0``).  ``h2``
+has a positive root iff ``s2 < 0``, exactly one; ``h1(L) < 0`` iff ``L`` lies below ``h1``'s
+positive root ``L1`` (which exists iff ``c1 < 0``).  So II is inconsistent for every model where
+``s2 > 0``; where ``s2 < 0 < c1`` it is consistent exactly where ``c2 < 0``, for every model;
+where ``c2 > 0`` an II root lies below ``L1``, which dominates (never stable); where ``c2 < 0``
+an II root lies above every other root's real part (``L1`` and three roots with ``Re <= 0``), so
+II is stable exactly where it is consistent.  ``c2 = 0``, ``s1 != 0`` is the same with the two
+contacts exchanged; with ``c2 = s1 = 0`` a root of one factor alone is never II, so II is
+inconsistent for every model unless ``c1 < 0`` and ``s2 < 0``.  Only ``c1 < 0``, ``s2 < 0`` is
+left to the sample (``DEPENDS``, or ``UNDECIDED`` where it sees one side).  ``b2 = -b1`` is
 decided by the sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
 """
 
@@ -249,7 +263,29 @@ def signs_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     cons[zero & ~along] = 0
     cons[along & (c2 == c1)] = (c1 < 0)[along & (c2 == c1)]
     metzler = (c1 <= 0) & (s2 <= 0) & (c2 < 0) & (s1 < 0)
-    return cons, gpos & (c2 > 0), metzler | (gpos & (d < 0))
+    g0cons, g0never, g0dominant = _axis_rule(c1, s1, c2, s2, d)
+    cons = np.where(g0cons >= 0, g0cons, cons).astype(np.int8)
+    return cons, (gpos & (c2 > 0)) | g0never, metzler | (gpos & (d < 0)) | g0dominant
+
+
+def _axis_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`signs_rule` where ``gamma = c2 s1 = 0`` and ``D = c1 s2 != 0`` (module docstring,
+    a direction on an axis): ``p = h1 h2``, and with ``s1 = 0`` the II roots are the roots ``L`` of
+    ``h2`` with ``c2 h1(L) < 0`` (with ``c2 = 0``: the roots of ``h1`` with ``s1 h2 < 0``)."""
+    g0 = (d != 0) & (c2 * s1 == 0)
+    row = g0 & (s1 == 0) & (c2 != 0)  # B upper triangular: II roots are roots of h2
+    col = g0 & (c2 == 0) & (s1 != 0)  # B lower triangular: II roots are roots of h1
+    cons = np.full(c1.shape, -1, np.int8)
+    cons[row & (s2 > 0)] = 0  # h2 has no positive root
+    cons[row & (s2 < 0) & (c1 > 0)] = (c2 < 0)[row & (s2 < 0) & (c1 > 0)]  # h1(L) > 0
+    cons[col & (c1 > 0)] = 0
+    cons[col & (c1 < 0) & (s2 > 0)] = (s1 < 0)[col & (c1 < 0) & (s2 > 0)]
+    cons[g0 & (c2 == 0) & (s1 == 0) & ((c1 > 0) | (s2 > 0))] = 0  # a root of one factor only
+    # c2 > 0 (row): c2 h1(L) < 0 puts L below h1's positive root, which dominates; c2 < 0: above
+    # it, so L is simple and strictly dominant (and the same with s1, h2 for col)
+    never = (row & (c2 > 0)) | (col & (s1 > 0))
+    dominant = (row & (c2 < 0)) | (col & (s1 < 0))
+    return cons, never, dominant
 
 
 def below_threshold(geo: np.ndarray) -> np.ndarray:
@@ -285,8 +321,8 @@ def consistency_by_signs(c1, s1, c2, s2) -> int | None:
 
 
 def never_stable_by_signs(c1, s1, c2, s2) -> bool:
-    """:func:`signs_rule`'s ``never_stable`` of one geometry."""
-    return _sg(c2) > 0 and _sg(s1) > 0
+    """:func:`signs_rule`'s ``never_stable`` of one geometry (exact inputs)."""
+    return bool(signs_rule(*map(_sg, (c1, s1, c2, s2, c1 * s2 - s1 * c2)))[1])
 
 
 def stable_by_signs(c1, s1, c2, s2) -> bool:
