@@ -499,6 +499,40 @@ def test_box_layer_key_model_box_and_witnesses_on_click(need):
         assert (v in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, model, v)
 
 
+def test_ii_box_layers_show_witnesses_on_click(need):
+    """The two II layers over the whole model space: a click on a map cell where the verdict
+    depends on the model shows two witness models in the inspector, the ones the dataset holds,
+    each on its side by the exact tier (``consistent_II`` true / false, ``stable_II`` stable /
+    not)."""
+    need("ipywidgets")
+    from atlas.core.verdicts import OverModels
+
+    box = widget.make_widget(n=17, layer="ii_consistent_over_models")
+    ex = box.explorer
+    for layer, sides, output in (
+        ("ii_consistent_over_models", ("consistent", "inconsistent"), "consistent_II"),
+        ("ii_stable_over_models", ("stable", "unstable"), "stable_II"),
+    ):
+        box.controls["layer"].value = layer
+        dep = np.argwhere(ex.ds[layer].values == int(OverModels.DEPENDS))
+        assert len(dep), layer
+        i, j = dep[len(dep) // 2]
+        _click(box, float(ex.ds.beta1[i]), float(ex.ds.beta2[j]))
+        text = html.unescape(box.inspector.value)
+        assert f"{layer} over the model box" in text and ": depends on the model" in text, text
+        text = text.split(f"{layer} over the model box")[1].split("over the model box")[0]
+        p = ex.point
+        d = [np.cos(p[0]), np.sin(p[0]), np.cos(p[1]), np.sin(p[1])]
+        for side in sides:
+            m = re.search(rf"\b{side} witness: kappa = (\S+), q1 = (\S+), q2 = (\S+) \(", text)
+            assert m, (side, text)
+            model = ex.last_inspection["over_models"]["verdicts"][layer]["witnesses"][side]
+            np.testing.assert_allclose([float(x) for x in m.groups()], model["model"], rtol=1e-5)
+            v = exact.point_spectral(*d, *model["model"])[output]
+            good = bool(v) if output == "consistent_II" else v == Verdict.STABLE
+            assert good == (side == sides[0]), (layer, side, model, v)
+
+
 def test_status_counts_the_certified_boundaries_seconds_until_they_are_drawn(need, monkeypatch):
     """The first certified boundaries take seconds in the background (their kernels compile):
     the status line says so and refreshes itself while they are computed, then gives their
