@@ -177,6 +177,48 @@ def test_simulate_and_table_run(tmp_path, capsys):
     assert len(out.strip().splitlines()) == 25  # header + 24 classes
 
 
+def test_simulate_a_custom_trajectory_equals_its_fig2_case(tmp_path, capsys):
+    """``--beta1 --beta2 --alpha --k1 --k2 --q1 --q2`` (the custom trajectory starts at rest,
+    ``g0 = 0``, as the Fig. 2d case) writes the same events, byte for byte, as ``--case fig2d``;
+    the events are those of :func:`atlas.dynamics.simulate` on the caption's parameters."""
+    from atlas.dynamics import simulate
+    from atlas.dynamics.outcome import fig2_cases
+
+    custom = ["--beta1", "0.15pi", "--beta2", "1.07pi", "--alpha", "0.2pi", "--k1", "100"]
+    custom += ["--k2", "200", "--q1", "20", "--q2", "20", "--t-end", "3"]
+    a, b = tmp_path / "custom.csv", tmp_path / "case.csv"
+    assert cli.main(["simulate", *custom, "--out", str(a)]) == 0
+    assert cli.main(["simulate", "--case", "fig2d", "--t-end", "3", "--out", str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "custom: " in out and "d: " in out
+    assert a.read_bytes() == b.read_bytes()
+    res = simulate(**dict(fig2_cases()["d"], t_end=3.0), max_events=100_000)
+    rows = a.read_text().splitlines()[1:]
+    assert len(rows) == res.n_events and res.n_events > 0
+    assert [float(r.split(",")[0]) for r in rows] == [float(t) for t in res.t_events]
+
+
+@pytest.mark.parametrize(
+    "args, ending, magic",
+    [
+        (["--case", "fig2b", "--t-end", "1"], ".png", b"\x89PNG"),
+        (["--case", "fig2b", "--t-end", "1"], ".pdf", b"%PDF"),
+        (["--case", "fig2b", "--t-end", "1"], ".svg", b"<?xml"),
+        (["--map", "--n", "3", "--t-end", "2", "--workers", "1"], ".pdf", b"%PDF"),
+    ],
+)
+def test_simulate_figure_outputs_are_reproducible(args, ending, magic, tmp_path, capsys):
+    """``atlas simulate --out`` as a figure (one trajectory: ``.png``, ``.pdf``, ``.svg``; a map:
+    ``.pdf``, the same drawing code as ``.png``): the file is of that format, and a second run writes the same bytes (fixed
+    metadata, no date)."""
+    got = []
+    for k in range(2):
+        out = tmp_path / f"f{k}{ending}"
+        assert cli.main(["simulate", *args, "--out", str(out)]) == 0, capsys.readouterr().err
+        got.append(out.read_bytes())
+    assert got[0].startswith(magic) and got[0] == got[1]
+
+
 @pytest.mark.parametrize(
     "name, fmt, first",
     [("t.csv", [], "class,"), ("t.md", [], "| class"), ("t.txt", [], "| class"),
