@@ -209,8 +209,8 @@ def test_simulate_a_custom_trajectory_equals_its_fig2_case(tmp_path, capsys):
 )
 def test_simulate_figure_outputs_are_reproducible(args, ending, magic, tmp_path, capsys):
     """``atlas simulate --out`` as a figure (one trajectory: ``.png``, ``.pdf``, ``.svg``; a map:
-    ``.pdf``, the same drawing code as ``.png``): the file is of that format, and a second run writes the same bytes (fixed
-    metadata, no date)."""
+    ``.pdf``, the same drawing code as ``.png``): the file is of that format, and a second run
+    writes the same bytes (fixed metadata, no date)."""
     got = []
     for k in range(2):
         out = tmp_path / f"f{k}{ending}"
