@@ -686,10 +686,10 @@ def _cmd_generate(args, argv) -> int:
     return run_cli(history="atlas " + " ".join(shlex.quote(a) for a in argv), **opts)
 
 
-def _cmd_dispatch(args, argv=()) -> int:
-    estimate = _dispatch_estimate(args) if hasattr(args, "dry_run") else None
-    if estimate is not None and estimate.screen(args.dry_run, args.no_size_check):
-        return 0
+def dispatch_call(args, argv=()) -> tuple:
+    """The function a dispatched command runs and its keyword arguments, from the parsed
+    ``args`` (the options that only screen the run, ``--dry-run`` and ``--no-size-check``,
+    are not passed on)."""
     module, func = _DISPATCH[args.command]
     if args.command == "boundaries" and args.model_box is not None:
         module = "atlas.data.region_curves"  # the regions over a box of models
@@ -698,6 +698,14 @@ def _cmd_dispatch(args, argv=()) -> int:
     opts = {k: v for k, v in vars(args).items() if k not in skip}
     if args.command == "simulate":  # the command line, for the map's history attribute
         opts["argv"] = [args.command, *argv[1:]] if argv else None
+    return fn, opts
+
+
+def _cmd_dispatch(args, argv=()) -> int:
+    estimate = _dispatch_estimate(args) if hasattr(args, "dry_run") else None
+    if estimate is not None and estimate.screen(args.dry_run, args.no_size_check):
+        return 0
+    fn, opts = dispatch_call(args, argv)
     if args.command in _TOGETHER:
         from atlas.data.io import committed_together
 

@@ -177,6 +177,37 @@ def test_simulate_and_table_run(tmp_path, capsys):
     assert len(out.strip().splitlines()) == 25  # header + 24 classes
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["paper"],
+        ["paper", "--quick", "--jobs", "1", "--out", "d"],
+        ["bench"],
+        ["bench", "--quick", "--out", "d"],
+        ["table", "--format", "csv"],
+        ["simulate", "--case", "fig2b", "--t-end", "1"],
+        ["simulate", "--map", "--n", "4", "--store", "s", "--engine", "jax"],
+        ["boundaries", "--kappa", "2"],
+        ["boundaries", "--model-box", "kappa=0.5:2"],
+        ["mechanism", "ladder"],
+        ["selftest"],
+        ["mujoco", "m.xml", "--json"],
+    ],
+)
+def test_every_option_reaches_a_parameter_of_the_real_function(argv):
+    """The options a command line parses bind to the signature of the function the command
+    really runs (not a stand-in): a renamed or removed parameter, or a new option without one,
+    fails here, before any user meets the ``TypeError``."""
+    import inspect
+
+    args = cli.build_parser(argv[0]).parse_args(argv)
+    fn, opts = cli.dispatch_call(args, argv)
+    params = inspect.signature(fn).parameters
+    inspect.signature(fn).bind(**opts)
+    if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        assert set(opts) <= set(params), (fn.__module__, set(opts) - set(params))
+
+
 def test_simulate_a_custom_trajectory_equals_its_fig2_case(tmp_path, capsys):
     """``--beta1 --beta2 --alpha --k1 --k2 --q1 --q2`` (the custom trajectory starts at rest,
     ``g0 = 0``, as the Fig. 2d case) writes the same events, byte for byte, as ``--case fig2d``;
