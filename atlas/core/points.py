@@ -245,6 +245,9 @@ def _flat_columns(inputs, shape):
     size = -(-n // FLAT_BATCH) * FLAT_BATCH
     cols = []
     for a in inputs:
+        if a.size == 1:  # a model parameter shared by every point
+            cols.append(np.full(size, a.reshape(-1)[0]))
+            continue
         flat = np.broadcast_to(a.reshape((1,) * (len(shape) - a.ndim) + a.shape), shape).ravel()
         col = np.empty(size, a.dtype)
         col[:n], col[n:] = flat, flat[-1]
