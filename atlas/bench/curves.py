@@ -16,7 +16,7 @@ import numpy as np
 
 from atlas.bench.boundaries import contour_lines, torus_hausdorff
 from atlas.bench.timing import log
-from atlas.core import brackets
+from atlas.core import brackets, points
 from atlas.data import boundaries as bd
 
 __all__ = ["CURVE_CASES", "curves"]
@@ -40,23 +40,27 @@ def _grid_contours(fld, n, model) -> list[np.ndarray]:
 
 
 def _slice(n, model, chord):
+    """The curves of the ``n x n`` slice, their seconds and their certified work per tier
+    (:func:`atlas.core.points.tally`)."""
     beta = np.arange(n) * (2 * math.pi / n)
     t0 = time.perf_counter()
-    out = bd.slice_boundaries(beta, beta, *model, chord=chord)
-    return out, time.perf_counter() - t0
+    with points.tally() as work:
+        out = bd.slice_boundaries(beta, beta, *model, chord=chord)
+    return out, time.perf_counter() - t0, work
 
 
 def curves(cfg) -> list[dict]:
-    """Rows: case, n, field, curves, vertices, points, seconds (both fields), Hausdorff of the
-    curves and of the grid contours to the 4n reference curves, hidden cells, unrefined, tips
-    attached and unreached (of the n grid and of the reference)."""
+    """Rows: case, n, field, curves, vertices, points, seconds (both fields), the slice's kernel
+    calls and points per later tier (both fields, :func:`atlas.core.points.tally`), Hausdorff of
+    the curves and of the grid contours to the 4n reference curves, hidden cells, unrefined,
+    tips attached and unreached (of the n grid and of the reference)."""
     rows = []
     chord = cfg.get("curve_chord", bd.CHORD)
     for name, *model in CURVE_CASES[: cfg.get("curve_cases", len(CURVE_CASES))]:
         for n in cfg["curve_res"]:
             log(f"curves {name} n={n} (reference {4 * n})")
-            got, seconds = _slice(n, model, chord)
-            ref, ref_seconds = _slice(4 * n, model, chord)
+            got, seconds, work = _slice(n, model, chord)
+            ref, ref_seconds, _ = _slice(4 * n, model, chord)
             for fld in ("SS", "II"):
                 mine = [c.vertices for c in got.curves if c.field == fld]
                 theirs = [c.vertices for c in ref.curves if c.field == fld]
@@ -72,6 +76,10 @@ def curves(cfg) -> list[dict]:
                         points=len(got.points),
                         seconds=seconds,
                         reference_seconds=ref_seconds,
+                        kernel_calls=work["calls"],
+                        tier2_points=work["tier2_points"],
+                        roots_points=work["roots_points"],
+                        exact_points=work["exact_points"],
                         hausdorff_curves=torus_hausdorff(mine, theirs, step),
                         hausdorff_grid=torus_hausdorff(grid, theirs, step),
                         p99_curves=torus_hausdorff(mine, theirs, step, quantile=0.99),

@@ -46,6 +46,13 @@ def key() -> str:
 
 
 def _path() -> Path | None:
+    """The record file, or ``None`` with the cache off (found once per cache setting: the
+    certified driver asks on every call)."""
+    return _path_for(os.environ.get(config.CACHE_ENV), os.environ.get("HOME"))
+
+
+@functools.lru_cache(maxsize=8)
+def _path_for(cache_env: str | None, home: str | None) -> Path | None:
     where = config.compile_cache_dir()
     return None if where is None else Path(where) / RECORD_NAME
 

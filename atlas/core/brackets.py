@@ -22,6 +22,7 @@ nominal angle, far below any tolerance used here).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -102,12 +103,9 @@ def direction_codes(
     _check_field(field)
     n = np.size(c1)
     pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
-    pc, ps = contact_modes.direction(np.array(PAD_POINT), dtype)
-    c1, c2 = (
-        np.pad(np.asarray(v, dtype), (0, pad), constant_values=pc[i]) for i, v in ((0, c1), (1, c2))
-    )
-    s1, s2 = (
-        np.pad(np.asarray(v, dtype), (0, pad), constant_values=ps[i]) for i, v in ((0, s1), (1, s2))
+    pc, ps = _pad_direction(np.dtype(dtype))
+    c1, s1, c2, s2 = (
+        _padded(v, w, pad) for v, w in ((c1, pc[0]), (s1, ps[0]), (c2, pc[1]), (s2, ps[1]))
     )
     needed = None if first_change is None else _row_needs(field, np.asarray(first_change), n)
     res = spectral_points(
@@ -125,6 +123,20 @@ def direction_codes(
     if any((v == UNDECIDED_FLAG).any() for v in res.values()):  # the exact tier never leaves one
         raise RuntimeError("field_codes: a point stayed undecided after exact settlement")
     return codes
+
+
+@functools.cache
+def _pad_direction(dtype) -> tuple[np.ndarray, np.ndarray]:
+    """The direction vectors of :data:`PAD_POINT` in ``dtype``: ``(c, s)``, each ``(2,)``."""
+    return contact_modes.direction(np.array(PAD_POINT), dtype)
+
+
+def _padded(v, value, pad: int) -> np.ndarray:
+    """``v`` as a 1-D array of its dtype's kind followed by ``pad`` copies of ``value``."""
+    v = np.asarray(v, value.dtype).ravel()
+    out = np.empty(v.size + pad, value.dtype)
+    out[: v.size], out[v.size :] = v, value
+    return out
 
 
 #: the code of a sample left unsettled (:func:`direction_codes` with ``first_change``)

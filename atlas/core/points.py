@@ -37,6 +37,7 @@ from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
     "spectral_points",
+    "tally",
     "Verdicts",
     "settle_codes",
     "SPECTRAL_NAMES",
@@ -58,9 +59,10 @@ SPECTRAL_NAMES = ("stable_SS", "consistent_II", "stable_II", "spectral_abscissa"
 class Verdicts(dict):
     """What :func:`spectral_points` returns: the verdict arrays by name, and in ``stats`` the
     call's diagnostics: ``points``, ``tier2_points``, ``roots_points`` (points that needed root
-    enclosures), ``undecided_before`` and ``undecided_after`` exact settlement (points with any
-    verdict undecided), ``undecided_by_name`` (per output, before), ``exact_failures`` (points
-    the exact tier failed on, if any)."""
+    enclosures), ``exact_points`` (points sent to the exact tier, if any), ``undecided_before``
+    and ``undecided_after`` exact settlement (points with any verdict undecided),
+    ``undecided_by_name`` (per output, before), ``exact_failures`` (points the exact tier failed
+    on, if any)."""
 
     def __init__(self, arrays: dict, stats: dict):
         super().__init__(arrays)
@@ -245,6 +247,9 @@ def _flat_columns(inputs, shape):
     size = -(-n // FLAT_BATCH) * FLAT_BATCH
     cols = []
     for a in inputs:
+        if a.size == 1:  # a model parameter shared by every point
+            cols.append(np.full(size, a.reshape(-1)[0]))
+            continue
         flat = np.broadcast_to(a.reshape((1,) * (len(shape) - a.ndim) + a.shape), shape).ravel()
         col = np.empty(size, a.dtype)
         col[:n], col[n:] = flat, flat[-1]
@@ -400,7 +405,30 @@ def spectral_points(
     wanted = keep(open_idx[after], out, exact=False)
     counts["undecided_after"] = int(wanted.sum())
     counts["unneeded_points"] = int(wanted.size - wanted.sum())
+    for total in getattr(_TALLY, "open", ()):
+        total["calls"] += 1
+        for k in TALLY_KEYS[1:]:
+            total[k] += counts.get(k, 0)
     return Verdicts(out, counts)
+
+
+#: what :func:`tally` adds up: certified calls, and the points each tier received
+TALLY_KEYS = ("calls", "points", "tier2_points", "roots_points", "exact_points")
+_TALLY = threading.local()
+
+
+@contextlib.contextmanager
+def tally():
+    """Within the block (in this thread), the :data:`TALLY_KEYS` of every certified
+    :func:`spectral_points` call added up in the dict it yields: the work of a whole computation
+    (a boundary slice) per tier, counted rather than timed."""
+    total = dict.fromkeys(TALLY_KEYS, 0)
+    before = getattr(_TALLY, "open", ())
+    _TALLY.open = (*before, total)
+    try:
+        yield total
+    finally:
+        _TALLY.open = before
 
 
 def _checked_names(names, method) -> tuple[str, ...]:
@@ -571,6 +599,7 @@ def _settle_exact(inputs, shape, out, flags, idx, max_resolve, counts):
             sel, budget = sel[:budget], max(0, budget - sel.size)
         if not sel.size:
             continue
+        counts["exact_points"] = counts.get("exact_points", 0) + int(sel.size)
         cols = _gather(inputs, shape, sel)
         pts = {key: c.astype(np.float64) for key, c in zip(KEYS, cols)}
         try:

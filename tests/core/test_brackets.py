@@ -169,3 +169,15 @@ def test_bisect_leaves_a_bracket_once_within_tol():
     np.testing.assert_array_equal(P[0], p)
     np.testing.assert_array_equal(Q[0], q)
     assert vq[0] == 2 and 1e-9 / 64 < np.hypot(*(Q[1] - P[1])) <= 1e-9
+
+
+def test_padding_is_the_pad_point_in_the_kernel_dtype():
+    """The padded columns of a kernel call are the points given, then :data:`PAD_POINT`'s
+    direction vectors, as ``np.pad`` gives them."""
+    for dtype in (np.float64, np.float32):
+        pc, ps = contact_modes.direction(np.array(brackets.PAD_POINT), dtype)
+        v = np.linspace(-1, 1, 5)
+        got = brackets._padded(v, brackets._pad_direction(np.dtype(dtype))[0][1], 3)
+        want = np.pad(v.astype(dtype), (0, 3), constant_values=pc[1])
+        assert got.dtype == dtype
+        np.testing.assert_array_equal(got, want)

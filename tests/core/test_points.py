@@ -550,3 +550,29 @@ def test_needed_leaves_unwanted_points_undecided():
     want = exact.point_spectral(*(float(v[open_[0]]) for v in (c1, s1, c2, s2)), *model)
     assert got["consistent_II"][open_[0]] == want["consistent_II"]
     assert (got["consistent_II"][open_[1:]] == UNDECIDED_FLAG).all()
+
+
+def test_tally_adds_up_the_work_of_every_call_per_tier(monkeypatch):
+    """``tally`` counts the certified calls of a block and the points each tier received; the
+    exact tier's count is the number of points it was given (counted at the exact tier), and
+    nested blocks each see their own calls."""
+    given, resolve = [], exact.resolve
+
+    def counted(pts, names=None, **kw):
+        given.append(len(pts["c1"]))
+        return resolve(pts, names=names, **kw)
+
+    monkeypatch.setattr(exact, "resolve", counted)
+    small, big = _small_atlas(), grid(8)
+    with points.tally() as outer:
+        one = points.spectral_points(*small, names=FLAGS)
+        with points.tally() as inner:
+            two = points.spectral_points(*big, names=FLAGS)
+    inside = sum(given)
+    points.spectral_points(*small, names=FLAGS)  # outside: not counted
+    assert inner["calls"] == 1 and outer["calls"] == 2 and sum(given) > inside > 0
+    assert inner["exact_points"] == two.stats.get("exact_points", 0)
+    assert outer["exact_points"] == inside
+    for k in ("points", "tier2_points", "roots_points"):
+        assert inner[k] == two.stats[k]
+        assert outer[k] == one.stats[k] + two.stats[k]
