@@ -482,6 +482,14 @@ def _add_bench(sub) -> None:
         help="output directory (default: outputs, --quick: outputs/quick; created if its parent "
         "exists; the files atlas bench writes are replaced)",
     )
+    pb.add_argument(
+        "--only",
+        metavar="SECTION[,SECTION]",
+        help="re-measure only these sections of the report already in --out and keep the others "
+        "(each section then names the run that measured it): work_precision, model_grids, "
+        "model_box_map, large, suites, scaling, atlases, simulation, outcome_maps, curves, "
+        "startup, distributed",
+    )
 
 
 #: the output options of each command and the file name endings they take
