@@ -308,6 +308,7 @@ def _add_mujoco(sub) -> None:
 
 def _add_boundaries(sub) -> None:
     from atlas.data.boundary_args import (
+        CHECK,
         CHORD,
         CODE_MEANINGS,
         CSV_COLUMNS,
@@ -355,7 +356,7 @@ def _add_boundaries(sub) -> None:
         type=int,
         default=None,
         help=f"resample cells N x finer for hidden branches, 0..{MAX_CHECK}; 0 or 1: no check; "
-        "refused if the refined grids may need more than 4 GiB (2)",
+        f"refused if the refined grids may need more than 4 GiB ({CHECK})",
     )
     pb.add_argument("--out", metavar="FILE.nc", help="CF-1.10 geometry container")
     pb.add_argument("--csv", metavar="FILE.csv", help="one row per vertex and per point")
@@ -535,10 +536,10 @@ def _refuse_early(args) -> None:
     ``--chord``, ``--check`` and ``--fields`` (with ``--model-box`` the region curves check their
     own: chord and check do not apply there)."""
     if args.command == "boundaries" and getattr(args, "model_box", None) is None:
-        from atlas.data.boundary_args import CHORD, check_args, check_model_text
+        from atlas.data.boundary_args import CLI_DEFAULTS, check_args, check_model_text
 
         # the defaults of a slice's curves (left unset on the parser: --model-box refuses them)
-        for name, default in (("chord", CHORD), ("check", 2), ("fields", "SS,II")):
+        for name, default in CLI_DEFAULTS.items():
             if getattr(args, name) is None:
                 setattr(args, name, default)
         for name in ("kappa", "q", "q1", "q2"):
