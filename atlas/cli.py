@@ -165,7 +165,12 @@ def _add_generate(sub) -> None:
         action="store_false",
         help="keep undecided points instead of resolving them exactly",
     )
-    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    g.add_argument(
+        "--no-progress",
+        dest="progress",
+        action="store_false",
+        help="no progress bar (default: one on a terminal, or where ATLAS_PROGRESS=1)",
+    )
     g.add_argument(
         "--model-box",
         metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
@@ -687,11 +692,11 @@ _DISPATCH = {
 
 def _cmd_generate(args, argv) -> int:
     """``atlas generate``: its options, the progress bar decided here (a terminal, or
-    ``ATLAS_PROGRESS=1``) and the command line as ``history``."""
+    ``ATLAS_PROGRESS=1``; never with ``--no-progress``) and the command line as ``history``."""
     from atlas.data.generate_cli import run_cli
 
     opts = {k: v for k, v in vars(args).items() if k != "command"}
-    opts["progress"] = args.progress and sys.stderr.isatty() or _force_progress()
+    opts["progress"] = args.progress and (sys.stderr.isatty() or _force_progress())
     return run_cli(history="atlas " + " ".join(shlex.quote(a) for a in argv), **opts)
 
 
