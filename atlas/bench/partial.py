@@ -52,9 +52,10 @@ JSON_FIELDS = {
 }
 
 
-def check_only(only, out: Path, mode: str, cfg: dict) -> tuple[str, ...]:
+def check_only(only, out: Path, mode: str, cfg: dict, files=()) -> tuple[str, ...]:
     """The sections named by ``only`` (``"a,b"`` or a sequence); a :class:`ValueError` naming
-    ``only`` for an unknown or off section, or without an existing report of ``mode`` in ``out``."""
+    ``only`` for an unknown or off section, or without an existing report of ``mode`` in ``out``
+    (every one of ``files``, the tables and texts a whole run writes there)."""
     names = only.split(",") if isinstance(only, str) else list(only)
     names = [n.strip() for n in names]
     bad = [n for n in names if n not in SECTIONS]
@@ -76,6 +77,12 @@ def check_only(only, out: Path, mode: str, cfg: dict) -> tuple[str, ...]:
         raise ValueError(
             f"only: the report in {str(out)!r} is a {meta.get('mode')} run, this one {mode}: "
             "sections of different sizes are not joined"
+        )
+    lost = [f for f in files if f.endswith((".csv", ".md")) and not (out / f).is_file()]
+    if lost:
+        raise ValueError(
+            f"only: the report in {str(out)!r} lacks {', '.join(lost)}; run atlas bench without "
+            "--only first"
         )
     return tuple(dict.fromkeys(names))
 

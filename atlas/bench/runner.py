@@ -198,7 +198,8 @@ def run(quick: bool = False, out: str | None = None, config: str | None = None, 
     mode = mode_name(quick, config)
     cfg = CONFIG[mode]
     out = default_out(mode) if out is None else Path(out)
-    names = tuple(partial.SECTIONS) if only is None else partial.check_only(only, out, mode, cfg)
+    whole = tuple(partial.SECTIONS)
+    names = whole if only is None else partial.check_only(only, out, mode, cfg, files(mode))
     out.mkdir(parents=True, exist_ok=True)
     meta = dict(
         mode=mode,

@@ -44,6 +44,15 @@ def test_only_over_a_report_of_another_size_is_refused(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bench.md", "bench_headline.json"]
 
 
+def test_a_report_missing_a_kept_sections_file_is_refused(tmp_path):
+    (tmp_path / "bench.md").write_text("# a tiny report\n")
+    meta = dict(mode="tiny", start="2026-01-01T00:00:00+0000", command="atlas bench")
+    (tmp_path / "bench_headline.json").write_text(json.dumps(dict(meta=meta)))
+    with pytest.raises(ValueError, match="^only: the report in .* lacks bench_work_precision.csv"):
+        run(config="tiny", out=str(tmp_path), only="simulation")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bench.md", "bench_headline.json"]
+
+
 def test_distributed_is_refused_where_the_configuration_does_not_measure_it(tmp_path):
     with pytest.raises(ValueError, match="^only: the tiny configuration does not measure"):
         run(config="tiny", out=str(tmp_path), only="distributed")
