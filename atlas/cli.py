@@ -165,7 +165,12 @@ def _add_generate(sub) -> None:
         action="store_false",
         help="keep undecided points instead of resolving them exactly",
     )
-    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    g.add_argument(
+        "--no-progress",
+        dest="progress",
+        action="store_false",
+        help="no progress bar (default: one on a terminal, or where ATLAS_PROGRESS=1)",
+    )
     g.add_argument(
         "--model-box",
         metavar="kappa=LO:HI,q1=LO:HI,q2=LO:HI",
@@ -308,6 +313,7 @@ def _add_mujoco(sub) -> None:
 
 def _add_boundaries(sub) -> None:
     from atlas.data.boundary_args import (
+        CHECK,
         CHORD,
         CODE_MEANINGS,
         CSV_COLUMNS,
@@ -355,7 +361,7 @@ def _add_boundaries(sub) -> None:
         type=int,
         default=None,
         help=f"resample cells N x finer for hidden branches, 0..{MAX_CHECK}; 0 or 1: no check; "
-        "refused if the refined grids may need more than 4 GiB (2)",
+        f"refused if the refined grids may need more than 4 GiB ({CHECK})",
     )
     pb.add_argument("--out", metavar="FILE.nc", help="CF-1.10 geometry container")
     pb.add_argument("--csv", metavar="FILE.csv", help="one row per vertex and per point")
@@ -482,6 +488,14 @@ def _add_bench(sub) -> None:
         help="output directory (default: outputs, --quick: outputs/quick; created if its parent "
         "exists; the files atlas bench writes are replaced)",
     )
+    pb.add_argument(
+        "--only",
+        metavar="SECTION[,SECTION]",
+        help="re-measure only these sections of the report already in --out and keep the others "
+        "(each section then names the run that measured it): work_precision, model_grids, "
+        "model_box_map, large, suites, scaling, atlases, simulation, outcome_maps, curves, "
+        "startup, distributed",
+    )
 
 
 #: the output options of each command and the file name endings they take
@@ -527,10 +541,10 @@ def _refuse_early(args) -> None:
     ``--chord``, ``--check`` and ``--fields`` (with ``--model-box`` the region curves check their
     own: chord and check do not apply there)."""
     if args.command == "boundaries" and getattr(args, "model_box", None) is None:
-        from atlas.data.boundary_args import CHORD, check_args, check_model_text
+        from atlas.data.boundary_args import CLI_DEFAULTS, check_args, check_model_text
 
         # the defaults of a slice's curves (left unset on the parser: --model-box refuses them)
-        for name, default in (("chord", CHORD), ("check", 2), ("fields", "SS,II")):
+        for name, default in CLI_DEFAULTS.items():
             if getattr(args, name) is None:
                 setattr(args, name, default)
         for name in ("kappa", "q", "q1", "q2"):
@@ -678,11 +692,11 @@ _DISPATCH = {
 
 def _cmd_generate(args, argv) -> int:
     """``atlas generate``: its options, the progress bar decided here (a terminal, or
-    ``ATLAS_PROGRESS=1``) and the command line as ``history``."""
+    ``ATLAS_PROGRESS=1``; never with ``--no-progress``) and the command line as ``history``."""
     from atlas.data.generate_cli import run_cli
 
     opts = {k: v for k, v in vars(args).items() if k != "command"}
-    opts["progress"] = args.progress and sys.stderr.isatty() or _force_progress()
+    opts["progress"] = args.progress and (sys.stderr.isatty() or _force_progress())
     return run_cli(history="atlas " + " ".join(shlex.quote(a) for a in argv), **opts)
 
 

@@ -6,7 +6,8 @@ beta grid, every method, checked exactly), :mod:`~atlas.bench.boundaries` (conto
 distance), :mod:`~atlas.bench.suites` and :mod:`~atlas.bench.simulation` (the measured sections),
 :mod:`~atlas.bench.startup` (start-up figures, whole processes),
 :mod:`~atlas.bench.report` and :mod:`~atlas.bench.plots` (``bench.md`` and its figures),
-:mod:`~atlas.bench.runner` (:func:`run`, the entry point of ``atlas bench``), and
+:mod:`~atlas.bench.runner` (:func:`run`, the entry point of ``atlas bench``),
+:mod:`~atlas.bench.partial` (``--only``: some sections re-measured, the others read back), and
 :mod:`~atlas.bench.distributed` (throughput of distributed generation, ``distributed.md``).
 The names below load on first use (``lazy_loader``).
 """

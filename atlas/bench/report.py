@@ -20,6 +20,7 @@ __all__ = [
     "Results",
     "build_report",
     "fmt",
+    "runs_section",
     "slope",
     "startup_section",
     "table",
@@ -327,9 +328,12 @@ def _convergence_orders(wp, cfg) -> list[str]:
 def work_precision_section(wp, refs, cfg) -> list[str]:
     """Every method x dtype x resolution x case; convergence orders; the floor kernel."""
     vjit = list(cfg["vjit_damped_res"]) or "none (quick mode: 10-30 s compile)"
-    refline = "; ".join(
-        f"{k}: {v['settled']} points settled exactly, {v['left']} left undecided"
-        for k, v in refs.items()
+    refline = (
+        "; ".join(
+            f"{k}: {v['settled']} points settled exactly, {v['left']} left undecided"
+            for k, v in refs.items()
+        )
+        or "not stored in this report's files"
     )
     floor = ", ".join(
         f"{r['dtype']} n={r['n']}: {fmt(r['floor_ns'])}"
@@ -628,32 +632,70 @@ def startup_section(rows) -> list[str]:
 
 
 def notes_section(notes, exact) -> list[str]:
-    """The run's notes and the cost of the exact reference."""
+    """The run's notes and the cost of the exact reference (``None``: not stored)."""
+    if exact is None:
+        line = "* Exact reference: its cost is not stored in this report's files."
+    else:
+        which = exact.get("sections")
+        line = (
+            f"* Exact reference: {exact['points']} distinct points evaluated in "
+            f"{exact['seconds']:.0f} s; {exact['failures']} failed (counted as undecided)"
+            + (f"; for the sections {', '.join(which)}." if which else ".")
+        )
+    return ["## Notes, omissions\n", *(f"* {note}" for note in notes), line]
+
+
+def runs_section(meta) -> list[str]:
+    """Which run measured each section, when the report joins several (``atlas bench --only``)."""
+    runs = meta.get("sections", {})
+    if len({(v["start"], v["command"]) for v in runs.values()}) < 2:
+        return []
+    rows = [dict(section=k, start=v["start"], command=f"`{v['command']}`") for k, v in runs.items()]
     return [
-        "## Notes, omissions\n",
-        *(f"* {note}" for note in notes),
-        f"* Exact reference: {exact['points']} distinct points evaluated in "
-        f"{exact['seconds']:.0f} s; {exact['failures']} failed (counted as undecided).",
+        "**This report joins several runs** (`atlas bench --only` re-measured some sections and "
+        "kept the others): each section names the run that measured it. Ratios inside a section "
+        "are of one run; do not compare figures across sections of different runs.\n",
+        table(rows, ("section", "start", "command")),
+        "",
     ]
+
+
+def _stamp(parts, names, meta) -> list[str]:
+    """``parts`` (one section's paragraphs) with, under its heading, the run(s) that measured
+    ``names``, when the report joins several runs."""
+    runs = meta.get("sections", {})
+    if not parts or len({(v["start"], v["command"]) for v in runs.values()}) < 2:
+        return parts
+    seen = dict.fromkeys((runs[n]["start"], runs[n]["command"]) for n in names if n in runs)
+    line = "; ".join(f"run started {start} (`{command}`)" for start, command in seen)
+    head, _, rest = parts[0].partition("\n")
+    return [f"{head}\n\n*Measured by the {line}.*\n{rest}", *parts[1:]]
 
 
 def build_report(r: Results) -> str:
-    """The markdown of ``bench.md``: every section in order."""
-    parts = [
-        *header_section(r.meta),
-        *headline_section(r.head, r.cfg),
-        *model_grids_section(r.model_grids),
-        *model_box_map.section(r.model_box_map),
-        *large_section(r.large, r.cfg),
-        *work_precision_section(r.wp, r.refs, r.cfg),
-        *suites_section(r.suites, r.cfg),
-        *scaling_section(r.scaling),
-        *atlases_section(r.atlases),
-        *kernel_speed_section(r.head, r.suites, r.atlases),
-        *curves_section(r.curves),
-        *simulation_section(r.sim),
-        *outcome_maps_section(r.maps),
-        *startup_section(r.startup),
-        *notes_section(r.meta["notes"], r.exact),
+    """The markdown of ``bench.md``: every section in order, each under the run that measured it
+    where the report joins several."""
+    m = r.meta
+    sections = [
+        (("work_precision",), headline_section(r.head, r.cfg)),
+        (("model_grids",), model_grids_section(r.model_grids)),
+        (("model_box_map",), model_box_map.section(r.model_box_map)),
+        (("large",), large_section(r.large, r.cfg)),
+        (("work_precision",), work_precision_section(r.wp, r.refs, r.cfg)),
+        (("suites",), suites_section(r.suites, r.cfg)),
+        (("scaling",), scaling_section(r.scaling)),
+        (("atlases",), atlases_section(r.atlases)),
+        (
+            ("work_precision", "suites", "atlases"),
+            kernel_speed_section(r.head, r.suites, r.atlases),
+        ),
+        (("curves",), curves_section(r.curves)),
+        (("simulation",), simulation_section(r.sim)),
+        (("outcome_maps",), outcome_maps_section(r.maps)),
+        (("startup",), startup_section(r.startup)),
     ]
+    parts = [*header_section(m), *runs_section(m)]
+    for names, section in sections:
+        parts += _stamp(section, names, m)
+    parts += notes_section(m["notes"], r.exact)
     return "\n".join(parts) + "\n"

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.bench import distributed, model_axes, model_box_map, plots, startup, suites
+from atlas.bench import distributed, model_axes, model_box_map, partial, plots, startup, suites
 from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
@@ -80,53 +80,95 @@ def files(mode: str) -> tuple[str, ...]:
     return tuple(f for f in FILES if not off.get(f, False))
 
 
-def _measure(cfg, meta) -> Results:
-    """Every section of the run, in order (seeded: the same points are checked every run)."""
-    rng = np.random.default_rng(20240601)
+def _work_precision(cfg, cache):
+    wp, refs = suites.work_precision(cfg, cache, np.random.default_rng(20240601))
+    return dict(wp=wp, refs=refs, head=suites.headline(wp, cfg))
+
+
+def _outcome_maps(cfg, cache):
+    maps = outcome_maps(cfg)
+    jax_outcome_columns(maps, cfg)
+    return dict(maps=maps)
+
+
+#: how each section is measured: ``fn(cfg, cache) -> {field: rows}`` (seeded: the same points
+#: are checked every run, whichever sections it measures)
+_MEASURE = {
+    "work_precision": _work_precision,
+    "model_grids": lambda cfg, cache: dict(model_grids=model_axes.measure(cfg)),
+    "model_box_map": lambda cfg, cache: dict(model_box_map=model_box_map.measure(cfg)),
+    "large": lambda cfg, cache: dict(
+        large=suites.large_grid(cfg, cache, np.random.default_rng(20240602))
+    ),
+    "suites": lambda cfg, cache: dict(
+        suites=suites.hard_case_suites(cfg, cache, np.random.default_rng(20240603))
+    ),
+    "scaling": lambda cfg, cache: dict(scaling=suites.scaling(cfg)),
+    "atlases": lambda cfg, cache: dict(atlases=suites.atlases(cfg)),
+    "curves": lambda cfg, cache: dict(curves=curves(cfg)),
+    "simulation": lambda cfg, cache: dict(sim=simulation(cfg)),
+    "outcome_maps": _outcome_maps,
+    "startup": lambda cfg, cache: dict(startup=startup.measure(cfg["startup"])),
+}
+#: the sections that evaluate the exact reference (``ExactCache``)
+_EXACT = ("work_precision", "large", "suites")
+
+
+def _measure(cfg, names) -> dict:
+    """The fields of the sections ``names``, in report order, and the exact reference's cost."""
     cache = ExactCache()
+    fields = {}
     with np.errstate(all="ignore"):
-        wp, refs = suites.work_precision(cfg, cache, rng)
-        model_grids = model_axes.measure(cfg)
-        box_map = model_box_map.measure(cfg)
-        large = suites.large_grid(cfg, cache, rng)
-        hard = suites.hard_case_suites(cfg, cache, rng)
-        scaling = suites.scaling(cfg)
-        atlases = suites.atlases(cfg)
-        sim = simulation(cfg)
-        maps = outcome_maps(cfg)
-        jax_outcome_columns(maps, cfg)
-        curve_rows = curves(cfg)
-    startup_rows = startup.measure(cfg["startup"])
-    exact = dict(points=len(cache.store), seconds=cache.seconds, failures=cache.failures)
-    return Results(
-        meta=meta,
-        cfg=cfg,
-        head=suites.headline(wp, cfg),
-        wp=wp,
-        refs=refs,
-        suites=hard,
-        scaling=scaling,
-        sim=sim,
-        large=large,
-        model_grids=model_grids,
-        model_box_map=box_map,
-        atlases=atlases,
-        curves=curve_rows,
-        maps=maps,
-        startup=startup_rows,
-        exact=exact,
-    )
+        for name in names:
+            if name in _MEASURE:
+                fields.update(_MEASURE[name](cfg, cache))
+    fields["exact"] = dict(
+        points=len(cache.store), seconds=cache.seconds, failures=cache.failures,
+        sections=[n for n in names if n in _EXACT],
+    )  # fmt: skip
+    return fields
 
 
-def _write(out: Path, r: Results, t_start: float):
-    """``bench_*.csv``, the figures, ``bench_headline.json`` and ``bench.md`` into ``out``."""
-    rows = (r.wp, r.suites, r.large, r.scaling, r.atlases, r.sim, r.curves, r.startup)
-    for name, section in zip(SECTIONS, rows):
-        write_csv(out / f"bench_{name}.csv", section)
-    plots.plot_all(out, r.wp, r.scaling, r.sim, r.cfg)
+def _results(meta, cfg, names, out) -> Results:
+    """The sections ``names`` measured now; with ``--only``, the others read back from ``out``
+    and ``meta["sections"]`` saying which run measured each."""
+    whole = set(names) == set(partial.SECTIONS)
+    kept = None if whole else partial.read_report(out)  # read first: a bad file costs no work
+    fields = _measure(cfg, names)
+    this = dict(start=meta["start"], command=meta["command"])
+    mine = {n: dict(this) for n in names if n != "distributed" or cfg.get("distributed")}
+    if whole:
+        meta["sections"] = mine
+        return Results(meta=meta, cfg=cfg, **fields)
+    meta["sections"] = {**partial.section_runs(kept["meta"]), **mine}
+    measured = {f for n in names for f in partial.SECTIONS[n]}
+    if not set(names) & set(_EXACT):
+        fields["exact"] = kept["exact"]
+    for f in Results.__dataclass_fields__:
+        if f not in ("meta", "cfg", "exact") and f not in measured:
+            fields[f] = kept[f]
+    return Results(meta=meta, cfg=cfg, **fields)
+
+
+def _write(out: Path, r: Results, t_start: float, names):
+    """The CSVs and figures of the sections ``names``, ``bench_headline.json`` and ``bench.md``
+    into ``out`` (a kept section's files are left as they are)."""
+    rows = dict(zip(SECTIONS, (r.wp, r.suites, r.large, r.scaling, r.atlases, r.sim, r.curves,
+                                r.startup)))  # fmt: skip
+    for name, section in rows.items():
+        if name in names:
+            write_csv(out / f"bench_{name}.csv", section)
+    if "work_precision" in names:
+        cases = [c[0] for c in r.cfg["cases"]]
+        plots.plot_work_precision(out, r.wp, cases)
+        plots.plot_convergence(out, r.wp, cases)
+    if "scaling" in names:
+        plots.plot_scaling(out, r.scaling)
+    if "simulation" in names:
+        plots.plot_simulation(out, r.sim)
     r.meta["duration"] = time.perf_counter() - t_start
     js = dict(
-        meta=r.meta, headline=r.head, model_grids=r.model_grids,
+        meta=r.meta, headline=r.head, refs=r.refs, exact=r.exact, model_grids=r.model_grids,
         model_box_map=r.model_box_map, large=r.large,
         atlases=r.atlases, outcome_maps=r.maps, startup=r.startup,
     )  # fmt: skip
@@ -134,7 +176,7 @@ def _write(out: Path, r: Results, t_start: float):
     atomic_write_text(out / "bench.md", build_report(r))
 
 
-def run(quick: bool = False, out: str | None = None, config: str | None = None) -> int:
+def run(quick: bool = False, out: str | None = None, config: str | None = None, only=None) -> int:
     """Run the benchmark and write :func:`files` (``bench.md``, ``bench_*.png``, ``bench_*.csv``,
     ``bench_headline.json``, and in the full run ``distributed.md``) into ``out``; returns 0.
 
@@ -147,33 +189,40 @@ def run(quick: bool = False, out: str | None = None, config: str | None = None) 
         report), ``outputs/quick`` for a quick one (ignored by git).
     config : str, optional
         A key of :data:`~atlas.bench.config.CONFIG` in place of ``quick`` (``tiny``: the tests).
+    only : str or sequence of str, optional
+        Re-measure only these sections (:data:`atlas.bench.partial.SECTIONS`, ``"a,b"``) and keep
+        the others of the report of the same mode already in ``out``, which the report then
+        names, per section, with the run that measured it.
     """
     t_start = time.perf_counter()
     mode = mode_name(quick, config)
+    cfg = CONFIG[mode]
     out = default_out(mode) if out is None else Path(out)
+    whole = tuple(partial.SECTIONS)
+    names = whole if only is None else partial.check_only(only, out, mode, cfg, files(mode))
     out.mkdir(parents=True, exist_ok=True)
     meta = dict(
         mode=mode,
         quick=mode != "full",
         start=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        command=_command(mode, out),
+        command=_command(mode, out, only),
         machine=machine(),
         notes=list(NOTES),
     )
-    log(f"{mode} run into {out}")
+    log(f"{mode} run into {out}" + (f", only {', '.join(names)}" if only is not None else ""))
     # timings exclude compilation (a warm-up call first); the cache spares recompiling next time
     use_compile_cache()
-    results = _measure(CONFIG[mode], meta)
-    if CONFIG[mode].get("distributed"):
+    results = _results(meta, cfg, names, out)
+    if cfg.get("distributed") and "distributed" in names:
         log("distributed generation (in process, LocalCluster 1 and 2 workers)")
         distributed.measure_throughput(out=str(out))
-    _write(out, results, t_start)
+    _write(out, results, t_start, names)
     log(f"done in {meta['duration']:.0f} s")
     print(f"atlas bench: {mode} report in {out / 'bench.md'}")
     return 0
 
 
-def _command(mode, out) -> str:
+def _command(mode, out, only=None) -> str:
     """The command line of this run, and the call it made."""
     argv = sys.argv[:]
     if argv and argv[0] in ("-c", ""):
@@ -183,6 +232,8 @@ def _command(mode, out) -> str:
     else:
         head = "python"
     call = f"quick={mode == 'quick'}" if mode in ("quick", "full") else f"config={mode!r}"
+    if only is not None:
+        call += f", only={only!r}"
     return f"{head} (bench.run({call}, out={str(out)!r}))"
 
 

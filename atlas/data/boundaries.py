@@ -89,6 +89,7 @@ from atlas.data import (
 )
 from atlas.data.boundary_args import (
     CHORD,
+    CLI_DEFAULTS,
     MAX_CHECK,
     MAX_LEVELS,
     MIN_CHORD,
@@ -791,10 +792,10 @@ def run_cli(
     csv=None,
     geojson=None,
     overwrite=False,
-    fields="SS,II",
+    fields=CLI_DEFAULTS["fields"],
     tol=TOL,
-    chord=CHORD,
-    check=2,
+    chord=CLI_DEFAULTS["chord"],
+    check=CLI_DEFAULTS["check"],
     dtype="float64",
     **axes,
 ) -> int:

@@ -11,7 +11,9 @@ import numpy as np
 from atlas.core import checks
 
 __all__ = [
+    "CHECK",
     "CHORD",
+    "CLI_DEFAULTS",
     "CODE_MEANINGS",
     "CSV_COLUMNS",
     "FIELD_NAMES",
@@ -31,6 +33,11 @@ TOL = 1e-10
 CHORD = 1e-6
 #: the fields (:data:`atlas.core.brackets.FIELDS`)
 FIELD_NAMES = ("SS", "II")
+#: default resampling factor of the hidden-branch check
+CHECK = 2
+#: the defaults of ``atlas boundaries``' options for a slice's curves, by name (the parser leaves
+#: them unset: ``--model-box`` refuses ``--chord`` and ``--check``)
+CLI_DEFAULTS = dict(chord=CHORD, check=CHECK, fields=",".join(FIELD_NAMES))
 #: the columns of :meth:`Boundaries.to_csv`: ``record`` ``vertex`` (one row per curve vertex, in
 #: order along the curve) or ``point`` (a codimension-2 point); ``curve`` the curve's index;
 #: ``field`` ``SS``/``II``/``class``; ``kind`` the curve kind (``SS_stability``,

@@ -1,0 +1,52 @@
+"""``atlas boundaries`` at its defaults (no --fields, --tol, --chord, --check) with every output:
+the same curves, CSV and GeoJSON as :func:`atlas.boundaries` at its own defaults."""
+
+import inspect
+import json
+
+import xarray as xr
+
+from atlas.cli import main
+from atlas.data.boundaries import boundaries, slice_boundaries
+from atlas.data.scene import Scene
+
+AXES = dict(beta1="0:2pi:12", beta2="0:2pi:12", kappa="2", q="0.1")
+
+
+def _api_defaults() -> str:
+    """The options of :func:`slice_boundaries` at their defaults, as ``history`` writes them."""
+    sig = inspect.signature(slice_boundaries).parameters
+    names = ("check", "chord", "dtype", "fields", "tol")
+    return ", ".join(f"{k}={sig[k].default!r}" for k in names)
+
+
+def _same_run(x):
+    """A GeoJSON object without what differs between two runs of the same curves: the durations
+    and the call in ``history`` (the CLI's options written out, the API's not)."""
+    if isinstance(x, dict):
+        return {k: _same_run(v) for k, v in x.items() if k != "history" and "seconds" not in k}
+    if isinstance(x, list):
+        return [_same_run(v) for v in x]
+    return x
+
+
+def test_defaults_with_csv_and_geojson_are_the_apis(tmp_path, capsys):
+    argv = ["boundaries", *(x for k, v in AXES.items() for x in (f"--{k}", v))]
+    cli = {end: tmp_path / f"cli.{end}" for end in ("nc", "csv", "json")}
+    argv += ["--out", str(cli["nc"]), "--csv", str(cli["csv"]), "--geojson", str(cli["json"])]
+    assert main(argv) == 0, capsys.readouterr().err
+    bd = boundaries(Scene(**AXES))
+    api = {end: tmp_path / f"api.{end}" for end in ("nc", "csv", "json")}
+    bd.to_netcdf(api["nc"])
+    bd.to_csv(api["csv"])
+    bd.to_geojson(api["json"])
+    with xr.open_dataset(cli["nc"]) as a, xr.open_dataset(api["nc"]) as b:
+        # the options of the run, as the file records them, are the API's defaults
+        assert f"atlas.boundaries({_api_defaults()}) over 1 slice(s)" in a.attrs["history"]
+        xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
+    assert cli["csv"].read_text() == api["csv"].read_text()
+    assert _same_run(json.loads(cli["json"].read_text())) == _same_run(
+        json.loads(api["json"].read_text())
+    )
+    fields = {r.split(",")[2] for r in cli["csv"].read_text().splitlines()[1:]}
+    assert {"SS", "II"} <= fields
