@@ -140,32 +140,6 @@ def test_in_process_equals_generate(inproc, reference, tmp_path):
     }
 
 
-@pytest.mark.e2e
-def test_a_running_cluster_by_address_equals_in_process(inproc, reference, tmp_path, capsys):
-    """``atlas generate --scheduler tcp://HOST:PORT``: the tiles of a cluster that was already
-    running (two single-thread workers), given by its scheduler's address on the command line,
-    are the in-process tiles byte for byte, and so is the netCDF file ``--out`` converts."""
-    from atlas.cli import main
-    from atlas.data.cluster import local_cluster
-
-    cluster, client = local_cluster(2)
-    try:
-        args = ["generate", *(f"--{k}={v}" for k, v in SCENE.items()), "--slab", "2"]
-        args += ["--tile-points", str(TP), "--no-progress", "--out", str(tmp_path / "c.nc")]
-        rc = main([*args, "--scheduler", cluster.scheduler_address])
-    finally:
-        client.close()
-        cluster.close()
-    assert rc == 0, capsys.readouterr().err
-    assert "4 computed" in capsys.readouterr().err
-    got = open_store(tmp_path / "c.zarr").load()
-    same_bytes(got, reference)
-    same_bytes(got, open_store(inproc[0] / "a.zarr").load())
-    assert got.attrs["undecided_fast"] == reference.attrs["undecided_fast"]
-    with xr.open_dataset(tmp_path / "c.nc") as a, xr.open_dataset(inproc[0] / "a.nc") as b:
-        same_bytes(a.load(), b.load())
-
-
 _KILLED = textwrap.dedent(
     """
     import sys, time

@@ -63,11 +63,11 @@ def test_scheduler_local_n_through_the_command_line(tmp_path, capsys):
     pytest.importorskip("distributed")
     axes = dict(GRID, kappa="0.5,2", q="0,0.1")
     out = tmp_path / "a.nc"
-    argv = ["generate", *_argv(axes), "--scheduler", "local:1", "--slab", "2", "--out", str(out)]
-    # one worker, where a bare "local" starts one per core
+    argv = ["generate", *_argv(axes), "--scheduler", "local:2", "--slab", "2", "--out", str(out)]
+    # two single-thread workers writing tiles of one store at the same time
     assert main(argv) == 0, capsys.readouterr().err
     summary = capsys.readouterr().err.strip().splitlines()[-1]
-    assert "on local:1 with 1 worker(s); 4 tiles: 4 computed" in summary, summary
+    assert "on local:2 with 2 worker(s); 4 tiles: 4 computed" in summary, summary
     assert (tmp_path / "a.zarr").is_dir()  # the resumable store beside the file
     api = generate(Scene(**axes))
     with xr.open_dataset(out) as ds:
