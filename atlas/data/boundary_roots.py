@@ -33,17 +33,18 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import flint
 import numpy as np
 
-from atlas.data import boundary_germs, boundary_points
-from atlas.data.boundary_curves import Point
+from atlas.data import boundary_germs, boundary_points, class_lines
+from atlas.data.boundary_curves import Curve, Point
 
 __all__ = [
     "KINDS",
     "account_roots",
-    "attach_off_lines",
+    "attach",
     "distinct",
     "ii_root_account",
     "ss_root_account",
@@ -234,15 +235,63 @@ def superseded(points, proven, reach) -> list[Point]:
     return [p for p in points if p.proven or p.kind not in kinds or not near(p)]
 
 
-def attach_off_lines(curves, points, reach, within, near, tol) -> tuple[list, int]:
-    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into the curves not on
-    a class line only (the pieces on the lines end at their breaks already,
-    :mod:`atlas.data.boundary_cover`; a piece ending next to a point would be stretched over the
-    piece that reaches it).  Returns the curves (same order) and the number of splices."""
-    idx = [i for i, c in enumerate(curves) if not c.on_class_line]
-    got, n = boundary_points.attach_points([curves[i] for i in idx], points, reach, within, near,
-                                           tol)  # fmt: skip
-    out = list(curves)
-    for i, c in zip(idx, got):
-        out[i] = c
+def attach(curves, points, reach, within, near, tol) -> tuple[list, int]:
+    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into every curve of a
+    field, SS and II alike, but for a splice that extends a piece on a class line past its end
+    over a stretch of the line another piece of the field covers (:func:`_unstretched`: the
+    pieces on the lines end at their breaks already; such a splice would cover the stretch
+    twice).  Returns the curves (same order) and the number of splices kept."""
+    got, n = boundary_points.attach_points(curves, points, reach, within, near, tol)
+    out = list(curves)  # the other pieces as they stand: spliced where checked, else as before
+    for i, (old, new) in enumerate(zip(curves, got)):
+        if new.on_class_line and len(new.vertices) > len(old.vertices):
+            new, undone = _unstretched(old, new, out[:i] + out[i + 1 :], tol)
+            n -= undone
+        out[i] = new
     return out, n
+
+
+def _unstretched(old, new, others, tol) -> tuple[Curve, int]:
+    """``new`` (``old`` with points spliced in) without a new end vertex whose segment to its
+    neighbour overlaps, by more than ``tol`` [rad] along the line, a segment of a curve of
+    ``others`` on the same class line; and how many were dropped."""
+    others = [c for c in others if c.on_class_line and len(c.vertices) > 1]
+    dropped = 0
+    for end in (0, -1):
+        v = new.vertices
+        is_new = not np.array_equal(v[end], old.vertices[end])
+        if len(v) > 2 and is_new and _covered(v[end], v[1 if end == 0 else -2], others, tol):
+            new = _without_end(new, end)
+            dropped += 1
+    return new, dropped
+
+
+def _covered(a, b, curves, tol) -> bool:
+    """Whether the segment ``a -> b`` on a class line overlaps a segment of ``curves`` on the
+    same line (both ends within ``tol`` of it) by more than ``tol`` [rad] along it."""
+    mid = 0.5 * (np.asarray(a) + np.asarray(b))
+    m = int(class_lines.line_distances(mid[None])[0].argmin())
+    axis = 1 if m < 5 else 0  # the line's parameter (beta1 on the diagonals)
+    lo, hi = sorted((a[axis], b[axis]))
+    for c in curves:
+        v = c.vertices
+        near = class_lines.line_distances(v)[:, m] <= tol
+        on = near[1:] & near[:-1]
+        s, e = np.minimum(v[:-1, axis], v[1:, axis])[on], np.maximum(v[:-1, axis], v[1:, axis])[on]
+        if (np.minimum(e, hi) - np.maximum(s, lo) > tol).any():
+            return True
+    return False
+
+
+def _without_end(c: Curve, end: int) -> Curve:
+    """``c`` without its first (``end = 0``) or last (``-1``) vertex, a spliced one."""
+    keep = slice(1, None) if end == 0 else slice(None, -1)
+    n = len(c.vertices)
+    spliced = [i - (end == 0) for i in c.spliced if i != (0 if end == 0 else n - 1)]
+    return replace(
+        c,
+        vertices=c.vertices[keep],
+        bracket=c.bracket[keep],
+        ends=None if c.ends is None else c.ends[keep],
+        spliced=tuple(spliced),
+    )
