@@ -24,10 +24,15 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
   ``p`` is positive at ``r`` or vanishes on the whole slice (``a3``, ``a1`` at ``q1 = q2 = 0``):
   then ``p(l) > 0`` for ``l > 0`` on a neighbourhood of ``r``, no real root ``l > 0``, every
   point there II inconsistent (proven);
+* II, where none of the above holds: from the branches of the boundaries through ``r``
+  (:func:`atlas.data.boundary_branches.decide`: each vanishing germ's zero set a graph over the
+  line, at most one per quadrant, the codes of the sectors between them sampled exactly):
+  ``not_boundary`` where each side carries one code, ``point`` (``touches_class_line``) where a
+  boundary touches the line there (proven);
 * ``class_crossing``: ``r`` is a multiple of ``pi/2``, where class lines cross (a vertex of the
   closed-form class lines; the codes around it are not examined here);
-* ``undecided``: anything else (a multiple root, roots of two polynomials overlapping, or a
-  sample without a proven offset).
+* ``undecided``: anything else (a germ whose derivative across the line vanishes at ``r`` too, two
+  branches into one quadrant, or a sample without a proven offset).
 """
 
 from __future__ import annotations
@@ -38,7 +43,7 @@ from dataclasses import replace
 import flint
 import numpy as np
 
-from atlas.data import boundary_germs, boundary_points, class_lines
+from atlas.data import boundary_branches, boundary_germs, boundary_points, class_lines
 from atlas.data.boundary_curves import Curve, Point
 
 __all__ = [
@@ -109,16 +114,19 @@ def _inconsistent_near(model, m, ball) -> bool:
         )
 
 
-def _verdict(fld, model, m, ball, listed, others) -> tuple[str, tuple[bool, bool] | None]:
-    """The verdict of one root (module docstring) and, for a ``point`` found from the codes next
-    to the line, per side (``delta < 0``, ``> 0``) whether they change across the root."""
+def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None]:
+    """The verdict of one root (module docstring) and, for a ``point`` found here, its kind:
+    ``crosses_class_line`` where the codes next to the line change across the root on both
+    sides, ``leaves_class_line`` on one, ``touches_class_line`` where they change on neither
+    but a boundary touches the line there (:func:`atlas.data.boundary_branches.decide`, II)."""
     if listed:
         return "point", None
     beta = float(ball.mid())
     h = 0.25 * _neighbours(beta, others)
     near = [boundary_germs.near_side_codes(fld, model, m, beta + s * h) for s in (-1, 1)]
     if None not in near and near[0][:2] != near[1][:2]:
-        return "point", (near[0][0] != near[1][0], near[0][1] != near[1][1])
+        both = near[0][0] != near[1][0] and near[0][1] != near[1][1]
+        return "point", ("leaves_class_line", "crosses_class_line")[both]
     if _at_crossing(ball):
         return "class_crossing", None
     if None not in near and _simple_single(fld, model, m, ball):
@@ -127,6 +135,10 @@ def _verdict(fld, model, m, ball, listed, others) -> tuple[str, tuple[bool, bool
         return "not_boundary", None
     if fld == "II" and _inconsistent_near(model, m, ball):
         return "not_boundary", None
+    if fld == "II" and None not in near:
+        got = boundary_branches.decide(fld, model, m, ball, h, near)
+        if got is not None:
+            return ("point", got) if got == "touches_class_line" else (got, None)
     return "undecided", None
 
 
@@ -205,9 +217,9 @@ def ii_root_account(model, germ_roots) -> tuple[dict, list[Point]]:
     found = _account("II", model, roots, germ_roots, [False] * len(roots))
     verdicts = [v for v, _ in found]
     points = [
-        Point(*_xy(m, float(ball.mid())), ("leaves_class_line", "crosses_class_line")[all(ch)],
-              _radius(m, ball), *model, proven=True, field="II")
-        for (m, ball, _), (v, ch) in zip(roots, found)
+        Point(*_xy(m, float(ball.mid())), kind, _radius(m, ball), *model, proven=True,
+              field="II")
+        for (m, ball, _), (v, kind) in zip(roots, found)
         if v == "point"
     ]  # fmt: skip
     counts = {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
