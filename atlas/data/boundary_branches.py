@@ -104,7 +104,7 @@ def _graphs(germs, t_root, t_ends, e_max):
         if 0 in signs:
             return None
         sides = [((-1, 1) if s > 0 else ()) if even else (s,) for s in signs]
-        out.append((_rows(germ), [(j, s) for j in (0, 1) for s in sides[j]]))
+        out.append((_rows(germ), [(j, s) for j in (0, 1) for s in sides[j]], germ))
     return out
 
 
@@ -145,7 +145,7 @@ def decide(fld, model, m, ball, h, near) -> str | None:
                 graphs = _graphs(germs, t_root, ends, e_max)
                 if graphs is None:
                     continue
-                return _verdict(fld, model, m, graphs, t_root, e_max, k, near)
+                return _verdict(fld, model, m, graphs, t_root, e_max, k, near, ends)
     return None
 
 
@@ -186,23 +186,110 @@ def _fmpq(x: float) -> flint.fmpq:
     return flint.fmpq(*Fraction(x).as_integer_ratio())
 
 
-def _verdict(fld, model, m, graphs, t_root, e_max, k, near) -> str | None:
+def _verdict(fld, model, m, graphs, t_root, e_max, k, near, ends) -> str | None:
     """:func:`decide` once the box is proven (:func:`_graphs`)."""
-    quadrants = [q for _, entered in graphs for q in entered]
-    if len(set(quadrants)) < len(quadrants):
-        return None  # two graphs in one quadrant: a sector between them is not sampled
+    quadrants = [q for _, entered, _ in graphs for q in entered]
     entered = {s for _, s in quadrants}
-    vertical = {}
-    if entered:
-        vertical = _vertical_codes(fld, model, m, [r for r, _ in graphs], t_root, e_max, k)
+    sampled = {-1: set(), 1: set()}
+    if len(set(quadrants)) < len(quadrants):  # a sector between two graphs: the chart
+        sampled = _chart_codes(fld, model, m, [g for _, _, g in graphs], t_root, ends, e_max)
+        if sampled is None:
+            return None
+    elif entered:
+        vertical = _vertical_codes(fld, model, m, [r for r, _, _ in graphs], t_root, e_max, k)
         if vertical is None:
             return None
-    sides = {}
-    for s, i in ((-1, 0), (1, 1)):
-        codes = {near[0][i], near[1][i]} | ({vertical[s]} if s in entered else set())
-        sides[s] = codes
+        sampled = {s: {vertical[s]} if s in entered else set() for s in (-1, 1)}
+    sides = {s: {near[0][i], near[1][i]} | sampled[s] for s, i in ((-1, 0), (1, 1))}
     if all(len(c) == 1 for c in sides.values()):
         return "not_boundary"
     if all(near[0][i] == near[1][i] for i in (0, 1)):
         return "touches_class_line"
     return "point"
+
+
+def _chart(germs, t_root):
+    """The minimal polynomial ``f`` of ``t_root`` (an irreducible factor of the first germ's
+    ``g_0``), the common multiplicity ``k`` of ``t_root`` in every ``g_0``, and per germ the rows
+    of ``H(t, lam) = G(t, lam f^k) / f^k`` (exact: ``h_0 = g_0 / f^k``, ``h_b = g_b f^(k (b -
+    1))``); ``None`` where the multiplicities differ."""
+    with flint.ctx.workprec(256):
+        f = next((p for p, _ in germs[0][0].factor()[1]
+                  if flint.arb_poly(list(p.coeffs()))(t_root).contains(0)), None)  # fmt: skip
+    if f is None:
+        return None
+    charts, ks = [], set()
+    for germ in germs:
+        k = 0
+        while (germ[0] % f ** (k + 1)).is_zero():
+            k += 1
+        ks.add(k)
+        rows = [germ[0] / f**k] + [g * f ** (k * (b - 1)) for b, g in enumerate(germ) if b]
+        charts.append(rows)
+    return (f, ks.pop(), charts) if len(ks) == 1 else None
+
+
+def _chart_codes(fld, model, m, germs, t_root, ends, e_max) -> dict | None:
+    """The exact codes of the sectors around ``t_root`` where two graphs enter one quadrant
+    (module docstring), per side of the line (``{-1: codes, 1: codes}``), or ``None``.
+
+    In the chart ``e = lam f(t)^k`` (:func:`_chart`) each graph ``phi_i`` tends to ``lam_i =
+    -h_0 / h_1`` at ``t_root``.  For ``lam`` in each gap between ``0`` and the ``lam_i`` (and
+    beyond the outermost), the curve ``e = lam f(t)^k`` from ``t_s`` to ``t_root`` meets no
+    graph (every ``H_i(., lam)`` proven away from 0 over it) and stays in the box (``|e| <=
+    e_max``): it lies in one sector, the one between those ``lam_i`` next to ``t_root``; the
+    code at ``(t_s, lam f(t_s)^k)`` is that sector's, on each half of the box."""
+    got = _chart(germs, t_root)
+    if got is None:
+        return None
+    f, k, charts = got
+    with flint.ctx.workprec(256):
+        lams = []
+        for rows in charts:
+            h0, h1 = (flint.arb_poly(list(r.coeffs()))(t_root) for r in rows[:2])
+            if h1.contains(0):
+                return None
+            lams.append(-h0 / h1)
+        if any(a.overlaps(b) for i, a in enumerate(lams) for b in lams[i + 1 :]):
+            return None
+        marks = sorted([0.0] + [float(v.mid()) for v in lams])
+        big = 2 * max(abs(v) for v in marks)
+        gaps = [0.5 * (a + b) for a, b in zip(marks, marks[1:])] + [-big, big]
+        t_q = _q(t_root)
+        codes = {-1: set(), 1: set()}
+        for end in ends:
+            for lam in (_fmpq(g) for g in gaps if g != 0):
+                t_s = _inside(f, k, lam, t_q, end, e_max)
+                if t_s is None or not _clear_curve(charts, t_q, t_s, t_root, lam):
+                    return None
+                e_s = lam * f(t_s) ** k
+                side = 1 if e_s > 0 else -1
+                t, e = (Fraction(int(v.p), int(v.q)) for v in (t_s, e_s))
+                codes[side].add(boundary_germs.exact_codes_at(fld, model, m, t, e))
+    return codes
+
+
+def _inside(f, k, lam, t_q, end, e_max):
+    """A rational ``t_s`` between ``t_q`` and ``end`` where ``|lam f^k| <= e_max`` over
+    ``[t_s, t_q]`` (halving the way towards ``t_q``), or ``None``."""
+    t_s = end
+    for _ in range(200):
+        box = flint.arb(t_s).union(flint.arb(t_q))
+        if (abs(flint.arb(lam) * flint.arb_poly(list(f.coeffs()))(box) ** k)).upper() <= e_max:
+            return t_s
+        t_s = (t_s + t_q) / 2
+    return None
+
+
+def _clear_curve(charts, t_q, t_s, t_root, lam) -> bool:
+    """Whether every ``H_i(t, lam)`` is proven away from 0 for ``t`` between ``t_s`` and the
+    root (rows :func:`_shifted` about the middle; ``t_q`` the root's exact middle)."""
+    mid = (t_s + t_q) / 2
+    x = flint.arb(t_s).union(t_root) - flint.arb(mid)
+    for rows in charts:
+        h = flint.fmpq_poly([0])
+        for b, r in enumerate(rows):
+            h += r * lam**b
+        if (flint.arb_poly(list(h(flint.fmpq_poly([mid, 1])).coeffs()))(x)).contains(0):
+            return False
+    return True

@@ -49,6 +49,7 @@ __all__ = [
     "clear",
     "coefficients_on_line",
     "exact_codes",
+    "exact_codes_at",
     "germ_roots",
     "germs",
     "near_side_codes",
@@ -288,12 +289,14 @@ def exact_codes(fld, model, m, t: Fraction, k: int) -> tuple[int, int]:
     """The exact codes of ``fld`` at ``(t, -2^-k)`` and ``(t, 2^-k)`` near class line ``m``
     (module docstring; ``t`` rational, the directions exactly rational;
     :func:`atlas.core.exact.point_spectral`)."""
+    e = Fraction(1, 2**k)
+    return exact_codes_at(fld, model, m, t, -e), exact_codes_at(fld, model, m, t, e)
+
+
+def exact_codes_at(fld, model, m, t: Fraction, e: Fraction) -> int:
+    """The exact code of ``fld`` at the rationals ``(t, e)`` near class line ``m`` (module
+    docstring; :func:`atlas.core.exact.point_spectral` at exactly rational directions)."""
     kappa, q1, q2 = (Fraction(v) for v in model)
-    codes = []
-    for e in (-Fraction(1, 2**k), Fraction(1, 2**k)):
-        dirs = [_value_at(r, t, e) for r in _directions(m)]
-        verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
-        codes.append(
-            int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])
-        )
-    return codes[0], codes[1]
+    dirs = [_value_at(r, t, e) for r in _directions(m)]
+    verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
+    return int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])

@@ -26,13 +26,14 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
   point there II inconsistent (proven);
 * II, where none of the above holds: from the branches of the boundaries through ``r``
   (:func:`atlas.data.boundary_branches.decide`: each vanishing germ's zero set a graph over the
-  line, at most one per quadrant, the codes of the sectors between them sampled exactly):
+  line, the codes of the sectors between them sampled exactly):
   ``not_boundary`` where each side carries one code, ``point`` (``touches_class_line``) where a
   boundary touches the line there (proven);
 * ``class_crossing``: ``r`` is a multiple of ``pi/2``, where class lines cross (a vertex of the
   closed-form class lines; the codes around it are not examined here);
-* ``undecided``: anything else (a germ whose derivative across the line vanishes at ``r`` too, two
-  branches into one quadrant, or a sample without a proven offset).
+* ``undecided``: anything else (a germ whose derivative across the line vanishes at ``r`` too,
+  two branches into one quadrant that the chart cannot tell apart, or a sample without a proven
+  offset).
 """
 
 from __future__ import annotations
