@@ -651,8 +651,7 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
     )
     curves += added
     proven = [p for p in pts if p.proven]
-    attach = boundary_points.attach_points if fld == "SS" else boundary_roots.attach_off_lines
-    curves, spliced = attach(curves, proven, tol, cell, 2 * distance, tol)
+    curves, spliced = boundary_roots.attach(curves, proven, tol, cell, 2 * distance, tol)
     reached = np.concatenate([polys.xy] + [c.vertices for c in added])
     max_bracket = float(polys.width.max(initial=0.0))
     if max_bracket > tol:  # bisect shrinks every bracket to <= tol

@@ -48,6 +48,8 @@ __all__ = [
     "boundary_polynomials",
     "clear",
     "coefficients_on_line",
+    "exact_codes",
+    "exact_codes_at",
     "germ_roots",
     "germs",
     "near_side_codes",
@@ -170,11 +172,20 @@ def coefficients_on_line(m, model) -> tuple:
 
 def boundary_polynomials(fld, m, model) -> tuple:
     """The numerators ``F(t, e)`` (``flint.fmpq_mpoly``) of the boundary polynomials of ``fld``
-    (module docstring) near class line ``m``; ``model = (kappa, q1, q2)``."""
+    (module docstring) near class line ``m``, squarefree (:func:`_radical`); ``model = (kappa,
+    q1, q2)``."""
     exact = [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in model]
     comps = (_ss_polynomials if fld == "SS" else _ii_polynomials)(*_directions(m), *exact)
     out = [c.num if isinstance(c, _Rat2) else c for c in comps]
-    return tuple(f for f in out if not isinstance(f, flint.fmpq) and not f.is_zero())
+    return tuple(_radical(f) for f in out if not isinstance(f, flint.fmpq) and not f.is_zero())
+
+
+def _radical(F):
+    """``F`` with each repeated factor once (squarefree factorisation): the same zero set, and a
+    root of ``G(t, 0)`` that only a squared factor made multiple becomes simple (at ``q = 0``
+    ``disc_l p = 16 a0 (a2^2 - 4 a0)^2``)."""
+    _, factors = F.factor_squarefree()
+    return functools.reduce(operator.mul, (f for f, _ in factors), _CTX.from_dict({(0, 0, 0): 1}))
 
 
 def _germ(F):
@@ -271,12 +282,21 @@ def near_side_codes(fld, model, m, beta: float) -> tuple[int, int, float] | None
         )  # fmt: skip
     if k is None:
         return None
+    return (*exact_codes(fld, model, m, t, k), 2 * math.atan(2.0**-k))
+
+
+def exact_codes(fld, model, m, t: Fraction, k: int) -> tuple[int, int]:
+    """The exact codes of ``fld`` at ``(t, -2^-k)`` and ``(t, 2^-k)`` near class line ``m``
+    (module docstring; ``t`` rational, the directions exactly rational;
+    :func:`atlas.core.exact.point_spectral`)."""
+    e = Fraction(1, 2**k)
+    return exact_codes_at(fld, model, m, t, -e), exact_codes_at(fld, model, m, t, e)
+
+
+def exact_codes_at(fld, model, m, t: Fraction, e: Fraction) -> int:
+    """The exact code of ``fld`` at the rationals ``(t, e)`` near class line ``m`` (module
+    docstring; :func:`atlas.core.exact.point_spectral` at exactly rational directions)."""
     kappa, q1, q2 = (Fraction(v) for v in model)
-    codes = []
-    for e in (-Fraction(1, 2**k), Fraction(1, 2**k)):
-        dirs = [_value_at(r, t, e) for r in _directions(m)]
-        verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
-        codes.append(
-            int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])
-        )
-    return codes[0], codes[1], 2 * math.atan(2.0**-k)
+    dirs = [_value_at(r, t, e) for r in _directions(m)]
+    verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
+    return int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])

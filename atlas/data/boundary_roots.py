@@ -24,26 +24,33 @@ a quarter of the way to the nearest other break: a germ root, a line root or a m
   ``p`` is positive at ``r`` or vanishes on the whole slice (``a3``, ``a1`` at ``q1 = q2 = 0``):
   then ``p(l) > 0`` for ``l > 0`` on a neighbourhood of ``r``, no real root ``l > 0``, every
   point there II inconsistent (proven);
+* II, where none of the above holds: from the branches of the boundaries through ``r``
+  (:func:`atlas.data.boundary_branches.decide`: each vanishing germ's zero set a graph over the
+  line, the codes of the sectors between them sampled exactly):
+  ``not_boundary`` where each side carries one code, ``point`` (``touches_class_line``) where a
+  boundary touches the line there (proven);
 * ``class_crossing``: ``r`` is a multiple of ``pi/2``, where class lines cross (a vertex of the
   closed-form class lines; the codes around it are not examined here);
-* ``undecided``: anything else (a multiple root, roots of two polynomials overlapping, or a
-  sample without a proven offset).
+* ``undecided``: anything else (a germ whose derivative across the line vanishes at ``r`` too,
+  two branches into one quadrant that the chart cannot tell apart, or a sample without a proven
+  offset).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import flint
 import numpy as np
 
-from atlas.data import boundary_germs, boundary_points
-from atlas.data.boundary_curves import Point
+from atlas.data import boundary_branches, boundary_germs, boundary_points, class_lines
+from atlas.data.boundary_curves import Curve, Point
 
 __all__ = [
     "KINDS",
     "account_roots",
-    "attach_off_lines",
+    "attach",
     "distinct",
     "ii_root_account",
     "ss_root_account",
@@ -108,16 +115,19 @@ def _inconsistent_near(model, m, ball) -> bool:
         )
 
 
-def _verdict(fld, model, m, ball, listed, others) -> tuple[str, tuple[bool, bool] | None]:
-    """The verdict of one root (module docstring) and, for a ``point`` found from the codes next
-    to the line, per side (``delta < 0``, ``> 0``) whether they change across the root."""
+def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None]:
+    """The verdict of one root (module docstring) and, for a ``point`` found here, its kind:
+    ``crosses_class_line`` where the codes next to the line change across the root on both
+    sides, ``leaves_class_line`` on one, ``touches_class_line`` where they change on neither
+    but a boundary touches the line there (:func:`atlas.data.boundary_branches.decide`, II)."""
     if listed:
         return "point", None
     beta = float(ball.mid())
     h = 0.25 * _neighbours(beta, others)
     near = [boundary_germs.near_side_codes(fld, model, m, beta + s * h) for s in (-1, 1)]
     if None not in near and near[0][:2] != near[1][:2]:
-        return "point", (near[0][0] != near[1][0], near[0][1] != near[1][1])
+        both = near[0][0] != near[1][0] and near[0][1] != near[1][1]
+        return "point", ("leaves_class_line", "crosses_class_line")[both]
     if _at_crossing(ball):
         return "class_crossing", None
     if None not in near and _simple_single(fld, model, m, ball):
@@ -126,6 +136,10 @@ def _verdict(fld, model, m, ball, listed, others) -> tuple[str, tuple[bool, bool
         return "not_boundary", None
     if fld == "II" and _inconsistent_near(model, m, ball):
         return "not_boundary", None
+    if fld == "II" and None not in near:
+        got = boundary_branches.decide(fld, model, m, ball, h, near)
+        if got is not None:
+            return ("point", got) if got == "touches_class_line" else (got, None)
     return "undecided", None
 
 
@@ -204,9 +218,9 @@ def ii_root_account(model, germ_roots) -> tuple[dict, list[Point]]:
     found = _account("II", model, roots, germ_roots, [False] * len(roots))
     verdicts = [v for v, _ in found]
     points = [
-        Point(*_xy(m, float(ball.mid())), ("leaves_class_line", "crosses_class_line")[all(ch)],
-              _radius(m, ball), *model, proven=True, field="II")
-        for (m, ball, _), (v, ch) in zip(roots, found)
+        Point(*_xy(m, float(ball.mid())), kind, _radius(m, ball), *model, proven=True,
+              field="II")
+        for (m, ball, _), (v, kind) in zip(roots, found)
         if v == "point"
     ]  # fmt: skip
     counts = {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
@@ -234,15 +248,63 @@ def superseded(points, proven, reach) -> list[Point]:
     return [p for p in points if p.proven or p.kind not in kinds or not near(p)]
 
 
-def attach_off_lines(curves, points, reach, within, near, tol) -> tuple[list, int]:
-    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into the curves not on
-    a class line only (the pieces on the lines end at their breaks already,
-    :mod:`atlas.data.boundary_cover`; a piece ending next to a point would be stretched over the
-    piece that reaches it).  Returns the curves (same order) and the number of splices."""
-    idx = [i for i, c in enumerate(curves) if not c.on_class_line]
-    got, n = boundary_points.attach_points([curves[i] for i in idx], points, reach, within, near,
-                                           tol)  # fmt: skip
-    out = list(curves)
-    for i, c in zip(idx, got):
-        out[i] = c
+def attach(curves, points, reach, within, near, tol) -> tuple[list, int]:
+    """:func:`atlas.data.boundary_points.attach_points` (same arguments) into every curve of a
+    field, SS and II alike, but for a splice that extends a piece on a class line past its end
+    over a stretch of the line another piece of the field covers (:func:`_unstretched`: the
+    pieces on the lines end at their breaks already; such a splice would cover the stretch
+    twice).  Returns the curves (same order) and the number of splices kept."""
+    got, n = boundary_points.attach_points(curves, points, reach, within, near, tol)
+    out = list(curves)  # the other pieces as they stand: spliced where checked, else as before
+    for i, (old, new) in enumerate(zip(curves, got)):
+        if new.on_class_line and len(new.vertices) > len(old.vertices):
+            new, undone = _unstretched(old, new, out[:i] + out[i + 1 :], tol)
+            n -= undone
+        out[i] = new
     return out, n
+
+
+def _unstretched(old, new, others, tol) -> tuple[Curve, int]:
+    """``new`` (``old`` with points spliced in) without a new end vertex whose segment to its
+    neighbour overlaps, by more than ``tol`` [rad] along the line, a segment of a curve of
+    ``others`` on the same class line; and how many were dropped."""
+    others = [c for c in others if c.on_class_line and len(c.vertices) > 1]
+    dropped = 0
+    for end in (0, -1):
+        v = new.vertices
+        is_new = not np.array_equal(v[end], old.vertices[end])
+        if len(v) > 2 and is_new and _covered(v[end], v[1 if end == 0 else -2], others, tol):
+            new = _without_end(new, end)
+            dropped += 1
+    return new, dropped
+
+
+def _covered(a, b, curves, tol) -> bool:
+    """Whether the segment ``a -> b`` on a class line overlaps a segment of ``curves`` on the
+    same line (both ends within ``tol`` of it) by more than ``tol`` [rad] along it."""
+    mid = 0.5 * (np.asarray(a) + np.asarray(b))
+    m = int(class_lines.line_distances(mid[None])[0].argmin())
+    axis = 1 if m < 5 else 0  # the line's parameter (beta1 on the diagonals)
+    lo, hi = sorted((a[axis], b[axis]))
+    for c in curves:
+        v = c.vertices
+        near = class_lines.line_distances(v)[:, m] <= tol
+        on = near[1:] & near[:-1]
+        s, e = np.minimum(v[:-1, axis], v[1:, axis])[on], np.maximum(v[:-1, axis], v[1:, axis])[on]
+        if (np.minimum(e, hi) - np.maximum(s, lo) > tol).any():
+            return True
+    return False
+
+
+def _without_end(c: Curve, end: int) -> Curve:
+    """``c`` without its first (``end = 0``) or last (``-1``) vertex, a spliced one."""
+    keep = slice(1, None) if end == 0 else slice(None, -1)
+    n = len(c.vertices)
+    spliced = [i - (end == 0) for i in c.spliced if i != (0 if end == 0 else n - 1)]
+    return replace(
+        c,
+        vertices=c.vertices[keep],
+        bracket=c.bracket[keep],
+        ends=None if c.ends is None else c.ends[keep],
+        spliced=tuple(spliced),
+    )

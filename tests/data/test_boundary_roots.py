@@ -24,13 +24,18 @@ def _account(model):
     return roots, listed, boundary_roots.account_roots("SS", model, roots, germs, listed)
 
 
-def _rings(field, model, roots, verdicts):
+def _rings(field, model, roots, verdicts, only=None):
     """``(m, ball, ring)`` of each ``not_boundary`` root of ``field`` that is not a simple root
-    of one boundary polynomial; ``ring``: 24 ``(angle, (beta1, beta2))`` on a circle of radius
-    1e-7 rad around it (none on the line)."""
+    of one boundary polynomial (or for which ``only(m, ball)`` holds); ``ring``: 24 ``(angle,
+    (beta1, beta2))`` on a circle of radius 1e-7 rad around it (none on the line)."""
+    if only is None:
+
+        def only(m, ball):
+            return not boundary_roots._simple_single(field, model, m, ball)
+
     out = []
     for (m, ball, _), v in zip(roots, verdicts):
-        if v != "not_boundary" or boundary_roots._simple_single(field, model, m, ball):
+        if v != "not_boundary" or not only(m, ball):
             continue
         at, _ = _point(m, float(ball.mid()))
         angles = (np.arange(24) + 0.5) * PI / 12
@@ -90,11 +95,16 @@ def test_not_boundary_roots_have_one_code_per_side(field, model):
     """Around each ``not_boundary`` root, 24 points on a circle of radius 1e-7 rad (off the line
     by more than a tenth of it) and 1e-12 off the line 1e-7 along it on both sides (inside a
     needle a tangent boundary would leave): the exact tier's code is the same on all of one
-    side."""
+    side.  (Roots decided from the branches through them are checked closer:
+    :func:`test_ii_roots_decided_from_the_branches_through_them`; a boundary can pass them 5e-9
+    rad off the line.)"""
     roots, _, verdicts = (_account if field == "SS" else _account_ii)(model)
-    checked = 0
+    checked = branches = 0
     for (m, ball, _), v in zip(roots, verdicts):
         if v != "not_boundary":
+            continue
+        if field == "II" and _by_branches(model, m, ball):
+            branches += 1
             continue
         at, normal = _point(m, float(ball.mid()))
         sides = {1: set(), -1: set()}
@@ -107,7 +117,14 @@ def test_not_boundary_roots_have_one_code_per_side(field, model):
                 sides[int(np.sign(side))].add(exact_code(field, *(at + off), model))
         assert len(sides[1]) == 1 and len(sides[-1]) == 1, (m, float(ball.mid()), sides)
         checked += 1
-    assert checked == verdicts.count("not_boundary")
+    assert checked + branches == verdicts.count("not_boundary")
+
+
+def _by_branches(model, m, ball):
+    """Whether the II root ``ball`` of line ``m`` is decided neither by a simple root of one
+    boundary polynomial nor by the signs of ``p``'s coefficients."""
+    simple = boundary_roots._simple_single("II", model, m, ball)
+    return not simple and not boundary_roots._inconsistent_near(model, m, ball)
 
 
 def test_undecided_roots_are_listed_as_points():
@@ -235,15 +252,130 @@ def _line_of(x, y):
 
 
 def test_ii_roots_with_no_positive_root_of_p_are_decided():
-    """At q = 0 the II roots where no boundary polynomial vanishes simply but every coefficient
-    of ``p`` is positive are ``not_boundary`` (none was before); checked against mpmath at 60
-    digits: on a ring of radius 1e-7 rad around each (24 points) ``p`` has no real root ``l > 0``
-    (II inconsistent all round)."""
+    """At q = 0 the II roots where every coefficient of ``p`` is positive are ``not_boundary``;
+    checked against mpmath at 60 digits: on a ring of radius 1e-7 rad around each (24 points)
+    ``p`` has no real root ``l > 0`` (II inconsistent all round)."""
     roots, _, verdicts = _account_ii(Q0)
     assert verdicts.count("undecided") <= 12
-    rings = _rings("II", Q0, roots, verdicts)
+    rings = _rings(
+        "II", Q0, roots, verdicts, lambda m, b: boundary_roots._inconsistent_near(Q0, m, b)
+    )
     for m, _, ring in rings:
         for a, (x, y) in ring:
             zs = _roots(x, y, Q0)
             assert not any(abs(z.imag) < 1e-40 and z.real > 0 for z in zs), (m, a, zs)
     assert len(rings) >= 10
+
+
+def _line_spans(c, m, ends=False):
+    """``(lo, hi)`` along class line ``m`` (``beta2`` on ``beta1 = k pi/2``, else ``beta1``) of
+    each segment of curve ``c`` lying on that line (both ends within 1e-10 rad of it); with
+    ``ends`` only the end segments at a spliced vertex."""
+    v = c.vertices
+    k = [PI / 2 * j for j in range(5)]
+    if m < 5:
+        near, axis = np.abs(v[:, 0] - k[m]) < 1e-10, 1
+    elif m < 10:
+        near, axis = np.abs(v[:, 1] - k[m - 5]) < 1e-10, 0
+    else:
+        near, axis = np.abs((v[:, 1] - v[:, 0] - (m - 11) * PI + PI) % (2 * PI) - PI) < 1e-10, 0
+    on = near[1:] & near[:-1]
+    if ends:
+        at = np.zeros(len(on), bool)
+        at[0], at[-1] = 0 in c.spliced, len(v) - 1 in c.spliced
+        on &= at
+    return np.sort(np.stack([v[:-1, axis], v[1:, axis]], 1)[on], 1)
+
+
+@pytest.mark.parametrize("model", [Q0, DAMPED])
+def test_points_on_the_lines_are_spliced_into_the_pieces_once(model):
+    """SS and II alike: every proven point that a piece on a class line comes within twice the
+    cover distance of is a spliced vertex of such a piece (or the piece passes within ``tol``
+    of it), and at each II one the exact tier's codes 1e-6 rad before and after it along its
+    line differ at some offset ``2 atan(2^-k)`` (k = 40 .. 160); and no end segment at a
+    spliced vertex covers a stretch of the line another piece of the field covers (overlap <=
+    ``tol``).  Before, the II points were not
+    spliced into the pieces on the lines (0 of 11 at q = 0), and extending an SS piece to its
+    point covered a needle piece twice (1.5e-9 rad at kappa 2, q 0.1)."""
+    g = np.arange(32) * 2 * PI / 32
+    b = bd.slice_boundaries(g, g, *model, check=0)
+    on_line = 0
+    for fld in ("SS", "II"):
+        pieces = [c for c in b.curves if c.field == fld and c.on_class_line]
+        reach = 2 * b.attrs[f"{fld}_cover_distance"]
+        for p in (p for p in b.points if p.field == fld and p.proven):
+            xy = np.array([p.beta1, p.beta2])
+            d = boundary_points.nearest_segment(xy, pieces)[0]
+            at = [c.vertices[k] for c in pieces for k in c.spliced]
+            hit = any(np.hypot(*(v - xy)) <= p.uncertainty + 1e-15 for v in at)
+            assert d > reach or d <= bd.TOL or hit, (fld, p.beta1, p.beta2, d)
+            if fld == "II" and hit:
+                on_line += 1
+                m, beta = _line_of(p.beta1, p.beta2)
+                assert any(
+                    _exact_ii(m, beta - 1e-6, e, model) != _exact_ii(m, beta + 1e-6, e, model)
+                    for k in (40, 80, 120, 160)
+                    for e in (2.0**-k, -(2.0**-k))
+                ), (p.beta1, p.beta2)
+        for m in range(13):  # an end spliced on covers no stretch another piece covers
+            for c in pieces:
+                rest = [_line_spans(o, m) for o in pieces if o is not c] + [np.zeros((0, 2))]
+                rest = np.concatenate(rest)
+                for lo, hi in _line_spans(c, m, ends=True):
+                    overlap = np.minimum(rest[:, 1], hi) - np.maximum(rest[:, 0], lo)
+                    assert (overlap <= bd.TOL).all(), (fld, m, lo, hi, overlap.max())
+    assert on_line >= 8
+
+
+def _sides(model, m, beta):
+    """The exact tier's II codes on each side of line ``m`` around free angle ``beta`` [rad]: 24
+    points on a circle of radius 1e-7 rad (those off the line by more than 1e-13) and 1e-12 off
+    the line 1e-7 along it."""
+    at, normal = _point(m, beta)
+    along = np.array([normal[1], -normal[0]])
+    near = [s * 1e-7 * along + r * 1e-12 * normal for s in (-1, 1) for r in (-1, 1)]
+    ring = [1e-7 * np.array([math.cos(a), math.sin(a)]) for a in np.arange(24) * PI / 12]
+    sides = {1: set(), -1: set()}
+    for off in near + ring:
+        if abs(off @ normal) > 1e-13:
+            sides[int(np.sign(off @ normal))].add(exact_code("II", *(at + off), model))
+    return sides
+
+
+def _micro_sides(model, m, beta):
+    """The exact tier's II codes on each side of line ``m`` within 1e-12 rad of free angle
+    ``beta`` [rad]: at ``beta`` and ``beta +- 1e-12`` along it, ``2 atan(2^-k)`` off it (k = 43
+    .. 160 at ``beta``, 60 .. 160 beside it): a boundary leaving the line at ``beta``, tangent
+    (``e ~ s^2``) or not, separates some of them."""
+    sides = {1: set(), -1: set()}
+    for s, ks in ((0.0, (43, 60, 80, 100, 130, 160)), (-1e-12, (60, 80, 100, 130, 160)),
+                  (1e-12, (60, 80, 100, 130, 160))):  # fmt: skip
+        for k in ks:
+            for sign in (-1, 1):
+                sides[sign].add(_exact_ii(m, beta + s, sign * 2.0**-k, model))
+    return sides
+
+
+@pytest.mark.parametrize("model, left", [(Q0, 0), (SLICES[1], 6), (DAMPED, 2), (SLICES[3], 0),
+                                         (SLICES[4], 0)])  # fmt: skip
+def test_ii_roots_decided_from_the_branches_through_them(model, left):
+    """An II root is decided where the boundary polynomials, squarefree, vanish simply there
+    (at q = 0 ``disc_l p = 16 a0 (a2^2 - 4 a0)^2`` made every crossing a double root) or their
+    zero sets through it are graphs over the line (``dG/de`` proven away from 0; two graphs in
+    one quadrant told apart in the chart ``e = lam f^k``): undecided 12 / 11 / 15 / 12 / 15 -> 0
+    / 6 / 2 / 0 / 0 on the five slices.  Each root not decided by the
+    signs of ``p``'s coefficients is checked by the exact tier: one code on each side of the
+    line on a circle of radius 1e-7 rad (:func:`_sides`; a simple root of one polynomial), or
+    within 1e-12 rad (:func:`_micro_sides`; decided from the branches: at 1e-7 a boundary passes
+    some of them 5e-9 off the line, away from the root)."""
+    roots, _, verdicts = _account_ii(model)
+    assert verdicts.count("undecided") <= left
+    checked = 0
+    for (m, ball, _), v in zip(roots, verdicts):
+        if v != "not_boundary" or boundary_roots._inconsistent_near(model, m, ball):
+            continue
+        beta = float(ball.mid())
+        sides = (_micro_sides if _by_branches(model, m, ball) else _sides)(model, m, beta)
+        assert len(sides[1]) == 1 and len(sides[-1]) == 1, (m, float(ball.mid()), sides)
+        checked += 1
+    assert checked >= 3
