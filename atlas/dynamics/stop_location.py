@@ -56,8 +56,8 @@ def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
         return np.concatenate([d, v], axis=1)
 
     def holds(g, rows):
-        return stop_rule.stopped(g, mk[rows], E[rows], zq[rows], amp[rows], pen[rows],
-                                 eig_rows(tables.eig, lx[rows]))  # fmt: skip
+        return stop_rule.stopped(g, mk[rows], E, zq, amp[rows], pen[rows],
+                                 eig_rows(tables.eig, lx), rows)  # fmt: skip
 
     def near(g, rows):
         out, penetrated = stop_rule.beyond(g, mk[rows], amp[rows], pen[rows])

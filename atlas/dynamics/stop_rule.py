@@ -96,15 +96,18 @@ def beyond(g, mask, amp, pen):
     return out, pen_
 
 
-def stopped(g, mask, E, z_eq, amp, pen, eig=None):
+def stopped(g, mask, E, z_eq, amp, pen, eig=None, rows=None):
     """The stop rule at the states ``g`` (n, 4) in configurations ``mask`` (n,) (augmented
     matrices ``E`` (n, 5, 5), equilibria ``z_eq`` (n, 5), NaN where none), limits ``amp``, ``pen``
-    (n,); ``eig`` as in :func:`atlas.dynamics.system.iwc_aligned_many`; bool (n,)."""
+    (n,); ``eig`` as in :func:`atlas.dynamics.system.iwc_aligned_many`; bool (n,).  ``rows``
+    (n,), if given: the states' rows of ``E``, ``z_eq`` and ``eig`` (gathered only where the
+    alignment is tested)."""
     out, deep = beyond(g, mask, amp, pen)
     r = np.flatnonzero(deep)
     if r.size:
-        out[r] = iwc_aligned_many(E[r], z_eq[r], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL,
-                                  eig_rows(eig, r))  # fmt: skip
+        e = r if rows is None else rows[r]
+        out[r] = iwc_aligned_many(E[e], z_eq[e], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL,
+                                  eig_rows(eig, e))  # fmt: skip
     return out
 
 
