@@ -417,7 +417,8 @@ def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
         live = live[out[live] < c[live]]
         if live.size == 0:
             break
-        x = tuple(a[ok] for a in x)
+        if not ok.all():
+            x = tuple(a[ok] for a in x)
     return out
 
 
