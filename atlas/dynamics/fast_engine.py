@@ -130,6 +130,7 @@ from atlas.dynamics.system import (
     MODE_NAMES,
     Outcome,
     Status,
+    eig_rows,
     iwc_aligned_many,
 )
 
@@ -271,7 +272,7 @@ def _classify_stopped(st: State, tables, n, width, t_max, fallback):
     if div.size:
         mk = mask_of(st.s[div])
         E, zq = stack_table(tables, "E", div, mk), z_eq(tables, div, mk)
-        near = div[stop_rule.within_rounding(st.g[div], mk, E, zq)]
+        near = div[stop_rule.within_rounding(st.g[div], mk, E, zq, eig=eig_rows(tables.eig, div))]
         st.rounding[near] = True
         fallback[near] = True
     again = n[(st.code[n] == int(Outcome.UNDETERMINED)) & (st.status[n] == 0)
@@ -416,7 +417,8 @@ def _safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
         live = live[out[live] < c[live]]
         if live.size == 0:
             break
-        x = tuple(a[ok] for a in x)
+        if not ok.all():
+            x = tuple(a[ok] for a in x)
     return out
 
 
@@ -698,7 +700,8 @@ def _classify_many(st: State, tables, n, width) -> np.ndarray:
     diverged, t_end, cap = status == 2, status == 0, status == 1
     iwc = diverged & (mask > 0)
     r = eb.rows(iwc)
-    iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2)
+    iwc[r] = iwc_aligned_many(E[r], z_eq(tables, n[r], mask[r]), mask[r], g[r], 1e-2,
+                              eig_rows(tables.eig, n[r]))  # fmt: skip
     decide(iwc, int(Outcome.IWC))
     # settled at t_end (or diverged) with no event in the second half: neutral or stable mode,
     # free gaps leaving (classification._free_gaps_leaving)

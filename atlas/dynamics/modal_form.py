@@ -92,6 +92,8 @@ class ModalTable:
     ok: np.ndarray
     E: np.ndarray
     closed: np.ndarray
+    eig_w: np.ndarray | None = None
+    eig_V: np.ndarray | None = None
 
 
 class ModalTables(list):
@@ -104,6 +106,12 @@ class ModalTables(list):
     def __init__(self, tables, stacked):
         super().__init__(tables)
         self.__dict__.update(stacked)
+
+    def eig(self, m, lanes):
+        """Eigenvalues (m, na) and eigenvectors (m, na, na) of the active subsystem of
+        configuration ``m`` (1, 2, 3) of the ``lanes`` as LAPACK ``geev`` gives them (complex;
+        the ``eig`` of :func:`atlas.dynamics.system.iwc_aligned_many`)."""
+        return self[m].eig_w[lanes], self[m].eig_V[lanes]
 
 
 def modal_tables(lanes: Lanes) -> ModalTables:
@@ -123,18 +131,22 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         idx = [i for i in range(2) if mask >> i & 1]
         na = 2 * len(idx)
         lam, valid, d_eq, ok, E = (st[x][mask] for x in ("lam", "valid", "d_eq", "ok", "E"))
-        V = W = np.zeros((n, na, na), dtype=complex)
+        V = W = raw_V = np.zeros((n, na, na), dtype=complex)
+        raw_w = np.zeros((n, na), dtype=complex)
+        distinct = False  # every lane's flow distinct (no repeats to spare in log_norm)
         if idx:
             sub = idx + [i + 2 for i in idx]
             A = E[:, sub][:, :, sub]
             BS = lanes.B[:, idx][:, :, idx] * lanes.k[:, None, idx]
             a_S = lanes.a[:, idx]
             first, inv = _distinct(A, BS, a_S)
+            distinct = first.size == n and na == 4
             if first.size == n:  # all distinct: no gathers
-                w, V, W, d_S, ok[:] = _active_modes(A, BS, a_S)
+                w, V, W, d_S, ok[:], raw_V = _active_modes(A, BS, a_S)
             else:
                 modes = _active_modes(A[first], BS[first], a_S[first])
-                w, V, W, d_S, ok[:] = (x[inv] for x in modes)
+                w, V, W, d_S, ok[:], raw_V = (x[inv] for x in modes)
+            raw_w[:] = w
             lam[:, :na] = w
             valid[:, :na] = True
             d_eq[:, idx] = d_S
@@ -144,9 +156,19 @@ def modal_tables(lanes: Lanes) -> ModalTables:
         rho = np.abs(lam).max(axis=1)
         H = st["H"][mask]
         H[:] = 1.0 / np.maximum(rho, 0.25 * omega)
-        st["mu"][mask] = log_norm(E, 1.0 / H)
-        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E, st["closed"][mask]))
+        st["mu"][mask] = _log_norms(E, H, distinct)
+        out.append(ModalTable(mask, lam, valid, V, W, d_eq, H, ok, E, st["closed"][mask], raw_w,
+                              raw_V))  # fmt: skip
     return ModalTables(out, st)
+
+
+def _log_norms(E, H, distinct):
+    """:func:`log_norm` ``(E, 1 / H)`` (N,), once per distinct ``(E, H)`` (rows 0, 1 of
+    ``E[:, :4, :4]`` are the same for every lane) unless ``distinct`` (then every lane's is)."""
+    if distinct:
+        return log_norm(E, 1.0 / H)
+    first, inv = _distinct(E[:, 2:4, :4], H)
+    return log_norm(E[first], 1.0 / H[first])[inv]
 
 
 def log_norm(E, w):
@@ -229,11 +251,12 @@ def _active_modes(A, BS, a_S):
     """Eigenvalues ``w`` (n, na), eigenvectors ``V`` and inverse ``W`` (n, na, na) of the active
     subsystems ``A`` (n, na, na) (LAPACK ``geev``, ``gesv`` per matrix; the identity where not
     ``ok``), the equilibria ``d_S`` (n, na / 2) of ``BS d_S = -a_S`` (paper eq. 8 with ``g' =
-    0``) and ``ok`` (n,): the condition of ``V`` below ``1e4`` (:func:`cond_bound`), ``BS``
-    not singular, no zero eigenvalue."""
+    0``), ``ok`` (n,): the condition of ``V`` below ``1e4`` (:func:`cond_bound`), ``BS``
+    not singular, no zero eigenvalue, and ``geev``'s eigenvectors (complex, also where not
+    ``ok``)."""
     m, na = A.shape[:2]
     w, V = np.linalg.eig(A)  # real arrays if every eigenvalue of the batch is real
-    V = V.astype(complex)  # each lane's ``W`` by complex arithmetic, whatever the batch
+    raw = V = V.astype(complex)  # each lane's ``W`` by complex arithmetic, whatever the batch
     W = _inverse(V)
     ok = cond_bound(V, W) < _COND_MAX
     V = np.where(ok[:, None, None], V, np.eye(na))
@@ -243,7 +266,7 @@ def _active_modes(A, BS, a_S):
     BS = np.where(ok[:, None, None], BS, np.eye(na // 2))
     d_S = np.linalg.solve(BS, -a_S[:, :, None])[:, :, 0]
     ok &= np.all(np.abs(w) > 0, axis=1)
-    return w, V, W, d_S, ok
+    return w, V, W, d_S, ok, raw
 
 
 def _inverse(V):

@@ -9,6 +9,7 @@ import numpy as np
 from atlas.dynamics import event_bounds as eb
 from atlas.dynamics import stop_rule
 from atlas.dynamics.modal_form import stack_table, z_eq
+from atlas.dynamics.system import eig_rows
 
 __all__ = ["stops_at", "locate_stops"]
 
@@ -25,7 +26,7 @@ def stops_at(tables, ix, mask, act, g, scale):
     if r.size:
         lx, mk = ix[r], mask[r]
         r = r[stop_rule.stopped(g[r], mk, stack_table(tables, "E", lx, mk), z_eq(tables, lx, mk),
-                                amp[r], pen[r])]  # fmt: skip
+                                amp[r], pen[r], eig_rows(tables.eig, lx))]  # fmt: skip
     return r
 
 
@@ -55,7 +56,8 @@ def _locate_stop(tables, lx, mk, P, U, lam, scale, a, b, xtol):
         return np.concatenate([d, v], axis=1)
 
     def holds(g, rows):
-        return stop_rule.stopped(g, mk[rows], E[rows], zq[rows], amp[rows], pen[rows])
+        return stop_rule.stopped(g, mk[rows], E, zq, amp[rows], pen[rows],
+                                 eig_rows(tables.eig, lx), rows)  # fmt: skip
 
     def near(g, rows):
         out, penetrated = stop_rule.beyond(g, mk[rows], amp[rows], pen[rows])

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from atlas.dynamics.event_bounds import safe_steps, xp_of
-from atlas.dynamics.system import MODE_NAMES, Status, iwc_aligned_many
+from atlas.dynamics.system import MODE_NAMES, Status, eig_rows, iwc_aligned_many
 
 __all__ = ["AMPLITUDE", "PENETRATION", "DEEP", "ALIGN_TOL", "ROUNDING_SHARE", "limits",
            "limit_rows", "limit_steps", "beyond", "stopped", "within_rounding", "run_within_rounding", "locate"]  # fmt: skip
@@ -96,24 +96,29 @@ def beyond(g, mask, amp, pen):
     return out, pen_
 
 
-def stopped(g, mask, E, z_eq, amp, pen):
+def stopped(g, mask, E, z_eq, amp, pen, eig=None, rows=None):
     """The stop rule at the states ``g`` (n, 4) in configurations ``mask`` (n,) (augmented
     matrices ``E`` (n, 5, 5), equilibria ``z_eq`` (n, 5), NaN where none), limits ``amp``, ``pen``
-    (n,); bool (n,)."""
+    (n,); ``eig`` as in :func:`atlas.dynamics.system.iwc_aligned_many`; bool (n,).  ``rows``
+    (n,), if given: the states' rows of ``E``, ``z_eq`` and ``eig`` (gathered only where the
+    alignment is tested)."""
     out, deep = beyond(g, mask, amp, pen)
     r = np.flatnonzero(deep)
     if r.size:
-        out[r] = iwc_aligned_many(E[r], z_eq[r], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL)
+        e = r if rows is None else rows[r]
+        out[r] = iwc_aligned_many(E[e], z_eq[e], np.asarray(mask)[r], np.asarray(g)[r], ALIGN_TOL,
+                                  eig_rows(eig, e))  # fmt: skip
     return out
 
 
-def within_rounding(g, mask, E, z_eq, tol=1e-2):
+def within_rounding(g, mask, E, z_eq, tol=1e-2, eig=None):
     """Divergence stops (bool (n,)) at the states ``g`` (n, 4) in configurations ``mask`` (n,)
     (augmented matrices ``E`` (n, 5, 5), equilibria ``z_eq`` (n, 5)) whose verdict sits within
     rounding: the IWC test of the classification (:func:`atlas.dynamics.system.iwc_aligned`,
     tolerance ``tol``; paper Sec. 4.3) changes when the gaps and velocities within
     ``ROUNDING_SHARE`` of the state's largest gap or velocity take either sign (a digit neither
-    engine keeps: e.g. a free gap of ``47`` or ``-3e-4`` beside an active one at ``-7e20``)."""
+    engine keeps: e.g. a free gap of ``47`` or ``-3e-4`` beside an active one at ``-7e20``).
+    ``eig`` as in :func:`atlas.dynamics.system.iwc_aligned_many`."""
     g = np.asarray(g, dtype=float)
     mask = np.asarray(mask, dtype=int)
     out = np.zeros(mask.shape[0], dtype=bool)
@@ -124,12 +129,37 @@ def within_rounding(g, mask, E, z_eq, tol=1e-2):
     if r.size == 0:
         return out
     g, small, size, mask, E, z_eq = g[r], small[r], size[r], mask[r], E[r], z_eq[r]
-    base = iwc_aligned_many(E, z_eq, mask, g, tol)
+    if eig is None:  # one eigen-decomposition per state for the 17 tests below
+        eig = _eig_once(E, mask)
+    else:
+        eig = eig_rows(eig, r)
+    base = iwc_aligned_many(E, z_eq, mask, g, tol, eig)
     for combo in range(16):  # every sign of the small components
         sign = np.where((combo >> np.arange(4)) & 1, 1.0, -1.0)
         moved = np.where(small, sign * ROUNDING_SHARE * size, g)
-        out[r] |= iwc_aligned_many(E, z_eq, mask, moved, tol) != base
+        out[r] |= iwc_aligned_many(E, z_eq, mask, moved, tol, eig) != base
     return out
+
+
+def _eig_once(E, mask):
+    """The ``eig`` of :func:`atlas.dynamics.system.iwc_aligned_many` for the states of
+    configurations ``mask`` (n,) with augmented matrices ``E`` (n, 5, 5): ``geev`` once per state
+    and configuration, on demand."""
+    done = {}
+
+    def eig(m, sel):
+        if m not in done:
+            rows = np.flatnonzero(mask == m)
+            sub = [i for i in range(2) if m >> i & 1]
+            sub += [i + 2 for i in sub]
+            w, V = np.linalg.eig(E[rows][:, sub][:, :, sub])
+            pos = np.full(mask.shape[0], -1)
+            pos[rows] = np.arange(rows.size)
+            done[m] = (w.astype(complex), V.astype(complex), pos)
+        w, V, pos = done[m]
+        return w[pos[sel]], V[pos[sel]]
+
+    return eig
 
 
 def run_within_rounding(res) -> bool:

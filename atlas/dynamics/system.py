@@ -48,6 +48,7 @@ __all__ = [
     "expm",
     "iwc_aligned",
     "iwc_aligned_many",
+    "eig_rows",
     "aligned_in_basis",
     "mask_from_signs",
     "mode_name",
@@ -334,10 +335,13 @@ def aligned_in_basis(w, V, c, dev, n_active, tol):
     return ok
 
 
-def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
+def iwc_aligned_many(E, z_eq, mask, g, tol, eig=None) -> np.ndarray:
     """:func:`iwc_aligned` of ``n`` states ``g`` (n, 4) in the modes ``mask`` (n,) with augmented
     matrices ``E`` (n, 5, 5) and equilibria ``z_eq`` (n, 5); the same arithmetic per state
-    (LAPACK ``geev`` and ``gesv`` per matrix).  Returns bool (n,)."""
+    (LAPACK ``geev`` and ``gesv`` per matrix).  ``eig(m, rows)``, if given, returns the
+    eigenvalues and eigenvectors (complex) that ``geev`` gives for the active subsystems of
+    ``E[rows]`` in mode ``m`` (computed once per configuration, e.g.
+    :meth:`atlas.dynamics.modal_form.ModalTables.eig`); the same result.  Returns bool (n,)."""
     mask = np.asarray(mask, dtype=int)
     out = np.zeros(mask.shape[0], dtype=bool)
     for m in (1, 2, 3):
@@ -354,8 +358,7 @@ def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
         sel, gs = sel[signs], gs[signs]
         if sel.size == 0:
             continue
-        A = E[sel][:, sub][:, :, sub]
-        w, V = np.linalg.eig(A)
+        w, V = _active_eig(E, sel, sub, m, eig)
         dev = gs[:, sub] - z_eq[sel][:, sub]
         try:
             c = np.linalg.solve(V, dev[:, :, None])[:, :, 0]
@@ -368,3 +371,23 @@ def iwc_aligned_many(E, z_eq, mask, g, tol) -> np.ndarray:
                     pass
         out[sel] = aligned_in_basis(w, V, c, dev, len(idx), tol)
     return out
+
+
+def _active_eig(E, sel, sub, m, eig):
+    """``numpy.linalg.eig`` of the active subsystems ``E[sel]`` (indices ``sub``) of mode ``m``,
+    or the same from ``eig(m, sel)`` (its complex output made real where every eigenvalue of the
+    batch is, as ``numpy.linalg.eig`` returns a batch)."""
+    if eig is None:
+        return np.linalg.eig(E[sel][:, sub][:, :, sub])
+    w, V = eig(m, sel)
+    if np.all(w.imag == 0.0):
+        return w.real, V.real
+    return w, V
+
+
+def eig_rows(eig, rows):
+    """The ``eig`` argument of :func:`iwc_aligned_many` for the states ``rows`` of a batch
+    (``None`` stays ``None``)."""
+    if eig is None:
+        return None
+    return lambda m, sel: eig(m, rows[sel])

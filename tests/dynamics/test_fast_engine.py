@@ -407,3 +407,35 @@ def test_no_lane_takes_more_steps_than_its_events_and_time_allow():
     bound = 10 * np.median(steps) + 2 * events + t / (4 * H[ok])
     assert np.all(steps <= bound), np.flatnonzero(steps > bound)
     assert ok.mean() >= 0.98
+
+
+def test_stops_and_their_classification_reuse_the_tables_eigenvectors(monkeypatch):
+    """Lanes of the random comparison (seed 46) stepped to the aligned-penetration stop (lanes 21,
+    95, 119: IWC) or to a divergence within rounding (lane 183, sent to the exact simulator) are
+    checked, located, classified and tested for rounding with the eigenvectors of their modal
+    tables: no ``geev`` beyond the tables' own (counted per matrix), and the exact simulator's
+    verdicts."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 2000)
+    sel = np.array([21, 95, 119, 183])
+    k, q = np.stack([L.kappa[sel], np.ones(sel.size)], 1), np.stack([L.q[sel]] * 2, 1)
+    args = (L.beta1[sel], L.beta2[sel], L.alpha[sel], k, q)
+    seen = [0]
+    real = np.linalg.eig
+
+    def counted(a):
+        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
+        return real(a)
+
+    monkeypatch.setattr(np.linalg, "eig", counted)
+    mf.modal_tables(mf.Lanes.of(*args))
+    tables_only = seen[0]
+    res = F.run_lanes(*args, L.g0[sel])
+    assert seen[0] == 2 * tables_only
+    monkeypatch.undo()
+    assert res.decided_by.tolist() == [0, 0, 0, 3]
+    assert res.code[:3].tolist() == [int(S.Outcome.IWC)] * 3
+    for j, i in enumerate(sel[:3]):
+        out = _reference(L.beta1[i], L.beta2[i], L.alpha[i], tuple(k[j]), tuple(q[j]), L.g0[i])
+        assert int(out[0]) == int(S.Outcome.IWC), i

@@ -165,3 +165,51 @@ def test_log_norm_bounds_the_weighted_flow(q):
                 assert norm <= np.exp(mu * t) * (1 + 1e-12), (r, mask, t, norm, mu)
                 n_tight += norm >= 0.5 * np.exp(mu * t)
     assert n_tight > 0  # not vacuous
+
+
+def _counting(monkeypatch, name):
+    """Count the matrices passed to ``numpy.linalg.<name>`` (a list of one int)."""
+    seen = [0]
+    real = getattr(np.linalg, name)
+
+    def counted(a, *args, **kwargs):
+        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
+        return real(a, *args, **kwargs)
+
+    monkeypatch.setattr(np.linalg, name, counted)
+    return seen
+
+
+def test_tables_keep_geevs_eigenvectors_for_the_alignment_test():
+    """``tables.eig(m, lanes)`` is bitwise what ``numpy.linalg.eig`` gives for each lane's active
+    subsystem alone (complex), also where the modal form is not ``ok`` (``det B = 0`` on the
+    grid) or closed, so the IWC alignment test needs no eigen-decomposition of its own."""
+    b = np.linspace(0, 2 * PI, 8, endpoint=False)
+    b1, b2 = np.repeat(b, 8), np.tile(b, 8)
+    tables = mf.modal_tables(mf.Lanes.of(b1, b2, 0.35 * PI, (0.5, 1.0), (0.3, 0.0)))
+    assert not tables[3].ok.all() and tables.closed.any()
+    for m in (1, 2, 3):
+        sub = [i for i in range(2) if m >> i & 1]
+        sub += [i + 2 for i in sub]
+        w, V = tables.eig(m, np.arange(b1.size))
+        for r in range(b1.size):
+            w1, V1 = np.linalg.eig(tables.E[m, r][np.ix_(sub, sub)])
+            assert w[r].tobytes() == w1.astype(complex).tobytes(), (m, r)
+            assert V[r].tobytes() == V1.astype(complex).tobytes(), (m, r)
+
+
+def test_log_norm_once_per_distinct_flow(monkeypatch):
+    """On an ``n x n`` grid the flows of FF, SF (beta1 alone), FS (beta2 alone) and SS get one
+    logarithmic norm per distinct matrix (bitwise: an inactive column of ``E`` holds ``-b_ij * 0``,
+    a zero signed as ``-b_ij``, 4 sign patterns per column): at most ``n^2 + 2 (4n) + 16``
+    symmetric eigenproblems, not ``4 n^2``; each lane's ``mu`` is bitwise :func:`mf.log_norm` of
+    its own flow."""
+    n = 12
+    b = np.linspace(0.1, 2 * PI, n, endpoint=False)
+    lanes = mf.Lanes.of(np.repeat(b, n), np.tile(b, n), 0.35 * PI, (0.5, 1.0), (0.2, 0.2))
+    seen = _counting(monkeypatch, "eigvalsh")
+    tables = mf.modal_tables(lanes)
+    assert seen[0] <= n * n + 8 * n + 16 < 4 * n * n
+    for m in range(4):
+        alone = mf.log_norm(tables.E[m], 1.0 / tables.H[m])
+        assert tables.mu[m].tobytes() == alone.tobytes()

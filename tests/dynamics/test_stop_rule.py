@@ -81,3 +81,27 @@ def test_a_verdict_within_rounding_goes_to_the_exact_simulator():
     assert int(res.code[0]) == int(out)
     assert F.DECIDED_BY[res.decided_by[0]] == "fallback"
     assert res.within_rounding[0] and SR.run_within_rounding(run)
+
+
+def test_within_rounding_solves_each_states_eigenproblem_once(monkeypatch):
+    """The rounding test of a divergence (lane 183 of the random comparison, seed 46: a gap at
+    -3e-16 beside one at -4.5e5 in the exact simulator's run) tries the 16 signs of the small
+    components on one eigen-decomposition of the configuration (LAPACK ``geev`` once, not 17
+    times), with the verdict of the tests one by one: flagged."""
+    from atlas import dynamics as S
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 2000)
+    i = 183
+    _, run = S.simulate_outcome(L.beta1[i], L.beta2[i], L.alpha[i], k=(L.kappa[i], 1.0),
+                                q=(L.q[i], L.q[i]), g0=L.g0[i], max_events=2000)  # fmt: skip
+    seen = [0]
+    real = np.linalg.eig
+
+    def counted(a):
+        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
+        return real(a)
+
+    monkeypatch.setattr(np.linalg, "eig", counted)
+    assert SR.run_within_rounding(run)
+    assert seen[0] == 1
