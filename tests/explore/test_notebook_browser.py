@@ -91,7 +91,9 @@ def jupyterlab(root: Path):
     proc = subprocess.Popen(cmd, cwd=root, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
-        for _ in range(300):
+        # until the server answers or dies, however loaded the machine (pytest-timeout bounds a
+        # hang): a fixed number of tries went on to the browser before the server listened
+        while True:
             try:
                 urllib.request.urlopen(f"{base}/api/status?token={token}", timeout=1).close()
                 break
