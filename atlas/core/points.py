@@ -405,11 +405,16 @@ def spectral_points(
     wanted = keep(open_idx[after], out, exact=False)
     counts["undecided_after"] = int(wanted.sum())
     counts["unneeded_points"] = int(wanted.size - wanted.sum())
+    _count_in_tallies(counts)
+    return Verdicts(out, counts)
+
+
+def _count_in_tallies(counts: dict) -> None:
+    """Add one certified call and its points per tier to every open :func:`tally`."""
     for total in getattr(_TALLY, "open", ()):
         total["calls"] += 1
         for k in TALLY_KEYS[1:]:
             total[k] += counts.get(k, 0)
-    return Verdicts(out, counts)
 
 
 #: what :func:`tally` adds up: certified calls, and the points each tier received
