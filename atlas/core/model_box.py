@@ -454,9 +454,10 @@ def _by_signs(geo: np.ndarray, sd: np.ndarray) -> np.ndarray:
 
 @functools.cache
 def _jitted_ss(fn):
-    import jax  # noqa: PLC0415
+    """``fn`` as a kept kernel (:func:`atlas.core.warm.jit`: a warm process loads its program)."""
+    from atlas.core import warm  # noqa: PLC0415 - JAX only when witnesses are checked
 
-    return jax.jit(fn)
+    return warm.jit(fn)
 
 
 def _verify(geo: np.ndarray, models) -> np.ndarray:

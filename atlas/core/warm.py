@@ -178,8 +178,8 @@ def _prefetch(manifest: Path | None) -> dict:
 
 class Kernel:
     """``jax.jit(fn, static_argnames=...)``, whose traced and lowered program is kept on disk
-    while :func:`kernel_cache` is active (module docstring).  Arguments: arrays (numpy or
-    concrete JAX) positionally, static options by keyword."""
+    while :func:`kernel_cache` is active (module docstring).  Arguments: arrays (numpy, NumPy
+    scalars or concrete JAX) positionally, static options by keyword."""
 
     def __init__(self, fn, static_argnames=()):
         self.fn = fn
@@ -196,6 +196,8 @@ class Kernel:
 
     def __call__(self, *args, **static):
         where = _STATE["dir"]
+        # a NumPy scalar is a 0-d array to jax.jit as well (strongly typed, unlike a Python one)
+        args = tuple(np.asarray(a) if isinstance(a, np.generic) else a for a in args)
         if where is None or not all(_concrete(a) for a in args):
             return self.jitted(*args, **static)
         avals = tuple((tuple(a.shape), np.dtype(a.dtype).str) for a in args)

@@ -22,6 +22,7 @@ __all__ = [
     "model_dependence_map",
     "draw_model_dependence",
     "plot_model_dependence",
+    "save_model_dependence",
     "fractions",
     "fractions_markdown",
 ]
@@ -66,7 +67,12 @@ def draw_model_dependence(fig, maps: list) -> list:
 def plot_model_dependence(path, n: int = 181, boxes=BOXES):
     """The panels of :data:`BOXES` (or ``boxes``) at ``n x n`` points into ``path``; returns the
     maps."""
-    maps = [model_dependence_map(n, box) for box in boxes]
+    return save_model_dependence(path, [model_dependence_map(n, box) for box in boxes])
+
+
+def save_model_dependence(path, maps: list) -> list:
+    """The panels of ``maps`` (:func:`model_dependence_map`, computed already) into ``path``;
+    returns the maps."""
     fig = drawing.new_figure(figsize=(3.2 * len(maps), 3.8), layout="constrained")
     draw_model_dependence(fig, maps)
     savefig(fig, path, dpi=150)

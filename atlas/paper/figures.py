@@ -24,11 +24,9 @@ this module arranges them in Datasets (:func:`stability_map`, :func:`class_repre
 
 from __future__ import annotations
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import baseline, contact_modes, expressions, spectral
+from atlas.core import baseline, contact_modes, expressions, warm
 from atlas.core.points import spectral_points
 from atlas.data.outputs import OUTPUTS, coord_attrs, default_outputs, to_storage, variable_attrs
 from atlas.data.plane import map_dims, plane_outputs
@@ -110,13 +108,14 @@ def _ss_margin_full(margin, c1, s2, kappa, q1, q2):
     return np.minimum(np.asarray(margin, float), a)
 
 
+#: :func:`atlas.core.baseline.build_M` as one kept program (products and negations only: the
+#: same numbers as its operations one by one)
+_build_M = warm.jit(baseline.build_M)
+
+
 def _ii_root_margin(c1, s1, c2, s2, kappa, q1, q2):
     """``Re(l_II) - max Re(other roots)`` (NaN where no II root), scaled by the root magnitude."""
-    M = np.asarray(
-        baseline.build_M(
-            *(jnp.asarray(np.asarray(a, np.float64)) for a in (c1, s1, c2, s2, kappa, q1, q2))
-        )
-    )
+    M = np.asarray(_build_M(*(np.asarray(a, np.float64) for a in (c1, s1, c2, s2, kappa, q1, q2))))
     w = np.linalg.eigvals(M)
     shape = w.shape[:-1]
     bc = [
@@ -202,14 +201,11 @@ def _margin_layers(ss_margin, C1, S1, C2, S2, kappa, q1, q2) -> dict:
     if q1 == 0 and q2 == 0:
         mii = ss_margin  # the mu-discriminant (see module docstring)
     else:
-        a3, a2, a1, a0 = (
-            np.asarray(x)
-            for x in spectral.coefficients(
-                *(jnp.asarray(v) for v in (C1, S1, C2, S2)),
-                jnp.asarray(float(kappa)),
-                jnp.asarray(float(q1)),
-                jnp.asarray(float(q2)),
-            )
+        # :func:`atlas.core.spectral.coefficients` in NumPy: the same roundings, no op dispatch
+        D = expressions.det(C1, S1, C2, S2, sub=np.subtract)
+        k, q1, q2 = float(kappa), float(q1), float(q2)
+        a3, a2, a1, a0 = expressions.coefficients(
+            C1, S1, C2, S2, k, 1.0, q1, q2, D, sub=np.subtract
         )
         mii = np.broadcast_to(_quartic_discriminant(a3, a2, a1, a0), (n, n))
     return {
@@ -220,10 +216,6 @@ def _margin_layers(ss_margin, C1, S1, C2, S2, kappa, q1, q2) -> dict:
 
 
 # --------------------------------------------------------------------------- Fig. 1, classes
-
-_subclass_jit = jax.jit(
-    contact_modes.subclass_code
-)  # eager, the 24 calls took ~20 s of op dispatch
 
 
 def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
@@ -249,7 +241,9 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
         beta1, beta2 = float(b1[best]), float(b2[best])
         c1, s1 = contact_modes.direction(beta1)
         c2, s2 = contact_modes.direction(beta2)
-        sub = np.asarray(_subclass_jit(*(np.asarray(v) for v in (c1, s1, c2, s2)), ca, sa))
+        sub = np.asarray(
+            contact_modes.subclass_code(*(np.asarray(v) for v in (c1, s1, c2, s2)), ca, sa)
+        )
         alphas = {}
         for k in range(1, 7):
             hit = alpha[sub == 10 * cls + k]

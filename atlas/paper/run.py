@@ -22,6 +22,7 @@ from atlas.paper.steps import (
     shared_steps,
     side_steps,
     sizes,
+    write_realisability,
 )
 
 #: ``atomic_write_text``: from :mod:`atlas.data.io` on first use (module ``__getattr__``)
@@ -181,22 +182,36 @@ def _run_steps(step: Steps, out: Path, quick: bool, ci: bool, side, shared: Shar
     fig1_map = ds[[v for v in ds.data_vars if v != "margin_II_stable"]]
     call = f"atlas.paper.run(quick={quick}, ci={ci})"
     step("fig1_map.nc", lambda: write_netcdf(fig1_map, out / "fig1_map.nc", call))
-    claims = step(
-        "audit (compute)",
-        lambda: audit.run_audit(quick=quick, progress=step.say, rows=rows, ci=ci),
-    )
+    ctx = audit.Context(quick, ci, step.say, rows)
+    claims = step("audit (compute)", lambda: audit.run_audit(context=ctx))
     step("audit.md", lambda: audit.write_audit(claims, out / "audit.md"))
+    models = _from_the_audit(step, out, ctx)
     _outcome_map_step(step, out, quick, ds)
     if side is None:
-        fig1_curves, models = side_steps(step, out, quick, ci, shared)
+        fig1_curves = side_steps(step, out, quick, ci, shared)
     else:
         shared_steps(step, out, quick, ci, shared)
-        fig1_curves, models = side_process.join(side, step)
+        fig1_curves = side_process.join(side, step)
     step(
         "fig1_stability.png",
         lambda: plots.plot_fig1_stability(out / "fig1_stability.png", ds, fig1_curves),
     )
     _write_readme(out, quick, n_map, n_var, _audit_counts(claims), notes(quick), ds, models)
+
+
+def _from_the_audit(step: Steps, out: Path, ctx):
+    """The files drawn from what the audit ``ctx`` computed (each computed once in the run):
+    Fig. 1 over every model (its map, :attr:`atlas.paper.audit.Context.models_map`) and the
+    realisations.  Returns the maps of ``fig1_models.png``."""
+    from atlas.paper import figure_models
+
+    path = out / "fig1_models.png"
+    (models,) = step(
+        "fig1_models.png", lambda: figure_models.save_model_dependence(path, [ctx.models_map])
+    )
+    path = out / "realisability.md"
+    step("realisability.md", lambda: write_realisability(path, ctx.realisations))
+    return models
 
 
 def _outcome_map_step(step: Steps, out: Path, quick: bool, ds) -> None:

@@ -25,6 +25,7 @@ __all__ = [
     "shared_steps",
     "side_steps",
     "sizes",
+    "write_realisability",
 ]
 
 
@@ -36,7 +37,8 @@ def say_stderr(msg: str) -> None:
 class Steps:
     """The steps of :func:`atlas.paper.run.run`: ``step(name, fn)`` announces ``name``, calls
     ``fn`` and records its wall time [s] in ``timings`` (and in the active run log,
-    :mod:`atlas.paper.runlog`)."""
+    :mod:`atlas.paper.runlog`, with the CPU seconds of its process meanwhile, user + system:
+    what a step costs on a loaded machine, where its wall time says little)."""
 
     def __init__(self, say):
         self.say = say
@@ -46,10 +48,11 @@ class Steps:
         from atlas.paper import runlog
 
         self.say(f"{name} ...")
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         res = fn()
         self.timings[name] = time.perf_counter() - t
         runlog.record(f"step {name} seconds", self.timings[name])
+        runlog.record(f"step {name} cpu seconds", time.process_time() - cpu)
         self.say(f"{name} done in {self.timings[name]:.1f} s")
         return res
 
@@ -100,25 +103,16 @@ class Shared:
 
 
 def side_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared):
-    """The steps that need no other step's result and give one: Fig. 1 over every model and the
-    boundary curves, then the :data:`SHARED` steps ``shared`` leaves.  Returns the curves of
-    Fig. 1's slice and the model-dependence shares."""
-    from atlas.paper import figure_boundaries, figure_models
+    """The steps that need no other step's result and give one: the boundary curves, then the
+    :data:`SHARED` steps ``shared`` leaves.  Returns the curves of Fig. 1's slice."""
+    from atlas.paper import figure_boundaries
 
-    (models,) = step(
-        "fig1_models.png",
-        lambda: figure_models.plot_model_dependence(
-            out / "fig1_models.png",
-            n=figure_models.N_MODELS[ci + quick],
-            boxes=figure_models.BOXES[:1],
-        ),
-    )
     curves = step(
         "fig1_boundaries.png",
         lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
     )
     shared_steps(step, out, quick, ci, shared)
-    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0]), models
+    return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])
 
 
 def shared_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared) -> None:
@@ -169,10 +163,6 @@ def _classes(step: Steps, out: Path, quick: bool, ci: bool) -> None:
     step("fig1_classes.png", lambda: plots.plot_fig1_classes(out / "fig1_classes.png"))
 
 
-def _realisability(step: Steps, out: Path, quick: bool, ci: bool) -> None:
-    step("realisability.md", lambda: _write_realisability(out / "realisability.md"))
-
-
 def _ladder(step: Steps, out: Path, quick: bool, ci: bool) -> None:
     from atlas.paper import figure_ladder
 
@@ -180,12 +170,13 @@ def _ladder(step: Steps, out: Path, quick: bool, ci: bool) -> None:
     step("ladder.png", lambda: figure_ladder.write_ladder(out / "ladder.png", n=n))
 
 
-def _write_realisability(path) -> None:
-    """The 144 single-body realisations (:mod:`atlas.paper.realisability`) as Markdown."""
+def write_realisability(path, search) -> None:
+    """The 144 single-body realisations ``search`` (:func:`atlas.paper.realisability.search`,
+    2^19 bodies: the audit's, :attr:`atlas.paper.audit.Context.realisations`) as Markdown."""
     from atlas.data.io import atomic_write_text
     from atlas.paper import realisability, runlog
 
-    found, stats = realisability.search(1 << 19)
+    found, stats = search
     for key in ("seconds_search", "seconds_verify"):
         runlog.record(f"realisability {key}", stats[key])
     atomic_write_text(path, realisability.markdown(found, stats))
@@ -193,4 +184,4 @@ def _write_realisability(path) -> None:
 
 #: the steps either process may run (each writes its files and gives nothing to another step),
 #: the longest first so that the last one claimed is short
-SHARED = (_distribution, _variants, _classes, _fig2, _realisability, _ladder)
+SHARED = (_distribution, _variants, _classes, _fig2, _ladder)

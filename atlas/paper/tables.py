@@ -27,11 +27,10 @@ import math
 import os
 from dataclasses import dataclass, field
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import checks, contact_modes, exact
+from atlas.core import checks, contact_modes, exact, warm
 from atlas.core import ii_over_models as iim
 from atlas.core import model_box as mb
 from atlas.core.points import spectral_points
@@ -114,9 +113,6 @@ def _grid(n):
     return (np.arange(n) + 0.5) * (2 * np.pi / n)
 
 
-_class_code_jit = jax.jit(contact_modes.class_code)  # eager op dispatch took ~10 s
-
-
 def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     """Up to ``per_class`` interior (beta1, beta2) points [rad] of each class, from an offset grid.
 
@@ -131,7 +127,7 @@ def class_samples(n: int = 96, per_class: int = 24, seed: int = 0) -> dict:
     b = _grid(n)
     c, s = contact_modes.direction(b)
     code = np.asarray(
-        _class_code_jit(
+        contact_modes.class_code(
             np.asarray(c)[:, None],
             np.asarray(s)[:, None],
             np.asarray(c)[None, :],
@@ -183,11 +179,19 @@ def _word(verdicts) -> str:
     return "model-dependent"
 
 
-@jax.jit
-def class_kernel(c1, s1, c2, s2, ca, sa):
-    """Dual class code, subclass code and Table 1 consistency of every mode (jitted; broadcast).
+def padded(points: np.ndarray, size: int) -> np.ndarray:
+    """``points`` (rows) with its last row repeated up to ``size`` rows: one array shape for
+    every class sample, so that a kernel compiles once (the sets of verdicts are unchanged)."""
+    return np.concatenate([points, np.repeat(points[-1:], size - len(points), 0)])
 
-    Shared with the audit's Sec. 6.2 check so both compile the same shapes once.
+
+@warm.jit
+def class_kernel(c1, s1, c2, s2, ca, sa):
+    """Dual class code, subclass code and Table 1 consistency of every mode (a kept kernel,
+    :func:`atlas.core.warm.jit`; broadcast).
+
+    Shared with the audit's Sec. 6.2 check; both pad each class's sample to one size
+    (:func:`padded`): one program for every class and both.
     """
     dual = contact_modes.class_code(*contact_modes.dual_vectors(c1, s1, c2, s2))
     sub = contact_modes.subclass_code(c1, s1, c2, s2, ca, sa)
@@ -214,8 +218,7 @@ def table2(
     # each jitted kernel compiles once instead of once per distinct class sample size
     size = max(len(p) for p in samples.values())
     for cls in contact_modes.ALL_CLASSES:
-        pts = samples[cls]
-        pts = np.concatenate([pts, np.repeat(pts[-1:], size - len(pts), 0)])
+        pts = padded(samples[cls], size)
         c1, s1 = (np.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 0], dtype))
         c2, s2 = (np.asarray(v)[:, None] for v in contact_modes.direction(pts[:, 1], dtype))
         # dual class (contact indices swapped; exact in vector form), subclasses, Table 1
@@ -264,11 +267,8 @@ def table2(
         row.FI = _marker(fi)
         row.II = _marker(ci)
         row.II_stability = _word(si[ci == 1]) if (ci == 1).any() else "-"
-        row.CC = (
-            "?"
-            if bool(np.all(contact_modes.cc_possible(c1, s2)))
-            else ("" if not np.any(contact_modes.cc_possible(c1, s2)) else "(?)")
-        )
+        cc = np.asarray(contact_modes.cc_possible(c1, s2))  # NumPy reductions: no JAX program
+        row.CC = "?" if cc.all() else ("" if not cc.any() else "(?)")
         rows.append(row)
     if over_models:
         _apply_over_models(rows, samples, dtype)

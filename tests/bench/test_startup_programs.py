@@ -73,6 +73,8 @@ def test_rows_and_tables_of_the_cold_commands(tmp_path):
     assert s.cmds[0][-3:] == ["generate", "--out", f"{tmp_path}/a.nc"]
     ok, failed = rows
     assert ok["value"] == 2 and ok["median_s"] == 5.0  # the traced-only function is no program
+    assert ok["in_run_s"] == 4.0  # the work's own seconds beside the process's
+    assert failed["in_run_s"] == ""
     assert ok["note"] == ("tracing 1.6 s, lowering 0.8 s, XLA compilation 10.0 s (3 compilations)")
     assert failed["value"] == "" and failed["note"] == "exit 1: boom"
     text = "\n".join(sp.program_tables(rows))

@@ -40,6 +40,33 @@ def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypat
     assert sorted(p.name for p in tmp_path.iterdir()) == files
 
 
+def _scaled(x, k):
+    return x * k
+
+
+def test_numpy_scalar_arguments_keep_the_program_like_zero_d_arrays(tmp_path, monkeypatch):
+    """A kernel given NumPy scalars (a map's model parameters, ``np.float64(0.5)``) keeps its
+    program as with 0-d arrays (before, it traced in every process): one file, loaded by a
+    fresh Kernel without exporting again; the results and dtypes are ``jax.jit``'s."""
+    monkeypatch.setenv(warm.EXECUTABLE_ENV, "0")  # the exported programs alone
+    kernel = warm.Kernel(_scaled)
+    cases = [(np.arange(4.0), np.float64(0.5)), (np.arange(4, dtype=np.float32), np.float32(3))]
+    want = [np.asarray(jax.jit(_scaled)(*a)) for a in cases]
+    with warm.kernel_cache(str(tmp_path)):
+        got = [np.asarray(kernel(*a)) for a in cases]
+    files = sorted(p.name for p in tmp_path.iterdir())
+    assert len(files) == 2 and all(".jaxexport" in f for f in files)
+    fresh = warm.Kernel(_scaled)
+    monkeypatch.setattr(jax.export, "export", lambda *a, **k: pytest.fail("exported again"))
+    with warm.kernel_cache(str(tmp_path)):
+        again = [np.asarray(fresh(*a)) for a in cases]
+    for w, g, a in zip(want, got, again):
+        assert g.dtype == w.dtype == a.dtype
+        np.testing.assert_array_equal(g, w)
+        np.testing.assert_array_equal(a, w)
+    assert sorted(p.name for p in tmp_path.iterdir()) == files
+
+
 def test_threads_asking_at_once_load_a_kernel_once(tmp_path, monkeypatch):
     """A first use and a background warm-up asking for the same program at the same time: one
     of them exports and compiles it, the other waits and shares it (both compiled it before,

@@ -144,6 +144,28 @@ def test_mode_2x2_exact_against_closed_form():
     assert abs(max(z.real for z in r["roots"]) - (0.05 + (0.0025 + 4) ** 0.5) / 2) < 1e-12
 
 
+def test_dense_alpha_calls_the_class_kernel_with_one_shape(monkeypatch):
+    """Sec. 6.2's dense alpha pads each class's sample to the largest, as Table 2 does: one
+    argument shape (one program) for every class, not one per sample size (7 or 8 points here);
+    the codes are still those of each real point (exact re-check)."""
+    from atlas.paper.audit import consistency
+    from atlas.paper.tables import class_samples
+
+    pts = class_samples(96, 8)
+    assert {len(p) for p in pts.values()} == {7, 8}
+    shapes, real = [], consistency.class_kernel
+
+    def recording(*args):
+        shapes.append(tuple(a.shape for a in args))
+        return real(*args)
+
+    monkeypatch.setattr(consistency, "class_kernel", recording)
+    sub, cons, inputs = consistency.dense_alpha(pts, 1)
+    assert set(shapes) == {((8, 1),) * 4 + ((1, 720),) * 2}
+    assert len(sub) == len(inputs) == 720 * sum(len(p) for p in pts.values())
+    assert consistency.exact_disagreements(sub, cons, inputs, 300) == 0
+
+
 def test_app_c_q1_over_every_model(monkeypatch):
     """C1w is decided by the proved whole-model-space map: confirmed as computed, refuted by one
     class-12 cell that depends on the model, not confirmed with an undecided cell."""
@@ -163,7 +185,7 @@ def test_app_c_q1_over_every_model(monkeypatch):
             return ds
 
         monkeypatch.setattr(figure_models, "model_dependence_map", mutated)
-        c = audit.CLAIMS["C1w"](ctx)
+        c = audit.CLAIMS["C1w"](audit.Context(ci=True))  # a context computes its map once
         assert c.status == status
         assert f"12: stable for every model, {flip.label};" in c.evidence
 

@@ -71,3 +71,37 @@ def test_a_second_run_elsewhere_writes_the_same_bytes(paper_run, tmp_path):
     log = (out / LOG).read_text()
     assert "date: " in log and "total seconds: " in log and str(out) in log
     assert "processes: 2" in log and "step fig1_boundaries.png seconds: " in log
+
+
+def test_the_files_drawn_from_the_audit_reuse_its_computations(tmp_path, monkeypatch):
+    """``fig1_models.png`` and ``realisability.md`` come from what the audit computed: the
+    whole-model-space map and the 2^19-body search run once each in a run (twice before: once
+    in the audit, once in a step of their own), and the figure has the standalone drawing's
+    bytes."""
+    import collections
+
+    from atlas.paper import audit, figure_models, realisability
+    from atlas.paper.run import _from_the_audit
+    from atlas.paper.steps import Steps
+
+    calls = collections.Counter()
+
+    def counted(name, fn):
+        def wrapper(*args, **kwargs):
+            calls[name] += 1
+            return fn(*args, **kwargs)
+
+        return wrapper
+
+    real_map = figure_models.model_dependence_map
+    monkeypatch.setattr(figure_models, "model_dependence_map", counted("map", real_map))
+    monkeypatch.setattr(realisability, "search", counted("search", realisability.search))
+    ctx = audit.Context(ci=True)
+    audit.run_audit(context=ctx, select=["C1w", "S144"])
+    _from_the_audit(Steps(lambda m: None), tmp_path, ctx)
+    assert calls == {"map": 1, "search": 1}
+    assert "subclasses realised" in (tmp_path / "realisability.md").read_text()
+    alone = tmp_path / "alone.png"
+    n, boxes = figure_models.N_MODELS[2], figure_models.BOXES[:1]
+    figure_models.plot_model_dependence(alone, n=n, boxes=boxes)
+    assert (tmp_path / "fig1_models.png").read_bytes() == alone.read_bytes()

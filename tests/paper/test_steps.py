@@ -8,13 +8,20 @@ from atlas.paper import runlog, side_process
 from atlas.paper.steps import Shared, Steps
 
 
+def _spin(n: int) -> int:
+    """Some CPU work (``n`` additions)."""
+    return sum(range(n))
+
+
 def test_a_step_is_announced_timed_and_logged(tmp_path):
     said = []
     step = Steps(said.append)
     with runlog.RunLog(tmp_path) as log:
-        assert step("one", lambda: 7) == 7
+        assert step("one", lambda: _spin(10**6)) == _spin(10**6)
     assert said == ["one ...", f"one done in {step.timings['one']:.1f} s"]
     assert f"step one seconds: {step.timings['one']:.3f}" in log.lines
+    cpu = [line for line in log.lines if line.startswith("step one cpu seconds: ")]
+    assert len(cpu) == 1  # the process's CPU seconds of the step, beside its wall seconds
 
 
 def test_the_driver_starts_its_second_process_before_importing_jax():

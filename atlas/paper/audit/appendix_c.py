@@ -7,7 +7,7 @@ import numpy as np
 from atlas.core import contact_modes
 from atlas.core import ii_over_models as iim
 from atlas.core.verdicts import OverModels, Verdict
-from atlas.paper import figure_models, tables
+from atlas.paper import tables
 from atlas.paper.audit.context import KAPPAS_Q0
 from atlas.paper.audit.printed import SS_CURVED
 from atlas.paper.audit.records import Counterexample, Finding, N, S, U
@@ -253,7 +253,7 @@ def _damped_changes(ctx):
 def _over_models_by_class(ctx) -> tuple[dict, int]:
     """``{class: OverModels codes of its cells}`` on the whole-model-space map of ``atlas paper``'s
     size, and the cell count."""
-    ds = figure_models.model_dependence_map(figure_models.N_MODELS[ctx.ci + ctx.quick])
+    ds = ctx.models_map
     code = ds["ss_over_models"].values
     b = ds.beta1.values
     (c1, s1), (c2, s2) = contact_modes.direction(b[:, None]), contact_modes.direction(b[None, :])

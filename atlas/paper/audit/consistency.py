@@ -11,28 +11,31 @@ from atlas.paper.audit.printed import MODES, PAPER_TABLE2
 from atlas.paper.audit.records import Finding
 from atlas.paper.audit.registry import claim
 from atlas.paper.audit.samples import PI, directions, fmt_classes
-from atlas.paper.tables import class_kernel
+from atlas.paper.tables import class_kernel, padded
 
 
 def dense_alpha(class_points: dict, blocks: int):
     """Subclass codes and Table 1 consistency of every class-sample system at ``720 * blocks``
-    shifted values of alpha (the kernel and shapes Table 2 compiled).
+    shifted values of alpha (the kernel and shapes of Table 2: each class's sample padded to
+    the largest, :func:`atlas.paper.tables.padded`).
 
     Returns ``(subclass, {mode: consistency}, inputs)``, flat over (system, alpha); ``inputs`` are
     the rows ``(c1, s1, c2, s2, cos alpha, sin alpha)`` for an exact re-check.
     """
     subs, conss, spots = [], {m: [] for m in MODES}, []
+    size = max(len(p) for p in class_points.values())
     for c in contact_modes.ALL_CLASSES:
         p = class_points[c]
         c1, s1, c2, s2 = (np.asarray(v)[:, None] for v in directions(p[:, 0], p[:, 1]))
+        pad = [padded(v, size) for v in (c1, s1, c2, s2)]
         ii, jj = np.meshgrid(np.arange(len(p)), np.arange(720), indexing="ij")
         for blk in range(blocks):
             al = (np.arange(720) + (blk + 0.5) / blocks) * (2 * PI / 720)
             ca, sa = (np.asarray(v)[None, :] for v in contact_modes.direction(al))
-            _, sub, cons = class_kernel(c1, s1, c2, s2, ca, sa)
-            subs.append(np.asarray(sub).ravel())
+            _, sub, cons = class_kernel(*pad, ca, sa)
+            subs.append(np.asarray(sub)[: len(p)].ravel())
             for m in conss:
-                conss[m].append(np.asarray(cons[m]).ravel())
+                conss[m].append(np.asarray(cons[m])[: len(p)].ravel())
             cols = [np.asarray(v)[ii, 0] for v in (c1, s1, c2, s2)]
             cols += [np.asarray(v)[0, jj] for v in (ca, sa)]
             spots.append(np.stack([x.ravel() for x in cols], -1))

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from atlas.core import contact_modes
-from atlas.paper import realisability
+from atlas.paper import figure_models, realisability
 from atlas.paper.audit import samples
 from atlas.paper.audit.samples import Points
 from atlas.paper.tables import KAPPA_Q_SAMPLE, class_samples, table2
@@ -81,6 +81,13 @@ class Context:
         """:func:`atlas.paper.realisability.search` (2^19 random bodies, mu <= 2) and its stats."""
         self.say("searching single rigid bodies for the 144 subclasses")
         return realisability.search(1 << 19)
+
+    @cached_property
+    def models_map(self):
+        """SS over the whole model space on the Fig. 1 plane at this run's size
+        (:func:`atlas.paper.figure_models.model_dependence_map`): the map of ``fig1_models.png``,
+        which ``atlas paper`` draws from here."""
+        return figure_models.model_dependence_map(figure_models.N_MODELS[self.ci + self.quick])
 
     @cached_property
     def class_points(self) -> dict:

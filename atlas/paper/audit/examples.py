@@ -3,10 +3,9 @@ points, and how the SS boundary moves with K and Q."""
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import contact_modes, exact
+from atlas.core import contact_modes, exact, warm
 from atlas.core.hurwitz import ss_margin
 from atlas.core.verdicts import Verdict
 from atlas.paper.audit.printed import MODES
@@ -253,13 +252,18 @@ def fig2(ctx) -> Finding:
     )
 
 
+#: :func:`atlas.core.hurwitz.ss_margin` as one kept program (:func:`atlas.core.warm.jit`), not
+#: some 80 operations dispatched one by one
+_ss_margin = warm.jit(ss_margin)
+
+
 def ss_crossings(kap, qa, qb, beta1=0.1 * PI, n=4001):
     """Zero crossings of the SS margin along ``beta1`` [rad], ``beta2`` in ``(pi/2, pi)`` [rad]."""
     b2 = np.linspace(0.5 * PI + 1e-3, PI - 1e-3, n)
     c1, s1 = contact_modes.direction(np.full_like(b2, beta1))
     c2, s2 = contact_modes.direction(b2)
-    args = [jnp.asarray(v) for v in (c1, s1, c2, s2, kap, qa, qb)]
-    m = np.asarray(ss_margin(*args))
+    args = [np.asarray(v, np.float64) for v in (c1, s1, c2, s2, kap, qa, qb)]
+    m = np.asarray(_ss_margin(*args))
     return b2[np.flatnonzero(np.diff(np.sign(m)) != 0)]
 
 
