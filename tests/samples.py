@@ -41,3 +41,17 @@ def limit_bracket_inputs(n: int = 2000, seed: int = 7):
     M, scale = 10 ** rng.uniform(-2, 6, (n, 4)), 10 ** rng.uniform(-1, 1, n)
     H = rng.uniform(0.1, 3, n)
     return d, v, M, scale, H
+
+
+def count_eig(monkeypatch) -> list:
+    """Count the matrices ``np.linalg.eig`` (LAPACK ``geev``) decomposes from now on: a one-item
+    list whose value grows by the batch size of each call (``monkeypatch.undo()`` stops it)."""
+    seen = [0]
+    real = np.linalg.eig
+
+    def counted(a):
+        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
+        return real(a)
+
+    monkeypatch.setattr(np.linalg, "eig", counted)
+    return seen

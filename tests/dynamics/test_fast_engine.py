@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from samples import count_eig
 
 from atlas import dynamics as S
 from atlas.dynamics import fast_engine as F
@@ -421,14 +422,7 @@ def test_stops_and_their_classification_reuse_the_tables_eigenvectors(monkeypatc
     sel = np.array([21, 95, 119, 183])
     k, q = np.stack([L.kappa[sel], np.ones(sel.size)], 1), np.stack([L.q[sel]] * 2, 1)
     args = (L.beta1[sel], L.beta2[sel], L.alpha[sel], k, q)
-    seen = [0]
-    real = np.linalg.eig
-
-    def counted(a):
-        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
-        return real(a)
-
-    monkeypatch.setattr(np.linalg, "eig", counted)
+    seen = count_eig(monkeypatch)
     mf.modal_tables(mf.Lanes.of(*args))
     tables_only = seen[0]
     res = F.run_lanes(*args, L.g0[sel])

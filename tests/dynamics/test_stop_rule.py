@@ -4,6 +4,7 @@ time on closed forms."""
 import math
 
 import numpy as np
+from samples import count_eig
 
 from atlas.dynamics import stop_rule as SR
 
@@ -95,13 +96,6 @@ def test_within_rounding_solves_each_states_eigenproblem_once(monkeypatch):
     i = 183
     _, run = S.simulate_outcome(L.beta1[i], L.beta2[i], L.alpha[i], k=(L.kappa[i], 1.0),
                                 q=(L.q[i], L.q[i]), g0=L.g0[i], max_events=2000)  # fmt: skip
-    seen = [0]
-    real = np.linalg.eig
-
-    def counted(a):
-        seen[0] += int(np.prod(np.shape(a)[:-2], dtype=int))
-        return real(a)
-
-    monkeypatch.setattr(np.linalg, "eig", counted)
+    seen = count_eig(monkeypatch)
     assert SR.run_within_rounding(run)
     assert seen[0] == 1
