@@ -189,8 +189,11 @@ class AtomicFile:
 
     def rename(self) -> None:
         os.chmod(self.tmp, 0o644 & ~_umask())
-        os.replace(self.tmp, self.path)
-        COMMITTED.append(self.path)
+        try:
+            os.replace(self.tmp, self.path)
+        finally:  # an interrupt just after the rename still names the file it completed
+            if not os.path.exists(self.tmp):
+                COMMITTED.append(self.path)
 
     def discard(self) -> None:
         with contextlib.suppress(FileNotFoundError):
