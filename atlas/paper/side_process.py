@@ -101,6 +101,10 @@ def _main(send, steps, out, quick, ci, live, args, kept) -> None:
     from atlas.data import io
     from atlas.paper.steps import Steps, say_stderr
 
+    # :func:`stop` ends this process by an interrupt: it must raise here even where the calling
+    # run was started with SIGINT ignored (a background job of a shell, ``nohup``), which a new
+    # interpreter inherits and then leaves ignored
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     said: list[str] = []
     try:
         from atlas.core import warm

@@ -1,6 +1,7 @@
 """``atlas.paper.side_process``: a group of ``atlas paper``'s steps in a second process."""
 
 import os
+import signal
 import time
 
 import pytest
@@ -76,11 +77,20 @@ def test_bad_jobs_are_refused_before_any_work(tmp_path, jobs):
     assert not out.exists()
 
 
-def test_stopped_early_it_names_the_files_it_completed(tmp_path, monkeypatch):
+@pytest.mark.parametrize("ignored", [False, True])
+def test_stopped_early_it_names_the_files_it_completed(tmp_path, monkeypatch, ignored):
     """The calling run failed (or was interrupted) first: the second process is interrupted and
-    its complete files join the run's list (the interrupt message names them)."""
+    its complete files join the run's list (the interrupt message names them); so too where the
+    run was started with SIGINT ignored (a shell's background job), which the second process
+    inherits."""
     monkeypatch.setattr(io, "COMMITTED", [])
-    side = side_process.start(_steps_wait, tmp_path, True, False, False)
+    before = signal.signal(
+        signal.SIGINT, signal.SIG_IGN if ignored else signal.getsignal(signal.SIGINT)
+    )
+    try:
+        side = side_process.start(_steps_wait, tmp_path, True, False, False)
+    finally:
+        signal.signal(signal.SIGINT, before)
     while not (tmp_path / "done.md").exists() and side[0].is_alive():
         time.sleep(0.05)
     side_process.stop(side)
