@@ -201,8 +201,13 @@ class Notebook:
         return self.page.locator(_CANVAS).first.bounding_box()
 
     def pixels(self) -> np.ndarray:
-        """The map canvas as an RGBA array (CSS pixels at device scale 1)."""
-        url = self.page.locator(_CANVAS).first.evaluate("c => c.toDataURL('image/png')")
+        """The map canvas as an RGBA array (CSS pixels at device scale 1), once it has a size (a
+        canvas not yet laid out gives the empty ``data:,``; pytest-timeout ends a hang)."""
+        canvas = self.page.locator(_CANVAS).first
+        url = canvas.evaluate("c => c.toDataURL('image/png')")
+        while url == "data:,":
+            self.page.wait_for_timeout(50)
+            url = canvas.evaluate("c => c.toDataURL('image/png')")
         return _rgba(url)
 
     def to_page(self, beta1: float, beta2: float) -> tuple[float, float]:
