@@ -33,6 +33,7 @@ def test_output_bytes_count_the_verdicts_over_a_model_box():
     assert est.output_bytes - plain.output_bytes == 4 * 3 * (3 * 1 + 18 * 8)
     assert est.output_bytes == sum(v.nbytes for v in ds.data_vars.values())
     assert est.peak_bytes - plain.peak_bytes == 4 * 3 * (3 * 1 + 18 * 8)
+    # ``seconds`` here is the estimate's model (limits.BOX_NS_PER_GEOMETRY), not a clock reading
     assert est.seconds > plain.seconds + 4 * 3 * 1e-3  # the II verdicts: ms per geometry
     whole = limits.generate_estimate(scene, model_box=as_model_box({}))  # nothing to settle
     assert whole.output_bytes == est.output_bytes and plain.seconds < whole.seconds < est.seconds
