@@ -252,3 +252,20 @@ def test_savefig_writes_the_same_bytes_at_another_time(suffix, tmp_path, monkeyp
         got.append(path.read_bytes())
     assert got[0] == got[1]
     assert b"atplotlib version" not in got[0] and b"Matplotlib v" not in got[0]
+
+
+def test_an_interrupt_just_after_the_rename_still_names_the_file(tmp_path, monkeypatch):
+    """A KeyboardInterrupt raised as the rename returns (the file complete in place, not yet
+    listed): the file is listed as complete all the same, and the interrupt goes on."""
+    real = os.replace
+
+    def replace_then_interrupt(a, b):
+        real(a, b)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(aio, "COMMITTED", [])
+    monkeypatch.setattr(aio.os, "replace", replace_then_interrupt)
+    out = tmp_path / "a.md"
+    with pytest.raises(KeyboardInterrupt):
+        aio.atomic_write_text(out, "done\n")
+    assert out.read_text() == "done\n" and aio.COMMITTED == [str(out)]
