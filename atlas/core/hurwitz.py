@@ -28,7 +28,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from atlas.core import expressions as ex
-from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, nonzero
 from atlas.core.verdicts import Verdict
 
 __all__ = ["ss_verdict", "ss_from_signs", "ss_margin"]
@@ -58,7 +58,7 @@ def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
         disc_abs=disc_abs,
         G=G,
         G_abs=G_abs,
-        damped=(q1 > 0) | (q2 > 0),
+        damped=nonzero(q1) | nonzero(q2),  # q >= 0; a subnormal q is damping
     )
 
 

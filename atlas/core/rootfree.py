@@ -97,6 +97,8 @@ from atlas.core.signs import (
     det2_sign,
     evaluate_certified,
     has_float64,
+    nonzero,
+    sign_of,
 )
 from atlas.core.verdicts import UNDECIDED_FLAG, Verdict
 
@@ -252,7 +254,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     wide = None
     if args[0].dtype == jnp.float32 and has_float64():
         wide = [jnp.asarray(a, jnp.float64) for a in args]
-    sg = {n: jnp.sign(v).astype(CODE) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
+    sg = {n: sign_of(v) for n, v in zip(("c1", "s1", "c2", "s2"), args)}
     sg["D"] = det2_sign(c1, s1, c2, s2)
     for name, fn in {**_CHEAP, **_STURM, "disc_u": _DISC_U}.items():
         if name not in names:
@@ -264,7 +266,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     # sign of one rounded sum or difference is exact; on the class line beta2 = beta1 + pi/2
     # (c1 = s2 up to rounding) A and B are below every error bound otherwise
     plus, minus = _exact_sign(c1, s2, 1), _exact_sign(c1, s2, -1)
-    sq = jnp.sign(q1s).astype(CODE)
+    sq = sign_of(q1s)
     for name, same, exact in (("a3", q1s == q2s, plus * sq), ("A", q1s == q2s, minus * sq)):
         if name in names:
             sg[name] = jnp.where(same & (exact != UNKNOWN), exact, sg[name])
@@ -566,7 +568,7 @@ def _tier2_dominance(c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_dis
     S, U = int(Verdict.STABLE), int(Verdict.UNSTABLE)
     dom = jnp.where(stable, S, jnp.where(unstable, U, X))
     stab = jnp.where(dominance, dom, stab)
-    damped = (q1 != 0) | (q2 != 0)
+    damped = nonzero(q1) | nonzero(q2)  # a subnormal q is damping (XLA reads it as 0)
     cons, stab = jnp.where(damped, cons, X), jnp.where(damped, stab, X)
     return cons.astype(jnp.int8), stab.astype(jnp.int8)
 
@@ -629,7 +631,7 @@ def codes(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, da
         names |= set(_SS_NAMES) | ({"disc_u"} if damped is not True else set())
     names |= set(_CHEAP) | set(_STURM)
     g = _signs(c1, s1, c2, s2, kappa, q1, q2, frozenset(names))
-    is_damped = (q1 != 0) | (q2 != 0)
+    is_damped = nonzero(q1) | nonzero(q2)  # a subnormal q is damping (XLA reads it as 0)
     if ss:
         parts = dict(sd=g["D"], s_a2u=g["a2_d0"], s_disc=g["disc_u"], s_a3=g["a3"], s_G=g["G"])
         s = hurwitz.ss_from_signs({**parts, "damped": is_damped})

@@ -10,7 +10,9 @@ which runs the same function on symbolic stand-ins (:class:`_Tracer`):
   rounds once: ``fl(x o y) = (x o y)(1 + d) + e``, ``|d| <= u``, ``|e| <= tiny`` (``e`` covers results
   flushed to zero below the smallest normal number: XLA on CPU flushes subnormals; where the result
   is normal, ``e = 0``).  Fused multiply-add only removes roundings, so the bounds hold with or
-  without FMA contraction;
+  without FMA contraction.  XLA on CPU also reads subnormal *inputs* as zero (denormals-are-zero,
+  jitted or not): every input is taken as known within ``tiny`` (one ``e`` of its own), and
+  :func:`structural_zero` reads zeros from the bits;
 * the *rounding count* ``n`` of the expression is the largest number of factors ``(1 + d)`` in any
   monomial of ``fl(P)``: ``max(n_x, n_y) + 1`` for a sum, ``n_x + n_y + 1`` for a product;
 * the *underflow floor* ``E`` (in units of ``tiny``) bounds the absolute error from the ``e`` terms,
@@ -120,7 +122,8 @@ def error_model(
     u = float(jnp.finfo(dtype_name).eps) / 2.0
     bounds = bounds or (INPUT_BOUND,) * n_args
     rounded = rounded or (0,) * n_args
-    t = fn(*(_Tracer(k, float(b), 0.0, u) for b, k in zip(bounds, rounded)), sub=_add)
+    # err 1.0: an input may be subnormal, which XLA on CPU reads as zero (module docstring)
+    t = fn(*(_Tracer(k, float(b), 1.0, u) for b, k in zip(bounds, rounded)), sub=_add)
     return t.n, t.err
 
 
@@ -193,9 +196,10 @@ def structural_zero(fn, *args):
     non-negative small integers, computed exactly, that is zero iff each monomial has a zero
     factor, so the exact value is zero (underflow cannot fake it, unlike ``abs_value == 0``).
     This certifies the exact zeros of the axis lines (``s1 = 0``, ``c2 = 0``) and of ``q_j = 0``.
+    The indicators come from the bits (:func:`nonzero`): a subnormal input is not a zero.
     """
     dtype = jnp.result_type(*args)
-    ind = [(jnp.asarray(a) != 0).astype(dtype) for a in args]
+    ind = [nonzero(a).astype(dtype) for a in args]
     return fn(*ind, sub=jnp.add) == 0
 
 
@@ -243,8 +247,9 @@ def _float64_parts(x):
     bits = jax.lax.bitcast_convert_type(x, jnp.int64)
     mag = bits & ((1 << 63) - 1)
     expo = mag >> 52
-    sign = jnp.where(mag == 0, 0, jnp.where(bits < 0, -1, 1)).astype(CODE)
-    exact = (mag == 0) | ((expo > 0) & (expo < 0x7FF))
+    zero = ~nonzero(x)  # not ``mag == 0``: LLVM folds that into ``x == 0.0`` (:func:`nonzero`)
+    sign = jnp.where(zero, 0, jnp.where(bits < 0, -1, 1)).astype(CODE)
+    exact = zero | ((expo > 0) & (expo < 0x7FF))
     return sign, (mag & _LOW52) | (1 << 52), expo - 1075, exact
 
 
@@ -335,9 +340,38 @@ def has_float64() -> bool:
     return jnp.zeros((), jnp.float64).dtype == jnp.float64
 
 
+def _magnitude_bits(x):
+    """The bits of ``x`` without its sign bit, as an integer of the same width."""
+    x = jnp.asarray(x)
+    itype = {4: jnp.int32, 8: jnp.int64}[jnp.dtype(x.dtype).itemsize]
+    return jax.lax.bitcast_convert_type(x, itype) & jnp.iinfo(itype).max
+
+
+def nonzero(x):
+    """``x != 0`` read from the bits.  XLA on CPU runs every program (jitted or not) with
+    denormals-are-zero and flush-to-zero set, so there a subnormal ``x`` compares equal to zero
+    and every arithmetic operation reads it as zero; its bits do not.  LLVM, which assumes IEEE
+    subnormals, folds an integer test ``bits & ~sign == 0`` back into ``x == 0.0``: the magnitude
+    bits are tested as a float sum instead (``m + 0.5 > 1`` for the integer ``m``), which no
+    optimization without fast-math flags rewrites."""
+    mag = _magnitude_bits(x).astype(jnp.float64 if has_float64() else jnp.float32)
+    return mag + 0.5 > 1
+
+
+def subnormal(x):
+    """``True`` where ``x`` is subnormal (nonzero, below the smallest normal number), from the
+    bits (:func:`nonzero`)."""
+    x = jnp.asarray(x)
+    expo = _magnitude_bits(x) >> jnp.finfo(x.dtype).nmant
+    return nonzero(x) & (expo == 0)
+
+
 def sign_of(x):
-    """Exact sign code of a floating-point number (:data:`CODE`)."""
-    return jnp.sign(x).astype(CODE)
+    """Exact sign code of a floating-point number (:data:`CODE`); a subnormal's from its bits
+    (:func:`nonzero`)."""
+    x = jnp.asarray(x)
+    tiny_sign = jnp.where(jnp.signbit(x), -1, 1)
+    return jnp.where(subnormal(x), tiny_sign, jnp.sign(x)).astype(CODE)
 
 
 def known(s):

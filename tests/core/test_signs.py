@@ -131,3 +131,27 @@ def test_rounded_inputs_add_to_the_rounding_count():
     square = lambda x, y, *, sub: sub(x * x, y)  # noqa: E731
     assert signs.error_model(square, 2, "float64", (1.0, 1.0))[0] == 2
     assert signs.error_model(square, 2, "float64", (1.0, 1.0), (3, 0))[0] == 3 + 3 + 1 + 1
+
+
+def _product(x, y, *, sub):
+    return x * y
+
+
+@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+def test_subnormal_input_is_not_a_structural_zero(jitted):
+    """XLA on CPU reads a subnormal as zero (``x != 0`` is False there, jitted or not); the sign
+    of ``x y`` at ``x = 1e-310``, ``y = 1`` is +1 exactly, never a certified 0."""
+    x, y = jnp.asarray(1e-310), jnp.asarray(1.0)
+    assert Fraction(float(x)) * Fraction(float(y)) > 0
+
+    def sign(x, y):
+        return evaluate_certified(_product, x, y)[2]
+
+    if jitted:
+        got = int(jax.jit(sign)(x, y))
+    else:
+        with jax.disable_jit():
+            got = int(sign(x, y))
+    assert got in (1, UNKNOWN)
+    assert bool(jax.jit(signs.nonzero)(x)) and bool(jax.jit(signs.subnormal)(x))
+    assert int(jax.jit(signs.sign_of)(-x)) == -1
