@@ -9,6 +9,12 @@ jaxlib and package versions) in ``selftest.json`` beside the persistent compilat
 driver :func:`atlas.core.points.spectral_points`, raises :class:`BackendFailed` on a backend whose
 last self-check failed.  A backend never checked is trusted (CI checks the CPU); with the cache
 switched off (``ATLAS_JAX_CACHE=0``) nothing is recorded or consulted.
+
+The certificates hold for XLA's CPU arithmetic as measured (docs/SPEC.md, "Certification"):
+fused multiply-adds, flush-to-zero and denormals-are-zero, division by a constant as a
+multiplication by its rounded reciprocal.  They do not hold under the flags of
+:data:`UNSAFE_XLA_FLAGS` (fast math reassociates sums: ``(a + b) - a`` becomes ``b``), so
+:func:`require_trusted` refuses to certify where ``$XLA_FLAGS`` switches one on.
 """
 
 from __future__ import annotations
@@ -24,7 +30,19 @@ import jaxlib
 
 from atlas.core import config
 
-__all__ = ["BackendFailed", "key", "record", "recorded", "require_trusted", "checking"]
+__all__ = [
+    "BackendFailed",
+    "key",
+    "record",
+    "recorded",
+    "require_trusted",
+    "checking",
+    "unsafe_xla_flags",
+]
+
+#: XLA flags that let the compiler rewrite the kernels' arithmetic beyond what the error bounds
+#: cover: fast math (reassociation, no NaN or infinity checks) and NaN-dropping min/max
+UNSAFE_XLA_FLAGS = ("xla_cpu_enable_fast_math", "xla_cpu_enable_fast_min_max")
 
 #: file name of the per-backend results, in the compilation cache directory
 RECORD_NAME = "selftest.json"
@@ -95,6 +113,22 @@ def record(result: dict) -> Path | None:
     return path
 
 
+def unsafe_xla_flags(flags: str | None = None) -> tuple[str, ...]:
+    """The flags of :data:`UNSAFE_XLA_FLAGS` switched on in ``flags`` (default ``$XLA_FLAGS``;
+    ``--name``, ``--name=true`` or any value but ``false`` / ``0``)."""
+    return _unsafe(os.environ.get("XLA_FLAGS", "") if flags is None else flags)
+
+
+@functools.lru_cache(maxsize=8)
+def _unsafe(flags: str) -> tuple[str, ...]:
+    on = []
+    for token in flags.split():
+        name, eq, value = token.lstrip("-").partition("=")
+        if name in UNSAFE_XLA_FLAGS and (not eq or value.strip().lower() not in ("false", "0")):
+            on.append(name)
+    return tuple(on)
+
+
 @contextlib.contextmanager
 def checking():
     """While the self-check runs, the kernels run whatever the record says."""
@@ -106,7 +140,14 @@ def checking():
 
 
 def require_trusted() -> None:
-    """Raise :class:`BackendFailed` if this backend's last self-check found disagreements."""
+    """Raise :class:`BackendFailed` if this backend's last self-check found disagreements, or
+    ``$XLA_FLAGS`` switches on a rewrite the certificates do not cover (:func:`unsafe_xla_flags`)."""
+    unsafe = unsafe_xla_flags()
+    if unsafe:
+        raise BackendFailed(
+            f"XLA_FLAGS: {', '.join(unsafe)} lets XLA reassociate or drop NaNs, which the certified "
+            "kernels' error bounds do not cover; they refuse to run (unset it, or set it to false)"
+        )
     if _STATE["checking"]:
         return
     rec = recorded()
