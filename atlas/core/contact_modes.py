@@ -23,7 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from atlas.core import warm
-from atlas.core.signs import UNKNOWN, det2_sign, sign_of
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, sign_of
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Verdict
 
 __all__ = [
@@ -95,6 +95,7 @@ def direction(angle, dtype=np.float64):
 
 def _half(c, s):
     """0 if the angle is in [0, pi), 1 if in [pi, 2 pi) (exact)."""
+    s, c = sign_of(s), sign_of(c)  # from the bits: XLA reads a subnormal as zero
     return jnp.where((s > 0) | ((s == 0) & (c > 0)), 0, 1)
 
 
@@ -130,8 +131,9 @@ def _axes_like(x):
 
 
 def _axis_cross(ac, as_, vc, vs):
-    # cross products with axis vectors are exact (one product is zero, the other is +-component)
-    return sign_of(ac * vs - as_ * vc)
+    # with an axis vector one product is zero and the other +-component: the sign, exactly, from
+    # the signs (the float difference would flush a subnormal component to zero)
+    return (sign_of(ac) * sign_of(vs) - sign_of(as_) * sign_of(vc)).astype(CODE)
 
 
 @warm.jit
@@ -212,7 +214,7 @@ def consistent_modes(c1, s1, c2, s2, ca, sa):
     interior, so SS is inconsistent there).
     """
     sc1, ss2, sca, ssa = sign_of(c1), sign_of(s2), sign_of(ca), sign_of(sa)
-    ff = ((ca < 0) & (sa < 0)).astype(jnp.int8)
+    ff = ((sca < 0) & (ssa < 0)).astype(jnp.int8)
     # SF: c1 ca > 0  and  c1 * (ca s1 - sa c1) > 0
     a_b1 = det2_sign(ca, sa, c1, s1)
     sf = _and3(_positive(sc1 * sca), _positive(_mul_sign(sc1, a_b1)))
@@ -237,6 +239,7 @@ def _neg_sign(a):
 
 def _stable_from_diagonal(b_jj):
     # matrix (7): det = b_jj k_j, trace = -b_jj q_j (Appendix B); b_jj = 0 gives a double zero root
+    b_jj = sign_of(b_jj)
     return jnp.where(
         b_jj > 0, Verdict.STABLE, jnp.where(b_jj < 0, Verdict.UNSTABLE, Verdict.NEUTRAL)
     ).astype(jnp.int8)
@@ -257,19 +260,19 @@ def stable_FS(s2):
 @warm.jit
 def consistent_IF(c1, s1):
     """IF consistency (Sec. 4.3, SPEC-corrected): ``b11 < 0`` and ``b21 > 0``; stable if consistent."""
-    return ((c1 < 0) & (s1 > 0)).astype(jnp.int8)
+    return ((sign_of(c1) < 0) & (sign_of(s1) > 0)).astype(jnp.int8)
 
 
 @warm.jit
 def consistent_FI(c2, s2):
     """FI consistency: ``b22 < 0`` and ``b12 > 0``; stable if consistent."""
-    return ((s2 < 0) & (c2 > 0)).astype(jnp.int8)
+    return ((sign_of(s2) < 0) & (sign_of(c2) > 0)).astype(jnp.int8)
 
 
 @warm.jit
 def cc_possible(c1, s2):
     """Necessary condition for CC inverse chattering (Sec. 5.2): ``b11 > 0`` and ``b22 > 0``."""
-    return ((c1 > 0) & (s2 > 0)).astype(bool)
+    return ((sign_of(c1) > 0) & (sign_of(s2) > 0)).astype(bool)
 
 
 def invariants(k1, k2, q1=0.0, q2=0.0, b1=1.0, b2=1.0) -> dict:

@@ -186,3 +186,35 @@ def test_the_verdicts_are_kept_kernels(tmp_path):
         got = np.asarray(me.class_code(c1, s1, c2, s2))
     assert list(tmp_path.glob("atlas.core.contact_modes.class_code-*.jaxexport"))
     np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+def test_subnormal_components_keep_their_sign(jitted):
+    """XLA on CPU reads a subnormal as zero (jitted or not): a component ``-1e-310`` is negative
+    exactly, so ``a = (-1e-310, -1)`` makes FF consistent, ``b11 = 1e-310`` SF stable,
+    ``b22 = -1e-310`` FS unstable, ``(b11, b21) = (-1e-310, 1)`` IF consistent (paper Table 1,
+    Sec. 4.2-4.3); read as zero they were inconsistent, neutral, neutral, inconsistent."""
+    from fractions import Fraction
+
+    import jax
+
+    tiny = 1e-310
+    assert 0 < Fraction(tiny) < Fraction(float(np.finfo(np.float64).tiny))
+    tiny, one = jnp.asarray(tiny), jnp.asarray(1.0)
+    c1, s1 = jnp.cos(jnp.asarray(0.3)), jnp.sin(jnp.asarray(0.3))
+    cases = [
+        (lambda: me.consistent_modes(c1, s1, one, tiny, -tiny, -one)["FF"], 1),
+        (lambda: me.consistent_modes(c1, s1, one, tiny, -tiny, -one)["SF"], 0),
+        (lambda: me.stable_SF(tiny), int(Verdict.STABLE)),
+        (lambda: me.stable_FS(-tiny), int(Verdict.UNSTABLE)),
+        (lambda: me.consistent_IF(-tiny, one), 1),
+        (lambda: me.consistent_FI(one, -tiny), 1),
+        (lambda: me.cc_possible(tiny, tiny), True),
+    ]
+    for run, want in cases:
+        if jitted:
+            got = run()
+        else:
+            with jax.disable_jit():
+                got = run()
+        assert np.asarray(got).item() == want
