@@ -368,7 +368,20 @@ def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
     )
     cons, stab = _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, dzero, c1.dtype)
     absc = jnp.ldexp(jnp.max(jnp.real(z), -1), n)
-    return cons, stab, absc
+    return (*_unproven((c1, s1, c2, s2, kappa, q1, q2), (k1, k2, q1s, q2s), cons, stab), absc)
+
+
+def _unproven(originals, scaled, cons, stab):
+    """``cons, stab`` undecided where an input is subnormal or the scaling flushed one
+    (:func:`atlas.core.expressions.lost_to_underflow`): XLA reads those as zero, so the
+    polynomial enclosed would not be the point's."""
+    c1, s1, c2, s2, kappa, q1, q2 = originals
+    lost = ex.any_subnormal(c1, s1, c2, s2) | ex.lost_to_underflow((kappa, kappa, q1, q2), scaled)
+    X = int(Verdict.UNDECIDED)
+    return (
+        jnp.where(lost, int(Consistency.UNDECIDED), cons).astype(cons.dtype),
+        jnp.where(lost, X, stab).astype(stab.dtype),
+    )
 
 
 def _ii_stage2(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero):
@@ -405,4 +418,5 @@ def ii_verdicts_two_stage(c1, s1, c2, s2, kappa, q1, q2):
     """
     z, zq = _roots_jit(c1, s1, c2, s2, kappa, q1, q2)
     z, R, extra = _radii_jit(z, zq, c1, s1, c2, s2, kappa, q1, q2)
-    return _stage2_jit(z, R, *extra)
+    cons, stab, absc = _stage2_jit(z, R, *extra)
+    return (*_unproven((c1, s1, c2, s2, kappa, q1, q2), extra[4:8], cons, stab), absc)

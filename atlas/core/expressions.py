@@ -60,6 +60,7 @@ __all__ = [
     "normalize",
     "damping_scale",
     "balance",
+    "any_subnormal",
     "lost_to_underflow",
 ]
 
@@ -295,6 +296,15 @@ def balance(kappa, q1, q2):
     e = jnp.maximum(jnp.where(qm > 0, eq, -100000), (ek + 1) // 2)
     f = jnp.ldexp(jnp.ones_like(k1), -e)
     return k1 * f * f, k2 * f * f, q1s * f, q2s * f
+
+
+def any_subnormal(*xs):
+    """``True`` where any of ``xs`` is subnormal (from the bits): XLA on CPU reads it as zero, so
+    no comparison or sign of it in a kernel is its own (:func:`atlas.core.signs.nonzero`)."""
+    out = False
+    for x in xs:
+        out = out | subnormal(x)
+    return out
 
 
 def lost_to_underflow(originals, scaled):

@@ -47,6 +47,7 @@ def _sign_parts(c1, s1, c2, s2, kappa, q1, q2):
     s_a3 = jnp.where(q1 == q2, jnp.sign(c1 + s2).astype(CODE), s_a3)
     G, G_abs, s_G = evaluate_certified(_G, c1, s1, c2, s2, k1, k2, r1, r2, w2, w4)
     lost = ex.lost_to_underflow((kappa, kappa, q1, q2, q1, q2), (k1, k2, q1s, q2s, r1, r2))
+    lost = lost | ex.any_subnormal(c1, s1, c2, s2)
     unk = lambda sg: jnp.where(lost, UNKNOWN, sg).astype(CODE)  # noqa: E731
     return dict(
         sd=sd,

@@ -273,6 +273,7 @@ def _signs(c1, s1, c2, s2, kappa, q1, q2, names, sharp: bool = False) -> dict:
     if "B" in names:
         sg["B"] = jnp.where((k1 == k2) & (minus != UNKNOWN), minus, sg["B"])
     lost = ex.lost_to_underflow((kappa, kappa, q1, q2), (k1, k2, q1s, q2s))
+    lost = lost | ex.any_subnormal(c1, s1, c2, s2)
     for name in sorted(names):  # sorted: the same program (and compilation-cache key) every run
         sg[name] = jnp.where(lost, UNKNOWN, sg[name]).astype(CODE)
     # A = B = 0 exactly (h1 == h2): c1 == s2 and q1 == q2, k1 == k2 as floats

@@ -23,7 +23,7 @@ import jax.numpy as jnp
 from atlas.core import expressions as ex
 from atlas.core.enclosures import ii_verdicts
 from atlas.core.hurwitz import ss_verdict
-from atlas.core.signs import CODE, UNKNOWN, det2_sign
+from atlas.core.signs import CODE, UNKNOWN, det2_sign, sign_of
 from atlas.core.undamped import ii_undamped
 from atlas.core.verdicts import Consistency, Verdict
 
@@ -52,7 +52,7 @@ def ii_possible(c1, s1, c2, s2):
     in it, or (``det B != 0``) the cone contains the direction ``(-1, -1)``, i.e.
     ``sign(c2 - s2) = sign(s1 - c1) = sign(det B)``; for ``det B = 0`` the cone is a ray or a line.
     """
-    in3 = lambda c, s: (c < 0) & (s < 0)
+    in3 = lambda c, s: (sign_of(c) < 0) & (sign_of(s) < 0)  # noqa: E731
     sd = det2_sign(c1, s1, c2, s2)
     d = jnp.sign(c2 - s2).astype(CODE)  # one rounding: exact sign
     e = jnp.sign(s1 - c1).astype(CODE)
