@@ -347,6 +347,11 @@ def _magnitude_bits(x):
     return jax.lax.bitcast_convert_type(x, itype) & jnp.iinfo(itype).max
 
 
+def _magnitude(x):
+    """``|x|``'s bits as a float integer (exact below ``2^nmant``, i.e. for every subnormal)."""
+    return _magnitude_bits(x).astype(jnp.float64 if has_float64() else jnp.float32)
+
+
 def nonzero(x):
     """``x != 0`` read from the bits.  XLA on CPU runs every program (jitted or not) with
     denormals-are-zero and flush-to-zero set, so there a subnormal ``x`` compares equal to zero
@@ -354,16 +359,14 @@ def nonzero(x):
     subnormals, folds an integer test ``bits & ~sign == 0`` back into ``x == 0.0``: the magnitude
     bits are tested as a float sum instead (``m + 0.5 > 1`` for the integer ``m``), which no
     optimization without fast-math flags rewrites."""
-    mag = _magnitude_bits(x).astype(jnp.float64 if has_float64() else jnp.float32)
-    return mag + 0.5 > 1
+    return _magnitude(x) + 0.5 > 1
 
 
 def subnormal(x):
     """``True`` where ``x`` is subnormal (nonzero, below the smallest normal number), from the
     bits (:func:`nonzero`)."""
-    x = jnp.asarray(x)
-    expo = _magnitude_bits(x) >> jnp.finfo(x.dtype).nmant
-    return nonzero(x) & (expo == 0)
+    m = _magnitude(x)
+    return (m + 0.5 > 1) & (m < 2 ** jnp.finfo(jnp.asarray(x).dtype).nmant)
 
 
 def sign_of(x):
