@@ -55,3 +55,40 @@ def test_subnormal_damping_settles_to_the_exact_verdict():
     x = np.array([_inputs(b1, b2, Q_SUBNORMAL) for b1, b2 in STABLE_POINTS]).T
     got = points.spectral_points(*x, names=("stable_SS",))["stable_SS"]
     assert (got == int(Verdict.STABLE)).all(), got
+
+
+def exact_ss_unstable(c1, s1, c2, s2, kappa, q1, q2) -> bool:
+    """``True`` iff ``p`` (as in :func:`exact_ss_stable`) certainly has a root with ``Re > 0``: a
+    negative coefficient, or positive ones with ``H2 < 0`` or ``H3 < 0`` (sign changes in the
+    first column of the Routh array)."""
+    c1, s1, c2, s2, k1, q1, q2 = (Fraction(float(v)) for v in (c1, s1, c2, s2, kappa, q1, q2))
+    d = c1 * s2 - s1 * c2
+    a3, a2 = c1 * q1 + s2 * q2, c1 * k1 + s2 + d * q1 * q2
+    a1, a0 = d * (k1 * q2 + q1), d * k1
+    h2 = a3 * a2 - a1
+    if min(a3, a2, a1, a0) < 0:
+        return True
+    return min(a3, a2, a1, a0) > 0 and (h2 < 0 or a1 * h2 - a3 * a3 * a0 < 0)
+
+
+@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+def test_equal_damping_sum_flushed_to_zero_keeps_the_verdict(jitted):
+    """Equal damping reads ``sign(a3) = sign(c1 + s2)`` from one rounded sum.  XLA flushes a
+    subnormal sum to zero (``3e-308 - 2.9e-308`` gives 0 under jit), so that sign can be 0 where
+    it is not; but ``|c1|, |s2| < 2^-1021`` forces ``|s1 c2| ~ 1``: ``det B < 0`` is unstable, and
+    ``det B > 0`` has ``G ~ s1 c2 m^2 < 0``, unstable whatever ``a3``'s sign.  The verdict is the
+    exact one on the worst such inputs, jitted and op-by-op."""
+    flushed = jax.jit(jnp.add)(jnp.asarray(3e-308), jnp.asarray(-2.9e-308))
+    assert float(flushed) == 0 and Fraction(3e-308) + Fraction(-2.9e-308) != 0
+    cases = [(3e-308, 1.0, -1.0, -2.9e-308), (-3e-308, 1.0, -1.0, 2.9e-308)]
+    cases += [(c1, -s1, -c2, s2) for c1, s1, c2, s2 in cases]
+    for c1, s1, c2, s2 in cases:
+        for q in (1e-3, 0.3, 5.0):
+            x = [np.float64(v) for v in (c1, s1, c2, s2, 0.5, q, q)]
+            assert exact_ss_unstable(*x)
+            if jitted:
+                got = int(jax.jit(hurwitz.ss_verdict)(*map(jnp.asarray, x)))
+            else:
+                with jax.disable_jit():
+                    got = int(hurwitz.ss_verdict(*map(jnp.asarray, x)))
+            assert got in (int(Verdict.UNSTABLE), int(Verdict.UNDECIDED)), (x, got)
