@@ -57,6 +57,21 @@ def _q_to_zero(rng, dtype):
     return _pack(B1.ravel(), B2.ravel(), K.ravel(), Q.ravel(), Q.ravel(), dtype)
 
 
+def _q_subnormal(rng, dtype):
+    """Subnormal damping (float64 ``5e-324 .. 2e-308``; ``1e-40``, ``1e-45``: subnormal in
+    float32), on one contact or both: XLA on CPU reads subnormals as zero, IEEE does not."""
+    n = 20
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+    kap = 10 ** rng.uniform(-1, 1, n)
+    qs = np.array([5e-324, 1e-315, 1e-310, 2e-308, 1e-40, 1e-45])
+    B1, Q = np.meshgrid(b1, qs, indexing="ij")
+    B2, _ = np.meshgrid(b2, qs, indexing="ij")
+    K, _ = np.meshgrid(kap, qs, indexing="ij")
+    b1, b2, k, q = (np.tile(a.ravel(), 2) for a in (B1, B2, K, Q))
+    one_side = np.repeat([True, False], q.size // 2)
+    return _pack(b1, b2, k, q, np.where(one_side, 0.0, q), dtype)
+
+
 def _G_parts(b1, b2, kap):
     """G/q^2 = G2 + q^2 X for q1 = q2 = q (kappa, 1 stiffness), 50 digits: the parts of degree 2
     and 4 of :func:`atlas.core.expressions.G_scaled` at ``q = 1``; also ``det B`` and ``a3/q``."""
@@ -212,6 +227,7 @@ def _class_boundaries(rng, dtype):
 
 SUITES = {
     "q_to_zero": _q_to_zero,
+    "q_subnormal": _q_subnormal,
     "near_hurwitz": _near_hurwitz,
     "near_discriminant": _near_discriminant,
     "near_detB": _near_detB,
