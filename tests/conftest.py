@@ -4,6 +4,7 @@ from pathlib import Path
 from pkgutil import iter_modules
 
 import pytest
+from shared_run import shared_run
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -43,52 +44,27 @@ def pytest_collection_modifyitems(items):
 @pytest.fixture(scope="session")
 def paper_run(tmp_path_factory):
     """One ``atlas paper`` run at the CI size per test session (``atlas.paper.run(ci=True)``): its
-    directory, step timings and audit claims, shared by the run, audit and outputs-tree tests.
-    Under pytest-xdist the first worker to create the shared directory runs it and the others
-    wait for its result (a pickle beside it)."""
-    import pickle
-    import time
+    directory, step timings and audit claims, shared by the run, audit and outputs-tree tests
+    (and by the xdist workers: :func:`shared_run`)."""
     from types import SimpleNamespace
 
-    root = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        root = root.parent  # shared by the workers of this session
-    out, done = root / "paper_run", root / "paper_run.pickle"
-    try:
-        out.mkdir()
-    except FileExistsError:  # another worker runs it
-        deadline = time.monotonic() + 1800
-        while not done.exists():
-            if time.monotonic() > deadline:
-                pytest.fail("the shared atlas paper run did not finish")
-            time.sleep(0.5)
-        got = pickle.loads(done.read_bytes())
-        if isinstance(got, str):
-            pytest.fail(f"the shared atlas paper run failed: {got}")
-        return SimpleNamespace(out=out, **got)
+    def compute(out):
+        from atlas import paper
+        from atlas.paper import audit
 
-    from atlas import paper
-    from atlas.paper import audit
+        seen = {}
+        run_audit = audit.run_audit
 
-    seen = {}
-    run_audit = audit.run_audit
+        def keep_claims(*args, **kwargs):
+            seen["claims"] = run_audit(*args, **kwargs)
+            return seen["claims"]
 
-    def keep_claims(*args, **kwargs):
-        seen["claims"] = run_audit(*args, **kwargs)
-        return seen["claims"]
-
-    try:
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(audit, "run_audit", keep_claims)
             timings = paper.run(out=out, ci=True, progress=lambda m: None, jobs=1)
-        got = {"timings": timings, "claims": seen["claims"]}
-    except BaseException as e:
-        got = f"{type(e).__name__}: {e}"
-        raise
-    finally:
-        tmp = done.with_name(done.name + ".tmp")
-        tmp.write_bytes(pickle.dumps(got))
-        os.replace(tmp, done)
+        return {"timings": timings, "claims": seen["claims"]}
+
+    out, got = shared_run(tmp_path_factory, "paper_run", compute)
     return SimpleNamespace(out=out, **got)
 
 

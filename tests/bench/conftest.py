@@ -1,10 +1,14 @@
 """Fixtures of tests/bench: a small made-up result set of an ``atlas bench`` run (no
-measurement), rows of every section with the keys the measuring code writes, numbers by hand."""
+measurement), rows of every section with the keys the measuring code writes, numbers by hand;
+and one real ``tiny`` run per test session."""
 
+import contextlib
+import io
 import json
 import math
 
 import pytest
+from shared_run import shared_run
 
 from atlas.bench.config import CONFIG, METHODS
 from atlas.bench.report import Results
@@ -132,3 +136,22 @@ def fake_results(mode="full") -> Results:
 def results():
     """The made-up results of a full run."""
     return fake_results("full")
+
+
+@pytest.fixture(scope="session")
+def tiny_bench(tmp_path_factory):
+    """One whole ``tiny`` run (``atlas.bench.run(config="tiny")``), measured for real, per test
+    session (and xdist workers: :func:`shared_run`), started in an empty directory with the
+    default output directory: ``(that directory, its exit code, what it printed)``."""
+
+    def compute(cwd):
+        from atlas.bench import run
+
+        printed = io.StringIO()
+        with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(printed):
+            mp.chdir(cwd)
+            code = run(config="tiny")
+        return {"code": code, "printed": printed.getvalue()}
+
+    cwd, got = shared_run(tmp_path_factory, "tiny_bench", compute)
+    return cwd, got["code"], got["printed"]

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from atlas.bench import run, runner
+from atlas.bench import runner
 from atlas.bench.config import CONFIG, METHODS
 
 HEAD_COLUMNS = (
@@ -22,12 +22,14 @@ def _filled(v):
 
 
 @pytest.mark.e2e
-def test_tiny_run_end_to_end(tmp_path, monkeypatch, capsys):
-    monkeypatch.chdir(tmp_path)
-    assert run(config="tiny") == 0
-    out = Path("outputs/tiny")
-    assert f"tiny report in {out / 'bench.md'}" in capsys.readouterr().out
-    assert not Path("outputs/bench.md").exists()  # the full report is not touched
+def test_tiny_run_end_to_end(tiny_bench):
+    """The session's tiny run (``tiny_bench``, tests/bench/conftest.py), started in an empty
+    directory: its report in the mode's default directory, every section measured."""
+    cwd, code, printed = tiny_bench
+    assert code == 0
+    assert f"tiny report in {Path('outputs/tiny') / 'bench.md'}" in printed
+    out = cwd / "outputs" / "tiny"
+    assert not (cwd / "outputs" / "bench.md").exists()  # the full report is not touched
     md = (out / "bench.md").read_text()
     for word in ("Mode: **tiny**", "JAX", "Command:", "total duration", "## Headline",
                  "## Work-precision", "## Hard-case suites", "## Scaling", "### End to end",

@@ -75,12 +75,12 @@ def test_csv_rows_read_back_as_written(tmp_path):
     assert isinstance(back[0]["n"], int)
 
 
-@pytest.fixture(scope="module")
-def tiny_report(tmp_path_factory):
-    """A whole ``tiny`` run, measured for real."""
-    out = tmp_path_factory.mktemp("bench") / "tiny"
-    assert run(config="tiny", out=str(out)) == 0
-    return out
+@pytest.fixture
+def tiny_report(tiny_bench):
+    """A whole ``tiny`` run, measured for real: the session's (tests/bench/conftest.py)."""
+    cwd, code, _ = tiny_bench
+    assert code == 0
+    return cwd / "outputs" / "tiny"
 
 
 def _without_stamps(md: str) -> list[str]:
