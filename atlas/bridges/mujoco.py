@@ -60,6 +60,7 @@ __all__ = [
     "collide",
     "relative_jacobian",
     "same_contact",
+    "check_tol",
 ]
 
 #: the one line a user without the extra gets
@@ -159,6 +160,12 @@ def collide(model, data, qpos, margin):
 def touching(model, data, qpos, tol=TOUCH_TOL) -> list:
     """The contacts with MuJoCo's signed distance ``<= tol`` [m] at ``qpos``."""
     return [c for c in collide(model, data, qpos, tol) if c.dist <= tol]
+
+
+def check_tol(tol) -> None:
+    """The touching tolerance ``tol`` [m]: finite and ``>= 0``, else a one-line error."""
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol: must be a finite distance >= 0 m, got {tol!r}")
 
 
 def _select(found, contacts):
@@ -305,6 +312,7 @@ def contact_data(
     (world 3-vectors), needed only where a frictional contact does not slide.  ``tol`` [m]: touching.
     """
     mj = require()
+    check_tol(tol)
     work = state(model, data, qpos, qvel)
     qpos0, qvel0 = work.qpos.copy(), work.qvel.copy()
     chosen = _select(touching(model, work, qpos0, tol), contacts)

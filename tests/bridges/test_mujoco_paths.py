@@ -144,3 +144,33 @@ def test_the_cli_refuses_a_constrained_file_in_one_line(tmp_path, capsys):
     assert cli.main(["mujoco", str(path), "--qvel", ",".join(map(repr, QVEL))]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"atlas: error: model: the {named} acts") and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--tol", "-1"], "tol: must be a finite distance >= 0 m, got -1.0"),
+        (["--tol", "nan"], "tol: must be a finite distance >= 0 m, got nan"),
+        (["--rollout", "0.01", "--tol", "-1"], "tol: must be a finite distance >= 0 m, got -1.0"),
+        (["--rollout", "inf"], "duration: must be > 0 s, got inf (and finite)"),
+        (["--rollout", "1e9"], "duration: 1e+09 s is 200,000,000,001 judged states of 0.0005 s "
+                               "steps every 10, at most 1,000,000 (raise every)"),
+        (["--every", "5"], "every: only with --rollout T (it applies to a rollout)"),
+        (["--jam-test"], "jam_test: only with --rollout T (it applies to a rollout)"),
+        (["--rollout", "0.01", "--slip", "1,0,0;0,0,-1"], "slip: not with --rollout"),
+    ],
+)  # fmt: skip
+def test_bad_or_ignored_options_are_one_line(extra, message, capsys):
+    """A bad tolerance was reported as "no two geoms touch", an infinite rollout was an internal
+    error and a huge one ran out of memory; an option of the other mode was silently ignored."""
+    argv = ["mujoco", str(EXAMPLE), "--qvel", ",".join(map(repr, QVEL)), *extra]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("atlas: error: " + message) and err.count("\n") == 1, err
+
+
+def test_the_api_refuses_a_bad_tolerance():
+    model, data = bridge.load(EXAMPLE)
+    for tol in (-1e-6, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=r"^tol: must be a finite distance >= 0 m"):
+            bridge.contact_data(model, data, qvel=QVEL, tol=tol)
