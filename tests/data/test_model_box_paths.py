@@ -82,3 +82,13 @@ def test_a_resume_over_a_box_that_differs_in_the_seventh_digit_is_refused(tmp_pa
     with pytest.raises(ValueError, match=r"^model_box: store .* asks for kappa=0.5:2.0000004") as e:
         distributed.generate_distributed(scene, store, model_box=wider, resume=True, slab=2)
     assert "\n" not in str(e.value)
+
+
+def test_a_mechanism_atlas_records_the_box_typed():
+    """``atlas.mechanism_atlas(name, model_box=...)`` (one body): the attribute and the call in
+    ``history`` give the box typed."""
+    from atlas.data.body_atlas import mechanism_atlas
+
+    ds = mechanism_atlas("ladder", theta="0.3", mu="0.5", model_box=TYPED[0])
+    assert parse_model_box(ds.attrs["model_box"]) == parse_model_box(TYPED[0])
+    assert f"model_box={TYPED[0]!r}" in ds.attrs["history"]
