@@ -149,7 +149,12 @@ def run_cli(
 
         tol = max(tol, 1e-4)  # a rollout's contacts penetrate: touching within 0.1 mm
         kw = dict(contacts=contacts, every=every, tol=tol, **state)
-        res = roll.rollout(mj_model, data, rollout, **kw)
+        try:
+            res = roll.rollout(mj_model, data, rollout, **kw)
+        except ValueError as err:  # the API's duration is the command line's --rollout
+            if not str(err).startswith("duration:"):
+                raise
+            raise ValueError("rollout:" + str(err)[len("duration:") :]) from None
         rep = _rollout_report(res, model)
         text = _rollout_text(res)
         if jam_test:

@@ -152,8 +152,8 @@ def test_the_cli_refuses_a_constrained_file_in_one_line(tmp_path, capsys):
         (["--tol", "-1"], "tol: must be a finite distance >= 0 m, got -1.0"),
         (["--tol", "nan"], "tol: must be a finite distance >= 0 m, got nan"),
         (["--rollout", "0.01", "--tol", "-1"], "tol: must be a finite distance >= 0 m, got -1.0"),
-        (["--rollout", "inf"], "duration: must be > 0 s, got inf (and finite)"),
-        (["--rollout", "1e9"], "duration: 1e+09 s is 200,000,000,001 judged states of 0.0005 s "
+        (["--rollout", "inf"], "rollout: must be > 0 s, got inf (and finite)"),
+        (["--rollout", "1e9"], "rollout: 1e+09 s is 200,000,000,001 judged states of 0.0005 s "
                                "steps every 10, at most 1,000,000 (raise every)"),
         (["--every", "5"], "every: only with --rollout T (it applies to a rollout)"),
         (["--jam-test"], "jam_test: only with --rollout T (it applies to a rollout)"),
