@@ -304,7 +304,7 @@ def _add_mujoco(sub) -> None:
         "--rollout", type=float, metavar="T", help="step the model T seconds and report the "
         "verdicts along the trajectory (where the mode or a verdict changes)",
     )  # fmt: skip
-    pm.add_argument("--every", type=int, default=10, help="rollout: judge every N-th step")
+    pm.add_argument("--every", type=int, help="rollout: judge every N-th step (default: 10)")
     pm.add_argument(
         "--jam-test", action="store_true", help="rollout: run again with the constraint time "
         "constants halved (a jam's stop time halves, a friction stop's does not)",

@@ -22,6 +22,11 @@ touching).  ``contacts``: names of geoms (``"foot"``: the one touching contact o
 contacts, three or more without a choice, a geom that touches two things, or a contact that does
 not slide (its slip direction is undefined; give ``slip``) is a one-line ``ValueError``.
 
+**Supported models.**  Joints, actuators, passive and applied forces, and contacts.  A constraint
+that acts at the state besides the contacts (an active equality constraint, a joint or tendon at
+its limit, a joint's or tendon's friction loss) would add a force that neither ``Q`` nor ``B``
+holds, so it is refused in one line naming ``model``.
+
 **Contact model (approximate).**  MuJoCo's constraint is not a spring: with impedance ``d``, the
 reference acceleration ``-b v - k r`` (``solref = (timeconst, dampratio)``: ``b = 2 / (dmax
 timeconst)``, ``k = d / (dmax^2 timeconst^2 dampratio^2)``; ``solref < 0``: ``k = -solref[0] /
@@ -36,6 +41,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 
 import numpy as np
 
@@ -54,6 +60,7 @@ __all__ = [
     "collide",
     "relative_jacobian",
     "same_contact",
+    "check_tol",
 ]
 
 #: the one line a user without the extra gets
@@ -79,11 +86,19 @@ def require():
 def load(path):
     """``(MjModel, MjData)`` of an MJCF (or MJB) file; a bad file is a one-line error."""
     mj = require()
+    if not os.path.isfile(path):
+        raise ValueError(f"model: cannot load {path}: no such file")
+    binary = str(path).lower().endswith(".mjb")
+    read = mj.MjModel.from_binary_path if binary else mj.MjModel.from_xml_path
+    said, before = [], mj.get_mju_user_warning()
+    mj.set_mju_user_warning(said.append)  # MuJoCo's own warning joins the one line
     try:
-        model = mj.MjModel.from_xml_path(str(path))
+        model = read(str(path))
     except (ValueError, FileNotFoundError) as err:
-        msg = " ".join(str(err).split())
+        msg = " ".join(" ".join([*said, str(err)]).split())
         raise ValueError(f"model: cannot load {path}: {msg}") from None
+    finally:
+        mj.set_mju_user_warning(before)
     return model, mj.MjData(model)
 
 
@@ -145,6 +160,12 @@ def collide(model, data, qpos, margin):
 def touching(model, data, qpos, tol=TOUCH_TOL) -> list:
     """The contacts with MuJoCo's signed distance ``<= tol`` [m] at ``qpos``."""
     return [c for c in collide(model, data, qpos, tol) if c.dist <= tol]
+
+
+def check_tol(tol) -> None:
+    """The touching tolerance ``tol`` [m]: finite and ``>= 0``, else a one-line error."""
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol: must be a finite distance >= 0 m, got {tol!r}")
 
 
 def _select(found, contacts):
@@ -213,6 +234,36 @@ def _drift(mj, model, qpos, qvel, chosen, scratch):
     return (rates[0] - rates[1]) / (2 * h)
 
 
+def _other_constraints(mj) -> dict:
+    """MuJoCo's constraint kinds besides contacts: ``{type: (words, object kind of efc_id)}``."""
+    C, O = mj.mjtConstraint, mj.mjtObj
+    return {
+        int(C.mjCNSTR_EQUALITY): ("equality constraint", O.mjOBJ_EQUALITY),
+        int(C.mjCNSTR_FRICTION_DOF): ("friction loss of joint", O.mjOBJ_DOF),
+        int(C.mjCNSTR_FRICTION_TENDON): ("friction loss of tendon", O.mjOBJ_TENDON),
+        int(C.mjCNSTR_LIMIT_JOINT): ("limit of joint", O.mjOBJ_JOINT),
+        int(C.mjCNSTR_LIMIT_TENDON): ("limit of tendon", O.mjOBJ_TENDON),
+    }
+
+
+def _refuse_other_constraints(mj, model, data) -> None:
+    """A one-line ``ValueError`` naming ``model`` where a constraint other than a contact acts at
+    the state (``data`` after ``mj_forward``): its force is in neither ``Q`` nor ``B``."""
+    kinds = _other_constraints(mj)
+    for kind, i in zip(data.efc_type[: data.nefc], data.efc_id[: data.nefc]):
+        if int(kind) not in kinds:
+            continue
+        words, obj = kinds[int(kind)]
+        i = int(model.dof_jntid[i]) if obj == mj.mjtObj.mjOBJ_DOF else int(i)
+        obj = mj.mjtObj.mjOBJ_JOINT if obj == mj.mjtObj.mjOBJ_DOF else obj
+        name = mj.mj_id2name(model, obj, i) or f"#{i}"
+        raise ValueError(
+            f"model: the {words} {name!r} acts at this state; the bridge reads the mass matrix, "
+            "the smooth forces and the contacts only (not supported: active equality constraints, "
+            "joint or tendon limits, friction loss)"
+        )
+
+
 def _full_mass(mj, model, data):
     """Dense ``M`` (nv, nv): ``mj_fullM`` (MuJoCo 4 takes ``data``, 3.x the packed ``qM``)."""
     M = np.zeros((model.nv, model.nv))
@@ -261,11 +312,13 @@ def contact_data(
     (world 3-vectors), needed only where a frictional contact does not slide.  ``tol`` [m]: touching.
     """
     mj = require()
+    check_tol(tol)
     work = state(model, data, qpos, qvel)
     qpos0, qvel0 = work.qpos.copy(), work.qvel.copy()
     chosen = _select(touching(model, work, qpos0, tol), contacts)
     work.qpos[:] = qpos0
     mj.mj_forward(model, work)
+    _refuse_other_constraints(mj, model, work)
     M = _full_mass(mj, model, work)
     rel = [relative_jacobian(mj, model, work, c) for c in chosen]
     Jn = np.array([c.n @ J for c, J in zip(chosen, rel)])

@@ -133,10 +133,15 @@ def _text(rep) -> str:
 
 def run_cli(
     model, contacts=None, qpos=None, qvel=None, json_out=False, tol=bridge.TOUCH_TOL,
-    rollout=None, every=10, jam_test=False, slip=None,
+    rollout=None, every=None, jam_test=False, slip=None,
 ):  # fmt: skip
     """``atlas mujoco``: load, compute at the state (or along ``rollout`` seconds of MuJoCo's
-    trajectory), print (text or ``--json``); returns 0."""
+    trajectory, judged every ``every`` steps, default 10), print (text or ``--json``); returns 0.
+    An option of the other mode (``--every``, ``--jam-test`` without ``--rollout``; ``--slip``
+    with it) is refused in one line naming it."""
+    _check_mode(rollout, every, jam_test, slip)
+    bridge.check_tol(tol)
+    every = 10 if every is None else every
     mj_model, data = bridge.load(model)
     state = dict(qpos=_numbers("qpos", qpos), qvel=_numbers("qvel", qvel))
     if rollout is not None:
@@ -144,7 +149,12 @@ def run_cli(
 
         tol = max(tol, 1e-4)  # a rollout's contacts penetrate: touching within 0.1 mm
         kw = dict(contacts=contacts, every=every, tol=tol, **state)
-        res = roll.rollout(mj_model, data, rollout, **kw)
+        try:
+            res = roll.rollout(mj_model, data, rollout, **kw)
+        except ValueError as err:  # the API's duration is the command line's --rollout
+            if not str(err).startswith("duration:"):
+                raise
+            raise ValueError("rollout:" + str(err)[len("duration:") :]) from None
         rep = _rollout_report(res, model)
         text = _rollout_text(res)
         if jam_test:
@@ -158,6 +168,17 @@ def run_cli(
     rep = report(res, model)
     print(json.dumps(rep) if json_out else _text(rep))
     return 0
+
+
+def _check_mode(rollout, every, jam_test, slip) -> None:
+    """Refuse the options that the chosen mode (a state, or ``--rollout``) would ignore."""
+    if rollout is None:
+        for name, given in (("every", every is not None), ("jam_test", jam_test)):
+            if given:
+                raise ValueError(f"{name}: only with --rollout T (it applies to a rollout)")
+    elif slip is not None:
+        raise ValueError("slip: not with --rollout (a rollout takes its slip directions from "
+                         "the trajectory)")  # fmt: skip
 
 
 def _rollout_report(res, model) -> dict:

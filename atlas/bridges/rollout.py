@@ -13,12 +13,16 @@ where the theory says the engine must leave it.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
 from atlas.bridges import mujoco as bridge
 
-__all__ = ["Rollout", "rollout", "jam_test", "KEYS"]
+__all__ = ["Rollout", "rollout", "jam_test", "KEYS", "MAX_SAMPLES"]
+
+#: the most states a rollout keeps (each a dict of the state and its verdicts, about 1 kB)
+MAX_SAMPLES = 10**6
 
 #: the verdicts recorded along a rollout (two contacts; one contact: all of its four)
 KEYS = (
@@ -58,10 +62,16 @@ def rollout(
     import time  # noqa: PLC0415  (wall time of the sampled states only)
 
     mj = bridge.require()
-    if not duration > 0:
-        raise ValueError(f"duration: must be > 0 s, got {duration}")
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration: must be > 0 s, got {duration} (and finite)")
     if int(every) < 1:
         raise ValueError(f"every: must be >= 1 step, got {every}")
+    judged = int(duration / model.opt.timestep) // int(every) + 1
+    if judged > MAX_SAMPLES:
+        raise ValueError(
+            f"duration: {duration:g} s is {judged:,} judged states of {model.opt.timestep:g} s "
+            f"steps every {int(every)}, at most {MAX_SAMPLES:,} (raise every)"
+        )
     work = bridge.state(model, data, qpos, qvel)
     start = bridge.contact_data(model, work, contacts=contacts, tol=tol, slip=_any_slip(2))
     chosen = start.contacts

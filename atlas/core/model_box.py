@@ -100,9 +100,16 @@ class ModelBox:
         return self.q1[1] > 0 or self.q2[1] > 0
 
     def __str__(self):
-        f = lambda r: f"{r[0]:g}:{r[1]:g}"  # noqa: E731
+        """The box's text, exact: :func:`parse_model_box` of it gives this box back."""
+        f = lambda r: f"{_exact(r[0])}:{_exact(r[1])}"  # noqa: E731
         qs = f"q={f(self.q1)}" if self.equal else f"q1={f(self.q1)},q2={f(self.q2)}"
         return f"kappa={f(self.kappa)},{qs}"
+
+
+def _exact(x: float) -> str:
+    """``x`` as short text that reads back as ``x`` exactly (``%g`` where that is exact)."""
+    short = f"{x:g}"
+    return short if float(short) == x else repr(float(x))
 
 
 def _range(name: str, value, *, kappa: bool) -> tuple:
@@ -119,7 +126,7 @@ def _range(name: str, value, *, kappa: bool) -> tuple:
     if lo < 0 or hi < 0:
         raise ValueError(f"model_box: {name}: bounds must be >= 0, got {value!r}")
     if lo > hi:
-        raise ValueError(f"model_box: {name}: reversed range {lo:g}:{hi:g}")
+        raise ValueError(f"model_box: {name}: reversed range {_exact(lo)}:{_exact(hi)}")
     if lo == math.inf:
         raise ValueError(f"model_box: {name}: the lower bound must be finite")
     if kappa and hi == 0:

@@ -156,8 +156,18 @@ def _json(v):
     return v
 
 
+def _side_labels(field: str) -> dict:
+    """The words of a curve's side codes: field SS / II, else the output's declared codes."""
+    if field in brackets.FIELD_LABELS:
+        return brackets.FIELD_LABELS[field]
+    from atlas.data.outputs import OUTPUTS  # noqa: PLC0415 - region curves of box verdicts
+
+    codes = OUTPUTS[field].codes if field in OUTPUTS else None
+    return {c.value: c.label for c in codes.codes} if codes is not None else {}
+
+
 def _curve_props(c: Curve) -> dict:
-    labels = brackets.FIELD_LABELS.get(c.field, {})
+    labels = _side_labels(c.field)
     props = {
         "field": c.field,
         "kind": c.kind,

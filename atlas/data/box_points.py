@@ -16,6 +16,7 @@ from atlas.core import contact_modes as mech
 from atlas.core import ii_over_models as iom
 from atlas.core import model_box as mb
 from atlas.core.verdicts import is_over_models
+from atlas.data.over_models import as_model_box
 
 __all__ = ["box_outputs", "point_values"]
 
@@ -39,9 +40,11 @@ def box_outputs() -> tuple[str, ...]:
 def point_values(beta1, beta2, box, names=None, *, settle=True, dtype="float64") -> dict:
     """``{output: array}`` of the box verdicts ``names`` (default :func:`box_outputs`) and their
     witness outputs at the points ``(beta1, beta2)`` [rad] (broadcast; directions rounded to
-    ``dtype`` as in an atlas) over ``box`` (a :class:`~atlas.core.model_box.ModelBox`);
+    ``dtype`` as in an atlas) over ``box`` (a :class:`~atlas.core.model_box.ModelBox`, its text
+    or a dict; a bad box is a one-line error naming ``model_box``);
     ``settle=False``: what the small budget leaves is ``UNDECIDED``.  ``.stats`` of each call's
     result is summed into the returned dict's ``"stats"`` entry (counts)."""
+    box = as_model_box(box)
     b1, b2 = np.broadcast_arrays(np.asarray(beta1, np.float64), np.asarray(beta2, np.float64))
     c1, s1 = (np.asarray(v, np.float64) for v in mech.direction(b1, dtype))
     c2, s2 = (np.asarray(v, np.float64) for v in mech.direction(b2, dtype))

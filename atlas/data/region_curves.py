@@ -37,8 +37,9 @@ from atlas.core.verdicts import OverModels
 from atlas.data.boundary_curves import Boundaries, Curve
 from atlas.data.box_points import box_outputs, point_values
 from atlas.data.marching import region_boundaries
+from atlas.data.over_models import as_model_box
 
-__all__ = ["region_curves", "point_codes", "run_cli", "TOL", "labels"]
+__all__ = ["region_curves", "RegionCurves", "point_codes", "run_cli", "TOL", "labels"]
 
 #: default length of a vertex's certified bracket [rad]
 TOL = 1e-8
@@ -117,12 +118,13 @@ def region_curves(
     beta1, beta2, box, name: str = "ss_over_models", *, tol=TOL, dtype="float64", settle=SETTLE
 ):
     """The certified region boundaries of box verdict ``name`` over ``box`` on the grid ``beta1 x
-    beta2`` [rad] (module docstring): a :class:`~atlas.data.boundary_curves.Boundaries` with one
+    beta2`` [rad] (module docstring): :class:`RegionCurves` with one
     :class:`~atlas.data.boundary_curves.Curve` per piece, ``attrs``: ``model_box``, ``tolerance``,
-    ``stopped`` (brackets stopped above ``tol``), ``grid_undecided``, ``seconds``.
+    ``stopped`` (brackets stopped above ``tol``), ``grid_undecided``, ``seconds``, ``fields``.
     ``settle``: how many midpoints the small budget leaves undecided get the settlement's (the
     rest stop their brackets; ``attrs["settled"]``); 0: none."""
     t0 = time.perf_counter()
+    box = as_model_box(box)  # a ModelBox, its text or a dict
     b1 = np.asarray(beta1, np.float64).ravel()
     b2 = np.asarray(beta2, np.float64).ravel()
     if b1.size < 2 or b2.size < 2:
@@ -167,7 +169,15 @@ def region_curves(
         seconds=time.perf_counter() - t0,
         history=f"atlas.data.region_curves ({name} over {box})",
     )
-    return Boundaries(curves, [], attrs)
+    return RegionCurves(curves, [], attrs | {"fields": name})
+
+
+class RegionCurves(Boundaries):
+    """Region curves: :class:`~atlas.data.boundary_curves.Boundaries` whose netCDF side codes
+    are those of the box verdicts (``region_labels``), not of field SS / II."""
+
+    def to_netcdf(self, path) -> None:
+        _write_netcdf(self, path)
 
 
 def _fields(fields: str | None) -> tuple[str, ...]:
@@ -225,7 +235,7 @@ def run_cli(
     scene = Scene(**{k: v for k, v in (("beta1", beta1), ("beta2", beta2)) if v is not None})
     b1, b2 = (np.atleast_1d(scene.axes[k].values).astype(float) for k in ("beta1", "beta2"))
     parts = [region_curves(b1, b2, box, n, tol=tol, dtype=dtype) for n in names]
-    bd = Boundaries([c for p in parts for c in p.curves], [], dict(parts[0].attrs))
+    bd = RegionCurves([c for p in parts for c in p.curves], [], dict(parts[0].attrs))
     bd.attrs.update(stopped=sum(p.attrs["stopped"] for p in parts), fields=",".join(names))
     bd.attrs["settled"] = sum(p.attrs["settled"] for p in parts)
     print(
@@ -233,9 +243,9 @@ def run_cli(
         f"(a midpoint undecided or of a third code; {bd.attrs['settled']} midpoints settled); "
         "chords not refined (nan: none claimed)"
     )
-    for path, write in ((out, _write_netcdf), (csv, bd.to_csv), (geojson, bd.to_geojson)):
+    for path, write in ((out, bd.to_netcdf), (csv, bd.to_csv), (geojson, bd.to_geojson)):
         if path is not None:
-            write(path) if write is not _write_netcdf else write(bd, path)
+            write(path)
             print(f"wrote {path}")
     return 0
 
