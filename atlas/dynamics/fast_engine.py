@@ -149,6 +149,8 @@ DECIDED_BY = ("stepped", "early_settle", "early_iwc", "fallback")
 OUTCOME_OF_MASK = {m: int(Outcome[f"SETTLES_{MODE_NAMES[m]}"]) for m in range(4)}
 RUNNING = -1
 _STATUS = (Status.T_END, Status.EVENT_CAP, Status.DIVERGED)
+#: why a run of :class:`FastResult` stopped (the engine's own stops first, as in ``_STATUS``)
+STOPS = _STATUS + (Status.SETTLED, Status.STEP_CAP)
 
 
 @dataclasses.dataclass
@@ -763,7 +765,10 @@ class FastResult:
     at), ``g_final`` (N, 4) the state there, ``n_events``, ``steps`` (steps of the engine's
     batch the lane took part in; 0 for another stepper) and ``within_rounding`` (a divergence
     whose verdict sits within rounding, :func:`stop_rule.within_rounding`, of the engine that
-    decided it: :func:`stop_rule.run_within_rounding` for the exact simulator's runs)."""
+    decided it: :func:`stop_rule.run_within_rounding` for the exact simulator's runs), ``stop``
+    (int8 index into :data:`STOPS`, why the run stopped; -1: decided early, with no stop).  A
+    fallback lane has the exact simulator's stop, time, state and events (``steps``: the
+    engine's before it handed the lane over)."""
 
     code: np.ndarray
     decided_by: np.ndarray
@@ -772,6 +777,7 @@ class FastResult:
     n_events: np.ndarray
     steps: np.ndarray
     within_rounding: np.ndarray
+    stop: np.ndarray
 
     @classmethod
     def gather(cls, parts, n: int) -> FastResult:
@@ -815,6 +821,8 @@ def run_batch(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
         out, run = reference(b1[i], b2[i], al[i], k=tuple(kk[i]), q=tuple(qq[i]), g0=g0[i])
         res.code[i] = int(out)
         res.within_rounding[i] = stop_rule.run_within_rounding(run)
+        res.stop[i], res.n_events[i] = STOPS.index(run.status), run.n_events
+        res.t_final[i], res.g_final[i] = run.t_final, run.g_final
     return res
 
 
@@ -850,8 +858,10 @@ def run_lanes(beta1, beta2, alpha, k, q, g0, *, t_end=150.0, horizon_cap=8.0, ma
                 ix = _classify_stopped(st, tables, ix, width, t_max, fallback)
     st.code[fallback] = -1
     st.decided_by[fallback] = 3
+    stop = np.where(st.status >= 0, st.status, -1).astype(np.int8)
+    stop[fallback] = -1  # until the exact simulator has run the lane (run_batch)
     return FastResult(
-        st.code, st.decided_by, st.t, st.g, st.n_events, st.steps, st.rounding & ~fallback
+        st.code, st.decided_by, st.t, st.g, st.n_events, st.steps, st.rounding & ~fallback, stop
     )
 
 

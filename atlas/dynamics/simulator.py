@@ -296,7 +296,8 @@ def _integrate(sysm: System, g0, lim: _Limits):
             return log, t, z, mask, n_steps, (Status.T_END, "reached t_end")
         if n_steps >= lim.max_steps:
             return log, t, z, mask, n_steps, (Status.STEP_CAP, f"{lim.max_steps} sub-steps")
-        t, z, mask, stop = _sub_step(sysm, mode, s, t, z, mask, lim, log)
+        with np.errstate(over="ignore", invalid="ignore"):  # a non-finite run: stopped below
+            t, z, mask, stop = _sub_step(sysm, mode, s, t, z, mask, lim, log)
         n_steps += 1
         if stop is not None:
             return log, t, z, mask, n_steps, stop

@@ -278,6 +278,34 @@ def test_near_defective_lane_is_sent_back_at_once():
     assert res.decided_by[2] != fb and res.decided_by[3] != fb
 
 
+def test_a_fallback_lane_reports_the_exact_simulators_stop_time_state_and_events():
+    """The near-defective lane above (beta1 = pi/2 + 1e-8, second initial state) falls back: its result carries the
+    exact simulator's stop reason, final time, final state and event count in the fields a
+    stepped lane fills (not only the verdict)."""
+    alpha, k, q = 0.3 * PI, (5.0, 1.0), (1.5, 1.5)
+    b1 = PI / 2 + 1e-8
+    g0 = S.perturbed_initial_states([b1], [0.0], alpha, 5.0, n_perturb=2)[0, 0, 1]
+    res = F.run_batch(b1, 0.0, alpha, k, q, g0[None], reference=_reference)
+    assert F.DECIDED_BY[res.decided_by[0]] == "fallback"
+    out, run = _reference(b1, 0.0, alpha, k, q, g0)
+    assert F.STOPS[res.stop[0]] == run.status and res.code[0] == int(out)
+    assert res.t_final[0] == run.t_final and res.n_events[0] == run.n_events > 0
+    np.testing.assert_array_equal(res.g_final[0], run.g_final)
+
+
+def test_a_stepped_lane_reports_its_stop():
+    """A stepped lane's stop reason: the horizon (``t_end``) of the sustained oscillation of the
+    paper's Fig. 2 map, where the exact simulator stops the same way."""
+    alpha, kappa = 0.35 * PI, 0.5
+    b1, b2 = S.outcome_grid(64)
+    g0 = S.perturbed_initial_states(b1, b2, alpha, kappa)[2, 30, 0]
+    res = F.run_batch(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0), g0[None],
+                      reference=_reference)  # fmt: skip
+    _, run = _reference(b1[2], b2[30], alpha, (kappa, 1.0), (0.0, 0.0), g0)
+    assert F.DECIDED_BY[res.decided_by[0]] == "stepped"
+    assert F.STOPS[res.stop[0]] == run.status
+
+
 def test_a_gap_landing_on_the_amplitude_limit_steps_on():
     """A growing bouncing run of the Fig. 2 map (64^2 cell (2, 30)) reaches a state with a gap
     exactly at the amplitude limit (not past it: no stop); the engine steps past it instead of
