@@ -585,14 +585,19 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     st.last_event[lanes_r[has]] = t[r][has]
     b = eb.bins(t[r], width, st.amp.shape[1])
     st.amp[lanes_r, b] = np.maximum(st.amp[lanes_r, b], np.abs(d))
+    # a new segment where the configuration changes (the same flow goes on where it does not)
+    m = eb.rows(mask_of(sn) != mask[r])
     s[r] = sn
     mask[r] = mask_of(sn)
     g = np.concatenate([d, v], axis=1)
-    P[r], U[r], lam[r], valid[r], H[r], ok = segments(
-        lanes, tables, lanes_r, mask[r], g, closed=True
-    )
-    ok &= ~cancels(P[r], U[r], g, scale[r])
-    tseg[r] = t[r]
+    ok = np.ones(r.size, dtype=bool)
+    if m.size:
+        rm = r[m]
+        P[rm], U[rm], lam[rm], valid[rm], H[rm], ok[m] = segments(
+            lanes, tables, ix[rm], mask[rm], g[m], closed=True
+        )
+        ok[m] &= ~cancels(P[rm], U[rm], g[m], scale[rm])
+        tseg[rm] = t[rm]
     since[r] = 0
     fallback[lanes_r[~ok]] = True
     keep[r[~ok]] = False
