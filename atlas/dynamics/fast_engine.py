@@ -570,7 +570,7 @@ def _decide(st, tables, ix, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, sc
 def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, valid, H, s,
             mask, k, q, scale, since, max_events, width, keep, fallback):  # fmt: skip
     """Switch the lanes ``r`` (rows; gaps, velocities, accelerations ``dva`` there) at their
-    events and start their new segments (in place)."""
+    events and start new segments where their configuration changes (in place)."""
     d, v, acc = dva
     f, fp = eb.event_functions(d, v, acc, k[r], q[r])
     tol = (h[r] + 1e3 * xtol[r])[:, None]
