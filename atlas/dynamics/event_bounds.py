@@ -223,14 +223,17 @@ def safe_steps(A, Bd, M):
     xp = xp_of(A, Bd, M)
     M = xp.maximum(M, 1e-300)
     with np.errstate(all="ignore"):
-        root = xp.sqrt(Bd * Bd + 2 * M * A)
-        lo = xp.where(Bd >= 0, (Bd + root) / M, 2 * A / (root - Bd))
-        disc = Bd * Bd - 2 * M * A
-        hi = xp.where((Bd < 0) & (disc >= 0), 2 * A / (-Bd + xp.sqrt(xp.maximum(disc, 0.0))),
-                      np.inf)  # fmt: skip
-    lo = xp.where(xp.isnan(lo), 0.0, lo)
-    hi = xp.where(xp.isnan(hi), 0.0, hi)
-    return lo, hi
+        B2, MA2, A2 = Bd * Bd, 2 * M * A, 2 * A  # each once (the same values)
+        root = xp.sqrt(B2 + MA2)
+        falling = Bd < 0
+        lo = xp.where(falling, A2 / (root - Bd), (Bd + root) / M)
+        disc = B2 - MA2
+        hi = xp.where(falling & (disc >= 0), A2 / (xp.sqrt(xp.maximum(disc, 0.0)) - Bd), np.inf)
+    if xp is np:  # NaN (0 * inf, inf - inf) -> 0, in place
+        lo[np.isnan(lo)] = 0.0
+        hi[np.isnan(hi)] = 0.0
+        return lo, hi
+    return xp.where(xp.isnan(lo), 0.0, lo), xp.where(xp.isnan(hi), 0.0, hi)
 
 
 # ----------------------------------------------------------------------------- certificates

@@ -290,16 +290,18 @@ def _integrate(sysm: System, g0, lim: _Limits):
     t = 0.0
     log = _Log.start(z, mask)
     n_steps = 0
-    while True:
-        mode = sysm.modes[mask]
-        if t >= lim.t_end:
-            return log, t, z, mask, n_steps, (Status.T_END, "reached t_end")
-        if n_steps >= lim.max_steps:
-            return log, t, z, mask, n_steps, (Status.STEP_CAP, f"{lim.max_steps} sub-steps")
-        t, z, mask, stop = _sub_step(sysm, mode, s, t, z, mask, lim, log)
-        n_steps += 1
-        if stop is not None:
-            return log, t, z, mask, n_steps, stop
+    # the overflow of a non-finite run is its stop (_stop_in), not a warning; once per run
+    with np.errstate(over="ignore", invalid="ignore"):
+        while True:
+            mode = sysm.modes[mask]
+            if t >= lim.t_end:
+                return log, t, z, mask, n_steps, (Status.T_END, "reached t_end")
+            if n_steps >= lim.max_steps:
+                return log, t, z, mask, n_steps, (Status.STEP_CAP, f"{lim.max_steps} sub-steps")
+            t, z, mask, stop = _sub_step(sysm, mode, s, t, z, mask, lim, log)
+            n_steps += 1
+            if stop is not None:
+                return log, t, z, mask, n_steps, stop
 
 
 def _sub_step(sysm: System, mode: Mode, s, t, z, mask, lim: _Limits, log: _Log):

@@ -40,7 +40,7 @@ LONG = 64.0
 GROWTH = 2.0
 SMALL = 10.0
 #: the NumPy engine's window in ``H_S`` (its safe sub-steps cross an oscillation's window in one
-#: step, :func:`atlas.dynamics.fast_engine._safe_substeps`); the JAX engine keeps ``WINDOWS``
+#: step, :func:`atlas.dynamics.substeps.safe_substeps`); the JAX engine keeps ``WINDOWS``
 WIDE = 8.0
 #: a step below ``SHORT`` times its window is bracketed again within a shorter window, where the
 #: flow's curvature bound is below ``CANCELLING`` times the modal one

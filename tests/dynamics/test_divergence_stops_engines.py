@@ -7,6 +7,8 @@ engine (2 of them stop there); the rule's limit is the documented ``-1e3 penetra
 ``-1e6 scale`` (``scale``: the run's length scale, the initial gaps or ``|a| / min k_i |b_i|``).
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -30,13 +32,11 @@ STEPPED, FALLBACK = F.DECIDED_BY.index("stepped"), F.DECIDED_BY.index("fallback"
 
 def _exact(params, g0):
     b1, b2, alpha, kappa, q = params
-    with np.errstate(all="ignore"):
-        return S.simulate_outcome(b1, b2, alpha, k=(kappa, 1.0), q=(q, q), g0=np.array(g0))
+    return S.simulate_outcome(b1, b2, alpha, k=(kappa, 1.0), q=(q, q), g0=np.array(g0))
 
 
 def _reference(b1, b2, alpha, k, q, g0):
-    with np.errstate(all="ignore"):  # the overflow of a non-finite run
-        return S.simulate_outcome(b1, b2, alpha, k=k, q=q, g0=g0)
+    return S.simulate_outcome(b1, b2, alpha, k=k, q=q, g0=g0)
 
 
 def _batch(engine, lanes, **kw):
@@ -82,7 +82,12 @@ def test_jax_engine_stops_at_the_deep_penetration_limit_with_the_exact_simulator
 
 
 def test_exact_simulator_stops_at_a_non_finite_state():
-    out, res = _exact(DEEP_LANES[0][0], HUGE_G0)
+    """... without a warning: the overflow is the stop, reported as such, under NumPy's default
+    floating-point error handling (a warning, an error in this suite)."""
+    with np.errstate(divide="warn", over="warn", under="ignore", invalid="warn"), \
+            warnings.catch_warnings():  # fmt: skip
+        warnings.simplefilter("error")
+        out, res = _exact(DEEP_LANES[0][0], HUGE_G0)
     assert res.status == Status.DIVERGED and out == Outcome.UNDETERMINED
     assert not np.isfinite(res.g_final).all()
     assert 0 < res.t_final < 150  # the overflow, not the start or the horizon
@@ -96,6 +101,9 @@ def _check_non_finite(res):
     is checked above) and report its verdict, never one of their own (IWC, settled)."""
     assert res.decided_by[0] == FALLBACK and res.code[0] == int(Outcome.UNDETERMINED)
     assert not res.within_rounding[0]
+    # with the exact simulator's stop, time and state (stopped past 0, before the horizon)
+    assert F.STOPS[res.stop[0]] == Status.DIVERGED and 0 < res.t_final[0] < 150
+    assert not np.isfinite(res.g_final[0]).all()
 
 
 def test_numpy_engine_reports_a_non_finite_run_as_the_exact_simulator():
