@@ -78,6 +78,7 @@ from scipy.spatial import cKDTree
 from atlas.core import brackets, checks
 from atlas.data import (
     boundary_cover,
+    boundary_ends,
     boundary_germs,
     boundary_paths,
     boundary_points,
@@ -652,13 +653,20 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
     curves += added
     proven = [p for p in pts if p.proven]
     curves, spliced = boundary_roots.attach(curves, proven, tol, cell, 2 * distance, tol)
+    curves, extended = boundary_ends.extend_to_points(
+        curves, proven, 2 * distance, cell, chord, tol, dtype
+    )
+    bridges = boundary_ends.bridge(curves, 2 * distance, cell, chord, tol, dtype)
+    curves += bridges
+    loose = boundary_ends.dangling(curves, pts + left, 2 * distance)
     reached = np.concatenate([polys.xy] + [c.vertices for c in added])
     max_bracket = float(polys.width.max(initial=0.0))
     if max_bracket > tol:  # bisect shrinks every bracket to <= tol
         raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
+    ends = [Point(*xy, "dangling_curve_end", math.nan, *model, field=fld) for xy, _ in loose]
     return (
         curves,
-        pts + left,
+        pts + left + ends,
         attrs
         | {
             "grid": f"{b1.size}x{b2.size}",
@@ -679,7 +687,11 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
             "line_intervals_unproven": len(unproven),
             "unproven_intervals": unproven,
             "lines_complete": int(not unproven),
-            "points_attached": spliced + sum(len(c.spliced) for c in added),
+            "points_attached": spliced + extended + sum(len(c.spliced) for c in added),
+            "ends_extended": extended,
+            "ends_bridged": len(bridges),
+            "dangling_ends": len(loose),
+            "dangling_end_points": [xy for xy, _ in loose],
             "points_off_curves": _off_curves(proven, curves, 2 * distance),
             "max_bracket": max_bracket,
         },
@@ -778,11 +790,13 @@ def boundaries(source, *, size_check: bool = True, **options) -> Boundaries:
 
 def _completeness(slices) -> dict:
     """``complete``: 1 when every class-line stretch of every field and slice is proven covered
-    (:mod:`atlas.data.boundary_cover`), else 0; and the
-    class-line length [rad] still uncovered, summed."""
+    (:mod:`atlas.data.boundary_cover`) and no curve ends with nothing near it
+    (:func:`atlas.data.boundary_ends.dangling`), else 0; and the class-line length [rad] still
+    uncovered, summed."""
     left = [v for s in slices for k, v in s.items() if k.endswith("_line_length_left_uncovered")]
     proven = [v for s in slices for k, v in s.items() if k.endswith("_lines_complete")]
-    complete = bool(slices) and all(proven) and not any(left)
+    loose = [v for s in slices for k, v in s.items() if k.endswith("_dangling_ends")]
+    complete = bool(slices) and all(proven) and not any(left) and not any(loose)
     return dict(complete=int(complete), uncovered_line_length=float(sum(left)))
 
 

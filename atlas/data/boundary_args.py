@@ -50,7 +50,8 @@ CLI_DEFAULTS = dict(chord=CHORD, check=CHECK, fields=",".join(FIELD_NAMES))
 #: ``uncertainty`` a point's proven enclosure radius [rad] (empty: not proven); ``proven`` 0/1;
 #: ``spliced`` 0/1: the vertex is a proven codimension-2 point (:attr:`atlas.data.boundary_curves.Curve.spliced`);
 #: ``side_offset`` the curve's offset [rad] at which its side codes are proven (empty: the side
-#: step, 4 tol; :attr:`atlas.data.boundary_curves.Curve.side_offset`)
+#: step, 4 tol; :attr:`atlas.data.boundary_curves.Curve.side_offset`); ``reason`` why a point
+#: is left undecided (:data:`atlas.data.boundary_roots.REASONS`; empty otherwise)
 CSV_COLUMNS = (
     "record",
     "curve",
@@ -70,6 +71,7 @@ CSV_COLUMNS = (
     "proven",
     "spliced",
     "side_offset",
+    "reason",
 )
 
 

@@ -34,7 +34,20 @@ import flint
 
 from atlas.data import boundary_germs
 
-__all__ = ["decide"]
+__all__ = ["REASONS", "decide"]
+
+#: why a root is left undecided (the key is stored with its ``undecided_line_root`` point)
+REASONS = {
+    "no_box": "no box around the root where the other boundary polynomials are proven zero-free"
+    " and each vanishing one a graph over the line (roots too close to separate at the box sizes"
+    " tried, or dG/de = 0 at the root)",
+    "vertical": "the codes on the vertical through the root are not proven",
+    "unequal_multiplicities": "two graphs enter one quarter and meet the line with different"
+    " multiplicities: the chart e = lam f^k needs them equal",
+    "chart_factor": "no irreducible factor of g_0 proven to vanish at the root",
+    "chart_unseparated": "two graphs enter one quarter with limits lam not proven apart",
+    "chart_curve": "a curve e = lam f^k of the chart is not proven clear of the graphs",
+}
 
 #: the exponents ``k`` of ``e_max = 2^-k`` tried (largest box first)
 E_EXPONENTS = (8, 12, 16, 20, 26, 32, 43, 60, 80, 110, 140)
@@ -124,11 +137,11 @@ def _vertical_codes(fld, model, m, rows_list, t_root, e_max, k) -> dict | None:
     return {-1: codes[0], 1: codes[1]}
 
 
-def decide(fld, model, m, ball, h, near) -> str | None:
+def decide(fld, model, m, ball, h, near) -> tuple[str | None, str | None]:
     """The verdict at the root ``ball`` [rad] of line ``m``, from the branches through it
     (module docstring): ``"not_boundary"``, ``"point"`` (a code changes next to it on a side),
     ``"touches_class_line"`` (a point where the codes next to the line agree left and right),
-    or ``None`` (not decided).  ``h`` [rad]: at most a quarter of the distance to the nearest
+    or ``None`` (not decided); and, for ``None``, the reason (a key of :data:`REASONS`).  ``h`` [rad]: at most a quarter of the distance to the nearest
     other break of the line; ``near``: the codes next to the line at ``beta -+ h`` (each ``(code
     at -e, code at +e, ...)``, :func:`atlas.data.boundary_germs.near_side_codes`)."""
     model = tuple(float(v) for v in model)
@@ -146,22 +159,20 @@ def decide(fld, model, m, ball, h, near) -> str | None:
                 if graphs is None:
                     continue
                 return _verdict(fld, model, m, graphs, t_root, e_max, k, near, ends)
-    return None
+    return None, "no_box"
 
 
 def _refined(germs, t_ball, steps: int = 160) -> flint.arb:
-    """``t_ball`` shrunk by bisection on the squarefree part of the first germ's ``g_0`` that can
-    vanish in it (exact signs at rational points; its only root there, isolated by
-    :func:`atlas.data.boundary_points.real_roots`): 2^-160 of its width."""
-    g0 = next((g[0] for g in germs if flint.arb_poly(list(g[0].coeffs()))(t_ball).contains(0)),
-              None)  # fmt: skip
-    if g0 is None:
-        return t_ball
-    p = g0 / g0.gcd(g0.derivative())
+    """``t_ball`` shrunk by bisection on the squarefree part of the first germ's ``g_0`` whose
+    exact signs at the ball's ends differ (a root there: its only one, isolated by
+    :func:`atlas.data.boundary_points.real_roots`; a ``g_0`` whose ball merely contains 0 at
+    ``t_ball`` may have its root just outside): 2^-160 of its width."""
     lo, hi = _q(t_ball.lower()), _q(t_ball.upper())
-    s_lo = _sgn(p(lo))
-    if s_lo == 0 or s_lo == _sgn(p(hi)):
+    parts = (g[0] / g[0].gcd(g[0].derivative()) for g in germs if not g[0].is_zero())
+    p = next((p for p in parts if _sgn(p(lo)) * _sgn(p(hi)) < 0), None)
+    if p is None:
         return t_ball
+    s_lo = _sgn(p(lo))
     for _ in range(steps):
         mid = (lo + hi) / 2
         s_mid = _sgn(p(mid))
@@ -186,38 +197,39 @@ def _fmpq(x: float) -> flint.fmpq:
     return flint.fmpq(*Fraction(x).as_integer_ratio())
 
 
-def _verdict(fld, model, m, graphs, t_root, e_max, k, near, ends) -> str | None:
+def _verdict(fld, model, m, graphs, t_root, e_max, k, near, ends):
     """:func:`decide` once the box is proven (:func:`_graphs`)."""
     quadrants = [q for _, entered, _ in graphs for q in entered]
     entered = {s for _, s in quadrants}
     sampled = {-1: set(), 1: set()}
     if len(set(quadrants)) < len(quadrants):  # a sector between two graphs: the chart
         sampled = _chart_codes(fld, model, m, [g for _, _, g in graphs], t_root, ends, e_max)
-        if sampled is None:
-            return None
+        if isinstance(sampled, str):
+            return None, sampled
     elif entered:
         vertical = _vertical_codes(fld, model, m, [r for r, _, _ in graphs], t_root, e_max, k)
         if vertical is None:
-            return None
+            return None, "vertical"
         sampled = {s: {vertical[s]} if s in entered else set() for s in (-1, 1)}
     sides = {s: {near[0][i], near[1][i]} | sampled[s] for s, i in ((-1, 0), (1, 1))}
     if all(len(c) == 1 for c in sides.values()):
-        return "not_boundary"
+        return "not_boundary", None
     if all(near[0][i] == near[1][i] for i in (0, 1)):
-        return "touches_class_line"
-    return "point"
+        return "touches_class_line", None
+    return "point", None
 
 
 def _chart(germs, t_root):
     """The minimal polynomial ``f`` of ``t_root`` (an irreducible factor of the first germ's
     ``g_0``), the common multiplicity ``k`` of ``t_root`` in every ``g_0``, and per germ the rows
     of ``H(t, lam) = G(t, lam f^k) / f^k`` (exact: ``h_0 = g_0 / f^k``, ``h_b = g_b f^(k (b -
-    1))``); ``None`` where the multiplicities differ."""
+    1))``); else why not (``"chart_factor"``: no factor proven to vanish there,
+    ``"unequal_multiplicities"``)."""
     with flint.ctx.workprec(256):
         f = next((p for p, _ in germs[0][0].factor()[1]
                   if flint.arb_poly(list(p.coeffs()))(t_root).contains(0)), None)  # fmt: skip
     if f is None:
-        return None
+        return "chart_factor"
     charts, ks = [], set()
     for germ in germs:
         k = 0
@@ -226,12 +238,13 @@ def _chart(germs, t_root):
         ks.add(k)
         rows = [germ[0] / f**k] + [g * f ** (k * (b - 1)) for b, g in enumerate(germ) if b]
         charts.append(rows)
-    return (f, ks.pop(), charts) if len(ks) == 1 else None
+    return (f, ks.pop(), charts) if len(ks) == 1 else "unequal_multiplicities"
 
 
-def _chart_codes(fld, model, m, germs, t_root, ends, e_max) -> dict | None:
+def _chart_codes(fld, model, m, germs, t_root, ends, e_max) -> dict | str:
     """The exact codes of the sectors around ``t_root`` where two graphs enter one quadrant
-    (module docstring), per side of the line (``{-1: codes, 1: codes}``), or ``None``.
+    (module docstring), per side of the line (``{-1: codes, 1: codes}``), or why not (a key of
+    :data:`REASONS`).
 
     In the chart ``e = lam f(t)^k`` (:func:`_chart`) each graph ``phi_i`` tends to ``lam_i =
     -h_0 / h_1`` at ``t_root``.  For ``lam`` in each gap between ``0`` and the ``lam_i`` (and
@@ -240,18 +253,18 @@ def _chart_codes(fld, model, m, germs, t_root, ends, e_max) -> dict | None:
     e_max``): it lies in one sector, the one between those ``lam_i`` next to ``t_root``; the
     code at ``(t_s, lam f(t_s)^k)`` is that sector's, on each half of the box."""
     got = _chart(germs, t_root)
-    if got is None:
-        return None
+    if isinstance(got, str):
+        return got
     f, k, charts = got
     with flint.ctx.workprec(256):
         lams = []
         for rows in charts:
             h0, h1 = (flint.arb_poly(list(r.coeffs()))(t_root) for r in rows[:2])
             if h1.contains(0):
-                return None
+                return "chart_unseparated"
             lams.append(-h0 / h1)
         if any(a.overlaps(b) for i, a in enumerate(lams) for b in lams[i + 1 :]):
-            return None
+            return "chart_unseparated"
         marks = sorted([0.0] + [float(v.mid()) for v in lams])
         big = 2 * max(abs(v) for v in marks)
         gaps = [0.5 * (a + b) for a, b in zip(marks, marks[1:])] + [-big, big]
@@ -261,7 +274,7 @@ def _chart_codes(fld, model, m, germs, t_root, ends, e_max) -> dict | None:
             for lam in (_fmpq(g) for g in gaps if g != 0):
                 t_s = _inside(f, k, lam, t_q, end, e_max)
                 if t_s is None or not _clear_curve(charts, t_q, t_s, t_root, lam):
-                    return None
+                    return "chart_curve"
                 e_s = lam * f(t_s) ** k
                 side = 1 if e_s > 0 else -1
                 t, e = (Fraction(int(v.p), int(v.q)) for v in (t_s, e_s))

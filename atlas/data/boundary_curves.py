@@ -70,7 +70,9 @@ class Point:
 
     ``proven``: the true point lies within ``uncertainty`` [rad] (Euclidean) of ``(beta1,
     beta2)``, a proven enclosure; else ``uncertainty`` is NaN and the position is an estimate
-    (no bound is claimed).  ``field``: the field whose boundary it is on (``""``: both)."""
+    (no bound is claimed).  ``field``: the field whose boundary it is on (``""``: both).
+    ``reason``: why an ``undecided_line_root`` is left undecided (a key of
+    :data:`atlas.data.boundary_roots.REASONS`), else ``""``."""
 
     beta1: float
     beta2: float
@@ -81,6 +83,7 @@ class Point:
     q2: float = math.nan
     proven: bool = False
     field: str = ""
+    reason: str = ""
 
 
 @dataclass
@@ -118,14 +121,15 @@ class Boundaries:
             )
             off = "" if math.isnan(c.side_offset) else repr(float(c.side_offset))
             rows += [
-                f"{head},{x!r},{y!r},{w!r},,,{int(k in c.spliced)},{off}"
+                f"{head},{x!r},{y!r},{w!r},,,{int(k in c.spliced)},{off},"
                 for k, ((x, y), w) in enumerate(zip(c.vertices.tolist(), c.bracket.tolist()))
             ]
         for p in self.points:
             unc = "" if not p.proven else repr(float(p.uncertainty))
             rows.append(
                 f"point,,{p.field},{p.kind},,,,,{float(p.kappa)!r},{float(p.q1)!r},"
-                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)},,"
+                f"{float(p.q2)!r},{float(p.beta1)!r},{float(p.beta2)!r},,{unc},{int(p.proven)},,,"
+                f"{p.reason}"
             )
         atomic_write_text(path, "\n".join(rows) + "\n")
 
@@ -303,6 +307,14 @@ def _point_vars(ps) -> dict:
             "point",
             pp("proven").astype(np.int8),
             _FLAG | {"long_name": "the point has a proven enclosure"},
+        ),
+        "point_reason": (
+            "point",
+            pp("reason").astype(str),
+            {
+                "long_name": "why the point is left undecided",
+                "comment": "a key of atlas.data.boundary_roots.REASONS; empty where not undecided",
+            },
         ),
     } | _model_vars("point", ps)
 

@@ -49,6 +49,7 @@ from atlas.data.boundary_curves import Curve, Point
 
 __all__ = [
     "KINDS",
+    "REASONS",
     "account_roots",
     "attach",
     "distinct",
@@ -59,6 +60,13 @@ __all__ = [
 
 #: the verdicts of :func:`account_roots`
 KINDS = ("point", "not_boundary", "class_crossing", "undecided")
+#: why a root is left undecided: the key is stored as its point's ``reason``
+#: (:data:`atlas.data.boundary_branches.REASONS` for II roots the branches do not decide)
+REASONS = {
+    "no_offset": "the codes next to the line beside the root have no proven offset",
+    "ss_multiple": "several boundary polynomials vanish at the root, or one vanishes twice, and"
+    " no coefficient of p is proven negative there",
+} | boundary_branches.REASONS
 _QUARTER = math.pi / 2
 
 
@@ -119,7 +127,8 @@ def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None]:
     """The verdict of one root (module docstring) and, for a ``point`` found here, its kind:
     ``crosses_class_line`` where the codes next to the line change across the root on both
     sides, ``leaves_class_line`` on one, ``touches_class_line`` where they change on neither
-    but a boundary touches the line there (:func:`atlas.data.boundary_branches.decide`, II)."""
+    but a boundary touches the line there (:func:`atlas.data.boundary_branches.decide`, II); for
+    ``undecided``, the reason (a key of :data:`REASONS`)."""
     if listed:
         return "point", None
     beta = float(ball.mid())
@@ -136,11 +145,14 @@ def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None]:
         return "not_boundary", None
     if fld == "II" and _inconsistent_near(model, m, ball):
         return "not_boundary", None
-    if fld == "II" and None not in near:
-        got = boundary_branches.decide(fld, model, m, ball, h, near)
-        if got is not None:
-            return ("point", got) if got == "touches_class_line" else (got, None)
-    return "undecided", None
+    if None in near:
+        return "undecided", "no_offset"
+    if fld == "SS":
+        return "undecided", "ss_multiple"
+    got, reason = boundary_branches.decide(fld, model, m, ball, h, near)
+    if got is None:
+        return "undecided", reason
+    return ("point", got) if got == "touches_class_line" else (got, None)
 
 
 def _account(fld, model, roots, germ_roots, listed) -> list[tuple]:
@@ -162,14 +174,15 @@ def account_roots(fld, model, roots, germ_roots, listed) -> list[str]:
     return [v for v, _ in _account(fld, model, roots, germ_roots, listed)]
 
 
-def _undecided(fld, model, roots, verdicts) -> list[Point]:
+def _undecided(fld, model, roots, found) -> list[Point]:
     """The undecided roots as points (kind ``undecided_line_root``, not proven, at the root's
-    middle)."""
+    middle, with the reason of :func:`_verdict`); ``found``: per root, ``(verdict, detail)``."""
     return [
-        Point(*_xy(m, float(ball.mid())), "undecided_line_root", math.nan, *model, field=fld)
-        for (m, ball, _), v in zip(roots, verdicts)
+        Point(*_xy(m, float(ball.mid())), "undecided_line_root", math.nan, *model, field=fld,
+              reason=why)
+        for (m, ball, _), (v, why) in zip(roots, found)
         if v == "undecided"
-    ]
+    ]  # fmt: skip
 
 
 def ss_root_account(model, germ_roots, dtype="float64") -> tuple[dict, list[Point]]:
@@ -181,9 +194,10 @@ def ss_root_account(model, germ_roots, dtype="float64") -> tuple[dict, list[Poin
     roots = boundary_points.line_roots(model)
     codes = boundary_points.root_codes("SS", roots, model, dtype)
     listed = (codes != codes[:, :, :1]).any(axis=(1, 2))
-    verdicts = account_roots("SS", model, roots, germ_roots, listed)
+    found = _account("SS", model, roots, germ_roots, listed)
+    verdicts = [v for v, _ in found]
     counts = {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
-    return counts, _undecided("SS", model, roots, verdicts)
+    return counts, _undecided("SS", model, roots, found)
 
 
 def _xy(m, beta) -> tuple[float, float]:
@@ -224,7 +238,7 @@ def ii_root_account(model, germ_roots) -> tuple[dict, list[Point]]:
         if v == "point"
     ]  # fmt: skip
     counts = {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
-    return counts, points + _undecided("II", model, roots, verdicts)
+    return counts, points + _undecided("II", model, roots, found)
 
 
 def _radius(m, ball) -> float:

@@ -37,6 +37,7 @@ _MARKERS = {
     "uncovered_class_line": "co",  # a class-line stretch no curve covers (proven = 0)
     "unproven_class_line": "cx",  # a class-line interval whose side codes are not proven
     "undecided_line_root": "kd",  # an algebraic root on a class line not accounted for
+    "dangling_curve_end": "ro",  # a curve end with nothing near it (proven = 0)
 }
 
 
