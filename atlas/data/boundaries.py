@@ -653,17 +653,13 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
     curves += added
     proven = [p for p in pts if p.proven]
     curves, spliced = boundary_roots.attach(curves, proven, tol, cell, 2 * distance, tol)
-    curves, extended = boundary_ends.extend_to_points(
-        curves, proven, 2 * distance, cell, chord, tol, dtype
+    curves, ends, end_attrs = _close_ends(
+        fld, model, curves, proven, pts + left, (distance, cell, chord, tol), dtype
     )
-    bridges = boundary_ends.bridge(curves, 2 * distance, cell, chord, tol, dtype)
-    curves += bridges
-    loose = boundary_ends.dangling(curves, pts + left, 2 * distance)
     reached = np.concatenate([polys.xy] + [c.vertices for c in added])
     max_bracket = float(polys.width.max(initial=0.0))
     if max_bracket > tol:  # bisect shrinks every bracket to <= tol
         raise RuntimeError(f"tol: a vertex bracket is longer than {tol!r} rad")
-    ends = [Point(*xy, "dangling_curve_end", math.nan, *model, field=fld) for xy, _ in loose]
     return (
         curves,
         pts + left + ends,
@@ -687,13 +683,38 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
             "line_intervals_unproven": len(unproven),
             "unproven_intervals": unproven,
             "lines_complete": int(not unproven),
-            "points_attached": spliced + extended + sum(len(c.spliced) for c in added),
+            "points_attached": spliced
+            + end_attrs["ends_extended"]
+            + sum(len(c.spliced) for c in added),
+            **end_attrs,
+            "points_off_curves": _off_curves(proven, curves, 2 * distance),
+            "max_bracket": max_bracket,
+        },
+    )
+
+
+def _close_ends(fld, model, curves, proven, points, sizes, dtype):
+    """The free curve ends of one field (:mod:`atlas.data.boundary_ends`): extended to a proven
+    point of ``proven`` or bridged to another end where the segment is proven, the rest listed.
+    ``sizes`` = (cover distance, grid cell, chord, tol) [rad].  Returns the curves, the
+    ``dangling_curve_end`` points and their diagnostics."""
+    distance, cell, chord, tol = sizes
+    reach = 2 * distance
+    curves, extended = boundary_ends.extend_to_points(
+        curves, proven, reach, cell, chord, tol, dtype
+    )
+    bridges = boundary_ends.bridge(curves, reach, cell, chord, tol, dtype)
+    curves = curves + bridges
+    loose = boundary_ends.dangling(curves, points, reach)
+    ends = [Point(*xy, "dangling_curve_end", math.nan, *model, field=fld) for xy, _ in loose]
+    return (
+        curves,
+        ends,
+        {
             "ends_extended": extended,
             "ends_bridged": len(bridges),
             "dangling_ends": len(loose),
             "dangling_end_points": [xy for xy, _ in loose],
-            "points_off_curves": _off_curves(proven, curves, 2 * distance),
-            "max_bracket": max_bracket,
         },
     )
 
