@@ -342,7 +342,7 @@ def _radii(z, zq, c1, s1, c2, s2, kappa, q1, q2):
     Rd = jnp.concatenate([Rq, jnp.zeros_like(Rq)], -1)
     z = jnp.where(dzero[..., None], zd, z)
     R = jnp.where(dzero[..., None], Rd, R)
-    return z, R, extra
+    return z, R, (*extra, _lost((c1, s1, c2, s2, kappa, q1, q2), extra[4:8]))
 
 
 def _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2):
@@ -363,20 +363,20 @@ def ii_verdicts(c1, s1, c2, s2, kappa, q1, q2):
     stable iff the strictly dominant eigenvalue is a II eigenvalue; it is never neutral).
     The abscissa (max Re of the approximate roots) is in the time unit of contact 2.
     """
-    z, R, (c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero) = _roots_and_radii(
-        c1, s1, c2, s2, kappa, q1, q2
-    )
-    cons, stab = _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, dzero, c1.dtype)
-    absc = jnp.ldexp(jnp.max(jnp.real(z), -1), n)
-    return (*_unproven((c1, s1, c2, s2, kappa, q1, q2), (k1, k2, q1s, q2s), cons, stab), absc)
+    z, R, extra = _roots_and_radii(c1, s1, c2, s2, kappa, q1, q2)
+    return _ii_stage2(z, R, *extra)
 
 
-def _unproven(originals, scaled, cons, stab):
-    """``cons, stab`` undecided where an input is subnormal or the scaling flushed one
+def _lost(originals, scaled):
+    """``True`` where an input is subnormal or the scaling flushed one
     (:func:`atlas.core.expressions.lost_to_underflow`): XLA reads those as zero, so the
     polynomial enclosed would not be the point's."""
     c1, s1, c2, s2, kappa, q1, q2 = originals
-    lost = ex.any_subnormal(c1, s1, c2, s2) | ex.lost_to_underflow((kappa, kappa, q1, q2), scaled)
+    return ex.any_subnormal(c1, s1, c2, s2) | ex.lost_to_underflow((kappa, kappa, q1, q2), scaled)
+
+
+def _unproven(lost, cons, stab):
+    """``cons, stab`` undecided where ``lost`` (:func:`_lost`)."""
     X = int(Verdict.UNDECIDED)
     return (
         jnp.where(lost, int(Consistency.UNDECIDED), cons).astype(cons.dtype),
@@ -384,9 +384,9 @@ def _unproven(originals, scaled, cons, stab):
     )
 
 
-def _ii_stage2(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero):
+def _ii_stage2(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, n, dzero, lost):
     cons, stab = _ii_from_roots(z, R, c1, s1, c2, s2, k1, k2, q1s, q2s, dzero, c1.dtype)
-    return cons, stab, jnp.ldexp(jnp.max(jnp.real(z), -1), n)
+    return (*_unproven(lost, cons, stab), jnp.ldexp(jnp.max(jnp.real(z), -1), n))
 
 
 _roots_jit = warm.jit(_roots)
@@ -418,5 +418,4 @@ def ii_verdicts_two_stage(c1, s1, c2, s2, kappa, q1, q2):
     """
     z, zq = _roots_jit(c1, s1, c2, s2, kappa, q1, q2)
     z, R, extra = _radii_jit(z, zq, c1, s1, c2, s2, kappa, q1, q2)
-    cons, stab, absc = _stage2_jit(z, R, *extra)
-    return (*_unproven((c1, s1, c2, s2, kappa, q1, q2), extra[4:8], cons, stab), absc)
+    return _stage2_jit(z, R, *extra)
