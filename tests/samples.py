@@ -55,3 +55,18 @@ def count_eig(monkeypatch) -> list:
 
     monkeypatch.setattr(np.linalg, "eig", counted)
     return seen
+
+
+def eq9_roots(b1, b2, model, dps=60):
+    """The roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)`` [rad] for ``model = (kappa,
+    q1, q2)``, by mpmath at ``dps`` digits (an independent reference)."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        kappa, q1, q2 = (mpmath.mpf(v) for v in model)
+        b1, b2 = mpmath.mpf(b1), mpmath.mpf(b2)
+        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+        D = c1 * s2 - s1 * c2
+        coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
+                  kappa * D]  # fmt: skip
+        return mpmath.polyroots(coeffs, maxsteps=200, extraprec=200)

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from samples import eq9_roots
 
 from atlas.data import boundaries as bd
 from atlas.data import boundary_ends, boundary_points
@@ -22,14 +23,8 @@ def _ii_consistent(b1, b2, model, dps=60) -> bool:
     (II consistent), by mpmath at ``dps`` digits (an independent reference)."""
     import mpmath
 
+    zs = eq9_roots(b1, b2, model, dps)
     with mpmath.workdps(dps):
-        kappa, q1, q2 = (mpmath.mpf(v) for v in model)
-        b1, b2 = mpmath.mpf(b1), mpmath.mpf(b2)
-        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
-        D = c1 * s2 - s1 * c2
-        coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
-                  kappa * D]  # fmt: skip
-        zs = mpmath.polyroots(coeffs, maxsteps=200, extraprec=200)
         return any(abs(z.imag) < mpmath.mpf(10) ** -40 and z.real > 0 for z in zs)
 
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from samples import exact_code
+from samples import eq9_roots, exact_code
 
 from atlas.data import boundaries as bd
 from atlas.data import boundary_germs, boundary_points, boundary_roots
@@ -147,18 +147,8 @@ SLICES = [Q0, (0.5, 1e-6, 1e-6), DAMPED, (2.0, 0.05, 0.3), (7.3, 0.8, 0.02)]
 
 
 def _roots(b1, b2, model, dps=60):
-    """The roots of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)`` [rad], by mpmath at ``dps``
-    digits (an independent reference)."""
-    import mpmath
-
-    with mpmath.workdps(dps):
-        kappa, q1, q2 = (mpmath.mpf(v) for v in model)
-        b1, b2 = mpmath.mpf(b1), mpmath.mpf(b2)
-        c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
-        D = c1 * s2 - s1 * c2
-        coeffs = [1, q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * D, D * (q1 + kappa * q2),
-                  kappa * D]  # fmt: skip
-        return mpmath.polyroots(coeffs, maxsteps=200, extraprec=200)
+    """The roots of ``p`` at ``(b1, b2)`` [rad] (:func:`samples.eq9_roots`, mpmath)."""
+    return eq9_roots(b1, b2, model, dps)
 
 
 def _abscissa(b1, b2, model):
