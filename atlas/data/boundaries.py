@@ -67,11 +67,11 @@ from __future__ import annotations
 import itertools
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass
 
 import numpy as np
-import xarray as xr
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.spatial import cKDTree
 
@@ -748,12 +748,19 @@ def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
     return kept + proven, roots
 
 
+def _is_dataset(source) -> bool:
+    """Whether ``source`` is an ``xarray.Dataset`` (without importing xarray: a process that has
+    not loaded it holds none)."""
+    xr = sys.modules.get("xarray")
+    return xr is not None and isinstance(source, xr.Dataset)
+
+
 def _slices(source) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float]]]:
     """``beta1, beta2`` and the model slices ``(kappa, q1, q2)`` of a scene or an atlas."""
     if isinstance(source, Scene):
         ax = source.axes
         get = {k: np.atleast_1d(a.values) for k, a in ax.items()}
-    elif isinstance(source, xr.Dataset):
+    elif _is_dataset(source):
         get = {k: np.atleast_1d(source[k].values) for k in source.coords}
     else:
         raise TypeError("source: must be an atlas.Scene or an atlas xarray.Dataset")

@@ -286,12 +286,36 @@ def _codes_at(fld, gaps, u, step, model, dtype):
     return sides, on.reshape(u.shape)
 
 
+#: the most steps of :func:`_pulled`'s bisection per kernel call (``2^k - 1`` probes an end,
+#: two side samples each), fewer where the probes would overflow one padded batch
+#: (:data:`atlas.core.brackets.MIN_BATCH`)
+PULL_STEPS = 6
+
+
+def _bisection_tree(bad, ok, depth: int) -> np.ndarray:
+    """Every parameter the next ``depth`` steps of a bisection between ``bad`` and ``ok`` (arrays
+    of any shape) can probe, in heap order along a new last axis (``2^depth - 1``: node ``h``'s
+    children are ``2 h`` where the probe has the labels, the new ``ok``, and ``2 h + 1`` where
+    not), each computed as the bisection computes it, ``0.5 * (bad + ok)`` of its own interval."""
+    lo, hi, nodes = bad[..., None], ok[..., None], []
+    for _ in range(depth):
+        u = 0.5 * (lo + hi)
+        nodes.append(u)
+        lo = np.stack([lo, u], -1).reshape(*u.shape[:-1], -1)  # children 2h: ok = u; 2h+1: bad = u
+        hi = np.stack([u, hi], -1).reshape(*u.shape[:-1], -1)
+    return np.concatenate(nodes, -1)
+
+
 def _pulled(fld, gaps, model, tol, dtype):
     """The gaps' ends ``(a, b)`` moved towards their middle, by bisection to ``tol``, until the
     codes :func:`atlas.data.boundary_sides.side_step` off the line on both sides and on it are
     those of the middle (at a root the boundary that meets the line changes them within a needle
     along it): every vertex of the added curve carries its labels.  Returns the ends and, per
-    gap, whether its middle carries them (else the gap is not added)."""
+    gap, whether its middle carries them (else the gap is not added).
+
+    The bisection runs several steps per kernel call: every parameter the next steps can probe
+    (:func:`_bisection_tree`) is evaluated at once, then the steps are taken on those codes, the
+    same steps (and the same floats) as one call a step."""
     step = boundary_sides.side_step(tol)
     a, b = np.array([g[3] for g in gaps]), np.array([g[4] for g in gaps])
     mid = 0.5 * (a + b)
@@ -300,14 +324,29 @@ def _pulled(fld, gaps, model, tol, dtype):
     good = sides & (on == on[:, :1])
     bad = np.stack([a, b], 1)  # per end: a parameter without the labels (or the end itself)
     ok = np.stack([mid, mid], 1)  # ... and one with them
-    for _ in range(64):
+    steps = 0
+    while steps < 64:
         live = ~good[:, 1:] & (np.abs(ok - bad) * speed[:, None] > tol)
         if not live.any():
             break
-        u = 0.5 * (bad + ok)
-        s, o = _codes_at(fld, gaps, u, step, model, dtype)
-        g = s & (o == on[:, :1])
-        ok, bad = np.where(live & g, u, ok), np.where(live & ~g, u, bad)
+        rows = np.flatnonzero(live.any(1))
+        fit = int(math.log2(brackets.MIN_BATCH // (4 * rows.size) + 1))
+        depth = max(1, min(PULL_STEPS, fit, 64 - steps))
+        u = _bisection_tree(bad[rows], ok[rows], depth)  # (rows, 2, 2^depth - 1)
+        s, o = _codes_at(fld, [gaps[r] for r in rows], u.reshape(rows.size, -1), step, model,
+                         dtype)  # fmt: skip
+        g = np.zeros((len(gaps), 2, u.shape[-1]), bool)
+        g[rows] = (s & (o == on[rows, :1])).reshape(u.shape)
+        h = np.ones((len(gaps), 2), int)  # the heap node each end's next step probes
+        for _ in range(depth):
+            live = ~good[:, 1:] & (np.abs(ok - bad) * speed[:, None] > tol)
+            if not live.any():
+                break
+            at = np.take_along_axis(g, (h - 1)[..., None], -1)[..., 0]
+            u = 0.5 * (bad + ok)
+            ok, bad = np.where(live & at, u, ok), np.where(live & ~at, u, bad)
+            h = 2 * h + ~at
+            steps += 1
     ends = np.where(good[:, 1:], np.stack([a, b], 1), ok)
     return ends, good[:, 0]
 

@@ -13,15 +13,18 @@ import datetime
 import json
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from atlas.core import brackets
 from atlas.core.config import __version__
 from atlas.data.boundary_args import CHORD, CODE_MEANINGS, CSV_COLUMNS, TOL
 from atlas.data.engine import REFERENCES
 from atlas.data.io import atomic_path, atomic_write_text
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["CHORD", "CSV_COLUMNS", "TOL", "Boundaries", "Curve", "Point", "summary"]
 
@@ -320,6 +323,8 @@ def _point_vars(ps) -> dict:
 
 
 def _to_dataset(bd: Boundaries) -> xr.Dataset:
+    import xarray as xr  # noqa: PLC0415 - a run writing no netCDF loads no xarray (pandas: ~1 s)
+
     container = {
         "geometry_type": "line",
         "node_count": "node_count",
