@@ -722,8 +722,11 @@ def _close_ends(fld, model, curves, proven, points, sizes, dtype):
 def _off_curves(points, curves, reach) -> int:
     """How many of ``points`` lie farther than ``reach`` [rad] from every segment of ``curves``
     on the torus (a proven codimension-2 point that no drawn curve comes near)."""
-    near = (boundary_points.nearest_segment((p.beta1, p.beta2), curves)[0] for p in points)
-    return sum(d > reach for d in near)
+    a, d, _, _ = boundary_points.curve_segments(curves)
+    if not points or not len(a):
+        return len(points)
+    xy = [(p.beta1, p.beta2) for p in points]
+    return int((boundary_points.torus_distances(xy, a, d)[0].min(1) > reach).sum())
 
 
 def _model_value(name, value) -> float:

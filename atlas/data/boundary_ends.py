@@ -21,9 +21,9 @@ from dataclasses import replace
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
 from atlas.core import brackets
+from atlas.data.boundary_points import curve_segments, torus_distances
 
 __all__ = [
     "CHORD_FRACTIONS",
@@ -46,30 +46,20 @@ def _torus_delta(a, b) -> np.ndarray:
 
 
 def _ends_near(curves, reach) -> np.ndarray:
-    """Per curve, whether its first and last vertex lie within ``reach`` [rad] of a segment of
-    another curve of ``curves`` on the torus ``(n, 2)``: at once where a vertex of one does (a
-    k-d tree), else from the distance to every segment."""
-    owner = np.concatenate([np.full(len(c.vertices), i) for i, c in enumerate(curves)] + [[]])
-    xy = np.concatenate([c.vertices for c in curves] + [np.zeros((0, 2))]) % TWO_PI
-    tree = cKDTree(xy, boxsize=TWO_PI)
-    a, d = (
-        xy[:-1],
-        np.diff(np.concatenate([c.vertices for c in curves] + [np.zeros((0, 2))]), axis=0),
-    )
-    seg = owner[:-1] == owner[1:]
-    out = np.zeros((len(curves), 2), bool)
-    for i, c in enumerate(curves):
-        for k, v in enumerate((c.vertices[0], c.vertices[-1])):
-            hits = tree.query_ball_point(v % TWO_PI, reach)
-            if (owner[hits] != i).any():
-                out[i, k] = True
-                continue
-            m = seg & (owner[:-1] != i)
-            img = a[m] + _torus_delta(a[m], v)  # per segment, the nearest image of v
-            t = np.sum((img - a[m]) * d[m], 1) / np.maximum(np.sum(d[m] * d[m], 1), 1e-300)
-            dist = np.hypot(*(a[m] + np.clip(t, 0.0, 1.0)[:, None] * d[m] - img).T)
-            out[i, k] = bool((dist <= reach).any())
-    return out
+    """Per curve, whether its first and last vertex lie within ``reach`` [rad] of a segment (or
+    the lone vertex) of another curve of ``curves`` on the torus ``(n, 2)``
+    (:func:`atlas.data.boundary_points.torus_distances`)."""
+    a, d, owner, _ = curve_segments(curves)
+    lone = [i for i, c in enumerate(curves) if len(c.vertices) == 1]
+    a = np.concatenate([a] + [curves[i].vertices for i in lone])
+    d = np.concatenate([d, np.zeros((len(lone), 2))])
+    owner = np.concatenate([owner, np.asarray(lone, int)])
+    ends = np.array([(c.vertices[0], c.vertices[-1]) for c in curves]).reshape(-1, 2)
+    if not len(a) or not len(ends):
+        return np.zeros((len(curves), 2), bool)
+    dist = torus_distances(ends, a, d)[0]
+    other = owner[None, :] != np.repeat(np.arange(len(curves)), 2)[:, None]
+    return ((dist <= reach) & other).any(1).reshape(-1, 2)
 
 
 def _free_ends(curves, reach) -> set[tuple[int, int]]:

@@ -49,6 +49,8 @@ __all__ = [
     "root_codes",
     "ss_line_points",
     "angle_from_tan_half",
+    "curve_segments",
+    "torus_distances",
 ]
 
 TWO_PI = 2 * math.pi
@@ -281,32 +283,71 @@ def ss_line_points(
     return out, len(roots)
 
 
-def _on_segments(xy, c: Curve) -> tuple[float, int, float, np.ndarray]:
-    """The segment of curve ``c`` nearest to ``xy`` [rad] on the torus: ``(distance, segment k,
-    t, image)``, the point's image ``xy + 2 pi n`` nearest to segment ``k -> k + 1`` at fraction
-    ``t`` of it (distance ``inf`` for a curve without a segment)."""
-    if len(c.vertices) < 2:
-        return math.inf, -1, 0.0, np.asarray(xy, float)
-    a, d = c.vertices[:-1], np.diff(c.vertices, axis=0)
+def curve_segments(curves) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every segment of ``curves``: ``(a, d, curve, k)``, segment ``k`` of curve ``curve`` from
+    ``a`` to ``a + d`` [rad] (a curve with fewer than two vertices has none)."""
+    vs = [c.vertices for c in curves if len(c.vertices) >= 2]
+    if not vs:
+        e = np.zeros(0, int)
+        return np.zeros((0, 2)), np.zeros((0, 2)), e, e
+    sizes = [len(v) - 1 for v in vs]
+    owner = np.repeat([i for i, c in enumerate(curves) if len(c.vertices) >= 2], sizes)
+    k = np.concatenate([np.arange(m) for m in sizes])
+    return (np.concatenate([v[:-1] for v in vs]), np.concatenate([np.diff(v, axis=0) for v in vs]),
+            owner, k)  # fmt: skip
+
+
+#: the most point-segment pairs :func:`torus_distances` holds at once
+PAIR_BLOCK = 1 << 20
+
+
+def torus_distances(xy, a, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Distances [rad] on the torus from points ``xy`` ``(m, 2)`` to segments ``a -> a + d``
+    ``(n, 2)``: ``(dist, t, image)``, each ``(m, n)`` (``image`` ``(m, n, 2)``), the point's
+    image ``xy + 2 pi j`` nearest to each segment's start (segments far shorter than ``pi``), at
+    fraction ``t`` of it (``xy`` itself where ``j = 0``: no rounding off the seams).  In blocks of :data:`PAIR_BLOCK` pairs."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    m, n = len(xy), len(a)
+    dist, t, img = np.empty((m, n)), np.empty((m, n)), np.empty((m, n, 2))
+    rows = max(1, PAIR_BLOCK // max(n, 1))
+    for s in range(0, m, rows):
+        p = xy[s : s + rows, None, :]
+        near = a + (p - a + math.pi) % TWO_PI - math.pi  # per segment, the nearest image
+        im = p + TWO_PI * np.round((near - p) / TWO_PI)
+        tt = np.sum((im - a) * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300)
+        tt = np.clip(tt, 0.0, 1.0)
+        dist[s : s + rows] = np.hypot(*np.moveaxis(a + tt[..., None] * d - im, -1, 0))
+        t[s : s + rows], img[s : s + rows] = tt, im
+    return dist, t, img
+
+
+def _per_curve(curves, xy) -> list[tuple[float, int, float, np.ndarray]]:
+    """Per curve of ``curves``, its segment nearest to ``xy`` [rad] on the torus: ``(distance,
+    segment k, t, image)`` (:func:`torus_distances`; the first of equally near ones; distance
+    ``inf`` for a curve without a segment)."""
     xy = np.asarray(xy, float)
-    near = a + (xy - a + math.pi) % TWO_PI - math.pi  # per segment, the nearest image
-    img = xy + TWO_PI * np.round((near - xy) / TWO_PI)  # as xy + 2 pi n: xy itself where n = 0
-    t = np.clip(np.sum((img - a) * d, 1) / np.maximum(np.sum(d * d, 1), 1e-300), 0.0, 1.0)
-    dist = np.hypot(*(a + t[:, None] * d - img).T)
-    k = int(dist.argmin())
-    return float(dist[k]), k, float(t[k]), img[k]
+    out = [(math.inf, -1, 0.0, xy)] * len(curves)
+    a, d, owner, k = curve_segments(curves)
+    if not len(a):
+        return out
+    dist, t, img = (v[0] for v in torus_distances(xy, a, d))
+    order = np.lexsort((dist, owner))  # stable: the first of equal distances first
+    first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
+    for j in first:
+        out[owner[j]] = (float(dist[j]), int(k[j]), float(t[j]), img[j])
+    return out
 
 
 def nearest_segment(xy, curves) -> tuple[float, int, int, float, np.ndarray]:
     """The segment of ``curves`` nearest to ``xy`` [rad] on the torus: ``(distance, curve,
-    segment k, t, image)`` (:func:`_on_segments`; distance ``inf`` and curve ``-1`` when no
-    curve has a segment)."""
-    best = (math.inf, -1, -1, 0.0, np.asarray(xy, float))
-    for i, c in enumerate(curves):
-        dist, k, t, img = _on_segments(xy, c)
-        if dist < best[0]:
-            best = (dist, i, k, t, img)
-    return best
+    segment k, t, image)`` (:func:`torus_distances`; the first of equally near ones; distance
+    ``inf`` and curve ``-1`` when no curve has a segment)."""
+    a, d, owner, k = curve_segments(curves)
+    if not len(a):
+        return math.inf, -1, -1, 0.0, np.asarray(xy, float)
+    dist, t, img = (v[0] for v in torus_distances(xy, a, d))
+    j = int(dist.argmin())
+    return float(dist[j]), int(owner[j]), int(k[j]), float(t[j]), img[j]
 
 
 def _spliced(c: Curve, k: int, t: float, xy, radius: float) -> Curve:
@@ -340,7 +381,7 @@ def attach_points(curves, points, reach, within, near, tol) -> tuple[list[Curve]
     for p in points:
         if not p.proven:
             continue
-        found = [_on_segments((p.beta1, p.beta2), c) for c in curves]
+        found = _per_curve(curves, (p.beta1, p.beta2))
         dist = np.array([f[0] for f in found] + [math.inf])
         targets = set(np.flatnonzero(dist <= near)) | ({int(dist.argmin())} & {
             i for i in range(len(curves)) if dist[i] <= within})  # fmt: skip

@@ -239,3 +239,52 @@ def test_nearest_segment_keeps_the_point_exact_off_the_seams():
     assert img.tolist() == [x, x]
     far = bp.nearest_segment((x - 2 * math.pi, x), [curve])[4]  # across a seam: shifted 2 pi
     assert far.tolist() == [x - 2 * math.pi + 2 * math.pi, x]
+
+
+def _plane_distance(p, a, b) -> float:
+    """Distance [rad] in the plane from point ``p`` to the segment ``a -> b`` (mpmath, 30
+    digits)."""
+    with mp.workdps(30):
+        p, a, b = ([mp.mpf(float(v)) for v in x] for x in (p, a, b))
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        den = dx * dx + dy * dy
+        t = 0 if den == 0 else min(1, max(0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / den))
+        return float(mp.hypot(a[0] + t * dx - p[0], a[1] + t * dy - p[1]))
+
+
+def test_torus_distances_are_the_nearest_image_distances():
+    """Point-to-segment distances on the torus, against the smallest plane distance over the
+    point's nine images ``xy + 2 pi (i, j)``, on random short segments as curves have them
+    (some across a seam, some a single point) and points: equal where below 1 rad (farther, a
+    point almost opposite on the torus may be measured from another image, never nearer); and the nearest segment, curve by curve and over all, is the one
+    of smallest reference distance."""
+    rng = np.random.default_rng(7)
+    a = rng.uniform(0, 2 * math.pi, (40, 2))
+    d = rng.normal(0, 0.05, (40, 2))
+    d[::7] = 0.0
+    xy = np.concatenate([rng.uniform(0, 2 * math.pi, (30, 2)), a[:5] + d[:5] / 3])
+    dist, t, img = bp.torus_distances(xy, a, d)
+    shifts = 2 * math.pi * np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
+    for m, p in enumerate(xy):
+        for n in range(len(a)):
+            ref = min(_plane_distance(p + s, a[n], a[n] + d[n]) for s in shifts)
+            assert dist[m, n] >= ref * (1 - 1e-12) - 1e-14
+            if ref > 1.0:
+                continue
+            assert dist[m, n] == pytest.approx(ref, rel=1e-12, abs=1e-14)
+            at = a[n] + t[m, n] * d[n]
+            assert math.hypot(*(at - img[m, n])) == pytest.approx(ref, rel=1e-12, abs=1e-14)
+    curves = [
+        bd.Curve("SS", "SS_stability", 1, 0, np.cumsum(np.r_[a[i : i + 1], d[i : i + 4]], 0),
+                 np.zeros(5))
+        for i in (0, 10, 20)
+    ] + [bd.Curve("SS", "SS_stability", 1, 0, a[30:31], np.zeros(1))]  # fmt: skip
+    for p in xy[:8]:
+        got = bp.nearest_segment(p, curves)
+        ref = [
+            min(_plane_distance(p + s, v[k], v[k + 1]) for s in shifts)
+            for v in (c.vertices for c in curves[:3])
+            for k in range(4)
+        ]
+        assert got[0] == pytest.approx(min(ref), rel=1e-12, abs=1e-14)
+        assert 4 * got[1] + got[2] == int(np.argmin(ref))
