@@ -72,8 +72,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from numpy.lib.stride_tricks import sliding_window_view
-from scipy.spatial import cKDTree
 
 from atlas.core import brackets, checks
 from atlas.data import (
@@ -544,10 +544,12 @@ def _meetings(ss: list[Curve], ii: list[Curve], model, min_sin=1e-3) -> list[Poi
     b0 = np.concatenate([c.vertices[:-1] for c in ii])
     b1 = np.concatenate([c.vertices[1:] for c in ii])
     la, lb = np.hypot(*(a1 - a0).T), np.hypot(*(b1 - b0).T)
-    tree = cKDTree(0.5 * (b0 + b1))
-    pairs = tree.query_ball_point(0.5 * (a0 + a1), 0.5 * (la + lb.max()) + 1e-12)
-    i = np.repeat(np.arange(len(a0)), [len(p) for p in pairs])
-    j = np.fromiter(itertools.chain.from_iterable(pairs), int, count=len(i))
+    # candidate pairs: midpoints within half the two lengths (a superset of the crossings)
+    tree = shapely.STRtree(shapely.points(0.5 * (b0 + b1)))
+    near = 0.5 * (la + lb.max()) + 1e-12
+    i, j = tree.query(shapely.points(0.5 * (a0 + a1)), predicate="dwithin", distance=near)
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
     if not i.size:
         return []
     da, db, w = a1[i] - a0[i], b1[j] - b0[j], b0[j] - a0[i]
@@ -745,10 +747,12 @@ def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
     proven, roots = boundary_points.ss_line_points(model, dtype)
     if not proven:
         return pts, roots
-    tree = cKDTree([[p.beta1, p.beta2] for p in proven])
     kinds = ("leaves_class_line", "crosses_class_line")
-    kept = [p for p in pts if p.kind not in kinds or tree.query([p.beta1, p.beta2])[0] > cell]
-    return kept + proven, roots
+    est = [p for p in pts if p.kind in kinds]
+    at = [(p.beta1, p.beta2) for p in proven]
+    far = boundary_tips.nearest_distance([(p.beta1, p.beta2) for p in est], at) > cell
+    gone = {id(p) for p, f in zip(est, far) if not f}
+    return [p for p in pts if id(p) not in gone] + proven, roots
 
 
 def _is_dataset(source) -> bool:

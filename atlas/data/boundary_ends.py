@@ -23,7 +23,7 @@ import numpy as np
 import shapely
 
 from atlas.core import brackets
-from atlas.data.boundary_points import curve_segments, torus_distances
+from atlas.data.boundary_points import curve_segments, pairs_near
 
 __all__ = [
     "CHORD_FRACTIONS",
@@ -48,18 +48,17 @@ def _torus_delta(a, b) -> np.ndarray:
 def _ends_near(curves, reach) -> np.ndarray:
     """Per curve, whether its first and last vertex lie within ``reach`` [rad] of a segment (or
     the lone vertex) of another curve of ``curves`` on the torus ``(n, 2)``
-    (:func:`atlas.data.boundary_points.torus_distances`)."""
+    (:func:`atlas.data.boundary_points.pairs_near`)."""
     a, d, owner, _ = curve_segments(curves)
     lone = [i for i, c in enumerate(curves) if len(c.vertices) == 1]
     a = np.concatenate([a] + [curves[i].vertices for i in lone])
     d = np.concatenate([d, np.zeros((len(lone), 2))])
     owner = np.concatenate([owner, np.asarray(lone, int)])
     ends = np.array([(c.vertices[0], c.vertices[-1]) for c in curves]).reshape(-1, 2)
-    if not len(a) or not len(ends):
-        return np.zeros((len(curves), 2), bool)
-    dist = torus_distances(ends, a, d)[0]
-    other = owner[None, :] != np.repeat(np.arange(len(curves)), 2)[:, None]
-    return ((dist <= reach) & other).any(1).reshape(-1, 2)
+    i, j = pairs_near(ends, a, d, reach)
+    out = np.zeros(len(ends), bool)
+    out[i[owner[j] != i // 2]] = True
+    return out.reshape(-1, 2)
 
 
 def _free_ends(curves, reach) -> set[tuple[int, int]]:

@@ -50,6 +50,8 @@ __all__ = [
     "ss_line_points",
     "angle_from_tan_half",
     "curve_segments",
+    "pair_distances",
+    "pairs_near",
     "torus_distances",
 ]
 
@@ -301,24 +303,53 @@ def curve_segments(curves) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
 PAIR_BLOCK = 1 << 20
 
 
+def pair_distances(p, a, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Distances [rad] on the torus from points ``p`` to segments ``a -> a + d`` (broadcastable
+    ``(..., 2)`` arrays): ``(dist, t, image)``, the point's image ``p + 2 pi j`` nearest to the
+    segment's start (segments far shorter than ``pi``), at fraction ``t`` of it (``p`` itself
+    where ``j = 0``: no rounding off the seams)."""
+    near = a + (p - a + math.pi) % TWO_PI - math.pi  # the image nearest to the start
+    img = p + TWO_PI * np.round((near - p) / TWO_PI)
+    t = np.sum((img - a) * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300)
+    t = np.clip(t, 0.0, 1.0)
+    return np.hypot(*np.moveaxis(a + t[..., None] * d - img, -1, 0)), t, img
+
+
 def torus_distances(xy, a, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Distances [rad] on the torus from points ``xy`` ``(m, 2)`` to segments ``a -> a + d``
-    ``(n, 2)``: ``(dist, t, image)``, each ``(m, n)`` (``image`` ``(m, n, 2)``), the point's
-    image ``xy + 2 pi j`` nearest to each segment's start (segments far shorter than ``pi``), at
-    fraction ``t`` of it (``xy`` itself where ``j = 0``: no rounding off the seams).  In blocks of :data:`PAIR_BLOCK` pairs."""
+    """:func:`pair_distances` from every point of ``xy`` ``(m, 2)`` to every segment ``a -> a +
+    d`` ``(n, 2)``: ``(dist, t, image)``, each ``(m, n)`` (``image`` ``(m, n, 2)``), in blocks of
+    :data:`PAIR_BLOCK` pairs."""
     xy = np.asarray(xy, float).reshape(-1, 2)
     m, n = len(xy), len(a)
     dist, t, img = np.empty((m, n)), np.empty((m, n)), np.empty((m, n, 2))
     rows = max(1, PAIR_BLOCK // max(n, 1))
     for s in range(0, m, rows):
-        p = xy[s : s + rows, None, :]
-        near = a + (p - a + math.pi) % TWO_PI - math.pi  # per segment, the nearest image
-        im = p + TWO_PI * np.round((near - p) / TWO_PI)
-        tt = np.sum((im - a) * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300)
-        tt = np.clip(tt, 0.0, 1.0)
-        dist[s : s + rows] = np.hypot(*np.moveaxis(a + tt[..., None] * d - im, -1, 0))
-        t[s : s + rows], img[s : s + rows] = tt, im
+        got = pair_distances(xy[s : s + rows, None, :], a, d)
+        dist[s : s + rows], t[s : s + rows], img[s : s + rows] = got
     return dist, t, img
+
+
+def pairs_near(xy, a, d, reach) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(i, j)`` (sorted) of a point of ``xy`` ``(m, 2)`` and a segment ``a -> a + d``
+    ``(n, 2)`` within ``reach`` [rad] on the torus (:func:`pair_distances`), found among the
+    segments whose start's ``beta1`` lies within ``reach`` plus the longest segment of the
+    point's (sorted starts, not every pair)."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    span = reach + float(np.abs(d).max(initial=0.0))
+    if not len(xy) or not len(a):
+        return np.zeros(0, int), np.zeros(0, int)
+    key = a[:, 0] % TWO_PI
+    order = np.argsort(key, kind="stable")
+    ext = np.concatenate([key[order] - TWO_PI, key[order], key[order] + TWO_PI])
+    v = xy[:, 0] % TWO_PI
+    lo = np.searchsorted(ext, v - span) if span < math.pi else np.full(len(xy), len(a))
+    hi = np.searchsorted(ext, v + span, "right") if span < math.pi else lo + len(a)
+    size = hi - lo
+    i = np.repeat(np.arange(len(xy)), size)
+    j = np.tile(order, 3)[np.arange(size.sum()) - np.repeat(np.cumsum(size) - size - lo, size)]
+    keep = pair_distances(xy[i], a[j], d[j])[0] <= reach
+    pairs = np.unique(np.stack([i[keep], j[keep]], 1), axis=0).reshape(-1, 2)
+    return pairs[:, 0], pairs[:, 1]
 
 
 def _per_curve(curves, xy) -> list[tuple[float, int, float, np.ndarray]]:

@@ -8,12 +8,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from atlas.core import brackets
 from atlas.data.class_lines import line_frames, line_labels, line_values
 
-__all__ = ["TIP_OFFSET", "attach_tips", "line_tips", "spike_tips", "unreached"]
+__all__ = [
+    "TIP_OFFSET", "attach_tips", "line_tips", "nearest_distance", "spike_tips", "unreached"
+]  # fmt: skip
 
 
 #: distance [rad] off a class line at which it is scanned for tips: 128 units in the last place
@@ -146,5 +147,20 @@ def unreached(tips, xy, cell) -> int:
     if not tips or not len(xy):
         return sum(len(v[0]) for v in tips.values())
     pts = np.concatenate([0.5 * (p + q) for p, q, _, _ in tips.values()])
-    dist, _ = cKDTree(xy).query(pts)
-    return int((dist > cell).sum())
+    return int((nearest_distance(pts, xy) > cell).sum())
+
+
+#: the most point pairs :func:`nearest_distance` holds at once
+PAIR_BLOCK = 1 << 20
+
+
+def nearest_distance(pts, xy) -> np.ndarray:
+    """Per point of ``pts`` ``(m, 2)``, the plane distance [rad] to the nearest of ``xy``
+    ``(n >= 1, 2)`` (every pair, in blocks of :data:`PAIR_BLOCK`)."""
+    pts, xy = np.asarray(pts, float).reshape(-1, 2), np.asarray(xy, float).reshape(-1, 2)
+    rows = max(1, PAIR_BLOCK // len(xy))
+    out = np.empty(len(pts))
+    for s in range(0, len(pts), rows):
+        d = pts[s : s + rows, None, :] - xy[None]
+        out[s : s + rows] = np.sqrt(np.min(d[..., 0] ** 2 + d[..., 1] ** 2, axis=1))
+    return out

@@ -288,3 +288,17 @@ def test_torus_distances_are_the_nearest_image_distances():
         ]
         assert got[0] == pytest.approx(min(ref), rel=1e-12, abs=1e-14)
         assert 4 * got[1] + got[2] == int(np.argmin(ref))
+
+
+def test_pairs_near_are_every_pair_within_reach():
+    """The point-segment pairs within a reach found from the sorted segment starts are those of
+    the full distance matrix (points and segments across both seams)."""
+    rng = np.random.default_rng(3)
+    a = np.concatenate([rng.uniform(0, 2 * math.pi, (300, 2)), [[6.28, 0.01], [0.001, 6.27]]])
+    d = rng.normal(0, 0.02, a.shape)
+    xy = np.concatenate([rng.uniform(0, 2 * math.pi, (200, 2)), a[-2:] + [[0.004, 0], [-0.003, 0]]])
+    for reach in (1e-3, 0.05, 0.3):
+        i, j = bp.pairs_near(xy, a, d, reach)
+        want = np.argwhere(bp.torus_distances(xy, a, d)[0] <= reach)
+        np.testing.assert_array_equal(np.stack([i, j], 1), want)
+        assert reach < 0.05 or len(want) > 10
