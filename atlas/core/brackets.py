@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from atlas.core import contact_modes
-from atlas.core.points import spectral_points
+from atlas.core.points import FLAT_SMALL, spectral_points
 from atlas.core.verdicts import UNDECIDED_FLAG
 
 __all__ = [
@@ -41,8 +41,11 @@ __all__ = [
     "field_codes",
 ]
 
-#: the two batch sizes a kernel call sees: small batches are padded to ``MIN_BATCH`` points,
-#: larger ones cut into padded batches of ``MAX_BATCH`` (two compilations per kernel)
+#: the batch sizes a kernel call sees: the smallest batches are padded to ``SMALL_BATCH`` points,
+#: small ones to ``MIN_BATCH``, larger ones cut into padded batches of ``MAX_BATCH`` (three
+#: compilations per kernel; :data:`atlas.core.points.FLAT_SMALL` and ``FLAT_BATCH``).
+#: ``MIN_BATCH`` is also the batch a bisection's sections fill (:func:`_sections`)
+SMALL_BATCH = FLAT_SMALL
 MIN_BATCH = 4096
 MAX_BATCH = 1 << 16
 #: the padding point ``(beta1, beta2)`` [rad]: ``B = I`` (two uncoupled contacts).  The first
@@ -93,8 +96,8 @@ def direction_codes(
 ) -> np.ndarray:
     """Certified codes of ``field`` at 1-D arrays of at most ``MAX_BATCH`` direction vectors
     ``(c1, s1)``, ``(c2, s2)`` [1] (e.g. exactly on a class line: ``(c2, s2) = -(c1, s1)`` on
-    ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``MIN_BATCH`` or ``MAX_BATCH``
-    points (two batch sizes: two compilations per kernel); every point settled exactly.
+    ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``SMALL_BATCH``, ``MIN_BATCH`` or
+    ``MAX_BATCH`` points (three compilations per kernel); every point settled exactly.
 
     ``first_change``: the codes ``vp`` of rows of samples (the points, row after row, ``n /
     len(vp)`` a row, in order along a bracket from an end of code ``vp``): per row, only the
@@ -102,7 +105,7 @@ def direction_codes(
     :data:`NO_CODE`."""
     _check_field(field)
     n = np.size(c1)
-    pad = (MIN_BATCH if n <= MIN_BATCH else MAX_BATCH) - n
+    pad = next(b for b in (SMALL_BATCH, MIN_BATCH, MAX_BATCH) if n <= b) - n
     pc, ps = _pad_direction(np.dtype(dtype))
     c1, s1, c2, s2 = (
         _padded(v, w, pad) for v, w in ((c1, pc[0]), (s1, ps[0]), (c2, pc[1]), (s2, ps[1]))

@@ -194,9 +194,13 @@ def test_small_grids_share_one_compilation():
 
 
 def test_flat_columns_pad_with_the_last_point():
+    """Columns padded to the small flat batch (512 points), and beyond it to multiples of the
+    flat batch (4096)."""
     a, b = np.arange(3.0)[:, None], np.array([10.0, 20.0])
     cols = points._flat_columns([a, b, np.array(5.0)], (3, 2))
-    assert [c.shape for c in cols] == [(4096,)] * 3 and (cols[2] == 5).all()
+    assert [c.shape for c in cols] == [(512,)] * 3 and (cols[2] == 5).all()
+    more = points._flat_columns([np.arange(513.0), np.array(5.0)], (513,))
+    assert [c.shape for c in more] == [(4096,)] * 2 and more[0][512:].tolist() == [512.0] * 3584
     assert cols[0][:7].tolist() == [0, 0, 1, 1, 2, 2, 2]
     assert cols[1][:7].tolist() == [10, 20, 10, 20, 10, 20, 20]
 
