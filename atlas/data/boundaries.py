@@ -697,15 +697,18 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
 
 def _close_ends(fld, model, curves, proven, points, sizes, dtype):
     """The free curve ends of one field (:mod:`atlas.data.boundary_ends`): extended to a proven
-    point of ``proven`` or bridged to another end where the segment is proven, the rest listed.
+    point of ``proven`` or bridged to another end where the segment is proven, the rest listed;
+    within a grid cell or the longest segment :func:`atlas.data.boundary_ends.proven_segment`
+    tries, whichever is longer (a finer grid extends no less: a boundary tangent to a class line
+    leaves a wedge the tracing cuts across farther than a cell of a fine grid from its point).
     ``sizes`` = (cover distance, grid cell, chord, tol) [rad].  Returns the curves, the
     ``dangling_curve_end`` points and their diagnostics."""
     distance, cell, chord, tol = sizes
-    reach = 2 * distance
+    reach, within = 2 * distance, max(cell, boundary_ends.longest_segment(chord))
     curves, extended = boundary_ends.extend_to_points(
-        curves, proven, reach, cell, chord, tol, dtype
+        curves, proven, reach, within, chord, tol, dtype
     )
-    bridges = boundary_ends.bridge(curves, reach, cell, chord, tol, dtype)
+    bridges = boundary_ends.bridge(curves, reach, within, chord, tol, dtype)
     curves = curves + bridges
     loose = boundary_ends.dangling(curves, points, reach)
     ends = [Point(*xy, "dangling_curve_end", math.nan, *model, field=fld) for xy, _ in loose]

@@ -32,12 +32,19 @@ __all__ = [
     "bridge",
     "dangling",
     "extend_to_points",
+    "longest_segment",
     "proven_segment",
 ]
 
 TWO_PI = 2 * math.pi
 #: most samples along one extension (longer stretches are left, and reported by :func:`dangling`)
 MAX_SAMPLES = 16384
+
+
+def longest_segment(chord) -> float:
+    """The longest segment [rad] :func:`proven_segment` samples (:data:`MAX_SAMPLES` samples
+    ``chord / 2`` apart)."""
+    return MAX_SAMPLES * chord / 2
 
 
 def _torus_delta(a, b) -> np.ndarray:

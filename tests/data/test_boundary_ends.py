@@ -95,3 +95,34 @@ def test_a_segment_off_the_boundary_is_not_proven():
     assert boundary_ends.proven_segment(c, end, np.array(LEAVE), 1e-6, 1e-10)
     low = np.array([0.0, 1e-4])
     assert not boundary_ends.proven_segment(c, end - low, np.array(LEAVE) - low, 1e-6, 1e-10)
+
+
+def _ss_stable(b1, b2, model, dps=60) -> bool:
+    """Whether every root of ``p`` (paper eq. 9, ``k2 = 1``) at ``(b1, b2)`` [rad] has a negative
+    real part (SS stable), by mpmath at ``dps`` digits (an independent reference)."""
+    return max(z.real for z in eq9_roots(b1, b2, model, dps)) < 0
+
+
+def test_a_fine_grid_extends_an_end_as_far_as_a_coarse_one():
+    """kappa 2, q 0.1: the SS boundary leaves beta2 = beta1 + pi at (pi/4, 5 pi/4) tangentially;
+    the 1024^2 slice (checked grid 4097^2) stopped its curve at END, 1.6e-3 rad short of the
+    point, farther than one of its cells (reported dangling), where the 256^2 slice ran on to it
+    (the bench's Hausdorff distance 1.3e-4 rad between the two).  The same grid spacing on a box
+    around it: the stretch is covered (mpmath: a stability change within 2e-6 rad of each
+    sample, and a curve within 2e-6 + twice the cover distance; 1.3e-4 before)."""
+    end, leave = np.array([0.7844469014337165, 3.9256581784576223]), np.array([PI / 4, 5 * PI / 4])
+    h = 2 * PI / 4096
+    box = bd.slice_boundaries(
+        np.arange(480, 560) * h, np.arange(2520, 2600) * h, *DAMPED, fields=("SS",), check=0
+    )
+    loose = np.array(box.attrs["SS_dangling_end_points"]).reshape(-1, 2)
+    assert (np.hypot(*(loose - end).T) > 1e-3).all()
+    curves = [c for c in box.curves if c.field == "SS"]
+    d = (leave - end) / np.hypot(*(leave - end))
+    normal = np.array([-d[1], d[0]])
+    for f in (0.1, 0.3, 0.5, 0.7, 0.9):
+        xy = end + f * (leave - end)
+        sides = {_ss_stable(*(xy + s * 2e-6 * normal), DAMPED) for s in (-1, 1)}
+        assert sides == {True, False}
+        dist = boundary_points.nearest_segment(xy, curves)[0]
+        assert dist <= 2e-6 + 2 * box.attrs["SS_cover_distance"]
