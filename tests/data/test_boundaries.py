@@ -392,3 +392,19 @@ def test_api_size_refusal_is_the_cli_one(capsys, monkeypatch):
     with pytest.raises(MemoryError) as err:
         bd.boundaries(scene, check=0)
     assert str(err.value) == want
+
+
+def test_a_run_writing_no_netcdf_loads_neither_xarray_nor_scipy():
+    """A slice's curves need neither xarray (with pandas, ~1 s of imports) nor
+    scipy (~0.8 s): a fresh process computes them without loading either."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np; from atlas.data import boundaries as bd; "
+        "g = np.arange(8) * np.pi / 4; "
+        "b = bd.slice_boundaries(g, g, 2.0, 0.1, 0.1, fields=('SS',), check=0); "
+        "print(len(b.curves) > 0, 'xarray' in sys.modules, 'scipy' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "False", "False"]
