@@ -18,8 +18,9 @@ def safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
     """Steps (of the rows ``r``) continued by up to ``SUBSTEPS`` further certified safe steps
     (:func:`eb.safe_steps` from the event functions at the step's end, under the same curvature
     bound ``M``, valid over the whole window), each at least ``SUBSTEP_MIN H_S``, never past
-    ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified: no monitored
-    function changes sign over the longer step.  An oscillating gap far from its contact is
+    ``cap`` (window, horizon, stop-rule limit) nor where a crossing is certified before ``cap``
+    (one certified beyond it stops none: a gap drifting slowly towards a contact far away):
+    no monitored function changes sign over the longer step.  An oscillating gap far from its contact is
     then crossed in one step of the window rather than several of its curvature's ``sigma_lo``.
     Returns the steps and ``(A, lo, hi, |d|)`` ((r.size, 4), |d| (r.size, 2)) of the last
     evaluation of each row that stopped below ``cap`` (:func:`event_after`; ``A`` 0
@@ -36,7 +37,9 @@ def safe_substeps(r, step, cap, P, U, lam, tau, s, k, q, M, mon, H):
         A, Bd = sl_ * f, sl_ * fp
         lo, hi = eb.safe_steps(np.maximum(A, 0.0), Bd, Ml)
         inc = eb.min_cols(np.where(ml, lo, np.inf))
-        ok = ~(ml & ((A <= 0) | (hi < np.inf))).any(axis=1) & (inc >= short)
+        # a crossing certified beyond the cap (past the window its bound holds over) stops none
+        ahead = out[live][:, None] + hi <= c[live][:, None]
+        ok = ~(ml & ((A <= 0) | ahead)).any(axis=1) & (inc >= short)
         for a, b in zip(last, (A, lo, hi, np.abs(dva[0])), strict=True):
             a[live[~ok]] = b[~ok]
         live = live[ok]

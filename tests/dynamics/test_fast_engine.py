@@ -503,3 +503,24 @@ def test_stops_and_their_classification_reuse_the_tables_eigenvectors(monkeypatc
     for j, i in enumerate(sel[:3]):
         out = _reference(L.beta1[i], L.beta2[i], L.alpha[i], tuple(k[j]), tuple(q[j]), L.g0[i])
         assert int(out[0]) == int(S.Outcome.IWC), i
+
+
+def test_a_crossing_certified_beyond_the_window_does_not_stop_the_safe_substeps():
+    """A lane of the random comparison (seed 46, lane 979: beta1 = 3pi/2, beta2 = pi/2, det B =
+    0, its perturbed SS equilibrium ~1e16) has no event in its 150 time units: gap 2 oscillates
+    about -1e15 while gap 1 drifts slowly towards its contact, its crossing certified ~190 H_S
+    ahead, far beyond the step window.  That crossing no longer stops the safe sub-steps, so
+    the oscillation is crossed in steps of the window: at most 30 steps (106 when every step
+    ended at gap 2's sigma_lo), and the exact simulator's outcome."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    i = 979
+    assert (L.beta1[i], L.beta2[i]) == (1.5 * PI, 0.5 * PI)
+    k, q = (L.kappa[i], 1.0), (L.q[i], L.q[i])
+    res = F.run_lanes(L.beta1[i : i + 1], L.beta2[i : i + 1], L.alpha[i : i + 1], np.array([k]),
+                      np.array([q]), L.g0[i : i + 1])  # fmt: skip
+    out, run = _reference(L.beta1[i], L.beta2[i], L.alpha[i], k, q, L.g0[i])
+    assert res.n_events[0] == run.n_events == 0
+    assert res.steps[0] <= 30
+    assert int(res.code[0]) == int(out)
