@@ -562,3 +562,20 @@ def test_a_gap_and_its_force_crossing_close_together_are_located_in_one_step():
     assert res.n_events[0] == run.n_events == 119
     assert res.steps[0] <= 1.1 * res.n_events[0]
     assert int(res.code[0]) == int(out) == int(S.Outcome.SUSTAINED_OSCILLATION)
+
+
+def test_lanes_over_ten_times_the_median_are_event_heavy_at_under_two_steps_per_event():
+    """The 1,000 lanes of the random comparison (seed 46), counted (not timed): a lane over 10
+    times the median lane's steps has at least 40 events, each costing a step or two (under 1.8
+    steps per event).  Before the sub-steps passed crossings certified beyond their window,
+    took a crossing their last step landed on, and overlapping brackets were closed together,
+    13 lanes were over: one without events (106 steps), one at 4 steps per event (26 events),
+    the others up to 2.25."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)
+    res = F.run_lanes(L.beta1, L.beta2, L.alpha, k, np.stack([L.q, L.q], axis=1), L.g0)
+    over = res.steps > 10 * np.median(res.steps)
+    assert np.all(res.n_events[over] >= 40)
+    assert np.all(res.steps[over] < 1.8 * res.n_events[over])
