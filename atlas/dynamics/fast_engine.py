@@ -435,8 +435,10 @@ def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid
 
 def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     """The first crossing of the next step: ``(ev, h, m)`` (n,), the rows with an event, its
-    time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo``; ``lo``, ``hi``
-    of a bracket closed by :func:`locate_root` (and its twin's) set to the event (in place)."""
+    time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo`` (or a step with
+    no crossing before it); ``lo``, ``hi`` of the brackets closed by
+    :func:`atlas.dynamics.substeps.locate_first` set to their roots, the event's to the event
+    (in place)."""
     # smallest sigma_lo, ties to the tightest bracket
     m = eb.min_cols(lo)
     tie_hi = np.where(lo <= m[:, None], hi, np.inf)
