@@ -123,9 +123,10 @@ def locate_first(lo, hi, first, mon, lim, P, U, lam, tau, s, k, q, xtol, root_it
     second = np.argmin(lo_o, axis=1)
     hs = hi[rows, second]
     single = (lo_o[rows, second] > hf) & (hf <= lim)
-    excl |= (cols == second[:, None]) | twins(second, mon, q)
-    third = eb.min_cols(np.where(excl, np.inf, lo))
-    pair = ~single & (hf <= lim) & np.isfinite(hs) & (hs <= lim) & (third > np.minimum(hf, hs))
+    pair = ~single & (hf <= lim) & np.isfinite(hs) & (hs <= lim)
+    if pair.any():
+        excl |= (cols == second[:, None]) | twins(second, mon, q)
+        pair &= eb.min_cols(np.where(excl, np.inf, lo)) > np.minimum(hf, hs)
     t1, t2 = eb.rows(single | pair), eb.rows(pair)
     idx, fn = np.concatenate([t1, t2]), np.concatenate([first[t1], second[t2]])
     a, b = eb.locate_root(P[idx], U[idx], lam[idx], tau[idx], lo[idx, fn], hi[idx, fn], fn,
@@ -137,7 +138,7 @@ def locate_first(lo, hi, first, mon, lim, P, U, lam, tau, s, k, q, xtol, root_it
     done = closed[:, 0] & (closed[:, 1] | single)
     h = np.minimum(b_[:, 0], b_[:, 1])
     safe = np.where(single, a_[:, 0], np.minimum(a_[:, 0], a_[:, 1]))
-    for j, f in enumerate((first, second)):
+    for j, f in enumerate((first, second)[: 2 if t2.size else 1]):
         r = eb.rows(done if j == 0 else done & pair)
         fr = f[r]
         lo[r, fr] = np.where(b_[r, j] <= h[r], h[r], a_[r, j])
