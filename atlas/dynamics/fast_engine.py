@@ -33,9 +33,10 @@ stretch such as a free flight or a settled contact is crossed in a few steps, so
 costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
 certified in the window goes on with further safe steps from its end under the same bound
 (:func:`atlas.dynamics.substeps.safe_substeps`: an oscillation far from its contacts crosses
-the window in one step), and a crossing certified where they stop is located in the same step
-(:func:`atlas.dynamics.substeps.event_after`; 1.6-1.7 steps per event on event-heavy lanes,
-was 2.0);
+the window in one step; a crossing certified beyond the window stops none), and a crossing
+certified where they stop, or reached by their last ``sigma_lo`` (a gap in free flight, an exact
+quadratic), is the step's event (:func:`atlas.dynamics.substeps.event_after`; 1.1 steps per
+event on event-heavy lanes, was 2.0);
 inside a step longer than ``H_S`` the gaps are sampled at
 most ``H_S`` apart (:func:`_sample_step`) for the late-amplitude test and the stop rule, unless
 both provably stay within ``10 scale``; the first
@@ -45,7 +46,10 @@ safeguarded Newton step from the safe side: the bracket shrinks quadratically.  
 bracket of the first function that every other function's ``sigma_lo`` lies beyond (its twin
 aside: the force of a contact with ``q_i = 0`` is ``-k_i d_i``, the same roots) is closed by
 :func:`locate_root` (safeguarded Newton, at most ``ROOT_ITER`` evaluations per step; an
-unfinished bracket resumes from its lower end at the next step).  The bounds hold in
+unfinished bracket resumes from its lower end at the next step); where one other function's
+``sigma_lo`` lies inside it and that function has a certified bracket too (a gap and its lightly
+damped force crossing ``1e-3 H_S`` apart), both are closed and the earlier root is the event
+(:func:`atlas.dynamics.substeps.locate_first`).  The bounds hold in
 exact arithmetic on the modal form; its floating-point evaluation is not bounded here (values within
 ``1e-13`` of the function's scale count as zero).
 
@@ -431,8 +435,10 @@ def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid
 
 def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
     """The first crossing of the next step: ``(ev, h, m)`` (n,), the rows with an event, its
-    time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo``; ``lo``, ``hi``
-    of a bracket closed by :func:`locate_root` (and its twin's) set to the event (in place)."""
+    time (the bracket's upper end, from ``tau``) and the smallest ``sigma_lo`` (or a step with
+    no crossing before it); ``lo``, ``hi`` of the brackets closed by
+    :func:`atlas.dynamics.substeps.locate_first` set to their roots, the event's to the event
+    (in place)."""
     # smallest sigma_lo, ties to the tightest bracket
     m = eb.min_cols(lo)
     tie_hi = np.where(lo <= m[:, None], hi, np.inf)
@@ -440,24 +446,18 @@ def _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, tau, s, k, q):
                      np.argmin(tie_hi, axis=1))  # fmt: skip
     h = hi[np.arange(first.size), first]
     ev = keep & (h - m <= xtol) & (h <= rem)
-    # a bracket of the first function that every other function's sigma_lo lies beyond: the
-    # first crossing is in it, located on that function alone (:func:`locate_root`); the
-    # force of a contact without damping (q_i = 0) is the gap times -k_i, the same root
-    twin = ss.twins(first, mon, q)
-    other = eb.min_cols(np.where((np.arange(4)[None, :] == first[:, None]) | twin, np.inf, lo))
-    r = eb.rows(keep & ~ev & (h <= rem) & (other > h))
+    # a bracket of the first function that every other function's sigma_lo lies beyond (or one
+    # other's, with a certified bracket too): the first crossing is in it, located
+    # (:func:`atlas.dynamics.substeps.locate_first`); not yet: step to where no function crosses
+    r = eb.rows(keep & ~ev & (h <= rem))
     if r.size:
-        fr = first[r]
-        a_r, b_r = locate_root(P[r], U[r], lam[r], tau[r], lo[r, fr], h[r], fr, s[r, fr], k[r],
-                                q[r], xtol[r], ROOT_ITER)  # fmt: skip
-        # located: the event at the upper end; not yet: step to the lower end, no crossing
-        # of any function before it
-        done = b_r - a_r <= xtol[r]
-        h[r], m[r] = np.where(done, b_r, h[r]), np.where(done, m[r], a_r)
-        rd, fd = r[done], fr[done]
-        lo[rd, fd] = hi[rd, fd] = h[rd]
-        tw_r, tw_c = np.nonzero(twin[rd])
-        lo[rd[tw_r], tw_c] = hi[rd[tw_r], tw_c] = h[rd[tw_r]]
+        lo_r, hi_r = lo[r], hi[r]
+        done, h_r, safe = ss.locate_first(lo_r, hi_r, first[r], mon[r], rem[r], P[r], U[r], lam[r],
+                                          tau[r], s[r], k[r], q[r], xtol[r], ROOT_ITER)  # fmt: skip
+        lo[r], hi[r] = lo_r, hi_r
+        tried = ~np.isnan(safe)
+        rd, rs = r[done], r[tried & ~done]
+        h[rd], m[rs] = h_r[done], safe[tried & ~done]
         ev[rd] = True
     return ev, h, m
 

@@ -503,3 +503,79 @@ def test_stops_and_their_classification_reuse_the_tables_eigenvectors(monkeypatc
     for j, i in enumerate(sel[:3]):
         out = _reference(L.beta1[i], L.beta2[i], L.alpha[i], tuple(k[j]), tuple(q[j]), L.g0[i])
         assert int(out[0]) == int(S.Outcome.IWC), i
+
+
+def test_a_crossing_certified_beyond_the_window_does_not_stop_the_safe_substeps():
+    """A lane of the random comparison (seed 46, lane 979: beta1 = 3pi/2, beta2 = pi/2, det B =
+    0, its perturbed SS equilibrium ~1e16) has no event in its 150 time units: gap 2 oscillates
+    about -1e15 while gap 1 drifts slowly towards its contact, its crossing certified ~190 H_S
+    ahead, far beyond the step window.  That crossing no longer stops the safe sub-steps, so
+    the oscillation is crossed in steps of the window: at most 30 steps (106 when every step
+    ended at gap 2's sigma_lo), and the exact simulator's outcome."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    i = 979
+    assert (L.beta1[i], L.beta2[i]) == (1.5 * PI, 0.5 * PI)
+    k, q = (L.kappa[i], 1.0), (L.q[i], L.q[i])
+    res = F.run_lanes(L.beta1[i : i + 1], L.beta2[i : i + 1], L.alpha[i : i + 1], np.array([k]),
+                      np.array([q]), L.g0[i : i + 1])  # fmt: skip
+    out, run = _reference(L.beta1[i], L.beta2[i], L.alpha[i], k, q, L.g0[i])
+    assert res.n_events[0] == run.n_events == 0
+    assert res.steps[0] <= 30
+    assert int(res.code[0]) == int(out)
+
+
+def _random_lane(seed, i):
+    """Lane ``i`` of the random comparison (1,000 lanes, ``seed``) by the fast engine, and the
+    exact simulator's ``(outcome, run)`` of it."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(seed, 1000)
+    k, q = (L.kappa[i], 1.0), (L.q[i], L.q[i])
+    res = F.run_lanes(L.beta1[i : i + 1], L.beta2[i : i + 1], L.alpha[i : i + 1], np.array([k]),
+                      np.array([q]), L.g0[i : i + 1])  # fmt: skip
+    return res, _reference(L.beta1[i], L.beta2[i], L.alpha[i], k, q, L.g0[i])
+
+
+def test_safe_substeps_ending_on_a_crossing_take_it_as_the_event():
+    """A lane of the random comparison (seed 46, lane 377: q = 0, growing bouncing, 179 events):
+    its gaps fall back in free flight, an exact quadratic whose curvature bound is its own, so a
+    safe sub-step's sigma_lo lands on the root.  The step takes it as its event (the next step
+    took it, with a step of length 0): at most 0.75 steps per event (167 steps, 0.93, before;
+    twin crossings of an undamped contact count two events), and the exact simulator's
+    outcome and events."""
+    res, (out, run) = _random_lane(46, 377)
+    assert res.n_events[0] == run.n_events == 179
+    assert res.steps[0] <= 0.75 * res.n_events[0]
+    assert int(res.code[0]) == int(out) == int(S.Outcome.GROWING_BOUNCING)
+
+
+def test_a_gap_and_its_force_crossing_close_together_are_located_in_one_step():
+    """A lane of the random comparison (seed 47, lane 169: q = 0.0047, a sustained oscillation
+    with 119 events): at each release the force of the lightly damped contact crosses zero
+    ~2e-3 H_S before its gap, their certified brackets overlap, and neither could be located
+    alone (the step went to the smaller sigma_lo, twice an event).  Both roots are located in
+    the same step and the earlier is the event: at most 1.1 steps per event (268 steps, 2.25,
+    before), and the exact simulator's outcome and events."""
+    res, (out, run) = _random_lane(47, 169)
+    assert res.n_events[0] == run.n_events == 119
+    assert res.steps[0] <= 1.1 * res.n_events[0]
+    assert int(res.code[0]) == int(out) == int(S.Outcome.SUSTAINED_OSCILLATION)
+
+
+def test_lanes_over_ten_times_the_median_are_event_heavy_at_under_two_steps_per_event():
+    """The 1,000 lanes of the random comparison (seed 46), counted (not timed): a lane over 10
+    times the median lane's steps has at least 40 events, each costing a step or two (under 1.8
+    steps per event).  Before the sub-steps passed crossings certified beyond their window,
+    took a crossing their last step landed on, and overlapping brackets were closed together,
+    13 lanes were over: one without events (106 steps), one at 4 steps per event (26 events),
+    the others up to 2.25."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(46, 1000)
+    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)
+    res = F.run_lanes(L.beta1, L.beta2, L.alpha, k, np.stack([L.q, L.q], axis=1), L.g0)
+    over = res.steps > 10 * np.median(res.steps)
+    assert np.all(res.n_events[over] >= 40)
+    assert np.all(res.steps[over] < 1.8 * res.n_events[over])
