@@ -289,8 +289,8 @@ def _add_mujoco(sub) -> None:
     )
     pm.add_argument("model", metavar="MODEL.xml", help="MJCF (or MJB) file")
     pm.add_argument(
-        "--contacts", metavar="A,B", help="one or two geom names or pairs g1/g2 (default: the "
-        "touching contacts, when one or two touch)",
+        "--contacts", metavar="A,B", help="the touching contacts in order, geom names or pairs "
+        "g1/g2 (default: the touching ones; three or more touching, or one left out, is refused)",
     )  # fmt: skip
     pm.add_argument("--qpos", metavar="X,...", help="generalised positions (default: qpos0)")
     pm.add_argument("--qvel", metavar="V,...", help="generalised velocities (default: 0)")

@@ -18,9 +18,12 @@ by hand.  Then :func:`atlas.core.contact_space.contact_space` gives ``B`` and ``
 
 **Contacts.**  Touching means MuJoCo's signed distance ``dist <= tol`` (penetrating contacts are
 touching).  ``contacts``: names of geoms (``"foot"``: the one touching contact of that geom) or pairs
-(``"foot/floor"``); ``None`` takes the touching contacts when there are one or two.  Zero touching
-contacts, three or more without a choice, a geom that touches two things, or a contact that does
-not slide (its slip direction is undefined; give ``slip``) is a one-line ``ValueError``.
+(``"foot/floor"``); ``None`` takes the touching contacts (one or two); a choice orders them.
+Every touching contact is analysed: three or more touching contacts, or a touching contact left
+out of the choice, is refused in one line naming ``model`` and the contacts (its force would be
+in neither ``Q`` nor ``B``).  Zero touching contacts, a geom that touches two things, or a
+contact that does not slide (its slip direction is undefined; give ``slip``) is a one-line
+``ValueError``.
 
 **Supported models.**  Joints, actuators, passive and applied forces, and contacts.  A constraint
 that acts at the state besides the contacts (an active equality constraint, a joint or tendon at
@@ -169,16 +172,13 @@ def check_tol(tol) -> None:
 
 
 def _select(found, contacts):
-    """The chosen contacts (module docstring), in the order asked."""
+    """The chosen contacts (module docstring), in the order asked; every touching contact must be
+    among them (:func:`_refuse_left_out`)."""
     listing = ", ".join(c.name for c in found) or "none"
     if contacts is None:
         if not found:
             raise ValueError("contacts: no two geoms touch at this state (touching: none)")
-        if len(found) > 2:
-            raise ValueError(
-                f"contacts: {len(found)} contacts touch ({listing}): choose one or two "
-                "(geom names or pairs g1/g2)"
-            )
+        _refuse_left_out(found, found[:2])
         return found
     if isinstance(contacts, str):
         contacts = [x.strip() for x in contacts.split(",") if x.strip()]
@@ -194,7 +194,26 @@ def _select(found, contacts):
         out.append(hits[0])
     if len(out) == 2 and out[0].name == out[1].name:
         raise ValueError(f"contacts: {contacts[0]!r} and {contacts[1]!r} are the same contact")
+    _refuse_left_out(found, out)
     return out
+
+
+def _refuse_left_out(found, chosen) -> None:
+    """A one-line ``ValueError`` naming ``model`` where a touching contact is not among the
+    ``chosen`` ones: its force would be in neither ``Q`` nor ``B`` (as an active constraint's),
+    and the theory covers one or two touching contacts analysed together."""
+    left = [c for c in found if all(c is not x for x in chosen)]
+    if not left:
+        return
+    listing = ", ".join(c.name for c in found)
+    if len(found) > 2:
+        head = f"{len(found)} contacts touch at this state ({listing})"
+    else:
+        head = f"{', '.join(c.name for c in left)} touches at this state but is not chosen"
+    raise ValueError(
+        f"model: {head}; the theory covers one or two touching contacts, every touching contact "
+        "analysed (a contact left out would add a force that neither Q nor B holds)"
+    )
 
 
 def relative_jacobian(mj, model, data, contact):
@@ -308,8 +327,9 @@ def contact_data(
     ``data``: a live ``MjData`` whose state is used (``qpos``, ``qvel``, controls, applied forces);
     ``None``: the model's ``qpos0`` and zero velocity.  ``qpos`` (nq,), ``qvel`` (nv,) override it.
     ``contacts``: ``None`` (the one or two touching contacts), or one or two geom names / pairs
-    ``"g1/g2"`` (a list or a comma-separated string).  ``slip``: unit slip directions per contact
-    (world 3-vectors), needed only where a frictional contact does not slide.  ``tol`` [m]: touching.
+    ``"g1/g2"`` (a list or a comma-separated string) naming every touching contact.  ``slip``:
+    unit slip directions per contact (world 3-vectors), needed only where a frictional contact
+    does not slide.  ``tol`` [m]: touching.
     """
     mj = require()
     check_tol(tol)

@@ -145,7 +145,8 @@ def run_cli(
     mj_model, data = bridge.load(model)
     state = dict(qpos=_numbers("qpos", qpos), qvel=_numbers("qvel", qvel))
     if rollout is not None:
-        from atlas.bridges import rollout as roll  # noqa: PLC0415  (only with --rollout)
+        from atlas.bridges import chatter  # noqa: PLC0415  (only with --rollout)
+        from atlas.bridges import rollout as roll  # noqa: PLC0415
 
         tol = max(tol, 1e-4)  # a rollout's contacts penetrate: touching within 0.1 mm
         kw = dict(contacts=contacts, every=every, tol=tol, **state)
@@ -156,7 +157,8 @@ def run_cli(
                 raise
             raise ValueError("rollout:" + str(err)[len("duration:") :]) from None
         rep = _rollout_report(res, model)
-        text = _rollout_text(res)
+        rep["behaviour"] = chatter.behaviour(res)
+        text = _rollout_text(res) + "\n" + chatter.text(rep["behaviour"])
         if jam_test:
             rep["jam_test"] = roll.jam_test(mj_model, data, rollout, **kw)
             text += "\n" + _jam_text(rep["jam_test"])

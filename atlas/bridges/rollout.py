@@ -27,7 +27,7 @@ MAX_SAMPLES = 10**6
 #: the verdicts recorded along a rollout (two contacts; one contact: all of its four)
 KEYS = (
     "consistent_SS", "stable_SS", "consistent_SF", "consistent_FS", "consistent_FF",
-    "consistent_IF", "consistent_FI", "consistent_II", "subclass_code",
+    "consistent_IF", "consistent_FI", "consistent_II", "subclass_code", "cc_possible",
 )  # fmt: skip
 
 

@@ -52,7 +52,8 @@ def test_text_report_and_single_contact(capsys):
     assert "contact wall/top: mu 0.4" in out.splitlines()[1]
     assert "stable_SS = 1 (stable)" in out and "jam consistent: none" in out
     assert "lift-off consistent: none (a separation the engine shows here is an artefact" in out
-    assert cli.main(["mujoco", EXAMPLE, "--qvel", QVEL, "--contacts", "foot"]) == 0
+    off_wall = ["--qpos", "0.1,0,0", "--qvel", QVEL]  # the top 0.1 m off the wall
+    assert cli.main(["mujoco", EXAMPLE, *off_wall, "--contacts", "foot"]) == 0
     out = capsys.readouterr().out
     assert "consistent_S = True" in out and "B [1/kg] = [[0.0598017]]" in out
     args = ["mujoco", EXAMPLE, "--slip", "1,0,0;0,0,-1"]  # at rest: the directions given

@@ -1,7 +1,8 @@
 """``notebooks/explore.ipynb`` as a person uses it: JupyterLab on 127.0.0.1 with its file browser
 open (the widget gets an 848 px column at 1280 px), Chromium driven by Playwright, Run All, then
 every advertised path: hover, clicks, each model control, each layer (a click on the
-verdict over every model where it depends names both witness models), 129^2 and 513^2 (the status
+verdict over every model where it depends names both witness models; a reversed or NaN model
+box typed in is the one-line refusal naming ``model_box``, then a good box gives a verdict), 129^2 and 513^2 (the status
 line's texts recorded while the 513^2 map is computed), each overlay, clicks next to each kind of
 certified curve and on a codimension-2 point, exact settlements, "settle undecided"; the
 inspector's text, the status line, the hover text, the canvas's pixels, the widget's output area
@@ -490,7 +491,50 @@ def _box_layer(nb: Notebook, times: dict):
         assert (v in (Verdict.STABLE, Verdict.NEUTRAL)) == (side == "stable"), (side, m, v)
     times["model_box_s"] = _act(nb, lambda: nb.set_text("model-box", "kappa=0.5:2,q=0:1"), False)
     assert "over the model box kappa=0.5:2,q=0:1" in nb.status(), nb.status()
+    _bad_box(nb, times)
     _act(nb, lambda: select.select_option("stable_SS"), False)
+
+
+#: boxes typed into the explorer's "model box" and the one line that must refuse each
+BAD_BOXES = {
+    "kappa=2:1": "model_box: kappa: reversed range 2:1",
+    "kappa=nan:2": "model_box: kappa: NaN bound in (nan, 2.0)",
+    "q1=0:nan": "model_box: q1: NaN bound in (0.0, nan)",
+}
+
+
+def _bad_box(nb: Notebook, times: dict):
+    """A reversed and a NaN box typed in (the ``ss_over_models`` layer shown): the status line is
+    the one-line refusal naming ``model_box`` and the map is not redrawn; then the whole model
+    space typed again gives a verdict at a click: "depends" at a class-13 point, where the
+    closed form over the whole model space (stable for every model iff ``det B >= 0``, ``c1 >
+    0``, ``s2 > 0``, ``s1 c2 >= 0``; unstable for every model iff ``det B < 0`` or ``c1, s2 <=
+    0``) gives neither."""
+    from atlas.explore import maps
+
+    status = nb.page.locator(".atlas-explorer .atlas-status").element_handle()
+    for text, refusal in BAD_BOXES.items():
+        before = nb.pixels()
+        nb.set_text("model-box", text)
+        with contextlib.suppress(Exception):  # the assertion below says what the status was
+            nb.page.wait_for_function(
+                "([el, t]) => el.textContent.trim() === t", arg=[status, refusal], timeout=60_000
+            )
+        assert nb.status() == refusal, (text, nb.status())
+        assert not nb.tracebacks(), nb.tracebacks()
+        assert np.array_equal(nb.pixels(), before), text  # the map over the last good box stays
+    b1, b2 = 0.25 * PI, 0.6 * PI
+    c1, s1, c2, s2 = math.cos(b1), math.sin(b1), math.cos(b2), math.sin(b2)
+    det = c1 * s2 - c2 * s1
+    assert not (det >= 0 and c1 > 0 and s2 > 0 and s1 * c2 >= 0)  # not stable for every model
+    assert not (det < 0 or (c1 <= 0 and s2 <= 0))  # nor unstable for every model: depends
+    times["good_box_after_bad_s"] = _act(
+        nb, lambda: nb.set_text("model-box", maps.WHOLE_BOX), False
+    )
+    assert f"over the model box {maps.WHOLE_BOX}" in nb.status(), nb.status()
+    nb.click_map(0.3 * PI, 1.2 * PI)  # away first: the click below must move the inspector
+    nb.click_map(b1, b2)
+    assert f"ss_over_models over the model box {maps.WHOLE_BOX}: depends" in nb.inspector()
 
 
 def _resolution(nb: Notebook, times: dict, small: str):
