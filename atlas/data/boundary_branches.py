@@ -32,7 +32,7 @@ from fractions import Fraction
 
 import flint
 
-from atlas.data import boundary_germs
+from atlas.data import boundary_germs, root_frames
 
 __all__ = ["REASONS", "decide"]
 
@@ -137,20 +137,24 @@ def _vertical_codes(fld, model, m, rows_list, t_root, e_max, k) -> dict | None:
     return {-1: codes[0], 1: codes[1]}
 
 
-def decide(fld, model, m, ball, h, near) -> tuple[str | None, str | None]:
-    """The verdict at the root ``ball`` [rad] of line ``m``, from the branches through it
-    (module docstring): ``"not_boundary"``, ``"point"`` (a code changes next to it on a side),
+def decide(fld, model, m, fr, near) -> tuple[str | None, str | None]:
+    """The verdict at the root of line ``m`` in the frame ``fr``
+    (:class:`atlas.data.root_frames.Frame`), from the branches through it (module docstring):
+    ``"not_boundary"``, ``"point"`` (a code changes next to it on a side),
     ``"touches_class_line"`` (a point where the codes next to the line agree left and right),
-    or ``None`` (not decided); and, for ``None``, the reason (a key of :data:`REASONS`).  ``h`` [rad]: at most a quarter of the distance to the nearest
-    other break of the line; ``near``: the codes next to the line at ``beta -+ h`` (each ``(code
-    at -e, code at +e, ...)``, :func:`atlas.data.boundary_germs.near_side_codes`)."""
+    or ``None`` (not decided); and, for ``None``, the reason (a key of :data:`REASONS`).  The
+    box reaches ``beta +- h frac`` along the line (rational ends,
+    :func:`atlas.data.root_frames.sample`); ``near``: the codes next to the line at ``beta -+
+    h`` (each ``(code at -e, code at +e, ...)``,
+    :func:`atlas.data.boundary_germs.near_side_codes`)."""
     model = tuple(float(v) for v in model)
     germs = boundary_germs.germs(fld, m, model)
-    beta = float(ball.mid())
+    h = fr.h
     with flint.ctx.workprec(256):
-        t_root = _refined(germs, (ball / 2).tan())
+        t_root = (fr.beta / 2).tan()
+        t_root = t_root if fr.exact else _refined(germs, t_root)
         for frac in H_FRACTIONS:
-            ends = [_fmpq(math.tan(0.5 * (beta + s * h * frac))) for s in (-1, 1)]
+            ends = [_fmpq(root_frames.sample(fr, s * h * frac)) for s in (-1, 1)]
             for k in E_EXPONENTS:
                 if 2 * math.atan(2.0**-k) > h * frac:  # no other class line in the box
                     continue
@@ -192,8 +196,8 @@ def _q(a: flint.arb) -> flint.fmpq:
     return flint.fmpq(man * 2**exp) if exp >= 0 else flint.fmpq(man, 2**-exp)
 
 
-def _fmpq(x: float) -> flint.fmpq:
-    """The float ``x`` exactly."""
+def _fmpq(x) -> flint.fmpq:
+    """The float or ``Fraction`` ``x`` exactly."""
     return flint.fmpq(*Fraction(x).as_integer_ratio())
 
 

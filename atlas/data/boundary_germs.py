@@ -263,21 +263,25 @@ def _value_at(r, t, e) -> Fraction:
     return Fraction(int(v.p), int(v.q)) / w
 
 
-def near_side_codes(fld, model, m, beta: float) -> tuple[int, int, float] | None:
+def near_side_codes(
+    fld, model, m, beta: float, t: Fraction | None = None, max_offset: float = math.inf
+) -> tuple[int, int, float] | None:
     """The codes of ``fld`` arbitrarily close to class line ``m`` at free angle ``beta`` [rad],
-    on the side ``delta < 0`` and ``delta > 0`` (module docstring), proven: at ``t`` the float
-    nearest ``tan(beta / 2)`` (an exact dyadic rational), the largest ``e = 2^-k`` (``k`` in
-    :data:`NEAR_EXPONENTS`) with no branch of a boundary polynomial for ``|e'| <= e``
+    on the side ``delta < 0`` and ``delta > 0`` (module docstring), proven: at ``t`` (given, an
+    exact rational, or the float nearest ``tan(beta / 2)``), the largest ``e = 2^-k`` (``k`` in
+    :data:`NEAR_EXPONENTS`, ``2 atan(e) <= max_offset`` [rad]: clear of the class lines that
+    cross this one that far along it) with no branch of a boundary polynomial for ``|e'| <= e``
     (:func:`_dominated`), and the exact codes (:func:`atlas.core.exact.point_spectral`) at the
     exactly rational unit directions of ``(t, +-e)``.  Returns ``(code at -e, code at +e, delta
     [rad])`` (``delta = 2 atan(e)``), or ``None`` where no offset is proven."""
     model = tuple(float(v) for v in model)
-    t = Fraction(math.tan(0.5 * beta))
+    t = Fraction(math.tan(0.5 * beta)) if t is None else t
     with flint.ctx.workprec(256):
         t_ball = flint.arb(flint.fmpq(t.numerator, t.denominator))
         k = next(
             (k for k in NEAR_EXPONENTS
-             if _dominated(fld, model, m, t_ball, t_ball, flint.arb(2) ** -k)),
+             if 2.0 ** (1 - k) <= max_offset
+             and _dominated(fld, model, m, t_ball, t_ball, flint.arb(2) ** -k)),
             None,
         )  # fmt: skip
     if k is None:

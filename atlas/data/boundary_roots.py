@@ -44,7 +44,13 @@ from dataclasses import replace
 import flint
 import numpy as np
 
-from atlas.data import boundary_branches, boundary_germs, boundary_points, class_lines
+from atlas.data import (
+    boundary_branches,
+    boundary_germs,
+    boundary_points,
+    class_lines,
+    root_frames,
+)
 from atlas.data.boundary_curves import Curve, Point
 
 __all__ = [
@@ -66,24 +72,10 @@ REASONS = {
     "no_offset": "the codes next to the line beside the root have no proven offset",
     "ss_multiple": "several boundary polynomials vanish at the root, or one vanishes twice, and"
     " no coefficient of p is proven negative there",
+    "unseparated": "another break of the line lies within 1e-12 rad and the root's enclosure"
+    " holds other than one exact root",
 } | boundary_branches.REASONS
 _QUARTER = math.pi / 2
-
-
-def _neighbours(beta, others) -> float:
-    """Distance [rad] along the line (around the torus) from ``beta`` to the nearest of
-    ``others`` and the multiples of ``pi/2`` other than ``beta`` itself."""
-    grid = np.arange(5) * _QUARTER
-    cand = np.concatenate([np.asarray(others, float), grid])
-    d = np.abs(cand - beta)
-    d = np.minimum(d, 2 * math.pi - d)
-    return float(d[d > 1e-12].min())
-
-
-def _at_crossing(ball) -> bool:
-    """Whether the root ``ball`` [rad] can be a multiple of ``pi/2``."""
-    k = float((ball / _QUARTER).mid())
-    return any((ball - j * flint.arb.pi() / 2).contains(0) for j in (math.floor(k), math.ceil(k)))
 
 
 def _simple_single(fld, model, m, ball) -> bool:
@@ -123,40 +115,54 @@ def _inconsistent_near(model, m, ball) -> bool:
         )
 
 
-def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None]:
+def _verdict(fld, model, m, ball, listed, others) -> tuple[str, str | None, flint.arb]:
     """The verdict of one root (module docstring) and, for a ``point`` found here, its kind:
     ``crosses_class_line`` where the codes next to the line change across the root on both
     sides, ``leaves_class_line`` on one, ``touches_class_line`` where they change on neither
     but a boundary touches the line there (:func:`atlas.data.boundary_branches.decide`, II); for
-    ``undecided``, the reason (a key of :data:`REASONS`)."""
+    ``undecided``, the reason (a key of :data:`REASONS`); and the root's enclosure [rad]
+    (256 bits where its frame is exact, :mod:`atlas.data.root_frames`)."""
     if listed:
-        return "point", None
-    beta = float(ball.mid())
-    h = 0.25 * _neighbours(beta, others)
-    near = [boundary_germs.near_side_codes(fld, model, m, beta + s * h) for s in (-1, 1)]
+        return "point", None, ball
+    fr = root_frames.frame(fld, model, m, ball, others)
+    if fr is None:
+        return "undecided", "unseparated", ball
+    got, why = _decided(fld, model, m, fr)
+    return got, why, fr.beta
+
+
+def _decided(fld, model, m, fr) -> tuple[str, str | None]:
+    """:func:`_verdict` in the root's frame ``fr``: the codes next to the line sampled at
+    ``beta -+ h`` (:func:`atlas.data.root_frames.sample`), offsets at most ``h``."""
+    near = [
+        boundary_germs.near_side_codes(
+            fld, model, m, float(fr.beta.mid()) + s * fr.h, root_frames.sample(fr, s * fr.h), fr.h
+        )
+        for s in (-1, 1)
+    ]
     if None not in near and near[0][:2] != near[1][:2]:
         both = near[0][0] != near[1][0] and near[0][1] != near[1][1]
         return "point", ("leaves_class_line", "crosses_class_line")[both]
-    if _at_crossing(ball):
+    if fr.crossing:
         return "class_crossing", None
-    if None not in near and _simple_single(fld, model, m, ball):
+    if None not in near and _simple_single(fld, model, m, fr.beta):
         return "not_boundary", None
-    if fld == "SS" and _unstable_near(model, m, ball):
+    if fld == "SS" and _unstable_near(model, m, fr.beta):
         return "not_boundary", None
-    if fld == "II" and _inconsistent_near(model, m, ball):
+    if fld == "II" and _inconsistent_near(model, m, fr.beta):
         return "not_boundary", None
     if None in near:
         return "undecided", "no_offset"
     if fld == "SS":
         return "undecided", "ss_multiple"
-    got, reason = boundary_branches.decide(fld, model, m, ball, h, near)
+    got, reason = boundary_branches.decide(fld, model, m, fr, near)
     if got is None:
         return "undecided", reason
     return ("point", got) if got == "touches_class_line" else (got, None)
 
 
 def _account(fld, model, roots, germ_roots, listed) -> list[tuple]:
-    """:func:`account_roots` with each verdict's side changes (:func:`_verdict`)."""
+    """:func:`account_roots` with each verdict's side changes and enclosure (:func:`_verdict`)."""
     model = tuple(float(v) for v in model)
     breaks = [*roots, *germ_roots]
     return [
@@ -171,7 +177,7 @@ def account_roots(fld, model, roots, germ_roots, listed) -> list[str]:
     docstring); ``germ_roots``: the field's germ roots
     (:func:`atlas.data.boundary_germs.germ_roots`), breaks of the lines; ``listed``: per root,
     whether a proven point stands at it."""
-    return [v for v, _ in _account(fld, model, roots, germ_roots, listed)]
+    return [v for v, _, _ in _account(fld, model, roots, germ_roots, listed)]
 
 
 def _undecided(fld, model, roots, found) -> list[Point]:
@@ -180,7 +186,7 @@ def _undecided(fld, model, roots, found) -> list[Point]:
     return [
         Point(*_xy(m, float(ball.mid())), "undecided_line_root", math.nan, *model, field=fld,
               reason=why)
-        for (m, ball, _), (v, why) in zip(roots, found)
+        for (m, _, _), (v, why, ball) in zip(roots, found)
         if v == "undecided"
     ]  # fmt: skip
 
@@ -195,7 +201,7 @@ def ss_root_account(model, germ_roots, dtype="float64") -> tuple[dict, list[Poin
     codes = boundary_points.root_codes("SS", roots, model, dtype)
     listed = (codes != codes[:, :, :1]).any(axis=(1, 2))
     found = _account("SS", model, roots, germ_roots, listed)
-    verdicts = [v for v, _ in found]
+    verdicts = [v for v, _, _ in found]
     counts = {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
     return counts, _undecided("SS", model, roots, found)
 
@@ -230,11 +236,11 @@ def ii_root_account(model, germ_roots) -> tuple[dict, list[Point]]:
     model = tuple(float(v) for v in model)
     roots = distinct(germ_roots)
     found = _account("II", model, roots, germ_roots, [False] * len(roots))
-    verdicts = [v for v, _ in found]
+    verdicts = [v for v, _, _ in found]
     points = [
         Point(*_xy(m, float(ball.mid())), kind, _radius(m, ball), *model, proven=True,
               field="II")
-        for (m, ball, _), (v, kind) in zip(roots, found)
+        for (m, _, _), (v, kind, ball) in zip(roots, found)
         if v == "point"
     ]  # fmt: skip
     counts = {"line_roots": len(roots)} | {f"line_roots_{k}": verdicts.count(k) for k in KINDS}
