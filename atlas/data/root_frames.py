@@ -115,7 +115,9 @@ def _breaks(fld, m, model) -> tuple:
             crossing = z.degree() == 1 and any(z(v) == 0 for v in (0, 1, -1))
             for root, _ in z.complex_roots():
                 if root.imag == 0:
-                    out.append((root.real, boundary_points.angle_from_tan_half(root.real), crossing))
+                    out.append(
+                        (root.real, boundary_points.angle_from_tan_half(root.real), crossing)
+                    )
     return tuple(out)
 
 
