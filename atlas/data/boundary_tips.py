@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 
 from atlas.core import brackets
 from atlas.data.class_lines import line_frames, line_labels, line_values
@@ -150,17 +151,12 @@ def unreached(tips, xy, cell) -> int:
     return int((nearest_distance(pts, xy) > cell).sum())
 
 
-#: the most point pairs :func:`nearest_distance` holds at once
-PAIR_BLOCK = 1 << 20
-
-
 def nearest_distance(pts, xy) -> np.ndarray:
     """Per point of ``pts`` ``(m, 2)``, the plane distance [rad] to the nearest of ``xy``
-    ``(n >= 1, 2)`` (every pair, in blocks of :data:`PAIR_BLOCK`)."""
+    ``(n >= 1, 2)`` (:class:`shapely.STRtree`)."""
     pts, xy = np.asarray(pts, float).reshape(-1, 2), np.asarray(xy, float).reshape(-1, 2)
-    rows = max(1, PAIR_BLOCK // len(xy))
+    tree = shapely.STRtree(shapely.points(xy))
+    (i, _), dist = tree.query_nearest(shapely.points(pts), return_distance=True, all_matches=False)
     out = np.empty(len(pts))
-    for s in range(0, len(pts), rows):
-        d = pts[s : s + rows, None, :] - xy[None]
-        out[s : s + rows] = np.sqrt(np.min(d[..., 0] ** 2 + d[..., 1] ** 2, axis=1))
+    out[i] = dist
     return out
