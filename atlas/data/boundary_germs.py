@@ -221,13 +221,24 @@ def germ_roots(fld, model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]
     return out
 
 
+@functools.lru_cache(maxsize=64)
+def _ball_germs(fld, m, model, prec) -> tuple:
+    """Per boundary polynomial of :func:`germs`, its rows as ``prec``-bit ball polynomials and
+    the derivative of the first (converted once: :func:`near_side_codes` tests hundreds of
+    offsets against the same rows)."""
+    out = []
+    for rows in germs(fld, m, model):
+        polys = tuple(flint.arb_poly(list(r.coeffs())) for r in rows)
+        out.append((polys, polys[0].derivative()))
+    return tuple(out)
+
+
 def _dominated(fld, model, m, t_mid, t_box, e_max) -> bool:
     """Whether ``|g_0(t)| > sum_{b >= 1} |g_b(t)| e_max^b`` over the ball ``t_box`` (middle
     ``t_mid``) for every boundary polynomial of ``fld`` near line ``m`` (256-bit balls)."""
-    for rows in germs(fld, m, model):
-        polys = [flint.arb_poly(list(r.coeffs())) for r in rows]
+    for polys, slope in _ball_germs(fld, m, model, flint.ctx.prec):
         # mean-value form: a ball argument in Horner's scheme loses the cancellation
-        g0 = polys[0](t_mid) + polys[0].derivative()(t_box) * (t_box - t_mid)
+        g0 = polys[0](t_mid) + slope(t_box) * (t_box - t_mid)
         rest = sum((abs(p(t_box)) * e_max**k for k, p in enumerate(polys) if k), flint.arb(0))
         if not abs(g0).lower() > rest.upper():
             return False
@@ -255,12 +266,12 @@ NEAR_EXPONENTS = tuple(range(43, 161, 3))
 
 
 def _value_at(r, t, e) -> Fraction:
-    """A direction component ``r`` (``_Rat2`` or a rational) at rationals ``(t, e)``, exactly."""
+    """A direction component ``r`` (``_Rat2`` or a rational) at rationals ``(t, e)``
+    (``flint.fmpq``), exactly."""
     if not isinstance(r, _Rat2):
         return Fraction(r)
-    v = r.num(flint.fmpq(t.numerator, t.denominator), flint.fmpq(e.numerator, e.denominator), 0)
-    w = (1 + t * t) ** r.i * (1 + e * e) ** r.j
-    return Fraction(int(v.p), int(v.q)) / w
+    v = r.num(t, e, 0) / ((1 + t * t) ** r.i * (1 + e * e) ** r.j)
+    return Fraction(int(v.p), int(v.q))
 
 
 def near_side_codes(
@@ -301,6 +312,7 @@ def exact_codes_at(fld, model, m, t: Fraction, e: Fraction) -> int:
     """The exact code of ``fld`` at the rationals ``(t, e)`` near class line ``m`` (module
     docstring; :func:`atlas.core.exact.point_spectral` at exactly rational directions)."""
     kappa, q1, q2 = (Fraction(v) for v in model)
-    dirs = [_value_at(r, t, e) for r in _directions(m)]
+    at = tuple(flint.fmpq(v.numerator, v.denominator) for v in (t, e))
+    dirs = [_value_at(r, *at) for r in _directions(m)]
     verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
     return int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])
