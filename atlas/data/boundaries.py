@@ -175,13 +175,26 @@ def _hidden_cells(coarse, fine, k: int) -> np.ndarray:
     return varies & same
 
 
+def _finer_codes(fld, f1, f2, codes, k, model, dtype) -> np.ndarray:
+    """Certified codes on the ``k``-finer grid ``f1 x f2`` (:func:`_finer`), whose every
+    ``k``-th node is a node of the grid of ``codes`` (the same floats): only the other nodes,
+    three quarters of them for ``k = 2``, are evaluated."""
+    fine = np.empty((f1.size, f2.size), codes.dtype)
+    new = np.ones(fine.shape, bool)
+    new[::k, ::k] = False
+    i, j = np.nonzero(new)
+    fine[i, j] = brackets.field_codes(fld, f1[i], f2[j], *model, dtype=dtype)
+    fine[::k, ::k] = codes
+    return fine
+
+
 def _checked_grid(fld, b1, b2, model, check, max_levels, dtype):
     """Axes and certified codes of the grid, refined until no cell hides a branch (step 2)."""
     codes = brackets.field_codes(fld, b1[:, None], b2[None, :], *model, dtype=dtype)
     hidden, levels = (0 if check > 1 else None), 0  # None: not checked
     while check > 1:
         f1, f2 = _finer(b1, check), _finer(b2, check)
-        fine = brackets.field_codes(fld, f1[:, None], f2[None, :], *model, dtype=dtype)
+        fine = _finer_codes(fld, f1, f2, codes, check, model, dtype)
         hidden = int(_hidden_cells(codes, fine, check).sum())
         if not hidden or levels == max_levels:
             break
