@@ -42,9 +42,10 @@ __all__ = [
 ]
 
 #: the batch sizes a kernel call sees: the smallest batches are padded to ``SMALL_BATCH`` points,
-#: small ones to ``MIN_BATCH``, larger ones cut into padded batches of ``MAX_BATCH`` (three
-#: compilations per kernel; :data:`atlas.core.points.FLAT_SMALL` and ``FLAT_BATCH``).
-#: ``MIN_BATCH`` is also the batch a bisection's sections fill (:func:`_sections`)
+#: the others to a multiple of ``MIN_BATCH``, cut into calls of at most ``MAX_BATCH`` (the first
+#: pass runs them in :data:`atlas.core.points.FLAT_SMALL` or ``FLAT_BATCH`` chunks: two
+#: compilations per kernel).  ``MIN_BATCH`` is also the batch a bisection's sections fill
+#: (:func:`_sections`)
 SMALL_BATCH = FLAT_SMALL
 MIN_BATCH = 4096
 MAX_BATCH = 1 << 16
@@ -96,8 +97,9 @@ def direction_codes(
 ) -> np.ndarray:
     """Certified codes of ``field`` at 1-D arrays of at most ``MAX_BATCH`` direction vectors
     ``(c1, s1)``, ``(c2, s2)`` [1] (e.g. exactly on a class line: ``(c2, s2) = -(c1, s1)`` on
-    ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``SMALL_BATCH``, ``MIN_BATCH`` or
-    ``MAX_BATCH`` points (three compilations per kernel); every point settled exactly.
+    ``beta2 = beta1 + pi``), padded with :data:`PAD_POINT` to ``SMALL_BATCH`` points or a
+    multiple of ``MIN_BATCH`` (not to ``MAX_BATCH``: 7,786 points would cost 16 first-pass
+    chunks instead of 2); every point settled exactly.
 
     ``first_change``: the codes ``vp`` of rows of samples (the points, row after row, ``n /
     len(vp)`` a row, in order along a bracket from an end of code ``vp``): per row, only the
@@ -105,7 +107,7 @@ def direction_codes(
     :data:`NO_CODE`."""
     _check_field(field)
     n = np.size(c1)
-    pad = next(b for b in (SMALL_BATCH, MIN_BATCH, MAX_BATCH) if n <= b) - n
+    pad = (SMALL_BATCH if n <= SMALL_BATCH else -(-n // MIN_BATCH) * MIN_BATCH) - n
     pc, ps = _pad_direction(np.dtype(dtype))
     c1, s1, c2, s2 = (
         _padded(v, w, pad) for v, w in ((c1, pc[0]), (s1, ps[0]), (c2, pc[1]), (s2, ps[1]))
