@@ -150,7 +150,39 @@ def _ii_polynomials(c1, s1, c2, s2, kappa, q1, q2) -> list:
         - 15 * A3 * W * _L**2
         - 20 * W * W * _L**3
     )
-    return [p.discriminant("l"), p.resultant(T, "l")]
+    return list(_eliminated(p, T))
+
+
+#: ``disc_l p`` and ``res_l(p, T)`` of the II polynomials already computed, by ``(p, T)`` as text
+_ELIMINATED: dict = {}
+
+
+def _mirrored(F):
+    """``F(-t, -e, l)``."""
+    return F.compose(-_T, -_E, _L)
+
+
+def _eliminated(p, T) -> tuple:
+    """``(disc_l p, res_l(p, T))``, the costly part of :func:`_ii_polynomials` (0.1-0.2 s a
+    line); where ``(p, T)`` is exactly the mirror image ``(t, e) -> (-t, -e)`` of a pair done
+    before (on the slices tried: the lines ``beta2 = pi`` and ``beta2 = 0``, the two diagonals),
+    the mirror images of its results: both are polynomials in the coefficients of ``p`` and
+    ``T``, which the substitution maps term by term."""
+    key = (str(p), str(T))
+    if key not in _ELIMINATED:
+        done = _ELIMINATED.get((str(_mirrored(p)), str(_mirrored(T))))
+        if len(_ELIMINATED) >= 64:
+            _ELIMINATED.clear()
+        if done is not None:
+            _ELIMINATED[key] = tuple(_mirrored(F) for F in done)
+        else:
+            _ELIMINATED[key] = _eliminate(p, T)
+    return _ELIMINATED[key]
+
+
+def _eliminate(p, T) -> tuple:
+    """``(disc_l p, res_l(p, T))``, computed (flint)."""
+    return p.discriminant("l"), p.resultant(T, "l")
 
 
 @functools.lru_cache(maxsize=16)

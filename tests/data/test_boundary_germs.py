@@ -105,3 +105,20 @@ def test_clear_is_sound_against_the_exact_codes():
             seen += 1
             assert not bg.clear(fld, mod, m, b, d)
     assert seen >= 5
+
+
+def test_mirrored_lines_reuse_the_elimination_exactly(monkeypatch):
+    """The II boundary polynomials of a line whose ``p`` and ``T`` mirror those of a line done
+    before (``(t, e) -> (-t, -e)``) are taken from it: two of the ten eliminations saved, and
+    the same polynomials as flint's discriminant and resultant computed for every line."""
+    model = (2.0, 0.1, 0.1)
+    calls = []
+    real = bg._eliminate
+    monkeypatch.setattr(bg, "_eliminate", lambda p, T: calls.append(1) or real(p, T))
+    bg._ELIMINATED.clear()
+    got = {m: bg.boundary_polynomials("II", m, model) for m in bp.TORUS_LINES}
+    assert len(calls) == 8 and len(bp.TORUS_LINES) == 10
+    monkeypatch.setattr(bg, "_eliminated", real)
+    want = {m: bg.boundary_polynomials("II", m, model) for m in bp.TORUS_LINES}
+    assert got == want
+    bg._ELIMINATED.clear()
