@@ -30,6 +30,9 @@ __all__ = [
     "curvature_bound",
     "flow_curvature_bound",
     "flat_step",
+    "second_and_third",
+    "taylor_steps",
+    "first_root",
     "safe_steps",
     "positive_quadratic",
     "keeps_sign_bound",
@@ -202,6 +205,16 @@ def flat_step(s, p, UE, lam, H, k, q):
     with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
     ``C > 0``)."""
     xp = xp_of(s, p, UE, lam)
+    f2, M3 = second_and_third(p, UE, lam, H, k, q)
+    C = s * f2
+    return xp.where(C > 0, 3 * C / xp.maximum(M3, 1e-300), 0.0)
+
+
+def second_and_third(p, UE, lam, H, k, q):
+    """``(f2, M3)`` (n, 4): the second derivatives of the event functions at ``tau`` and a bound
+    ``M3`` of their third derivatives on ``[tau, tau + H]`` (the modal terms' moduli grown by
+    ``exp(max(Re lambda, 0) H)``, the cubic and quartic part's bounds)."""
+    xp = xp_of(p, UE, lam)
     lr = xp.abs(lam)[:, None, :]
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
     a = xp.abs(UE) * grow
@@ -211,9 +224,32 @@ def flat_step(s, p, UE, lam, H, k, q):
     if p.shape[2] > 3:  # the cubic and quartic part: its third derivative and its bounds
         _, e3, e4 = _poly_bounds(p, H)
         d3, m3, m4 = d3 + 6 * p[:, :, 3], m3 + e3, m4 + e4
-    C = s * xp.concatenate([d2, -k * d2 - q * d3], axis=1)
-    M3 = xp.maximum(xp.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
-    return xp.where(C > 0, 3 * C / M3, 0.0)
+    f2 = xp.concatenate([d2, -k * d2 - q * d3], axis=1)
+    return f2, xp.concatenate([m3, k * m3 + q * m4], axis=1)
+
+
+def taylor_steps(A, Bd, C, M3, W, err=0.0):
+    """``(sigma_lo, sigma_hi)`` (n, 4) within ``[0, W]`` (n,) from the signed curvature ``C = s
+    f2(tau)`` and ``M3`` bounding the third derivative on ``[tau, tau + W]``: for ``0 <= x <= W``,
+    ``s f(tau + x)`` lies within ``A + Bd x + C x^2 / 2 -+ M3 x^3 / 6``, so between ``A + Bd x +
+    (C -+ M3 W / 3) x^2 / 2`` (``A = s f >= 0``, ``Bd = s f'``): no sign change before the first
+    root of the lower quadratic (``sigma_lo``, at most ``W``), one by the first root of the upper
+    one (``sigma_hi``, ``inf`` beyond ``W``).  Tight where ``W`` is short: a gap curving away
+    from its contact is not bounded as if it curved towards it.  ``err``: a bound of the
+    rounding of ``C``.  NumPy arrays."""
+    w = W[:, None]
+    reach = M3 * w / 3 + err
+    lo = first_root(A, Bd, C - reach)
+    hi = first_root(A, Bd, C + reach)
+    return np.minimum(lo, w), np.where(hi <= w, hi, np.inf)
+
+
+def first_root(A, Bd, c):
+    """First root ``x > 0`` of ``A + Bd x + c x^2 / 2`` (``A >= 0``; ``inf`` if none), by
+    :func:`safe_steps` with ``M = |c|``: its lower root where ``c <= 0``, its upper one where
+    ``c > 0``.  NumPy arrays."""
+    lo, hi = safe_steps(A, Bd, np.abs(c))
+    return np.where(c > 0, hi, lo)
 
 
 def safe_steps(A, Bd, M):

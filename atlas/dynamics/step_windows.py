@@ -46,6 +46,8 @@ WIDE = 8.0
 #: flow's curvature bound is below ``CANCELLING`` times the modal one
 SHORT = 0.125
 CANCELLING = 0.5
+#: windows of the signed-curvature brackets, in multiples of a step cut by a ``sigma_lo``
+TAYLOR = (2.0, 8.0, 32.0)
 
 
 def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
@@ -120,7 +122,27 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
     r = eb.rows(eb.min_cols(lo) < SHORT * Hw)
     if r.size:
         _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu)
+    r = eb.rows(eb.min_cols(lo) < Hw)
+    if r.size:
+        _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon)
     return lo, hi, mon, M, Hw, small
+
+
+def _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon):
+    """Rows ``r`` whose step is cut by a ``sigma_lo``: the brackets again from the signed
+    curvature at the step's start (:func:`eb.taylor_steps`) within windows ``TAYLOR`` times the
+    step (at most ``Hw``), each bracket kept where tighter (both hold); ``lo``, ``hi`` in place."""
+    m = eb.min_cols(lo[r])
+    lo_r, hi_r, mon_r = lo[r], hi[r], mon[r]
+    A_r, Bd_r = A[r], Bd[r]
+    err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
+    for f in TAYLOR:
+        W = np.minimum(Hw[r], f * m)
+        f2, M3 = eb.second_and_third(p[r], UE[r], lam[r], W, k[r], q[r])
+        lo_t, hi_t = eb.taylor_steps(A_r, Bd_r, s[r] * f2, M3, W, err)
+        lo_r = np.where(mon_r, np.maximum(lo_r, lo_t), lo_r)
+        hi_r = np.where(mon_r, np.minimum(hi_r, hi_t), hi_r)
+    lo[r], hi[r] = lo_r, hi_r
 
 
 def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu):
