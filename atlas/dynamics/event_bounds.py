@@ -37,6 +37,8 @@ __all__ = [
     "positive_quadratic",
     "keeps_sign_bound",
     "keeps_sign",
+    "event_terms",
+    "keeps_sign_within",
     "no_event_certificate",
     "may_keep_signs",
     "locate_root",
@@ -327,17 +329,41 @@ def keeps_sign_bound(c, w, lam, valid, horizon):
     return ok, G, bounded, l1
 
 
-def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
-    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
-    in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
-    bounded (n, 4), lam_1 (n,))``."""
-    xp = xp_of(s, p, UE, lam)
+def event_terms(p, UE, lam, k, q):
+    """``(c (n, 4, 3), w (n, 4, M))``: the quadratic part (coefficients of ``1, s, s^2``) and
+    the modal terms (of ``exp(lam_m s)``) of the four event functions from the gaps' quadratic
+    part ``p`` (n, 2, 3) and modal terms ``UE`` (n, 2, M)."""
+    xp = xp_of(p, UE, lam)
     kk, qq = k[:, :, None], q[:, :, None]
     c = xp.concatenate([p, xp.stack(
         [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
          -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
          -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
-    w = xp.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+    return c, xp.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+
+
+def keeps_sign_within(s, p, UE, lam, k, q, W):
+    """(n, 4): each event function keeps its recorded sign ``s`` on ``[tau, tau + W]`` (W (n,)):
+    ``s`` times its quadratic part stays above the moduli of its modal terms, each grown by
+    ``exp(max(Re lam, 0) W)``, plus a margin of ``1e-12`` of its terms for rounding, over the
+    whole window (:func:`positive_quadratic`).  An oscillation far from its contact is
+    certified over a long window at once, where a curvature bound's parabola reaches zero
+    after ``(2 A / M)^(1/2)``.  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    c, w = event_terms(p, UE, lam, k, q)
+    aw = np.abs(w)
+    grown = sum4(aw * np.exp(np.maximum(lam.real, 0.0) * W[:, None])[:, None, :])
+    margin = 1e-12 * (np.abs(c[..., 0]) + sum4(aw)) + 1e-300
+    sc = s[:, :, None] * c
+    return positive_quadratic(sc[..., 0] - grown - margin, sc[..., 1], sc[..., 2],
+                              np.repeat(W[:, None], 4, axis=1))  # fmt: skip
+
+
+def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
+    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
+    in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
+    bounded (n, 4), lam_1 (n,))``."""
+    xp = xp_of(s, p, UE, lam)
+    c, w = event_terms(p, UE, lam, k, q)
     sj = s[:, :, None]
     ok, G, bounded, l1 = keeps_sign(
         sj * c, sj * w, lam[:, None, :], valid[:, None, :], xp.repeat(horizon[:, None], 4, 1)
