@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 from atlas.dynamics import fast_engine
-from atlas.dynamics.outcome import initial_states, simulate_outcome
+from atlas.dynamics.outcome import initial_states, simulate_outcome, standard_normals
 
-__all__ = ["RandomLanes", "random_lanes", "compare"]
+__all__ = ["RandomLanes", "random_lanes", "grid_lanes", "compare", "cost_ratios"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,11 +50,27 @@ def random_lanes(seed: int, n: int) -> RandomLanes:
     return RandomLanes(b[0], b[1], alpha, kappa, q, g0)
 
 
+def grid_lanes(beta1, beta2, kappa, q, alpha, n_perturb=1, seed=0) -> RandomLanes:
+    """The runs of an outcome atlas over the grid ``beta1 x beta2 x kappa x q`` [rad, 1] at one
+    ``alpha`` [rad] (``q = q1 = q2``): ``n_perturb`` perturbed SS equilibria per cell, from the
+    normals :func:`atlas.dynamics.outcome.standard_normals` ``(seed)`` of the ``beta`` cells,
+    the same for every model, as ``atlas simulate --map`` draws them; lanes in the order
+    ``(beta1, beta2, kappa, q, run)``."""
+    b1, b2, ka, qa = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (beta1, beta2, kappa, q))
+    xi = standard_normals(seed, range(b1.size), b2.size, n_perturb)[:, :, None, None]
+    B1, B2, K, Q = np.meshgrid(b1, b2, ka, qa, indexing="ij")
+    g0 = initial_states(B1, B2, alpha, K, xi).reshape(-1, 4)
+    cell = [np.repeat(x.ravel(), n_perturb) for x in (B1, B2, K, Q)]
+    return RandomLanes(cell[0], cell[1], np.full(g0.shape[0], float(alpha)), cell[2], cell[3], g0)
+
+
 def compare(lanes: RandomLanes, **opts) -> dict:
     """Outcomes of ``lanes`` by both engines (``opts``: ``t_end``, ``horizon_cap``,
     ``max_events`` of both); returns ``fast`` and ``exact`` codes (n,), ``disagree`` (lane
-    indices), ``decided_by`` (n,) and the CPU seconds of each engine (``fast_s``, ``exact_s``;
-    the fallback lanes counted in the fast engine's)."""
+    indices), ``decided_by`` (n,), the CPU seconds of each engine (``fast_s``, ``exact_s``;
+    the fallback lanes counted in the fast engine's) and per lane the fast engine's ``steps``
+    and ``n_events``, the exact simulator's CPU seconds ``exact_lane_s``, sub-steps
+    ``exact_steps`` and events ``exact_events`` (n,)."""
     kw = dict(t_end=150.0, horizon_cap=8.0, max_events=2000) | opts
     k = np.stack([lanes.kappa, np.ones_like(lanes.kappa)], axis=1)
     q = np.stack([lanes.q, lanes.q], axis=1)
@@ -66,9 +82,28 @@ def compare(lanes: RandomLanes, **opts) -> dict:
     res = fast_engine.run_batch(lanes.beta1, lanes.beta2, lanes.alpha, k, q, lanes.g0,
                                 reference=exact, **kw)  # fmt: skip
     t1 = time.process_time()
-    ref = np.array([int(exact(lanes.beta1[i], lanes.beta2[i], lanes.alpha[i], tuple(k[i]),
-                              tuple(q[i]), lanes.g0[i])[0]) for i in range(k.shape[0])])  # fmt: skip
+    n = k.shape[0]
+    ref, cpu, steps, events = (np.zeros(n, dtype=dt) for dt in (int, float, int, int))
+    for i in range(n):
+        c0 = time.process_time()
+        out, run = exact(lanes.beta1[i], lanes.beta2[i], lanes.alpha[i], tuple(k[i]), tuple(q[i]),
+                         lanes.g0[i])  # fmt: skip
+        cpu[i] = time.process_time() - c0
+        ref[i], steps[i], events[i] = int(out), run.n_steps, run.n_events
     t2 = time.process_time()
     code = res.code.astype(int)
     return {"fast": code, "exact": ref, "disagree": np.flatnonzero(code != ref),
-            "decided_by": res.decided_by, "fast_s": t1 - t0, "exact_s": t2 - t1}  # fmt: skip
+            "decided_by": res.decided_by, "fast_s": t1 - t0, "exact_s": t2 - t1,
+            "steps": res.steps, "n_events": res.n_events, "exact_lane_s": cpu,
+            "exact_steps": steps, "exact_events": events}  # fmt: skip
+
+
+def cost_ratios(r: dict) -> np.ndarray:
+    """Each lane's cost in the fast engine over its cost in the exact simulator (n,), from
+    :func:`compare`'s result ``r``: the lane's share of the batch's CPU seconds in proportion to
+    the steps it took part in (a step costs every lane of the batch alike), plus the exact
+    simulator's run of a fallback lane, over the exact simulator's CPU seconds of the same lane."""
+    fb = r["decided_by"] == 3
+    batch = max(r["fast_s"] - r["exact_lane_s"][fb].sum(), 0.0)
+    share = batch * r["steps"] / max(int(r["steps"].sum()), 1)
+    return (share + np.where(fb, r["exact_lane_s"], 0.0)) / r["exact_lane_s"]

@@ -30,10 +30,15 @@ __all__ = [
     "curvature_bound",
     "flow_curvature_bound",
     "flat_step",
+    "second_and_third",
+    "taylor_steps",
+    "first_root",
     "safe_steps",
     "positive_quadratic",
     "keeps_sign_bound",
     "keeps_sign",
+    "event_terms",
+    "keeps_sign_within",
     "no_event_certificate",
     "may_keep_signs",
     "locate_root",
@@ -202,6 +207,16 @@ def flat_step(s, p, UE, lam, H, k, q):
     with ``C = s f''`` and ``M3`` bounding the third derivative on ``[tau, tau + H]`` (0 unless
     ``C > 0``)."""
     xp = xp_of(s, p, UE, lam)
+    f2, M3 = second_and_third(p, UE, lam, H, k, q)
+    C = s * f2
+    return xp.where(C > 0, 3 * C / xp.maximum(M3, 1e-300), 0.0)
+
+
+def second_and_third(p, UE, lam, H, k, q):
+    """``(f2, M3)`` (n, 4): the second derivatives of the event functions at ``tau`` and a bound
+    ``M3`` of their third derivatives on ``[tau, tau + H]`` (the modal terms' moduli grown by
+    ``exp(max(Re lambda, 0) H)``, the cubic and quartic part's bounds)."""
+    xp = xp_of(p, UE, lam)
     lr = xp.abs(lam)[:, None, :]
     grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
     a = xp.abs(UE) * grow
@@ -211,9 +226,32 @@ def flat_step(s, p, UE, lam, H, k, q):
     if p.shape[2] > 3:  # the cubic and quartic part: its third derivative and its bounds
         _, e3, e4 = _poly_bounds(p, H)
         d3, m3, m4 = d3 + 6 * p[:, :, 3], m3 + e3, m4 + e4
-    C = s * xp.concatenate([d2, -k * d2 - q * d3], axis=1)
-    M3 = xp.maximum(xp.concatenate([m3, k * m3 + q * m4], axis=1), 1e-300)
-    return xp.where(C > 0, 3 * C / M3, 0.0)
+    f2 = xp.concatenate([d2, -k * d2 - q * d3], axis=1)
+    return f2, xp.concatenate([m3, k * m3 + q * m4], axis=1)
+
+
+def taylor_steps(A, Bd, C, M3, W, err=0.0):
+    """``(sigma_lo, sigma_hi)`` (n, 4) within ``[0, W]`` (n,) from the signed curvature ``C = s
+    f2(tau)`` and ``M3`` bounding the third derivative on ``[tau, tau + W]``: for ``0 <= x <= W``,
+    ``s f(tau + x)`` lies within ``A + Bd x + C x^2 / 2 -+ M3 x^3 / 6``, so between ``A + Bd x +
+    (C -+ M3 W / 3) x^2 / 2`` (``A = s f >= 0``, ``Bd = s f'``): no sign change before the first
+    root of the lower quadratic (``sigma_lo``, at most ``W``), one by the first root of the upper
+    one (``sigma_hi``, ``inf`` beyond ``W``).  Tight where ``W`` is short: a gap curving away
+    from its contact is not bounded as if it curved towards it.  ``err``: a bound of the
+    rounding of ``C``.  NumPy arrays."""
+    w = W[:, None]
+    reach = M3 * w / 3 + err
+    lo = first_root(A, Bd, C - reach)
+    hi = first_root(A, Bd, C + reach)
+    return np.minimum(lo, w), np.where(hi <= w, hi, np.inf)
+
+
+def first_root(A, Bd, c):
+    """First root ``x > 0`` of ``A + Bd x + c x^2 / 2`` (``A >= 0``; ``inf`` if none), by
+    :func:`safe_steps` with ``M = |c|``: its lower root where ``c <= 0``, its upper one where
+    ``c > 0``.  NumPy arrays."""
+    lo, hi = safe_steps(A, Bd, np.abs(c))
+    return np.where(c > 0, hi, lo)
 
 
 def safe_steps(A, Bd, M):
@@ -291,17 +329,41 @@ def keeps_sign_bound(c, w, lam, valid, horizon):
     return ok, G, bounded, l1
 
 
-def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
-    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
-    in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
-    bounded (n, 4), lam_1 (n,))``."""
-    xp = xp_of(s, p, UE, lam)
+def event_terms(p, UE, lam, k, q):
+    """``(c (n, 4, 3), w (n, 4, M))``: the quadratic part (coefficients of ``1, s, s^2``) and
+    the modal terms (of ``exp(lam_m s)``) of the four event functions from the gaps' quadratic
+    part ``p`` (n, 2, 3) and modal terms ``UE`` (n, 2, M)."""
+    xp = xp_of(p, UE, lam)
     kk, qq = k[:, :, None], q[:, :, None]
     c = xp.concatenate([p, xp.stack(
         [-kk[..., 0] * p[..., 0] - qq[..., 0] * p[..., 1],
          -kk[..., 0] * p[..., 1] - 2 * qq[..., 0] * p[..., 2],
          -kk[..., 0] * p[..., 2]], axis=-1)], axis=1)  # fmt: skip
-    w = xp.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+    return c, xp.concatenate([UE, -(kk + qq * lam[:, None, :]) * UE], axis=1)
+
+
+def keeps_sign_within(s, p, UE, lam, k, q, W):
+    """(n, 4): each event function keeps its recorded sign ``s`` on ``[tau, tau + W]`` (W (n,)):
+    ``s`` times its quadratic part stays above the moduli of its modal terms, each grown by
+    ``exp(max(Re lam, 0) W)``, plus a margin of ``1e-12`` of its terms for rounding, over the
+    whole window (:func:`positive_quadratic`).  An oscillation far from its contact is
+    certified over a long window at once, where a curvature bound's parabola reaches zero
+    after ``(2 A / M)^(1/2)``.  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    c, w = event_terms(p, UE, lam, k, q)
+    aw = np.abs(w)
+    grown = sum4(aw * np.exp(np.maximum(lam.real, 0.0) * W[:, None])[:, None, :])
+    margin = 1e-12 * (np.abs(c[..., 0]) + sum4(aw)) + 1e-300
+    sc = s[:, :, None] * c
+    return positive_quadratic(sc[..., 0] - grown - margin, sc[..., 1], sc[..., 2],
+                              np.repeat(W[:, None], 4, axis=1))  # fmt: skip
+
+
+def no_event_certificate(s, p, UE, lam, valid, k, q, horizon):
+    """Every monitored event function keeps its recorded sign ``s`` (n, 4) for all later times
+    in the current configuration (:func:`keeps_sign`).  Returns ``(ok (n,), G (n, 4),
+    bounded (n, 4), lam_1 (n,))``."""
+    xp = xp_of(s, p, UE, lam)
+    c, w = event_terms(p, UE, lam, k, q)
     sj = s[:, :, None]
     ok, G, bounded, l1 = keeps_sign(
         sj * c, sj * w, lam[:, None, :], valid[:, None, :], xp.repeat(horizon[:, None], 4, 1)

@@ -606,7 +606,11 @@ def _events(lanes, tables, st, ix, r, dva, lo, hi, h, xtol, t, tseg, P, U, lam, 
     st.t[ix[rc]], st.g[ix[rc]], st.s[ix[rc]] = t[rc], g[cap], sn[cap]
     st.status[ix[rc]] = 1
     keep[rc] = False
-    rf = r[ok & ~cap & _leaves_free(mask[r], g, lanes.a[lanes_r], t[r] + H[r], st.horizon[lanes_r])]
+    # a gap crossing here is at its contact: a residue of the other sign is rounding
+    at = np.concatenate([np.where(cross[:, :2], np.maximum(d, 0.0), d), v], axis=1)
+    rf = r[
+        ok & ~cap & _leaves_free(mask[r], at, lanes.a[lanes_r], t[r] + H[r], st.horizon[lanes_r])
+    ]
     st.t[ix[rf]], st.g[ix[rf]], st.s[ix[rf]] = t[rf], g[r.searchsorted(rf)], s[rf]
     st.code[ix[rf]], st.decided_by[ix[rf]] = OUTCOME_OF_MASK[0], 1
     keep[rf] = False

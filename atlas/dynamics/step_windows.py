@@ -46,6 +46,8 @@ WIDE = 8.0
 #: flow's curvature bound is below ``CANCELLING`` times the modal one
 SHORT = 0.125
 CANCELLING = 0.5
+#: windows of the signed-curvature brackets, in multiples of a step cut by a ``sigma_lo``
+TAYLOR = (2.0, 8.0, 32.0)
 
 
 def window(H, lam, valid, p, aUE, scale, windows=WINDOWS):
@@ -117,10 +119,53 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
         r, lo_r, hi_r, M_r, w, sm = (x[longer] for x in (r, lo_r, hi_r, M_r, w, sm))
         lo[r], hi[r] = np.maximum(lo[r], lo_r), np.minimum(hi[r], hi_r)
         M[r], Hw[r], small[r] = M_r, w, sm
+    r = eb.rows(eb.min_cols(lo) < Hw)
+    if r.size:
+        _far(r, lo, hi, M, Hw, small, s, p, UE, lam, valid, k, q, aUE, mon, H, scale)
     r = eb.rows(eb.min_cols(lo) < SHORT * Hw)
     if r.size:
         _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu)
+    r = eb.rows(eb.min_cols(lo) < Hw)
+    if r.size:
+        _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon)
     return lo, hi, mon, M, Hw, small
+
+
+def _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon):
+    """Rows ``r`` whose step is cut by a ``sigma_lo``: the brackets again from the signed
+    curvature at the step's start (:func:`eb.taylor_steps`) within windows ``TAYLOR`` times the
+    step (at most ``Hw``), each bracket kept where tighter (both hold); ``lo``, ``hi`` in place."""
+    m = eb.min_cols(lo[r])
+    lo_r, hi_r, mon_r = lo[r], hi[r], mon[r]
+    A_r, Bd_r = A[r], Bd[r]
+    err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
+    for f in TAYLOR:
+        W = np.minimum(Hw[r], f * m)
+        f2, M3 = eb.second_and_third(p[r], UE[r], lam[r], W, k[r], q[r])
+        lo_t, hi_t = eb.taylor_steps(A_r, Bd_r, s[r] * f2, M3, W, err)
+        lo_r = np.where(mon_r, np.maximum(lo_r, lo_t), lo_r)
+        hi_r = np.where(mon_r, np.minimum(hi_r, hi_t), hi_r)
+    lo[r], hi[r] = lo_r, hi_r
+
+
+def _far(r, lo, hi, M, Hw, small, s, p, UE, lam, valid, k, q, aUE, mon, H, scale):
+    """Rows ``r`` whose step is cut by a ``sigma_lo``: where every monitored function keeps its
+    sign over the ``LONG`` window by the size of its terms (:func:`eb.keeps_sign_within`: an
+    oscillation far from its contacts, growing by at most ``GROWTH``), the step is that window
+    (``lo``, ``hi``, ``M``, ``Hw``, ``small`` replaced in place).  Quadratic segments only."""
+    if p.shape[2] > 3:  # closed forms: those with cubic or quartic terms left out
+        r = r[~(p[r, :, 3:] != 0).any(axis=(1, 2))]
+    if r.size == 0:
+        return
+    w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+    pr = p[r, :, :3]
+    ok = eb.all_cols(eb.keeps_sign_within(s[r], pr, UE[r], lam[r], k[r], q[r], w) | ~mon[r])
+    ok &= w > Hw[r]
+    r, w, sm = r[ok], w[ok], sm[ok]
+    lo[r] = np.where(mon[r], w[:, None], np.inf)
+    hi[r] = np.inf
+    M[r] = eb.curvature_bound(p[r], UE[r], lam[r], w, k[r], q[r], aUE[r])
+    Hw[r], small[r] = w, sm
 
 
 def _shorter(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, aUE, mon, acc, H, mu):

@@ -129,3 +129,81 @@ def test_flow_curvature_bound_holds_where_modal_terms_cancel():
         short = C[r] * zn[r] * np.exp(max(mu[r], 0.0) * 0.1 * H[r])
         narrower += r < 8 and np.all(short < 1e-2 * modal[r, [1, 3]].min())
     assert narrower >= 4
+
+
+def _random_segments(rng, n):
+    """Random segments: gaps' quadratic parts ``p`` (n, 2, 3), modal terms ``UE`` (n, 2, 4) of
+    growing, oscillating and decaying modes ``lam`` (n, 4), contact models ``k``, ``q`` (n, 2)."""
+    re = rng.normal(size=(n, 2)) * 0.3
+    im = np.abs(rng.normal(size=n)) * 2
+    lam = np.stack([re[:, 0] + 1j * im, re[:, 0] - 1j * im, re[:, 1], -np.abs(re[:, 1]) - 0.1], 1)
+    w1 = rng.normal(size=(n, 2)) + 1j * rng.normal(size=(n, 2))
+    UE = np.stack([w1, w1.conj(), rng.normal(size=(n, 2)), rng.normal(size=(n, 2))], axis=2)
+    UE *= rng.uniform(0.0, 0.5, (n, 1, 1))
+    p = rng.normal(size=(n, 2, 3)) * np.array([1.0, 0.5, 0.2])
+    k, q = rng.uniform(0.2, 2.0, (n, 2)), rng.uniform(0.0, 1.0, (n, 2))
+    return p, UE, lam, k, q
+
+
+def _event_values(p, UE, lam, k, q, x):
+    """The event functions ``(d1, d2, phi1, phi2)`` (n, 4, m) at the times ``x`` (n, m), summed
+    directly from the segment."""
+    xx = x[:, None, :]
+    e = np.exp(lam[:, None, :, None] * xx[:, :, None, :])  # (n, 1, 4, m)
+    d = p[:, :, :1] + p[:, :, 1:2] * xx + p[:, :, 2:3] * xx**2 + (UE[..., None] * e).sum(2).real
+    v = (
+        p[:, :, 1:2]
+        + 2 * p[:, :, 2:3] * xx
+        + (UE[..., None] * lam[:, None, :, None] * e).sum(2).real
+    )
+    return np.concatenate([d, -k[..., None] * d - q[..., None] * v], axis=1)
+
+
+def test_signed_curvature_brackets_are_never_wrong_on_random_segments():
+    """:func:`eb.taylor_steps` on random segments and windows: a dense sampling (and the function
+    at ``sigma_hi``) finds no sign change before ``sigma_lo`` and one by ``sigma_hi``; the
+    ``sigma_lo`` is over 1.5 times the modal curvature bound's (:func:`eb.safe_steps`) on some
+    of the functions that bound cuts below half the window."""
+    rng = np.random.default_rng(17)
+    n = 2000
+    p, UE, lam, k, q = _random_segments(rng, n)
+    W = 10 ** rng.uniform(-2, 0.5, n)
+    f0 = _event_values(p, UE, lam, k, q, np.zeros((n, 1)))[:, :, 0]
+    s = np.where(f0 > 0, 1.0, -1.0)
+    h = 1e-6
+    fh = _event_values(p, UE, lam, k, q, np.array([[-h, h]] * n))
+    fp = (fh[:, :, 1] - fh[:, :, 0]) / (2 * h)
+    f2, M3 = eb.second_and_third(p, UE, lam, W, k, q)
+    A, Bd = np.maximum(s * f0, 0.0), s * fp
+    lo, hi = eb.taylor_steps(A, Bd, s * f2, M3, W, 1e-6 * (np.abs(f2) + M3))
+    x = np.linspace(0, 1, 201)[None, :] * lo.min(axis=1)[:, None]
+    before = s[..., None] * _event_values(p, UE, lam, k, q, x)
+    assert np.all(before[:, :, :-1] > -1e-9), np.argwhere(before[:, :, :-1] <= -1e-9)[:3]
+    rr, cc = np.nonzero(np.isfinite(hi))
+    assert rr.size > 250
+    at_hi = _event_values(p[rr], UE[rr], lam[rr], k[rr], q[rr], hi[rr, cc][:, None])
+    assert np.all(s[rr, cc] * at_hi[np.arange(rr.size), cc, 0] <= 1e-9)
+    modal_lo, _ = eb.safe_steps(A, Bd, eb.curvature_bound(p, UE, lam, W, k, q))
+    cut = modal_lo < 0.5 * W[:, None]
+    assert cut.sum() > 1000 and (lo[cut] > 1.5 * modal_lo[cut]).mean() > 0.05
+
+
+def test_keeps_sign_within_is_never_wrong_on_random_segments():
+    """:func:`eb.keeps_sign_within` on random segments and windows up to 30: wherever it holds,
+    a dense sampling of the window finds no sign change; it holds on many."""
+    rng = np.random.default_rng(19)
+    n = 2000
+    p, UE, lam, k, q = _random_segments(rng, n)
+    p[:, :, 0] += np.where(rng.random((n, 2)) < 0.5, 3.0, -3.0)  # far from the contact, mostly
+    W = 10 ** rng.uniform(-1, 1.5, n)
+    f0 = _event_values(p, UE, lam, k, q, np.zeros((n, 1)))[:, :, 0]
+    s = np.where(f0 > 0, 1.0, -1.0)
+    ok = eb.keeps_sign_within(s, p, UE, lam, k, q, W)
+    assert 0.1 < ok.mean() < 0.9
+    rr, cc = np.nonzero(ok)
+    x = np.linspace(0, 1, 1001)[None, :] * W[rr][:, None]
+    vals = (
+        s[rr, cc][:, None]
+        * _event_values(p[rr], UE[rr], lam[rr], k[rr], q[rr], x)[np.arange(rr.size), cc]
+    )
+    assert np.all(vals > 0)

@@ -579,3 +579,36 @@ def test_lanes_over_ten_times_the_median_are_event_heavy_at_under_two_steps_per_
     over = res.steps > 10 * np.median(res.steps)
     assert np.all(res.n_events[over] >= 40)
     assert np.all(res.steps[over] < 1.8 * res.n_events[over])
+
+
+def test_a_gap_curving_away_from_its_contact_is_bracketed_by_its_signed_curvature():
+    """A lane of the random comparison (seed 46, lane 489: kappa 0.05, q 0.23, 117 events): each
+    period a lifted gap rises towards its contact and turns back before it (its force crosses
+    first).  Under a bound of ``|f''|`` (about twice the true curvature) each step assumed it
+    curved towards the contact, ~4 steps per approach; the signed curvature at the step's start
+    (:func:`atlas.dynamics.event_bounds.taylor_steps`) takes the approach in about one: at most
+    1.15 steps per event (198 steps, 1.69, before), and the exact simulator's outcome and
+    events."""
+    res, (out, run) = _random_lane(46, 489)
+    assert res.n_events[0] == run.n_events == 117
+    assert res.steps[0] <= 1.15 * res.n_events[0]
+    assert int(res.code[0]) == int(out)
+
+
+def test_an_oscillation_far_from_its_contacts_is_crossed_in_long_windows():
+    """A lane of the random comparison (seed 47, lane 604: kappa 9.1, q 0.05): both contacts
+    closed, a slowly growing oscillation (about 1/10 of the gaps) with no event for 148 time
+    units.  Its functions keep their signs over the long window by the size of their terms
+    (:func:`atlas.dynamics.event_bounds.keeps_sign_within`): the 140 time units to ``t_end =
+    140`` take at most 8 steps (40 steps of the 8 H_S window before), with no event, as in the
+    exact simulator."""
+    from atlas.dynamics import engine_check as C
+
+    L = C.random_lanes(47, 1000)
+    i = 604
+    k, q = (L.kappa[i], 1.0), (L.q[i], L.q[i])
+    res = F.run_lanes(L.beta1[i : i + 1], L.beta2[i : i + 1], L.alpha[i : i + 1], np.array([k]),
+                      np.array([q]), L.g0[i : i + 1], t_end=140.0)  # fmt: skip
+    run = S.simulate(L.beta1[i], L.beta2[i], L.alpha[i], k=k, q=q, g0=L.g0[i], t_end=140.0)
+    assert res.n_events[0] == run.n_events == 0
+    assert res.steps[0] <= 8
