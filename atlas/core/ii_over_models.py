@@ -307,7 +307,7 @@ def threshold_rule(geo: np.ndarray, d: np.ndarray) -> np.ndarray:
     dominant eigenvalue is a simple positive root for every model (module docstring, the
     threshold rule), so II is stable exactly where it is consistent."""
     geo = np.asarray(geo, np.float64)
-    gneg = geo[:, 2] * geo[:, 1] < 0
+    gneg = np.sign(geo[:, 2]) * np.sign(geo[:, 1]) < 0  # the factors' signs: no underflow
     out = gneg & (d < 0)
     out[out] = below_threshold(geo[out])
     return out

@@ -386,6 +386,34 @@ def test_the_threshold_is_compared_exactly():
     assert iim.threshold_rule(np.array([at, above]), d).tolist() == [True, False]
 
 
+def _threshold_exact(g) -> bool:
+    """The threshold rule's condition in exact rationals: ``gamma < 0``, ``D < 0``,
+    ``3 |gamma| <= 2 |c1 s2|``."""
+    c1, s1, c2, s2 = (Fraction(float(v)) for v in g)
+    gamma = c2 * s1
+    return gamma < 0 and c1 * s2 - gamma < 0 and 3 * abs(gamma) <= 2 * abs(c1 * s2)
+
+
+def test_the_threshold_rule_at_products_below_the_smallest_subnormal():
+    """Direction components whose products ``c2 s1``, ``c1 s2`` underflow to ``-0.0`` (below
+    ``2^-1074``): the rule takes ``gamma``'s sign from the factors, so the verdict is the exact
+    rationals' (stable for every model), not a needless ``undecided``."""
+    geo = np.array(
+        [
+            (1e-200, 1e-200, -1e-200, -2e-200),
+            (1e-160, 3e-170, -1e-170, -1e-160),
+            (2.0**-540, 2.0**-540, -(2.0**-540), -(2.0**-539)),
+            (1e-200, 1e-200, 1e-200, -2e-200),  # gamma > 0: not the rule's
+        ]
+    )
+    assert (geo[:, 2] * geo[:, 1] == 0).all()
+    want = [_threshold_exact(g) for g in geo]
+    assert want == [True, True, True, False]
+    assert iim.threshold_rule(geo, mb.det_signs(geo)).tolist() == want
+    r = iim.ii_over_models(*geo[:3].T, mb.model_box(), settle=False)
+    assert r[CONS].tolist() == [YES] * 3 and r[STAB].tolist() == [YES] * 3
+
+
 def _consistent_numpy(g, models) -> np.ndarray:
     """Independent float64 check of II consistency (numpy eigenvectors of the state matrix): 1
     where some real eigenvalue ``> 1e-6`` has ``x1 x2 > 1e-6 |x|^2``, 0 where every eigenvalue
