@@ -68,23 +68,43 @@ def _at_crossing(ball) -> bool:
 
 def frame(fld, model, m, ball, others) -> Frame | None:
     """The frame of the root ``ball`` [rad] of line ``m`` (module docstring); ``others``: the
-    free angles [rad] of the field's roots on the line (the root itself among them).  ``None``
-    where the exact frame is needed and the enclosure holds other than one exact break."""
+    free angles [rad] of the field's roots on the line (the root itself among them, once or
+    more).  Another float equal to the root's may be another root within a float step: then the
+    float frame needs the exact breaks to show one root within :data:`SEPARATION` of the ball.
+    ``None`` where the exact frame is needed and the enclosure holds other than one exact
+    break."""
+    model = tuple(float(v) for v in model)
     beta = float(ball.mid())
-    others = [b for b in others if b != beta]
-    h = 0.25 * _float_distance(beta, others)
-    if 4 * h > SEPARATION:
+    h = 0.25 * _float_distance(beta, [b for b in others if b != beta])
+    alone = list(others).count(beta) <= 1 or _alone(fld, model, m, ball)
+    if 4 * h > SEPARATION and alone:
         return Frame(ball, h, _at_crossing(ball), False)
-    return _exact_frame(fld, tuple(float(v) for v in model), m, ball)
+    return _exact_frame(fld, model, m, ball)
+
+
+def _alone(fld, model, m, ball) -> bool:
+    """Whether exactly one exact break of line ``m`` (:func:`_exact_breaks`) lies within
+    :data:`SEPARATION` [rad] of the root ``ball`` [rad]."""
+    with flint.ctx.workprec(_PREC):
+        wide = ball + flint.arb(0, SEPARATION)
+        return sum(b.overlaps(wide) for b, _ in _exact_breaks(fld, m, model)) == 1
+
+
+def _exact_breaks(fld, m, model) -> list[tuple[flint.arb, bool]]:
+    """Every break of line ``m`` as ``(beta ball [rad], crossing)`` at 256 bits: the distinct
+    real roots of the line polynomials (:func:`_breaks`) and the multiples of ``pi/2`` (one
+    that is a root counted once)."""
+    with flint.ctx.workprec(_PREC):
+        roots = [(b, c) for _, b, c in _breaks(fld, m, model)]
+        grid = [(j * flint.arb.pi() / 2, True) for j in range(4)]
+        grid = [g for g in grid if not any(c and b.overlaps(g[0]) for b, c in roots)]
+        return roots + grid
 
 
 def _exact_frame(fld, model, m, ball) -> Frame | None:
     """The exact frame (module docstring) of the root ``ball`` [rad] of line ``m``."""
     with flint.ctx.workprec(_PREC):
-        roots = [(b, c) for _, b, c in _breaks(fld, m, model)]
-        grid = [(j * flint.arb.pi() / 2, True) for j in range(4)]
-        grid = [g for g in grid if not any(c and b.overlaps(g[0]) for b, c in roots)]
-        breaks = roots + grid  # a multiple of pi/2 that is a root counted once
+        breaks = _exact_breaks(fld, m, model)
         inside = [k for k, (b, _) in enumerate(breaks) if b.overlaps(ball)]
         if len(inside) != 1:
             return None

@@ -1,6 +1,6 @@
 """Root frames (:mod:`atlas.data.root_frames`) against closed forms: line polynomials with known
-roots (``t = tan(beta / 2)``: a pair ``1e-15`` apart, one ``1e-14`` off the multiple ``pi/2``
-of ``t = 1``, a crossing at ``t = 0``) stand in for the germs, and every angle, distance and
+roots (``t = tan(beta / 2)``: a pair ``1e-15`` apart, a pair within one float step, one ``1e-14``
+off the multiple ``pi/2`` of ``t = 1``, a crossing at ``t = 0``) stand in for the germs, and every angle, distance and
 sample is checked against mpmath at 100 digits."""
 
 import math
@@ -15,7 +15,9 @@ from atlas.data import boundary_germs, root_frames
 A = Fraction(1, 3)  # a root t = 1/3 ...
 PAIR = A + Fraction(1, 10**15)  # ... and its neighbour 1e-15 above it
 NEAR_AXIS = 1 + Fraction(1, 10**14)  # a root just above t = 1 (beta = pi/2)
-ROOTS = (0, A, PAIR, 1, NEAR_AXIS, -2)
+TWIN = Fraction(1, 7)  # a root t = 1/7 ...
+TWIN_UP = TWIN + Fraction(1, 10**18)  # ... and one 1.9e-18 rad above: the same float angle
+ROOTS = (0, TWIN, TWIN_UP, A, PAIR, 1, NEAR_AXIS, -2)
 MODEL = (1.25, 0.5, 0.75)  # only a cache key here: the polynomials are the ones above
 
 
@@ -65,11 +67,13 @@ def _quarter_gap(t) -> mpmath.mpf:
     return min(gaps) / 4
 
 
-@pytest.mark.parametrize("t", [A, PAIR, NEAR_AXIS])
+@pytest.mark.parametrize("t", [A, PAIR, NEAR_AXIS, TWIN, TWIN_UP])
 def test_crowded_roots_get_the_exact_frame(line, t):
     """A root with another break closer than SEPARATION: the ball holds the exact root, ``h`` is
     at most (and nearly) a quarter of the true distance to its neighbour, and the samples at
-    ``+-h`` lie strictly between the root and its neighbours, however close."""
+    ``+-h`` lie strictly between the root and its neighbours, however close; also for the twins
+    whose angles round to one float (the caller's list holds that float twice)."""
+    assert float(_beta(TWIN)) == float(_beta(TWIN_UP))
     with flint.ctx.workprec(256):
         fr = root_frames.frame("II", MODEL, 0, _ball(t), _others())
         assert fr is not None and fr.exact and not fr.crossing
@@ -84,6 +88,17 @@ def test_crowded_roots_get_the_exact_frame(line, t):
         off = beta_s - _beta(t)
         assert s * off > 0 and abs(off) < 2 * quarter  # strictly beside, short of the neighbour
         assert abs(off - s * fr.h) <= mpmath.mpf(2) ** -240
+
+
+def test_a_root_listed_twice_keeps_the_float_frame(line):
+    """The root ``t = -2``, its float twice among the caller's angles (found by two polynomials)
+    and every other break far: one exact root near it, so the float frame, ``h`` a quarter of
+    the distance to ``3 pi/2``."""
+    ball = _ball(Fraction(-2), 1e-15)
+    beta = float(_beta(Fraction(-2)))
+    fr = root_frames.frame("II", MODEL, 0, ball, [*_others(), beta])
+    assert fr is not None and not fr.exact and fr.beta is ball
+    assert fr.h == pytest.approx(float(_quarter_gap(Fraction(-2))), rel=1e-12)
 
 
 def test_a_multiple_of_a_quarter_turn_is_a_crossing(line):
