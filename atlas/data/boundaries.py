@@ -654,18 +654,19 @@ def _field_curves(fld, grid, model, tol, chord, dtype) -> tuple[list, list, dict
     for p in pts:
         p.field = fld
     attrs = {}
-    if fld == "SS":
-        pts, attrs["line_roots"] = _proven_line_points(pts, model, cell, dtype)
-        attrs["line_points"] = sum(p.proven for p in pts)
     distance = max(chord, near)
     roots = boundary_germs.germ_roots(fld, model)
     if fld == "SS":  # every algebraic root accounted for
+        on_lines = boundary_points.line_roots(model)
+        found, attrs["line_roots"] = boundary_points.ss_line_points(model, dtype, roots=on_lines)
+        pts = boundary_roots.superseded(pts, found, cell, on_lines + roots, near) + found
+        attrs["line_points"] = sum(p.proven for p in pts)
         counts, undecided = boundary_roots.ss_root_account(model, roots, dtype)
         attrs, pts = attrs | counts, pts + undecided
     else:
-        counts, ii_points = boundary_roots.ii_root_account(model, roots)
-        pts = boundary_roots.superseded(pts, ii_points, cell) + ii_points
-        attrs |= counts | {"line_points": sum(p.proven for p in ii_points)}
+        counts, found = boundary_roots.ii_root_account(model, roots)
+        pts = boundary_roots.superseded(pts, found, cell, roots, near) + found
+        attrs |= counts | {"line_points": sum(p.proven for p in found)}
     added, left, (stretches, gap, left_over, unproven, pieces) = boundary_cover.cover_lines(
         fld, box, model, curves, roots, distance, tol, dtype
     )
@@ -757,22 +758,6 @@ def _model_value(name, value) -> float:
     if arr.size != 1:
         raise ValueError(f"{name}: expected one number per slice, got {value!r}")
     return float(arr.ravel()[0])
-
-
-def _proven_line_points(pts, model, cell, dtype) -> tuple[list[Point], int]:
-    """The SS points where a boundary meets a class line, found from the algebra with proven
-    enclosures (:func:`atlas.data.boundary_points.ss_line_points`), replacing the estimated
-    ``leaves_class_line`` and ``crosses_class_line`` points within a grid ``cell`` of one;
-    returns the points and the algebraic count of roots on the lines."""
-    proven, roots = boundary_points.ss_line_points(model, dtype)
-    if not proven:
-        return pts, roots
-    kinds = ("leaves_class_line", "crosses_class_line")
-    est = [p for p in pts if p.kind in kinds]
-    at = [(p.beta1, p.beta2) for p in proven]
-    far = boundary_tips.nearest_distance([(p.beta1, p.beta2) for p in est], at) > cell
-    gone = {id(p) for p, f in zip(est, far) if not f}
-    return [p for p in pts if id(p) not in gone] + proven, roots
 
 
 def _is_dataset(source) -> bool:

@@ -254,18 +254,64 @@ def _radius(m, ball) -> float:
     return (float(ball.rad()) + 4 * math.ulp(2 * math.pi)) * (math.sqrt(2) if m >= 10 else 1.0)
 
 
-def superseded(points, proven, reach) -> list[Point]:
+def superseded(points, proven, reach, breaks, near) -> list[Point]:
     """``points`` without the estimated (not proven) ``leaves_class_line`` and
-    ``crosses_class_line`` points within ``reach`` [rad] of one of ``proven`` (the same point,
-    found from the algebra with a proven enclosure)."""
+    ``crosses_class_line`` points that stand for one of ``proven`` (the same point, found from
+    the algebra with a proven enclosure): those within ``reach`` [rad] of it, and those on a
+    class line it lies on (both within ``near`` [rad]) with no break of the line between them (a
+    root of ``breaks``, ``(m, beta ball, multiplicity)``, or a multiple of ``pi/2``).  A
+    boundary meets a class line only at a break, so such an estimate is the proven point,
+    however far off a coarse chord left it."""
     kinds = ("leaves_class_line", "crosses_class_line")
-    xy = np.array([[p.beta1, p.beta2] for p in proven if p.proven]).reshape(-1, 2)
+    good = [p for p in proven if p.proven]
+    xy = np.array([[p.beta1, p.beta2] for p in good]).reshape(-1, 2)
+    marks = [mark for p in good for mark in _on_lines(p.beta1, p.beta2, near)]
+    cuts = {m: [float(b.mid()) for k, b, _ in breaks if k == m] for m, _ in marks}
+    cuts = {m: np.array(v + [j * _QUARTER for j in range(4)]) for m, v in cuts.items()}
 
-    def near(p):
+    def stands_for(p):
         d = np.abs(xy - (p.beta1, p.beta2))
-        return bool((np.hypot(*np.minimum(d, 2 * math.pi - d).T) <= reach).any())
+        if (np.hypot(*np.minimum(d, 2 * math.pi - d).T) <= reach).any():
+            return True
+        return any(
+            m == k and _adjacent(e, a, cuts[m])
+            for m, e in _on_lines(p.beta1, p.beta2, near)
+            for k, a in marks
+        )
 
-    return [p for p in points if p.proven or p.kind not in kinds or not near(p)]
+    return [p for p in points if p.proven or p.kind not in kinds or not stands_for(p)]
+
+
+def _on_lines(x, y, near) -> list[tuple[int, float]]:
+    """The torus class lines (``m`` of :func:`atlas.data.boundary_points.line_roots`) within
+    ``near`` [rad] of the point ``(x, y)`` [rad], each with the point's free angle along it."""
+    x, y = float(x) % (2 * math.pi), float(y) % (2 * math.pi)
+    out = []
+    for k in range(4):
+        if _around(x - k * _QUARTER) <= near:
+            out.append((k, y))
+        if _around(y - k * _QUARTER) <= near:
+            out.append((5 + k, x))
+    for m, c in ((11, 0.0), (12, math.pi)):
+        if _around(y - x - c) / math.sqrt(2) <= near:
+            out.append((m, x))
+    return out
+
+
+def _around(d) -> float:
+    """``|d|`` [rad] around the circle (in ``[0, pi]``)."""
+    return abs((d + math.pi) % (2 * math.pi) - math.pi)
+
+
+def _adjacent(e, a, cuts, same=1e-9) -> bool:
+    """Whether one of the two arcs of a line from free angle ``e`` to ``a`` [rad] holds none of
+    ``cuts`` [rad] (those within ``same`` [rad] of ``a``, the break at ``a`` itself, aside)."""
+    for sign in (1, -1):
+        span = (sign * (a - e)) % (2 * math.pi)
+        at = (sign * (cuts - e)) % (2 * math.pi)
+        if not ((at > 0) & (at < span - same)).any():
+            return True
+    return False
 
 
 def attach(curves, points, reach, within, near, tol) -> tuple[list, int]:
