@@ -5,6 +5,7 @@ each side of the line (no boundary but the line itself comes near it)."""
 import functools
 import math
 
+import mpmath
 import numpy as np
 import pytest
 from samples import eq9_roots, exact_code
@@ -534,3 +535,75 @@ def _frame(model, m, ball):
 
     others = [float(b.mid()) for k, b, _ in _germ_roots(model) if k == m]
     return root_frames.frame("II", model, m, ball, others)
+
+
+def _hurwitz_stable(b1, b2, model) -> bool:
+    """SS stable at ``(b1, b2)`` [rad] (mpmath numbers, at mpmath's precision): the Hurwitz
+    conditions of ``p`` (paper eq. 9, ``k2 = 1``), ``a3``, ``a3 a2 - a1``, ``(a3 a2 - a1) a1 -
+    a3^2 a0`` and ``a0`` all positive (none may vanish at a sample)."""
+    kappa, q1, q2 = (mpmath.mpf(v) for v in model)
+    c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
+    det = c1 * s2 - s1 * c2
+    a3, a2 = q1 * c1 + q2 * s2, kappa * c1 + s2 + q1 * q2 * det
+    a1, a0 = det * (q1 + kappa * q2), kappa * det
+    hurwitz = (a3, a3 * a2 - a1, (a3 * a2 - a1) * a1 - a3**2 * a0, a0)
+    assert all(h != 0 for h in hurwitz)
+    return all(h > 0 for h in hurwitz)
+
+
+def _antipodal_changes(model, n=128):
+    """Reference: the angles ``beta1`` [rad] where the SS code ``1e-25`` rad off the line
+    ``beta2 = beta1 + pi`` changes along it, on either side, with the bracket's width: a scan of
+    ``n`` samples, then bisection at 50 digits to 1e-20 rad (:func:`_hurwitz_stable`); each
+    change confirmed by the roots of ``p`` at the bracket's ends (mpmath, :func:`_roots`)."""
+    out = []
+    with mpmath.workdps(50):
+        eps = mpmath.mpf(10) ** -25
+        for s in (-1, 1):
+
+            def stable(x, s=s):
+                return _hurwitz_stable(x, x + mpmath.pi + s * eps, model)
+
+            xs = [2 * mpmath.pi * k / n for k in range(n + 1)]
+            codes = [stable(x) for x in xs]
+            for lo, hi, c in zip(xs, xs[1:], codes):
+                if stable(hi) == c:
+                    continue
+                while hi - lo > mpmath.mpf(10) ** -20:
+                    mid = (lo + hi) / 2
+                    lo, hi = (mid, hi) if stable(mid) == c else (lo, mid)
+                for x, st in ((lo, c), (hi, not c)):  # roots of p on the two sides
+                    top = max(z.real for z in _roots(x, x + mpmath.pi + s * eps, model, 50))
+                    assert (top < 0) == st
+                out.append((float((lo + hi) / 2), float(hi - lo)))
+    return sorted(out)
+
+
+def test_codimension_2_points_do_not_depend_on_chord_or_grid():
+    """At kappa 2, q 0.1 the SS points on the class lines are the same proven points at every
+    chord (1e-2, 1e-4, 1e-6) and on two grids (32^2, 48^2), each within the two radii of its
+    counterpart; none is an estimate.  On ``beta2 = beta1 + pi`` they are the reference's
+    changes of the code next to the line (:func:`_antipodal_changes`, mpmath), within their
+    radii.  Before, at chord 1e-2 two estimated ``leaves_class_line`` points stood 0.07 and
+    0.06 rad from the proven ones (the replacement reached one grid cell)."""
+    ref = _antipodal_changes(DAMPED)
+    assert len(ref) == 2
+    kinds = ("leaves_class_line", "crosses_class_line", "touches_class_line")
+    first = None
+    for n in (32, 48):
+        g = np.arange(n) * 2 * PI / n
+        for chord in (1e-2, 1e-4, 1e-6):
+            b = bd.slice_boundaries(g, g, *DAMPED, fields=("SS",), chord=chord)
+            pts = [p for p in b.points if p.kind in kinds or p.kind == "undecided_line_root"]
+            assert all(p.proven for p in pts), (n, chord, [(p.beta1, p.beta2) for p in pts])
+            pts = sorted(pts, key=lambda p: (p.kind, p.beta1, p.beta2))
+            on = [p for p in pts if abs((p.beta2 - p.beta1) % (2 * PI) - PI) < 1e-9]
+            assert len(on) == len(ref)
+            for p, (x, width) in zip(sorted(on, key=lambda p: p.beta1), ref):
+                assert abs(p.beta1 - x) <= p.uncertainty + width, (n, chord, p.beta1, x)
+            first = first or pts
+            assert [p.kind for p in pts] == [p.kind for p in first]
+            for p, o in zip(pts, first):
+                d = np.abs(np.array([p.beta1 - o.beta1, p.beta2 - o.beta2]))
+                gap = np.hypot(*np.minimum(d, 2 * PI - d))
+                assert gap <= p.uncertainty + o.uncertainty, (n, chord, p.beta1, p.beta2)
