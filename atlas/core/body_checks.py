@@ -58,10 +58,14 @@ def vector(name, v):
 
 
 def unit(name, v):
+    """``v / |v|``; a vector shorter than 2^-1000 is first scaled by 2^1100 (exact), so that its
+    length is not rounded on the subnormal grid (``(1e-320, 1e-320)`` gave length 1.00013)."""
     x, y = vector(name, v)
-    norm = np.hypot(x, y)
-    if np.any(norm == 0.0):
+    if np.any(np.maximum(np.abs(x), np.abs(y)) == 0.0):
         raise ValueError(f"{name}: normal has zero length")
+    k = np.where(np.maximum(np.abs(x), np.abs(y)) < 2.0**-1000, 1100, 0)
+    x, y = np.ldexp(x, k), np.ldexp(y, k)
+    norm = np.hypot(x, y)
     return (x / norm, y / norm) if np.ndim(norm) else (float(x / norm), float(y / norm))
 
 
