@@ -24,6 +24,7 @@ none, or depends on the model -- the body's own ``kappa, q1, q2`` replaced by th
 
 from __future__ import annotations
 
+import math
 import shlex
 
 import numpy as np
@@ -32,6 +33,7 @@ import xarray as xr
 from atlas.core import checks, config
 from atlas.core.bodies import BODIES, DERIVED, MODEL, Body
 from atlas.core.rigid_body import body_invariants, verdicts_at
+from atlas.data import limits
 from atlas.data.engine import REFERENCES
 from atlas.data.io import check_output_path, write_netcdf
 from atlas.data.outputs import coord_attrs, storage_dtype, variable_attrs, verdict_outputs
@@ -122,6 +124,7 @@ def mechanism_atlas(
     fixed: dict | None = None,
     history: str | None = None,
     model_box=None,
+    size_check: bool = True,
     **axes,
 ) -> xr.Dataset:
     """The atlas of built-in mechanism scene ``name`` (:data:`MECHANISM_SCENES`) over its physical
@@ -131,7 +134,8 @@ def mechanism_atlas(
     ``history``: the command recorded in the ``history`` attribute (default: this call, with every
     axis range and fixed value); ``model_box``: a box of contact models (a
     :class:`~atlas.core.model_box.ModelBox`, its text or a dict) whose verdicts are added
-    (module docstring).
+    (module docstring); ``size_check``: refuse a grid that cannot fit in the memory available
+    now, as the command line does (:func:`atlas.data.limits.grid_estimate`).
     """
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
@@ -140,6 +144,9 @@ def mechanism_atlas(
     scene = MECHANISM_SCENES[name]
     consts = _fixed_values(scene, dict(fixed or {}))
     values = _axis_values(scene, axes)
+    if size_check:
+        points = math.prod(v.size for v in values.values())
+        limits.grid_estimate("mechanism", points, **limits.MECHANISM).check()
     grids = np.meshgrid(*values.values(), indexing="ij")
     params = {k: v for k, v in consts.items() if k not in _MODEL}
     for (_d, _u, _l, sets), grid in zip(scene.axes.values(), grids):
@@ -315,9 +322,10 @@ def run_cli(
     words += ["--out", str(out)] if out is not None else []
     words += ["--overwrite"] if overwrite else []
     history = " ".join(shlex.quote(w) for w in words)
-    ds = mechanism_atlas(
-        name, dtype=dtype, fixed=parse_fixed(fixed), history=history, model_box=box, **given
-    )
+    ds = mechanism_atlas(  # the command line screened the size already (--no-size-check)
+        name, dtype=dtype, fixed=parse_fixed(fixed), history=history, model_box=box,
+        size_check=False, **given,
+    )  # fmt: skip
     print(summary(ds))
     if out is not None:
         write_netcdf(ds, out, overwrite=overwrite)

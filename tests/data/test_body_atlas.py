@@ -282,3 +282,21 @@ def test_cli_mechanism_model_box(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("atlas: error: model_box: kappa: ") and err.count("\n") == 1, err
     assert not bad.exists()
+
+
+def test_api_size_refusal_is_the_cli_one(capsys, monkeypatch):
+    """A grid that cannot fit in the memory available (each axis alone fits) is refused by
+    ``mechanism_atlas`` with the command line's one line, before any grid is built (a
+    1e10-point grid raised numpy's 74.5 GiB ``MemoryError`` from ``meshgrid``)."""
+    from atlas.cli import main
+    from atlas.data import body_atlas, limits
+
+    monkeypatch.setattr(limits, "available_memory", lambda: 1 << 30)  # 1 GiB free
+    axes = dict(theta="0:1.5:30000", mu="0:2:30000")
+    assert main(["mechanism", "ladder", "--theta", axes["theta"], "--mu", axes["mu"]]) == 2
+    want = capsys.readouterr().err.strip().splitlines()[-1].removeprefix("atlas: error: ")
+    assert want.startswith("size: 9e+08 points")
+    monkeypatch.setattr(body_atlas.np, "meshgrid", lambda *a, **k: pytest.fail("grid built"))
+    with pytest.raises(MemoryError) as err:
+        mechanism_atlas("ladder", **axes)
+    assert str(err.value) == want

@@ -110,7 +110,7 @@ def _exact_ss(b1, b2, model):
     return exact.point_spectral(c1, s1, c2, s2, *model)["stable_SS"]
 
 
-@pytest.mark.parametrize("chord", [bd.CHORD, 1e-2])
+@pytest.mark.parametrize("chord", [bd.CHORD, 1e-4, 1e-2])
 def test_seam_tangencies_found_at_every_chord(chord):
     """q = 0, kappa 0.5: on the seam beta1 = 0 the discriminant is (kappa - sin beta2)^2, so the
     SS boundary touches it at beta2 = asin(kappa) = pi / 6 and 5 pi / 6 (50-digit closed form);
