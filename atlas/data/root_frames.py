@@ -76,8 +76,7 @@ def frame(fld, model, m, ball, others) -> Frame | None:
     model = tuple(float(v) for v in model)
     beta = float(ball.mid())
     h = 0.25 * _float_distance(beta, [b for b in others if b != beta])
-    alone = list(others).count(beta) <= 1 or _alone(fld, model, m, ball)
-    if 4 * h > SEPARATION and alone:
+    if 4 * h > SEPARATION and (list(others).count(beta) <= 1 or _alone(fld, model, m, ball)):
         return Frame(ball, h, _at_crossing(ball), False)
     return _exact_frame(fld, model, m, ball)
 
