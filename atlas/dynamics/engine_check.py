@@ -119,7 +119,8 @@ def summary(r: dict, over: float = 10.0) -> dict:
     """The reported numbers of :func:`compare`'s result ``r``: ``lanes``, ``disagreements``,
     ``fallback`` (share of lanes), CPU seconds of each engine (``fast_cpu_s``, ``exact_cpu_s``)
     and their ratio ``speedup``; the per-lane fast/exact cost (:func:`cost_ratios`:
-    ``ratio_median``, ``ratio_p99``, ``ratio_worst``); the median and largest steps of a lane,
+    ``ratio_median``, ``ratio_p99``, ``ratio_worst``, and ``over_exact`` the lanes that cost
+    more than in the exact simulator); the median and largest steps of a lane,
     the lanes over ``over`` times the median lane in steps (``over_steps``) and in fast CPU
     seconds (:func:`lane_costs`; ``over_cost``), the worst lane's cost over the median lane's
     (``worst_over_median``) and the most steps per event of a lane over ``over`` times the median
@@ -134,6 +135,7 @@ def summary(r: dict, over: float = 10.0) -> dict:
         fast_cpu_s=float(r["fast_s"]), exact_cpu_s=float(r["exact_s"]),
         speedup=float(r["exact_s"] / r["fast_s"]), ratio_median=float(np.median(ratio)),
         ratio_p99=float(np.quantile(ratio, 0.99)), ratio_worst=float(ratio.max()),
+        over_exact=int((ratio > 1).sum()),
         steps_median=med_steps, steps_max=int(steps.max()), over_steps=int(heavy.sum()),
         over_cost=int((cost > over * med_cost).sum()),
         worst_over_median=float(cost.max() / med_cost) if med_cost > 0 else math.inf,

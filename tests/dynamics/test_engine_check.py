@@ -77,6 +77,7 @@ def test_summary_counts_lanes_against_the_median_lane():
     assert s["speedup"] == 3.0 and s["fast_cpu_s"] == 2.0 and s["exact_cpu_s"] == 6.0
     assert s["ratio_median"] == pytest.approx(2 / 16)  # ratios 1/16, 1/16, 12/32, 1, 2/16
     assert s["ratio_worst"] == pytest.approx(1.0)  # the fallback: its exact run, 1 s
+    assert s["over_exact"] == 0  # the fallback costs exactly its exact run: not over
     assert s["ratio_p99"] == pytest.approx(np.quantile(ratio, 0.99))
     assert s["steps_median"] == 1.0 and s["steps_max"] == 12
     assert s["over_steps"] == 1 and s["over_steps_per_event"] == pytest.approx(12 / 11)
@@ -92,3 +93,4 @@ def test_summary_of_a_lane_set_without_heavy_lanes():
     s = C.summary(r)
     assert s["over_steps"] == s["over_cost"] == 0 and s["over_steps_per_event"] == 0.0
     assert s["worst_over_median"] == 1.0 and s["ratio_median"] == s["ratio_worst"] == 0.5
+    assert C.summary(dict(r, fast_s=3.0))["over_exact"] == 2  # 1.5 s a lane against 1 s
