@@ -100,7 +100,7 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-3, 1e-6, 1e-9, 1e-12)), ("Radau", (1e-3, 1e-6, 1e-9))),
         sim_repeats=3,
         outcome_maps=((256, 0.5, 0.0, 0.35 * math.pi, 400), (256, 2.0, 0.5, 0.2 * math.pi, 300)),
-        engine_random=(44, 2000),  # lanes of both engines over the whole space (~2 min CPU)
+        engine_random=(44, 2000),  # lanes of both engines over the whole space (~40 s CPU)
         engine_grid=4,  # runs a cell of the 0:2pi:8 degenerate-direction grid (~30 s CPU)
         jax_outcome_n=64,  # the JAX kernel of the outcome engine, first map's parameters (~2 min)
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
