@@ -204,8 +204,8 @@ OUTCOME_MAP_COLUMNS = (
 )  # fmt: skip
 ENGINE_LANE_COLUMNS = (
     "set", "lanes", "disagreements", "fallback", "fast_cpu_s", "exact_cpu_s", "speedup",
-    "ratio_median", "ratio_p99", "ratio_worst", "over_exact", "steps_median", "steps_max", "over_steps",
-    "over_cost", "worst_over_median", "over_steps_per_event",
+    "ratio_median", "ratio_p99", "ratio_worst", "over_exact", "steps_median", "steps_max",
+    "over_steps", "over_cost", "worst_over_median", "over_steps_per_event",
 )  # fmt: skip
 
 STARTUP_COLUMNS = (
@@ -615,7 +615,8 @@ def engine_lanes_section(lanes) -> list[str]:
         "lanes the fast engine hands to the exact simulator. A lane's fast cost is its share of "
         "the batch's CPU in proportion to its steps (plus its exact run if it falls back); "
         "`ratio_*`: that cost over the exact simulator's CPU for the same lane (median, 99th "
-        "percentile, worst); `over_exact`: lanes where it is over 1. `steps_median`, `steps_max`: steps of a lane in the fast engine; "
+        "percentile, worst); `over_exact`: lanes where it is over 1. `steps_median`, "
+        "`steps_max`: steps of a lane in the fast engine; "
         "`over_steps`, `over_cost`: lanes over 10 times the median lane in steps, in fast cost; "
         "`worst_over_median`: the costliest lane over the median lane; `over_steps_per_event`: "
         "the most steps per event of a lane over 10 times the median (near 1: such a lane is "

@@ -40,8 +40,9 @@ def test_engine_lanes_rows_are_computed_from_the_lanes():
     assert row["lanes"] == 6 and row["disagreements"] == 0 and row["disagree_lanes"] == ""
     L = engine_check.random_lanes(44, 6)
     k = np.stack([L.kappa, np.ones(6)], axis=1)
-    res = fast_engine.run_batch(L.beta1, L.beta2, L.alpha, k, np.stack([L.q, L.q], axis=1), L.g0,
-                                reference=None, t_end=150.0, horizon_cap=8.0, max_events=2000)  # fmt: skip
+    q = np.stack([L.q, L.q], axis=1)
+    res = fast_engine.run_batch(L.beta1, L.beta2, L.alpha, k, q, L.g0, reference=None,
+                                t_end=150.0, horizon_cap=8.0, max_events=2000)  # fmt: skip
     assert row["steps_max"] == res.steps.max() and row["steps_median"] == np.median(res.steps)
     assert row["over_steps"] == int((res.steps > 10 * np.median(res.steps)).sum())
     assert 0 < row["ratio_median"] <= row["ratio_p99"] <= row["ratio_worst"]
