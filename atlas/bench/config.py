@@ -100,6 +100,8 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-3, 1e-6, 1e-9, 1e-12)), ("Radau", (1e-3, 1e-6, 1e-9))),
         sim_repeats=3,
         outcome_maps=((256, 0.5, 0.0, 0.35 * math.pi, 400), (256, 2.0, 0.5, 0.2 * math.pi, 300)),
+        engine_random=(44, 2000),  # lanes of both engines over the whole space (~40 s CPU)
+        engine_grid=4,  # runs a cell of the 0:2pi:8 degenerate-direction grid (~30 s CPU)
         jax_outcome_n=64,  # the JAX kernel of the outcome engine, first map's parameters (~2 min)
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
@@ -139,6 +141,8 @@ CONFIG = {
         sim_methods=(("DOP853", (1e-4, 1e-8)), ("Radau", (1e-4,))),
         sim_repeats=1,
         outcome_maps=((48, 0.5, 0.0, 0.35 * math.pi, 64),),
+        engine_random=(44, 200),
+        engine_grid=1,
         jax_outcome_n=None,
         large_n=0,
         large_check=10,
@@ -174,6 +178,8 @@ CONFIG["tiny"] = dict(
     scale_undamped=(1 << 18,),
     sim_methods=(("DOP853", (1e-4,)), ("Radau", (1e-4,))),
     outcome_maps=((8, 0.5, 0.0, 0.35 * math.pi, 8),),
+    engine_random=(44, 6),
+    engine_grid=0,
     jax_outcome_n=None,
     atlases=(
         (

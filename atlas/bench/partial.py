@@ -26,7 +26,7 @@ SECTIONS = {
     "scaling": ("scaling",),
     "atlases": ("atlases",),
     "simulation": ("sim",),
-    "outcome_maps": ("maps",),
+    "outcome_maps": ("maps", "lanes"),
     "curves": ("curves",),
     "startup": ("startup",),
     "distributed": (),
@@ -48,6 +48,7 @@ JSON_FIELDS = {
     "large": "large",
     "atlases": "atlases",
     "maps": "outcome_maps",
+    "lanes": "engine_lanes",
     "startup": "startup",
 }
 

@@ -46,6 +46,8 @@ class Results:
     curves: list = field(default_factory=list)
     #: the fast outcome-map engine against the exact simulator
     maps: list = field(default_factory=list)
+    #: both engines lane by lane (:func:`atlas.bench.simulation.engine_lanes`)
+    lanes: list = field(default_factory=list)
     #: start-up figures, whole processes (:mod:`atlas.bench.startup`)
     startup: list = field(default_factory=list)
     #: 2-D and 5-D grids through the certified driver (:mod:`atlas.bench.model_axes`)
@@ -199,6 +201,11 @@ OUTCOME_MAP_COLUMNS = (
     "identical", "ref_cells", "ref_per_s", "speedup", "early_settle", "early_iwc", "stepped",
     "fallback", "agreement", "jax_map", "jax_compile_s", "jax_per_s", "fast_per_s_again",
     "jax_same",
+)  # fmt: skip
+ENGINE_LANE_COLUMNS = (
+    "set", "lanes", "disagreements", "fallback", "fast_cpu_s", "exact_cpu_s", "speedup",
+    "ratio_median", "ratio_p99", "ratio_worst", "over_exact", "steps_median", "steps_max",
+    "over_steps", "over_cost", "worst_over_median", "over_steps_per_event",
 )  # fmt: skip
 
 STARTUP_COLUMNS = (
@@ -594,6 +601,33 @@ def outcome_maps_section(maps) -> list[str]:
     return [*lines, ""]
 
 
+def engine_lanes_section(lanes) -> list[str]:
+    """Both engines lane by lane: disagreements, fallbacks, per-lane cost (empty if none)."""
+    if not lanes:
+        return []
+    lines = [
+        "### Lane by lane: fast engine against the exact simulator\n",
+        "Seeded lanes over the whole parameter space (`atlas.dynamics.engine_check.random_lanes`: "
+        "a quarter of the angles on the axes and diagonals, where the modal forms are degenerate) "
+        "and the runs of the `0:2pi:8` degenerate-direction grid, each lane by both engines (one "
+        "core each, CPU seconds: `fast_cpu_s`, `exact_cpu_s`, `speedup` their ratio). "
+        "`disagreements`: lanes of different outcomes (each listed below); `fallback`: share of "
+        "lanes the fast engine hands to the exact simulator. A lane's fast cost is its share of "
+        "the batch's CPU in proportion to its steps (plus its exact run if it falls back); "
+        "`ratio_*`: that cost over the exact simulator's CPU for the same lane (median, 99th "
+        "percentile, worst); `over_exact`: lanes where it is over 1. `steps_median`, "
+        "`steps_max`: steps of a lane in the fast engine; "
+        "`over_steps`, `over_cost`: lanes over 10 times the median lane in steps, in fast cost; "
+        "`worst_over_median`: the costliest lane over the median lane; `over_steps_per_event`: "
+        "the most steps per event of a lane over 10 times the median (near 1: such a lane is "
+        "stepped event to event).\n",
+        table(lanes, ENGINE_LANE_COLUMNS),
+        "",
+    ]
+    lines += [f"* {row['set']}: {row['disagree_lanes']}" for row in lanes if row["disagree_lanes"]]
+    return [*lines, ""]
+
+
 def startup_section(rows) -> list[str]:
     """Start-up figures, whole processes, against their targets (empty if not measured)."""
     if not rows:
@@ -691,7 +725,7 @@ def build_report(r: Results) -> str:
         ),
         (("curves",), curves_section(r.curves)),
         (("simulation",), simulation_section(r.sim)),
-        (("outcome_maps",), outcome_maps_section(r.maps)),
+        (("outcome_maps",), [*outcome_maps_section(r.maps), *engine_lanes_section(r.lanes)]),
         (("startup",), startup_section(r.startup)),
     ]
     parts = [*header_section(m), *runs_section(m)]

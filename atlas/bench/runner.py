@@ -34,7 +34,7 @@ from atlas.bench.config import CONFIG, default_out, mode_name
 from atlas.bench.curves import curves
 from atlas.bench.grids import ExactCache
 from atlas.bench.report import Results, build_report, write_csv
-from atlas.bench.simulation import jax_outcome_columns, outcome_maps, simulation
+from atlas.bench.simulation import engine_lanes, jax_outcome_columns, outcome_maps, simulation
 from atlas.bench.timing import log, machine
 from atlas.core.config import use_compile_cache
 from atlas.data.io import atomic_write_text
@@ -88,7 +88,7 @@ def _work_precision(cfg, cache):
 def _outcome_maps(cfg, cache):
     maps = outcome_maps(cfg)
     jax_outcome_columns(maps, cfg)
-    return dict(maps=maps)
+    return dict(maps=maps, lanes=engine_lanes(cfg))
 
 
 #: how each section is measured: ``fn(cfg, cache) -> {field: rows}`` (seeded: the same points
@@ -170,7 +170,7 @@ def _write(out: Path, r: Results, t_start: float, names):
     js = dict(
         meta=r.meta, headline=r.head, refs=r.refs, exact=r.exact, model_grids=r.model_grids,
         model_box_map=r.model_box_map, large=r.large,
-        atlases=r.atlases, outcome_maps=r.maps, startup=r.startup,
+        atlases=r.atlases, outcome_maps=r.maps, engine_lanes=r.lanes, startup=r.startup,
     )  # fmt: skip
     atomic_write_text(out / "bench_headline.json", json.dumps(js, indent=1, default=_json_default))
     atomic_write_text(out / "bench.md", build_report(r))

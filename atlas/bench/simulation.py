@@ -12,9 +12,16 @@ import numpy as np
 
 from atlas import dynamics
 from atlas.bench.timing import log, timeit
+from atlas.dynamics import engine_check
 from atlas.dynamics.lane_pool import usable_cores
 
-__all__ = ["event_error", "gap_events", "jax_outcome_columns", "outcome_maps", "simulation"]
+__all__ = ["engine_lanes", "event_error", "gap_events", "jax_outcome_columns", "outcome_maps",
+           "simulation"]  # fmt: skip
+
+#: the degenerate-direction grid of the lane comparison: ``beta1 = beta2 = 0:2pi:8`` [rad],
+#: ``kappa``, ``q`` [1], ``alpha`` [rad]
+DEGENERATE_GRID = dict(beta1=np.arange(8) * (math.pi / 4), beta2=np.arange(8) * (math.pi / 4),
+                       kappa=(0.1, 5.0), q=(0.05, 1.5), alpha=0.3 * math.pi)  # fmt: skip
 
 #: the reference of ``simulate``: ``solve_ivp`` at tight tolerances
 _TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-16)
@@ -199,3 +206,35 @@ def jax_outcome_columns(rows, cfg) -> None:
                    jax_same=float(np.mean(jx == fast)))  # fmt: skip
     log(f"outcome map {rows[0]['map']} at {n}x{n}: jax kernel {n * n / jax_s:.0f}/s "
         f"(compiled in {first_s - jax_s:.0f} s), numpy {n * n / fast_s:.0f}/s")  # fmt: skip
+
+
+def _lane_sets(cfg):
+    """``(name, lanes)`` of the lane comparison: ``engine_random = (seed, n)`` random lanes over
+    the whole parameter space, ``engine_grid = n_perturb`` runs per cell of
+    :data:`DEGENERATE_GRID` (each off where its key is missing or 0)."""
+    seed, n = cfg.get("engine_random") or (0, 0)
+    if n:
+        yield f"{n} random lanes (seed {seed})", engine_check.random_lanes(seed, n)
+    runs = cfg.get("engine_grid")
+    if runs:
+        g = DEGENERATE_GRID
+        yield (f"beta 0:2pi:8, kappa 0.1,5, q 0.05,1.5, alpha 0.3pi, {runs} runs a cell",
+               engine_check.grid_lanes(**g, n_perturb=runs))  # fmt: skip
+
+
+def engine_lanes(cfg) -> list[dict]:
+    """Rows of the lane-by-lane comparison of the fast engine with the exact simulator
+    (:func:`atlas.dynamics.engine_check.compare`, one core each, CPU seconds) on the lane sets of
+    :func:`_lane_sets`: :func:`atlas.dynamics.engine_check.summary` (disagreements, fallback
+    share, per-lane fast/exact cost, lanes over 10 times the median lane) and ``disagree_lanes``
+    (each disagreeing lane: index, both outcome codes)."""
+    rows = []
+    for name, lanes in _lane_sets(cfg):
+        r = engine_check.compare(lanes)
+        bad = "; ".join(f"lane {i}: exact {r['exact'][i]}, fast {r['fast'][i]}"
+                        for i in r["disagree"])  # fmt: skip
+        rows.append(dict(set=name, **engine_check.summary(r), disagree_lanes=bad))
+        x = rows[-1]
+        log(f"engine lanes {name}: {x['disagreements']} disagreements, fast/exact per lane "
+            f"{x['ratio_median']:.2f} median, {x['ratio_worst']:.2f} worst")  # fmt: skip
+    return rows

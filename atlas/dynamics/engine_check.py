@@ -13,7 +13,8 @@ import numpy as np
 from atlas.dynamics import fast_engine
 from atlas.dynamics.outcome import initial_states, simulate_outcome, standard_normals
 
-__all__ = ["RandomLanes", "random_lanes", "grid_lanes", "compare", "cost_ratios"]
+__all__ = ["RandomLanes", "random_lanes", "grid_lanes", "compare", "lane_costs", "cost_ratios",
+           "summary"]  # fmt: skip
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,12 +99,46 @@ def compare(lanes: RandomLanes, **opts) -> dict:
             "exact_steps": steps, "exact_events": events}  # fmt: skip
 
 
-def cost_ratios(r: dict) -> np.ndarray:
-    """Each lane's cost in the fast engine over its cost in the exact simulator (n,), from
-    :func:`compare`'s result ``r``: the lane's share of the batch's CPU seconds in proportion to
-    the steps it took part in (a step costs every lane of the batch alike), plus the exact
-    simulator's run of a fallback lane, over the exact simulator's CPU seconds of the same lane."""
-    fb = r["decided_by"] == 3
+def lane_costs(r: dict) -> np.ndarray:
+    """Each lane's CPU seconds in the fast engine (n,), from :func:`compare`'s result ``r``: the
+    lane's share of the batch's CPU seconds in proportion to the steps it took part in (a step
+    costs every lane of the batch alike), plus the exact simulator's run of a fallback lane."""
+    fb = r["decided_by"] == fast_engine.DECIDED_BY.index("fallback")
     batch = max(r["fast_s"] - r["exact_lane_s"][fb].sum(), 0.0)
     share = batch * r["steps"] / max(int(r["steps"].sum()), 1)
-    return (share + np.where(fb, r["exact_lane_s"], 0.0)) / r["exact_lane_s"]
+    return share + np.where(fb, r["exact_lane_s"], 0.0)
+
+
+def cost_ratios(r: dict) -> np.ndarray:
+    """Each lane's cost in the fast engine (:func:`lane_costs`) over the exact simulator's CPU
+    seconds of the same lane (n,), from :func:`compare`'s result ``r``."""
+    return lane_costs(r) / r["exact_lane_s"]
+
+
+def summary(r: dict, over: float = 10.0) -> dict:
+    """The reported numbers of :func:`compare`'s result ``r``: ``lanes``, ``disagreements``,
+    ``fallback`` (share of lanes), CPU seconds of each engine (``fast_cpu_s``, ``exact_cpu_s``)
+    and their ratio ``speedup``; the per-lane fast/exact cost (:func:`cost_ratios`:
+    ``ratio_median``, ``ratio_p99``, ``ratio_worst``, and ``over_exact`` the lanes that cost
+    more than in the exact simulator); the median and largest steps of a lane,
+    the lanes over ``over`` times the median lane in steps (``over_steps``) and in fast CPU
+    seconds (:func:`lane_costs`; ``over_cost``), the worst lane's cost over the median lane's
+    (``worst_over_median``) and the most steps per event of a lane over ``over`` times the median
+    (``over_steps_per_event``: 1 where each step is an event; 0 if none)."""
+    steps, events = np.asarray(r["steps"]), np.asarray(r["n_events"])
+    cost, ratio = lane_costs(r), cost_ratios(r)
+    med_steps, med_cost = float(np.median(steps)), float(np.median(cost))
+    heavy = steps > over * med_steps
+    fb = r["decided_by"] == fast_engine.DECIDED_BY.index("fallback")
+    return dict(
+        lanes=int(steps.size), disagreements=int(r["disagree"].size), fallback=float(fb.mean()),
+        fast_cpu_s=float(r["fast_s"]), exact_cpu_s=float(r["exact_s"]),
+        speedup=float(r["exact_s"] / r["fast_s"]), ratio_median=float(np.median(ratio)),
+        ratio_p99=float(np.quantile(ratio, 0.99)), ratio_worst=float(ratio.max()),
+        over_exact=int((ratio > 1).sum()),
+        steps_median=med_steps, steps_max=int(steps.max()), over_steps=int(heavy.sum()),
+        over_cost=int((cost > over * med_cost).sum()),
+        worst_over_median=float(cost.max() / med_cost) if med_cost > 0 else math.inf,
+        over_steps_per_event=float((steps[heavy] / np.maximum(events[heavy], 1)).max())
+        if heavy.any() else 0.0,
+    )  # fmt: skip

@@ -31,6 +31,8 @@ __all__ = [
     "flow_curvature_bound",
     "flat_step",
     "second_and_third",
+    "taylor_terms",
+    "third_bound",
     "taylor_steps",
     "first_root",
     "safe_steps",
@@ -216,18 +218,36 @@ def second_and_third(p, UE, lam, H, k, q):
     """``(f2, M3)`` (n, 4): the second derivatives of the event functions at ``tau`` and a bound
     ``M3`` of their third derivatives on ``[tau, tau + H]`` (the modal terms' moduli grown by
     ``exp(max(Re lambda, 0) H)``, the cubic and quartic part's bounds)."""
+    f2, terms = taylor_terms(p, UE, lam, k, q)
+    return f2, third_bound(terms, H)
+
+
+def taylor_terms(p, UE, lam, k, q):
+    """``(f2, terms)``: the second derivatives ``f2`` (n, 4) of the event functions at ``tau``
+    and the parts of :func:`third_bound` that do not depend on the window (one evaluation for
+    several windows)."""
     xp = xp_of(p, UE, lam)
     lr = xp.abs(lam)[:, None, :]
-    grow = xp.exp(xp.maximum(lam.real, 0.0) * H[:, None])[:, None, :]
-    a = xp.abs(UE) * grow
     d2 = 2 * p[:, :, 2] + (UE * lam[:, None, :] ** 2).sum(axis=2).real
     d3 = (UE * lam[:, None, :] ** 3).sum(axis=2).real
-    m3, m4 = (a * lr**3).sum(axis=2), (a * lr**4).sum(axis=2)
-    if p.shape[2] > 3:  # the cubic and quartic part: its third derivative and its bounds
-        _, e3, e4 = _poly_bounds(p, H)
-        d3, m3, m4 = d3 + 6 * p[:, :, 3], m3 + e3, m4 + e4
+    if p.shape[2] > 3:  # the cubic part's third derivative
+        d3 = d3 + 6 * p[:, :, 3]
     f2 = xp.concatenate([d2, -k * d2 - q * d3], axis=1)
-    return f2, xp.concatenate([m3, k * m3 + q * m4], axis=1)
+    return f2, (p, xp.abs(UE), lr**3, lr**4, xp.maximum(lam.real, 0.0), k, q)
+
+
+def third_bound(terms, H):
+    """``M3`` (n, 4): a bound of the event functions' third derivatives on ``[tau, tau + H]``
+    (n,) from :func:`taylor_terms`' ``terms``: the modal terms' moduli grown by ``exp(max(Re
+    lambda, 0) H)``, the cubic and quartic part's bounds."""
+    p, aUE, lr3, lr4, grow_rate, k, q = terms
+    xp = xp_of(aUE, H)
+    a = aUE * xp.exp(grow_rate * H[:, None])[:, None, :]
+    m3, m4 = (a * lr3).sum(axis=2), (a * lr4).sum(axis=2)
+    if p.shape[2] > 3:  # the cubic and quartic part's bounds
+        _, e3, e4 = _poly_bounds(p, H)
+        m3, m4 = m3 + e3, m4 + e4
+    return xp.concatenate([m3, k * m3 + q * m4], axis=1)
 
 
 def taylor_steps(A, Bd, C, M3, W, err=0.0):

@@ -139,10 +139,11 @@ def _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon):
     lo_r, hi_r, mon_r = lo[r], hi[r], mon[r]
     A_r, Bd_r = A[r], Bd[r]
     err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
+    f2, terms = eb.taylor_terms(p[r], UE[r], lam[r], k[r], q[r])
+    C = s[r] * f2
     for f in TAYLOR:
         W = np.minimum(Hw[r], f * m)
-        f2, M3 = eb.second_and_third(p[r], UE[r], lam[r], W, k[r], q[r])
-        lo_t, hi_t = eb.taylor_steps(A_r, Bd_r, s[r] * f2, M3, W, err)
+        lo_t, hi_t = eb.taylor_steps(A_r, Bd_r, C, eb.third_bound(terms, W), W, err)
         lo_r = np.where(mon_r, np.maximum(lo_r, lo_t), lo_r)
         hi_r = np.where(mon_r, np.minimum(hi_r, hi_t), hi_r)
     lo[r], hi[r] = lo_r, hi_r

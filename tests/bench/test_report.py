@@ -148,3 +148,29 @@ def test_outcome_maps_section_lists_every_disagreement(results):
     assert "| map | trajectories | workers | fast_seconds | fast_per_s | core_seconds |" in md
     assert "* 8x8, kappa=0.5, q=0, alpha=0.35pi: (1,2): reference IWC" in md
     assert "* other:" not in md
+
+
+def test_engine_lanes_table_follows_the_outcome_maps_and_lists_disagreements(results):
+    """The lane-by-lane rows (``Results.lanes``) under the outcome maps: their table with the
+    per-lane ratio and the counts against the median lane, each disagreeing set on its own line;
+    no such table without rows."""
+    row = dict(set="2000 random lanes (seed 44)", lanes=2000, disagreements=1, fallback=0.0,
+               fast_cpu_s=20.0, exact_cpu_s=900.0, speedup=45.0, ratio_median=0.1,
+               ratio_p99=0.6, ratio_worst=1.2, over_exact=3, steps_median=6.0, steps_max=130,
+               over_steps=4, over_cost=4, worst_over_median=21.7, over_steps_per_event=1.1,
+               disagree_lanes="lane 7: exact 3, fast 2")  # fmt: skip
+    assert "### Lane by lane" not in report.build_report(results)
+    results.lanes = [row, dict(row, set="grid", disagreements=0, disagree_lanes="")]
+    md = report.build_report(results)
+    heads = [ln for ln in md.splitlines() if ln.startswith("#")]
+    i = heads.index("## Outcome maps: fast engine against the exact simulator")
+    assert heads[i + 1 : i + 3] == ["### Lane by lane: fast engine against the exact simulator",
+                                    "## Start-up"]  # fmt: skip
+    header = ("| set | lanes | disagreements | fallback | fast_cpu_s | exact_cpu_s | speedup | "
+              "ratio_median | ratio_p99 | ratio_worst | over_exact | steps_median | steps_max | "
+              "over_steps | over_cost | worst_over_median | over_steps_per_event |")  # fmt: skip
+    assert header in md
+    row_md = "| 2000 random lanes (seed 44) | 2000 | 1 | 0 | 20 | 900 | 45 | 0.1 | 0.6 | 1.2 | 3 |"
+    assert row_md in md
+    assert "* 2000 random lanes (seed 44): lane 7: exact 3, fast 2" in md
+    assert "* grid:" not in md

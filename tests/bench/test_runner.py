@@ -53,6 +53,9 @@ def test_tiny_run_end_to_end(tiny_bench):
     sim = _csv(out / "bench_simulation.csv")
     assert [r["method"] for r in sim] == ["simulate (exact)", "solve_ivp DOP853", "solve_ivp Radau"]
     assert float(sim[0]["error"]) < 1e-9  # simulate against solve_ivp at rtol 1e-13
+    (lanes,) = js["engine_lanes"]  # both engines on the tiny run's 6 random lanes
+    assert lanes["lanes"] == 6 and lanes["disagreements"] == 0
+    assert "### Lane by lane" in md
     for name in ("work_precision.png", "convergence.png", "scaling.png", "simulation.png",
                  "work_precision.csv", "suites.csv", "atlases.csv", "curves.csv"):  # fmt: skip
         assert (out / f"bench_{name}").stat().st_size > 0

@@ -60,3 +60,37 @@ def test_cost_ratios_share_the_batch_by_steps_and_add_a_fallbacks_exact_run():
     x = C.cost_ratios(r)
     np.testing.assert_allclose(x, [0.25 / 0.5, 0.75 / 1.0, 1.0, 1.0 / 2.0])
     assert np.isclose((x * r["exact_lane_s"]).sum(), r["fast_s"])
+
+
+def test_summary_counts_lanes_against_the_median_lane():
+    """The reported numbers of a made-up comparison, by hand: five lanes, one a fallback (its
+    exact run added to its cost), one with 12 steps for 11 events (over 10 times the median of
+    1 step), one disagreement."""
+    r = dict(fast_s=2.0, steps=np.array([1, 1, 12, 0, 2]), n_events=np.array([0, 1, 11, 0, 1]),
+             decided_by=np.array([0, 1, 0, 3, 0]), exact_lane_s=np.array([1.0, 1.0, 2.0, 1.0, 1.0]),
+             exact_s=6.0, disagree=np.array([4]))  # fmt: skip
+    s = C.summary(r)
+    # batch CPU 2.0 - 1.0 (the fallback's exact run) over 16 steps: 1/16 s a step
+    cost = np.array([1, 1, 12, 16, 2]) / 16
+    ratio = cost / r["exact_lane_s"]
+    assert s["lanes"] == 5 and s["disagreements"] == 1 and s["fallback"] == 0.2
+    assert s["speedup"] == 3.0 and s["fast_cpu_s"] == 2.0 and s["exact_cpu_s"] == 6.0
+    assert s["ratio_median"] == pytest.approx(2 / 16)  # ratios 1/16, 1/16, 12/32, 1, 2/16
+    assert s["ratio_worst"] == pytest.approx(1.0)  # the fallback: its exact run, 1 s
+    assert s["over_exact"] == 0  # the fallback costs exactly its exact run: not over
+    assert s["ratio_p99"] == pytest.approx(np.quantile(ratio, 0.99))
+    assert s["steps_median"] == 1.0 and s["steps_max"] == 12
+    assert s["over_steps"] == 1 and s["over_steps_per_event"] == pytest.approx(12 / 11)
+    # fast cost: median lane 2/16 s; the 12-step lane (12/16) is 6x, the fallback (16/16) 8x
+    assert s["over_cost"] == 0 and s["worst_over_median"] == pytest.approx(8.0)
+    assert C.summary(r, over=5.0)["over_cost"] == 2
+
+
+def test_summary_of_a_lane_set_without_heavy_lanes():
+    r = dict(fast_s=1.0, steps=np.array([3, 3]), n_events=np.array([1, 1]),
+             decided_by=np.array([0, 0]), exact_lane_s=np.array([1.0, 1.0]), exact_s=2.0,
+             disagree=np.array([], dtype=int))  # fmt: skip
+    s = C.summary(r)
+    assert s["over_steps"] == s["over_cost"] == 0 and s["over_steps_per_event"] == 0.0
+    assert s["worst_over_median"] == 1.0 and s["ratio_median"] == s["ratio_worst"] == 0.5
+    assert C.summary(dict(r, fast_s=3.0))["over_exact"] == 2  # 1.5 s a lane against 1 s

@@ -250,6 +250,7 @@ def test_divergence_stop_is_located_as_in_the_exact_simulator(b1, b2, alpha, kap
     assert out == out_fine == S.Outcome[expected]
     assert res.status == res_fine.status == S.Status.DIVERGED
     assert int(fast.code[0]) == int(out)
+    assert F.DECIDED_BY[fast.decided_by[0]] == "stepped"  # its own stop, no early decision
     assert fast.t_final[0] == pytest.approx(res.t_final, rel=1e-9)
     assert res_fine.t_final == pytest.approx(res.t_final, rel=1e-9)
 
@@ -277,6 +278,24 @@ def test_near_defective_lane_is_sent_back_at_once():
     # beta2 = 0: FS (b22 = 0, defective) in closed form; SF at 1e-8 off the axis is no rounding
     assert fb in res.decided_by[:2]
     assert res.decided_by[2] != fb and res.decided_by[3] != fb
+
+
+@pytest.mark.parametrize("run", [0, 1])
+def test_near_defective_lane_has_the_exact_simulators_verdict_at_a_finer_substep(run):
+    """The near-defective lane (beta1 = pi/2 + 1e-8, beta2 0, kappa 5, q 1.5, alpha 0.3pi), both
+    initial states: the exact simulator's verdict, stop and time (to 1e-9 relative) are the same
+    at a 10 times finer sub-step (theta 0.05), and the fast engine gives that verdict."""
+    alpha, k, q = 0.3 * PI, (5.0, 1.0), (1.5, 1.5)
+    b1 = PI / 2 + 1e-8
+    g0 = S.perturbed_initial_states([b1], [0.0], alpha, 5.0, n_perturb=2)[0, 0, run]
+    out, res = S.simulate_outcome(b1, 0.0, alpha, k=k, q=q, g0=g0, max_events=2000)
+    fine, res_fine = S.simulate_outcome(b1, 0.0, alpha, k=k, q=q, g0=g0, max_events=2000,
+                                        theta=0.05)  # fmt: skip
+    assert out == fine and res.status == res_fine.status and res.n_events == res_fine.n_events
+    assert res_fine.t_final == pytest.approx(res.t_final, rel=1e-9)
+    assert res_fine.n_steps > 5 * res.n_steps  # the finer sub-step was taken
+    fast = F.run_batch(b1, 0.0, alpha, k, q, g0[None], reference=_reference)
+    assert int(fast.code[0]) == int(out)
 
 
 def test_a_fallback_lane_reports_the_exact_simulators_stop_time_state_and_events():
