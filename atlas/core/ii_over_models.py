@@ -537,7 +537,7 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     codes[SIDES_STAB][(cons == 0) | never] = _U
     codes[SIDES_STAB][(cons == 1) & dominant] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
-    todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
+    todo = np.flatnonzero((codes[SIDES_STAB] == _X) | (codes[SIDES_CONS] == _X))  # signs: open
     sample = _staged_sample(geo[todo], box, cons[todo])
     sc, ss = (sample[name][0] for name in SIDES)
     got = _sample_codes(cons[todo], sc, ss, geo[todo])
