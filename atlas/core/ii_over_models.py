@@ -283,9 +283,73 @@ def _axis_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     cons[g0 & (c2 == 0) & (s1 == 0) & ((c1 > 0) | (s2 > 0))] = 0  # a root of one factor only
     # c2 > 0 (row): c2 h1(L) < 0 puts L below h1's positive root, which dominates; c2 < 0: above
     # it, so L is simple and strictly dominant (and the same with s1, h2 for col)
-    never = (row & (c2 > 0)) | (col & (s1 > 0))
+    # c2 = s1 = 0 (B diagonal): an II root is a common root of h1 and h2, a double root of p
+    # above the other two (negative) roots: never strictly dominant
+    never = (row & (c2 > 0)) | (col & (s1 > 0)) | (g0 & (c2 == 0) & (s1 == 0))
     dominant = (row & (c2 < 0)) | (col & (s1 < 0))
     return cons, never, dominant
+
+
+def _sign_sqrt(x: Fraction, r: Fraction, y: Fraction) -> int:
+    """Exact sign of ``x sqrt(r) + y`` (``r >= 0``)."""
+    a, b = _sg(x) if r else 0, _sg(y)
+    if a == b or b == 0 or a == 0:
+        return a or b
+    return _sg(x * x * r - y * y) * a
+
+
+def root_order(C, S, kappa, q1, q2) -> int:
+    """Exact sign of ``L1 - L2``, ``L1`` the positive root of ``h1 = l^2 - C (kappa + q1 l)``
+    (``C q1`` at ``kappa = 0``), ``L2`` that of ``h2 = l^2 - S (1 + q2 l)`` (``C, S > 0``;
+    ``C = -c1``, ``S = -s2``): ``L1 < L2`` iff ``h2(L1) = (C q1 - S q2) L1 + C kappa - S < 0``,
+    ``L1 = (C q1 + sqrt(C^2 q1^2 + 4 C kappa)) / 2``."""
+    C, S, k, q1, q2 = (Fraction(v) for v in (C, S, kappa, q1, q2))
+    a = C * q1 - S * q2
+    return _sign_sqrt(a, (C * q1) ** 2 + 4 * C * k, a * C * q1 + 2 * (C * k - S))
+
+
+def axis_ranges_rule(geo: np.ndarray, box: mb.ModelBox) -> np.ndarray:
+    """II consistency over ``box`` (1 every model, 0 none, -1 depends or not this rule's) of the
+    rows of ``geo`` with ``c1 < 0``, ``s2 < 0`` and ``c2 s1 = 0`` (module docstring, a direction
+    on an axis): II iff ``t = L1 - L2 < 0`` (``s1 > 0`` or ``c2 < 0``), ``t > 0`` (``s1 < 0``
+    or ``c2 > 0``) or ``t = 0`` (``s1 = c2 = 0``), and ``t`` increases with ``kappa``, ``q1``
+    and decreases with ``q2``: its supremum and infimum over the box are at two corners
+    (:func:`root_order`, exact; an unbounded axis gives ``+-inf``; ``kappa > 0`` leaves the
+    infimum unattained).  With ``q1 = q2`` the corners bound ``t`` (taken as attained)."""
+    out = np.full(len(geo), -1, np.int8)
+    (k0, k1), (a0, a1), (b0, b1) = box.kappa, box.q1, box.q2
+    lo_open = k0 == 0 and not box.equal
+    for i in np.flatnonzero((geo[:, 0] < 0) & (geo[:, 3] < 0) & (geo[:, 1] * geo[:, 2] == 0)):
+        c1, s1, c2, s2 = geo[i]
+        if s1 != 0 and c2 != 0:  # a product below the smallest subnormal: not on an axis
+            continue
+        hi = 1 if math.inf in (k1, a1) else root_order(-c1, -s2, k1, a1, b0)
+        lo = -1 if b1 == math.inf else root_order(-c1, -s2, k0, a0, b1)
+        above = lo > 0 or (lo == 0 and lo_open)  # t > 0 for every model
+        if s1 > 0 or c2 < 0:
+            out[i] = 1 if hi < 0 else 0 if lo >= 0 else -1
+        elif s1 < 0 or c2 > 0:
+            out[i] = 1 if above else 0 if hi <= 0 else -1
+        else:
+            out[i] = 0 if hi < 0 or above else -1
+    return out
+
+
+def common_root_model(g, box: mb.ModelBox):
+    """A model of ``box`` at which ``h1 = h2`` (so II is consistent) for ``g = (c1, 0, 0, s2)``,
+    ``c1, s2 < 0``: ``(s2 / c1, q2 s2 / c1, q2)`` for a sample value ``q2``, where it is exact in
+    floats (checked by the exact tier), else ``None``."""
+    from atlas.core import exact  # noqa: PLC0415
+
+    c1, s2 = Fraction(float(g[0])), Fraction(float(g[3]))
+    for q2 in np.unique(mb.sample_models(box, True)[2]):
+        m = (float(s2 / c1), float(q2 * s2 / c1), float(q2))
+        exact_ = Fraction(m[0]) == s2 / c1 and Fraction(m[1]) == Fraction(m[2]) * s2 / c1
+        inside = all(r[0] <= v <= r[1] for v, r in zip(m, (box.kappa, box.q1, box.q2)))
+        if exact_ and inside and m[0] > 0 and (m[1] == m[2] or not box.equal):
+            if exact.point_spectral(*map(float, g), *m)["consistent_II"] == 1:
+                return m
+    return None
 
 
 def below_threshold(geo: np.ndarray) -> np.ndarray:
@@ -445,6 +509,11 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
         if len(rest):
             models = np.stack(mb.sample_models(box, fine), 1)
             _merge(out, rest, _sample(geo[rest], models, scaled(c1[rest], s2[rest])))
+    seen, models = out[SIDES_CONS]
+    for i in np.flatnonzero((s1 == 0) & (c2 == 0) & (c1 < 0) & (s2 < 0) & ~seen[:, 0]):
+        m = common_root_model(geo[i], box)
+        if m is not None:
+            seen[i, 0], models[i, 0] = True, m
     return out
 
 
@@ -531,6 +600,8 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
     sd = mb.det_signs(geo)
     cons, never, dominant = signs_rule(*np.sign(geo.T), sd)
+    ranges = axis_ranges_rule(geo, box)
+    cons = np.where(ranges >= 0, ranges, cons).astype(np.int8)
     dominant = dominant | threshold_rule(geo, sd)
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
