@@ -105,8 +105,15 @@ where ``c2 > 0`` an II root lies below ``L1``, which dominates (never stable); w
 an II root lies above every other root's real part (``L1`` and three roots with ``Re <= 0``), so
 II is stable exactly where it is consistent.  ``c2 = 0``, ``s1 != 0`` is the same with the two
 contacts exchanged; with ``c2 = s1 = 0`` a root of one factor alone is never II, so II is
-inconsistent for every model unless ``c1 < 0`` and ``s2 < 0``.  Only ``c1 < 0``, ``s2 < 0`` is
-left to the sample (``DEPENDS``, or ``UNDECIDED`` where it sees one side).  ``b2 = -b1`` is
+inconsistent for every model unless ``c1 < 0`` and ``s2 < 0``.  There (:func:`axis_ranges_rule`)
+``h1``, ``h2`` have one positive root each, ``L1`` (increasing in ``kappa``, ``q1``) and ``L2``
+(increasing in ``q2``); II holds iff ``L1 < L2`` (``s1 > 0`` or ``c2 < 0``), ``L1 > L2``
+(``s1 < 0`` or ``c2 > 0``), or ``L1 = L2`` (``c2 = s1 = 0``: ``B`` diagonal, every ``x`` is an
+eigenvector at a common root, a double root of ``p`` above the two negative ones: never strictly
+dominant, so never stable), so two corners of the box bound ``L1 - L2`` and decide "for every
+model" or "for none" exactly; where they do not, the sample finds ``DEPENDS`` (with ``B``
+diagonal its consistent witness has ``h1 = h2``: ``kappa = s2 / c1``, ``q1 = q2 s2 / c1``) or
+leaves ``UNDECIDED``.  ``b2 = -b1`` is
 decided by the sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
 """
 
@@ -556,17 +563,19 @@ def _decide(ints, N, box, seen: dict, budget: int) -> dict:
     return {"ii_consistent_over_models": cons, "ii_stable_over_models": stab}
 
 
-def _sample_codes(cons: np.ndarray, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
+def _sample_codes(cons, never, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
     """Tier 2 for all open geometries at once: their codes from the signs' consistency ``cons``
-    (1, 0, -1) and the sides the sample saw (``sc``, ``ss``: ``(n, 2)`` bool, sides
-    :data:`SIDES`); ``UNDECIDED`` where one side only was seen and the signs do not decide."""
+    (1, 0, -1), ``never`` (never stable: unstable for every model) and the sides the sample saw
+    (``sc``, ``ss``: ``(n, 2)`` bool, sides :data:`SIDES`); ``UNDECIDED`` where one side only was
+    seen and the signs do not decide."""
     n = np.arange(len(cons))
     bad = (cons >= 0) & sc[n, np.clip(cons, 0, 1)]  # side 1 seen where the signs say 1, ...
     c = np.where(cons >= 0, np.where(cons == 1, _S, _U), np.where(sc.all(1), _D, _X))
-    bad |= (c == _U) & ss[:, 0]
+    unstable = (c == _U) | never
+    bad |= unstable & ss[:, 0]
     if bad.any():
         raise _contradiction(*mb.integers(tuple(geo[np.argmax(bad)].tolist())))
-    st = np.where(ss.all(1), _D, np.where(c == _U, _U, _X))
+    st = np.where(ss.all(1), _D, np.where(unstable, _U, _X))
     return {SIDES_CONS: c.astype(np.int8), SIDES_STAB: st.astype(np.int8)}
 
 
@@ -611,7 +620,7 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     todo = np.flatnonzero((codes[SIDES_STAB] == _X) | (codes[SIDES_CONS] == _X))  # signs: open
     sample = _staged_sample(geo[todo], box, cons[todo])
     sc, ss = (sample[name][0] for name in SIDES)
-    got = _sample_codes(cons[todo], sc, ss, geo[todo])
+    got = _sample_codes(cons[todo], never[todo], sc, ss, geo[todo])
     stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
     stats["undecided_before"] = int(sum(np.sum(v == _X) for v in got.values()))
     open_ = np.flatnonzero((got[SIDES_CONS] == _X) | (got[SIDES_STAB] == _X))
