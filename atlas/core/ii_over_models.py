@@ -62,7 +62,7 @@ the strictly dominant eigenvalue, so again II is stable exactly where it is cons
 model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 
 **The threshold rule** (``gamma < 0``, ``D < 0``: classes 15 and 32, ``c1 s2 < 0``; II
-consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaled`) the verdict
+consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaling`) the verdict
 depends only on ``e = |D| / |c1 s2|`` in ``(0, 1)``; class 32 is class 15 under
 ``l = sqrt(kappa) m``, ``(kappa, q1, q2) -> (1 / kappa, q2 / sqrt(kappa), q1 / sqrt(kappa))``.
 Unit class 15: ``p = (l^2 + d1)(l^2 - d2) + (1 - e) d1 d2``, ``p(0) = -e kappa < 0``.  Where
@@ -433,25 +433,29 @@ def far_models(box: mb.ModelBox) -> tuple:
 
 def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 21) -> dict:
     """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``; at geometry ``i``
-    times ``scale[i]`` if given) on each side (certified point verdicts) at each geometry:
-    ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool, ``models`` ``(n, 2, 3)`` (NaN where not
-    seen)."""
+    :func:`rescaled` by ``scale[i]`` if given, skipped where that is no float model) on each side
+    (certified point verdicts) at each geometry: ``{name: (seen, models)}``, ``seen`` ``(n, 2)``
+    bool, ``models`` ``(n, 2, 3)`` (NaN where not seen)."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
-    K, Q1, Q2 = models.T
-    scale = np.ones((len(geo), 3)) if scale is None else scale
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
-    step = max(1, chunk // len(K))
+    step = max(1, chunk // len(models))
     for i in range(0, len(geo), step):
         block = geo[i : i + step]
         size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
         block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
-        sc = scale[i : i + step]
-        sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
+        if scale is None:
+            m = np.broadcast_to(models, (size, *models.shape))
+        else:
+            sc = scale[i : i + step]
+            sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
+            m = rescaled(models[None], sc[:, None])
+        valid = ~np.isnan(m[..., 0])
         g = [block[:, j, None] for j in range(4)]
-        m = [v[None] * sc[:, j, None] for j, v in enumerate((K, Q1, Q2))]
+        m = [np.where(valid, m[..., j], 1.0) for j in range(3)]
         v = spectral_points(*g, *m, names=("consistent_II", "stable_II"))
         n = min(step, len(geo) - i)
+        valid = valid[:n]
         ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
         sides = {
             "ii_consistent_over_models": (ci == 1, ci == 0),
@@ -461,20 +465,35 @@ def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 2
             ),
         }
         for name, (good, bad) in sides.items():
-            for j, m in enumerate((good, bad)):
+            for j, m in enumerate((good & valid, bad & valid)):
                 firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
     padded = np.concatenate([models, np.full((1, 3), np.nan)])  # index -1: NaN
-    return {name: (f >= 0, padded[f] * scale[:, None]) for name, f in firsts.items()}
+    moved = (lambda m: m) if scale is None else (lambda m: rescaled(m, scale[:, None]))  # noqa: E731
+    return {name: (f >= 0, moved(padded[f])) for name, f in firsts.items()}
 
 
-def scaled(c1, s2) -> np.ndarray:
-    """``(kappa, q1, q2)`` multipliers ``(|s2| / |c1|, sqrt|s2| / |c1|, 1 / sqrt|s2|)``: ``p`` (and
-    so every verdict: the II condition ``c2 h1 < 0`` keeps its sign) at the model times them and
-    geometry ``c1, s1, c2, s2`` is ``s2^2`` times ``p`` at the model and geometry
-    ``sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2``, ``l`` scaled by ``sqrt|s2|``: the sample of a geometry with ``|c1|`` or ``|s2|`` far
-    from 1 is the unit one's moved there (``c1 s2 != 0``)."""
-    C, S = np.abs(c1), np.abs(s2)
-    return np.stack([S / C, np.sqrt(S) / C, 1 / np.sqrt(S)], -1)
+def scaling(c1, log2_u) -> np.ndarray:
+    """``log2`` of the ``(kappa, q1, q2)`` multipliers ``(u / |c1|, sqrt(u) / |c1|, 1 / sqrt(u))``
+    (``u > 0`` given as ``log2 u``, ``c1 != 0``; no overflow for subnormal ``|c1|``).  With
+    ``l = sqrt(u) m``, ``p`` at the model times them and geometry ``c1, s1, c2, s2`` is ``u^2``
+    times ``p`` at the model and the geometry with ``c1' = sign c1``, ``s2' = s2 / u``,
+    ``gamma' = gamma / (|c1| u)`` (the II condition ``c2 h1 < 0`` keeps its sign): ``u = |s2|``
+    gives ``(sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2)``, ``u = |gamma / c1|``
+    gives ``(sign c1, sign s1, sign c2, s2 |c1 / gamma|)``, so the sample of a geometry with
+    components or ``|gamma / (c1 s2)|`` far from 1 is a unit one's moved there."""
+    lc, lu = np.log2(np.abs(c1)), np.asarray(log2_u, np.float64)
+    return np.stack([lu - lc, lu / 2 - lc, -lu / 2], -1)
+
+
+def rescaled(models, log2_scale) -> np.ndarray:
+    """``models`` (``(..., 3)``: ``kappa, q1, q2``) times ``2^log2_scale`` (broadcast), NaN rows
+    where the product is not a float model (overflow, or ``kappa`` rounded to 0): not in the
+    model space, never evaluated."""
+    e = np.clip(np.floor(log2_scale), -4096, 4096)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        out = np.ldexp(models * np.exp2(log2_scale - e), e.astype(np.int32))
+    bad = ~np.isfinite(out).all(-1) | ~(out[..., 0] > 0)
+    return np.where(bad[..., None], np.nan, out)
 
 
 def _merge(out: dict, rows: np.ndarray, more: dict) -> None:
@@ -492,7 +511,8 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     and ``3 |gamma| > 1.9 |c1 s2|`` (the far models' limit, with room: a choice of candidates,
     never a decision; the far models mostly need the exact tier), and on the whole model space,
     where ``|c1|`` or ``|s2| < 2^-20`` and a side is still missing, the sample scaled to the
-    geometry (:func:`scaled`), then the fine one."""
+    geometry (:func:`scaling` with ``u = |s2|``), then the fine one, and the same with
+    ``u = |gamma / c1|`` where ``|gamma / (c1 s2)|`` is outside ``[2^-20, 2^20]``."""
     grid = np.stack(mb.sample_models(box, False), 1)
     out = _sample(geo, grid[::8])
 
@@ -509,13 +529,22 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     rest = np.flatnonzero(missing() & ~out[SIDES_STAB][0][:, 1] & near)
     if len(rest) and len(far):
         _merge(out, rest, _sample(geo[rest], far))
-    C, S = np.abs(c1), np.abs(s2)
-    rest = np.flatnonzero(missing() & (np.minimum(C, S) < 2.0**-20) & (box == mb.ModelBox()))
-    for fine in (False, True):
-        rest = rest[missing()[rest]]
-        if len(rest):
-            models = np.stack(mb.sample_models(box, fine), 1)
-            _merge(out, rest, _sample(geo[rest], models, scaled(c1[rest], s2[rest])))
+    whole = box == mb.ModelBox()
+    with np.errstate(divide="ignore"):  # log2 0 = -inf: such rows are left out
+        lc, ls = np.log2(np.abs(c1)), np.log2(np.abs(s2))
+        lg = np.log2(np.abs(c2)) + np.log2(np.abs(s1))  # log2 |gamma|, no underflow
+    ok = whole & np.isfinite(lc) & np.isfinite(ls) & np.isfinite(lg)
+    stages = (
+        (ok & (np.minimum(lc, ls) < -20), ls),  # u = |s2|
+        (ok & (np.abs(lg - lc - ls) > 20), lg - lc),  # u = |gamma / c1|
+    )
+    for where, log2_u in stages:
+        rest = np.flatnonzero(missing() & where)
+        for fine in (False, True):
+            rest = rest[missing()[rest]]
+            if len(rest):
+                models = np.stack(mb.sample_models(box, fine), 1)
+                _merge(out, rest, _sample(geo[rest], models, scaling(c1[rest], log2_u[rest])))
     seen, models = out[SIDES_CONS]
     for i in np.flatnonzero((s1 == 0) & (c2 == 0) & (c1 < 0) & (s2 < 0) & ~seen[:, 0]):
         m = common_root_model(geo[i], box)
