@@ -168,3 +168,35 @@ def test_never_stable_stays_decided_on_an_unbounded_box():
     assert r[CONS].tolist() == [DEP] * 4 and r[STAB].tolist() == [NO] * 4
     for g in NEVER_STABLE:
         assert {_reference(g, m)[1] for m in _corners_and_middle(box)} == {0}, g
+
+
+def _tiny_c1(x: float) -> np.ndarray:
+    return np.array([(-x, -1.0, 0.6, 0.8), (-x, -1.0, 0.6, -0.8)])
+
+
+@pytest.mark.parametrize("x", [1e-20])
+def test_a_tiny_c1_depends_with_witnesses_far_out(x):
+    """``b1 = (-x, -1)``, ``b2 = (0.6, +-0.8)``: II needs ``h1 < 0``, so ``kappa + q1 l`` beyond
+    about ``0.6 / x^2`` (the sample moved by ``u = |gamma / c1|``): consistency and stability
+    depend on the model, both witnesses on their sides by the reference."""
+    geo = _tiny_c1(x)
+    r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert r[CONS].tolist() == [DEP, DEP] and r[STAB].tolist() == [DEP, DEP]
+    for i, g in enumerate(map(tuple, geo)):
+        for j, name in enumerate((CONS, STAB)):
+            yes, no = _witnesses(r, name, i)
+            assert _reference(g, yes)[j] == 1 and _reference(g, no)[j] == 0, (g, name, yes, no)
+
+
+def test_a_subnormal_c1_overflows_nothing():
+    """``c1`` subnormal (``5e-324``, ``1e-310``): the moved samples raise no warning (no
+    multiplier overflows).  The codes stay ``undecided``: an II root needs ``h1 = l^2 - x d1 < 0``
+    with ``d1 > 0.6 / x^2`` (from ``h1 h2 = 0.6 d1 d2``), so ``kappa > 1e300`` or
+    ``q1 > sqrt(0.6) / (2 x^1.5) > 1e400``: no float model witnesses the consistent side."""
+    import warnings
+
+    geo = np.concatenate([_tiny_c1(5e-324), _tiny_c1(1e-310)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert set(r[CONS].tolist()) <= {DEP, UND} and set(r[STAB].tolist()) <= {DEP, UND}
