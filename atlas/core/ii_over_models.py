@@ -632,6 +632,7 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     (:func:`witness_names`, float64, NaN where the code is not ``DEPENDS``).  ``settle=False``
     leaves what the small budget did not decide ``UNDECIDED``; on a box with an unbounded axis
     no proof is tried (module docstring, Tiers).  ``.stats``: counts."""
+    box = mb.checked(box)
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
