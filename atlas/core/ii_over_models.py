@@ -62,7 +62,7 @@ the strictly dominant eigenvalue, so again II is stable exactly where it is cons
 model (``c2 < 0``: consistent; ``c2 > 0``: never), decided by the signs.
 
 **The threshold rule** (``gamma < 0``, ``D < 0``: classes 15 and 32, ``c1 s2 < 0``; II
-consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaled`) the verdict
+consistent by the signs where ``c1 c2 < 0``).  By the scaling law (:func:`scaling`) the verdict
 depends only on ``e = |D| / |c1 s2|`` in ``(0, 1)``; class 32 is class 15 under
 ``l = sqrt(kappa) m``, ``(kappa, q1, q2) -> (1 / kappa, q2 / sqrt(kappa), q1 / sqrt(kappa))``.
 Unit class 15: ``p = (l^2 + d1)(l^2 - d2) + (1 - e) d1 d2``, ``p(0) = -e kappa < 0``.  Where
@@ -105,8 +105,15 @@ where ``c2 > 0`` an II root lies below ``L1``, which dominates (never stable); w
 an II root lies above every other root's real part (``L1`` and three roots with ``Re <= 0``), so
 II is stable exactly where it is consistent.  ``c2 = 0``, ``s1 != 0`` is the same with the two
 contacts exchanged; with ``c2 = s1 = 0`` a root of one factor alone is never II, so II is
-inconsistent for every model unless ``c1 < 0`` and ``s2 < 0``.  Only ``c1 < 0``, ``s2 < 0`` is
-left to the sample (``DEPENDS``, or ``UNDECIDED`` where it sees one side).  ``b2 = -b1`` is
+inconsistent for every model unless ``c1 < 0`` and ``s2 < 0``.  There (:func:`axis_ranges_rule`)
+``h1``, ``h2`` have one positive root each, ``L1`` (increasing in ``kappa``, ``q1``) and ``L2``
+(increasing in ``q2``); II holds iff ``L1 < L2`` (``s1 > 0`` or ``c2 < 0``), ``L1 > L2``
+(``s1 < 0`` or ``c2 > 0``), or ``L1 = L2`` (``c2 = s1 = 0``: ``B`` diagonal, every ``x`` is an
+eigenvector at a common root, a double root of ``p`` above the two negative ones: never strictly
+dominant, so never stable), so two corners of the box bound ``L1 - L2`` and decide "for every
+model" or "for none" exactly; where they do not, the sample finds ``DEPENDS`` (with ``B``
+diagonal its consistent witness has ``h1 = h2``: ``kappa = s2 / c1``, ``q1 = q2 s2 / c1``) or
+leaves ``UNDECIDED``.  ``b2 = -b1`` is
 decided by the sample only (``DEPENDS``) or left ``UNDECIDED``.  No tolerance decides anything.
 """
 
@@ -283,9 +290,73 @@ def _axis_rule(c1, s1, c2, s2, d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     cons[g0 & (c2 == 0) & (s1 == 0) & ((c1 > 0) | (s2 > 0))] = 0  # a root of one factor only
     # c2 > 0 (row): c2 h1(L) < 0 puts L below h1's positive root, which dominates; c2 < 0: above
     # it, so L is simple and strictly dominant (and the same with s1, h2 for col)
-    never = (row & (c2 > 0)) | (col & (s1 > 0))
+    # c2 = s1 = 0 (B diagonal): an II root is a common root of h1 and h2, a double root of p
+    # above the other two (negative) roots: never strictly dominant
+    never = (row & (c2 > 0)) | (col & (s1 > 0)) | (g0 & (c2 == 0) & (s1 == 0))
     dominant = (row & (c2 < 0)) | (col & (s1 < 0))
     return cons, never, dominant
+
+
+def _sign_sqrt(x: Fraction, r: Fraction, y: Fraction) -> int:
+    """Exact sign of ``x sqrt(r) + y`` (``r >= 0``)."""
+    a, b = _sg(x) if r else 0, _sg(y)
+    if a == b or b == 0 or a == 0:
+        return a or b
+    return _sg(x * x * r - y * y) * a
+
+
+def root_order(C, S, kappa, q1, q2) -> int:
+    """Exact sign of ``L1 - L2``, ``L1`` the positive root of ``h1 = l^2 - C (kappa + q1 l)``
+    (``C q1`` at ``kappa = 0``), ``L2`` that of ``h2 = l^2 - S (1 + q2 l)`` (``C, S > 0``;
+    ``C = -c1``, ``S = -s2``): ``L1 < L2`` iff ``h2(L1) = (C q1 - S q2) L1 + C kappa - S < 0``,
+    ``L1 = (C q1 + sqrt(C^2 q1^2 + 4 C kappa)) / 2``."""
+    C, S, k, q1, q2 = (Fraction(v) for v in (C, S, kappa, q1, q2))
+    a = C * q1 - S * q2
+    return _sign_sqrt(a, (C * q1) ** 2 + 4 * C * k, a * C * q1 + 2 * (C * k - S))
+
+
+def axis_ranges_rule(geo: np.ndarray, box: mb.ModelBox) -> np.ndarray:
+    """II consistency over ``box`` (1 every model, 0 none, -1 depends or not this rule's) of the
+    rows of ``geo`` with ``c1 < 0``, ``s2 < 0`` and ``c2 s1 = 0`` (module docstring, a direction
+    on an axis): II iff ``t = L1 - L2 < 0`` (``s1 > 0`` or ``c2 < 0``), ``t > 0`` (``s1 < 0``
+    or ``c2 > 0``) or ``t = 0`` (``s1 = c2 = 0``), and ``t`` increases with ``kappa``, ``q1``
+    and decreases with ``q2``: its supremum and infimum over the box are at two corners
+    (:func:`root_order`, exact; an unbounded axis gives ``+-inf``; ``kappa > 0`` leaves the
+    infimum unattained).  With ``q1 = q2`` the corners bound ``t`` (taken as attained)."""
+    out = np.full(len(geo), -1, np.int8)
+    (k0, k1), (a0, a1), (b0, b1) = box.kappa, box.q1, box.q2
+    lo_open = k0 == 0 and not box.equal
+    for i in np.flatnonzero((geo[:, 0] < 0) & (geo[:, 3] < 0) & (geo[:, 1] * geo[:, 2] == 0)):
+        c1, s1, c2, s2 = geo[i]
+        if s1 != 0 and c2 != 0:  # a product below the smallest subnormal: not on an axis
+            continue
+        hi = 1 if math.inf in (k1, a1) else root_order(-c1, -s2, k1, a1, b0)
+        lo = -1 if b1 == math.inf else root_order(-c1, -s2, k0, a0, b1)
+        above = lo > 0 or (lo == 0 and lo_open)  # t > 0 for every model
+        if s1 > 0 or c2 < 0:
+            out[i] = 1 if hi < 0 else 0 if lo >= 0 else -1
+        elif s1 < 0 or c2 > 0:
+            out[i] = 1 if above else 0 if hi <= 0 else -1
+        else:
+            out[i] = 0 if hi < 0 or above else -1
+    return out
+
+
+def common_root_model(g, box: mb.ModelBox):
+    """A model of ``box`` at which ``h1 = h2`` (so II is consistent) for ``g = (c1, 0, 0, s2)``,
+    ``c1, s2 < 0``: ``(s2 / c1, q2 s2 / c1, q2)`` for a sample value ``q2``, where it is exact in
+    floats (checked by the exact tier), else ``None``."""
+    from atlas.core import exact  # noqa: PLC0415
+
+    c1, s2 = Fraction(float(g[0])), Fraction(float(g[3]))
+    for q2 in np.unique(mb.sample_models(box, True)[2]):
+        m = (float(s2 / c1), float(q2 * s2 / c1), float(q2))
+        exact_ = Fraction(m[0]) == s2 / c1 and Fraction(m[1]) == Fraction(m[2]) * s2 / c1
+        inside = all(r[0] <= v <= r[1] for v, r in zip(m, (box.kappa, box.q1, box.q2)))
+        if exact_ and inside and m[0] > 0 and (m[1] == m[2] or not box.equal):
+            if exact.point_spectral(*map(float, g), *m)["consistent_II"] == 1:
+                return m
+    return None
 
 
 def below_threshold(geo: np.ndarray) -> np.ndarray:
@@ -362,25 +433,29 @@ def far_models(box: mb.ModelBox) -> tuple:
 
 def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 21) -> dict:
     """Per output, the first of ``models`` (``(m, 3)``: ``kappa, q1, q2``; at geometry ``i``
-    times ``scale[i]`` if given) on each side (certified point verdicts) at each geometry:
-    ``{name: (seen, models)}``, ``seen`` ``(n, 2)`` bool, ``models`` ``(n, 2, 3)`` (NaN where not
-    seen)."""
+    :func:`rescaled` by ``scale[i]`` if given, skipped where that is no float model) on each side
+    (certified point verdicts) at each geometry: ``{name: (seen, models)}``, ``seen`` ``(n, 2)``
+    bool, ``models`` ``(n, 2, 3)`` (NaN where not seen)."""
     from atlas.core.points import spectral_points  # noqa: PLC0415 - JAX only when needed
 
-    K, Q1, Q2 = models.T
-    scale = np.ones((len(geo), 3)) if scale is None else scale
     firsts = {name: np.full((len(geo), 2), -1, np.int64) for name in SIDES}
-    step = max(1, chunk // len(K))
+    step = max(1, chunk // len(models))
     for i in range(0, len(geo), step):
         block = geo[i : i + step]
         size = min(step, max(64, 1 << (len(block) - 1).bit_length()))  # a few shapes: compiled once
         block = np.concatenate([block, np.repeat(block[:1], size - len(block), 0)])
-        sc = scale[i : i + step]
-        sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
+        if scale is None:
+            m = np.broadcast_to(models, (size, *models.shape))
+        else:
+            sc = scale[i : i + step]
+            sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
+            m = rescaled(models[None], sc[:, None])
+        valid = ~np.isnan(m[..., 0])
         g = [block[:, j, None] for j in range(4)]
-        m = [v[None] * sc[:, j, None] for j, v in enumerate((K, Q1, Q2))]
+        m = [np.where(valid, m[..., j], 1.0) for j in range(3)]
         v = spectral_points(*g, *m, names=("consistent_II", "stable_II"))
         n = min(step, len(geo) - i)
+        valid = valid[:n]
         ci, si = np.asarray(v["consistent_II"])[:n], np.asarray(v["stable_II"])[:n]
         sides = {
             "ii_consistent_over_models": (ci == 1, ci == 0),
@@ -390,20 +465,35 @@ def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 2
             ),
         }
         for name, (good, bad) in sides.items():
-            for j, m in enumerate((good, bad)):
+            for j, m in enumerate((good & valid, bad & valid)):
                 firsts[name][i : i + n, j] = np.where(m.any(1), np.argmax(m, 1), -1)
     padded = np.concatenate([models, np.full((1, 3), np.nan)])  # index -1: NaN
-    return {name: (f >= 0, padded[f] * scale[:, None]) for name, f in firsts.items()}
+    moved = (lambda m: m) if scale is None else (lambda m: rescaled(m, scale[:, None]))  # noqa: E731
+    return {name: (f >= 0, moved(padded[f])) for name, f in firsts.items()}
 
 
-def scaled(c1, s2) -> np.ndarray:
-    """``(kappa, q1, q2)`` multipliers ``(|s2| / |c1|, sqrt|s2| / |c1|, 1 / sqrt|s2|)``: ``p`` (and
-    so every verdict: the II condition ``c2 h1 < 0`` keeps its sign) at the model times them and
-    geometry ``c1, s1, c2, s2`` is ``s2^2`` times ``p`` at the model and geometry
-    ``sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2``, ``l`` scaled by ``sqrt|s2|``: the sample of a geometry with ``|c1|`` or ``|s2|`` far
-    from 1 is the unit one's moved there (``c1 s2 != 0``)."""
-    C, S = np.abs(c1), np.abs(s2)
-    return np.stack([S / C, np.sqrt(S) / C, 1 / np.sqrt(S)], -1)
+def scaling(c1, log2_u) -> np.ndarray:
+    """``log2`` of the ``(kappa, q1, q2)`` multipliers ``(u / |c1|, sqrt(u) / |c1|, 1 / sqrt(u))``
+    (``u > 0`` given as ``log2 u``, ``c1 != 0``; no overflow for subnormal ``|c1|``).  With
+    ``l = sqrt(u) m``, ``p`` at the model times them and geometry ``c1, s1, c2, s2`` is ``u^2``
+    times ``p`` at the model and the geometry with ``c1' = sign c1``, ``s2' = s2 / u``,
+    ``gamma' = gamma / (|c1| u)`` (the II condition ``c2 h1 < 0`` keeps its sign): ``u = |s2|``
+    gives ``(sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2)``, ``u = |gamma / c1|``
+    gives ``(sign c1, sign s1, sign c2, s2 |c1 / gamma|)``, so the sample of a geometry with
+    components or ``|gamma / (c1 s2)|`` far from 1 is a unit one's moved there."""
+    lc, lu = np.log2(np.abs(c1)), np.asarray(log2_u, np.float64)
+    return np.stack([lu - lc, lu / 2 - lc, -lu / 2], -1)
+
+
+def rescaled(models, log2_scale) -> np.ndarray:
+    """``models`` (``(..., 3)``: ``kappa, q1, q2``) times ``2^log2_scale`` (broadcast), NaN rows
+    where the product is not a float model (overflow, or ``kappa`` rounded to 0): not in the
+    model space, never evaluated."""
+    e = np.clip(np.floor(log2_scale), -4096, 4096)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        out = np.ldexp(models * np.exp2(log2_scale - e), e.astype(np.int32))
+    bad = ~np.isfinite(out).all(-1) | ~(out[..., 0] > 0)
+    return np.where(bad[..., None], np.nan, out)
 
 
 def _merge(out: dict, rows: np.ndarray, more: dict) -> None:
@@ -421,7 +511,8 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     and ``3 |gamma| > 1.9 |c1 s2|`` (the far models' limit, with room: a choice of candidates,
     never a decision; the far models mostly need the exact tier), and on the whole model space,
     where ``|c1|`` or ``|s2| < 2^-20`` and a side is still missing, the sample scaled to the
-    geometry (:func:`scaled`), then the fine one."""
+    geometry (:func:`scaling` with ``u = |s2|``), then the fine one, and the same with
+    ``u = |gamma / c1|`` where ``|gamma / (c1 s2)|`` is outside ``[2^-20, 2^20]``."""
     grid = np.stack(mb.sample_models(box, False), 1)
     out = _sample(geo, grid[::8])
 
@@ -438,13 +529,27 @@ def _staged_sample(geo: np.ndarray, box: mb.ModelBox, cons: np.ndarray) -> dict:
     rest = np.flatnonzero(missing() & ~out[SIDES_STAB][0][:, 1] & near)
     if len(rest) and len(far):
         _merge(out, rest, _sample(geo[rest], far))
-    C, S = np.abs(c1), np.abs(s2)
-    rest = np.flatnonzero(missing() & (np.minimum(C, S) < 2.0**-20) & (box == mb.ModelBox()))
-    for fine in (False, True):
-        rest = rest[missing()[rest]]
-        if len(rest):
-            models = np.stack(mb.sample_models(box, fine), 1)
-            _merge(out, rest, _sample(geo[rest], models, scaled(c1[rest], s2[rest])))
+    whole = box == mb.ModelBox()
+    with np.errstate(divide="ignore"):  # log2 0 = -inf: such rows are left out
+        lc, ls = np.log2(np.abs(c1)), np.log2(np.abs(s2))
+        lg = np.log2(np.abs(c2)) + np.log2(np.abs(s1))  # log2 |gamma|, no underflow
+    ok = whole & np.isfinite(lc) & np.isfinite(ls) & np.isfinite(lg)
+    stages = (
+        (ok & (np.minimum(lc, ls) < -20), ls),  # u = |s2|
+        (ok & (np.abs(lg - lc - ls) > 20), lg - lc),  # u = |gamma / c1|
+    )
+    for where, log2_u in stages:
+        rest = np.flatnonzero(missing() & where)
+        for fine in (False, True):
+            rest = rest[missing()[rest]]
+            if len(rest):
+                models = np.stack(mb.sample_models(box, fine), 1)
+                _merge(out, rest, _sample(geo[rest], models, scaling(c1[rest], log2_u[rest])))
+    seen, models = out[SIDES_CONS]
+    for i in np.flatnonzero((s1 == 0) & (c2 == 0) & (c1 < 0) & (s2 < 0) & ~seen[:, 0]):
+        m = common_root_model(geo[i], box)
+        if m is not None:
+            seen[i, 0], models[i, 0] = True, m
     return out
 
 
@@ -487,17 +592,19 @@ def _decide(ints, N, box, seen: dict, budget: int) -> dict:
     return {"ii_consistent_over_models": cons, "ii_stable_over_models": stab}
 
 
-def _sample_codes(cons: np.ndarray, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
+def _sample_codes(cons, never, sc: np.ndarray, ss: np.ndarray, geo: np.ndarray) -> dict:
     """Tier 2 for all open geometries at once: their codes from the signs' consistency ``cons``
-    (1, 0, -1) and the sides the sample saw (``sc``, ``ss``: ``(n, 2)`` bool, sides
-    :data:`SIDES`); ``UNDECIDED`` where one side only was seen and the signs do not decide."""
+    (1, 0, -1), ``never`` (never stable: unstable for every model) and the sides the sample saw
+    (``sc``, ``ss``: ``(n, 2)`` bool, sides :data:`SIDES`); ``UNDECIDED`` where one side only was
+    seen and the signs do not decide."""
     n = np.arange(len(cons))
     bad = (cons >= 0) & sc[n, np.clip(cons, 0, 1)]  # side 1 seen where the signs say 1, ...
     c = np.where(cons >= 0, np.where(cons == 1, _S, _U), np.where(sc.all(1), _D, _X))
-    bad |= (c == _U) & ss[:, 0]
+    unstable = (c == _U) | never
+    bad |= unstable & ss[:, 0]
     if bad.any():
         raise _contradiction(*mb.integers(tuple(geo[np.argmax(bad)].tolist())))
-    st = np.where(ss.all(1), _D, np.where(c == _U, _U, _X))
+    st = np.where(ss.all(1), _D, np.where(unstable, _U, _X))
     return {SIDES_CONS: c.astype(np.int8), SIDES_STAB: st.astype(np.int8)}
 
 
@@ -525,22 +632,25 @@ def ii_over_models(c1, s1, c2, s2, box: mb.ModelBox, *, settle: bool = True) -> 
     (:func:`witness_names`, float64, NaN where the code is not ``DEPENDS``).  ``settle=False``
     leaves what the small budget did not decide ``UNDECIDED``; on a box with an unbounded axis
     no proof is tried (module docstring, Tiers).  ``.stats``: counts."""
+    box = mb.checked(box)
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)
     bounded = math.inf not in (box.kappa[1], box.q1[1], box.q2[1])
     sd = mb.det_signs(geo)
     cons, never, dominant = signs_rule(*np.sign(geo.T), sd)
+    ranges = axis_ranges_rule(geo, box)
+    cons = np.where(ranges >= 0, ranges, cons).astype(np.int8)
     dominant = dominant | threshold_rule(geo, sd)
     codes = {name: np.full(len(geo), _X, np.int8) for name in SIDES}
     codes[SIDES_CONS][cons >= 0] = cons[cons >= 0]
     codes[SIDES_STAB][(cons == 0) | never] = _U
     codes[SIDES_STAB][(cons == 1) & dominant] = _S
     wit = {name: np.full((len(geo), 6), np.nan) for name in SIDES}
-    todo = np.flatnonzero(codes[SIDES_STAB] == _X)  # the signs leave the stability open
+    todo = np.flatnonzero((codes[SIDES_STAB] == _X) | (codes[SIDES_CONS] == _X))  # signs: open
     sample = _staged_sample(geo[todo], box, cons[todo])
     sc, ss = (sample[name][0] for name in SIDES)
-    got = _sample_codes(cons[todo], sc, ss, geo[todo])
+    got = _sample_codes(cons[todo], never[todo], sc, ss, geo[todo])
     stats = {"points": len(geo), "by_signs": len(geo) - len(todo)}
     stats["undecided_before"] = int(sum(np.sum(v == _X) for v in got.values()))
     open_ = np.flatnonzero((got[SIDES_CONS] == _X) | (got[SIDES_STAB] == _X))

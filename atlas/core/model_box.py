@@ -65,6 +65,7 @@ __all__ = [
     "BoxResult",
     "model_box",
     "parse_model_box",
+    "checked",
     "ss_over_models",
     "sample_models",
     "integers",
@@ -91,6 +92,18 @@ class ModelBox:
     q2: tuple = (0.0, math.inf)
     equal: bool = False
 
+    def __post_init__(self):
+        """Every axis checked (:func:`_range`, a one-line ``ValueError`` naming it) and stored as
+        ``(lo, hi)`` floats, however the box was made."""
+        for name in ("kappa", "q1", "q2"):
+            value = _range(name, getattr(self, name), kappa=name == "kappa")
+            object.__setattr__(self, name, value)
+        if not isinstance(self.equal, (bool, np.bool_)):
+            raise ValueError(f"model_box: equal: expected True or False, got {_shown(self.equal)}")
+        object.__setattr__(self, "equal", bool(self.equal))
+        if self.equal and self.q1 != self.q2:
+            raise ValueError("model_box: q: equal damping needs the same q1 and q2 ranges")
+
     @property
     def has_undamped(self) -> bool:
         return self.q1[0] == 0 and self.q2[0] == 0
@@ -112,25 +125,33 @@ def _exact(x: float) -> str:
     return short if float(short) == x else repr(float(x))
 
 
+def _shown(value) -> str:
+    """``value``'s repr where it is one short line, else its type (error messages stay one line)."""
+    text = repr(value)
+    return text if len(text) <= 60 and "\n" not in text else f"a {type(value).__name__}"
+
+
 def _range(name: str, value, *, kappa: bool) -> tuple:
     """One axis ``(lo, hi)`` (or one number: a fixed value), checked: one-line ``ValueError``."""
+    if isinstance(value, np.ndarray) and value.ndim <= 1:
+        value = tuple(value.tolist()) if value.ndim else value.item()
     vals = value if isinstance(value, (tuple, list)) else (value, value)
-    if len(vals) != 2 or any(isinstance(v, (bool, str)) for v in vals):
-        raise ValueError(f"model_box: {name}: expected lo:hi or one number, got {value!r}")
+    if len(vals) != 2 or any(isinstance(v, (bool, np.bool_, str, bytes)) for v in vals):
+        raise ValueError(f"model_box: {name}: expected lo:hi or one number, got {_shown(value)}")
     try:
         lo, hi = (float(v) for v in vals)
     except (TypeError, ValueError):
-        raise ValueError(f"model_box: {name}: expected real numbers, got {value!r}") from None
+        raise ValueError(f"model_box: {name}: expected real numbers, got {_shown(value)}") from None
     if math.isnan(lo) or math.isnan(hi):
-        raise ValueError(f"model_box: {name}: NaN bound in {value!r}")
+        raise ValueError(f"model_box: {name}: NaN bound in {_shown(value)}")
     if lo < 0 or hi < 0:
-        raise ValueError(f"model_box: {name}: bounds must be >= 0, got {value!r}")
+        raise ValueError(f"model_box: {name}: bounds must be >= 0, got {_shown(value)}")
     if lo > hi:
         raise ValueError(f"model_box: {name}: reversed range {_exact(lo)}:{_exact(hi)}")
     if lo == math.inf:
         raise ValueError(f"model_box: {name}: the lower bound must be finite")
     if kappa and hi == 0:
-        raise ValueError(f"model_box: {name}: empty (kappa > 0), got {value!r}")
+        raise ValueError(f"model_box: {name}: empty (kappa > 0), got {_shown(value)}")
     return lo, hi
 
 
@@ -170,6 +191,25 @@ def parse_model_box(text: str) -> ModelBox:
             raise ValueError(f"model_box: {key}: expected numbers, got {val!r}") from None
         out[key] = tuple(nums) if len(nums) == 2 else nums[0]
     return model_box(**out)
+
+
+def checked(value) -> ModelBox:
+    """The one check of every entry point: a :class:`ModelBox` from itself, its text
+    (:func:`parse_model_box`) or a dict of :func:`model_box` keywords; anything else, a bad
+    axis or an unknown key is a one-line ``ValueError`` naming the parameter (the CLI's
+    message)."""
+    if isinstance(value, ModelBox):
+        return value
+    if isinstance(value, str):
+        return parse_model_box(value)
+    if isinstance(value, dict):
+        unknown = set(value) - {"kappa", "q1", "q2", "q"}
+        if unknown:
+            raise ValueError(
+                f"model_box: unknown axes {sorted(map(str, unknown))} (kappa, q1, q2, q)"
+            )
+        return model_box(**value)
+    raise ValueError(f"model_box: expected a ModelBox, a dict or text, got {_shown(value)}")
 
 
 # --- the pieces of the box and their conditions, exactly -------------------------------------------
@@ -512,6 +552,7 @@ def ss_over_models(c1, s1, c2, s2, box: ModelBox, *, settle: bool = True) -> dic
     components: ``ss_over_models`` (:class:`atlas.core.verdicts.OverModels` codes, int8) and the
     :data:`WITNESS_NAMES` (float64, NaN where the code is not ``DEPENDS``).  ``settle=False`` leaves
     what the small budget did not decide ``UNDECIDED``.  ``.stats`` of the result: counts."""
+    box = checked(box)
     arrs = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (c1, s1, c2, s2)))
     shape = arrs[0].shape
     geo = np.stack([a.ravel() for a in arrs], axis=1)

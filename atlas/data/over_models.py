@@ -41,17 +41,9 @@ II_OVER_MODELS_OUTPUTS = iim.II_OUTPUTS
 
 def as_model_box(value) -> mb.ModelBox:
     """A :class:`atlas.core.model_box.ModelBox` from itself, its text (``"kappa=0.01:100,q=0:1"``)
-    or a dict of :func:`atlas.core.model_box.model_box` keywords; one-line ``ValueError``."""
-    if isinstance(value, mb.ModelBox):
-        return value
-    if isinstance(value, str):
-        return mb.parse_model_box(value)
-    if isinstance(value, dict):
-        unknown = set(value) - {"kappa", "q1", "q2", "q"}
-        if unknown:
-            raise ValueError(f"model_box: unknown axes {sorted(unknown)} (kappa, q1, q2, q)")
-        return mb.model_box(**value)
-    raise ValueError(f"model_box: expected a ModelBox, a dict or text, got {value!r}")
+    or a dict of :func:`atlas.core.model_box.model_box` keywords; one-line ``ValueError``
+    (:func:`atlas.core.model_box.checked`)."""
+    return mb.checked(value)
 
 
 def over_models(beta1, beta2, box, dtype: str = "float64", *, ii: bool = False) -> xr.Dataset:

@@ -320,17 +320,23 @@ def test_a_fast_pair_overtakes_near_the_threshold(cls):
 
 
 def test_the_scaling_law():
-    """The exact tier at ``(kappa, q1, q2)`` times :func:`scaled` equals it at the unit geometry
-    ``(sign c1, sign s1, sign c2 |gamma / (c1 s2)|, sign s2)`` with the model unscaled (``p``
-    times ``s2^2``, the II condition ``c2 h1 < 0`` unchanged)."""
+    """The exact tier at ``(kappa, q1, q2)`` moved by :func:`scaling` equals it at the unit
+    geometry with the model unmoved: ``u = |s2|`` gives ``(sign c1, sign s1, sign c2
+    |gamma / (c1 s2)|, sign s2)``, ``u = |gamma / c1|`` gives ``(sign c1, sign s1, sign c2,
+    s2 |c1 / gamma|)`` (``p`` times ``u^2``, the II condition ``c2 h1 < 0`` unchanged)."""
     rng = np.random.default_rng(8)
     for _ in range(12):
         g = tuple(rng.uniform(-1, 1, 4) * np.exp2(rng.integers(-30, 3, 4)))
         c1, s1, c2, s2 = g
-        unit = (np.sign(c1), np.sign(s1), np.sign(c2) * abs(c2 * s1 / (c1 * s2)), np.sign(s2))
+        gamma = c2 * s1
+        units = {
+            abs(s2): (np.sign(c1), np.sign(s1), np.sign(c2) * abs(gamma / (c1 * s2)), np.sign(s2)),
+            abs(gamma / c1): (np.sign(c1), np.sign(s1), np.sign(c2), s2 * abs(c1 / gamma)),
+        }
         m = tuple(np.exp2(rng.uniform(-8, 8, 3)))
-        mm = tuple((np.array(m) * iim.scaled(c1, s2)).tolist())
-        assert _exact(g, mm) == _exact(unit, m), (g, m)
+        for u, unit in units.items():
+            mm = tuple(iim.rescaled(np.array(m), iim.scaling(c1, np.log2(u))).tolist())
+            assert _exact(g, mm) == _exact(unit, m), (g, m, u)
 
 
 def test_a_direction_next_to_an_axis():

@@ -1,0 +1,202 @@
+"""II over a box of contact models where a direction lies on an axis (``gamma = c2 s1 = 0``) or
+a component is tiny, against the independent sympy/mpmath reference (``tests/reference_sympy.py``:
+the characteristic polynomial from its definition, exact root isolation)."""
+
+import numpy as np
+import pytest
+from reference_sympy import point_spectral
+
+from atlas.core import ii_over_models as iim
+from atlas.core import model_box as mb
+from atlas.core.verdicts import OverModels, Verdict
+
+NO, YES, DEP, UND = (int(v) for v in OverModels)
+CONS, STAB = iim.SIDES
+BOX = mb.model_box(kappa=(0.01, 100.0), q1=(0.0, 1.0), q2=(0.0, 1.0))
+
+
+def _reference(g, m) -> tuple[int, int]:
+    """``(consistent_II, stable_II is STABLE)`` of model ``m`` at geometry ``g`` (reference)."""
+    v = point_spectral(*g, *m)
+    return int(v["consistent_II"]), int(v["stable_II"] == int(Verdict.STABLE))
+
+
+def _grid(box: mb.ModelBox, n: int = 5) -> list:
+    """``n^3`` models spread over a bounded box (geometric in ``kappa``, linear in ``q``)."""
+    k = np.geomspace(*box.kappa, n)
+    q1, q2 = (np.linspace(*r, n) for r in (box.q1, box.q2))
+    return [(float(a), float(b), float(c)) for a in k for b in q1 for c in q2]
+
+
+def _witnesses(r, name, i) -> tuple:
+    w = [float(r[x][i]) for x in iim.witness_names(name)]
+    return tuple(w[:3]), tuple(w[3:])
+
+
+# b1 = (-1, 0) with b2 in QIV, and b2 = (0, -1) with b1 in QII: gamma = 0, c1 < 0, s2 < 0, and
+# the II root, where there is one, lies below a larger root (never stable)
+NEVER_STABLE = [
+    (-1.0, 0.0, 0.6, -0.8),
+    (-1.0, 0.0, 0.28, -0.96),
+    (-0.6, 0.8, 0.0, -1.0),
+    (-0.96, 0.28, 0.0, -1.0),
+]
+
+
+def test_consistency_is_sampled_where_the_signs_decide_only_the_stability():
+    """The signs say "never stable" but leave the consistency open: it depends on the model (the
+    reference sees both sides on a grid of the box), with both witnesses on their sides; the
+    stability is unstable for every model (the reference never sees a stable II)."""
+    r = iim.ii_over_models(*np.array(NEVER_STABLE).T, BOX, settle=False)
+    assert r[CONS].tolist() == [DEP] * 4 and r[STAB].tolist() == [NO] * 4
+    for i, g in enumerate(NEVER_STABLE):
+        got = {_reference(g, m) for m in _grid(BOX)}
+        assert got == {(0, 0), (1, 0)}, (g, got)
+        yes, no = _witnesses(r, CONS, i)
+        assert _reference(g, yes)[0] == 1 and _reference(g, no)[0] == 0, (g, yes, no)
+
+
+def _corners_and_middle(box: mb.ModelBox) -> list:
+    """The box's corners and middle (``inf`` -> ``1e6``, ``kappa > 0`` from ``0`` -> ``1e-6``)."""
+    ends = [
+        (max(lo, 1e-6) if name == "kappa" else lo, min(hi, 1e6))
+        for name, (lo, hi) in (("kappa", box.kappa), ("q1", box.q1), ("q2", box.q2))
+    ]
+    mid = tuple(float(np.sqrt(a * b)) if a > 0 else b / 2 for a, b in ends)
+    models = [(k, a, b) for k in ends[0] for a in ends[1] for b in ends[2]] + [mid]
+    return [m for m in models if m[1] == m[2] or not box.equal]
+
+
+# one of each rule: II iff L1 < L2 (s1 > 0; c2 < 0), L1 > L2 (s1 < 0; c2 > 0), L1 = L2 (diagonal)
+ON_AXES = [
+    (-0.6, 0.8, 0.0, -1.0),
+    (-1.0, 0.0, -0.6, -0.8),
+    (-0.6, -0.8, 0.0, -1.0),
+    (-1.0, 0.0, 0.6, -0.8),
+]
+AXIS_BOXES = [
+    mb.model_box(kappa=(0.01, 0.1), q1=(0.0, 0.1), q2=(1.0, 2.0)),  # L1 < L2 throughout
+    mb.model_box(kappa=(10.0, 100.0), q1=(1.0, 2.0), q2=(0.0, 0.5)),  # L1 > L2 throughout
+    mb.model_box(kappa=(0.0, 0.1), q1=(0.0, 0.1), q2=(1.0, 2.0)),  # kappa > 0, open at 0
+    mb.model_box(kappa=(0.5, 2.0), q=(0.0, 1.0)),
+]
+
+
+@pytest.mark.parametrize("box", AXIS_BOXES, ids=str)
+def test_axis_geometries_against_the_reference_at_the_corners(box):
+    """Where a direction lies on an axis (``c1, s2 < 0``) the corners of the box decide (module
+    docstring): every "for every model" code holds at the corners and middle of the box by the
+    reference, and on the first two boxes (the sample sees one side only) the codes are decided;
+    before the rule they were ``undecided``."""
+    r = iim.ii_over_models(*np.array(ON_AXES).T, box, settle=False)
+    for i, g in enumerate(ON_AXES):
+        code = int(r[CONS][i])
+        assert code != UND, g
+        if code in (YES, NO):
+            got = {_reference(g, m)[0] for m in _corners_and_middle(box)}
+            assert got == {int(code == YES)}, (g, code, got)
+        else:
+            yes, no = _witnesses(r, CONS, i)
+            assert _reference(g, yes)[0] == 1 and _reference(g, no)[0] == 0, (g, yes, no)
+    if box in AXIS_BOXES[:2]:
+        want = [YES, YES, NO, NO] if box == AXIS_BOXES[0] else [NO, NO, YES, YES]
+        assert r[CONS].tolist() == want
+        assert r[STAB].tolist() == [NO, YES, NO, NO] if box == AXIS_BOXES[0] else [NO] * 4
+
+
+def test_the_corner_order_is_exact():
+    """``L1 = L2`` exactly (``C = S = 1``, ``kappa = 1``, ``q1 = q2``: ``h1 = h2``) is 0, one
+    ulp of ``kappa`` either side is -1 / +1; against the closed-form roots in mpmath (80 digits)."""
+    mpmath = pytest.importorskip("mpmath")
+    assert iim.root_order(1.0, 1.0, 1.0, 0.5, 0.5) == 0
+    with mpmath.workdps(80):
+        for k in (np.nextafter(1.0, 0.0), np.nextafter(1.0, 2.0), 0.3, 7.0):
+            for C, S, q1, q2 in (
+                (1.0, 1.0, 0.5, 0.5),
+                (0.6, 0.8, 0.0, 1.0),
+                (0.28, 0.96, 2.0, 0.0),
+            ):
+                L1 = (C * q1 + mpmath.sqrt(mpmath.mpf(C * q1) ** 2 + 4 * mpmath.mpf(C) * k)) / 2
+                L2 = (S * q2 + mpmath.sqrt(mpmath.mpf(S * q2) ** 2 + 4 * mpmath.mpf(S))) / 2
+                want = int(mpmath.sign(L1 - L2))
+                assert want != 0 and iim.root_order(C, S, k, q1, q2) == want, (k, C, S)
+
+
+def _ii_at_common_root(g, m) -> bool:
+    """B diagonal: at the positive root ``L`` of ``h2`` (sympy, exact) ``l^2 I + B diag(d1, d2)``
+    vanishes, so ``x = (1, 1)`` is an eigenvector with ``x1 x2 > 0``: II consistent."""
+    sp = pytest.importorskip("sympy")
+    c1, _, _, s2 = (sp.Rational(v) for v in g)
+    k, q1, q2 = (sp.Rational(v) for v in m)
+    lam = sp.Symbol("lam", positive=True)
+    (L,) = sp.solve(lam**2 + s2 * (1 + q2 * lam), lam)
+    mat = sp.Matrix([[L**2 + c1 * (k + q1 * L), 0], [0, L**2 + s2 * (1 + q2 * L)]])
+    return L > 0 and sp.simplify(mat) == sp.zeros(2, 2)
+
+
+@pytest.mark.parametrize("box", [BOX, mb.model_box(), mb.model_box(kappa=(0.5, 4.0), q=(0, 1))])
+def test_a_diagonal_b_depends_and_is_never_stable(box):
+    """``b1 = (-1, 0)``, ``b2 = (0, -1)`` (``beta1 = pi``, ``beta2 = 3 pi / 2``): II consistent
+    exactly where ``h1``, ``h2`` share their positive root (a double root of ``p``, never
+    strictly dominant).  Consistency depends on the model (the consistent witness has ``h1 =
+    h2``, checked in sympy; the inconsistent one by the reference), stability is unstable for
+    every model (the reference at the box's corners and middle).  Undecided before."""
+    g = (-1.0, 0.0, 0.0, -1.0)
+    r = iim.ii_over_models(*g, box, settle=False)
+    assert (int(r[CONS]), int(r[STAB])) == (DEP, NO)
+    yes, no = _witnesses(r, CONS, ())
+    assert _ii_at_common_root(g, yes) and _reference(g, no)[0] == 0
+    assert {_reference(g, m)[1] for m in _corners_and_middle(box) if m[0] != 1.0} == {0}
+
+
+def test_a_diagonal_b_without_a_common_root_in_the_box():
+    """The positive roots' ranges do not meet (``L1 <= 0.36 < 1 <= L2``): inconsistent for every
+    model, by the corners (the reference agrees at the corners and middle)."""
+    g = (-1.0, 0.0, 0.0, -1.0)
+    box = mb.model_box(kappa=(0.01, 0.1), q1=(0.0, 0.1), q2=(0.0, 2.0))
+    r = iim.ii_over_models(*g, box, settle=False)
+    assert (int(r[CONS]), int(r[STAB])) == (NO, NO)
+    assert {_reference(g, m)[0] for m in _corners_and_middle(box)} == {0}
+
+
+def test_never_stable_stays_decided_on_an_unbounded_box():
+    """On the whole model space (no proof tier) the sampled consistency must not reopen the
+    stability the signs decided: unstable for every model (the reference at the corners and
+    middle of the box, capped at 1e6), consistency depends."""
+    box = mb.model_box()
+    r = iim.ii_over_models(*np.array(NEVER_STABLE).T, box, settle=False)
+    assert r[CONS].tolist() == [DEP] * 4 and r[STAB].tolist() == [NO] * 4
+    for g in NEVER_STABLE:
+        assert {_reference(g, m)[1] for m in _corners_and_middle(box)} == {0}, g
+
+
+def _tiny_c1(x: float) -> np.ndarray:
+    return np.array([(-x, -1.0, 0.6, 0.8), (-x, -1.0, 0.6, -0.8)])
+
+
+@pytest.mark.parametrize("x", [1e-20])
+def test_a_tiny_c1_depends_with_witnesses_far_out(x):
+    """``b1 = (-x, -1)``, ``b2 = (0.6, +-0.8)``: II needs ``h1 < 0``, so ``kappa + q1 l`` beyond
+    about ``0.6 / x^2`` (the sample moved by ``u = |gamma / c1|``): consistency and stability
+    depend on the model, both witnesses on their sides by the reference."""
+    geo = _tiny_c1(x)
+    r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert r[CONS].tolist() == [DEP, DEP] and r[STAB].tolist() == [DEP, DEP]
+    for i, g in enumerate(map(tuple, geo)):
+        for j, name in enumerate((CONS, STAB)):
+            yes, no = _witnesses(r, name, i)
+            assert _reference(g, yes)[j] == 1 and _reference(g, no)[j] == 0, (g, name, yes, no)
+
+
+def test_a_subnormal_c1_overflows_nothing():
+    """``c1`` subnormal (``5e-324``, ``1e-310``): the moved samples raise no warning (no
+    multiplier overflows).  The codes stay ``undecided``: an II root needs ``h1 = l^2 - x d1 < 0``
+    with ``d1 > 0.6 / x^2`` (from ``h1 h2 = 0.6 d1 d2``), so ``kappa > 1e300`` or
+    ``q1 > sqrt(0.6) / (2 x^1.5) > 1e400``: no float model witnesses the consistent side."""
+    import warnings
+
+    geo = np.concatenate([_tiny_c1(5e-324), _tiny_c1(1e-310)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
+    assert set(r[CONS].tolist()) <= {DEP, UND} and set(r[STAB].tolist()) <= {DEP, UND}
