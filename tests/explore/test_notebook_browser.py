@@ -627,7 +627,9 @@ def check_explorer(nb: Notebook, targets=None) -> dict:
 
 
 def _launch(p):
-    return p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+    """Chromium headless, drawing in software: no GPU process emulating one (SwiftShader)."""
+    args = ["--no-sandbox", "--disable-gpu", "--disable-software-rasterizer"]
+    return p.chromium.launch(executable_path=CHROMIUM, args=args)
 
 
 def _broken_copy(path: Path):
