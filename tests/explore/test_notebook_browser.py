@@ -211,6 +211,23 @@ class Notebook:
             url = canvas.evaluate("c => c.toDataURL('image/png')")
         return _rgba(url)
 
+    def fingerprint(self) -> tuple[int, int, str]:
+        """The map canvas's width, height [px] and the SHA-256 of its RGBA pixels, computed in
+        the page (equal for equal pixels; no PNG encoded, sent and decoded), once it has a
+        size."""
+        canvas = self.page.locator(_CANVAS).first
+        js = """async c => {
+            if (!c.width || !c.height) return null;
+            const px = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+            const h = new Uint8Array(await crypto.subtle.digest('SHA-256', px));
+            return [c.width, c.height, Array.from(h, b => b.toString(16).padStart(2, '0')).join('')];
+        }"""
+        got = canvas.evaluate(js)
+        while got is None:
+            self.page.wait_for_timeout(50)
+            got = canvas.evaluate(js)
+        return tuple(got)
+
     def to_page(self, beta1: float, beta2: float) -> tuple[float, float]:
         """Page coordinates of the map point ``(beta1, beta2)`` [rad]."""
         from atlas.explore.map_view import AXES_RECT
@@ -221,17 +238,16 @@ class Notebook:
         fy = y0 + h * beta2 / (2 * PI)
         return b["x"] + fx * b["width"], b["y"] + (1 - fy) * b["height"]
 
-    def wait_change(self, before: np.ndarray | None, status: str | None, timeout: float):
-        """Wait until the canvas differs from ``before`` (if given) and the status line from
-        ``status`` (if given); returns the seconds, or raises ``AssertionError``.  Polled at
-        20 ms growing to 0.2 s: each look at the canvas is a PNG encoding in the browser and a
-        decoding here, which must not take the CPU from the kernel it waits for."""
+    def wait_change(self, before: tuple | None, status: str | None, timeout: float):
+        """Wait until the canvas differs from ``before`` (a :meth:`fingerprint`, if given) and the
+        status line from ``status`` (if given); returns the seconds, or raises
+        ``AssertionError``.  Polled at 20 ms growing to 0.2 s: each look at the canvas reads its
+        pixels back in the browser, which must not take the CPU from the kernel it waits for."""
         t, pause = time.perf_counter(), 0.02
         while True:
             done = True
             if before is not None:
-                now = self.pixels()
-                done &= now.shape != before.shape or bool(np.any(now != before))
+                done &= self.fingerprint() != before
             if status is not None:
                 now = self.status()
                 done &= now != status and not _busy(now)
@@ -249,7 +265,7 @@ class Notebook:
         """Click the map at ``(beta1, beta2)``; the inspector must move there (within 0.01 pi)
         and the marker appear (canvas pixels change).  Returns the click-to-inspector seconds."""
         self.page.locator(_CANVAS).first.scroll_into_view_if_needed()  # the whole map in view
-        old, before = self.inspector(), self.pixels()
+        old, before = self.inspector(), self.fingerprint()
         x, y = self.to_page(beta1, beta2)
         t = time.perf_counter()
         self.page.mouse.click(x, y)
@@ -403,7 +419,7 @@ def _hover(nb: Notebook):
 def _act(nb: Notebook, action, repaint=True, timeout=60) -> float:
     """Run ``action``; wait for the canvas to change (``repaint``) or the status line to change
     and settle; no error anywhere.  Returns the seconds."""
-    before, status = nb.pixels(), nb.status()
+    before, status = nb.fingerprint(), nb.status()
     t = time.perf_counter()
     action()
     nb.wait_change(before if repaint else None, None if repaint else status, timeout)
@@ -514,7 +530,7 @@ def _bad_box(nb: Notebook, times: dict):
 
     status = nb.page.locator(".atlas-explorer .atlas-status").element_handle()
     for text, refusal in BAD_BOXES.items():
-        before = nb.pixels()
+        before = nb.fingerprint()
         nb.set_text("model-box", text)
         with contextlib.suppress(Exception):  # the assertion below says what the status was
             nb.page.wait_for_function(
@@ -522,7 +538,7 @@ def _bad_box(nb: Notebook, times: dict):
             )
         assert nb.status() == refusal, (text, nb.status())
         assert not nb.tracebacks(), nb.tracebacks()
-        assert np.array_equal(nb.pixels(), before), text  # the map over the last good box stays
+        assert nb.fingerprint() == before, text  # the map over the last good box stays
     b1, b2 = 0.25 * PI, 0.6 * PI
     c1, s1, c2, s2 = math.cos(b1), math.sin(b1), math.cos(b2), math.sin(b2)
     det = c1 * s2 - c2 * s1
