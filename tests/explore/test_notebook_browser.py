@@ -8,8 +8,8 @@ certified curve and on a codimension-2 point, exact settlements, "settle undecid
 inspector's text, the status line, the hover text, the canvas's pixels, the widget's output area
 and the kernel's log console are read back from the page (any traceback fails the test).
 
-The same checks fail on a copy of the notebook whose click handler is disconnected and whose
-"settle undecided" raises.  Needs the ``e2e`` extra (jupyterlab, playwright) and Debian's
+The same checks fail once a last cell, run in the same kernel, has disconnected the widget's click
+handler and made its "settle undecided" raise.  Needs the ``e2e`` extra (jupyterlab, playwright) and Debian's
 ``chromium`` (``$ATLAS_CHROMIUM``; Playwright's own browser download is not used); skipped
 without them, except in CI (``CI`` set), where it fails.  ``python
 tests/explore/test_notebook_browser.py --n 129`` prints the latencies of a run at ``n x n``
@@ -648,24 +648,39 @@ def _launch(p):
     return p.chromium.launch(executable_path=CHROMIUM, args=args)
 
 
-def _broken_copy(path: Path):
-    """The notebook up to the widget's cell, its click handler disconnected and its "settle
-    undecided" raising (an error in a widget callback)."""
-    import nbformat
+#: a last cell: the widget's click handler disconnected and its "settle undecided" raising (an
+#: error in a widget callback)
+BREAK = "box.figure.canvas.mpl_disconnect(box.click_cid)\nbox.explorer.settle = lambda: 1 / 0"
 
-    nb = nbformat.read(path, as_version=4)
-    i = next(i for i, c in enumerate(nb.cells) if "make_widget(" in c.source)
-    nb.cells[i].source += (
-        "\nbox.figure.canvas.mpl_disconnect(box.click_cid)"
-        "\nbox.explorer.settle = lambda: 1 / 0\nbox"
+
+def _break(nb: Notebook):
+    """Add :data:`BREAK` as the notebook's last cell and run it (the kernel of the checks)."""
+    page, cells = nb.page, nb.page.locator(".jp-NotebookPanel .jp-CodeCell")
+    n = cells.count()
+    cells.last.locator(".jp-InputPrompt").click()
+    page.keyboard.press("Escape")
+    page.keyboard.press("b")  # a new cell below
+    page.wait_for_function(
+        "n => document.querySelectorAll('.jp-NotebookPanel .jp-CodeCell').length > n", arg=n
     )
-    nb.cells = nb.cells[: i + 1]
-    nbformat.write(nb, path)
+    page.keyboard.press("Enter")
+    page.keyboard.insert_text(BREAK)
+    page.keyboard.press("Shift+Enter")
+    page.wait_for_function(
+        """n => {
+            const p = document.querySelectorAll('.jp-NotebookPanel .jp-CodeCell .jp-InputPrompt')[n];
+            return p !== undefined && /^\\[\\d+\\]:$/.test(p.textContent.trim());
+        }""",
+        arg=n,
+        timeout=60_000,
+        polling=100,
+    )
 
 
 def _check_broken(broken: Notebook):
-    """The checks fail on the broken copy: a click does not move the inspector, and the error of
-    "settle undecided" is seen in the widget's output area and in the kernel's log console."""
+    """The checks fail once :func:`_break` has run: a click does not move the inspector, and the
+    error of "settle undecided" is seen in the widget's output area and in the kernel's log
+    console."""
     assert not broken.tracebacks(), broken.tracebacks()
     with pytest.raises(AssertionError, match="did not move the inspector"):
         broken.click_map(0.15 * PI, 1.07 * PI, timeout=3)
@@ -682,16 +697,14 @@ def _check_broken(broken: Notebook):
 @pytest.mark.e2e
 def test_explorer_in_a_browser(tmp_path, need):
     """Run All in JupyterLab (the file browser open: an ~850 px column), then every check of
-    :func:`check_explorer`; the click and error checks fail on a copy whose click handler is
-    disconnected and whose "settle undecided" raises (run after it, in a second tab)."""
+    :func:`check_explorer`; then the click and error checks fail once a last cell has
+    disconnected the widget's click handler and made "settle undecided" raise (:func:`_break`)."""
     _need_browser(need)
     from concurrent.futures import ThreadPoolExecutor
 
     from playwright.sync_api import sync_playwright
 
     prepare_notebook(ROOT / "notebooks" / "explore.ipynb", tmp_path / "explore.ipynb")
-    prepare_notebook(ROOT / "notebooks" / "explore.ipynb", tmp_path / "broken.ipynb")
-    _broken_copy(tmp_path / "broken.ipynb")
     t0 = time.perf_counter()
     with (
         ThreadPoolExecutor(1) as pool,
@@ -701,25 +714,21 @@ def test_explorer_in_a_browser(tmp_path, need):
         targets = pool.submit(slice_targets)  # the click targets, computed here meanwhile
         browser = _launch(p)
         try:
-            nb, broken = (
-                Notebook(browser, base, token, f) for f in ("explore.ipynb", "broken.ipynb")
-            )
+            nb = Notebook(browser, base, token, "explore.ipynb")
             nb.start_run_all()
             seconds = nb.wait_run_all()
-            broken.start_run_all()  # after: its programs are in the compilation cache
-            broken.wait_run_all()
-            for page in (nb, broken):
-                page.open_log_console()
-            _check_broken(broken)
+            nb.open_log_console()
             times = check_explorer(nb, targets.result)
             nb.page.screenshot(path=str(tmp_path / "explorer.png"), full_page=True)
+            _break(nb)
+            _check_broken(nb)
         finally:
             browser.close()
     print(f"Run All {seconds:.1f} s, test {time.perf_counter() - t0:.1f} s, {times}")
 
 
 def _measure(n: int):
-    """One run at ``n x n`` cells (no broken copy): prints Run All and the latencies."""
+    """One run at ``n x n`` cells (no broken cell): prints Run All and the latencies."""
     import tempfile
 
     from playwright.sync_api import sync_playwright
