@@ -390,10 +390,11 @@ def test_failed_inspection_leaves_the_widget_on_the_previous_point(need, monkeyp
     assert any("inspection failed on purpose" in o.get("text", "") for o in box.errors.outputs)
 
 
-#: a widget in a fresh process: XLA compilations while it is made, during its inspector's
-#: warm-up (waited for unless ``now``) and on a click right after (counted by jax.monitoring)
+#: a widget in a fresh process: XLA compilations by thread (the main thread: the map while it is
+#: made, then a click made at once, during the inspector's warm-up; the warm-up's own thread),
+#: counted by jax.monitoring once the warm-up has ended
 _START_PROBE = """
-import json, sys
+import json, threading
 import jax
 from atlas.core import warm
 from atlas.explore.widget import make_widget
@@ -401,47 +402,44 @@ from atlas.explore.widget import make_widget
 compiles = []
 def count(event, seconds, **kw):
     if event.endswith("backend_compile_duration"):
-        compiles.append(event)
+        compiles.append(threading.current_thread() is threading.main_thread())
 jax.monitoring.register_event_duration_secs_listener(count)
 box = make_widget(n=9, layer="stable_SS", kappa=0.5, q1=0.3)
-made, started = len(compiles), box.explorer._warm is not None
-if sys.argv[1:] != ["now"]:
-    box.explorer.warm_up().result()
-warmed = len(compiles)
+made, started = sum(compiles), box.explorer._warm is not None
+during = started and not box.explorer._warm.done()
 box.controls["beta1"].value, box.controls["beta2"].value = 1.3, 0.2
 box.callbacks["inspect"]()
 assert box.explorer.last_inspection is not None
 box.explorer.warm_up().result()  # a click waits for its inspection only: the rest counts here
-out = dict(started=started, made=made, warm_up=warmed - made, click=len(compiles) - warmed, used=len(warm._STATE["used"]))
+main = sum(compiles)
+out = dict(started=started, during=during, made=made, click=main - made,
+           warm_up=len(compiles) - main, used=len(warm._STATE["used"]))
 print(json.dumps(out))
 """
 
 
 @pytest.mark.e2e
 def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, need, probe_env):
-    """A first session (empty cache) compiles the map's and, in the background warm-up, the
-    inspector's kernels, so a click compiles nothing; a click before the warm-up is done waits for
-    its inspection (the same compilations in all once it has ended); a second session compiles
-    nothing at all (kept kernels)."""
+    """A first session (empty cache) compiles the map's kernels and, in the background warm-up,
+    the inspector's; a click made at once, during the warm-up, waits for its inspection and
+    compiles nothing itself, and no program is compiled twice (as many compilations as kept
+    programs); a second session compiles nothing at all (kept kernels)."""
     need("ipywidgets")
 
-    def start(cache, *args):
-        cmd = [sys.executable, "-c", _START_PROBE, *args]
-        env = probe_env(cache)
-        return subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE, text=True)
+    def session(cache):
+        cmd = [sys.executable, "-c", _START_PROBE]
+        p = subprocess.run(cmd, env=probe_env(cache), cwd=tmp_path, stdout=subprocess.PIPE,
+                           text=True, timeout=600)  # fmt: skip
+        assert p.returncode == 0
+        return json.loads(p.stdout.strip().splitlines()[-1])
 
-    def result(proc):
-        out, _ = proc.communicate(timeout=600)
-        assert proc.returncode == 0
-        return json.loads(out.strip().splitlines()[-1])
-
-    first, now = start(tmp_path / "a"), start(tmp_path / "b", "now")
-    first, now = result(first), result(now)
-    assert first["started"] and first["warm_up"] > 0 and first["click"] == 0, first
-    assert now["made"] + now["warm_up"] + now["click"] == first["made"] + first["warm_up"], now
-    kept = sorted(p.suffix for p in (tmp_path / "a" / "kernels").iterdir())
-    assert ".jaxexport" in kept and ".txt" in kept  # the programs and the session's list
-    second = result(start(tmp_path / "a"))
+    first = session(tmp_path / "a")
+    assert first["started"] and first["during"], first  # the click came before the warm-up ended
+    assert first["made"] > 0 and first["warm_up"] > 0 and first["click"] == 0, first
+    kept = [p.suffix for p in (tmp_path / "a" / "kernels").iterdir()]
+    assert ".txt" in kept  # the session's list
+    assert first["made"] + first["warm_up"] == kept.count(".jaxexport"), (first, sorted(kept))
+    second = session(tmp_path / "a")
     assert (second["made"], second["warm_up"], second["click"]) == (0, 0, 0), second
     assert second["used"] > 0  # kept executables served it
 
