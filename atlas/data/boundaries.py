@@ -396,9 +396,9 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         k = polys.segments()
         if not k.size:
             break
-        labels = line_labels(polys.xy, near)
+        at, after = line_labels(polys.xy[k], near), line_labels(polys.xy[k + 1], near)
         tip = polys.tip[k] | polys.tip[k + 1]
-        mixed = ((labels[k] != labels[k + 1]) | (polys.other[k] != polys.other[k + 1])) & ~tip
+        mixed = ((at != after) | (polys.other[k] != polys.other[k + 1])) & ~tip
         new = _probe_all(fld, polys, k, model, tol, dtype)
         ok = new.pop("ok")
         # a probe between two vertices of one kind (both on one class line, or both off the
@@ -407,8 +407,8 @@ def _refine_chords(fld, polys, model, tol, chord, near, dtype, max_rounds=40) ->
         # segment is left as it is
         lab = np.full(k.size, -2)
         lab[ok] = line_labels(new["xy"], near)
-        kind = np.where(polys.tip[k], labels[k + 1], labels[k])
-        jumped = ok & ((labels[k] == labels[k + 1]) | tip) & (lab != kind)
+        kind = np.where(polys.tip[k], after, at)
+        jumped = ok & ((at == after) | tip) & (lab != kind)
         keep = ~jumped[ok]
         new = {c: v[keep] for c, v in new.items()}
         ok &= ~jumped
