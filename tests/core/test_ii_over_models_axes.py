@@ -200,3 +200,13 @@ def test_a_subnormal_c1_overflows_nothing():
         warnings.simplefilter("error")
         r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
     assert set(r[CONS].tolist()) <= {DEP, UND} and set(r[STAB].tolist()) <= {DEP, UND}
+
+
+def test_without_settlement_the_undecided_counts_agree():
+    """``settle=False``: ``undecided_before`` (after the small budget) and ``undecided_after``
+    count the same codes, the undecided ones of the result (before, geometries whose stability
+    the signs decided were never sampled, and their open consistency was counted only after)."""
+    geo = np.array(NEVER_STABLE + [(-1.0, 0.0, 0.0, -1.0)])
+    r = iim.ii_over_models(*geo.T, BOX, settle=False)
+    und = sum(int(np.sum(r[name] == UND)) for name in (CONS, STAB))
+    assert r.stats["undecided_before"] == r.stats["undecided_after"] == und, r.stats
