@@ -188,6 +188,36 @@ def test_a_tiny_c1_depends_with_witnesses_far_out(x):
             assert _reference(g, yes)[j] == 1 and _reference(g, no)[j] == 0, (g, name, yes, no)
 
 
+def test_the_moved_sample_of_a_subnormal_c1_overflows_nothing():
+    """:func:`scaling` and :func:`rescaled` at ``|c1| = 5e-324`` and ``1e-300`` (``u = |s2| =
+    0.8`` and ``u = |gamma / c1|``): no warning; a product is the exact one (Fractions, to 1e-12) where it
+    is a float, NaN where it overflows (no float model)."""
+    import math
+    import warnings
+    from fractions import Fraction
+
+    models = np.array([(2.0**e, 2.0**e, 2.0**e) for e in range(-24, 25, 6)])
+    top = Fraction(np.finfo(float).max) ** 2
+    seen = set()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for c1 in (5e-324, 1e-300):
+            C = Fraction(c1)
+            for U in (Fraction(0.8), Fraction(0.6) / C):
+                log2_u = math.log2(U.numerator) - math.log2(U.denominator)
+                got = iim.rescaled(models, iim.scaling(c1, log2_u))
+                squares = (U * U / (C * C), U / (C * C), 1 / U)  # the multipliers squared
+                for m, row in zip(models, got):
+                    want = [Fraction(float(v)) ** 2 * f for v, f in zip(m, squares)]
+                    seen.add(any(w > top for w in want))
+                    if any(w > top for w in want):
+                        assert np.isnan(row).all()
+                    else:
+                        assert all(abs(Fraction(r) ** 2 / w - 1) < 1e-12 for r, w in zip(row, want))
+    assert seen == {True, False}
+
+
+@pytest.mark.slow
 def test_a_subnormal_c1_overflows_nothing():
     """``c1`` subnormal (``5e-324``, ``1e-310``): the moved samples raise no warning (no
     multiplier overflows).  The codes stay ``undecided``: an II root needs ``h1 = l^2 - x d1 < 0``
@@ -200,3 +230,13 @@ def test_a_subnormal_c1_overflows_nothing():
         warnings.simplefilter("error")
         r = iim.ii_over_models(*geo.T, mb.model_box(), settle=False)
     assert set(r[CONS].tolist()) <= {DEP, UND} and set(r[STAB].tolist()) <= {DEP, UND}
+
+
+def test_without_settlement_the_undecided_counts_agree():
+    """``settle=False``: ``undecided_before`` (after the small budget) and ``undecided_after``
+    count the same codes, the undecided ones of the result (before, geometries whose stability
+    the signs decided were never sampled, and their open consistency was counted only after)."""
+    geo = np.array(NEVER_STABLE + [(-1.0, 0.0, 0.0, -1.0)])
+    r = iim.ii_over_models(*geo.T, BOX, settle=False)
+    und = sum(int(np.sum(r[name] == UND)) for name in (CONS, STAB))
+    assert r.stats["undecided_before"] == r.stats["undecided_after"] == und, r.stats
