@@ -131,11 +131,10 @@ def mechanism_atlas(
     axes (ranges in the syntax of :func:`atlas.data.scene.parse_values`, e.g. ``mu="0:2:101"``).
 
     ``fixed``: values of the other parameters (module docstring; SI units of :func:`stored_units`);
-    ``history``: the command recorded in the ``history`` attribute (default: this call, with every
-    axis range and fixed value); ``model_box``: a box of contact models (a
-    :class:`~atlas.core.model_box.ModelBox`, its text or a dict) whose verdicts are added (module
-    docstring); ``size_check``: refuse a grid that cannot fit in the memory available now, as the
-    command line does (:func:`atlas.data.limits.grid_estimate`).
+    ``history``: the command recorded in ``history`` (default: this call, every axis range and fixed
+    value); ``model_box``: a box of contact models (:class:`~atlas.core.model_box.ModelBox`, its
+    text or a dict) whose verdicts are added; ``size_check``: refuse a grid too large for the memory
+    available, as the command line does (:func:`atlas.data.limits.grid_estimate`).
     """
     if name not in MECHANISM_SCENES:
         raise ValueError(f"mechanism: unknown {name!r} (built-in: {', '.join(MECHANISM_SCENES)})")
