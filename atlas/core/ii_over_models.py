@@ -451,6 +451,8 @@ def _sample(geo: np.ndarray, models: np.ndarray, scale=None, chunk: int = 1 << 2
             sc = np.concatenate([sc, np.repeat(sc[:1], size - len(sc), 0)])
             m = rescaled(models[None], sc[:, None])
         valid = ~np.isnan(m[..., 0])
+        if not valid.any():  # no float model here: nothing to evaluate
+            continue
         g = [block[:, j, None] for j in range(4)]
         m = [np.where(valid, m[..., j], 1.0) for j in range(3)]
         v = spectral_points(*g, *m, names=("consistent_II", "stable_II"))
