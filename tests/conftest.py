@@ -41,7 +41,7 @@ def pytest_collection_modifyitems(items):
     items.sort(key=lambda item: "bounded_det_b" in getattr(item, "fixturenames", ()))
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's own choice
+@pytest.hookimpl(tryfirst=True, optionalhook=True)  # before xdist's own choice
 def pytest_xdist_make_scheduler(config, log):
     """Under pytest-xdist (``-n``), a run that selects no end-to-end test deals each test module
     whole to one worker (``--dist loadfile``): a worker then traces, lowers and compiles the
