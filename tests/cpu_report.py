@@ -7,13 +7,15 @@ seconds of each test module.
 
 ``--jax-report``: with ``--cpu-durations``, the seconds (wall, in the test's process) JAX spent
 tracing, lowering and compiling in each test and module, the number of programs compiled by XLA
-and the persistent compilation cache's hits and misses (``jax.monitoring`` events)."""
+and the persistent compilation cache's hits and misses (``jax.monitoring`` events).
+``--cpu-json=PATH``: every test's figures, as JSON (to compare two runs test by test)."""
 
 from __future__ import annotations
 
+import json
 import resource
 from collections import Counter
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 
 import pytest
 
@@ -27,6 +29,12 @@ def pytest_addoption(parser):
         default=None,
         metavar="N",
         help="list the N tests that used the most CPU seconds (user + sys, with waited children)",
+    )
+    parser.addoption(
+        "--cpu-json",
+        default=None,
+        metavar="PATH",
+        help="with --cpu-durations: write every test's CPU seconds (and JAX counts) to PATH as JSON",
     )
     parser.addoption(
         "--jax-report",
@@ -144,6 +152,13 @@ class _Totals:
         self._write_modules(terminalreporter, n)
         if self.jax_by_test:
             self._write_jax(terminalreporter, n)
+        if config.getoption("cpu_json"):
+            tests = {
+                k: {"cpu_s": v, **self.jax_by_test.get(k, {})} for k, v in self.by_test.items()
+            }
+            Path(config.getoption("cpu_json")).write_text(
+                json.dumps(tests, indent=1, sort_keys=True)
+            )
 
 
 def _jax_seconds(counts) -> float:

@@ -2,6 +2,7 @@
 for, and reach the listing from pytest-xdist workers; ``--jax-report`` counts the programs each
 test compiles."""
 
+import json
 import os
 import re
 import subprocess
@@ -65,7 +66,13 @@ def test_idle():
 
 
 def test_jax_report_counts_the_programs_each_test_compiles(tmp_path):
-    out = _pytest(tmp_path, "test_j.py", _JAX_TESTS, "--cpu-durations=5", "--jax-report")
+    report = tmp_path / "cpu.json"
+    options = ("--cpu-durations=5", "--jax-report", f"--cpu-json={report}")
+    out = _pytest(tmp_path, "test_j.py", _JAX_TESTS, *options)
     rows = re.findall(r"^\s*[\d.]+s\s+test_j\.py::(\w+)\s+\(.*programs (\d+),", out, re.M)
     assert rows == [("test_compiles", "1")], out
     assert re.search(r"^\s*[\d.]+s\s+test_j\.py\s+\(.*programs 1,", out, re.M), out
+    tests = json.loads(report.read_text())
+    assert set(tests) == {"test_j.py::test_compiles", "test_j.py::test_idle"}
+    assert tests["test_j.py::test_compiles"]["programs"] == 1
+    assert "programs" not in tests["test_j.py::test_idle"]
