@@ -41,24 +41,6 @@ def pytest_collection_modifyitems(items):
     items.sort(key=lambda item: "bounded_det_b" in getattr(item, "fixturenames", ()))
 
 
-@pytest.hookimpl(tryfirst=True, optionalhook=True)  # before xdist's own choice
-def pytest_xdist_make_scheduler(config, log):
-    """Under pytest-xdist (``-n``), a run that selects no end-to-end test deals each test module
-    whole to one worker (``--dist loadfile``): a worker then traces, lowers and compiles the
-    programs of the modules it runs, not of nearly every module (the persistent cache spares
-    the other worker the compilation only).  End-to-end tests (whole runs, each its own
-    processes) are dealt one by one, as set on the command line."""
-    from _pytest.mark.expression import Expression
-    from xdist.scheduler import LoadFileScheduling
-
-    selects = Expression.compile(config.getoption("markexpr") or "not slow")
-    if config.getoption("dist") == "load" and not selects.evaluate(
-        lambda mark, **kw: mark == "e2e"
-    ):
-        return LoadFileScheduling(config, log)
-    return None
-
-
 @pytest.fixture(scope="session")
 def paper_run(tmp_path_factory):
     """One ``atlas paper`` run at the CI size per test session (``atlas.paper.run(ci=True)``): its
