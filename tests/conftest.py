@@ -79,15 +79,31 @@ def det2_sign_users() -> list:
     return [m for m in mods if m is not signs and getattr(m, "det2_sign", None) is signs.det2_sign]
 
 
+#: whether this process's jit caches hold kernels traced with the float-bounded ``sign det B``
+_BOUNDED_TRACES = {"held": False}
+
+
 @pytest.fixture
 def bounded_det_b():
     """The fast kernels with ``sign det B`` certified by its float error bound only (as before the
     exact integer sign): cells on ``beta2 = beta1 + pi`` of an even grid (``det B`` of the rounded
     directions ~ 1e-17) are then undecided, which exercises the settlement paths.  Every jit cache
-    is cleared before (the kernels retrace with it) and after."""
+    is cleared before the first such test (the kernels retrace with it) and before the first test
+    after them that does not use it (:func:`pytest_runtest_setup`); the tests using it run one
+    after another (:func:`pytest_collection_modifyitems`) and share their traces."""
     with pytest.MonkeyPatch.context() as mp:
         for mod in det2_sign_users():
             mp.setattr(mod, "det2_sign", signs.det2_sign_bounded)
-        jax.clear_caches()
+        if not _BOUNDED_TRACES["held"]:
+            jax.clear_caches()
+            _BOUNDED_TRACES["held"] = True
         yield
-    jax.clear_caches()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    """A test without :func:`bounded_det_b` after one with it starts from cleared jit caches (the
+    kernels retrace with the exact ``sign det B``)."""
+    if _BOUNDED_TRACES["held"] and "bounded_det_b" not in getattr(item, "fixturenames", ()):
+        jax.clear_caches()
+        _BOUNDED_TRACES["held"] = False
