@@ -129,6 +129,11 @@ def fake_results(mode="full") -> Results:
         suites=suites,
         scaling=scaling, sim=sim, large=large, atlases=atlases, curves=curves, maps=maps,
         startup=startup, exact=dict(points=42, seconds=3.0, failures=0), model_box_map=model_box,
+        lanes=[dict(set=name, lanes=100, disagreements=0, fallback=0.0, fast_cpu_s=1.0,
+                    exact_cpu_s=20.0, speedup=20.0, ratio_median=0.1, ratio_p99=0.3,
+                    ratio_worst=0.5, over_exact=0, steps_median=8.0, steps_max=90, over_steps=2,
+                    over_cost=2, worst_over_median=11.0, over_steps_per_event=1.1,
+                    disagree_lanes="") for name in ("random lanes", "grid")],
     )  # fmt: skip
 
 

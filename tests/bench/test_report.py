@@ -49,6 +49,7 @@ def test_sections_in_order(results):
         "## Boundary curves (`atlas boundaries`)",
         "## Simulation",
         "## Outcome maps: fast engine against the exact simulator",
+        "### Lane by lane: fast engine against the exact simulator",
         "## Start-up",
         "### Where a cold run's seconds go",
         "## Notes, omissions",
@@ -142,7 +143,8 @@ def test_outcome_maps_section_lists_every_disagreement(results):
     results.maps = [row, dict(row, map="other", agreement=1.0, disagreements="")]
     md = report.build_report(results)
     heads = [ln for ln in md.splitlines() if ln.startswith("#")]
-    assert heads[-4:] == ["## Outcome maps: fast engine against the exact simulator",
+    assert heads[-5:] == ["## Outcome maps: fast engine against the exact simulator",
+                          "### Lane by lane: fast engine against the exact simulator",
                           "## Start-up", "### Where a cold run's seconds go",
                           "## Notes, omissions"]  # fmt: skip
     assert "| map | trajectories | workers | fast_seconds | fast_per_s | core_seconds |" in md
@@ -159,6 +161,7 @@ def test_engine_lanes_table_follows_the_outcome_maps_and_lists_disagreements(res
                ratio_p99=0.6, ratio_worst=1.2, over_exact=3, steps_median=6.0, steps_max=130,
                over_steps=4, over_cost=4, worst_over_median=21.7, over_steps_per_event=1.1,
                disagree_lanes="lane 7: exact 3, fast 2")  # fmt: skip
+    results.lanes = []
     assert "### Lane by lane" not in report.build_report(results)
     results.lanes = [row, dict(row, set="grid", disagreements=0, disagree_lanes="")]
     md = report.build_report(results)
