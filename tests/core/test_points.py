@@ -1,4 +1,7 @@
-"""The tiered driver (atlas.core.points): broadcasting, gathers, slabs, settlement, diagnostics."""
+"""The tiered driver (atlas.core.points): broadcasting, gathers, slabs, settlement, diagnostics.
+
+The ``slow`` cases (the op-by-op subnormal run, float32 later tiers, the float32 model axes) run
+by hand: ``python -m pytest -m slow tests/core/test_points.py``."""
 
 import contextlib
 import functools
@@ -303,7 +306,7 @@ def test_batches_pad_little(n, chunk, sizes, lengths):
     assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
 
 
-@pytest.mark.parametrize("later", [np.float64, np.float32])
+@pytest.mark.parametrize("later", [np.float64, pytest.param(np.float32, marks=pytest.mark.slow)])
 def test_later_tiers_run_in_float64(monkeypatch, later):
     """Float32 inputs near ``b2 = -b1`` (directions of the 513-point headline grid): the later
     tiers in float64 (the inputs convert exactly) decide every point without the exact tier; in
@@ -598,7 +601,9 @@ def _ii_on_singular_b(c1, s1, c2, s2, kappa, q1, q2):
     return {"consistent_II": ii, "stable_II": ii}
 
 
-@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+@pytest.mark.parametrize(
+    "jitted", [True, pytest.param(False, marks=pytest.mark.slow)], ids=["jit", "op-by-op"]
+)
 def test_subnormal_directions_are_never_certified_wrong(jitted):
     """XLA on CPU reads subnormal direction components as zero (jitted or not): at ``b2 = -b1``
     with components ``+-1e-310`` the kernels certified II inconsistent where it is consistent
