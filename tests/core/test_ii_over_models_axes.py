@@ -1,6 +1,7 @@
 """II over a box of contact models where a direction lies on an axis (``gamma = c2 s1 = 0``) or
 a component is tiny, against the independent sympy/mpmath reference (``tests/reference_sympy.py``:
-the characteristic polynomial from its definition, exact root isolation)."""
+the characteristic polynomial from its definition, exact root isolation).  The full-size model
+grid is ``slow``: ``python -m pytest -m slow tests/core/test_ii_over_models_axes.py``."""
 
 import numpy as np
 import pytest
@@ -43,14 +44,15 @@ NEVER_STABLE = [
 ]
 
 
-def test_consistency_is_sampled_where_the_signs_decide_only_the_stability():
+@pytest.mark.parametrize("n", [3, pytest.param(5, marks=pytest.mark.slow)])
+def test_consistency_is_sampled_where_the_signs_decide_only_the_stability(n):
     """The signs say "never stable" but leave the consistency open: it depends on the model (the
-    reference sees both sides on a grid of the box), with both witnesses on their sides; the
-    stability is unstable for every model (the reference never sees a stable II)."""
+    reference sees both sides on an ``n^3`` grid of the box), with both witnesses on their sides;
+    the stability is unstable for every model (the reference never sees a stable II)."""
     r = iim.ii_over_models(*np.array(NEVER_STABLE).T, BOX, settle=False)
     assert r[CONS].tolist() == [DEP] * 4 and r[STAB].tolist() == [NO] * 4
     for i, g in enumerate(NEVER_STABLE):
-        got = {_reference(g, m) for m in _grid(BOX)}
+        got = {_reference(g, m) for m in _grid(BOX, n)}
         assert got == {(0, 0), (1, 0)}, (g, got)
         yes, no = _witnesses(r, CONS, i)
         assert _reference(g, yes)[0] == 1 and _reference(g, no)[0] == 0, (g, yes, no)
