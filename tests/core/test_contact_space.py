@@ -1,6 +1,7 @@
 """atlas.core.contact_space: B and a of any mechanism against an independent Lagrangian derivation
 (sympy: Euler-Lagrange equations solved for the accelerations, gaps differentiated twice in time),
-the planar Mechanism's closed forms, the one-contact verdicts, errors."""
+the planar Mechanism's closed forms, the one-contact verdicts, errors.  The three-rod derivation
+is ``slow``: ``python -m pytest -m slow tests/core/test_contact_space.py``."""
 
 from __future__ import annotations
 
@@ -84,12 +85,15 @@ def _lagrange_reference(n_links, values, state, normals, mu, s):
     return B_ref, a_ref, mats
 
 
-@pytest.mark.parametrize("n_links", [1, 2])
-def test_any_mechanism_matches_the_lagrangian_derivation(n_links):
+@pytest.mark.parametrize(
+    "n_links, draws", [(1, 1), (2, 1), pytest.param(1, 3, marks=pytest.mark.slow)]
+)
+def test_any_mechanism_matches_the_lagrangian_derivation(n_links, draws):
     """A free rod (3 DOF) and a two-link chain (4 DOF) with its two ends on two surfaces, sliding,
-    spinning: B and a equal the Euler-Lagrange reference to rounding."""
+    spinning: B and a equal the Euler-Lagrange reference to rounding (``draws`` random
+    mechanisms; three rods in the ``slow`` case)."""
     rng = np.random.default_rng(40 + n_links)
-    for _ in range(3 if n_links == 1 else 1):
+    for _ in range(draws):
         ang = rng.uniform(0, 2 * np.pi, 2)
         normals = [(math.cos(x), math.sin(x)) for x in ang]
         n = 2 + n_links
