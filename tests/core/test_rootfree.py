@@ -16,34 +16,36 @@ from atlas.core.signs import UNKNOWN
 from atlas.core.verdicts import Verdict
 
 NAMES = ("stable_SS", "consistent_II", "stable_II")
-_codes = jax.jit(rootfree.codes)
-_tier2 = rootfree.tier2  # two compiled programs inside (not to be jitted as one)
+#: the driver's programs (one compilation per process, shared with every test that runs it):
+#: the flat first pass and tier 2 (two compiled programs inside, not to be jitted as one)
+_codes = points._kernel("codes", ss=True, ii=True, damped=None)
+_tier2 = points._kernel("tier2", ss=True, ii=True)
 
 
 def kernel_verdicts(pts, dtype):
-    """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier)."""
+    """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier): the
+    first pass in ``dtype`` on flat columns of the driver's lengths, tier 2 in
+    ``points.LATER_DTYPE`` (an exact conversion) in batches of ``points.LATER_BATCH``."""
     cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
-    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols)[0]))
+    flat = points.FLAT_SMALL if cols[0].size <= points.FLAT_SMALL else points.FLAT_BATCH
+    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols, flat)[0]))
     idx = np.flatnonzero(first[3])
     if idx.size:
-        second = _chunked(_tier2, [c[idx] for c in cols])
+        later = [c[idx].astype(points.LATER_DTYPE) for c in cols]
+        second = _chunked(_tier2, later, points.LATER_BATCH)
         for a, b in zip(first[:3], second):
             a[idx] = np.where(a[idx] == 3, b, a[idx])
     return dict(zip(NAMES, first[:3])), cols
 
 
-#: the one padded length of every kernel call here: one compilation per kernel and dtype
-PAD = 1024
-
-
-def _chunked(kernel, cols):
+def _chunked(kernel, cols, length):
     """``kernel`` (returning a tuple of per-point arrays) on the columns in batches of
-    :data:`PAD` points, the last one padded by repeating its first point."""
+    ``length`` points, the last one padded by repeating its first point."""
     outs = []
-    for start in range(0, cols[0].size, PAD):
-        part = [c[start : start + PAD] for c in cols]
+    for start in range(0, cols[0].size, length):
+        part = [c[start : start + length] for c in cols]
         n = part[0].size
-        args = [jnp.asarray(np.concatenate([c, np.full(PAD - n, c[0], c.dtype)])) for c in part]
+        args = [jnp.asarray(np.concatenate([c, np.full(length - n, c[0], c.dtype)])) for c in part]
         outs.append([np.asarray(r)[:n] for r in kernel(*args)])
     return [np.concatenate(parts) for parts in zip(*outs)]
 
@@ -183,7 +185,7 @@ def test_first_pass_computes_every_sign_once(dtype):
     (flat columns and the grid layout), so each sign code exists once per point and every
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
-    x = jnp.ones(PAD, dtype)  # the flat program of kernel_verdicts: compiled once for both
+    x = jnp.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program
     row, col, one = jnp.ones((64, 1), dtype), jnp.ones((1, 64), dtype), jnp.ones((), dtype)
     for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
         kern = (
@@ -191,7 +193,7 @@ def test_first_pass_computes_every_sign_once(dtype):
         )
         # scalars and single rows or columns (e.g. the exact bits of an axis input) are computed
         # once per call or per axis, not per point
-        grid = f"[{PAD}]" if damped is None else "[64,64]"
+        grid = f"[{points.FLAT_SMALL}]" if damped is None else "[64,64]"
         per_point = [f for f in _fusions(kern, *args) if grid in f]
         assert len(per_point) == 1, per_point
 
