@@ -1,6 +1,7 @@
 """The SS kernel (:mod:`atlas.core.hurwitz`) where XLA's arithmetic is not IEEE op-by-op
 arithmetic: XLA on CPU reads subnormal inputs as zero (denormals-are-zero), jitted or not.
-References: Routh-Hurwitz in exact rationals of the float inputs."""
+References: Routh-Hurwitz in exact rationals of the float inputs.  The op-by-op cases run by hand:
+``python -m pytest -m slow tests/core/test_hurwitz.py``."""
 
 from fractions import Fraction
 
@@ -14,6 +15,9 @@ from atlas.core.verdicts import Verdict
 
 #: subnormal damping: XLA reads it as zero (an undamped, neutral system), IEEE does not
 Q_SUBNORMAL = 1e-310
+
+#: the op-by-op case (``jax.disable_jit``; the package runs this kernel only jitted): ``slow``
+OP_BY_OP = pytest.param(False, marks=pytest.mark.slow)
 
 #: points ``(beta1, beta2)`` [rad] at kappa 0.5 where any positive damping ``q1`` is stable
 STABLE_POINTS = [(0.3, 1.2), (0.2, 0.9), (0.1, 0.5)]
@@ -34,7 +38,7 @@ def _inputs(b1, b2, q1):
     return [np.float64(v) for v in (np.cos(b1), np.sin(b1), np.cos(b2), np.sin(b2), 0.5, q1, 0.0)]
 
 
-@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+@pytest.mark.parametrize("jitted", [True, OP_BY_OP], ids=["jit", "op-by-op"])
 def test_subnormal_damping_is_never_certified_undamped(jitted):
     """``q1 = 1e-310 > 0`` is damping: the system is stable (exactly), and the kernel must say so
     or stay undecided; reading the subnormal as zero certified "neutral" (the undamped verdict)."""
@@ -71,7 +75,7 @@ def exact_ss_unstable(c1, s1, c2, s2, kappa, q1, q2) -> bool:
     return min(a3, a2, a1, a0) > 0 and (h2 < 0 or a1 * h2 - a3 * a3 * a0 < 0)
 
 
-@pytest.mark.parametrize("jitted", [True, False], ids=["jit", "op-by-op"])
+@pytest.mark.parametrize("jitted", [True, OP_BY_OP], ids=["jit", "op-by-op"])
 def test_equal_damping_sum_flushed_to_zero_keeps_the_verdict(jitted):
     """Equal damping reads ``sign(a3) = sign(c1 + s2)`` from one rounded sum.  XLA flushes a
     subnormal sum to zero (``3e-308 - 2.9e-308`` gives 0 under jit), so that sign can be 0 where
