@@ -502,19 +502,24 @@ def _stage(p, out) -> str:
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
-def test_sigterm_at_random_points_never_exits_0_nor_dies_late(tmp_path):
+@pytest.mark.parametrize("writes", [2, pytest.param(5, marks=pytest.mark.slow)])
+def test_sigterm_at_random_points_never_exits_0_nor_dies_late(writes, tmp_path):
     """SIGTERM at random points of whole runs, from the imports to just before exit: a run never
     ends with exit 0 after the signal (ignored) nor by another signal (a late alarm), prints no
     traceback and leaves no temporary file; with exit 143 (130 for SIGINT) the file is absent or
     complete.  During the package imports a signal ends the run at once (130 / 143, no
     traceback); before them, in the interpreter's start, SIGTERM kills by its default action
     (-15).  Each delay counts from a stage of the run (``_stage``), in units of a warm-up run's
-    time from that stage to its exit; most trials aim at the end (tile writes, commit, exit)."""
+    time from that stage to its exit; ``writes`` trials aim at the end (tile writes, commit,
+    exit): 2 in CI, 5 with ``-m slow``.  A first run fills the compilation caches (timed on a
+    cold cache, the trials would finish before their signals)."""
     import random
     import signal
     import time
 
     env = _env()
+    cold = _spawn([*TINY_RUN, "--out", str(tmp_path / "cold.nc")], env)
+    assert cold.communicate(timeout=300) and cold.returncode == 0  # fills the caches
     warm = tmp_path / "warm" / "a.nc"
     warm.parent.mkdir()
     p = _spawn([*TINY_RUN, "--out", str(warm)], env)
@@ -529,7 +534,7 @@ def test_sigterm_at_random_points_never_exits_0_nor_dies_late(tmp_path):
     rng = random.Random(28)
     plan = [("start", rng.uniform(0, 0.5), signal.SIGTERM), ("main", 0.0, signal.SIGINT)]
     plan += [("main", rng.uniform(0, 1), signal.SIGTERM)]
-    plan += [("write", rng.uniform(0, 1.3), signal.SIGTERM) for _ in range(5)]
+    plan += [("write", rng.uniform(0, 1.3), signal.SIGTERM) for _ in range(writes)]
     outcomes = []
     for batch in range(0, len(plan), 4):
         trials = []
@@ -571,7 +576,7 @@ def test_sigterm_at_random_points_never_exits_0_nor_dies_late(tmp_path):
                     with xr.open_dataset(t["out"]) as ds:  # complete before the signal came
                         assert ds.attrs["undecided_after_resolve"] == 0
     print("trials (aimed at, stage when sent, exit code, files):", outcomes)
-    assert sum(sent in ("main", "write") for _, sent, *_ in outcomes) >= 4
+    assert sum(sent in ("main", "write") for _, sent, *_ in outcomes) >= min(4, writes + 1)
 
 
 def test_a_swallowed_signal_commits_nothing(tmp_path, monkeypatch, capsys):

@@ -3,6 +3,7 @@ changelog, no swallowed options, no function over 80 lines or module over 900 (r
 lint-imports are CI steps of ``.ci/run``, not tests)."""
 
 import ast
+import functools
 import re
 import subprocess
 from pathlib import Path
@@ -11,15 +12,24 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "atlas"
 
 
-def _modules():
-    for path in sorted(PACKAGE.rglob("*.py")):
-        yield path, ast.parse(path.read_text(), str(path))
+@functools.cache
+def _modules() -> tuple:
+    """``(path, nodes)`` of every module of the package: all nodes of its syntax tree
+    (``ast.walk``), parsed and walked once for these tests."""
+    return tuple(
+        (p, tuple(ast.walk(ast.parse(p.read_text(), str(p)))))
+        for p in sorted(PACKAGE.rglob("*.py"))
+    )
 
 
-def _atlas_aliases(tree) -> dict:
+def _nodes(source: str) -> tuple:
+    return tuple(ast.walk(ast.parse(source)))
+
+
+def _atlas_aliases(nodes) -> dict:
     """Local names bound to atlas modules: ``from atlas.core import points as p`` -> {p: ...}."""
     names = {}
-    for node in ast.walk(tree):
+    for node in nodes:
         if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("atlas"):
             for a in node.names:
                 names[a.asname or a.name] = f"{node.module}.{a.name}"
@@ -32,12 +42,12 @@ def _atlas_aliases(tree) -> dict:
 
 def test_no_private_names_across_modules():
     offences = []
-    for path, tree in _modules():
+    for path, nodes in _modules():
         rel = path.relative_to(ROOT)
         if path.name == "__init__.py":  # a package may use its own private modules
             continue
-        aliases = _atlas_aliases(tree)
-        for node in ast.walk(tree):
+        aliases = _atlas_aliases(nodes)
+        for node in nodes:
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("atlas"):
                 offences += [
                     f"{rel}:{node.lineno} from {node.module} import {a.name}"
@@ -82,11 +92,11 @@ def test_no_issue_numbers_outside_the_changelog():
     assert not offences, "\n".join(offences)
 
 
-def _swallowing(tree) -> list[int]:
+def _swallowing(nodes) -> list[int]:
     """Lines of functions with a ``**_`` parameter (unknown options silently ignored)."""
     return [
         node.lineno
-        for node in ast.walk(tree)
+        for node in nodes
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
         and node.args.kwarg is not None
         and node.args.kwarg.arg.startswith("_")
@@ -94,11 +104,11 @@ def _swallowing(tree) -> list[int]:
 
 
 def test_no_parameter_swallows_unknown_options():
-    assert _swallowing(ast.parse("def f(a, **_):\n    pass\n")) == [1]  # the check can fail
+    assert _swallowing(_nodes("def f(a, **_):\n    pass\n")) == [1]  # the check can fail
     offences = [
         f"{path.relative_to(ROOT)}:{line}"
-        for path, tree in _modules()
-        for line in _swallowing(tree)
+        for path, nodes in _modules()
+        for line in _swallowing(nodes)
     ]
     assert not offences, "\n".join(offences)
 
@@ -108,10 +118,10 @@ MAX_FUNCTION_LINES = 80
 MAX_MODULE_LINES = 900
 
 
-def _long_functions(tree, limit: int) -> list[str]:
+def _long_functions(nodes, limit: int) -> list[str]:
     return [
         f"{node.lineno}: {node.name} ({n} lines)"
-        for node in ast.walk(tree)
+        for node in nodes
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
         for n in [
             node.end_lineno - min([node.lineno, *(d.lineno for d in node.decorator_list)]) + 1
@@ -123,12 +133,12 @@ def _long_functions(tree, limit: int) -> list[str]:
 def test_no_function_or_module_is_too_long():
     body = lambda n: "".join(f"    x{i} = {i}\n" for i in range(n))  # noqa: E731
     # the check can fail: a decorated function of 81 lines, not one of 80
-    assert _long_functions(ast.parse(f"@d\ndef f():\n{body(79)}"), 80)
-    assert not _long_functions(ast.parse(f"def f():\n{body(79)}"), 80)
+    assert _long_functions(_nodes(f"@d\ndef f():\n{body(79)}"), 80)
+    assert not _long_functions(_nodes(f"def f():\n{body(79)}"), 80)
     offences = [
         f"{path.relative_to(ROOT)}:{line}"
-        for path, tree in _modules()
-        for line in _long_functions(tree, MAX_FUNCTION_LINES)
+        for path, nodes in _modules()
+        for line in _long_functions(nodes, MAX_FUNCTION_LINES)
     ]
     offences += [
         f"{path.relative_to(ROOT)} ({n} lines)"

@@ -65,7 +65,7 @@ def _rod_reference(mu, theta0, omega0, h, I, m):
     return sol.t[-1], *sol.y[:, -1]
 
 
-@pytest.mark.parametrize("dt", [1e-2, 1e-3])
+@pytest.mark.parametrize("dt", [1e-2, pytest.param(1e-3, marks=pytest.mark.slow)])
 def test_painleves_rod_reaches_painleves_point(dt):
     """A uniform rod (m = 1 kg, L = 1 m, mu = 2) on its tip only, rising while its foot slides
     away (theta0 = 0.6 rad, omega0 = -0.5 rad/s, foot at 8 m/s).  b11 = 1/m + (h^2/I) cos (cos -

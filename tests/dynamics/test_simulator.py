@@ -92,7 +92,7 @@ def test_sample_matches_scipy_expm():
 # --------------------------------------------------------------------------- robustness
 
 
-@pytest.mark.parametrize("theta", [1.0, 0.5])
+@pytest.mark.parametrize("theta", [1.0, pytest.param(0.5, marks=pytest.mark.slow)])
 def test_no_crossing_skipped_brute_force_scan(theta):
     """Many rapid events (Fig. 2d, ~230 events): every gap sign change seen on a very fine scan of
     the exact trajectory is a recorded impact/lift-off, and vice versa."""
