@@ -156,11 +156,14 @@ class Notebook:
         page.get_by_text("Run All Cells", exact=True).click()
 
     def wait_run_all(self, timeout: float = 300) -> float:
-        """Wait until every code cell has run; returns the seconds since :meth:`start_run_all`."""
+        """Wait until every code cell has run, or a cell's traceback is shown (the cells after it
+        never run); returns the seconds since :meth:`start_run_all`."""
         self.page.wait_for_function(
             """() => {
                 const p = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
-                return p.length > 0 && p.every(e => /^\\[\\d+\\]:$/.test(e.textContent.trim()));
+                const out = [...document.querySelectorAll('.jp-OutputArea-output')];
+                return (p.length > 0 && p.every(e => /^\\[\\d+\\]:$/.test(e.textContent.trim())))
+                    || out.some(e => e.textContent.includes('Traceback'));
             }""",
             timeout=timeout * 1e3,
             polling=200,
@@ -717,6 +720,8 @@ def test_explorer_in_a_browser(tmp_path, need):
             nb = Notebook(browser, base, token, "explore.ipynb")
             nb.start_run_all()
             seconds = nb.wait_run_all()
+            assert not nb.tracebacks(), nb.tracebacks()
+            assert (tmp_path / "tiny_atlas.nc").is_file()  # its last cells ran
             nb.open_log_console()
             times = check_explorer(nb, targets.result)
             nb.page.screenshot(path=str(tmp_path / "explorer.png"), full_page=True)

@@ -35,6 +35,7 @@ def test_notebooks_committed_without_outputs(need):
 
 
 @pytest.mark.e2e
+@pytest.mark.slow  # in CI the browser test runs this notebook at this size (test_notebook_browser)
 def test_explore_notebook_executes(notebook_runs):
     seconds, cwd = notebook_runs.wait("explore")
     assert (cwd / "tiny_atlas.nc").is_file()
