@@ -508,13 +508,17 @@ def tier2(c1, s1, c2, s2, kappa, q1, q2, *, ss: bool = True, ii: bool = True, it
     Two compiled programs (module docstring, "Soundness"): :func:`_tier2_decide` (every sign, the
     decisions and the shifts) and :func:`_tier2_dominance` (the shifted counts), so each shift
     reaches the certified expressions as one rounded input.  Call it as it is (a ``jax.jit`` around
-    it would merge the two programs again).
+    it would merge the two programs again).  Program 2 is skipped where no point is left to it.
     """
     ss_code, cons, stab, dominance, s_disc, s_lo, s_hi = _tier2_decide(
         c1, s1, c2, s2, kappa, q1, q2, ss=ss, ii=ii, iters=iters
     )
     if not ii:
         return ss_code, cons, stab
+    if not isinstance(dominance, jax.core.Tracer) and not np.asarray(dominance).any():
+        # no dominance to settle: program 2 would only mark the undamped points undecided
+        damped = (np.asarray(q1) != 0) | (np.asarray(q2) != 0)  # numpy keeps subnormals
+        return ss_code, *(np.where(damped, v, X).astype(np.int8) for v in (cons, stab))
     return ss_code, *_tier2_dominance(
         c1, s1, c2, s2, kappa, q1, q2, cons, stab, dominance, s_disc, s_lo, s_hi
     )
