@@ -66,6 +66,16 @@ CLASS_COLORS = dict(
 )  # fmt: skip
 
 
+#: the angles [rad] whose float (in any dtype) yields the exact axis vector ``(cos, sin)``
+_AXES = (
+    (0.0, 1.0, 0.0),
+    (np.pi / 2, 0.0, 1.0),
+    (np.pi, -1.0, 0.0),
+    (1.5 * np.pi, 0.0, -1.0),
+    (TWO_PI, 1.0, 0.0),
+)
+
+
 def direction(angle, dtype=np.float64):
     """Direction vector ``(cos angle, sin angle)`` [1] of angles [rad], rounded to ``dtype``.
 
@@ -76,20 +86,16 @@ def direction(angle, dtype=np.float64):
     x = np.asarray(angle, dtype=dtype)
     if not np.all(np.isfinite(x)):
         raise ValueError("angle: must be finite")
-    x = np.where((x >= 0) & (x < dtype.type(TWO_PI)), x, np.mod(x, dtype.type(TWO_PI)))
-    c = np.cos(x.astype(np.float64)).astype(dtype)
-    s = np.sin(x.astype(np.float64)).astype(dtype)
-    axes = [
-        (0.0, 1.0, 0.0),
-        (np.pi / 2, 0.0, 1.0),
-        (np.pi, -1.0, 0.0),
-        (1.5 * np.pi, 0.0, -1.0),
-        (TWO_PI, 1.0, 0.0),
-    ]
-    for a, ca, sa in axes:
+    inside = (x >= 0) & (x < dtype.type(TWO_PI))
+    if not inside.all():
+        x = np.where(inside, x, np.mod(x, dtype.type(TWO_PI)))
+    x64 = x.astype(np.float64, copy=False)
+    c, s = np.empty(x.shape, dtype), np.empty(x.shape, dtype)
+    c[...], s[...] = np.cos(x64), np.sin(x64)  # rounded to dtype as astype rounds
+    for a, ca, sa in _AXES:
         hit = x == dtype.type(a)
-        c = np.where(hit, dtype.type(ca), c)
-        s = np.where(hit, dtype.type(sa), s)
+        if hit.any():
+            c[hit], s[hit] = ca, sa
     return c, s
 
 

@@ -64,6 +64,7 @@ from atlas.core.verdicts import Verdict
 __all__ = [
     "characteristic_poly",
     "point_spectral",
+    "point_verdicts",
     "ss_hurwitz",
     "resolve",
     "point_codes",
@@ -420,6 +421,12 @@ def _roots(s: _Scaled) -> list:
     with flint.ctx.workprec(64):
         enclosures = flint.fmpz_poly(list(s.P)).complex_roots()
         return [complex((z / L).mid()) for z, m in enclosures for _ in range(m)]
+
+
+def point_verdicts(c1, s1, c2, s2, kappa, q1, q2) -> dict:
+    """Exact ``stable_SS``, ``consistent_II``, ``stable_II`` of one point: :func:`point_spectral`
+    without the roots (their enclosures cost more than the verdicts)."""
+    return _verdicts(_scaled(c1, s1, c2, s2, kappa, q1, q2))
 
 
 def point_spectral(c1, s1, c2, s2, kappa, q1, q2) -> dict:

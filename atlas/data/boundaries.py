@@ -338,11 +338,13 @@ def _probe(fld, polys, k, frac, model, tol, dtype) -> dict:
     a = np.array([polys.region[c] for c in polys.cid[k]], np.int8)
     off = _offsets(base, n, np.maximum(length, 8 * tol))
     pts = base[:, None, :] + off[:, :, None] * n[:, None, :]
-    # each point once: without a class line near, the line offsets are all 0 (the chord's middle,
-    # next to the boundary: the costly tiers)
-    uniq, again = np.unique(pts.reshape(-1, 2), axis=0, return_inverse=True)
+    # each point of a segment once: without a class line near, the line offsets are all 0 (the
+    # chord's middle, next to the boundary: the costly tiers); equal offsets are neighbours
+    first = np.ones(off.shape, bool)
+    first[:, 1:] = off[:, 1:] != off[:, :-1]
+    uniq = pts[first]
     codes = brackets.field_codes(fld, uniq[:, 0], uniq[:, 1], *model, dtype=dtype)
-    codes = codes[again.reshape(-1)].reshape(pts.shape[:2])
+    codes = codes[np.cumsum(first).reshape(off.shape) - 1]
     inside = codes == a[:, None]
     score = np.abs(off[:, :-1]) + np.abs(off[:, 1:])
     score = np.where(inside[:, :-1] != inside[:, 1:], score, np.inf)

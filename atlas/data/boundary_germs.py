@@ -314,7 +314,7 @@ def near_side_codes(
     exact rational, or the float nearest ``tan(beta / 2)``), the largest ``e = 2^-k`` (``k`` in
     :data:`NEAR_EXPONENTS`, ``2 atan(e) <= max_offset`` [rad]: clear of the class lines that
     cross this one that far along it) with no branch of a boundary polynomial for ``|e'| <= e``
-    (:func:`_dominated`), and the exact codes (:func:`atlas.core.exact.point_spectral`) at the
+    (:func:`_dominated`), and the exact codes (:func:`atlas.core.exact.point_verdicts`) at the
     exactly rational unit directions of ``(t, +-e)``.  Returns ``(code at -e, code at +e, delta
     [rad])`` (``delta = 2 atan(e)``), or ``None`` where no offset is proven."""
     model = tuple(float(v) for v in model)
@@ -335,16 +335,16 @@ def near_side_codes(
 def exact_codes(fld, model, m, t: Fraction, k: int) -> tuple[int, int]:
     """The exact codes of ``fld`` at ``(t, -2^-k)`` and ``(t, 2^-k)`` near class line ``m``
     (module docstring; ``t`` rational, the directions exactly rational;
-    :func:`atlas.core.exact.point_spectral`)."""
+    :func:`atlas.core.exact.point_verdicts`)."""
     e = Fraction(1, 2**k)
     return exact_codes_at(fld, model, m, t, -e), exact_codes_at(fld, model, m, t, e)
 
 
 def exact_codes_at(fld, model, m, t: Fraction, e: Fraction) -> int:
     """The exact code of ``fld`` at the rationals ``(t, e)`` near class line ``m`` (module
-    docstring; :func:`atlas.core.exact.point_spectral` at exactly rational directions)."""
+    docstring; :func:`atlas.core.exact.point_verdicts` at exactly rational directions)."""
     kappa, q1, q2 = (Fraction(v) for v in model)
     at = tuple(flint.fmpq(v.numerator, v.denominator) for v in (t, e))
     dirs = [_value_at(r, *at) for r in _directions(m)]
-    verdicts = exact.point_spectral(*dirs, kappa, q1, q2)
+    verdicts = exact.point_verdicts(*dirs, kappa, q1, q2)
     return int(brackets.codes_of(fld, {n: [verdicts[n]] for n in brackets.FIELDS[fld]})[0])

@@ -122,3 +122,26 @@ def test_mirrored_lines_reuse_the_elimination_exactly(monkeypatch):
     want = {m: bg.boundary_polynomials("II", m, model) for m in bp.TORUS_LINES}
     assert got == want
     bg._ELIMINATED.clear()
+
+
+def test_exact_codes_beside_a_line_need_no_roots(monkeypatch):
+    """The exact codes just off a class line (:func:`atlas.data.boundary_germs.exact_codes`) take
+    the exact verdicts alone: no root enclosure is computed (hundreds of points a slice); they
+    are the exact tier's codes at the float points ``2 atan(2^-20)`` rad off the line."""
+    from fractions import Fraction
+
+    from atlas.core import exact
+
+    cases = [(model, *case) for model in SLICES[1:] for case in (
+        ("II", 8, 4.17), ("II", 11, 0.4), ("SS", 0, 1.0), ("SS", 12, 2.5))]  # fmt: skip
+    calls = []
+    real = exact._roots
+    monkeypatch.setattr(exact, "_roots", lambda s: calls.append(1) or real(s))
+    got = [bg.exact_codes(fld, model, m, Fraction(math.tan(beta / 2)), 20)
+           for model, fld, m, beta in cases]  # fmt: skip
+    assert not calls
+    monkeypatch.undo()
+    delta = 2 * math.atan(2.0**-20)
+    for (model, fld, m, beta), codes in zip(cases, got):
+        want = tuple(_code(fld, *_point(m, beta, s * delta), model) for s in (-1, 1))
+        assert codes == want, (fld, model, m, beta)
