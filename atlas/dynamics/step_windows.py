@@ -159,9 +159,10 @@ def _far(r, lo, hi, M, Hw, small, s, p, UE, lam, valid, k, q, aUE, mon, H, scale
     if r.size == 0:
         return
     w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+    wider = w > Hw[r]  # the test only where the long window is longer
+    r, w, sm = r[wider], w[wider], sm[wider]
     pr = p[r, :, :3]
     ok = eb.all_cols(eb.keeps_sign_within(s[r], pr, UE[r], lam[r], k[r], q[r], w) | ~mon[r])
-    ok &= w > Hw[r]
     r, w, sm = r[ok], w[ok], sm[ok]
     lo[r] = np.where(mon[r], w[:, None], np.inf)
     hi[r] = np.inf
