@@ -138,20 +138,22 @@ def _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon):
     A row stops widening once its step falls inside the window: a wider window's lower
     quadratic lies below, so its ``sigma_lo`` cannot be longer."""
     m = eb.min_cols(lo[r])
+    lo_r, hi_r, mon_r, Hw_r, A_r, Bd_r = lo[r], hi[r], mon[r], Hw[r], A[r], Bd[r]
     f2, terms = eb.taylor_terms(p[r], UE[r], lam[r], k[r], q[r])
     C = s[r] * f2
     err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
     j = np.arange(r.size)  # the rows still widening, into r
     for f in TAYLOR:
-        W = np.minimum(Hw[r[j]], f * m[j])
-        lo_t, hi_t = eb.taylor_steps(A[r[j]], Bd[r[j]], C[j], eb.third_bound(_rows(terms, j), W),
+        W = np.minimum(Hw_r[j], f * m[j])
+        lo_t, hi_t = eb.taylor_steps(A_r[j], Bd_r[j], C[j], eb.third_bound(_rows(terms, j), W),
                                      W, err[j])  # fmt: skip
-        rj, mon_j = r[j], mon[r[j]]
-        lo[rj] = np.where(mon_j, np.maximum(lo[rj], lo_t), lo[rj])
-        hi[rj] = np.where(mon_j, np.minimum(hi[rj], hi_t), hi[rj])
-        j = j[(eb.min_cols(lo[rj]) >= W) & (W < Hw[rj])]
+        mon_j, lo_j = mon_r[j], lo_r[j]
+        lo_j = np.where(mon_j, np.maximum(lo_j, lo_t), lo_j)
+        lo_r[j], hi_r[j] = lo_j, np.where(mon_j, np.minimum(hi_r[j], hi_t), hi_r[j])
+        j = j[(eb.min_cols(lo_j) >= W) & (W < Hw_r[j])]
         if j.size == 0:
-            return
+            break
+    lo[r], hi[r] = lo_r, hi_r
 
 
 def _rows(terms, j):
