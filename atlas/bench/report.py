@@ -205,7 +205,8 @@ OUTCOME_MAP_COLUMNS = (
 ENGINE_LANE_COLUMNS = (
     "set", "lanes", "disagreements", "fallback", "fast_cpu_s", "exact_cpu_s", "speedup",
     "ratio_median", "ratio_p99", "ratio_worst", "over_exact", "steps_median", "steps_max",
-    "over_steps", "over_cost", "worst_over_median", "over_steps_per_event",
+    "over_steps", "over_cost", "worst_over_median", "over_steps_per_event", "event_steps_worst",
+    "event_cost_worst", "over_event", "over_exact_stepped", "fallback_worst", "met",
 )  # fmt: skip
 
 STARTUP_COLUMNS = (
@@ -621,6 +622,14 @@ def engine_lanes_section(lanes) -> list[str]:
         "`worst_over_median`: the costliest lane over the median lane; `over_steps_per_event`: "
         "the most steps per event of a lane over 10 times the median (near 1: such a lane is "
         "stepped event to event).\n",
+        'The target "no lane costs more than 10x the median lane" is read as: no lane\'s cost '
+        "is out of proportion to the work its physics needs (a lane with 100 contact events "
+        "cannot cost 10 events' worth).  `met` is 1 when (a) no lane costs over 10 times the median "
+        "lane per event (`event_steps_worst`, `event_cost_worst`: the worst lane's steps and "
+        "fast cost per event over the median lane's, events counted at least 1; `over_event`: "
+        "lanes over 10 times in either) and (b) no lane costs more than the exact simulator's "
+        "run of it (`over_exact_stepped`), fallbacks aside: a fallback lane pays the fast attempt "
+        "and the exact run (`fallback_worst`: the costliest over its exact run).\n",
         table(lanes, ENGINE_LANE_COLUMNS),
         "",
     ]

@@ -14,7 +14,7 @@ from atlas.dynamics import fast_engine
 from atlas.dynamics.outcome import initial_states, simulate_outcome, standard_normals
 
 __all__ = ["RandomLanes", "random_lanes", "grid_lanes", "compare", "lane_costs", "cost_ratios",
-           "summary"]  # fmt: skip
+           "per_event", "summary"]  # fmt: skip
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,6 +115,34 @@ def cost_ratios(r: dict) -> np.ndarray:
     return lane_costs(r) / r["exact_lane_s"]
 
 
+def per_event(r: dict, over: float = 10.0) -> dict:
+    """The stated target of a lane's cost, from :func:`compare`'s result ``r``: no lane costs
+    out of proportion to the work its physics needs, read as (a) no lane over ``over`` times
+    the median lane in steps per event or in fast CPU seconds per event (:func:`lane_costs`;
+    events counted at least 1) and (b) no lane over the exact simulator's CPU seconds for the
+    same lane (:func:`cost_ratios` over 1), fallbacks aside: a fallback lane pays the fast
+    attempt and the exact run, reported apart (``fallback_worst``, its cost over its exact run;
+    0 if none).  Returns ``event_steps_worst``, ``event_cost_worst`` (the worst lane's steps
+    and cost per event over the median lane's), ``over_event`` (lanes over ``over`` times the
+    median in either), ``over_exact_stepped`` (lanes of (b)) and ``met`` ((a) and (b))."""
+    fb = np.asarray(r["decided_by"]) == fast_engine.DECIDED_BY.index("fallback")
+    events = np.maximum(np.asarray(r["n_events"]), 1)
+    ratio, run = cost_ratios(r), ~fb
+    worst, over_med = {}, np.zeros(fb.size, dtype=bool)
+    for name, x in (("steps", np.asarray(r["steps"]) / events), ("cost", lane_costs(r) / events)):
+        x = x[run]
+        med = float(np.median(x)) if x.size else 0.0
+        worst[name] = float(x.max() / med) if med > 0 else (math.inf if (x > 0).any() else 0.0)
+        over_med[run] |= x > over * med
+    over_exact = int((run & (ratio > 1)).sum())
+    return dict(
+        event_steps_worst=worst["steps"], event_cost_worst=worst["cost"],
+        over_event=int(over_med.sum()), over_exact_stepped=over_exact,
+        fallback_worst=float(ratio[fb].max()) if fb.any() else 0.0,
+        met=bool(not over_med.any() and over_exact == 0),
+    )  # fmt: skip
+
+
 def summary(r: dict, over: float = 10.0) -> dict:
     """The reported numbers of :func:`compare`'s result ``r``: ``lanes``, ``disagreements``,
     ``fallback`` (share of lanes), CPU seconds of each engine (``fast_cpu_s``, ``exact_cpu_s``)
@@ -124,7 +152,8 @@ def summary(r: dict, over: float = 10.0) -> dict:
     the lanes over ``over`` times the median lane in steps (``over_steps``) and in fast CPU
     seconds (:func:`lane_costs`; ``over_cost``), the worst lane's cost over the median lane's
     (``worst_over_median``) and the most steps per event of a lane over ``over`` times the median
-    (``over_steps_per_event``: 1 where each step is an event; 0 if none)."""
+    (``over_steps_per_event``: 1 where each step is an event; 0 if none); the target's columns
+    of :func:`per_event`."""
     steps, events = np.asarray(r["steps"]), np.asarray(r["n_events"])
     cost, ratio = lane_costs(r), cost_ratios(r)
     med_steps, med_cost = float(np.median(steps)), float(np.median(cost))
@@ -141,4 +170,5 @@ def summary(r: dict, over: float = 10.0) -> dict:
         worst_over_median=float(cost.max() / med_cost) if med_cost > 0 else math.inf,
         over_steps_per_event=float((steps[heavy] / np.maximum(events[heavy], 1)).max())
         if heavy.any() else 0.0,
+        **per_event(r, over),
     )  # fmt: skip

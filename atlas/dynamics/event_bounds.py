@@ -267,11 +267,17 @@ def taylor_steps(A, Bd, C, M3, W, err=0.0):
 
 
 def first_root(A, Bd, c):
-    """First root ``x > 0`` of ``A + Bd x + c x^2 / 2`` (``A >= 0``; ``inf`` if none), by
-    :func:`safe_steps` with ``M = |c|``: its lower root where ``c <= 0``, its upper one where
-    ``c > 0``.  NumPy arrays."""
-    lo, hi = safe_steps(A, Bd, np.abs(c))
-    return np.where(c > 0, hi, lo)
+    """First root ``x > 0`` of ``A + Bd x + c x^2 / 2`` (``A >= 0``; ``inf`` if none): the
+    root :func:`safe_steps` gives with ``M = |c|`` (its lower one where ``c <= 0``, its upper
+    one where ``c > 0``; the same arithmetic), from one square root.  NumPy arrays."""
+    cm = np.where(c > 0, np.maximum(c, 1e-300), np.minimum(c, -1e-300))  # sign(c) max(|c|, 1e-300)
+    with np.errstate(all="ignore"):
+        disc = Bd * Bd - 2 * cm * A
+        root = np.sqrt(np.maximum(disc, 0.0))
+        x = np.where(Bd < 0, (2 * A) / (root - Bd), (Bd + root) / -cm)
+        x[(c > 0) & ~((Bd < 0) & (disc >= 0))] = np.inf
+    x[np.isnan(x)] = 0.0
+    return x
 
 
 def safe_steps(A, Bd, M):

@@ -134,19 +134,31 @@ def brackets(d, v, acc, k, q, s, p, UE, lam, valid, H, scale, act, mu):
 def _taylor(r, lo, hi, M, Hw, A, Bd, s, p, UE, lam, k, q, mon):
     """Rows ``r`` whose step is cut by a ``sigma_lo``: the brackets again from the signed
     curvature at the step's start (:func:`eb.taylor_steps`) within windows ``TAYLOR`` times the
-    step (at most ``Hw``), each bracket kept where tighter (both hold); ``lo``, ``hi`` in place."""
+    step (at most ``Hw``), each bracket kept where tighter (both hold); ``lo``, ``hi`` in place.
+    A row stops widening once its step falls inside the window: a wider window's lower
+    quadratic lies below, so its ``sigma_lo`` cannot be longer."""
     m = eb.min_cols(lo[r])
-    lo_r, hi_r, mon_r = lo[r], hi[r], mon[r]
-    A_r, Bd_r = A[r], Bd[r]
-    err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
+    lo_r, hi_r, mon_r, Hw_r, A_r, Bd_r = lo[r], hi[r], mon[r], Hw[r], A[r], Bd[r]
     f2, terms = eb.taylor_terms(p[r], UE[r], lam[r], k[r], q[r])
     C = s[r] * f2
+    err = 1e-13 * M[r]  # the rounding of f2: below 1e-13 of its terms' moduli
+    j = np.arange(r.size)  # the rows still widening, into r
     for f in TAYLOR:
-        W = np.minimum(Hw[r], f * m)
-        lo_t, hi_t = eb.taylor_steps(A_r, Bd_r, C, eb.third_bound(terms, W), W, err)
-        lo_r = np.where(mon_r, np.maximum(lo_r, lo_t), lo_r)
-        hi_r = np.where(mon_r, np.minimum(hi_r, hi_t), hi_r)
+        W = np.minimum(Hw_r[j], f * m[j])
+        lo_t, hi_t = eb.taylor_steps(A_r[j], Bd_r[j], C[j], eb.third_bound(_rows(terms, j), W),
+                                     W, err[j])  # fmt: skip
+        mon_j, lo_j = mon_r[j], lo_r[j]
+        lo_j = np.where(mon_j, np.maximum(lo_j, lo_t), lo_j)
+        lo_r[j], hi_r[j] = lo_j, np.where(mon_j, np.minimum(hi_r[j], hi_t), hi_r[j])
+        j = j[(eb.min_cols(lo_j) >= W) & (W < Hw_r[j])]
+        if j.size == 0:
+            break
     lo[r], hi[r] = lo_r, hi_r
+
+
+def _rows(terms, j):
+    """:func:`eb.taylor_terms`' ``terms`` of the rows ``j``."""
+    return tuple(x[j] for x in terms)
 
 
 def _far(r, lo, hi, M, Hw, small, s, p, UE, lam, valid, k, q, aUE, mon, H, scale):
@@ -159,9 +171,10 @@ def _far(r, lo, hi, M, Hw, small, s, p, UE, lam, valid, k, q, aUE, mon, H, scale
     if r.size == 0:
         return
     w, sm = window(H[r], lam[r], valid[r], p[r], aUE[r], scale[r], LONG)
+    wider = w > Hw[r]  # the test only where the long window is longer
+    r, w, sm = r[wider], w[wider], sm[wider]
     pr = p[r, :, :3]
     ok = eb.all_cols(eb.keeps_sign_within(s[r], pr, UE[r], lam[r], k[r], q[r], w) | ~mon[r])
-    ok &= w > Hw[r]
     r, w, sm = r[ok], w[ok], sm[ok]
     lo[r] = np.where(mon[r], w[:, None], np.inf)
     hi[r] = np.inf

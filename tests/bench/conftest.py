@@ -133,6 +133,8 @@ def fake_results(mode="full") -> Results:
                     exact_cpu_s=20.0, speedup=20.0, ratio_median=0.1, ratio_p99=0.3,
                     ratio_worst=0.5, over_exact=0, steps_median=8.0, steps_max=90, over_steps=2,
                     over_cost=2, worst_over_median=11.0, over_steps_per_event=1.1,
+                    event_steps_worst=6.0, event_cost_worst=6.0, over_event=0,
+                    over_exact_stepped=0, fallback_worst=0.0, met=True,
                     disagree_lanes="") for name in ("random lanes", "grid")],
     )  # fmt: skip
 

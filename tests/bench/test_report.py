@@ -160,6 +160,8 @@ def test_engine_lanes_table_follows_the_outcome_maps_and_lists_disagreements(res
                fast_cpu_s=20.0, exact_cpu_s=900.0, speedup=45.0, ratio_median=0.1,
                ratio_p99=0.6, ratio_worst=1.2, over_exact=3, steps_median=6.0, steps_max=130,
                over_steps=4, over_cost=4, worst_over_median=21.7, over_steps_per_event=1.1,
+               event_steps_worst=12.5, event_cost_worst=12.5, over_event=2,
+               over_exact_stepped=1, fallback_worst=1.15, met=False,
                disagree_lanes="lane 7: exact 3, fast 2")  # fmt: skip
     results.lanes = []
     assert "### Lane by lane" not in report.build_report(results)
@@ -171,8 +173,12 @@ def test_engine_lanes_table_follows_the_outcome_maps_and_lists_disagreements(res
                                     "## Start-up"]  # fmt: skip
     header = ("| set | lanes | disagreements | fallback | fast_cpu_s | exact_cpu_s | speedup | "
               "ratio_median | ratio_p99 | ratio_worst | over_exact | steps_median | steps_max | "
-              "over_steps | over_cost | worst_over_median | over_steps_per_event |")  # fmt: skip
+              "over_steps | over_cost | worst_over_median | over_steps_per_event | "
+              "event_steps_worst | event_cost_worst | over_event | over_exact_stepped | "
+              "fallback_worst | met |")  # fmt: skip
     assert header in md
+    assert "| 4 | 4 | 21.7 | 1.1 | 12.5 | 12.5 | 2 | 1 | 1.15 | 0 |" in md
+    assert "read as: no lane's cost is out of proportion to the work its physics needs" in md
     row_md = "| 2000 random lanes (seed 44) | 2000 | 1 | 0 | 20 | 900 | 45 | 0.1 | 0.6 | 1.2 | 3 |"
     assert row_md in md
     assert "* 2000 random lanes (seed 44): lane 7: exact 3, fast 2" in md

@@ -86,6 +86,50 @@ def test_summary_counts_lanes_against_the_median_lane():
     assert C.summary(r, over=5.0)["over_cost"] == 2
 
 
+def test_per_event_target_by_hand():
+    """The lane-cost target of a made-up comparison, by hand: four stepped lanes at 2, 1, 30 and
+    2.5 steps per event (median 2.25; a lane without events counts one) and a fallback (its
+    cost reported apart, over its exact run).  Batch CPU 4.4 s over 44 steps: 0.1 s a step."""
+    r = dict(fast_s=6.4, steps=np.array([2, 4, 30, 3, 5]), n_events=np.array([1, 4, 1, 0, 2]),
+             decided_by=np.array([0, 0, 0, 3, 0]), exact_lane_s=np.array([1.0, 1.0, 1.0, 2.0, 1.0]),
+             exact_s=6.0, disagree=np.array([], dtype=int))  # fmt: skip
+    x = C.per_event(r)
+    # steps per event 2, 1, 30, 2.5 and cost per event 0.2, 0.1, 3.0, 0.25 s: 30 / 2.25 both
+    assert x["event_steps_worst"] == pytest.approx(30 / 2.25)
+    assert x["event_cost_worst"] == pytest.approx(3.0 / 0.225)
+    assert x["over_event"] == 1  # the 30-step lane, over 22.5
+    assert x["over_exact_stepped"] == 1  # the same lane: 3.0 s against 1 s exact
+    assert x["fallback_worst"] == pytest.approx((0.3 + 2.0) / 2.0)  # its share and exact run
+    assert x["met"] is False
+    # over 15 times the median and 10 s exact for the long lane: met, the fallback aside
+    y = C.per_event(dict(r, exact_lane_s=np.array([1.0, 1.0, 10.0, 2.0, 1.0])), over=15.0)
+    assert y["over_event"] == y["over_exact_stepped"] == 0 and y["met"] is True
+    s = C.summary(r)  # the literal column kept: 30 steps are under 10 times the median lane's 4
+    assert s["met"] is False and s["over_event"] == 1 and s["over_steps"] == 0
+    none = dict(r, decided_by=np.zeros(5, dtype=int), fast_s=4.4)
+    assert C.per_event(none)["fallback_worst"] == 0.0
+
+
+def test_grid_lanes_cost_under_ten_times_the_median_lane_per_event():
+    """The runs of the ``0:2pi:8`` degenerate-direction grid at one run a cell (256 lanes), by
+    the fast engine alone, counted (not timed): no stepped lane takes over 10 times the median
+    lane's steps per event."""
+    from atlas.bench.simulation import DEGENERATE_GRID
+    from atlas.dynamics import fast_engine
+
+    L = C.grid_lanes(**DEGENERATE_GRID)
+    k, q = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1), np.stack([L.q, L.q], axis=1)
+    res = fast_engine.run_lanes(L.beta1, L.beta2, L.alpha, k, q, L.g0)
+    n = res.steps.size
+    r = dict(fast_s=1.0, steps=res.steps, n_events=res.n_events, decided_by=res.decided_by,
+             exact_lane_s=np.ones(n))  # fmt: skip
+    x = C.per_event(r)
+    stepped = res.decided_by != fast_engine.DECIDED_BY.index("fallback")
+    spe = res.steps[stepped] / np.maximum(res.n_events[stepped], 1)
+    assert x["event_steps_worst"] == pytest.approx(spe.max() / np.median(spe))
+    assert x["event_steps_worst"] < 10
+
+
 def test_summary_of_a_lane_set_without_heavy_lanes():
     r = dict(fast_s=1.0, steps=np.array([3, 3]), n_events=np.array([1, 1]),
              decided_by=np.array([0, 0]), exact_lane_s=np.array([1.0, 1.0]), exact_s=2.0,
