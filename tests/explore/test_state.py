@@ -14,15 +14,17 @@ import pytest
 from atlas.explore import maps, state
 
 _SWITCH_PROBE = """
-import json, jax
+import json, sys, jax
 from atlas.explore import state
+assert "ipywidgets" not in sys.modules  # the explorer's state imports without the widgets
 print(json.dumps(dict(kept=state.keep_kernels(), cache=jax.config.jax_compilation_cache_dir)))
 """
 
 
 def test_keep_kernels_follows_the_cli_switches(tmp_path, probe_env):
     """An explorer's process keeps kernels in ``<cache>/kernels`` and uses the compilation
-    cache; ``ATLAS_KERNEL_CACHE=0`` leaves the kept kernels off, ``ATLAS_JAX_CACHE=0`` both."""
+    cache; ``ATLAS_KERNEL_CACHE=0`` leaves the kept kernels off, ``ATLAS_JAX_CACHE=0`` both.
+    The same fresh processes show that :mod:`atlas.explore` imports without ipywidgets."""
     cases = {
         "on": ({}, str(tmp_path / "kernels"), str(tmp_path)),
         "no kept kernels": ({"ATLAS_KERNEL_CACHE": "0"}, None, str(tmp_path)),
