@@ -70,7 +70,7 @@ def pin_to_cpus(cpus) -> list[int]:
 def local_cluster(n_workers: int):
     """``(cluster, client)``: a LocalCluster of ``n_workers`` single-thread worker processes with
     :func:`worker_env`, worker ``i`` pinned to core ``i mod ncores`` (:func:`pin_to_cpus`), so N
-    workers use N cores."""
+    workers use N cores; the scheduler's HTTP server on a free loopback port (no dashboard)."""
     from distributed import Client, LocalCluster
 
     cluster = LocalCluster(
@@ -79,6 +79,9 @@ def local_cluster(n_workers: int):
         processes=True,
         env=worker_env(),
         dashboard_address=None,
+        # no dashboard, but the scheduler still serves HTTP (health, metrics): on a free loopback
+        # port, not on 8787, where a second cluster (or a user's own) would make it warn and move
+        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
         silence_logs=40,
     )
     client = Client(cluster)

@@ -1,5 +1,6 @@
 """``atlas.data.cluster``: where tiles run (in process, LocalCluster workers pinned to cores)."""
 
+import contextlib
 import os
 
 import pytest
@@ -32,14 +33,24 @@ def _thread_affinities():
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
 def test_local_cluster_pins_each_worker_to_one_core():
     """Every thread of a LocalCluster worker (XLA's task pool included) runs on one core, and the
-    worker has the single-thread XLA environment."""
+    worker has the single-thread XLA environment; the scheduler's HTTP server is on a free loopback
+    port, not on dask's 8787 (held here: two clusters at once would warn, an error in the suite)."""
+    import socket
+
     import jax.numpy as jnp  # noqa: F401  (XLA's pools exist in this process too)
 
     pytest.importorskip("distributed")
     from atlas.data.cluster import WORKER_ENV, local_cluster
 
-    cluster, client = local_cluster(1)
+    with socket.socket() as held:
+        held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        with contextlib.suppress(OSError):  # already held by someone else: as good
+            held.bind(("127.0.0.1", 8787))
+            held.listen()
+        cluster, client = local_cluster(1)
     try:
+        http = cluster.scheduler.http_server
+        assert (http.address, http.port != 8787) == ("127.0.0.1", True), (http.address, http.port)
 
         def probe():
             import os
