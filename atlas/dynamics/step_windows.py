@@ -227,29 +227,49 @@ def stretch(s, p, UE, lam, valid, k, q, H, scale, rest, step):
     """Steps (n,) past the ``GROWTH`` cap of the rows' windows: up to ``LONG H_S`` and ``rest``
     [time], the time before which no gap can pass a limit of the stop rule
     (:func:`limit_reach`), where every monitored event function keeps its sign over it
-    (:func:`no_event_within`, no event); ``step`` (n,) where that is not longer.  Quadratic
-    ``p`` (n, 2, 3); NumPy arrays."""
-    reach = limit_reach(p, UE, lam, scale, np.minimum(LONG * H, rest))
-    r = eb.rows(reach > step)
+    (:func:`no_event_within`, no event); ``step`` (n,) where that is not longer.  Tried where the
+    signs are kept over ``step`` (necessary: the certificate over a longer horizon implies it
+    over a shorter one).  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
     out = step.copy()
+    r = eb.rows(no_event_within(s, p, UE, lam, valid, k, q, step))
+    if r.size == 0:
+        return out
+    reach = limit_reach(p[r], UE[r], lam[r], scale[r], np.minimum(LONG * H[r], rest[r]), step[r])
+    r, reach = r[reach > step[r]], reach[reach > step[r]]
     if r.size:
-        ok = no_event_within(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r], reach[r])
-        out[r[ok]] = reach[r[ok]]
+        ok = no_event_within(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r], reach)
+        out[r[ok]] = reach[ok]
     return out
 
 
 #: bisection rounds of :func:`limit_reach` (its bound to ``2^-REACH_ROUNDS`` of the interval)
-REACH_ROUNDS = 40
+REACH_ROUNDS = 24
 
 
-def limit_reach(p, UE, lam, scale, rest):
+def limit_reach(p, UE, lam, scale, rest, lo=None):
     """A lower bound (n,) of the time from now at which a gap can first pass the amplitude limit
-    (``d_i > amp``) or the deep penetration (``d_i < -DEEP pen``) of the stop rule, at most
-    ``rest`` [time]: bisection (:func:`eb.last_below`) on nondecreasing upper bounds of ``+-d_i``:
-    ``+-p0 + max(+-p1, 0) s + max(+-p2, 0) s^2 + sum_m b_m exp(max(Re lam_m, 0) s)``, ``b_m =
-    max(+-Re u_m, 0)`` for a real ``lam_m`` (its term is ``Re u_m exp(lam_m s)``), else ``|u_m|``;
-    a margin of ``1e-12`` of all the terms' moduli for the rounding of the gaps.  Quadratic ``p``
-    (n, 2, 3); NumPy arrays."""
+    (``d_i > amp``) or the deep penetration (``d_i < -DEEP pen``) of the stop rule, in ``[lo,
+    rest]`` [time] (``lo`` default 0): bisection (:func:`eb.last_below`) on nondecreasing upper
+    bounds of ``+-d_i`` (:func:`_over_limits`); ``rest`` where they stay below by then, 0 where
+    they pass by ``lo``.  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    lo = np.zeros(rest.size) if lo is None else lo
+    over = _over_limits(p, UE, lam, scale)
+    first = over(lo)
+    out = np.where(first, 0.0, rest)
+    r = eb.rows(~first & over(rest))
+    if r.size:
+        sub, a = _over_limits(p[r], UE[r], lam[r], scale[r]), lo[r]
+        with np.errstate(over="ignore", invalid="ignore"):
+            out[r] = a + eb.last_below(lambda x: sub(a + x), rest[r] - a, REACH_ROUNDS)
+    return out
+
+
+def _over_limits(p, UE, lam, scale):
+    """The test ``over(x)`` (bool (n,)) that an upper bound of ``+-d_i`` passes the amplitude
+    (``+``) or the deep-penetration limit (``-``) at time ``x`` (n,) from now: ``+-p0 + max(+-p1,
+    0) x + max(+-p2, 0) x^2 + sum_m b_m exp(max(Re lam_m, 0) x)``, ``b_m = max(+-Re u_m, 0)`` for
+    a real ``lam_m`` (its term is ``Re u_m exp(lam_m x)``), else ``|u_m|``; plus ``1e-12`` of all
+    the terms' moduli for the rounding of the gaps.  Nondecreasing in ``x``; NaN counts as over."""
     amp, pen = stop_rule.limits(scale)
     grow = np.maximum(lam.real, 0.0)[:, None, :]
     aw = np.abs(UE)
@@ -261,18 +281,18 @@ def limit_reach(p, UE, lam, scale, rest):
         sides.append((c, b, lim[:, None]))
     a = [np.abs(p[:, :, i]) for i in range(3)]
 
-    def above(x):
+    def over(x):
         x2 = x[:, None]
-        e = np.exp(grow * x2[:, :, None])
-        margin = 1e-12 * (a[0] + x2 * (a[1] + x2 * a[2]) + eb.sum4(aw * e))
-        out = np.zeros(x.size, dtype=bool)
-        for c, b, lim in sides:
-            bound = c[0] + x2 * (c[1] + x2 * c[2]) + eb.sum4(b * e) + margin
-            out |= ((bound >= lim) | np.isnan(bound)).any(axis=1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            e = np.exp(grow * x2[:, :, None])
+            margin = 1e-12 * (a[0] + x2 * (a[1] + x2 * a[2]) + eb.sum4(aw * e))
+            out = np.zeros(x.size, dtype=bool)
+            for c, b, lim in sides:
+                bound = c[0] + x2 * (c[1] + x2 * c[2]) + eb.sum4(b * e) + margin
+                out |= ((bound >= lim) | np.isnan(bound)).any(axis=1)
         return out
 
-    with np.errstate(over="ignore", invalid="ignore"):
-        return eb.last_below(above, rest, REACH_ROUNDS)
+    return over
 
 
 def no_event_within(s, p, UE, lam, valid, k, q, S):
