@@ -243,7 +243,7 @@ def stretch(s, p, UE, lam, valid, k, q, H, scale, rest, step):
 
 
 #: bisection rounds of :func:`limit_reach` (its bound to ``2^-REACH_ROUNDS`` of the interval)
-REACH_ROUNDS = 24
+REACH_ROUNDS = 12
 
 
 def limit_reach(p, UE, lam, scale, rest, lo=None):
