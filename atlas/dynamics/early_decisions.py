@@ -112,15 +112,7 @@ def reach_time(p, UE, lam, rest, scale):
         return b.max(axis=1)
 
     lim = 1e4 * scale
-
-    def halve(_, lohi):
-        lo, hi = lohi
-        mid = 0.5 * (lo + hi)
-        above = bound(mid) >= lim
-        return xp.where(above, lo, mid), xp.where(above, mid, hi)
-
-    s0, _ = eb.fori(64, halve, (xp.zeros(p.shape[0]), rest + 0.0))
-    return s0
+    return eb.last_below(lambda x: bound(x) >= lim, rest)
 
 
 def signs_from(p, UE, lam, valid, l1, act, s, s0):

@@ -15,6 +15,7 @@ import numpy as np
 __all__ = [
     "xp_of",
     "fori",
+    "last_below",
     "take",
     "NEUTRAL",
     "sum4",
@@ -451,6 +452,21 @@ def fori(n, body, carry, until=None):
     import jax  # noqa: PLC0415 - NumPy callers load no JAX
 
     return jax.lax.fori_loop(0, n, body, carry)
+
+
+def last_below(above, rest, rounds=64):
+    """The lower end (n,) of a bisection of ``[0, rest]`` (n,) on ``above(x)`` (bool (n,)), a
+    test that once true stays true as ``x`` grows (a nondecreasing bound over its limit): false
+    at the returned time and before it (``rest`` approached where never true).  NumPy or JAX."""
+    xp = xp_of(rest)
+
+    def halve(_, lohi):
+        lo, hi = lohi
+        mid = 0.5 * (lo + hi)
+        up = above(mid)
+        return xp.where(up, lo, mid), xp.where(up, mid, hi)
+
+    return fori(rounds, halve, (xp.zeros(rest.shape[0]), rest + 0.0))[0]
 
 
 def locate_root(P, U, lam, tau, a, b, j, sj, k, q, xtol, max_iter=200):

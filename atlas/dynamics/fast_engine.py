@@ -30,8 +30,10 @@ Every lane advances by the smallest ``sigma_lo`` of its monitored functions (at 
 ``W``: ``H_S = 1 / max(rho_S, omega / 4)``, up to ``8 H_S`` where no modal term grows by more than
 2 over it, and up to ``64 H_S`` where no function can cross within ``8 H_S``: an event-free
 stretch such as a free flight or a settled contact is crossed in a few steps, so that no lane
-costs many times the median lane); a step cut short by a ``sigma_lo`` with no crossing
-certified in the window goes on with further safe steps from its end under the same bound
+costs many times the median lane; past the growth cap, on the early decisions' schedule from its
+second try, where no event and no limit of the stop rule can come before its end,
+:func:`sw.stretch`: a run growing to its divergence stop with no event gets there in one step);
+a step cut short by a ``sigma_lo`` with no crossing certified in the window goes on with further safe steps from its end under the same bound
 (:func:`atlas.dynamics.substeps.safe_substeps`: an oscillation far from its contacts crosses
 the window in one step; a crossing certified beyond the window stops none), and a crossing
 certified where they stop, or reached by their last ``sigma_lo`` (a gap in free flight, an exact
@@ -355,7 +357,7 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
             _leave(st, ix, t, g, s, keep, dec, RUNNING)
         ev, h, xtol, step, t0 = _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v,
                                               t, T, tseg, P, U, lam, s, k, q, H, mask, act,
-                                              scale, width)  # fmt: skip
+                                              scale, width, (p, UE, valid), sched & (since > 1))  # fmt: skip
         t = np.where(keep, t + step, t)
         since += 1
         # stalled root location (a grazing contact): the exact simulator takes over
@@ -373,10 +375,12 @@ def _run_lanes(lanes, tables, st: State, t_max, max_events, width, fallback):
 
 
 def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, tseg, P, U, lam,
-                  s, k, q, H, mask, act, scale, width):  # fmt: skip
+                  s, k, q, H, mask, act, scale, width, now, sched):  # fmt: skip
     """The next step of every lane (:func:`_run_lanes`): ``(ev, h, xtol, step, t0)``, ``ev``
     where it ends at a located event ``h`` away, ``step`` its length (to the first crossing, the
-    window, the horizon or a stop-rule limit) and ``t0`` its start for a stop located inside."""
+    window, the horizon or a stop-rule limit; past the window where :func:`_stretch` allows, tried
+    on the rows ``sched``: the early decisions' schedule from its second try, after them) and ``t0`` its start for a stop located
+    inside; ``now`` the segments' ``(p, UE, valid)`` there."""
     rem = T - t
     xtol = XTOL * H
     ev, h, m = _first_crossing(lo, hi, mon, keep, rem, xtol, P, U, lam, t - tseg, s, k, q)
@@ -400,6 +404,9 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
         st.amp[ix[re], b] = np.maximum(st.amp[ix[re], b], d_re)
         split[re] = step[re]
         ev[re], h[re], step[re] = True, h_re, h_re
+    # a whole window with no crossing, cut by the growth cap: longer where no event can come
+    sel = keep & sched & ~ev & ~past & (step == Hw) & (Hw < np.minimum(rem, lim_lo))
+    _stretch(sel & np.isinf(eb.min_cols(hi)), step, small, *now, lam, s, k, q, H, scale, rem, Hw)
     t0 = t.copy()
     # a step over H_S where the gaps may leave SMALL scale: sampled, cut at a stop (a step
     # with safe sub-steps and an event: before and after the sub-steps' end, as two steps)
@@ -412,6 +419,26 @@ def _step_lengths(st, tables, ix, keep, lo, hi, mon, M, Hw, small, d, v, t, T, t
             a_c = a[rc] if i else 0.0
             step[rc], t0[rc], ev[rc] = a_c + s_cut, t[rc] + a_c + s_before, False
     return ev, h, xtol, step, t0
+
+
+def _stretch(sel, step, small, p, UE, valid, lam, s, k, q, H, scale, rem, Hw):
+    """Steps of the rows ``sel`` whose window the ``GROWTH`` cap cut (a real dominant growing
+    eigenvalue), past it where no event and no limit of the stop rule can come
+    (:func:`sw.stretch`; quadratic segments); ``step`` and ``small`` (sampled inside: no longer
+    provably small) in place."""
+    r = eb.rows(sel)
+    re = np.where(valid[r], lam[r].real, -np.inf)
+    j1 = np.argmax(re, axis=1)
+    grow, real = re[np.arange(r.size), j1], lam[r, j1].imag == 0
+    # not tried on a growing oscillation: its certificate rarely holds (half the attempts' cost)
+    capped = real & (grow * Hw[r] >= math.log(sw.GROWTH) * (1 - 1e-9)) & (Hw[r] < sw.LONG * H[r])
+    if p.shape[2] > 3:  # closed forms: those with cubic or quartic terms left out
+        capped &= ~(p[r, :, 3:] != 0).any(axis=(1, 2))
+    r = r[capped]
+    if r.size:
+        step[r] = sw.stretch(s[r], p[r, :, :3], UE[r], lam[r], valid[r], k[r], q[r], H[r],
+                             scale[r], rem[r], step[r])  # fmt: skip
+        small[r] &= step[r] <= Hw[r]
 
 
 def _try_decisions(st, tables, ix, r, t, T, t_max, s, mask, g, p, UE, lam, valid, k, q, scale,

@@ -6,7 +6,9 @@ JAX engine (:mod:`atlas.dynamics.jax_engine`), on NumPy or JAX arrays
 A step is at most ``WINDOWS H_S`` long (``WIDE H_S`` in the NumPy engine), or ``LONG H_S`` over
 an event-free stretch (the NumPy engine), and never so long that a modal term grows by more than
 ``GROWTH`` over it; the gaps are tested at most ``H_S`` apart inside a longer step unless they provably stay within ``SMALL`` times
-the scale (``small``).
+the scale (``small``).  Past the ``GROWTH`` cap a step goes on (:func:`stretch`, the NumPy
+engine) where no event and no limit of the stop rule can come before its end: a run growing
+to its divergence stop with no event reaches the limit in one step, not one doubling a step.
 """
 
 from __future__ import annotations
@@ -28,7 +30,10 @@ __all__ = [
     "WINDOWS",
     "bounded",
     "brackets",
+    "limit_reach",
     "limit_steps",
+    "no_event_within",
+    "stretch",
     "window",
 ]
 
@@ -216,3 +221,89 @@ def limit_steps(d, v, M, scale, Hw):
     if r.size:
         lo[r], hi[r] = stop_rule.limit_steps(d[r], v[r], M[r], scale[r], Hw[r])
     return lo, hi
+
+
+def stretch(s, p, UE, lam, valid, k, q, H, scale, rest, step):
+    """Steps (n,) past the ``GROWTH`` cap of the rows' windows: up to ``LONG H_S`` and ``rest``
+    [time], the time before which no gap can pass a limit of the stop rule
+    (:func:`limit_reach`), where every monitored event function keeps its sign over it
+    (:func:`no_event_within`, no event); ``step`` (n,) where that is not longer.  Tried where the
+    signs are kept over ``step`` (necessary: the certificate over a longer horizon implies it
+    over a shorter one).  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    out = step.copy()
+    r = eb.rows(no_event_within(s, p, UE, lam, valid, k, q, step))
+    if r.size == 0:
+        return out
+    reach = limit_reach(p[r], UE[r], lam[r], scale[r], np.minimum(LONG * H[r], rest[r]), step[r])
+    r, reach = r[reach > step[r]], reach[reach > step[r]]
+    if r.size:
+        ok = no_event_within(s[r], p[r], UE[r], lam[r], valid[r], k[r], q[r], reach)
+        out[r[ok]] = reach[ok]
+    return out
+
+
+#: bisection rounds of :func:`limit_reach` (its bound to ``2^-REACH_ROUNDS`` of the interval)
+REACH_ROUNDS = 12
+
+
+def limit_reach(p, UE, lam, scale, rest, lo=None):
+    """A lower bound (n,) of the time from now at which a gap can first pass the amplitude limit
+    (``d_i > amp``) or the deep penetration (``d_i < -DEEP pen``) of the stop rule, in ``[lo,
+    rest]`` [time] (``lo`` default 0): bisection (:func:`eb.last_below`) on nondecreasing upper
+    bounds of ``+-d_i`` (:func:`_over_limits`); ``rest`` where they stay below by then, 0 where
+    they pass by ``lo``.  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    lo = np.zeros(rest.size) if lo is None else lo
+    over = _over_limits(p, UE, lam, scale)
+    first = over(lo)
+    out = np.where(first, 0.0, rest)
+    r = eb.rows(~first & over(rest))
+    if r.size:
+        sub, a = _over_limits(p[r], UE[r], lam[r], scale[r]), lo[r]
+        with np.errstate(over="ignore", invalid="ignore"):
+            out[r] = a + eb.last_below(lambda x: sub(a + x), rest[r] - a, REACH_ROUNDS)
+    return out
+
+
+def _over_limits(p, UE, lam, scale):
+    """The test ``over(x)`` (bool (n,)) that an upper bound of ``+-d_i`` passes the amplitude
+    (``+``) or the deep-penetration limit (``-``) at time ``x`` (n,) from now: ``+-p0 + max(+-p1,
+    0) x + max(+-p2, 0) x^2 + sum_m b_m exp(max(Re lam_m, 0) x)``, ``b_m = max(+-Re u_m, 0)`` for
+    a real ``lam_m`` (its term is ``Re u_m exp(lam_m x)``), else ``|u_m|``; plus ``1e-12`` of all
+    the terms' moduli for the rounding of the gaps.  Nondecreasing in ``x``; NaN counts as over."""
+    amp, pen = stop_rule.limits(scale)
+    grow = np.maximum(lam.real, 0.0)[:, None, :]
+    aw = np.abs(UE)
+    real = (lam.imag == 0)[:, None, :]
+    sides = []
+    for sign, lim in ((1.0, amp), (-1.0, stop_rule.DEEP * pen)):
+        b = np.where(real, np.maximum(sign * UE.real, 0.0), aw)
+        c = [sign * p[:, :, 0]] + [np.maximum(sign * p[:, :, i], 0.0) for i in (1, 2)]
+        sides.append((c, b, lim[:, None]))
+    a = [np.abs(p[:, :, i]) for i in range(3)]
+
+    def over(x):
+        x2 = x[:, None]
+        with np.errstate(over="ignore", invalid="ignore"):
+            e = np.exp(grow * x2[:, :, None])
+            margin = 1e-12 * (a[0] + x2 * (a[1] + x2 * a[2]) + eb.sum4(aw * e))
+            out = np.zeros(x.size, dtype=bool)
+            for c, b, lim in sides:
+                bound = c[0] + x2 * (c[1] + x2 * c[2]) + eb.sum4(b * e) + margin
+                out |= ((bound >= lim) | np.isnan(bound)).any(axis=1)
+        return out
+
+    return over
+
+
+def no_event_within(s, p, UE, lam, valid, k, q, S):
+    """Every monitored event function (each gap; the force of a closed contact) keeps its recorded
+    sign ``s`` (n, 4) over ``[tau, tau + S]`` (S (n,) [time]): by :func:`eb.keeps_sign` over that
+    horizon (a growing real dominant term of its sign) or by :func:`eb.keeps_sign_within` (each
+    term grown by its growth over ``S``); bool (n,).  Quadratic ``p`` (n, 2, 3); NumPy arrays."""
+    c, w = eb.event_terms(p, UE, lam, k, q)
+    sj = s[:, :, None]
+    ok = eb.keeps_sign(sj * c, sj * w, lam[:, None, :], valid[:, None, :],
+                       np.repeat(S[:, None], 4, axis=1))[0]  # fmt: skip
+    ok |= eb.keeps_sign_within(s, p, UE, lam, k, q, S)
+    mon = np.concatenate([np.ones((s.shape[0], 2), dtype=bool), s[:, :2] < 0], axis=1)
+    return eb.all_cols(ok | ~mon)

@@ -631,3 +631,24 @@ def test_an_oscillation_far_from_its_contacts_is_crossed_in_long_windows():
     run = S.simulate(L.beta1[i], L.beta2[i], L.alpha[i], k=k, q=q, g0=L.g0[i], t_end=140.0)
     assert res.n_events[0] == run.n_events == 0
     assert res.steps[0] <= 8
+
+
+@pytest.mark.parametrize(("seed", "n", "lane", "old"), [(44, 200, 13, 33), (45, 1000, 925, 30)])
+def test_a_divergence_with_no_event_reaches_its_stop_in_few_steps(seed, n, lane, old):
+    """Random lanes on an axis (beta2 = 3pi/2; beta1 = pi) whose SS configuration has a growing
+    real mode and no event: the gap sinks to the deep-penetration stop (verdict undetermined, not
+    aligned).  The growth cap cut their steps to one doubling each (``old`` steps); past it, where
+    no event and no limit can come (a proven bound), one step reaches the limit: few steps
+    (counted), the exact simulator's verdict, stop reason and stop time (to the location's
+    tolerance)."""
+    from atlas.dynamics import engine_check
+
+    L = engine_check.random_lanes(seed, n)
+    b1, b2, alpha, kappa, q, g0 = (x[lane] for x in (L.beta1, L.beta2, L.alpha, L.kappa, L.q,
+                                                     L.g0))  # fmt: skip
+    res = F.run_lanes([b1], [b2], [alpha], [[kappa, 1.0]], [[q, q]], g0[None])
+    out, run = _reference(b1, b2, alpha, (kappa, 1.0), (q, q), g0)
+    assert run.n_events == res.n_events[0] == 0
+    assert F.DECIDED_BY[res.decided_by[0]] == "stepped" and res.steps[0] <= 6 < old
+    assert int(res.code[0]) == int(out) and F.STOPS[res.stop[0]] == run.status
+    assert abs(res.t_final[0] - run.t_final) <= 1e-10
