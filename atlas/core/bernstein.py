@@ -198,18 +198,28 @@ class Template:
         return np.tensordot(np.array(vals, dtype=object), self.arrays, axes=1)
 
 
+@functools.lru_cache(maxsize=32)
+def _halving(d: int) -> np.ndarray:
+    """The integer matrix ``(2, d + 1, d + 1)`` taking Bernstein coefficients ``b`` of degree
+    ``d`` on ``[0, 1]`` to those on its halves, scaled by ``2^d`` (de Casteljau at ``t = 1/2``
+    in closed form): left ``2^(d - r) sum_k C(r, k) b_k``, right ``2^i sum_m C(d - i, m)
+    b_(i + m)``."""
+    M = np.zeros((2, d + 1, d + 1), dtype=object)
+    for r in range(d + 1):
+        for k in range(r + 1):
+            M[0, r, k] = 2 ** (d - r) * comb(r, k)
+            M[1, d - r, d - r + k] = 2 ** (d - r) * comb(r, k)
+    return M
+
+
 def _split(b: np.ndarray, axis: int):
-    """De Casteljau halves of ``b`` along ``axis`` (both scaled by ``2^d``)."""
-    rows = list(np.moveaxis(b, axis, 0))
-    d = len(rows) - 1
-    left, right, cur = [rows[0]], [rows[-1]], rows
-    for _ in range(d):
-        cur = [cur[i] + cur[i + 1] for i in range(len(cur) - 1)]
-        left.append(cur[0])
-        right.append(cur[-1])
-    L = np.stack([left[r] * 2 ** (d - r) for r in range(d + 1)])
-    R = np.stack([right[d - i] * 2**i for i in range(d + 1)])
-    return np.moveaxis(L, 0, axis), np.moveaxis(R, 0, axis)
+    """De Casteljau halves of ``b`` along ``axis`` (both scaled by ``2^d``; exact integers, one
+    product with :func:`_halving`)."""
+    rows = np.moveaxis(b, axis, 0)
+    d = rows.shape[0] - 1
+    both = _halving(d).reshape(2 * (d + 1), d + 1).dot(rows.reshape(d + 1, -1))
+    both = both.reshape((2,) + rows.shape)
+    return np.moveaxis(both[0], 0, axis), np.moveaxis(both[1], 0, axis)
 
 
 def _sign_ok(v, kind: str, strict: bool) -> bool:

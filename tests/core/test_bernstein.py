@@ -37,6 +37,55 @@ def test_split_halves_are_the_halves():
     assert left[0] > 0 and left[-1] == 0 and right[0] == 0 and right[-1] > 0
 
 
+def _de_casteljau(b, axis):
+    """The textbook recurrence (pairwise sums, ``d`` rounds) on the rows of ``b`` along
+    ``axis``: the halves scaled by ``2^d``."""
+    rows = list(np.moveaxis(b, axis, 0))
+    d, cur, left, right = len(rows) - 1, rows, [rows[0]], [rows[-1]]
+    for _ in range(d):
+        cur = [x + y for x, y in zip(cur, cur[1:])]
+        left.append(cur[0])
+        right.append(cur[-1])
+    halves = (
+        [left[r] * 2 ** (d - r) for r in range(d + 1)],
+        [right[d - i] * 2**i for i in range(d + 1)],
+    )
+    return tuple(np.moveaxis(np.stack(h), 0, axis) for h in halves)
+
+
+def test_split_equals_de_casteljau_and_the_half_boxes():
+    """A random polynomial of degrees (5, 1, 3, 0) with integer coefficients up to 2^200 on a box
+    with an unbounded axis: along each axis, :func:`bz._split`'s halves are the integers
+    (Python ints, no other type) of the textbook recurrence, and each half is the Bernstein
+    array of the polynomial on the half box (to_bernstein there) times a positive factor (the
+    bounded axes)."""
+    rng = np.random.default_rng(8)
+    n, degs = 4, (5, 1, 3, 0)
+    terms = {}
+    for e in np.ndindex(*(d + 1 for d in degs)):
+        terms[e] = int(rng.integers(-(2**62), 2**62)) * 2 ** int(rng.integers(0, 138))
+    p = bz.Poly(terms, n)
+    axes = [bz.Axis(0, 1), bz.Axis(F(1, 3), 2), bz.Axis(1, None), bz.Axis(F(-2), F(5, 7))]
+    b = bz.to_bernstein(p, axes)
+    for ax in range(n):
+        halves = bz._split(b, ax)
+        for got, want in zip(halves, _de_casteljau(b, ax)):
+            assert got.shape == want.shape == b.shape
+            assert all(type(g) is int and g == w for g, w in zip(got.flat, want.flat))
+        lo, hi = axes[ax].lo, axes[ax].hi
+        if degs[ax] == 0 or hi is None:  # t = 1/2 halves an unbounded axis by another map
+            continue
+        mid = (lo + hi) / 2
+        for got, part in zip(halves, ((lo, mid), (mid, hi))):
+            sub = list(axes)
+            sub[ax] = bz.Axis(*part)
+            want = bz.to_bernstein(p, sub)
+            k = int(np.argmax([abs(v) for v in want.flat]))
+            ratio = F(got.flat[k], want.flat[k])
+            assert ratio > 0
+            assert all(F(g) == ratio * w for g, w in zip(got.flat, want.flat))
+
+
 def test_positive_quadratic_on_an_unbounded_axis():
     x = _x()
     p = (x + (-2)) ** 2 + F(1, 100)  # min 1/100 at x = 2
