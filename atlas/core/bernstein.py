@@ -215,11 +215,11 @@ def _halving(d: int) -> np.ndarray:
 def _split(b: np.ndarray, axis: int):
     """De Casteljau halves of ``b`` along ``axis`` (both scaled by ``2^d``; exact integers, one
     product with :func:`_halving`)."""
-    rows = np.moveaxis(b, axis, 0)
+    rows = b.swapaxes(0, axis)
     d = rows.shape[0] - 1
     both = _halving(d).reshape(2 * (d + 1), d + 1).dot(rows.reshape(d + 1, -1))
     both = both.reshape((2,) + rows.shape)
-    return np.moveaxis(both[0], 0, axis), np.moveaxis(both[1], 0, axis)
+    return both[0].swapaxes(0, axis), both[1].swapaxes(0, axis)
 
 
 def _sign_ok(v, kind: str, strict: bool) -> bool:
