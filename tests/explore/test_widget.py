@@ -525,12 +525,15 @@ def test_ii_box_layers_show_witnesses_on_click(need):
 def test_status_counts_the_certified_boundaries_seconds_until_they_are_drawn(need, monkeypatch):
     """The first certified boundaries take seconds in the background (their kernels compile):
     the status line says so and refreshes itself while they are computed, then gives their
-    time (a hang is ended by pytest-timeout, not by a clock in the test)."""
+    time (a hang is ended by pytest-timeout, not by a clock in the test).  On a 16 x 16 start
+    grid (the status does not depend on it; the 64 x 64 default's curves are the slow overlay
+    test's)."""
     need("ipywidgets")
     import threading
 
     from atlas.data import boundaries
 
+    monkeypatch.setattr(state, "BOUNDARY_GRID", 16)
     release, real = threading.Event(), boundaries.slice_boundaries
     monkeypatch.setattr(
         boundaries, "slice_boundaries", lambda *a, **k: release.wait() and real(*a, **k)
