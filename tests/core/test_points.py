@@ -37,14 +37,14 @@ def grid(n=12, dtype=np.float64):
 @pytest.mark.parametrize("flat_limit", [0, points.FLAT_LIMIT])
 def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
     """The grid path (per-axis inputs, gathers by index; small grids as flat columns, or always
-    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat."""
-    monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
+    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat (flat columns)."""
     args = grid()
-    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
-    st = res.stats
     shape = np.broadcast_shapes(*(a.shape for a in args))
     flat = [np.broadcast_to(a, shape).ravel() for a in args]
     ref = points.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
+    monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
+    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
+    st = res.stats
     for k in FLAGS:
         assert res[k].shape == shape
         assert np.array_equal(res[k].ravel(), ref[k]), k
@@ -242,17 +242,15 @@ def test_near_singular_B_decided_by_the_fast_tiers():
 @pytest.mark.parametrize("det_known", [True, False])
 def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch, det_known):
     """Tier 2 (``det B`` certified) and the enclosures (not: simulated) see batches of one
-    length whatever the number of points they get, 8, 100 or 600: one program each for every
+    length whatever the number of points they get, 8, 100 or 500: one program each for every
     caller (an atlas, a paper figure, the explorer's overlay), compiled once per process."""
     pts, _ = _near_singular_points()
-    if not det_known:
+    kernel = points._kernel
+    if not det_known:  # kernels traced afresh with the patched sign (and again after the test)
         unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
         monkeypatch.setattr(rootfree, "det2_sign", unknown)
+        kernel = functools.cache(points._kernel.__wrapped__)
     monkeypatch.setattr(points, "HOST_POINTS", 0)
-    kernel = functools.cache(points._kernel.__wrapped__)
-    cols = [np.broadcast_to(v, pts["c1"].shape) for v in pts.values()]
-    code = np.asarray(kernel("codes", ss=True, ii=True, damped=None)(*cols))
-    pts = {k: v[rootfree.unpack(code)[4]] for k, v in zip(pts, cols)}  # the open points
     seen = {}
 
     def recording(kind, *a, **k):
@@ -262,8 +260,12 @@ def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch
         return lambda *cols: seen.setdefault(kind, set()).add(cols[0].shape) or kern(*cols)
 
     monkeypatch.setattr(points, "_kernel", recording)
+    cols = [np.broadcast_to(np.asarray(v, np.float64), pts["c1"].shape) for v in pts.values()]
+    shape = cols[0].shape
+    code = points._first_pass(cols, shape, np.float64, ss=True, ii=True, damped=None)
+    pts = {k: v[rootfree.unpack(code)[4]] for k, v in zip(pts, cols)}  # the open points
     tier = "tier2_points" if det_known else "roots_points"
-    for n in (8, 100, 600):
+    for n in (8, 100, 500):  # 500: two batches, and the first pass's small flat program
         some = {k: np.resize(v, n) for k, v in pts.items()}
         st = points.spectral_points(*some.values(), names=FLAGS, resolve=False).stats
         assert st[tier] > 0, (n, st)
@@ -348,14 +350,15 @@ def model_grid(n=16, dtype=np.float64):
 def test_model_axes_equal_their_slices(monkeypatch, dtype):
     """A 5-D grid (the first pass on the grid layout, model axes broadcast) gives, before and
     after settlement, every verdict of each (kappa, q1, q2) slice computed on its own as a 2-D
-    grid with scalar model inputs, and the tier counts add up; the settled verdicts equal the
-    exact tier on a seeded sample."""
-    monkeypatch.setattr(points, "FLAT_LIMIT", 0)  # both on the grid path of the first pass
+    grid with scalar model inputs (flat columns, the driver's shared program), and the tier counts
+    add up; the settled verdicts equal the exact tier on a seeded sample."""
     monkeypatch.setattr(points, "HOST_POINTS", 0)  # a slice's handful would skip the later tiers
     args = model_grid(dtype=dtype)
     shape = np.broadcast_shapes(*(a.shape for a in args))
     for resolve in (False, True):
-        res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(points, "FLAT_LIMIT", 0)  # the 5-D grid on the grid path of the first pass
+            res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
         tiers = {"tier2_points": 0, "roots_points": 0, "undecided_before": 0}
         for m in np.ndindex(shape[2:]):
             model = [np.broadcast_to(a, shape)[(0, 0, *m)] for a in args]

@@ -208,12 +208,12 @@ def test_evaluation_points_are_program_inputs():
     """The shifts of tier 2 and the roots of the enclosure path are computed in one program and
     certified in another, whose only copy is the rounded input: the certifying programs hold no
     Newton iteration (a loop) or root finder (its square roots)."""
-    x, i = jnp.ones(8), jnp.ones(8, jnp.int8)
+    x, i, b = (jax.ShapeDtypeStruct((8,), t) for t in (jnp.float64, jnp.int8, jnp.bool_))
     decide = _primitives(rootfree._tier2_decide, *(x,) * 7, ss=True, ii=True, iters=24)
-    dominance = _primitives(rootfree._tier2_dominance, *(x,) * 7, i, i, x > 0, i, x, x)
+    dominance = _primitives(rootfree._tier2_dominance, *(x,) * 7, i, i, b, i, x, x)
     loops = ("scan", "while")
     assert sum(decide[k] for k in loops) >= 1 and sum(dominance[k] for k in loops) == 0
-    z, zq = enclosures._roots_jit(*(x,) * 7)
+    z, zq = jax.eval_shape(enclosures._roots, *(x,) * 7)  # traced only: no program compiled
     roots, radii = (
         _primitives(enclosures._roots, *(x,) * 7),
         _primitives(enclosures._radii, z, zq, *(x,) * 7),

@@ -14,12 +14,15 @@ import numpy as np
 import pytest
 
 from atlas.core import enclosures, hardcases, model_box, points, rootfree, signs, warm
-from atlas.core.invariants import KEYS
+from atlas.core.invariants import KEYS, PAD
 
 
 def _suite():
+    """A hard-case suite padded to the driver's length of the spectral abscissa
+    (:data:`points.FLAT_BATCH`): the jitted program is the one every atlas runs."""
     P = hardcases.suite("near_hurwitz", "float64")
-    return [P[k] for k in KEYS]
+    n = P["c1"].size
+    return [np.concatenate([P[k], np.full(points.FLAT_BATCH - n, p)]) for k, p in zip(KEYS, PAD)]
 
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
@@ -164,14 +167,17 @@ def test_digest_is_the_same_whatever_the_entry_point_imported():
     assert len(got) == 1, got
 
 
-def _dominance_args(n=64, seed=0):
-    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile)."""
+def _dominance_args(n=256, seed=0):
+    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile), of
+    the types and length the driver gives it (:data:`points.LATER_BATCH`): its jitted program is
+    the driver's."""
     rng = np.random.default_rng(seed)
     geometry = [rng.uniform(-1, 1, n) for _ in range(4)]
     model = [rng.uniform(0.1, 10, n), rng.uniform(0, 1, n), rng.uniform(0, 1, n)]
-    flags = [rng.integers(0, 2, n).astype(bool) for _ in range(3)]
-    shifts = [rng.integers(-1, 2, n).astype(np.int8), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
-    return geometry + model + flags + shifts
+    verdicts = [rng.choice(np.array([0, 1, 3], np.int8), n) for _ in range(2)]
+    dominance = rng.integers(0, 2, n).astype(bool)
+    shifts = [rng.integers(-1, 2, n).astype(np.int32), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
+    return geometry + model + verdicts + [dominance] + shifts
 
 
 STORED = """
@@ -312,13 +318,13 @@ def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, 
 
 
 def test_an_executable_given_other_arguments_falls_back():
-    """Arguments an executable was not compiled for (here float32 for float64) go to the
-    exported program, which gives its results for them."""
+    """Arguments an executable was not compiled for (here the driver's bulk length for its
+    batch length) go to the exported program, which gives its results for them."""
     args = _dominance_args()
     compiled = jax.jit(rootfree._tier2_dominance.fn).lower(*args).compile()
     guarded = warm._Guarded(compiled, lambda: rootfree._tier2_dominance.jitted)
     guarded(*args)
-    other = [a.astype(np.float32) if a.dtype == np.float64 else a for a in args]
+    other = _dominance_args(points.LATER_BULK)
     want = warm._result_digest(rootfree._tier2_dominance.jitted(*other))
     assert warm._result_digest(guarded(*other)) == want
     assert guarded.compiled is None
