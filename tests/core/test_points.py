@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, points, rootfree
+from atlas.core import exact, hurwitz, model_box, points, rootfree, warm
 from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
 from atlas.core.signs import UNKNOWN
@@ -627,3 +627,60 @@ def test_subnormal_directions_are_never_certified_wrong(jitted):
         for name in names:
             assert fast[name][i] in (want[name], 3), (row, name)
             assert settled[name][i] == want[name], (row, name)
+
+
+def test_witness_checks_run_one_ss_program_whatever_their_number(monkeypatch):
+    """The model box's witness checks (certified SS verdicts of point lists of any length) run
+    :func:`atlas.core.hurwitz.ss_verdict` at one length, the driver's small flat batch: one
+    program for 5, 40, 300 or 700 points (before: one per power of two, 16 to 1024), with the
+    exact tier's verdicts."""
+    seen = set()
+    call = warm.Kernel.__call__
+
+    def recording(self, *args, **static):
+        if self.name == "atlas.core.hurwitz.ss_verdict":
+            seen.add(tuple(np.shape(a) for a in args))
+        return call(self, *args, **static)
+
+    monkeypatch.setattr(warm.Kernel, "__call__", recording)
+    rng = np.random.default_rng(2)
+    for n in (5, 40, 300, 700):
+        b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+        geo = np.stack([*direction(b1), *direction(b2)], axis=1)
+        models = rng.uniform(0.05, 2.0, (n, 3))
+        models[::3, 1:] = 0.0  # undamped
+        got = model_box._verify(geo, models)
+        for i in range(0, n, 37):
+            code = exact.ss_hurwitz(*geo[i].tolist(), *models[i].tolist())
+            assert got[i] == np.isin(code, model_box._GOOD), (n, i)
+    assert seen == {((points.FLAT_SMALL,),) * 7}
+
+
+def _edge_columns(dtype, n=700, seed=4):
+    """``n`` points (one full small batch and a padded one) with edge values in every column:
+    zeros of both signs, the smallest subnormal, the largest finite, infinities and NaN."""
+    rng = np.random.default_rng(seed)
+    fi = np.finfo(dtype)
+    edge = np.array([0.0, -0.0, fi.smallest_subnormal, -fi.smallest_subnormal, fi.tiny, fi.max,
+                     np.inf, -np.inf, np.nan, 1.0], dtype)  # fmt: skip
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+    cols = [*direction(b1.astype(dtype), dtype), *direction(b2.astype(dtype), dtype)]
+    cols += [rng.uniform(0.05, 2.0, n).astype(dtype) for _ in range(3)]
+    for c in cols:
+        hit = rng.random(n) < 0.2
+        c[hit] = rng.choice(edge, hit.sum())
+    return cols
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_small_batches_equal_the_unpadded_call(dtype):
+    """Padded batches of an elementwise kernel give, bit for bit, its unpadded calls on the same
+    points (the first and the last :data:`points.FLAT_SMALL` of 700, each point at another place
+    of its batch), edge values included (subnormals, zeros, infinities, NaN; float32 too)."""
+    cols = _edge_columns(dtype)
+    got = points.in_small_batches(hurwitz.ss_verdict_jit, *cols, dtype=dtype)
+    m = points.FLAT_SMALL
+    head = np.asarray(hurwitz.ss_verdict_jit(*(c[:m] for c in cols)))
+    tail = np.asarray(hurwitz.ss_verdict_jit(*(c[-m:] for c in cols)))
+    assert got.dtype == head.dtype and got.shape == (700,)
+    assert np.array_equal(got[:m], head) and np.array_equal(got[m:], tail[2 * m - 700 :])
