@@ -185,8 +185,8 @@ def test_first_pass_computes_every_sign_once(dtype):
     (flat columns and the grid layout), so each sign code exists once per point and every
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
-    x = jnp.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program
-    row, col, one = jnp.ones((64, 1), dtype), jnp.ones((1, 64), dtype), jnp.ones((), dtype)
+    x = np.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program (numpy: no op)
+    row, col, one = np.ones((64, 1), dtype), np.ones((1, 64), dtype), np.ones((), dtype)
     for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
         kern = (
             _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
