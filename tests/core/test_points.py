@@ -84,20 +84,28 @@ def test_only_what_is_asked():
     assert st["tier2_points"] >= 0 and st["roots_points"] == 0
 
 
-def test_exact_failure_keeps_point_undecided(monkeypatch, bounded_det_b):
+def _ii_boundary():
+    """Eight points across an II boundary that no fast tier decides, and their model."""
+    b1 = np.full(8, 1.1069434970966943) - np.arange(8) * 1.25e-15
+    b2 = np.full(8, 4.24853613984915) + np.arange(8) * 1.25e-15
+    return (*direction(b1), *direction(b2)), (2.0, 0.1, 0.1)
+
+
+def test_exact_failure_keeps_point_undecided(monkeypatch):
     """A failing exact tier leaves its points undecided and records them (the undecided points
-    here: ``beta2 = beta1 + pi`` with a float-bounded ``sign det B``)."""
+    here: across an II boundary, :func:`_ii_boundary`)."""
 
     def broken(points, names=()):
         raise ArithmeticError("no convergence")
 
     monkeypatch.setattr(exact, "resolve", broken)
-    res = points.spectral_points(*grid(8), names=FLAGS)
+    geometry, model = _ii_boundary()
+    res = points.spectral_points(*geometry, *model, names=FLAGS)
     st = res.stats
     und = np.zeros(res["stable_SS"].shape, bool)
     for k in FLAGS:
         und |= res[k] == 3
-    assert st["undecided_before"] > 0
+    assert st["undecided_before"] >= 4
     assert st["undecided_after"] == und.sum() == st["undecided_before"]
     assert len(st["exact_failures"]) == st["undecided_after"]
 
@@ -536,11 +544,8 @@ def test_needed_leaves_unwanted_points_undecided():
     counted; a point wanted in the exact rounds is settled as the exact tier alone settles it."""
     from atlas.core.verdicts import UNDECIDED_FLAG
 
-    b1 = np.full(8, 1.1069434970966943) - np.arange(8) * 1.25e-15  # across an II boundary
-    b2 = np.full(8, 4.24853613984915) + np.arange(8) * 1.25e-15  # that no fast tier decides
-    c1, s1 = direction(b1)
-    c2, s2 = direction(b2)
-    model, names = (2.0, 0.1, 0.1), ("consistent_II", "stable_II")
+    (c1, s1, c2, s2), model = _ii_boundary()
+    names = ("consistent_II", "stable_II")
     full = points.spectral_points(c1, s1, c2, s2, *model, names=names)
     none = points.spectral_points(
         c1, s1, c2, s2, *model, names=names, needed=lambda idx, v, e: np.zeros(idx.size, bool)

@@ -146,24 +146,28 @@ def test_a_kernel_whose_helper_changes_gets_another_digest(monkeypatch):
         assert warm._digest(kern.module) != before
 
 
+#: the kernels' digests as an entry point sees them: after importing ``sys.argv[1]`` only
 DIGEST = (
     "import sys, importlib\n"
     "importlib.import_module(sys.argv[1])\n"
     "from atlas.core import warm\n"
     "with warm.kernel_cache('unused'):\n"
-    "    print(warm._digest('atlas.core.kernels'), warm._digest('atlas.core.rootfree'))\n"
+    "    print(*(warm._digest(f'atlas.core.{m}') for m in ('kernels', 'rootfree', 'points')))\n"
 )
 
 
 def test_digest_is_the_same_whatever_the_entry_point_imported():
-    """Two fresh processes: one imports the command line (every command's modules), one the
-    warm-cache module alone; the kernels' digests agree."""
+    """Fresh processes importing the warm-cache module alone, the command line (which imports
+    lazily: every command's modules) and the explorer (everything): the kernels' digests agree
+    (else every entry point exports and compiles its own copy of each program)."""
+    env = {**os.environ, "JAX_ENABLE_X64": "1"}
     got = {
         subprocess.run(
-            [sys.executable, "-c", DIGEST, entry], capture_output=True, text=True, check=True
-        ).stdout
-        for entry in ("atlas.cli", "atlas.core.warm")
-    }
+            [sys.executable, "-c", DIGEST, entry],
+            capture_output=True, text=True, env=env, timeout=300, check=True,
+        ).stdout.strip().splitlines()[-1]
+        for entry in ("atlas.core.warm", "atlas.cli", "atlas.explore.state")
+    }  # fmt: skip
     assert len(got) == 1, got
 
 
@@ -382,26 +386,3 @@ def test_a_cold_small_generate_compiles_no_more_programs(tmp_path):
     assert got["rc"] == 0 and programs, (got, p.stderr[-2000:])
     assert got["compiles"] == len(programs), (got, programs)
     assert len(programs) <= COLD_GENERATE_PROGRAMS, programs
-
-
-#: a kernel digest as an entry point sees it: after importing ``{imports}`` only
-_DIGEST = """
-import sys
-{imports}
-from atlas.core import warm
-print(warm._digest("atlas.core.points"))
-"""
-
-
-def test_the_kernel_digest_does_not_depend_on_what_the_entry_point_imported():
-    """The CLI imports lazily, the explorer everything: one kernel, one digest, whichever came
-    first (else every entry point exports and compiles its own copy of each program)."""
-    digests = set()
-    for imports in ("import atlas.core.points", "import atlas.explore.state"):
-        env = {**os.environ, "JAX_ENABLE_X64": "1"}
-        p = subprocess.run(
-            [sys.executable, "-c", _DIGEST.format(imports=imports)],
-            capture_output=True, text=True, env=env, timeout=300, check=True,
-        )  # fmt: skip
-        digests.add(p.stdout.strip().splitlines()[-1])
-    assert len(digests) == 1, digests
