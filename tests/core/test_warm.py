@@ -87,7 +87,7 @@ def test_threads_asking_at_once_load_a_kernel_once(tmp_path, monkeypatch):
     monkeypatch.setattr(warm.Kernel, "_load", slow_load)
     x = np.arange(4.0)
     out = {}
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         other = threading.Thread(target=lambda: out.setdefault("other", kernel(x)), name="other")
         other.start()
         started.wait()
@@ -228,9 +228,16 @@ def test_stored_executable_gives_the_jit_results_in_a_fresh_process(tmp_path):
 def stored_dominance(tmp_path_factory):
     """A kernel directory holding ``_tier2_dominance``'s program and executable."""
     where = tmp_path_factory.mktemp("stored")
-    with warm.kernel_cache(str(where)):
+    with warm.kernel_cache(str(where)), _compiled_here():
         warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
     return where
+
+
+def _compiled_here():
+    """The persistent compilation cache off: an executable stored in the block was compiled in
+    this process, so it serializes completely at once (one the cache served would be compiled
+    afresh, which clears every jit cache of the test process: warm module docstring)."""
+    return warm._no_compilation_cache()
 
 
 def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
@@ -260,7 +267,7 @@ def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
     for damage, data in damaged.items():
         xpath.write_bytes(data)
         assert warm._load_executable(xpath) is None, damage
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
     assert warm._result_digest(got) == want
     assert warm._load_executable(xpath) is not None  # stored again, valid
@@ -316,7 +323,7 @@ def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, 
     for f in stored_dominance.iterdir():
         shutil.copy(f, tmp_path)
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_enable_fast_math=true")
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
     assert len(list(tmp_path.glob("*.xlaexec"))) == 2
 
