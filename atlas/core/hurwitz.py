@@ -28,10 +28,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from atlas.core import expressions as ex
+from atlas.core import warm
 from atlas.core.signs import CODE, UNKNOWN, det2_sign, evaluate_certified, nonzero
 from atlas.core.verdicts import Verdict
 
-__all__ = ["ss_verdict", "ss_from_signs", "ss_margin"]
+__all__ = ["ss_verdict", "ss_verdict_jit", "ss_from_signs", "ss_margin"]
 
 _G = ex.with_det(ex.G_scaled)
 
@@ -105,6 +106,11 @@ def ss_from_signs(p):
 def ss_verdict(c1, s1, c2, s2, kappa, q1, q2):
     """Certified SS stability verdict (``Verdict`` codes, int8); see the module docstring."""
     return ss_from_signs(_sign_parts(c1, s1, c2, s2, kappa, q1, q2))
+
+
+#: :func:`ss_verdict` as a kept kernel (:func:`atlas.core.warm.jit`), for point lists of any
+#: length through :func:`atlas.core.points.in_small_batches` (one program per dtype)
+ss_verdict_jit = warm.jit(ss_verdict)
 
 
 def ss_margin(c1, s1, c2, s2, kappa, q1, q2):

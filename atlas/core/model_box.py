@@ -499,30 +499,20 @@ def _by_signs(geo: np.ndarray, sd: np.ndarray) -> np.ndarray:
     return code
 
 
-@functools.cache
-def _jitted_ss(fn):
-    """``fn`` as a kept kernel (:func:`atlas.core.warm.jit`: a warm process loads its program)."""
-    from atlas.core import warm  # noqa: PLC0415 - JAX only when witnesses are checked
-
-    return warm.jit(fn)
-
-
 def _verify(geo: np.ndarray, models) -> np.ndarray:
     """``True`` (stable or neutral), ``False`` (unstable) of model ``models[i]`` at ``geo[i]``:
-    the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`), the exact tier where it
-    leaves a point undecided."""
-    import jax.numpy as jnp  # noqa: PLC0415 - JAX only when witnesses are checked
+    the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`, in the driver's small
+    batches: one program for every number of points), the exact tier where it leaves a point
+    undecided."""
+    import jax  # noqa: PLC0415 - JAX only when witnesses are checked
 
-    from atlas.core import hurwitz  # noqa: PLC0415
+    from atlas.core import hurwitz, points  # noqa: PLC0415
 
     m = np.asarray(models, np.float64).reshape(-1, 3)
     n = len(m)
-    size = max(16, 1 << (n - 1).bit_length())  # padded: one compilation per power of two
-    pad = np.tile([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0], (size - n, 1))
-    cols = [jnp.asarray(a) for a in np.concatenate([np.hstack([geo, m]), pad]).T]
     undecided = int(Verdict.UNDECIDED)
-    if n and all(c.dtype == jnp.float64 for c in cols):
-        v = np.array(_jitted_ss(hurwitz.ss_verdict)(*cols))[:n]
+    if n and jax.config.jax_enable_x64:
+        v = points.in_small_batches(hurwitz.ss_verdict_jit, *np.hstack([geo, m]).T)
     else:  # no float64 in JAX here: the exact tier for all
         v = np.full(n, undecided, np.int8)
     for i in np.flatnonzero(v == undecided):

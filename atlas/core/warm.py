@@ -367,18 +367,24 @@ def _store_executable(xpath: Path, exp, args):
 def _compile_afresh(exp, specs):
     """``exp`` compiled in this process: the in-memory and persistent compilation caches bypassed
     (the other kernels of the process are compiled or loaded again when next used)."""
+    with _FRESH, _no_compilation_cache():
+        jax.clear_caches()
+        return jax.jit(exp.call).lower(*specs).compile()
+
+
+@contextlib.contextmanager
+def _no_compilation_cache():
+    """Within the block, compilations neither read nor write the persistent compilation cache."""
     from jax.experimental.compilation_cache import compilation_cache  # noqa: PLC0415
 
-    with _FRESH:
-        cached = jax.config.jax_enable_compilation_cache
-        try:
-            jax.clear_caches()
-            jax.config.update("jax_enable_compilation_cache", False)
-            compilation_cache.reset_cache()
-            return jax.jit(exp.call).lower(*specs).compile()
-        finally:
-            jax.config.update("jax_enable_compilation_cache", cached)
-            compilation_cache.reset_cache()
+    cached = jax.config.jax_enable_compilation_cache
+    try:
+        jax.config.update("jax_enable_compilation_cache", False)
+        compilation_cache.reset_cache()
+        yield
+    finally:
+        jax.config.update("jax_enable_compilation_cache", cached)
+        compilation_cache.reset_cache()
 
 
 def _load_executable(xpath: Path):

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, points, rootfree
+from atlas.core import exact, hurwitz, model_box, points, rootfree, warm
 from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
 from atlas.core.signs import UNKNOWN
@@ -37,14 +37,14 @@ def grid(n=12, dtype=np.float64):
 @pytest.mark.parametrize("flat_limit", [0, points.FLAT_LIMIT])
 def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
     """The grid path (per-axis inputs, gathers by index; small grids as flat columns, or always
-    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat."""
-    monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
+    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat (flat columns)."""
     args = grid()
-    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
-    st = res.stats
     shape = np.broadcast_shapes(*(a.shape for a in args))
     flat = [np.broadcast_to(a, shape).ravel() for a in args]
     ref = points.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
+    monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
+    res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
+    st = res.stats
     for k in FLAGS:
         assert res[k].shape == shape
         assert np.array_equal(res[k].ravel(), ref[k]), k
@@ -84,20 +84,28 @@ def test_only_what_is_asked():
     assert st["tier2_points"] >= 0 and st["roots_points"] == 0
 
 
-def test_exact_failure_keeps_point_undecided(monkeypatch, bounded_det_b):
+def _ii_boundary():
+    """Eight points across an II boundary that no fast tier decides, and their model."""
+    b1 = np.full(8, 1.1069434970966943) - np.arange(8) * 1.25e-15
+    b2 = np.full(8, 4.24853613984915) + np.arange(8) * 1.25e-15
+    return (*direction(b1), *direction(b2)), (2.0, 0.1, 0.1)
+
+
+def test_exact_failure_keeps_point_undecided(monkeypatch):
     """A failing exact tier leaves its points undecided and records them (the undecided points
-    here: ``beta2 = beta1 + pi`` with a float-bounded ``sign det B``)."""
+    here: across an II boundary, :func:`_ii_boundary`)."""
 
     def broken(points, names=()):
         raise ArithmeticError("no convergence")
 
     monkeypatch.setattr(exact, "resolve", broken)
-    res = points.spectral_points(*grid(8), names=FLAGS)
+    geometry, model = _ii_boundary()
+    res = points.spectral_points(*geometry, *model, names=FLAGS)
     st = res.stats
     und = np.zeros(res["stable_SS"].shape, bool)
     for k in FLAGS:
         und |= res[k] == 3
-    assert st["undecided_before"] > 0
+    assert st["undecided_before"] >= 4
     assert st["undecided_after"] == und.sum() == st["undecided_before"]
     assert len(st["exact_failures"]) == st["undecided_after"]
 
@@ -242,17 +250,15 @@ def test_near_singular_B_decided_by_the_fast_tiers():
 @pytest.mark.parametrize("det_known", [True, False])
 def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch, det_known):
     """Tier 2 (``det B`` certified) and the enclosures (not: simulated) see batches of one
-    length whatever the number of points they get, 8, 100 or 600: one program each for every
+    length whatever the number of points they get, 8, 100 or 500: one program each for every
     caller (an atlas, a paper figure, the explorer's overlay), compiled once per process."""
     pts, _ = _near_singular_points()
-    if not det_known:
+    kernel = points._kernel
+    if not det_known:  # kernels traced afresh with the patched sign (and again after the test)
         unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
         monkeypatch.setattr(rootfree, "det2_sign", unknown)
+        kernel = functools.cache(points._kernel.__wrapped__)
     monkeypatch.setattr(points, "HOST_POINTS", 0)
-    kernel = functools.cache(points._kernel.__wrapped__)
-    cols = [np.broadcast_to(v, pts["c1"].shape) for v in pts.values()]
-    code = np.asarray(kernel("codes", ss=True, ii=True, damped=None)(*cols))
-    pts = {k: v[rootfree.unpack(code)[4]] for k, v in zip(pts, cols)}  # the open points
     seen = {}
 
     def recording(kind, *a, **k):
@@ -262,8 +268,12 @@ def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch
         return lambda *cols: seen.setdefault(kind, set()).add(cols[0].shape) or kern(*cols)
 
     monkeypatch.setattr(points, "_kernel", recording)
+    cols = [np.broadcast_to(np.asarray(v, np.float64), pts["c1"].shape) for v in pts.values()]
+    shape = cols[0].shape
+    code = points._first_pass(cols, shape, np.float64, ss=True, ii=True, damped=None)
+    pts = {k: v[rootfree.unpack(code)[4]] for k, v in zip(pts, cols)}  # the open points
     tier = "tier2_points" if det_known else "roots_points"
-    for n in (8, 100, 600):
+    for n in (8, 100, 500):  # 500: two batches, and the first pass's small flat program
         some = {k: np.resize(v, n) for k, v in pts.items()}
         st = points.spectral_points(*some.values(), names=FLAGS, resolve=False).stats
         assert st[tier] > 0, (n, st)
@@ -348,14 +358,15 @@ def model_grid(n=16, dtype=np.float64):
 def test_model_axes_equal_their_slices(monkeypatch, dtype):
     """A 5-D grid (the first pass on the grid layout, model axes broadcast) gives, before and
     after settlement, every verdict of each (kappa, q1, q2) slice computed on its own as a 2-D
-    grid with scalar model inputs, and the tier counts add up; the settled verdicts equal the
-    exact tier on a seeded sample."""
-    monkeypatch.setattr(points, "FLAT_LIMIT", 0)  # both on the grid path of the first pass
+    grid with scalar model inputs (flat columns, the driver's shared program), and the tier counts
+    add up; the settled verdicts equal the exact tier on a seeded sample."""
     monkeypatch.setattr(points, "HOST_POINTS", 0)  # a slice's handful would skip the later tiers
     args = model_grid(dtype=dtype)
     shape = np.broadcast_shapes(*(a.shape for a in args))
     for resolve in (False, True):
-        res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(points, "FLAT_LIMIT", 0)  # the 5-D grid on the grid path of the first pass
+            res = points.spectral_points(*args, names=FLAGS, dtype=dtype, resolve=resolve)
         tiers = {"tier2_points": 0, "roots_points": 0, "undecided_before": 0}
         for m in np.ndindex(shape[2:]):
             model = [np.broadcast_to(a, shape)[(0, 0, *m)] for a in args]
@@ -533,11 +544,8 @@ def test_needed_leaves_unwanted_points_undecided():
     counted; a point wanted in the exact rounds is settled as the exact tier alone settles it."""
     from atlas.core.verdicts import UNDECIDED_FLAG
 
-    b1 = np.full(8, 1.1069434970966943) - np.arange(8) * 1.25e-15  # across an II boundary
-    b2 = np.full(8, 4.24853613984915) + np.arange(8) * 1.25e-15  # that no fast tier decides
-    c1, s1 = direction(b1)
-    c2, s2 = direction(b2)
-    model, names = (2.0, 0.1, 0.1), ("consistent_II", "stable_II")
+    (c1, s1, c2, s2), model = _ii_boundary()
+    names = ("consistent_II", "stable_II")
     full = points.spectral_points(c1, s1, c2, s2, *model, names=names)
     none = points.spectral_points(
         c1, s1, c2, s2, *model, names=names, needed=lambda idx, v, e: np.zeros(idx.size, bool)
@@ -624,3 +632,60 @@ def test_subnormal_directions_are_never_certified_wrong(jitted):
         for name in names:
             assert fast[name][i] in (want[name], 3), (row, name)
             assert settled[name][i] == want[name], (row, name)
+
+
+def test_witness_checks_run_one_ss_program_whatever_their_number(monkeypatch):
+    """The model box's witness checks (certified SS verdicts of point lists of any length) run
+    :func:`atlas.core.hurwitz.ss_verdict` at one length, the driver's small flat batch: one
+    program for 5, 40, 300 or 700 points (before: one per power of two, 16 to 1024), with the
+    exact tier's verdicts."""
+    seen = set()
+    call = warm.Kernel.__call__
+
+    def recording(self, *args, **static):
+        if self.name == "atlas.core.hurwitz.ss_verdict":
+            seen.add(tuple(np.shape(a) for a in args))
+        return call(self, *args, **static)
+
+    monkeypatch.setattr(warm.Kernel, "__call__", recording)
+    rng = np.random.default_rng(2)
+    for n in (5, 40, 300, 700):
+        b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+        geo = np.stack([*direction(b1), *direction(b2)], axis=1)
+        models = rng.uniform(0.05, 2.0, (n, 3))
+        models[::3, 1:] = 0.0  # undamped
+        got = model_box._verify(geo, models)
+        for i in range(0, n, 37):
+            code = exact.ss_hurwitz(*geo[i].tolist(), *models[i].tolist())
+            assert got[i] == np.isin(code, model_box._GOOD), (n, i)
+    assert seen == {((points.FLAT_SMALL,),) * 7}
+
+
+def _edge_columns(dtype, n=700, seed=4):
+    """``n`` points (one full small batch and a padded one) with edge values in every column:
+    zeros of both signs, the smallest subnormal, the largest finite, infinities and NaN."""
+    rng = np.random.default_rng(seed)
+    fi = np.finfo(dtype)
+    edge = np.array([0.0, -0.0, fi.smallest_subnormal, -fi.smallest_subnormal, fi.tiny, fi.max,
+                     np.inf, -np.inf, np.nan, 1.0], dtype)  # fmt: skip
+    b1, b2 = rng.uniform(0, 2 * np.pi, (2, n))
+    cols = [*direction(b1.astype(dtype), dtype), *direction(b2.astype(dtype), dtype)]
+    cols += [rng.uniform(0.05, 2.0, n).astype(dtype) for _ in range(3)]
+    for c in cols:
+        hit = rng.random(n) < 0.2
+        c[hit] = rng.choice(edge, hit.sum())
+    return cols
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_small_batches_equal_the_unpadded_call(dtype):
+    """Padded batches of an elementwise kernel give, bit for bit, its unpadded calls on the same
+    points (the first and the last :data:`points.FLAT_SMALL` of 700, each point at another place
+    of its batch), edge values included (subnormals, zeros, infinities, NaN; float32 too)."""
+    cols = _edge_columns(dtype)
+    got = points.in_small_batches(hurwitz.ss_verdict_jit, *cols, dtype=dtype)
+    m = points.FLAT_SMALL
+    head = np.asarray(hurwitz.ss_verdict_jit(*(c[:m] for c in cols)))
+    tail = np.asarray(hurwitz.ss_verdict_jit(*(c[-m:] for c in cols)))
+    assert got.dtype == head.dtype and got.shape == (700,)
+    assert np.array_equal(got[:m], head) and np.array_equal(got[m:], tail[2 * m - 700 :])

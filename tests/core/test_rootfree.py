@@ -166,7 +166,7 @@ def test_ss_matches_spectral_where_both_decide():
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = np.asarray(jax.jit(hurwitz.ss_verdict)(*(jnp.asarray(c) for c in cols)))
+        ref = points.in_small_batches(hurwitz.ss_verdict_jit, *cols, dtype=dtype)
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98
@@ -185,8 +185,8 @@ def test_first_pass_computes_every_sign_once(dtype):
     (flat columns and the grid layout), so each sign code exists once per point and every
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
-    x = jnp.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program
-    row, col, one = jnp.ones((64, 1), dtype), jnp.ones((1, 64), dtype), jnp.ones((), dtype)
+    x = np.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program (numpy: no op)
+    row, col, one = np.ones((64, 1), dtype), np.ones((1, 64), dtype), np.ones((), dtype)
     for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
         kern = (
             _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
@@ -208,12 +208,12 @@ def test_evaluation_points_are_program_inputs():
     """The shifts of tier 2 and the roots of the enclosure path are computed in one program and
     certified in another, whose only copy is the rounded input: the certifying programs hold no
     Newton iteration (a loop) or root finder (its square roots)."""
-    x, i = jnp.ones(8), jnp.ones(8, jnp.int8)
+    x, i, b = (jax.ShapeDtypeStruct((8,), t) for t in (jnp.float64, jnp.int8, jnp.bool_))
     decide = _primitives(rootfree._tier2_decide, *(x,) * 7, ss=True, ii=True, iters=24)
-    dominance = _primitives(rootfree._tier2_dominance, *(x,) * 7, i, i, x > 0, i, x, x)
+    dominance = _primitives(rootfree._tier2_dominance, *(x,) * 7, i, i, b, i, x, x)
     loops = ("scan", "while")
     assert sum(decide[k] for k in loops) >= 1 and sum(dominance[k] for k in loops) == 0
-    z, zq = enclosures._roots_jit(*(x,) * 7)
+    z, zq = jax.eval_shape(enclosures._roots, *(x,) * 7)  # traced only: no program compiled
     roots, radii = (
         _primitives(enclosures._roots, *(x,) * 7),
         _primitives(enclosures._radii, z, zq, *(x,) * 7),
@@ -242,11 +242,16 @@ def test_float32_sturm_signs_are_the_float64_signs():
 def test_counts_never_use_an_uncertified_sign():
     """Self-gating variations: any uncertified code gives NOT_COUNTED, and a difference of two
     counts with one not counted is outside 0..4."""
-    one, unk = jnp.ones(1, jnp.int32), jnp.full(1, UNKNOWN, jnp.int32)
-    assert int(rootfree._variations(one, -one, one)[0]) == 2
-    bad = rootfree._variations(one, unk, -one)
+
+    @jax.jit  # one program (op by op: 15)
+    def counts(one, unk):
+        bad, good = rootfree._variations(one, unk, -one), rootfree._variations(one, -one)
+        return rootfree._variations(one, -one, one), bad, bad - good, good - bad
+
+    two, bad, *diffs = counts(np.ones(1, np.int32), np.full(1, UNKNOWN, np.int32))
+    assert int(two[0]) == 2
     assert int(bad[0]) == rootfree.NOT_COUNTED
-    for d in (bad - rootfree._variations(one, -one), rootfree._variations(one, -one) - bad):
+    for d in diffs:
         assert not 0 <= int(d[0]) <= 4
 
 

@@ -14,12 +14,15 @@ import numpy as np
 import pytest
 
 from atlas.core import enclosures, hardcases, model_box, points, rootfree, signs, warm
-from atlas.core.invariants import KEYS
+from atlas.core.invariants import KEYS, PAD
 
 
 def _suite():
+    """A hard-case suite padded to the driver's length of the spectral abscissa
+    (:data:`points.FLAT_BATCH`): the jitted program is the one every atlas runs."""
     P = hardcases.suite("near_hurwitz", "float64")
-    return [P[k] for k in KEYS]
+    n = P["c1"].size
+    return [np.concatenate([P[k], np.full(points.FLAT_BATCH - n, p)]) for k, p in zip(KEYS, PAD)]
 
 
 def test_exported_kernel_equals_jit_and_is_loaded_not_traced(tmp_path, monkeypatch):
@@ -84,7 +87,7 @@ def test_threads_asking_at_once_load_a_kernel_once(tmp_path, monkeypatch):
     monkeypatch.setattr(warm.Kernel, "_load", slow_load)
     x = np.arange(4.0)
     out = {}
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         other = threading.Thread(target=lambda: out.setdefault("other", kernel(x)), name="other")
         other.start()
         started.wait()
@@ -143,35 +146,42 @@ def test_a_kernel_whose_helper_changes_gets_another_digest(monkeypatch):
         assert warm._digest(kern.module) != before
 
 
+#: the kernels' digests as an entry point sees them: after importing ``sys.argv[1]`` only
 DIGEST = (
     "import sys, importlib\n"
     "importlib.import_module(sys.argv[1])\n"
     "from atlas.core import warm\n"
     "with warm.kernel_cache('unused'):\n"
-    "    print(warm._digest('atlas.core.kernels'), warm._digest('atlas.core.rootfree'))\n"
+    "    print(*(warm._digest(f'atlas.core.{m}') for m in ('kernels', 'rootfree', 'points')))\n"
 )
 
 
 def test_digest_is_the_same_whatever_the_entry_point_imported():
-    """Two fresh processes: one imports the command line (every command's modules), one the
-    warm-cache module alone; the kernels' digests agree."""
+    """Fresh processes importing the warm-cache module alone, the command line (which imports
+    lazily: every command's modules) and the explorer (everything): the kernels' digests agree
+    (else every entry point exports and compiles its own copy of each program)."""
+    env = {**os.environ, "JAX_ENABLE_X64": "1"}
     got = {
         subprocess.run(
-            [sys.executable, "-c", DIGEST, entry], capture_output=True, text=True, check=True
-        ).stdout
-        for entry in ("atlas.cli", "atlas.core.warm")
-    }
+            [sys.executable, "-c", DIGEST, entry],
+            capture_output=True, text=True, env=env, timeout=300, check=True,
+        ).stdout.strip().splitlines()[-1]
+        for entry in ("atlas.core.warm", "atlas.cli", "atlas.explore.state")
+    }  # fmt: skip
     assert len(got) == 1, got
 
 
-def _dominance_args(n=64, seed=0):
-    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile)."""
+def _dominance_args(n=256, seed=0):
+    """Inputs of ``rootfree._tier2_dominance`` (a small certified program: quick to compile), of
+    the types and length the driver gives it (:data:`points.LATER_BATCH`): its jitted program is
+    the driver's."""
     rng = np.random.default_rng(seed)
     geometry = [rng.uniform(-1, 1, n) for _ in range(4)]
     model = [rng.uniform(0.1, 10, n), rng.uniform(0, 1, n), rng.uniform(0, 1, n)]
-    flags = [rng.integers(0, 2, n).astype(bool) for _ in range(3)]
-    shifts = [rng.integers(-1, 2, n).astype(np.int8), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
-    return geometry + model + flags + shifts
+    verdicts = [rng.choice(np.array([0, 1, 3], np.int8), n) for _ in range(2)]
+    dominance = rng.integers(0, 2, n).astype(bool)
+    shifts = [rng.integers(-1, 2, n).astype(np.int32), rng.uniform(-2, 0, n), rng.uniform(-1, 0, n)]
+    return geometry + model + verdicts + [dominance] + shifts
 
 
 STORED = """
@@ -218,9 +228,16 @@ def test_stored_executable_gives_the_jit_results_in_a_fresh_process(tmp_path):
 def stored_dominance(tmp_path_factory):
     """A kernel directory holding ``_tier2_dominance``'s program and executable."""
     where = tmp_path_factory.mktemp("stored")
-    with warm.kernel_cache(str(where)):
+    with warm.kernel_cache(str(where)), _compiled_here():
         warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
     return where
+
+
+def _compiled_here():
+    """The persistent compilation cache off: an executable stored in the block was compiled in
+    this process, so it serializes completely at once (one the cache served would be compiled
+    afresh, which clears every jit cache of the test process: warm module docstring)."""
+    return warm._no_compilation_cache()
 
 
 def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
@@ -250,7 +267,7 @@ def test_a_damaged_executable_is_never_used(stored_dominance, tmp_path):
     for damage, data in damaged.items():
         xpath.write_bytes(data)
         assert warm._load_executable(xpath) is None, damage
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         got = warm.Kernel(rootfree._tier2_dominance.fn)(*args)
     assert warm._result_digest(got) == want
     assert warm._load_executable(xpath) is not None  # stored again, valid
@@ -306,19 +323,19 @@ def test_other_compiler_flags_get_other_executables(stored_dominance, tmp_path, 
     for f in stored_dominance.iterdir():
         shutil.copy(f, tmp_path)
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_enable_fast_math=true")
-    with warm.kernel_cache(str(tmp_path)):
+    with warm.kernel_cache(str(tmp_path)), _compiled_here():
         warm.Kernel(rootfree._tier2_dominance.fn)(*_dominance_args())
     assert len(list(tmp_path.glob("*.xlaexec"))) == 2
 
 
 def test_an_executable_given_other_arguments_falls_back():
-    """Arguments an executable was not compiled for (here float32 for float64) go to the
-    exported program, which gives its results for them."""
+    """Arguments an executable was not compiled for (here the driver's bulk length for its
+    batch length) go to the exported program, which gives its results for them."""
     args = _dominance_args()
     compiled = jax.jit(rootfree._tier2_dominance.fn).lower(*args).compile()
     guarded = warm._Guarded(compiled, lambda: rootfree._tier2_dominance.jitted)
     guarded(*args)
-    other = [a.astype(np.float32) if a.dtype == np.float64 else a for a in args]
+    other = _dominance_args(points.LATER_BULK)
     want = warm._result_digest(rootfree._tier2_dominance.jitted(*other))
     assert warm._result_digest(guarded(*other)) == want
     assert guarded.compiled is None
@@ -376,26 +393,3 @@ def test_a_cold_small_generate_compiles_no_more_programs(tmp_path):
     assert got["rc"] == 0 and programs, (got, p.stderr[-2000:])
     assert got["compiles"] == len(programs), (got, programs)
     assert len(programs) <= COLD_GENERATE_PROGRAMS, programs
-
-
-#: a kernel digest as an entry point sees it: after importing ``{imports}`` only
-_DIGEST = """
-import sys
-{imports}
-from atlas.core import warm
-print(warm._digest("atlas.core.points"))
-"""
-
-
-def test_the_kernel_digest_does_not_depend_on_what_the_entry_point_imported():
-    """The CLI imports lazily, the explorer everything: one kernel, one digest, whichever came
-    first (else every entry point exports and compiles its own copy of each program)."""
-    digests = set()
-    for imports in ("import atlas.core.points", "import atlas.explore.state"):
-        env = {**os.environ, "JAX_ENABLE_X64": "1"}
-        p = subprocess.run(
-            [sys.executable, "-c", _DIGEST.format(imports=imports)],
-            capture_output=True, text=True, env=env, timeout=300, check=True,
-        )  # fmt: skip
-        digests.add(p.stdout.strip().splitlines()[-1])
-    assert len(digests) == 1, digests

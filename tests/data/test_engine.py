@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from atlas.core import contact_modes as mech
-from atlas.core import exact, spectral
-from atlas.core.invariants import KEYS, PAD
+from atlas.core import exact
+from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
 from atlas.data.engine import (
     MemorySink,
@@ -118,30 +118,17 @@ def _point_inputs(b1, b2):
     return [jnp.asarray(x) for x in (c1, s1, c2, s2)]
 
 
-#: the pointwise kernel's points, padded to the length the hard-case suites use
-#: (tests/core/test_hardcases.py): one program for both, not one more per shape (~4 s)
-PADDED = 256
-
-
 def _pointwise_verdicts(points) -> list[dict]:
-    """The kernels (``spectral.verdicts_jit``) on each ``(c1, s1, c2, s2, kappa, q1, q2)`` of
-    ``points``, elementwise over one padded batch; cells they leave undecided settled exactly."""
-    cols = [np.array([float(p[i]) for p in points]) for i in range(len(KEYS))]
-    padded = [np.concatenate([c, np.full(PADDED - c.size, pad)]) for c, pad in zip(cols, PAD)]
-    got = spectral.verdicts_jit(*(jnp.asarray(c) for c in padded))
-    out = []
-    for m, pt in enumerate(points):
-        v = {n: int(x[m]) for n, x in got.items() if n != "spectral_abscissa"}
-        if 3 in v.values():  # the atlas resolved it exactly
-            ex = exact.resolve({n: np.asarray(x) for n, x in zip(KEYS, pt)})
-            v.update({n: int(ex[n][0]) for n in v if v[n] == 3})
-        out.append(v)
-    return out
+    """The exact tier's verdicts (rational arithmetic, independent of every float kernel) at each
+    ``(c1, s1, c2, s2, kappa, q1, q2)`` of ``points``."""
+    cols = {n: np.array([float(p[i]) for p in points]) for i, n in enumerate(KEYS)}
+    ref = exact.resolve(cols, names=("stable_SS", "consistent_II", "stable_II"))
+    return [{n: int(v[m]) for n, v in ref.items()} for m in range(len(points))]
 
 
 def test_fig1_equals_pointwise_kernels(fig1_small):
-    """Sampled points of the fig1 scene (random, a tie, an axis, b2 = -b1) equal the kernels
-    evaluated on those points alone."""
+    """Sampled points of the fig1 scene (random, a tie, an axis, b2 = -b1): the verdicts equal
+    the exact tier's at those points alone, the codes the kernels'."""
     ds = fig1_small
     rng = np.random.default_rng(0)
     idx = [(i, j) for i, j in rng.integers(0, 32, size=(6, 2))] + [(0, 0), (8, 24), (5, 21)]
