@@ -511,18 +511,15 @@ def _verify(geo: np.ndarray, models) -> np.ndarray:
     """``True`` (stable or neutral), ``False`` (unstable) of model ``models[i]`` at ``geo[i]``:
     the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`), the exact tier where it
     leaves a point undecided."""
-    import jax.numpy as jnp  # noqa: PLC0415 - JAX only when witnesses are checked
+    import jax  # noqa: PLC0415 - JAX only when witnesses are checked
 
-    from atlas.core import hurwitz  # noqa: PLC0415
+    from atlas.core import buckets, hurwitz  # noqa: PLC0415
 
     m = np.asarray(models, np.float64).reshape(-1, 3)
     n = len(m)
-    size = max(16, 1 << (n - 1).bit_length())  # padded: one compilation per power of two
-    pad = np.tile([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0], (size - n, 1))
-    cols = [jnp.asarray(a) for a in np.concatenate([np.hstack([geo, m]), pad]).T]
     undecided = int(Verdict.UNDECIDED)
-    if n and all(c.dtype == jnp.float64 for c in cols):
-        v = np.array(_jitted_ss(hurwitz.ss_verdict)(*cols))[:n]
+    if n and jax.config.jax_enable_x64:  # shape buckets: the programs of every other caller
+        v = buckets.call(_jitted_ss(hurwitz.ss_verdict), *np.hstack([geo, m]).T)
     else:  # no float64 in JAX here: the exact tier for all
         v = np.full(n, undecided, np.int8)
     for i in np.flatnonzero(v == undecided):
