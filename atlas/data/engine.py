@@ -111,7 +111,8 @@ class RunOptions:
     resolve : bool
         Recompute undecided values exactly with :mod:`atlas.core.exact` (slow per point, few points).
     tile_points : int
-        Points per tile: bounds the kernel's memory; one compilation per value.
+        Points per tile: bounds the memory of a tile (the elementwise kernels' programs do not
+        depend on it).
     progress : bool
         tqdm progress bar on stderr.
     history : str, optional
