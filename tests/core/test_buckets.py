@@ -5,8 +5,6 @@ shapes as they are (no buckets): padding with a point of the batch must not chan
 edge inputs (signed zeros, subnormals, infinities, NaN) in float64 and float32.
 """
 
-import math
-
 import jax
 import numpy as np
 import pytest
@@ -42,9 +40,9 @@ def same_bits(a, b) -> bool:
     return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-#: broadcast shapes of the calls: a point; a grid (n, 1) x (1, n) of 5,000 points (a full batch
-#: of 4,096 and one padded from 904); empty
-CASES = ([()], [(50, 1), (1, 100)], [(0,)])
+#: broadcast shapes of the calls: a point; a grid (n, 1) x (1, n) of 5,000 points (batches of
+#: 4,096, 512 and one padded from 392), with scalars among the inputs too; empty
+CASES = ([()], [(50, 1), (1, 100)], [(50, 1), (), (1, 100)], [(0,)])
 
 
 def check_bits(fn, reference, args):
@@ -68,7 +66,7 @@ def test_kernels_run_is_bit_identical_to_the_unpadded_call(name, dtype):
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_contact_modes_and_class_kernel_are_bit_identical_to_the_unpadded_call(dtype):
     for fn, n_in in ((mech.class_code, 4), (class_kernel, 6)):
-        args = edge_inputs(n_in, CASES[1], dtype, seed=7)
+        args = edge_inputs(n_in, CASES[2], dtype, seed=7)
         check_bits(fn, fn.kernel.jitted, args)
 
 
@@ -80,16 +78,15 @@ def test_python_numbers_take_the_arrays_dtype():
     assert same_bits(got, ref)
 
 
-@pytest.mark.parametrize(
-    "n, length, batches",
-    [(1, 512, 1), (512, 512, 1), (513, 512, 2), (4095, 512, 8), (4096, 4096, 1), (8193, 4096, 3)],
-)
-def test_batches_pad_less_than_a_batch(n, length, batches):
-    """Padding stays under one batch: at most 511 points below 4,096 points, under 2x above."""
-    assert buckets.batch_length(n) == length
-    assert math.ceil(n / length) == batches
-    assert batches * length - n < length
-    assert n < 4096 or batches * length < 2 * n
+@pytest.mark.parametrize("n", [0, 1, 511, 512, 513, 4095, 4096, 5000, 65535, 65536, 200_001])
+def test_batches_cover_the_call_with_less_than_a_small_batch_of_padding(n):
+    got = buckets.batches(n)
+    starts = [s for s, _ in got]
+    assert starts == [sum(length for _, length in got[:i]) for i in range(len(got))]
+    assert {length for _, length in got} <= set(buckets.LENGTHS)
+    total = sum(length for _, length in got)
+    assert n <= total < n + buckets.SMALL
+    assert not got or n > total - got[-1][1]  # the last batch holds a point of the call
 
 
 class Shapes:
@@ -108,19 +105,20 @@ class Shapes:
 
         monkeypatch.setattr(warm.Kernel, "__call__", spy)
 
-    def per_kernel_and_dtype(self) -> dict:
+    def per_kernel(self) -> dict:
+        """Programs per kernel, dtype and set of scalar inputs."""
         out: dict = {}
         for name, sig in self.seen:
-            key = (name, sig[0][1])
+            key = (name, sig[0][1], tuple(len(shape) == 0 for shape, _ in sig))
             out[key] = out.get(key, 0) + 1
         return out
 
 
-def test_every_entry_point_shares_two_programs_per_kernel_and_dtype(monkeypatch):
+def test_every_entry_point_shares_the_programs_of_each_kernel(monkeypatch):
     """The engine at several grid sizes and ``tile_points``, the plane, the contact-space
-    verdicts and the explorer's map run each elementwise kernel in at most two shapes per dtype
-    (10 programs here; before shape buckets one per grid size, tile and broadcast shape: 26,
-    up to 8 of one kernel)."""
+    verdicts and the explorer's map run each elementwise kernel in at most two lengths per dtype
+    and set of scalar inputs (12 programs here; before shape buckets one per grid size, tile and
+    broadcast shape: 26, 8 of one kernel)."""
     shapes = Shapes(monkeypatch)
     outs = "class_code,cc_possible,stable_SF,consistent_IF,stable_FS,consistent_FI"
     for n, tile, dtype in ((5, 1 << 16, "float64"), (24, 64, "float64"), (70, 1000, "float32")):
@@ -138,7 +136,7 @@ def test_every_entry_point_shares_two_programs_per_kernel_and_dtype(monkeypatch)
     for shape in ((), (4,), (3, 5)):
         b = np.full(shape, 0.7)
         contact_space.verdicts_at(b, b + 2, b + 1, 0.5, 0.1, 0.1, names=("subclass_code",))
-    counts = shapes.per_kernel_and_dtype()
-    for name in ("_b1", "_b2", "_b1b2", "_b1b2a"):
-        assert counts.get((name, "float64"), 0) >= 1, (name, counts)
+    counts = shapes.per_kernel()
+    assert {k[0] for k in counts} == {"_b1", "_b2", "_b1b2", "_b1b2a"}, counts
     assert max(counts.values()) <= 2, counts
+    assert sum(counts.values()) <= 12, counts
