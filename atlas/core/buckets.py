@@ -140,7 +140,7 @@ class Pending:
             m = min(length, self.n - start)
             parts.append(jax.tree.map(lambda v, m=m: _points(v, m), self.out[k]))
             self.out[k] = None
-        flat = jax.tree.map(lambda *p: np.concatenate(p) if len(p) > 1 else p[0], *parts)
+        flat = jax.tree.map(lambda *p: np.concatenate(p), *parts)  # writable, fresh arrays
         return jax.tree.map(lambda v: v.reshape(self.shape), flat)
 
 

@@ -51,6 +51,7 @@ def check_bits(fn, reference, args):
     got, ref = jax.tree.leaves(fn(*args)), jax.tree.leaves(reference(*args))
     for g, r in zip(got, ref, strict=True):
         assert same_bits(g, np.broadcast_to(np.asarray(r), shape)), (fn, shape)
+        assert g.flags.writeable  # callers settle undecided codes in place
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
