@@ -9,11 +9,10 @@ from __future__ import annotations
 import math
 
 import contourpy
-import jax.numpy as jnp
 import numpy as np
 from scipy.spatial import cKDTree
 
-from atlas.core import hurwitz
+from atlas.core import kernels
 
 __all__ = ["contour_lines", "hausdorff", "masks", "ss_margin", "torus_hausdorff"]
 
@@ -130,5 +129,8 @@ def masks(res: dict, damped: bool) -> dict:
 
 def ss_margin(args):
     """The smooth SS margin :func:`atlas.core.hurwitz.ss_margin` on the broadcast grid ``args``
-    (float64 on the host); its zero contour is the SS boundary."""
-    return np.asarray(hurwitz.ss_margin(*(jnp.asarray(a) for a in args)), np.float64)
+    (float64 on the host), by the package's jitted kernel (``ss_margin`` of
+    :data:`atlas.core.kernels.KERNELS`: one program, not its operations one by one); its zero
+    contour is the SS boundary."""
+    kernel = kernels.KERNELS["ss_margin"]
+    return np.asarray(kernels.run(kernel, dict(zip(kernel.inputs, args)))["margin_SS"], np.float64)

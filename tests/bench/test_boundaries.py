@@ -77,3 +77,27 @@ def test_hausdorff_is_exact_next_to_a_dense_cluster():
     b = [np.array([[0.0, 0.0], [0.0, 1.0]]), cluster]
     assert hausdorff(a, b, 0.01) == pytest.approx(0.0, abs=1e-12)
     assert torus_hausdorff(a, b, 0.01) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_ss_margin_on_a_grid_is_one_program():
+    """The reference's SS margin runs as one jitted program (it was some 130 operations, each
+    compiled on its own for every grid shape): at most one lowering for a new grid shape."""
+    import jax
+
+    from atlas.bench.boundaries import ss_margin
+    from atlas.bench.grids import grid_inputs
+
+    lowered = []
+
+    def count(event, seconds, **kwargs):
+        if event == "/jax/core/compile/jaxpr_to_mlir_module_duration":
+            lowered.append(event)
+
+    _, args = grid_inputs(22, 0.5, 0.05, 0.2, "float64")  # a grid shape no other test uses
+    jax.monitoring.register_event_duration_secs_listener(count)
+    try:
+        got = ss_margin(args)
+    finally:
+        jax.monitoring.unregister_event_duration_listener(count)
+    assert len(lowered) <= 1
+    assert got.shape == (23, 23) and got.dtype == np.float64 and np.isfinite(got).all()
