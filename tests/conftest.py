@@ -34,25 +34,11 @@ use_compile_cache(min_compile_seconds=0.0)
 os.environ.setdefault(KERNEL_ENV, "0")
 
 
-@pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(items):
-    """The end-to-end tests (marker ``e2e``) run first, the tests that clear every jit cache
-    (:func:`bounded_det_b`) last, every other test in between (the order of the directories'
-    own sorts kept within each group).
-
-    CI runs the unit and end-to-end tests in one session (``.ci/run``): pytest-xdist hands each
-    worker a first chunk of consecutive tests (an eighth of the run), so the end-to-end tests,
-    which take minutes and start processes of their own, begin at once in one worker, share the
-    session's ``atlas paper`` and tiny bench runs there (no worker waits for the other's), and the
-    unit tests fill the other worker and then both.  Kept compiled: a cleared kernel is traced,
-    lowered and loaded again by the next test that calls it."""
-
-    def group(item) -> int:
-        if "bounded_det_b" in getattr(item, "fixturenames", ()):
-            return 2
-        return 0 if item.get_closest_marker("e2e") else 1
-
-    items.sort(key=group)
+    """The tests that clear every jit cache (:func:`bounded_det_b`) run last, so that the kernels
+    the other tests compiled stay compiled for the rest of the run (a cleared kernel is traced,
+    lowered and loaded again by the next test that calls it)."""
+    items.sort(key=lambda item: "bounded_det_b" in getattr(item, "fixturenames", ()))
 
 
 @pytest.fixture(scope="session")
