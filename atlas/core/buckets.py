@@ -9,7 +9,8 @@ and :data:`SMALL` points, as many of each as fit, the rest padded to :data:`SMAL
 lengths are those of the spectral driver's flat first pass, :mod:`atlas.core.points`); a large
 grid runs whole (:func:`call`).  Each input is broadcast to the call's shape and cut into
 batches one at a time (a broadcast grid is never materialized whole), an input of one value
-stays a scalar, the last batch is padded with its own last point, and the results are sliced
+stays a scalar (a Python number as it is: weakly typed, it meets the other inputs as in the
+unpadded call), the last batch is padded with its own last point, and the results are sliced
 back and reshaped: the same values as the unpadded call, bit for bit, since every output point
 depends on its own input point only.  The padding is under :data:`SMALL` points whatever the
 call.  One program per kernel, length, dtype and set of scalar inputs, whoever calls.
@@ -61,19 +62,15 @@ def batches(n: int) -> list[tuple[int, int]]:
     return out
 
 
+def _python(a) -> bool:
+    """A Python number (weakly typed in JAX: it takes the dtype of what it meets)."""
+    return isinstance(a, (int, float, complex)) and not isinstance(a, np.generic)
+
+
 def _host(a):
-    """An argument as a numpy array (a Python number stays one, typed by :func:`_typed`)."""
-    if isinstance(a, (int, float, complex, bool)) and not isinstance(a, np.generic):
-        return a
-    return np.asarray(a)
-
-
-def _typed(args):
-    """Python numbers as arrays of the dtype JAX gives them beside the array arguments (a weak
-    type takes the arrays' dtype; alone, JAX's default)."""
-    arrays = [a for a in args if isinstance(a, np.ndarray)]
-    dt = jax.dtypes.result_type(*arrays, *(a for a in args if not isinstance(a, np.ndarray)))
-    return [a if isinstance(a, np.ndarray) else np.asarray(a, dt) for a in args]
+    """An argument as a numpy array; a Python number stays one, passed to the kernel as it is
+    (so it meets the other inputs in the kernel exactly as in the unpadded call)."""
+    return a if _python(a) else np.asarray(a)
 
 
 def _flat_range(v, start: int, stop: int) -> np.ndarray:
@@ -95,14 +92,16 @@ class Pending:
 
     def __init__(self, fn, args, ahead: int | None):
         self.fn = fn
-        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        self.shape = np.broadcast_shapes(*(np.shape(a) for a in args))
         self.n = math.prod(self.shape)
         # an input of one value stays a scalar (the kernel computes what depends on it once)
-        # unless every input is one: a point runs as a column, like any other call
-        scalar = [a.size == 1 for a in args]
-        self.scalar = scalar if not all(scalar) else [False] * len(args)
+        # unless every input is one: a point of arrays runs as a column, like any other call
+        scalar = [np.size(a) == 1 for a in args]
+        if all(scalar) and not any(map(_python, args)):
+            scalar = [False] * len(args)
+        self.scalar = scalar
         self.args = [
-            a.reshape(()) if sc else np.broadcast_to(a, self.shape)
+            (a if _python(a) else a.reshape(())) if sc else np.broadcast_to(a, self.shape)
             for a, sc in zip(args, self.scalar, strict=True)
         ]
         self.batches = batches(self.n)
@@ -127,7 +126,7 @@ class Pending:
         """The outputs (the kernel's pytree of numpy arrays, each shaped like the call)."""
         if self.n == 0:
             specs = [
-                jax.ShapeDtypeStruct(() if sc else (SMALL,), a.dtype)
+                a if _python(a) else jax.ShapeDtypeStruct(() if sc else (SMALL,), a.dtype)
                 for a, sc in zip(self.args, self.scalar, strict=True)
             ]
             return jax.tree.map(
@@ -154,8 +153,9 @@ def submit(fn, *args, ahead: int | None = 1) -> Pending:
     """``fn`` (a jitted elementwise kernel) on broadcastable ``args`` in the batches of
     :func:`batches`; ``ahead`` batches (``None``: all) are dispatched at once (asynchronously),
     the rest by :meth:`Pending.result`.  An input is a flat column of the batch's length, or a
-    scalar if it has one value: one program per batch length, dtype and set of scalar inputs."""
-    args = _typed([_host(a) for a in args])
+    scalar if it has one value (a Python number stays one): one program per batch length, dtype
+    and set of scalar inputs."""
+    args = [_host(a) for a in args]
     if not args:
         raise ValueError("args: an elementwise kernel needs at least one input")
     return Pending(fn, args, ahead)
@@ -167,10 +167,10 @@ def call(fn, *args):
     input varying along some axes only) of at least :data:`LARGE` points, which runs whole in its
     own shape: its kernel computes what depends on one axis once per value of that axis (half
     the time of flat columns on a 513 x 513 plane), a saving that repeats at every call."""
-    args = _typed([_host(a) for a in args])
+    args = [_host(a) for a in args]
     shape = np.broadcast_shapes(*(np.shape(a) for a in args))
     n = math.prod(shape)
-    if n >= LARGE and any(1 < a.size < n for a in args):
+    if n >= LARGE and any(1 < np.size(a) < n for a in args):
         return jax.tree.map(lambda v: np.array(np.broadcast_to(v, shape)), fn(*args))
     return submit(fn, *args).result()
 
