@@ -8,10 +8,11 @@ reference (:mod:`atlas.core.exact`) evaluates the same rational numbers exactly.
 events of the direction vectors: ``beta2 == beta1``, ``b2 == -b1``, axis directions.
 
 All functions below except :func:`direction` are pure ``jax.numpy`` functions of arrays that
-broadcast against each other (no I/O, jit/vmap-able).  The public verdicts are jitted kernels
-(:func:`atlas.core.warm.jit`): called on host arrays they compile once per shape, where op-by-op
-dispatch compiled each of their ~30 operations (about 1 s per new shape), and a later process
-loads them (a warm ``atlas paper`` traced and lowered them again in every run).  Codes use :data:`atlas.core.verdicts.UNDECIDED_CODE`
+broadcast against each other (no I/O, jit/vmap-able).  The public verdicts are kept jitted kernels
+in shape buckets (:func:`atlas.core.buckets.elementwise`): called on host arrays of any shape they
+run as flat columns of two lengths (numpy results), one program per length and dtype, where
+op-by-op dispatch compiled each of their ~30 operations (about 1 s per new shape), and a later
+process loads them; inside another kernel they are traced as they are.  Codes use :data:`atlas.core.verdicts.UNDECIDED_CODE`
 (-1) or :data:`atlas.core.verdicts.UNDECIDED_FLAG` (3) where a cross product could not be certified.
 """
 
@@ -22,7 +23,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import warm
+from atlas.core import buckets
 from atlas.core.signs import CODE, UNKNOWN, det2_sign, sign_of
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Verdict
 
@@ -142,7 +143,7 @@ def _axis_cross(ac, as_, vc, vs):
     return (sign_of(ac) * sign_of(vs) - sign_of(as_) * sign_of(vc)).astype(CODE)
 
 
-@warm.jit
+@buckets.elementwise
 def class_code(c1, s1, c2, s2):
     """Class code ``ij`` (paper Sec. 3, SPEC §1) from the directions of ``b1``, ``b2``.
 
@@ -162,7 +163,7 @@ def class_code(c1, s1, c2, s2):
     return code.astype(jnp.int8)
 
 
-@warm.jit
+@buckets.elementwise
 def subclass_code(c1, s1, c2, s2, ca, sa):
     """Subclass code ``ijk``: ``k`` = rank of alpha in {alpha, beta1, beta2, pi/2, pi, 3pi/2}.
 
@@ -211,7 +212,7 @@ def _positive(sign):
     return jnp.where(sign == UNKNOWN, UNDECIDED_FLAG, (sign > 0).astype(jnp.int8)).astype(jnp.int8)
 
 
-@warm.jit
+@buckets.elementwise
 def consistent_modes(c1, s1, c2, s2, ca, sa):
     """Table 1 (Appendix A): consistency of FF, SF, FS, SS as ``Consistency`` codes (int8).
 
@@ -251,31 +252,31 @@ def _stable_from_diagonal(b_jj):
     ).astype(jnp.int8)
 
 
-@warm.jit
+@buckets.elementwise
 def stable_SF(c1):
     """SF stability (Sec. 4.2, App. B): stable iff ``b11 > 0``; ``b11 = 0`` is neutral."""
     return _stable_from_diagonal(c1)
 
 
-@warm.jit
+@buckets.elementwise
 def stable_FS(s2):
     """FS stability: stable iff ``b22 > 0``; ``b22 = 0`` is neutral."""
     return _stable_from_diagonal(s2)
 
 
-@warm.jit
+@buckets.elementwise
 def consistent_IF(c1, s1):
     """IF consistency (Sec. 4.3, SPEC-corrected): ``b11 < 0`` and ``b21 > 0``; stable if consistent."""
     return ((sign_of(c1) < 0) & (sign_of(s1) > 0)).astype(jnp.int8)
 
 
-@warm.jit
+@buckets.elementwise
 def consistent_FI(c2, s2):
     """FI consistency: ``b22 < 0`` and ``b12 > 0``; stable if consistent."""
     return ((sign_of(s2) < 0) & (sign_of(c2) > 0)).astype(jnp.int8)
 
 
-@warm.jit
+@buckets.elementwise
 def cc_possible(c1, s2):
     """Necessary condition for CC inverse chattering (Sec. 5.2): ``b11 > 0`` and ``b22 > 0``."""
     return ((sign_of(c1) > 0) & (sign_of(s2) > 0)).astype(bool)

@@ -109,7 +109,7 @@ def ss_verdict(c1, s1, c2, s2, kappa, q1, q2):
 
 
 #: :func:`ss_verdict` as a kept kernel (:func:`atlas.core.warm.jit`), for point lists of any
-#: length through :func:`atlas.core.points.in_small_batches` (one program per dtype)
+#: length through :func:`atlas.core.buckets.call` (one program per dtype)
 ss_verdict_jit = warm.jit(ss_verdict)
 
 

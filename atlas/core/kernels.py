@@ -24,9 +24,7 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
 
-import numpy as np
-
-from atlas.core import baseline, exact, hurwitz, points, warm
+from atlas.core import baseline, buckets, exact, hurwitz, points, warm
 from atlas.core import contact_modes as mech
 from atlas.core import settle as exact_settle
 from atlas.core.verdicts import UNDECIDED_CODE, UNDECIDED_FLAG, Consistency, Verdict
@@ -265,11 +263,12 @@ def verdict_kernels(params=None) -> tuple[PointKernel, ...]:
 
 
 def run(kernel: PointKernel, inputs: Mapping, names=None) -> dict:
-    """The raw results ``names`` (default: all) of ``kernel`` as numpy arrays, from a mapping of
-    broadcastable inputs (:data:`PARAM_INPUTS` names); uncertified codes are left undecided."""
+    """The raw results ``names`` (default: all) of ``kernel`` as numpy arrays of the inputs'
+    broadcast shape, from a mapping of broadcastable inputs (:data:`PARAM_INPUTS` names), run in
+    shape buckets (:mod:`atlas.core.buckets`); uncertified codes are left undecided."""
     names = kernel.results if names is None else tuple(names)
-    res = jitted(kernel)(*(inputs[i] for i in kernel.inputs))
-    return {k: np.asarray(res[k]) for k in names}
+    res = buckets.call(jitted(kernel), *(inputs[i] for i in kernel.inputs))
+    return {k: res[k] for k in names}
 
 
 def settle(kernel: PointKernel, codes: dict, inputs: Mapping) -> dict:

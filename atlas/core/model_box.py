@@ -501,18 +501,18 @@ def _by_signs(geo: np.ndarray, sd: np.ndarray) -> np.ndarray:
 
 def _verify(geo: np.ndarray, models) -> np.ndarray:
     """``True`` (stable or neutral), ``False`` (unstable) of model ``models[i]`` at ``geo[i]``:
-    the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`, in the driver's small
-    batches: one program for every number of points), the exact tier where it leaves a point
-    undecided."""
+    the certified float kernel (:func:`atlas.core.hurwitz.ss_verdict`, in the shared shape
+    buckets: one program for every number of points), the exact tier where it
+    leaves a point undecided."""
     import jax  # noqa: PLC0415 - JAX only when witnesses are checked
 
-    from atlas.core import hurwitz, points  # noqa: PLC0415
+    from atlas.core import buckets, hurwitz  # noqa: PLC0415
 
     m = np.asarray(models, np.float64).reshape(-1, 3)
     n = len(m)
     undecided = int(Verdict.UNDECIDED)
-    if n and jax.config.jax_enable_x64:
-        v = points.in_small_batches(hurwitz.ss_verdict_jit, *np.hstack([geo, m]).T)
+    if n and jax.config.jax_enable_x64:  # shape buckets: the programs of every other caller
+        v = buckets.call(hurwitz.ss_verdict_jit, *np.hstack([geo, m]).T)
     else:  # no float64 in JAX here: the exact tier for all
         v = np.full(n, undecided, np.int8)
     for i in np.flatnonzero(v == undecided):

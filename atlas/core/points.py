@@ -51,7 +51,6 @@ __all__ = [
     "LATER_BULK",
     "LATER_BULK_FROM",
     "compile_programs",
-    "in_small_batches",
     "PAD",
 ]
 
@@ -199,16 +198,6 @@ def _run_chunked(kernel, cols, dtype, chunk, sizes=CHUNK_SIZES):
         for k, v in res.items():
             out[k][start:stop] = v[: stop - start]
     return out or {}
-
-
-def in_small_batches(kernel, *cols, dtype="float64") -> np.ndarray:
-    """An elementwise ``kernel`` of the seven invariant columns (1-D, broadcast to one length
-    ``n >= 1``) in padded batches of :data:`FLAT_SMALL` points (padding :data:`PAD`): one program
-    per kernel and dtype whatever the length and the caller (a witness check, a reference);
-    returns its (first) result at the ``n`` points."""
-    dtype = np.dtype(dtype)
-    cols = [np.asarray(c, dtype) for c in np.broadcast_arrays(*cols)]
-    return _run_chunked(kernel, cols, dtype, FLAT_SMALL, (FLAT_SMALL,))[0]
 
 
 def _run_later(kernel, cols):

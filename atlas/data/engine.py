@@ -9,10 +9,11 @@ outputs also on ``alpha``, the spectral verdicts on ``beta1, beta2`` and the mod
 group is computed over the *varied* parameters it depends on, in hyperslab *tiles* of at most
 ``tile_points`` points (:func:`tile_blocks`: trailing dimensions whole, one leading dimension
 partial).  For each tile the host gathers the kernel's inputs from direction vectors computed
-**once per coordinate** (:func:`atlas.core.contact_modes.direction`), flattens and pads them to exactly
-``tile_points`` values (so the jitted kernel compiles once per ``tile_points`` and dtype), and
-dispatches the kernel asynchronously; the previous tile is finished (undecided points settled by
-the kernel's exact reference, codes converted to the stored types) while the next one computes.  A
+**once per coordinate** (:func:`atlas.core.contact_modes.direction`) and hands them,
+broadcastable, to the kernel in shape buckets (:mod:`atlas.core.buckets`: flat columns of two
+lengths whatever the tile, so the jitted kernel compiles at most twice per dtype), dispatched
+asynchronously; the previous tile is finished (undecided points settled by the kernel's exact
+reference, codes converted to the stored types) while the next one computes.  A
 kernel with a certified driver (the spectral verdicts) instead hands each hyperslab, as
 broadcastable per-axis inputs, to that driver (:func:`atlas.core.points.spectral_points`: its tiers
 and its exact settlement, the one copy of that logic).  Finished tiles go to a *sink* (:class:`Sink`):
@@ -52,7 +53,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, runtime_checkable
 import jax
 import numpy as np
 
-from atlas.core import checks, config, kernels
+from atlas.core import buckets, checks, config, kernels
 from atlas.core import contact_modes as mech
 from atlas.data.outputs import (
     OUTPUTS,
@@ -110,7 +111,8 @@ class RunOptions:
     resolve : bool
         Recompute undecided values exactly with :mod:`atlas.core.exact` (slow per point, few points).
     tile_points : int
-        Points per tile: bounds the kernel's memory; one compilation per value.
+        Points per tile: bounds the memory of a tile (the elementwise kernels' programs do not
+        depend on it).
     progress : bool
         tqdm progress bar on stderr.
     history : str, optional
@@ -358,24 +360,6 @@ def _axis_inputs(scene: Scene, dtype) -> dict:
     return src
 
 
-def _gather(src, inputs, dims, index, block, T):
-    """Flat, padded (length T) kernel inputs for one hyperslab ``index`` of the group ``dims``.
-
-    Fixed (scalar) parameters stay 0-d: the kernel broadcasts them (2-3x faster than full arrays).
-    """
-    n = math.prod(block)
-    out = []
-    for arr in _block_inputs(src, inputs, dims, index, block):
-        if arr.ndim == 0:
-            out.append(arr)
-            continue
-        buf = np.empty(T, arr.dtype)
-        buf[:n] = np.broadcast_to(arr, block).reshape(-1)
-        buf[n:] = buf[0]
-        out.append(buf)
-    return out
-
-
 def _block_inputs(src, inputs, dims, index, block):
     """Broadcastable (block-shaped) inputs of one hyperslab: each varied parameter along its axis."""
     out = []
@@ -403,11 +387,11 @@ def _driver_tile(kernel, src, dims, index, block, need, dtype, resolve, stats):
     return res, st["undecided_by_name"]
 
 
-def _resolve(kernel, res: dict, flat_inputs: list, n: int, stats: dict):
+def _resolve(kernel, res: dict, args: list, block: tuple, stats: dict):
     """Settle the undecided codes of one tile exactly, in place (the kernel's ``settle``; a kernel
-    with a driver is settled by the driver)."""
-    pts = [np.broadcast_to(a, (n,)) if a.ndim == 0 else a[:n] for a in flat_inputs]
-    st = kernels.settle(kernel, res, dict(zip(kernel.inputs, pts)))
+    with a driver is settled by the driver): ``res`` flat, ``args`` broadcastable to ``block``."""
+    codes = {k: v.reshape(block) for k, v in res.items()}
+    st = kernels.settle(kernel, codes, dict(zip(kernel.inputs, args)))
     stats["resolved_points"] = stats.get("resolved_points", 0) + st["resolved_points"]
     stats.setdefault("exact_failures", []).extend(st["exact_failures"])
 
@@ -433,11 +417,10 @@ def run(scene: Scene, sink: Sink, options: RunOptions | None = None) -> Run:
     try:
         sink.begin(sch)  # inside: an interrupt while the header is written still aborts
         for g, need, dims, shape in plan:
-            T = _kernel_size(shape, tile_points)
             if g.kernel.driver is not None and method == "certified":
-                _certified_group(writer, src, g, need, dims, shape, T)
+                _certified_group(writer, src, g, need, dims, shape, tile_points)
             else:
-                _kernel_group(writer, src, g, need, dims, shape, T)
+                _kernel_group(writer, src, g, need, dims, shape, tile_points)
         for name, block in md.results().items():
             sink.write(name, tuple(slice(None) for _ in block.shape), block)
         result = sink.finish(*_final_attrs(counts, sch))
@@ -465,12 +448,6 @@ class _TileWriter:
     bar: object
 
 
-def _kernel_size(shape, tile_points: int) -> int:
-    """Padded kernel length of a group: ``tile_points``, or for small groups the next power of two
-    (same blocks, few distinct shapes)."""
-    return min(tile_points, 1 << max(0, math.prod(shape) - 1).bit_length())
-
-
 def _certified_group(writer: _TileWriter, src, g, need, dims, shape, T):
     """The certified spectral verdicts of one group, hyperslab by hyperslab."""
     for index in tile_blocks(shape, T):
@@ -484,25 +461,25 @@ def _certified_group(writer: _TileWriter, src, g, need, dims, shape, T):
 
 
 def _kernel_group(writer: _TileWriter, src, g, need, dims, shape, T):
-    """One group through its jitted kernel: each tile is dispatched asynchronously and the previous
-    one finished (resolved, stored) while it computes."""
+    """One group through its jitted kernel in shape buckets (:mod:`atlas.core.buckets`): each
+    tile is dispatched asynchronously and the previous one finished (resolved, stored) while it
+    computes."""
     kern = kernels.jitted(g.kernel)
-    inputs = g.kernel.inputs
     pending = None
     try:
         for index in tile_blocks(shape, T):
             block = tuple(s.stop - s.start for s in index)
-            flat = _gather(src, inputs, dims, index, block, T)
-            res = kern(*flat)  # asynchronous dispatch: overlaps with finishing the last tile
+            args = _block_inputs(src, g.kernel.inputs, dims, index, block)
+            run = buckets.submit(kern, *args, ahead=None)  # overlaps with finishing the last tile
             if pending is not None:
-                _finish_tile(writer, g, dims, *pending)
-            pending = (index, block, flat, {k: res[k] for k in need})
+                _finish_tile(writer, g, need, dims, *pending)
+            pending = (index, block, args, run)
         if pending is not None:
-            _finish_tile(writer, g, dims, *pending)
+            _finish_tile(writer, g, need, dims, *pending)
     except BaseException:
         try:  # let in-flight kernels finish before unwinding (exiting under them can crash XLA)
             if pending is not None:
-                jax.block_until_ready(pending[3])
+                jax.block_until_ready(pending[3].out)
         except BaseException:  # pragma: no cover - best effort
             pass
         raise
@@ -552,19 +529,16 @@ def _summary(scene: Scene, values: int, seconds: float, counts: dict) -> dict:
     }
 
 
-def _finish_tile(writer: _TileWriter, g, dims, index, block, flat, out):
-    """Finish one kernel tile: unpad, count, resolve undecided values exactly, store."""
-    n = math.prod(block)
-    size = max(a.size for a in flat)  # outputs may not depend on every input (FF: alpha only)
-    res = {
-        k: np.array(np.broadcast_to(np.asarray(v).reshape(-1), (size,))[:n]) for k, v in out.items()
-    }
+def _finish_tile(writer: _TileWriter, g, need, dims, index, block, args, run):
+    """Finish one kernel tile: count, resolve undecided values exactly, store."""
+    out = run.result()
+    res = {k: out[k].reshape(-1) for k in need}  # fresh arrays of the tile's shape
     fast = {k: int(undecided(k, v).sum()) for k, v in res.items()}
     if writer.resolve:
-        _resolve(g.kernel, res, flat, n, writer.counts)
+        _resolve(g.kernel, res, args, block, writer.counts)
     _store_tile(writer, g, dims, index, block, res, fast)
     if writer.bar is not None:
-        writer.bar.update(n)
+        writer.bar.update(math.prod(block))
 
 
 def _store_tile(writer: _TileWriter, g, dims, index, block, res, fast):

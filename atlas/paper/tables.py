@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import jax.numpy as jnp
 import numpy as np
 
-from atlas.core import checks, contact_modes, exact, warm
+from atlas.core import buckets, checks, contact_modes, exact
 from atlas.core import ii_over_models as iim
 from atlas.core import model_box as mb
 from atlas.core.points import spectral_points
@@ -185,13 +185,12 @@ def padded(points: np.ndarray, size: int) -> np.ndarray:
     return np.concatenate([points, np.repeat(points[-1:], size - len(points), 0)])
 
 
-@warm.jit
+@buckets.elementwise
 def class_kernel(c1, s1, c2, s2, ca, sa):
-    """Dual class code, subclass code and Table 1 consistency of every mode (a kept kernel,
-    :func:`atlas.core.warm.jit`; broadcast).
+    """Dual class code, subclass code and Table 1 consistency of every mode (a kept kernel in
+    shape buckets, :func:`atlas.core.buckets.elementwise`; broadcast, numpy results).
 
-    Shared with the audit's Sec. 6.2 check; both pad each class's sample to one size
-    (:func:`padded`): one program for every class and both.
+    Shared with the audit's Sec. 6.2 check: the same programs for every class and both.
     """
     dual = contact_modes.class_code(*contact_modes.dual_vectors(c1, s1, c2, s2))
     sub = contact_modes.subclass_code(c1, s1, c2, s2, ca, sa)

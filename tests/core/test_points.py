@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import exact, hurwitz, model_box, points, rootfree, warm
+from atlas.core import buckets, exact, hurwitz, model_box, points, rootfree, warm
 from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
 from atlas.core.signs import UNKNOWN
@@ -636,7 +636,7 @@ def test_subnormal_directions_are_never_certified_wrong(jitted):
 
 def test_witness_checks_run_one_ss_program_whatever_their_number(monkeypatch):
     """The model box's witness checks (certified SS verdicts of point lists of any length) run
-    :func:`atlas.core.hurwitz.ss_verdict` at one length, the driver's small flat batch: one
+    :func:`atlas.core.hurwitz.ss_verdict` at one length, the shape buckets' small batch: one
     program for 5, 40, 300 or 700 points (before: one per power of two, 16 to 1024), with the
     exact tier's verdicts."""
     seen = set()
@@ -658,7 +658,7 @@ def test_witness_checks_run_one_ss_program_whatever_their_number(monkeypatch):
         for i in range(0, n, 37):
             code = exact.ss_hurwitz(*geo[i].tolist(), *models[i].tolist())
             assert got[i] == np.isin(code, model_box._GOOD), (n, i)
-    assert seen == {((points.FLAT_SMALL,),) * 7}
+    assert seen == {((buckets.SMALL,),) * 7}
 
 
 def _edge_columns(dtype, n=700, seed=4):
@@ -680,11 +680,11 @@ def _edge_columns(dtype, n=700, seed=4):
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_small_batches_equal_the_unpadded_call(dtype):
     """Padded batches of an elementwise kernel give, bit for bit, its unpadded calls on the same
-    points (the first and the last :data:`points.FLAT_SMALL` of 700, each point at another place
+    points (the first and the last :data:`atlas.core.buckets.SMALL` of 700, each point at another place
     of its batch), edge values included (subnormals, zeros, infinities, NaN; float32 too)."""
     cols = _edge_columns(dtype)
-    got = points.in_small_batches(hurwitz.ss_verdict_jit, *cols, dtype=dtype)
-    m = points.FLAT_SMALL
+    got = buckets.call(hurwitz.ss_verdict_jit, *cols)
+    m = buckets.SMALL
     head = np.asarray(hurwitz.ss_verdict_jit(*(c[:m] for c in cols)))
     tail = np.asarray(hurwitz.ss_verdict_jit(*(c[-m:] for c in cols)))
     assert got.dtype == head.dtype and got.shape == (700,)

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from atlas.core import enclosures, exact, hardcases, hurwitz, points, rootfree
+from atlas.core import buckets, enclosures, exact, hardcases, hurwitz, points, rootfree
 from atlas.core.contact_modes import direction
 from atlas.core.invariants import KEYS
 from atlas.core.signs import UNKNOWN
@@ -166,7 +166,7 @@ def test_ss_matches_spectral_where_both_decide():
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = points.in_small_batches(hurwitz.ss_verdict_jit, *cols, dtype=dtype)
+        ref = buckets.call(hurwitz.ss_verdict_jit, *cols)
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98
