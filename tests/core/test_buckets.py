@@ -8,7 +8,8 @@ scalars, every batch length, a whole large grid, no points) with the cheapest ke
 reference programs in the call's own shapes cost little.  The other kernels are checked against
 their unpadded calls of :data:`~atlas.core.buckets.SMALL` points (a program every caller uses),
 at another place of a padded batch and, in float64, inside a :data:`~atlas.core.buckets.BATCH`
-batch (a program of another length).
+batch (a program of another length; the tables' kernel, made of the ops of the others, in the
+short one only).
 """
 
 import jax
@@ -73,26 +74,28 @@ def test_calls_of_every_shape_have_the_bits_of_the_unpadded_call(dtype):
 
 
 def _kernels(dtype):
-    """(bucketed call, its unpadded program, input shapes: ``None`` a column, ``()`` a scalar)
-    of every entry point's kernel; scalars where a caller has them (the plane's fixed alpha)."""
-    col = None
-    out = [(run(n), kernels.jitted(kernels.KERNELS[n]).jitted, [col] * m)
-           for n, m in (("b1", 2), ("b2", 2), ("b1b2", 4))]  # fmt: skip
+    """(bucketed call, its unpadded program, input shapes: ``None`` a column, ``()`` a scalar,
+    points of the call) of every entry point's kernel; scalars where a caller has them (the
+    plane's fixed alpha); in float64 a BATCH-point batch first, except for the tables' kernel
+    (float64 only, its ops are those of ``b1b2`` and ``b1b2a``)."""
+    col, n = None, (BATCH if dtype == np.float64 else 0) + SMALL + 188
+    out = [(run(k), kernels.jitted(kernels.KERNELS[k]).jitted, [col] * m, n)
+           for k, m in (("b1", 2), ("b2", 2), ("b1b2", 4))]  # fmt: skip
     alpha = [(), ()] if dtype == np.float64 else [col] * 2
-    out.append((run("b1b2a"), kernels.jitted(kernels.KERNELS["b1b2a"]).jitted, [col] * 4 + alpha))
-    out.append((mech.class_code, mech.class_code.kernel.jitted, [col] * 4))
-    if dtype == np.float64:  # the tables run in float64 only
-        out.append((class_kernel, class_kernel.kernel.jitted, [col] * 6))
+    b1b2a = kernels.jitted(kernels.KERNELS["b1b2a"]).jitted
+    out.append((run("b1b2a"), b1b2a, [col] * 4 + alpha, n))
+    out.append((mech.class_code, mech.class_code.kernel.jitted, [col] * 4, n))
+    if dtype == np.float64:
+        out.append((class_kernel, class_kernel.kernel.jitted, [col] * 6, SMALL + 188))
     return out
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_every_kernel_has_the_bits_of_its_unpadded_calls(dtype):
     """The first and the last SMALL points of a call (the last ones shifted in a padded batch;
-    in float64 the first ones computed in a BATCH-point program) against the kernel's unpadded
-    calls on those points."""
-    n = (BATCH if dtype == np.float64 else 0) + SMALL + 188
-    for fn, reference, kinds in _kernels(dtype):
+    in float64 the first ones computed in a BATCH-point program) against the kernel's
+    unpadded calls on those points."""
+    for fn, reference, kinds, n in _kernels(dtype):
         args = edge_inputs([(n,) if k is None else k for k in kinds], dtype, seed=len(kinds))
         got = jax.tree.leaves(fn(*args))
         for part in (slice(0, SMALL), slice(n - SMALL, n)):
@@ -167,7 +170,7 @@ def _entry_points():
         contact_space.verdicts_at(b, b + 2, b + 1, 0.5, 0.1, 0.1, names=("subclass_code",))
         mech.class_code(*mech.direction(b), *mech.direction(b + 2))
     c, s = mech.direction(np.linspace(0.1, 6, 24)[:, None])
-    ca, sa = mech.direction(np.linspace(0.05, 6.2, 720)[None, :])
+    ca, sa = mech.direction(np.linspace(0.05, 6.2, 100)[None, :])
     class_kernel(c, s, s, c, ca, sa)  # the tables' (sample x alpha) grid
     geo = np.array([[0.6, 0.8, -0.8, 0.6]] * 5)
     model_box._verify(geo, np.full((5, 3), 0.5))  # the witness checks
