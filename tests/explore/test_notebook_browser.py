@@ -384,8 +384,19 @@ def slice_targets():
 
 def _first_state(nb: Notebook) -> dict:
     """After Run All: the widget's first state as its cell says, no error, and every figure and
-    the widget within the notebook's column (no sideways scroll).  Returns the widths [px]."""
+    the widget within the notebook's column (no sideways scroll).  Returns the widths [px].
+
+    The first canvas draw is done when the browser asks for it, a comm message queued behind
+    Run All's later cells: it may still be pending when they have run, so the status line is
+    given a minute to leave "drawing in the browser" (a draw that never comes still fails)."""
     assert not nb.tracebacks(), nb.tracebacks()
+    with contextlib.suppress(Exception):  # the assertions below say what the status was
+        nb.page.wait_for_function(
+            "el => !el.textContent.includes('drawing in the browser')",
+            arg=nb.page.locator(".atlas-explorer .atlas-status").element_handle(),
+            timeout=60_000,
+            polling=100,
+        )
     assert nb.status().startswith("stable_SS at kappa = 0.5, q = 0,"), nb.status()
     assert nb.status().endswith(", drawn"), nb.status()  # not a first draw's wait as a repaint
     assert "click the map" in nb.inspector()
