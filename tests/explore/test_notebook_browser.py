@@ -345,11 +345,19 @@ SLICE = (0.5, 0.3)
 KINDS = ("SS_stability", "II_consistency", "II_stability")
 
 
+def _on_torus(xy: np.ndarray) -> np.ndarray:
+    """Angles [rad] taken to [0, 2 pi) (a periodic k-d tree's box)."""
+    xy = np.mod(xy, 2 * PI)
+    return np.where(xy >= 2 * PI, 0.0, xy)
+
+
 def slice_targets():
     """Click targets on the certified boundaries of :data:`SLICE` (computed here, independently
     of the kernel): per curve kind a vertex ``(beta1, beta2, curve)`` far (> 0.15 rad) from
     every curve of another kind and from the codimension-2 points, and the codimension-2 point
     off ``det B = 0`` farthest from the others."""
+    from scipy.spatial import cKDTree
+
     from atlas.data.boundaries import slice_boundaries
     from atlas.explore.maps import beta_grid
 
@@ -357,9 +365,10 @@ def slice_targets():
     b = slice_boundaries(g, g, SLICE[0], SLICE[1], SLICE[1])
     pts = np.array([(p.beta1, p.beta2) for p in b.points]).reshape(-1, 2)
 
-    def far(xy, others):
-        d = (xy[:, None] - others[None] + PI) % (2 * PI) - PI
-        return np.hypot(d[..., 0], d[..., 1]).min(axis=1) if len(others) else np.full(len(xy), 9.0)
+    def far(xy, others):  # the distance to the nearest of ``others`` on the torus
+        if not len(others):
+            return np.full(len(xy), 9.0)
+        return cKDTree(_on_torus(others), boxsize=2 * PI).query(_on_torus(xy))[0]
 
     out = {}
     for kind in KINDS:
