@@ -119,6 +119,19 @@ def _rgba(data_url: str) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGBA"), dtype=np.int16)
 
 
+#: the rendered text (``innerText``) of each cell output, the widget's output area and each
+#: entry of the log console whose text holds "Traceback" or "Error" (the others, most of the page,
+#: are not laid out to be read: their rendered text cannot hold what their text does not)
+_ERROR_TEXTS = """() => {
+    const out = [];
+    for (const css of ['.jp-OutputArea-output', '.atlas-explorer .atlas-log',
+                       '.jp-LogConsolePanel .jp-OutputArea-output'])
+        for (const el of document.querySelectorAll(css))
+            if (/Traceback|Error/.test(el.textContent)) out.push(el.innerText);
+    return out;
+}"""
+
+
 class Notebook:
     """One notebook open in a JupyterLab tab: Run All, then the explorer widget's DOM and
     canvas."""
@@ -173,10 +186,7 @@ class Notebook:
     def tracebacks(self) -> list[str]:
         """The text of every error in the page: cell outputs, the widget's output area (its
         callbacks' tracebacks), the status line and the kernel's log console."""
-        texts = self.page.locator(".jp-OutputArea-output").all_inner_texts()
-        texts += self.page.locator(".atlas-explorer .atlas-log").all_inner_texts()
-        texts += self.page.locator(".jp-LogConsolePanel .jp-OutputArea-output").all_inner_texts()
-        texts += [self.status()]
+        texts = self.page.evaluate(_ERROR_TEXTS) + [self.status()]
         return [t for t in texts if "Traceback" in t or "Error" in t.split("\n", 1)[0]]
 
     def record_status(self):
@@ -267,18 +277,26 @@ class Notebook:
     def click_map(self, beta1: float, beta2: float, timeout: float = 10) -> float:
         """Click the map at ``(beta1, beta2)``; the inspector must move there (within 0.01 pi)
         and the marker appear (canvas pixels change).  Returns the click-to-inspector seconds."""
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
         self.page.locator(_CANVAS).first.scroll_into_view_if_needed()  # the whole map in view
         old, before = self.inspector(), self.fingerprint()
         x, y = self.to_page(beta1, beta2)
+        inspector = self.page.locator(".atlas-explorer .atlas-inspector").element_handle()
         t = time.perf_counter()
         self.page.mouse.click(x, y)
-        while self.inspector() == old:
-            if time.perf_counter() - t > timeout:
-                raise AssertionError(
-                    f"a click at ({beta1 / PI:.3f} pi, {beta2 / PI:.3f} pi) did not move the "
-                    f"inspector in {timeout} s"
-                )
-            time.sleep(0.01)
+        try:  # watched in the page (every 10 ms), not by a round trip from here each time
+            self.page.wait_for_function(
+                "([el, old]) => el.innerText !== old",
+                arg=[inspector, old],
+                timeout=timeout * 1e3,
+                polling=10,
+            )
+        except PlaywrightTimeout:
+            raise AssertionError(
+                f"a click at ({beta1 / PI:.3f} pi, {beta2 / PI:.3f} pi) did not move the "
+                f"inspector in {timeout} s"
+            ) from None
         latency = time.perf_counter() - t
         m = re.search(r"\(([\d.]+) pi\), beta2 = [-\d.e+]+ \(([\d.]+) pi\)", self.inspector())
         assert m, self.inspector()
@@ -430,7 +448,10 @@ def _hover(nb: Notebook):
     page.mouse.move(x, y)
     footer = page.locator(".atlas-explorer .jupyter-matplotlib-footer")
     page.wait_for_function(
-        "el => el.textContent.includes('beta1 =')", arg=footer.element_handle(), timeout=20_000
+        "el => el.textContent.includes('beta1 =')",
+        arg=footer.element_handle(),
+        timeout=20_000,
+        polling=100,
     )
     m = re.search(r"beta1 = ([\d.]+) pi, beta2 = ([\d.]+) pi", footer.inner_text())
     np.testing.assert_allclose([float(m.group(1)), float(m.group(2))], [0.25, 1.5], atol=0.01)
@@ -501,6 +522,7 @@ def _layers(nb: Notebook, times: dict):
                 layer,
             ],
             timeout=20_000,
+            polling=100,
         )
         if layer in ("class_code", "subclass_code"):
             assert _legend_pixels(nb.pixels()) > 200, layer  # a colour key
@@ -557,7 +579,10 @@ def _bad_box(nb: Notebook, times: dict):
         nb.set_text("model-box", text)
         with contextlib.suppress(Exception):  # the assertion below says what the status was
             nb.page.wait_for_function(
-                "([el, t]) => el.textContent.trim() === t", arg=[status, refusal], timeout=60_000
+                "([el, t]) => el.textContent.trim() === t",
+                arg=[status, refusal],
+                timeout=60_000,
+                polling=100,
             )
         assert nb.status() == refusal, (text, nb.status())
         assert not nb.tracebacks(), nb.tracebacks()
@@ -684,7 +709,9 @@ def _break(nb: Notebook):
     page.keyboard.press("Escape")
     page.keyboard.press("b")  # a new cell below
     page.wait_for_function(
-        "n => document.querySelectorAll('.jp-NotebookPanel .jp-CodeCell').length > n", arg=n
+        "n => document.querySelectorAll('.jp-NotebookPanel .jp-CodeCell').length > n",
+        arg=n,
+        polling=100,
     )
     page.keyboard.press("Enter")
     page.keyboard.insert_text(BREAK)
