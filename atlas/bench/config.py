@@ -175,6 +175,7 @@ CONFIG["tiny"] = dict(
     suites=("near_discriminant",),  # q = 0: verdicts_jit compiles its cheap undamped path
     suite_points=2,
     curve_res=(8,),
+    curve_chord=1e-4,  # 1e-6 (the others): 4x the vertices, twice the section's seconds
     scale_undamped=(1 << 18,),
     sim_methods=(("DOP853", (1e-4,)), ("Radau", (1e-4,))),
     outcome_maps=((8, 0.5, 0.0, 0.35 * math.pi, 8),),
