@@ -105,6 +105,7 @@ CONFIG = {
         jax_outcome_n=64,  # the JAX kernel of the outcome engine, first map's parameters (~2 min)
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
+        curve_chord=1e-6,  # sagitta the curves are refined to [rad] (`atlas boundaries`' default)
         curve_cases=3,
         distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
@@ -147,6 +148,7 @@ CONFIG = {
         large_n=0,
         large_check=10,
         curve_res=(16,),
+        curve_chord=1e-6,
         curve_cases=1,
         distributed=False,
         startup=_CHEAP_STARTUP,

@@ -55,7 +55,7 @@ def curves(cfg) -> list[dict]:
     the curves and of the grid contours to the 4n reference curves, hidden cells, unrefined,
     tips attached and unreached (of the n grid and of the reference)."""
     rows = []
-    chord = cfg.get("curve_chord", bd.CHORD)
+    chord = cfg["curve_chord"]
     for name, *model in CURVE_CASES[: cfg.get("curve_cases", len(CURVE_CASES))]:
         for n in cfg["curve_res"]:
             log(f"curves {name} n={n} (reference {4 * n})")

@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from atlas.bench import model_box_map, startup_programs
-from atlas.data.boundary_args import CHORD
 from atlas.data.io import atomic_path
 
 __all__ = [
@@ -527,7 +526,7 @@ def kernel_speed_section(head, suites, atlases) -> list[str]:
     return ["\n".join(out) + "\n"]
 
 
-def curves_section(rows, chord: float = CHORD) -> list[str]:
+def curves_section(rows, chord: float) -> list[str]:
     """Certified boundary curves against the grid contours, their chords refined to a
     ``chord`` [rad] sagitta."""
     if not rows:
@@ -735,7 +734,7 @@ def build_report(r: Results) -> str:
             ("work_precision", "suites", "atlases"),
             kernel_speed_section(r.head, r.suites, r.atlases),
         ),
-        (("curves",), curves_section(r.curves, r.cfg.get("curve_chord", CHORD))),
+        (("curves",), curves_section(r.curves, r.cfg["curve_chord"])),
         (("simulation",), simulation_section(r.sim)),
         (("outcome_maps",), [*outcome_maps_section(r.maps), *engine_lanes_section(r.lanes)]),
         (("startup",), startup_section(r.startup)),
