@@ -102,17 +102,22 @@ def _torus_copies(lines):
 def torus_hausdorff(lines_a, lines_b, step, quantile=1.0):
     """:func:`hausdorff` on the torus of angles (a curve traced on the seam ``beta = 0`` by one
     grid and on ``beta = 2 pi`` by another is the same curve); ``quantile < 1``: that quantile of
-    the point-to-curve distances of both directions instead of their maximum."""
+    the point-to-curve distances of both directions instead of their maximum.  A tuple of
+    quantiles gives a tuple, the distances measured once."""
+    many = isinstance(quantile, tuple)
+    qs = quantile if many else (quantile,)
     if not lines_a or not lines_b:
-        return math.nan if (lines_a or lines_b) else 0.0
-    a, b = _samples(lines_a, step), _samples(lines_b, step)
-    d = np.concatenate(
-        [
-            _directed(a, _torus_copies(lines_b), step, reduce=False),
-            _directed(b, _torus_copies(lines_a), step, reduce=False),
-        ]
-    )
-    return float(np.quantile(d, quantile))
+        got = tuple(math.nan if (lines_a or lines_b) else 0.0 for _ in qs)
+    else:
+        a, b = _samples(lines_a, step), _samples(lines_b, step)
+        d = np.concatenate(
+            [
+                _directed(a, _torus_copies(lines_b), step, reduce=False),
+                _directed(b, _torus_copies(lines_a), step, reduce=False),
+            ]
+        )
+        got = tuple(float(np.quantile(d, x)) for x in qs)
+    return got if many else got[0]
 
 
 def masks(res: dict, damped: bool) -> dict:

@@ -105,6 +105,7 @@ CONFIG = {
         jax_outcome_n=64,  # the JAX kernel of the outcome engine, first map's parameters (~2 min)
         large_n=3162,  # (3162 + 1)^2 = 1.0e7 points
         curve_res=(64, 128, 256),
+        curve_chord=1e-6,  # sagitta the curves are refined to [rad] (`atlas boundaries`' default)
         curve_cases=3,
         distributed=True,  # distributed.md: in process vs LocalCluster (needs the dask extra)
         large_check=100,
@@ -147,6 +148,7 @@ CONFIG = {
         large_n=0,
         large_check=10,
         curve_res=(16,),
+        curve_chord=1e-6,
         curve_cases=1,
         distributed=False,
         startup=_CHEAP_STARTUP,
@@ -175,6 +177,7 @@ CONFIG["tiny"] = dict(
     suites=("near_discriminant",),  # q = 0: verdicts_jit compiles its cheap undamped path
     suite_points=2,
     curve_res=(8,),
+    curve_chord=1e-4,  # 1e-6 (the others): 4x the vertices, twice the section's seconds
     scale_undamped=(1 << 18,),
     sim_methods=(("DOP853", (1e-4,)), ("Radau", (1e-4,))),
     outcome_maps=((8, 0.5, 0.0, 0.35 * math.pi, 8),),

@@ -55,7 +55,7 @@ def curves(cfg) -> list[dict]:
     the curves and of the grid contours to the 4n reference curves, hidden cells, unrefined,
     tips attached and unreached (of the n grid and of the reference)."""
     rows = []
-    chord = cfg.get("curve_chord", bd.CHORD)
+    chord = cfg["curve_chord"]
     for name, *model in CURVE_CASES[: cfg.get("curve_cases", len(CURVE_CASES))]:
         for n in cfg["curve_res"]:
             log(f"curves {name} n={n} (reference {4 * n})")
@@ -66,6 +66,8 @@ def curves(cfg) -> list[dict]:
                 theirs = [c.vertices for c in ref.curves if c.field == fld]
                 step = min(1e-3, 2 * math.pi / (16 * n))
                 grid = _grid_contours(fld, n, model)
+                h_curves, p99_curves = torus_hausdorff(mine, theirs, step, quantile=(1.0, 0.99))
+                h_grid, p99_grid = torus_hausdorff(grid, theirs, step, quantile=(1.0, 0.99))
                 rows.append(
                     dict(
                         case=name,
@@ -80,10 +82,10 @@ def curves(cfg) -> list[dict]:
                         tier2_points=work["tier2_points"],
                         roots_points=work["roots_points"],
                         exact_points=work["exact_points"],
-                        hausdorff_curves=torus_hausdorff(mine, theirs, step),
-                        hausdorff_grid=torus_hausdorff(grid, theirs, step),
-                        p99_curves=torus_hausdorff(mine, theirs, step, quantile=0.99),
-                        p99_grid=torus_hausdorff(grid, theirs, step, quantile=0.99),
+                        hausdorff_curves=h_curves,
+                        hausdorff_grid=h_grid,
+                        p99_curves=p99_curves,
+                        p99_grid=p99_grid,
                         hidden_cells=got.attrs[f"{fld}_hidden_cells"],
                         tips_attached=got.attrs[f"{fld}_tips_attached"],
                         tips_unreached=got.attrs[f"{fld}_tips_unreached"],

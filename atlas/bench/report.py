@@ -526,10 +526,12 @@ def kernel_speed_section(head, suites, atlases) -> list[str]:
     return ["\n".join(out) + "\n"]
 
 
-def curves_section(rows) -> list[str]:
-    """Certified boundary curves against the grid contours."""
+def curves_section(rows, chord: float) -> list[str]:
+    """Certified boundary curves against the grid contours, their chords refined to a
+    ``chord`` [rad] sagitta."""
     if not rows:
         return []
+    sagitta = f"{chord:.0e}".replace("e-0", "e-")
     cols = [
         "case", "n", "field", "curves", "vertices", "points", "seconds",
         "hausdorff_curves", "hausdorff_grid", "p99_curves", "p99_grid", "hidden_cells",
@@ -539,7 +541,7 @@ def curves_section(rows) -> list[str]:
         "## Boundary curves (`atlas boundaries`)",
         "",
         "Certified curves of one slice on an n x n grid (both fields; vertices bisected to a "
-        "bracket <= 1e-10 rad, chords refined to a 1e-6 rad sagitta) against the curves of the "
+        f"bracket <= 1e-10 rad, chords refined to a {sagitta} rad sagitta) against the curves of the "
         "4n x 4n grid: torus Hausdorff distance [rad] of the curves (`hausdorff_curves`) and of "
         "the grid's marching-squares contours (`hausdorff_grid`, what a plot of the atlas draws), "
         "and the 99th percentile of the point-to-curve distances (`p99_*`). Where a boundary "
@@ -732,7 +734,7 @@ def build_report(r: Results) -> str:
             ("work_precision", "suites", "atlases"),
             kernel_speed_section(r.head, r.suites, r.atlases),
         ),
-        (("curves",), curves_section(r.curves)),
+        (("curves",), curves_section(r.curves, r.cfg["curve_chord"])),
         (("simulation",), simulation_section(r.sim)),
         (("outcome_maps",), [*outcome_maps_section(r.maps), *engine_lanes_section(r.lanes)]),
         (("startup",), startup_section(r.startup)),

@@ -107,9 +107,11 @@ def side_steps(step: Steps, out: Path, quick: bool, ci: bool, shared: Shared):
     :data:`SHARED` steps ``shared`` leaves.  Returns the curves of Fig. 1's slice."""
     from atlas.paper import figure_boundaries
 
+    # CI: segments within 1e-3 rad of their curve (1e-5 else; half the step's seconds), every
+    # vertex still certified within 1e-10 rad
+    n, chord = (16, 1e-3) if ci else (32 if quick else 64, 1e-5)
     curves = step(
-        "fig1_boundaries.png",
-        lambda: figure_boundaries.write_boundaries(out, n=16 if ci else 32 if quick else 64),
+        "fig1_boundaries.png", lambda: figure_boundaries.write_boundaries(out, n=n, chord=chord)
     )
     shared_steps(step, out, quick, ci, shared)
     return figure_boundaries.slice_of(curves, *figure_boundaries.SLICES[0])

@@ -79,6 +79,21 @@ def test_hausdorff_is_exact_next_to_a_dense_cluster():
     assert torus_hausdorff(a, b, 0.01) == pytest.approx(0.0, abs=1e-12)
 
 
+def test_torus_quantiles_at_once_are_the_quantiles_one_by_one():
+    """Two quantiles from one measurement of the distances are those of two calls: a dot 0.25
+    off a segment (the largest distance, 0.25 by hand), and empty sets (NaN, or 0 for both)."""
+    line = [np.array([[0.0, 0.0], [1.0, 0.0]])]
+    dot = [np.array([[0.5, 0.25]])]
+    both = torus_hausdorff(dot + line, line, 0.01, quantile=(1.0, 0.5))
+    assert both == (
+        torus_hausdorff(dot + line, line, 0.01),
+        torus_hausdorff(dot + line, line, 0.01, 0.5),
+    )
+    assert both[0] == pytest.approx(0.25, abs=1e-12) and both[1] < 0.25
+    assert np.isnan(torus_hausdorff(line, [], 0.01, quantile=(1.0, 0.99))).all()
+    assert torus_hausdorff([], [], 0.01, quantile=(1.0, 0.99)) == (0.0, 0.0)
+
+
 def test_ss_margin_on_a_grid_is_one_program():
     """The reference's SS margin runs as one jitted program (it was some 130 operations, each
     compiled on its own for every grid shape): at most one lowering for a new grid shape."""
