@@ -26,7 +26,7 @@ from __future__ import annotations
 import contextlib
 import os
 
-from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir
+from atlas.core.config import CACHE_MIN_COMPILE_SECONDS, compile_cache_dir, use_compile_cache
 
 __all__ = [
     "WORKER_ENV",
@@ -70,7 +70,8 @@ def pin_to_cpus(cpus) -> list[int]:
 def local_cluster(n_workers: int):
     """``(cluster, client)``: a LocalCluster of ``n_workers`` single-thread worker processes with
     :func:`worker_env`, worker ``i`` pinned to core ``i mod ncores`` (:func:`pin_to_cpus`), so N
-    workers use N cores; the scheduler's HTTP server on a free loopback port (no dashboard)."""
+    workers use N cores, each with the persistent compilation cache on; the scheduler's HTTP
+    server on a free loopback port (no dashboard)."""
     from distributed import Client, LocalCluster
 
     cluster = LocalCluster(
@@ -86,6 +87,12 @@ def local_cluster(n_workers: int):
     )
     client = Client(cluster)
     client.wait_for_workers(n_workers)
+    where = compile_cache_dir()
+    if where is not None:
+        # a worker is spawned: it imports the parent's main script first (a script of the Python
+        # API may import JAX at its top) and gets :func:`worker_env` only after that, too late for
+        # JAX to read its cache variables; so the cache is switched on in each worker here
+        client.run(use_compile_cache, where, CACHE_MIN_COMPILE_SECONDS)
     cores = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
     if cores and n_workers <= len(cores):
         for i, addr in enumerate(sorted(client.scheduler_info()["workers"])):
