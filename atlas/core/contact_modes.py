@@ -10,7 +10,7 @@ events of the direction vectors: ``beta2 == beta1``, ``b2 == -b1``, axis directi
 All functions below except :func:`direction` are pure ``jax.numpy`` functions of arrays that
 broadcast against each other (no I/O, jit/vmap-able).  The public verdicts are kept jitted kernels
 in shape buckets (:func:`atlas.core.buckets.elementwise`): called on host arrays of any shape they
-run as flat columns of two lengths (numpy results), one program per length and dtype, where
+run as flat columns of a few lengths (numpy results), one program per length and dtype, where
 op-by-op dispatch compiled each of their ~30 operations (about 1 s per new shape), and a later
 process loads them; inside another kernel they are traced as they are.  Codes use :data:`atlas.core.verdicts.UNDECIDED_CODE`
 (-1) or :data:`atlas.core.verdicts.UNDECIDED_FLAG` (3) where a cross product could not be certified.

@@ -10,8 +10,8 @@ group is computed over the *varied* parameters it depends on, in hyperslab *tile
 ``tile_points`` points (:func:`tile_blocks`: trailing dimensions whole, one leading dimension
 partial).  For each tile the host gathers the kernel's inputs from direction vectors computed
 **once per coordinate** (:func:`atlas.core.contact_modes.direction`) and hands them,
-broadcastable, to the kernel in shape buckets (:mod:`atlas.core.buckets`: flat columns of two
-lengths whatever the tile, so the jitted kernel compiles at most twice per dtype), dispatched
+broadcastable, to the kernel in shape buckets (:mod:`atlas.core.buckets`: flat columns of
+65,536, 4,096 and 512 points whatever the tile, so at most three programs per kernel and dtype), dispatched
 asynchronously; the previous tile is finished (undecided points settled by the kernel's exact
 reference, codes converted to the stored types) while the next one computes.  A
 kernel with a certified driver (the spectral verdicts) instead hands each hyperslab, as
