@@ -74,11 +74,12 @@ def local_cluster(n_workers: int):
     server on a free loopback port (no dashboard)."""
     from distributed import Client, LocalCluster
 
+    env = worker_env()
     cluster = LocalCluster(
         n_workers=n_workers,
         threads_per_worker=1,
         processes=True,
-        env=worker_env(),
+        env=env,
         dashboard_address=None,
         # no dashboard, but the scheduler still serves HTTP (health, metrics): on a free loopback
         # port, not on 8787, where a second cluster (or a user's own) would make it warn and move
@@ -87,7 +88,7 @@ def local_cluster(n_workers: int):
     )
     client = Client(cluster)
     client.wait_for_workers(n_workers)
-    where = compile_cache_dir()
+    where = env.get("JAX_COMPILATION_CACHE_DIR")
     if where is not None:
         # a worker is spawned: it imports the parent's main script first (a script of the Python
         # API may import JAX at its top) and gets :func:`worker_env` only after that, too late for
