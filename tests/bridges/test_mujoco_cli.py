@@ -94,7 +94,8 @@ def test_missing_extra_is_one_line_naming_the_install(monkeypatch, capsys):
 @needs_mujoco
 def test_rollout_reports_events(capsys):
     """--rollout: the example ladder (mu = 0.4) sliding at 0.5 m/s slows to a stop; the events
-    name the state at the start and where a contact stops sliding."""
+    name the state at the start and where a contact stops sliding; the text report ends with
+    the engine's behaviour and the jam test."""
     args = ["mujoco", EXAMPLE, "--qvel", QVEL, "--rollout", "0.3", "--every", "20"]
     assert cli.main([*args, "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
@@ -106,3 +107,4 @@ def test_rollout_reports_events(capsys):
     out = capsys.readouterr().out
     assert out.startswith("contacts: floor/foot, wall/top; 31 states judged")
     assert out.splitlines()[-1].startswith("stop: ") and "friction stop)" in out
+    assert out.splitlines()[-2] == "engine: stop"  # the engine's behaviour, before the jam test
