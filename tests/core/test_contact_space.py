@@ -18,14 +18,15 @@ G = 9.81
 t = sp.Symbol("t")
 
 
-def _chain(n_links):
-    """A planar chain of uniform links (lengths ``L``, masses ``m``) hinged end to end; link 1 is
-    free (``x, y`` of its first end and its angle), each further link adds its angle.  Returns the
-    coordinates as functions of ``t``, the kinetic and potential energies, the chain's first and
-    last end points (the contact points)."""
+def _chain(Ls, ms):
+    """A planar chain of uniform links (lengths ``Ls``, masses ``ms``: numbers, so that the
+    expressions differentiated below stay small) hinged end to end; link 1 is free (``x, y`` of
+    its first end and its angle), each further link adds its angle.  Returns the coordinates as
+    functions of ``t``, the kinetic and potential energies, the chain's first and last end points
+    (the contact points)."""
+    n_links = len(Ls)
+    Ls, ms = [sp.Float(x) for x in Ls], [sp.Float(x) for x in ms]
     q = [sp.Function(f"q{i}")(t) for i in range(2 + n_links)]
-    Ls = sp.symbols(f"L0:{n_links}", positive=True)
-    ms = sp.symbols(f"m0:{n_links}", positive=True)
     joint = sp.Matrix([q[0], q[1]])
     first, T, V = joint, 0, 0
     for i in range(n_links):
@@ -34,28 +35,28 @@ def _chain(n_links):
         v = centre.diff(t)
         T += ms[i] * (v[0] ** 2 + v[1] ** 2) / 2 + ms[i] * Ls[i] ** 2 / 24 * q[2 + i].diff(t) ** 2
         V += ms[i] * G * centre[1]
-    return q, (Ls, ms), T, V, (first, joint)
+    return q, T, V, (first, joint)
 
 
-def _lagrange_reference(n_links, values, state, normals, mu, s):
+def _lagrange_reference(values, state, normals, mu, s):
     """Independent reference and the matrices for the code under test, at one state.
 
     Reference: the Euler-Lagrange equations with the contact forces' virtual work
     (``f_j (n_j - mu_j s_j t_j) . dp_j``) solved for ``q''`` at the numeric state, the gaps
     ``n_j . p_j(q(t))`` differentiated twice in time: ``B = d(d'')/df``, ``a = -d''(f = 0)``.
-    Matrices (a different route): ``M = d^2 T / dq'^2``, ``force = dT/dq - dV/dq - M' q'``,
+    Matrices (a different route, in plain symbols for q and q'): ``M = d^2 T / dq'^2``,
+    ``force = dT/dq - dV/dq - M' q'`` (``M' = sum_k dM/dq_k q'_k``),
     ``Jn = dd/dq``, ``Jt = d(t . p)/dq``, ``drift = q'^T (d^2 d / dq^2) q'``."""
-    q, (Ls, ms), T, V, points = _chain(n_links)
+    q, T, V, points = _chain(values["L"], values["m"])
     n = len(q)
     qs, vs, acs = sp.symbols(f"x0:{n}"), sp.symbols(f"v0:{n}"), sp.symbols(f"w0:{n}")
     f = sp.symbols("f0:2")
     to_sym = {q[i].diff(t, 2): acs[i] for i in range(n)}
     to_sym.update({q[i].diff(t): vs[i] for i in range(n)})
     to_sym.update({q[i]: qs[i] for i in range(n)})
-    sub = lambda e: e.subs(to_sym)  # noqa: E731  (derivatives first: the dict is ordered)
-    num = {**dict(zip(Ls, values["L"])), **dict(zip(ms, values["m"]))}
-    num.update(dict(zip(qs, state[0])))
-    num.update(dict(zip(vs, state[1])))
+    # structural replacement, outermost first (a second derivative before the first inside it)
+    sub = lambda e: e.xreplace(to_sym)  # noqa: E731
+    num = {x: sp.Float(v) for x, v in zip(qs + vs, [*state[0], *state[1]])}
     tang = [sp.Matrix([nj[1], -nj[0]]) for nj in normals]
     gaps = [(sp.Matrix(nj).T * p)[0] for nj, p in zip(normals, points)]
     slides = [(tj.T * p)[0] for tj, p in zip(tang, points)]
@@ -63,21 +64,21 @@ def _lagrange_reference(n_links, values, state, normals, mu, s):
     eqs = []
     for i in range(n):
         gen = sum(f[j] * (gaps[j].diff(q[i]) - mu[j] * s[j] * slides[j].diff(q[i])) for j in (0, 1))
-        eqs.append(sub(L.diff(q[i].diff(t)).diff(t) - L.diff(q[i]) - gen).subs(num))
+        eqs.append(sub(L.diff(q[i].diff(t)).diff(t) - L.diff(q[i]) - gen).xreplace(num))
     A, rhs = sp.linear_eq_to_matrix(eqs, acs)
     acc = dict(zip(acs, A.LUsolve(rhs)))
-    d2 = [sub(g.diff(t, 2)).subs(num).subs(acc) for g in gaps]
+    d2 = [sub(g.diff(t, 2)).xreplace(num).xreplace(acc) for g in gaps]
     B_ref = np.array([[float(sp.diff(d, fj)) for fj in f] for d in d2])
     a_ref = -np.array([float(d.subs({f[0]: 0, f[1]: 0})) for d in d2])
-    # the matrices for the code under test
-    qd = sp.Matrix([qi.diff(t) for qi in q])
-    Msym = sp.Matrix(n, n, lambda i, k: T.diff(qd[i]).diff(qd[k]))
-    Mdot_qd = Msym.diff(t) * qd
-    force = [T.diff(q[i]) - V.diff(q[i]) - Mdot_qd[i] for i in range(n)]
-    ev = lambda e: float(sub(e).subs(num))  # noqa: E731
-    Jn = [[ev(g.diff(qi)) for qi in q] for g in gaps]
-    Jt = [[ev(u.diff(qi)) for qi in q] for u in slides]
-    drift = [ev((qd.T * sp.hessian(g, q) * qd)[0]) for g in gaps]
+    # the matrices for the code under test, in the symbols x (q) and v (q')
+    Ts, Vs, qd = sub(T), sub(V), sp.Matrix(vs)
+    Msym = sp.hessian(Ts, vs)
+    Mdot_qd = sum((Msym.diff(qs[k]) * vs[k] for k in range(n)), sp.zeros(n, n)) * qd
+    force = [Ts.diff(qs[i]) - Vs.diff(qs[i]) - Mdot_qd[i] for i in range(n)]
+    ev = lambda e: float(e.xreplace(num))  # noqa: E731
+    Jn = [[ev(sub(g).diff(x)) for x in qs] for g in gaps]
+    Jt = [[ev(sub(u).diff(x)) for x in qs] for u in slides]
+    drift = [ev((qd.T * sp.hessian(sub(g), qs) * qd)[0]) for g in gaps]
     mats = dict(
         M=[[ev(x) for x in row] for row in Msym.tolist()],
         Jn=Jn, Jt=Jt, force=[ev(x) for x in force], drift=drift,
@@ -100,7 +101,7 @@ def test_any_mechanism_matches_the_lagrangian_derivation(n_links, draws):
         values = dict(L=rng.uniform(0.5, 2, n_links), m=rng.uniform(0.5, 3, n_links))
         state = (rng.uniform(-1, 1, n), rng.uniform(-2, 2, n))
         mu, s = rng.uniform(0, 1.5, 2), rng.choice([-1, 1], 2)
-        B_ref, a_ref, mats = _lagrange_reference(n_links, values, state, normals, mu, s)
+        B_ref, a_ref, mats = _lagrange_reference(values, state, normals, mu, s)
         cs = contact_space(mats["M"], mats["Jn"], mats["Jt"], mu, s, mats["force"], mats["drift"])
         scale = np.abs(B_ref).max()
         np.testing.assert_allclose(cs.B, B_ref, rtol=1e-11, atol=1e-13 * scale)
