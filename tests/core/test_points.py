@@ -397,10 +397,12 @@ def test_first_pass_layout_puts_the_longest_axis_inside():
 def test_grids_over_models_take_the_grid_kernel(monkeypatch):
     """Flat columns serve small grids and grids of one model; a grid over several models above
     ``FLAT_SIZES[0]`` points (a tile of ``atlas generate``) runs the grid kernel, which computes
-    the per-model factors once a model."""
+    the per-model factors once a model.  The threshold is lowered to 1,024 points so that the
+    grid is :func:`test_model_axes_equal_their_slices`'s, whose grid program it shares."""
     calls = []
     monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
-    g = model_grid(20)  # 20 x 20 x 3 x 2 x 2 = 4800 points
+    monkeypatch.setattr(points, "FLAT_SIZES", (1 << 10,))
+    g = model_grid(16)  # 16 x 16 x 3 x 2 x 2 = 3072 points
     points.spectral_points(*g, names=FLAGS, resolve=False)
     assert not calls
     plane = [a.reshape(a.shape[:2]) for a in g[:4]]
