@@ -247,17 +247,31 @@ def test_near_singular_B_decided_by_the_fast_tiers():
         assert np.array_equal(got[k], ref[k]), k
 
 
+def _unknown_det_sign(c1, *_):
+    return jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)
+
+
+@functools.cache
+def _kernels_without_det_sign():
+    """The driver's kernel factory for kernels traced while ``sign det B`` is uncertified: one
+    per module, so the tests that patch the sign trace each kernel once, not once a test."""
+    return functools.cache(points._kernel.__wrapped__)
+
+
+def _without_det_sign(monkeypatch):
+    """Patch ``sign det B`` to uncertified everywhere (:func:`_unknown_det_sign`); returns the
+    kernel factory to use meanwhile (its kernels are traced with the patch, never without)."""
+    monkeypatch.setattr(rootfree, "det2_sign", _unknown_det_sign)
+    return _kernels_without_det_sign()
+
+
 @pytest.mark.parametrize("det_known", [True, False])
 def test_later_tiers_run_at_one_length_whatever_the_number_of_points(monkeypatch, det_known):
     """Tier 2 (``det B`` certified) and the enclosures (not: simulated) see batches of one
     length whatever the number of points they get, 8, 100 or 500: one program each for every
     caller (an atlas, a paper figure, the explorer's overlay), compiled once per process."""
     pts, _ = _near_singular_points()
-    kernel = points._kernel
-    if not det_known:  # kernels traced afresh with the patched sign (and again after the test)
-        unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
-        monkeypatch.setattr(rootfree, "det2_sign", unknown)
-        kernel = functools.cache(points._kernel.__wrapped__)
+    kernel = points._kernel if det_known else _without_det_sign(monkeypatch)
     monkeypatch.setattr(points, "HOST_POINTS", 0)
     seen = {}
 
@@ -286,9 +300,7 @@ def test_uncertified_det_B_skips_tier_2_and_is_settled_exactly(monkeypatch):
     everywhere), damped points go from the first pass straight to the enclosures: tier 2 could not
     decide them.  The exact tier settles them."""
     pts, ref = _near_singular_points()
-    unknown = lambda c1, *_: jnp.full(jnp.shape(c1), UNKNOWN, jnp.int32)  # noqa: E731
-    monkeypatch.setattr(rootfree, "det2_sign", unknown)
-    monkeypatch.setattr(points, "_kernel", functools.cache(points._kernel.__wrapped__))
+    monkeypatch.setattr(points, "_kernel", _without_det_sign(monkeypatch))
     got = points.spectral_points(*pts.values(), names=FLAGS)
     st = got.stats
     assert st["tier2_points"] == 0
@@ -397,10 +409,12 @@ def test_first_pass_layout_puts_the_longest_axis_inside():
 def test_grids_over_models_take_the_grid_kernel(monkeypatch):
     """Flat columns serve small grids and grids of one model; a grid over several models above
     ``FLAT_SIZES[0]`` points (a tile of ``atlas generate``) runs the grid kernel, which computes
-    the per-model factors once a model."""
+    the per-model factors once a model.  The threshold is lowered to 1,024 points so that the
+    grid is :func:`test_model_axes_equal_their_slices`'s, whose grid program it shares."""
     calls = []
     monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
-    g = model_grid(20)  # 20 x 20 x 3 x 2 x 2 = 4800 points
+    monkeypatch.setattr(points, "FLAT_SIZES", (1 << 10,))
+    g = model_grid(16)  # 16 x 16 x 3 x 2 x 2 = 3072 points
     points.spectral_points(*g, names=FLAGS, resolve=False)
     assert not calls
     plane = [a.reshape(a.shape[:2]) for a in g[:4]]
