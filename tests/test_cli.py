@@ -4,6 +4,7 @@ console script, without an interpreter start-up each), except one subprocess smo
 signal test (``e2e``)."""
 
 import contextlib
+import functools
 import io
 import os
 import re
@@ -26,6 +27,17 @@ def exported_kernels(monkeypatch):
     """The kernels run as exported programs kept on disk, as in a user's run (conftest.py
     switches that off for the other in-process CLI calls)."""
     monkeypatch.delenv(KERNEL_ENV, raising=False)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def table2_once():
+    """Table 2 computed once for this module's ``atlas table`` runs (~0.5 s each): they check
+    where the table goes and in which format, not its rows (tests/paper/test_tables.py does)."""
+    from atlas.paper import tables
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(tables, "table2", functools.cache(tables.table2))
+        yield
 
 
 def _env():

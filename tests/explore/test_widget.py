@@ -35,8 +35,13 @@ ALPHA = 0.35 * math.pi
     [(0.5, 0.0, 0.0), (2.0, 0.3, 0.3), (0.5, 1.0, 0.01)],
     ids=["fig1", "damped", "q1-neq-q2"],
 )
-def test_widget_map_equals_generate(kappa, q1, q2, need):
+def test_widget_map_equals_generate(kappa, q1, q2, need, monkeypatch):
+    """Every control change reaches the map through the redraw callback, which then draws; the
+    drawing itself (a PNG of the figure, most of this test's seconds) is counted, not made: the
+    other tests of this module draw."""
     need("ipywidgets")
+    drawn = []
+    monkeypatch.setattr(widget._Callbacks, "draw", lambda cb: drawn.append(cb.ex.params["layer"]))
     box = widget.make_widget(n=N, layer="class_code", alpha=ALPHA)
     c, ex = box.controls, box.explorer
     c["kappa"].value = kappa
@@ -67,6 +72,7 @@ def test_widget_map_equals_generate(kappa, q1, q2, need):
             np.testing.assert_allclose(got.values, want.values, rtol=1e-9, atol=1e-12)
         else:
             np.testing.assert_array_equal(got.values, want.values, err_msg=layer)
+        assert drawn[-1] == layer, layer  # the callback drew the new layer
     assert ex.ds.attrs["n_undecided"] == 0
 
 
