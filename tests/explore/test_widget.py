@@ -30,18 +30,31 @@ N = 65
 ALPHA = 0.35 * math.pi
 
 
+@pytest.fixture
+def drawn(monkeypatch):
+    """The layers the widget's PNG draws showed, one per draw, the PNG itself not made (most
+    of a redraw's seconds): for the tests of what a redraw computes, shows in its controls and
+    status, or answers to a click; the overlay, title, legend and witness tests draw it."""
+    layers = []
+    draw = widget._Callbacks.draw
+
+    def counted(cb):
+        if cb.image is None:  # the interactive canvas's path: as it is
+            return draw(cb)
+        layers.append(cb.ex.params["layer"])
+
+    monkeypatch.setattr(widget._Callbacks, "draw", counted)
+    return layers
+
+
 @pytest.mark.parametrize(
     "kappa, q1, q2",
     [(0.5, 0.0, 0.0), (2.0, 0.3, 0.3), (0.5, 1.0, 0.01)],
     ids=["fig1", "damped", "q1-neq-q2"],
 )
-def test_widget_map_equals_generate(kappa, q1, q2, need, monkeypatch):
-    """Every control change reaches the map through the redraw callback, which then draws; the
-    drawing itself (a PNG of the figure, most of this test's seconds) is counted, not made: the
-    other tests of this module draw."""
+def test_widget_map_equals_generate(kappa, q1, q2, need, drawn):
+    """Every control change reaches the map through the redraw callback, which then draws."""
     need("ipywidgets")
-    drawn = []
-    monkeypatch.setattr(widget._Callbacks, "draw", lambda cb: drawn.append(cb.ex.params["layer"]))
     box = widget.make_widget(n=N, layer="class_code", alpha=ALPHA)
     c, ex = box.controls, box.explorer
     c["kappa"].value = kappa
@@ -88,7 +101,7 @@ def _click(box, beta1, beta2, button=1):
     return event
 
 
-def test_click_on_map_inspects_that_point(need):
+def test_click_on_map_inspects_that_point(need, drawn):
     need("ipywidgets")
     kappa, q = 0.5, 2**0.5
     box = widget.make_widget(n=N, layer="stable_II", kappa=kappa, q1=q, alpha=ALPHA)
@@ -129,7 +142,7 @@ def test_click_on_map_inspects_that_point(need):
     assert len(seen) >= 3  # the clicks landed in different classes
 
 
-def test_redraw_capped_then_settle_undecided(need, bounded_det_b):
+def test_redraw_capped_then_settle_undecided(need, bounded_det_b, drawn):
     """An even grid puts cells on det B = 0 (undecided with a float-bounded ``sign det B``,
     :func:`bounded_det_b`): a redraw settles at most
     ``max_resolve`` of them and draws the rest in the undecided colour; the "settle undecided"
@@ -186,7 +199,7 @@ def test_overlays(need):
         box.explorer.update(overlays=("nope",))
 
 
-def test_separately_starts_q1_q2_from_q(need):
+def test_separately_starts_q1_q2_from_q(need, drawn):
     """Ticking "q1, q2 separately" keeps the model: q1 = q2 = the current q; unticking gives q
     the value of q1."""
     need("ipywidgets")
@@ -249,7 +262,7 @@ def test_status_times_the_repaint_not_the_request(need):
     assert ms >= 50
 
 
-def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
+def test_status_says_what_the_session_is_doing_before_the_map_arrives(need, drawn):
     """Every value the status line takes during a move to 513^2 cells (with the SS boundary
     overlay): first what is being computed, step by step, then the new map's summary."""
     need("ipywidgets")
@@ -269,7 +282,7 @@ def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
     assert not any("513^2 cells: compute" in s for s in before)
 
 
-def test_hover_text_follows_the_layer(need):
+def test_hover_text_follows_the_layer(need, drawn):
     """After a layer change the hover readout is rewritten at the pointer's last point (not
     left on the previous layer's value until the mouse moves): the exact class code there."""
     need("ipywidgets")
