@@ -1006,7 +1006,7 @@ def test_a_failed_write_into_the_outcome_store_names_it(fault, tmp_path, monkeyp
 
     store = tmp_path / "st"
     args = ["simulate", "--map", "--n", "4", "--no-theory", "--slab", "2", "--workers", "1"]
-    args += ["--store", str(store)]
+    args += ["--t-end", "2", "--store", str(store)]  # a short horizon: the store is checked
     if fault == "full":
         write = outcome_tiles._write
 
