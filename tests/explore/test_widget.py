@@ -406,6 +406,7 @@ _START_PROBE = """
 import json, threading
 import jax
 from atlas.core import warm
+from atlas.explore import state
 from atlas.explore.widget import make_widget
 
 compiles = []
@@ -422,7 +423,8 @@ assert box.explorer.last_inspection is not None
 box.explorer.warm_up().result()  # a click waits for its inspection only: the rest counts here
 main = sum(compiles)
 out = dict(started=started, during=during, made=made, click=main - made,
-           warm_up=len(compiles) - main, used=len(warm._STATE["used"]))
+           warm_up=len(compiles) - main, used=len(warm._STATE["used"]),
+           kept=state.keep_kernels(), cache=jax.config.jax_compilation_cache_dir)
 print(json.dumps(out))
 """
 
@@ -432,7 +434,9 @@ def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, nee
     """A first session (empty cache) compiles the map's kernels and, in the background warm-up,
     the inspector's; a click made at once, during the warm-up, waits for its inspection and
     compiles nothing itself, and no program is compiled twice (as many compilations as kept
-    programs); a second session compiles nothing at all (kept kernels)."""
+    programs); a second session compiles nothing at all (kept kernels).  The sessions keep
+    kernels in ``<cache>/kernels`` and use the compilation cache (the explorer's switches with
+    none set; the others: tests/explore/test_state.py)."""
     need("ipywidgets")
 
     def session(cache):
@@ -443,6 +447,7 @@ def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, nee
         return json.loads(p.stdout.strip().splitlines()[-1])
 
     first = session(tmp_path / "a")
+    assert (first["kept"], first["cache"]) == (str(tmp_path / "a" / "kernels"), str(tmp_path / "a"))
     assert first["started"] and first["during"], first  # the click came before the warm-up ended
     assert first["made"] > 0 and first["warm_up"] > 0 and first["click"] == 0, first
     kept = [p.suffix for p in (tmp_path / "a" / "kernels").iterdir()]
