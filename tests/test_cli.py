@@ -4,6 +4,7 @@ console script, without an interpreter start-up each), except one subprocess smo
 signal test (``e2e``)."""
 
 import contextlib
+import functools
 import io
 import os
 import re
@@ -26,6 +27,19 @@ def exported_kernels(monkeypatch):
     """The kernels run as exported programs kept on disk, as in a user's run (conftest.py
     switches that off for the other in-process CLI calls)."""
     monkeypatch.delenv(KERNEL_ENV, raising=False)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def table2_once():
+    """Table 2 computed once for this module's ``atlas table`` runs (~0.5 s each), on the quick
+    run's sample (8 points a class, as tests/paper/test_tables.py, which checks the rows): they
+    check where the table goes and in which format (all 24 classes), not its sample size."""
+    from atlas.paper import tables
+
+    table2 = tables.table2
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(tables, "table2", functools.cache(lambda: table2(n=96, per_class=8)))
+        yield
 
 
 def _env():
@@ -511,15 +525,18 @@ def test_sigterm_at_random_points_never_exits_0_nor_dies_late(writes, tmp_path):
     traceback); before them, in the interpreter's start, SIGTERM kills by its default action
     (-15).  Each delay counts from a stage of the run (``_stage``), in units of a warm-up run's
     time from that stage to its exit; ``writes`` trials aim at the end (tile writes, commit,
-    exit): 2 in CI, 5 with ``-m slow``.  A first run fills the compilation caches (timed on a
-    cold cache, the trials would finish before their signals)."""
+    exit): 2 in CI, 5 with ``-m slow``.  A first run, in this process (the caches are the
+    subprocesses'; one interpreter start fewer), fills the compilation and kernel caches with
+    the exported kernels a user's run keeps (timed on a cold cache, the trials would finish
+    before their signals)."""
     import random
     import signal
     import time
 
     env = _env()
-    cold = _spawn([*TINY_RUN, "--out", str(tmp_path / "cold.nc")], env)
-    assert cold.communicate(timeout=300) and cold.returncode == 0  # fills the caches
+    with pytest.MonkeyPatch.context() as mp:
+        mp.delenv(KERNEL_ENV, raising=False)  # a user's run: exported kernels
+        assert cli.main([*TINY_RUN, "--out", str(tmp_path / "cold.nc")]) == 0
     warm = tmp_path / "warm" / "a.nc"
     warm.parent.mkdir()
     p = _spawn([*TINY_RUN, "--out", str(warm)], env)
@@ -991,7 +1008,7 @@ def test_a_failed_write_into_the_outcome_store_names_it(fault, tmp_path, monkeyp
 
     store = tmp_path / "st"
     args = ["simulate", "--map", "--n", "4", "--no-theory", "--slab", "2", "--workers", "1"]
-    args += ["--store", str(store)]
+    args += ["--t-end", "2", "--store", str(store)]  # a short horizon: the store is checked
     if fault == "full":
         write = outcome_tiles._write
 

@@ -47,7 +47,8 @@ def _ast_imports(name: str) -> tuple[set, set, set]:
     tree = ast.parse(path.read_text())
     imp = (ast.Import, ast.ImportFrom)
     now = [n for s in _executed(tree.body) for n in ast.walk(s) if isinstance(n, imp)]
-    every = [n for n in ast.walk(tree) if isinstance(n, imp)]
+    nodes = list(ast.walk(tree))  # one walk of the whole tree (most of this function's time)
+    every = [n for n in nodes if isinstance(n, imp)]
     typing = [
         n
         for s in tree.body
@@ -56,7 +57,7 @@ def _ast_imports(name: str) -> tuple[set, set, set]:
         if isinstance(n, imp)
     ]
     lazy = [n for n in every if n not in now and n not in typing]
-    texts = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)]
+    texts = [n.value for n in nodes if isinstance(n, ast.Constant)]
     quoted = [n for t in texts if isinstance(t, str) for n, _ in module_closure._scan(t)]
     targets = lambda nodes: set(module_closure._targets(name, nodes))  # noqa: E731
     return targets(now), targets(lazy) - targets(now), targets(quoted)

@@ -22,11 +22,11 @@ print(json.dumps(dict(kept=state.keep_kernels(), cache=jax.config.jax_compilatio
 
 
 def test_keep_kernels_follows_the_cli_switches(tmp_path, probe_env):
-    """An explorer's process keeps kernels in ``<cache>/kernels`` and uses the compilation
-    cache; ``ATLAS_KERNEL_CACHE=0`` leaves the kept kernels off, ``ATLAS_JAX_CACHE=0`` both.
-    The same fresh processes show that :mod:`atlas.explore` imports without ipywidgets."""
+    """``ATLAS_KERNEL_CACHE=0`` leaves an explorer's kept kernels off, ``ATLAS_JAX_CACHE=0`` the
+    compilation cache too (with neither, its sessions keep kernels in ``<cache>/kernels`` and use
+    the compilation cache: tests/explore/test_widget.py's fresh sessions, e2e).  The same fresh
+    processes show that :mod:`atlas.explore` imports without ipywidgets."""
     cases = {
-        "on": ({}, str(tmp_path / "kernels"), str(tmp_path)),
         "no kept kernels": ({"ATLAS_KERNEL_CACHE": "0"}, None, str(tmp_path)),
         "no caches": ({}, None, None),
     }

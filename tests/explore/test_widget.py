@@ -30,12 +30,30 @@ N = 65
 ALPHA = 0.35 * math.pi
 
 
+@pytest.fixture
+def drawn(monkeypatch):
+    """The layers the widget's PNG draws showed, one per draw, the PNG itself not made (most
+    of a redraw's seconds): for the tests of what a redraw computes, shows in its controls and
+    status, or answers to a click; the overlay, title, legend and witness tests draw it."""
+    layers = []
+    draw = widget._Callbacks.draw
+
+    def counted(cb):
+        if cb.image is None:  # the interactive canvas's path: as it is
+            return draw(cb)
+        layers.append(cb.ex.params["layer"])
+
+    monkeypatch.setattr(widget._Callbacks, "draw", counted)
+    return layers
+
+
 @pytest.mark.parametrize(
     "kappa, q1, q2",
     [(0.5, 0.0, 0.0), (2.0, 0.3, 0.3), (0.5, 1.0, 0.01)],
     ids=["fig1", "damped", "q1-neq-q2"],
 )
-def test_widget_map_equals_generate(kappa, q1, q2, need):
+def test_widget_map_equals_generate(kappa, q1, q2, need, drawn):
+    """Every control change reaches the map through the redraw callback, which then draws."""
     need("ipywidgets")
     box = widget.make_widget(n=N, layer="class_code", alpha=ALPHA)
     c, ex = box.controls, box.explorer
@@ -67,6 +85,7 @@ def test_widget_map_equals_generate(kappa, q1, q2, need):
             np.testing.assert_allclose(got.values, want.values, rtol=1e-9, atol=1e-12)
         else:
             np.testing.assert_array_equal(got.values, want.values, err_msg=layer)
+        assert drawn[-1] == layer, layer  # the callback drew the new layer
     assert ex.ds.attrs["n_undecided"] == 0
 
 
@@ -82,7 +101,7 @@ def _click(box, beta1, beta2, button=1):
     return event
 
 
-def test_click_on_map_inspects_that_point(need):
+def test_click_on_map_inspects_that_point(need, drawn):
     need("ipywidgets")
     kappa, q = 0.5, 2**0.5
     box = widget.make_widget(n=N, layer="stable_II", kappa=kappa, q1=q, alpha=ALPHA)
@@ -123,7 +142,7 @@ def test_click_on_map_inspects_that_point(need):
     assert len(seen) >= 3  # the clicks landed in different classes
 
 
-def test_redraw_capped_then_settle_undecided(need, bounded_det_b):
+def test_redraw_capped_then_settle_undecided(need, bounded_det_b, drawn):
     """An even grid puts cells on det B = 0 (undecided with a float-bounded ``sign det B``,
     :func:`bounded_det_b`): a redraw settles at most
     ``max_resolve`` of them and draws the rest in the undecided colour; the "settle undecided"
@@ -180,7 +199,7 @@ def test_overlays(need):
         box.explorer.update(overlays=("nope",))
 
 
-def test_separately_starts_q1_q2_from_q(need):
+def test_separately_starts_q1_q2_from_q(need, drawn):
     """Ticking "q1, q2 separately" keeps the model: q1 = q2 = the current q; unticking gives q
     the value of q1."""
     need("ipywidgets")
@@ -243,7 +262,7 @@ def test_status_times_the_repaint_not_the_request(need):
     assert ms >= 50
 
 
-def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
+def test_status_says_what_the_session_is_doing_before_the_map_arrives(need, drawn):
     """Every value the status line takes during a move to 513^2 cells (with the SS boundary
     overlay): first what is being computed, step by step, then the new map's summary."""
     need("ipywidgets")
@@ -263,7 +282,7 @@ def test_status_says_what_the_session_is_doing_before_the_map_arrives(need):
     assert not any("513^2 cells: compute" in s for s in before)
 
 
-def test_hover_text_follows_the_layer(need):
+def test_hover_text_follows_the_layer(need, drawn):
     """After a layer change the hover readout is rewritten at the pointer's last point (not
     left on the previous layer's value until the mouse moves): the exact class code there."""
     need("ipywidgets")
@@ -387,6 +406,7 @@ _START_PROBE = """
 import json, threading
 import jax
 from atlas.core import warm
+from atlas.explore import state
 from atlas.explore.widget import make_widget
 
 compiles = []
@@ -403,7 +423,8 @@ assert box.explorer.last_inspection is not None
 box.explorer.warm_up().result()  # a click waits for its inspection only: the rest counts here
 main = sum(compiles)
 out = dict(started=started, during=during, made=made, click=main - made,
-           warm_up=len(compiles) - main, used=len(warm._STATE["used"]))
+           warm_up=len(compiles) - main, used=len(warm._STATE["used"]),
+           kept=state.keep_kernels(), cache=jax.config.jax_compilation_cache_dir)
 print(json.dumps(out))
 """
 
@@ -413,7 +434,9 @@ def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, nee
     """A first session (empty cache) compiles the map's kernels and, in the background warm-up,
     the inspector's; a click made at once, during the warm-up, waits for its inspection and
     compiles nothing itself, and no program is compiled twice (as many compilations as kept
-    programs); a second session compiles nothing at all (kept kernels)."""
+    programs); a second session compiles nothing at all (kept kernels).  The sessions keep
+    kernels in ``<cache>/kernels`` and use the compilation cache (the explorer's switches with
+    none set; the others: tests/explore/test_state.py)."""
     need("ipywidgets")
 
     def session(cache):
@@ -424,6 +447,7 @@ def test_widget_keeps_kernels_and_the_first_click_does_not_compile(tmp_path, nee
         return json.loads(p.stdout.strip().splitlines()[-1])
 
     first = session(tmp_path / "a")
+    assert (first["kept"], first["cache"]) == (str(tmp_path / "a" / "kernels"), str(tmp_path / "a"))
     assert first["started"] and first["during"], first  # the click came before the warm-up ended
     assert first["made"] > 0 and first["warm_up"] > 0 and first["click"] == 0, first
     kept = [p.suffix for p in (tmp_path / "a" / "kernels").iterdir()]
