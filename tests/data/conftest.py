@@ -13,8 +13,16 @@ GRID_32 = np.arange(32) * 2 * np.pi / 32
 
 @pytest.fixture(scope="session")
 def slice_32():
-    """``slice_32(model)``: both fields of slice ``model = (kappa, q1, q2)`` on :data:`GRID_32`,
-    unchecked (``check=0``), at the default ``tol`` and ``chord``, traced once per process (the
-    fields are traced independently: a one-field run gives that field's curves and points).
-    The result is shared: tests only read it."""
-    return functools.cache(lambda model: bd.slice_boundaries(GRID_32, GRID_32, *model, check=0))
+    """``slice_32(model, fields=("SS", "II"), chord=bd.CHORD)``: slice ``model = (kappa, q1,
+    q2)`` on :data:`GRID_32`, unchecked (``check=0``), at the default ``tol``, traced once per
+    process and arguments (the fields are traced independently: a one-field run gives that
+    field's curves, points and attrs).  The result is shared: tests only read it."""
+
+    @functools.cache
+    def traced(model, fields, chord):
+        return bd.slice_boundaries(GRID_32, GRID_32, *model, fields=fields, check=0, chord=chord)
+
+    def one(model, fields=("SS", "II"), chord=bd.CHORD):
+        return traced(tuple(model), tuple(fields), float(chord))
+
+    return one
