@@ -263,7 +263,7 @@ def test_hidden_cells_are_found():
     assert hidden.tolist() == [[True, False], [False, False]]
 
 
-def test_scene_and_dataset_give_the_same_curves(tmp_path):
+def test_scene_and_dataset_give_the_same_curves(tmp_path, traced_once):
     from atlas.data.engine import generate
 
     scene = Scene(beta1="0:2pi:16", beta2="0:2pi:16", kappa=0.5, q=0.2, outputs=["stable_SS"])

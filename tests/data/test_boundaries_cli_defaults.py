@@ -2,7 +2,6 @@
 the same curves, CSV and GeoJSON as :func:`atlas.boundaries` at its own defaults, and the three
 files hold the same curves, labels and points."""
 
-import copy
 import csv
 import inspect
 import json
@@ -12,7 +11,6 @@ import xarray as xr
 
 from atlas.cli import main
 from atlas.core.brackets import FIELD_LABELS
-from atlas.data import boundaries as boundaries_module
 from atlas.data.boundaries import boundaries, slice_boundaries
 from atlas.data.scene import Scene
 
@@ -36,30 +34,9 @@ def _same_run(x):
     return x
 
 
-def _traced_once(real):
-    """``real`` (:func:`slice_boundaries`) tracing each distinct call once: a call with the same
-    arguments (defaults filled in, arrays by value) gets a copy of the first one's result.  A
-    command line passing other options than the API's defaults still gets its own run."""
-    sig, seen = inspect.signature(real), {}
-
-    def once(*args, **kwargs):
-        bound = sig.bind(*args, **kwargs)
-        bound.apply_defaults()
-        key = tuple(
-            (k, (v.dtype.str, v.shape, v.tobytes()) if isinstance(v, np.ndarray) else repr(v))
-            for k, v in bound.arguments.items()
-        )
-        if key not in seen:
-            seen[key] = real(*args, **kwargs)
-        return copy.deepcopy(seen[key])
-
-    return once
-
-
-def test_defaults_with_csv_and_geojson_are_the_apis(tmp_path, capsys, monkeypatch):
+def test_defaults_with_csv_and_geojson_are_the_apis(tmp_path, capsys, traced_once):
     """The slice is traced once if the command line calls :func:`slice_boundaries` with the
-    API's defaults (:func:`_traced_once`), twice otherwise."""
-    monkeypatch.setattr(boundaries_module, "slice_boundaries", _traced_once(slice_boundaries))
+    API's defaults (``traced_once``), twice otherwise."""
     argv = ["boundaries", *(x for k, v in AXES.items() for x in (f"--{k}", v))]
     cli = {end: tmp_path / f"cli.{end}" for end in ("nc", "csv", "json")}
     argv += ["--out", str(cli["nc"]), "--csv", str(cli["csv"]), "--geojson", str(cli["json"])]
