@@ -233,15 +233,14 @@ def test_a_band_along_a_diagonal_class_line_is_traced_whole():
     assert _torus_distance(np.array(edges), curves).max() < 2e-6
 
 
-def test_a_boundary_tangent_to_a_class_line_is_followed_to_its_tip():
+def test_a_boundary_tangent_to_a_class_line_is_followed_to_its_tip(slice_32):
     """Fig. 1 slice, SS: the boundary of code 2 touches the diagonal beta2 = beta1 tangentially
     near beta1 = 2.678 and leaves a needle along it, 1e-8 rad wide 1.6e-4 rad before its tip.
     The tip, found here by a dense scan 1e-12 rad off the line, lies on the curves of a 32 x 32
     grid to the chord tolerance: the polyline used to turn back 2e-5 to 1.6e-4 rad short of it
     (the tips were scanned 4 tol off the line, and none was inserted into the needle)."""
     model = (0.5, 0.0, 0.0)
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0)
+    b = slice_32(model, fields=("SS",))  # 32 x 32, no check
     t = np.linspace(2.677, 2.679, 200001)
     off = 1e-12 / np.sqrt(2)
     codes = brackets.field_codes("SS", t - off, t + off, *model)
@@ -264,7 +263,7 @@ def test_hidden_cells_are_found():
     assert hidden.tolist() == [[True, False], [False, False]]
 
 
-def test_scene_and_dataset_give_the_same_curves(tmp_path):
+def test_scene_and_dataset_give_the_same_curves(tmp_path, traced_once):
     from atlas.data.engine import generate
 
     scene = Scene(beta1="0:2pi:16", beta2="0:2pi:16", kappa=0.5, q=0.2, outputs=["stable_SS"])

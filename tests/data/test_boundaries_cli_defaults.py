@@ -34,7 +34,9 @@ def _same_run(x):
     return x
 
 
-def test_defaults_with_csv_and_geojson_are_the_apis(tmp_path, capsys):
+def test_defaults_with_csv_and_geojson_are_the_apis(tmp_path, capsys, traced_once):
+    """The slice is traced once if the command line calls :func:`slice_boundaries` with the
+    API's defaults (``traced_once``), twice otherwise."""
     argv = ["boundaries", *(x for k, v in AXES.items() for x in (f"--{k}", v))]
     cli = {end: tmp_path / f"cli.{end}" for end in ("nc", "csv", "json")}
     argv += ["--out", str(cli["nc"]), "--csv", str(cli["csv"]), "--geojson", str(cli["json"])]

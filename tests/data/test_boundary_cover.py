@@ -14,7 +14,6 @@ from atlas.data import boundary_cover as bc
 from atlas.data.class_lines import LINE_GRADS, line_values
 
 PI = math.pi
-GRID = np.arange(32) * 2 * PI / 32
 
 
 _exact_code = exact_code
@@ -47,9 +46,19 @@ def _check_stretch(field, model, b, along, normal):
 
 
 @pytest.fixture(scope="module")
-def q0():
-    g = np.arange(64) * 2 * PI / 64
-    return bd.slice_boundaries(g, g, 0.5, 0.0, 0.0, fields=("SS",), check=0)
+def q0_run():
+    """The kappa 0.5, q 0 slice (SS, 64 x 64, no check), traced once for the tests below, with
+    the arguments of each call of :func:`bc._pulled` it made."""
+    seen, real = [], bc._pulled
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(bc, "_pulled", lambda *a: seen.append(a) or real(*a))
+        g = np.arange(64) * 2 * PI / 64
+        return bd.slice_boundaries(g, g, 0.5, 0.0, 0.0, fields=("SS",), check=0), seen
+
+
+@pytest.fixture(scope="module")
+def q0(q0_run):
+    return q0_run[0]
 
 
 @pytest.mark.parametrize("lo, hi", [(0.33, 0.46), (3.61, 3.73)])
@@ -292,15 +301,11 @@ def _plain_pulled(fld, gaps, model, tol):
     return np.where(good[:, 1:], np.stack([a, b], 1), ok), good[:, 0]
 
 
-def test_pulled_ends_take_several_bisection_steps_a_call(monkeypatch):
+def test_pulled_ends_take_several_bisection_steps_a_call(monkeypatch, q0_run):
     """The gaps of the kappa 0.5, q 0 slice (SS): their pulled ends are bit for bit those of a
     plain bisection, found in at most a quarter of its kernel calls for the side codes (7
     against 32)."""
-    model, seen = (0.5, 0.0, 0.0), []
-    real = bc._pulled
-    monkeypatch.setattr(bc, "_pulled", lambda *a: seen.append(a) or real(*a))
-    g = np.arange(64) * 2 * PI / 64
-    bd.slice_boundaries(g, g, *model, fields=("SS",), check=0)
+    model, (_, seen), real = (0.5, 0.0, 0.0), q0_run, bc._pulled
     ((fld, gaps, _, tol, _),) = seen
     assert fld == "SS" and len(gaps) >= 2
     calls = []
@@ -346,13 +351,13 @@ def _mp_code(field, x, y, model) -> int:
 
 
 @pytest.mark.parametrize("model", list(DAMPED_STRETCHES))
-def test_damped_stretches_are_covered_to_their_ends(model):
+def test_damped_stretches_are_covered_to_their_ends(model, slice_32):
     """On the three damped slices (32^2, no check): 1e-3 and 0.02 rad inside each end of every
     stretch above, the mpmath reference sees different codes 1e-9 rad off the line on its two
     sides, and a curve of the field passes within the stated cover distance.  The issue found
     0.031 / 0.014 / 0.014 rad of ``beta2 = 3 pi/2``, 0.014 / 0.007 rad of ``beta2 = beta1 +- pi``
     and the last 0.018 rad of ``beta2 = beta1`` uncovered.  Every class-line interval is proven."""
-    b = bd.slice_boundaries(GRID, GRID, *model, check=0)
+    b = slice_32(model)
     for field, m, lo, hi in DAMPED_STRETCHES[model]:
         t = np.array([lo + 1e-3, min(lo + 0.02, hi - 1e-3), max(hi - 0.02, lo + 1e-3), hi - 1e-3])
         if m == 8:

@@ -91,12 +91,11 @@ def test_q0_tangencies_are_the_closed_form(kappa):
         assert 0 < p.uncertainty < 1e-13 and err <= p.uncertainty
 
 
-def test_points_of_a_slice_hold_their_enclosures():
-    """Every proven point of two 32 x 32 slices lies within its uncertainty of the mpmath
-    reference; the other points state no number."""
-    g = np.arange(32) * 2 * PI / 32
+def test_points_of_a_slice_hold_their_enclosures(slice_32):
+    """Every proven point of two 32 x 32 slices (SS, no check, chord 1e-4) lies within its
+    uncertainty of the mpmath reference; the other points state no number."""
     for model in ((0.5, 0.0, 0.0), (2.0, 0.1, 0.1)):
-        b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=1e-4)
+        b = slice_32(model, fields=("SS",), chord=1e-4)
         proven = [p for p in b.points if p.proven]
         assert proven
         assert _ratios(proven, model).max() <= 1
@@ -111,7 +110,7 @@ def _exact_ss(b1, b2, model):
 
 
 @pytest.mark.parametrize("chord", [bd.CHORD, 1e-4, 1e-2])
-def test_seam_tangencies_found_at_every_chord(chord):
+def test_seam_tangencies_found_at_every_chord(chord, slice_32):
     """q = 0, kappa 0.5: on the seam beta1 = 0 the discriminant is (kappa - sin beta2)^2, so the
     SS boundary touches it at beta2 = asin(kappa) = pi / 6 and 5 pi / 6 (50-digit closed form);
     the exact tier sees the code change next to both (on the side where sin beta1 cos beta2 < 0).  Both points are
@@ -122,8 +121,7 @@ def test_seam_tangencies_found_at_every_chord(chord):
     for w in want:  # the tangency is a boundary point: an independent code change beside it
         side = -1e-6 if mp.cos(w) > 0 else 1e-6
         assert [_exact_ss(side, float(w) + d, model) for d in (-1e-2, 0.0, 1e-2)] == [2, 0, 2]
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=chord)
+    b = slice_32(model, fields=("SS",), chord=chord)  # 32 x 32, no check
     seam = [p for p in b.points if p.kind == "touches_class_line" and p.beta1 == 0.0]
     assert len(seam) == 2 and all(p.proven for p in seam)
     for p, w in zip(sorted(seam, key=lambda p: p.beta2), want):

@@ -18,7 +18,10 @@ Q0 = (0.5, 0.0, 0.0)
 DAMPED = (2.0, 0.1, 0.1)
 
 
+@functools.cache
 def _account(model):
+    """The SS line roots of slice ``model``, which of them the codes list, and their verdicts
+    (computed once per slice: shared by the tests below, which only read them)."""
     roots = boundary_points.line_roots(model)
     codes = boundary_points.root_codes("SS", roots, model)
     listed = (codes != codes[:, :, :1]).any(axis=(1, 2))
@@ -73,9 +76,11 @@ def _point(m, beta):
     return np.array([beta, beta + (m - 11) * PI]), np.array([-1.0, 1.0]) / math.sqrt(2)
 
 
+@functools.cache
 def _account_ii(model):
-    roots = boundary_roots.distinct(boundary_germs.germ_roots("II", model))
+    """:func:`_account` for II (its distinct germ roots; none listed)."""
     germs = boundary_germs.germ_roots("II", model)
+    roots = boundary_roots.distinct(germs)
     return (
         roots,
         None,
@@ -129,18 +134,18 @@ def _by_branches(model, m, ball):
     return not simple and not boundary_roots._inconsistent_near(model, m, ball)
 
 
-def test_undecided_roots_are_listed_as_points():
+def test_undecided_roots_are_listed_as_points(slice_32):
     """The undecided roots of a slice are its ``undecided_line_root`` points (not proven), stored
     with the other points; the counts per verdict add up to the algebraic count."""
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *Q0, fields=("SS",), check=0)
+    b = slice_32(Q0)
     counts = [b.attrs[f"SS_line_roots_{k}"] for k in boundary_roots.KINDS]
     assert sum(counts) == b.attrs["SS_line_roots"] == 28
     assert b.attrs["SS_line_roots_point"] == b.attrs["SS_line_points"] == 10
-    left = [p for p in b.points if p.kind == "undecided_line_root"]
+    left = [p for p in b.points if p.kind == "undecided_line_root" and p.field == "SS"]
     assert len(left) == b.attrs["SS_line_roots_undecided"]
     assert all(not p.proven and math.isnan(p.uncertainty) for p in left)
-    kinds = b.to_dataset()["point_kind"].values.tolist()
+    ds = b.to_dataset()
+    kinds = ds["point_kind"].values[ds["point_field"].values == "SS"].tolist()
     assert kinds.count("undecided_line_root") == len(left)
 
 
@@ -205,22 +210,22 @@ def _exact_ii(m, beta, e, model):
 
 
 @pytest.mark.parametrize("model", [Q0, DAMPED])
-def test_ii_points_are_stored_proven(model):
+def test_ii_points_are_stored_proven(model, slice_32):
     """The II roots with verdict ``point`` are stored as proven points of field II (one per
     root, radius below 1e-13 rad) in the netCDF; the undecided ones as ``undecided_line_root``
     points, not proven, and no estimated crossing of a class line is left.  Independently, in the exact tier at rational points: 1e-6 rad before
     and after each point along its line, at some offset ``2 atan(2^-k)`` off it (k = 40, 80,
     120, 160) on one side, the II codes differ."""
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *model, fields=("II",), check=0)
+    b = slice_32(model)
     ii = [p for p in b.points if p.field == "II" and p.proven and p.kind.endswith("class_line")]
     assert len(ii) == b.attrs["II_line_roots_point"] == b.attrs["II_line_points"] > 0
     assert all(0 < p.uncertainty < 1e-13 for p in ii)
-    left = [p for p in b.points if p.kind == "undecided_line_root"]
+    pts = [p for p in b.points if p.field == "II"]
+    left = [p for p in pts if p.kind == "undecided_line_root"]
     assert len(left) == b.attrs["II_line_roots_undecided"]
     assert not any(p.proven for p in left)
     line = ("crosses_class_line", "leaves_class_line")
-    assert not any(p.kind in line and not p.proven for p in b.points)  # estimates replaced
+    assert not any(p.kind in line and not p.proven for p in pts)  # estimates replaced
     ds = b.to_dataset()
     assert ((ds["point_proven"].values == 1) & (ds["point_field"].values == "II")).sum() >= len(ii)
     for p in ii:
@@ -280,7 +285,7 @@ def _line_spans(c, m, ends=False):
 
 
 @pytest.mark.parametrize("model", [Q0, DAMPED])
-def test_points_on_the_lines_are_spliced_into_the_pieces_once(model):
+def test_points_on_the_lines_are_spliced_into_the_pieces_once(model, slice_32):
     """SS and II alike: every proven point that a piece on a class line comes within twice the
     cover distance of is a spliced vertex of such a piece (or the piece passes within ``tol``
     of it), and at each II one the exact tier's codes 1e-6 rad before and after it along its
@@ -289,8 +294,7 @@ def test_points_on_the_lines_are_spliced_into_the_pieces_once(model):
     ``tol``).  Before, the II points were not
     spliced into the pieces on the lines (0 of 11 at q = 0), and extending an SS piece to its
     point covered a needle piece twice (1.5e-9 rad at kappa 2, q 0.1)."""
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *model, check=0)
+    b = slice_32(model)
     on_line = 0
     for fld in ("SS", "II"):
         pieces = [c for c in b.curves if c.field == fld and c.on_class_line]

@@ -10,6 +10,7 @@ from atlas.data import boundaries as bd
 from atlas.data.boundary_sides import side_step
 
 PI = math.pi
+DAMPED = (2.0, 0.1, 0.1)
 
 
 def _exact_code(field, c1, s1, c2, s2, model):
@@ -108,12 +109,18 @@ def test_labels_hold_off_every_piece_undamped(undamped):
         assert lo >= hi - 1e-12  # no two pieces over the same stretch (they may share an end)
 
 
-def test_labels_hold_off_every_piece_damped():
+def _damped_32(model, slice_32, fields):
+    """Slice ``model`` on the 32 x 32 grid, no check, chord 1e-4; kappa 2, q 0.1 with both
+    fields whatever ``fields`` (traced once for both tests below: a field's curves do not
+    depend on the other field being traced)."""
+    return slice_32(model, fields=("SS", "II") if model == DAMPED else fields, chord=1e-4)
+
+
+def test_labels_hold_off_every_piece_damped(slice_32):
     """Damped SS along beta2 = beta1 +- k pi: unstable on one side, stable on the other, the
     neutral code only on the line itself (side_on)."""
-    g = np.arange(32) * 2 * PI / 32
-    model = (2.0, 0.1, 0.1)
-    b = bd.slice_boundaries(g, g, *model, check=0, chord=1e-4)
+    model = DAMPED
+    b = _damped_32(model, slice_32, ("SS", "II"))
     assert _check_labels(b, model) > 50
     diag = [
         c
@@ -123,18 +130,18 @@ def test_labels_hold_off_every_piece_damped():
     assert len(diag) >= 3 and all((c.side_left, c.side_right, c.side_on) == (1, 0, 2) for c in diag)
 
 
-@pytest.mark.parametrize("model", [(2.0, 0.1, 0.1), (7.3, 0.8, 0.02)])
-def test_diagonal_pieces_carry_the_neutral_code_up_to_the_corner(model):
+@pytest.mark.parametrize("model", [DAMPED, (7.3, 0.8, 0.02)])
+def test_diagonal_pieces_carry_the_neutral_code_up_to_the_corner(model, slice_32):
     """Damped SS on beta2 = beta1: the exact code on the line (``c1 = c2``, ``s1 = s2``, at each
     vertex's beta1) is neutral, different from both sides, and every piece on it says so, up to
     the corner (0, 0): a 2e-8 rad piece there, traced a nudge past 2 pi on beta2 = beta1 + 2 pi
     (no column of the lines), had ``side_on = -1`` (its vertices taken as on beta2 = 2 pi)."""
-    g = np.arange(32) * 2 * PI / 32
-    b = bd.slice_boundaries(g, g, *model, fields=("SS",), check=0, chord=1e-4)
+    b = _damped_32(model, slice_32, ("SS",))
     diag = [
         c
         for c in b.curves
-        if c.on_class_line
+        if c.field == "SS"
+        and c.on_class_line
         and (np.abs((c.vertices[:, 1] - c.vertices[:, 0] + PI) % (2 * PI) - PI) < 1e-9).all()
     ]
     assert any(np.hypot(*c.vertices.T).min() < 1e-6 for c in diag)  # the corner piece
