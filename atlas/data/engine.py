@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, runtime_checkable
 import jax
 import numpy as np
 
-from atlas.core import buckets, checks, config, kernels
+from atlas.core import backend, buckets, checks, config, kernels
 from atlas.core import contact_modes as mech
 from atlas.data.outputs import (
     OUTPUTS,
@@ -408,6 +408,8 @@ def run(scene: Scene, sink: Sink, options: RunOptions | None = None) -> Run:
     outputs = scene.output_names
     src = _axis_inputs(scene, dtype)
     plan = _plan(scene, outputs)
+    if method == "certified" and any(g.kernel.driver is not None for g, *_ in plan):
+        backend.require_trusted()  # before any work: a backend that failed selftest certifies nothing
     total = sum(math.prod(shape) for _, _, _, shape in plan)
     t0 = time.perf_counter()
     counts = {"undecided_fast": {}, "undecided": {}}

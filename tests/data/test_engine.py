@@ -9,10 +9,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from atlas.core import backend, exact
 from atlas.core import contact_modes as mech
-from atlas.core import exact
+from atlas.core.config import CACHE_ENV
 from atlas.core.invariants import KEYS
 from atlas.core.verdicts import UNDECIDED_CODE, Consistency, Verdict
+from atlas.data import engine
 from atlas.data.engine import (
     MemorySink,
     RunOptions,
@@ -221,6 +223,28 @@ def test_eig_method_and_float32():
 def test_bad_options(kw, name):
     with pytest.raises(ValueError, match=f"^{name}:"):
         generate(tiny_scene(outputs="class_code"), **kw)
+
+
+def test_a_backend_that_failed_selftest_is_refused_before_any_work(tmp_path, monkeypatch):
+    """With a failed self-check recorded, a certified run raises before the sink is begun or a
+    kernel runs (no file is started, nothing is computed); an ``eig`` run, which certifies
+    nothing, still runs."""
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path))
+    backend.record({"passed": False, "disagreements": 1, "when": "a test"})
+    calls = []
+
+    class Counted(MemorySink):
+        def begin(self, sch):
+            calls.append("begin")
+            super().begin(sch)
+
+    monkeypatch.setattr(engine, "_kernel_group", lambda *a: calls.append("kernel"))
+    scene = tiny_scene(outputs="class_code,stable_SS")
+    with pytest.raises(backend.BackendFailed, match="failed atlas selftest"):
+        run(scene, Counted(), RunOptions(tile_points=TILE))
+    assert calls == []
+    run(scene, Counted(), RunOptions(tile_points=TILE, method="eig"))
+    assert calls[0] == "begin" and "kernel" in calls
 
 
 def test_exact_failure_keeps_point_undecided(monkeypatch):
