@@ -239,11 +239,10 @@ def class_representatives(n: int = 96, n_alpha: int = 1440) -> dict:
         gap2 = np.min([np.abs(np.angle(np.exp(1j * (b2 - r)))) for r in refs2], 0)
         best = int(np.argmax(np.minimum(gap1, gap2)))
         beta1, beta2 = float(b1[best]), float(b2[best])
-        c1, s1 = contact_modes.direction(beta1)
-        c2, s2 = contact_modes.direction(beta2)
-        sub = np.asarray(
-            contact_modes.subclass_code(*(np.asarray(v) for v in (c1, s1, c2, s2)), ca, sa)
-        )
+        # the class point's directions spread over the alpha grid: the program of Table 1's
+        # columns (one trace fewer in a run), the same certified codes
+        pair = (*contact_modes.direction(beta1), *contact_modes.direction(beta2))
+        sub = np.asarray(contact_modes.subclass_code(*(np.full_like(ca, v) for v in pair), ca, sa))
         alphas = {}
         for k in range(1, 7):
             hit = alpha[sub == 10 * cls + k]

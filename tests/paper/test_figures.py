@@ -215,3 +215,20 @@ def test_outcome_distribution_per_subclass_and_its_bars():
     labels = [t.get_text() for t in ax.get_yticklabels()]
     assert labels == ["132, theory: SS stable", "132, theory: SS unstable",
                       "142, theory: SS unstable"]  # fmt: skip
+
+
+def test_class_representatives_share_table_1s_program(monkeypatch):
+    """Each class point's subclass codes over the alpha grid take six arrays of the grid's
+    length, the program of Table 1's columns (which the audit compiles), not four scalars and
+    two arrays: a program of their own, traced and compiled once more in every ``atlas paper``."""
+    from atlas.paper import figures
+
+    shapes = []
+
+    def subclass_code(*args):
+        shapes.append({np.shape(a) for a in args})
+        return np.zeros(np.shape(args[-1]), np.int16)
+
+    monkeypatch.setattr(contact_modes, "subclass_code", subclass_code)
+    reps = figures.class_representatives(n=24, n_alpha=64)
+    assert len(shapes) == len(reps) > 0 and all(s == {(64,)} for s in shapes), shapes
