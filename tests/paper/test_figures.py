@@ -220,7 +220,7 @@ def test_outcome_distribution_per_subclass_and_its_bars():
 def test_class_representatives_share_table_1s_program(monkeypatch):
     """Each class point's subclass codes over the alpha grid take six arrays of the grid's
     length, the program of Table 1's columns (which the audit compiles), not four scalars and
-    two arrays: a program of their own, traced and compiled once more in every ``atlas paper``."""
+    two arrays: a program of their own, traced once more in a one-process ``atlas paper``."""
     from atlas.paper import figures
 
     shapes = []
