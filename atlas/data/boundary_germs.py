@@ -55,6 +55,10 @@ __all__ = [
     "near_side_codes",
 ]
 
+#: entries kept by each cache of this module (one per line, field and model): the 10 torus lines
+#: and 2 fields make 20 a slice, so the slices of 12 models (a run's, an explorer session's) are
+#: each eliminated once (0.1-0.2 s a line for II), in about 3.4 MB a model
+CACHED = 256
 _CTX = flint.fmpq_mpoly_ctx.get(("t", "e", "l"), "lex")
 _T, _E, _L = _CTX.gens()
 _WT, _WE = 1 + _T * _T, 1 + _E * _E
@@ -171,7 +175,7 @@ def _eliminated(p, T) -> tuple:
     key = (str(p), str(T))
     if key not in _ELIMINATED:
         done = _ELIMINATED.get((str(_mirrored(p)), str(_mirrored(T))))
-        if len(_ELIMINATED) >= 64:
+        if len(_ELIMINATED) >= CACHED:
             _ELIMINATED.clear()
         if done is not None:
             _ELIMINATED[key] = tuple(_mirrored(F) for F in done)
@@ -185,7 +189,7 @@ def _eliminate(p, T) -> tuple:
     return p.discriminant("l"), p.resultant(T, "l")
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=CACHED)
 def coefficients_on_line(m, model) -> tuple:
     """``(a3, a2, a1, a0)`` of ``p`` (paper eq. 9) on class line ``m``, each as the numerator
     (``flint.fmpq_poly`` in ``t``) of its restriction, over a positive denominator: the signs of
@@ -234,7 +238,7 @@ def _germ(F):
     return out
 
 
-@functools.lru_cache(maxsize=64)  # one slice's lines and fields, a few times over
+@functools.lru_cache(maxsize=CACHED)
 def germs(fld, m, model) -> tuple:
     """Per boundary polynomial of ``fld`` near line ``m``: its germ rows (:func:`_germ`)."""
     return tuple(_germ(F) for F in boundary_polynomials(fld, m, model))
@@ -253,7 +257,7 @@ def germ_roots(fld, model, lines=TORUS_LINES) -> list[tuple[int, flint.arb, int]
     return out
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=CACHED)
 def _ball_germs(fld, m, model, prec) -> tuple:
     """Per boundary polynomial of :func:`germs`, its rows as ``prec``-bit ball polynomials and
     the derivative of the first (converted once: :func:`near_side_codes` tests hundreds of

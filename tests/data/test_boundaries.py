@@ -212,25 +212,39 @@ def test_wedge_tips_on_a_class_line_are_reached():
     assert b.attrs["SS_tips_attached"] >= 1
 
 
+def _band_edges(model, ts, width=0.01, n=1001):
+    """Per ``t`` of ``ts``, the far edge (code 1 -> 2) of the II band along ``beta2 = beta1 - pi``
+    at ``(t, t - pi)``, by a scan across the line towards ``beta2 > beta1 - pi``: ``n`` samples
+    over ``width`` [rad] (step 1e-5), then ``n`` samples over the step where the code changes
+    (step 1e-8; one change on each scan, and the band is code 1 from the first sample on)."""
+    s = np.sqrt(2)
+    lo, hi = np.zeros(len(ts)), np.full(len(ts), width)
+    for first in (1, 0):  # the first scan starts on the line (its sample 0 is left out)
+        d = lo[:, None] + np.linspace(0.0, 1.0, n) * (hi - lo)[:, None]
+        t = np.asarray(ts)[:, None]
+        codes = brackets.field_codes("II", t - d / s, t - PI + d / s, *model)
+        for r, row in enumerate(codes):
+            (i,) = np.flatnonzero(np.diff(row[first:])) + first  # 1 -> 2: the band's far edge
+            assert (row[first], row[i], row[i + 1]) == (1, 1, 2)
+            lo[r], hi[r] = d[r, i], d[r, i + 1]
+    assert (lo > 5e-4).all()
+    return np.stack([ts - lo / s, ts - PI + lo / s], 1)
+
+
 def test_a_band_along_a_diagonal_class_line_is_traced_whole():
     """One q = 0, II: a band of code 1 at most 0.0066 rad wide runs along beta2 = beta1 - pi
     (beta1 from ~3.75 to 3 pi / 2), seen by a 32 x 32 grid (cell 0.2 rad) only at its nodes on
-    the line.  Its far edge, located here independently by a dense scan across the line, lies on
-    the curves: the grid's diagonals join the nodes on the line into one strip (marching squares
-    left separate diamonds, and the curves missed the edge by 6e-3 rad), and the chord probes
-    reach a band thinner than their fixed offsets by stepping towards the line."""
+    the line.  Its far edge, located here independently by a scan across the line (to 1e-8 rad,
+    :func:`_band_edges`), lies on the curves: the grid's diagonals join the nodes on the line
+    into one strip (marching squares left separate diamonds, and the curves missed the edge by
+    6e-3 rad), and the chord probes reach a band thinner than their fixed offsets by stepping
+    towards the line."""
     model = (0.5, 0.35, 0.0)
     g = np.arange(32) * 2 * PI / 32
     b = bd.slice_boundaries(g, g, *model, fields=("II",), check=0)
-    d = np.linspace(0.0, 0.01, 100001)  # across the line, towards beta2 > beta1 - pi
-    edges = []
-    for t in (3.9, 4.2, 4.5):
-        codes = brackets.field_codes("II", t - d / np.sqrt(2), t - PI + d / np.sqrt(2), *model)
-        (i,) = np.flatnonzero(np.diff(codes[1:])) + 1  # 1 -> 2: the band's far edge
-        assert (codes[1], codes[i], codes[i + 1]) == (1, 1, 2) and d[i] > 5e-4
-        edges.append([t - d[i] / np.sqrt(2), t - PI + d[i] / np.sqrt(2)])
+    edges = _band_edges(model, np.array([3.9, 4.2, 4.5]))
     curves = [c.vertices for c in b.curves if (c.side_left, c.side_right) == (2, 1)]
-    assert _torus_distance(np.array(edges), curves).max() < 2e-6
+    assert _torus_distance(edges, curves).max() < 2e-6
 
 
 def test_a_boundary_tangent_to_a_class_line_is_followed_to_its_tip(slice_32):
