@@ -179,6 +179,13 @@ def _fusions(jitted, *args):
     return re.findall(r"^\s*(?:ROOT )?%\S+ = (\S+) fusion\(", entry, re.M)
 
 
+#: the 5-D grid of ``atlas bench`` (:mod:`atlas.bench.model_axes`: 12 x 12 beta, 8 kappa, 2 q1,
+#: 2 q2, damped) as the driver's first pass takes it (:func:`atlas.core.points._first_pass`): the
+#: axes ordered q1, q2, kappa, beta1, beta2 from the outside in, beta padded to 16; per input of
+#: ``codes`` its axis and length
+_BENCH_GRID = ((3, 16), (3, 16), (4, 16), (4, 16), (2, 8), (0, 2), (1, 2))
+
+
 @pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
 def test_first_pass_computes_every_sign_once(dtype):
     """Soundness (module docstring): the compiled first pass is one loop fusion over the points
@@ -186,15 +193,14 @@ def test_first_pass_computes_every_sign_once(dtype):
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
     x = np.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program (numpy: no op)
-    row, col, one = np.ones((64, 1), dtype), np.ones((1, 64), dtype), np.ones((), dtype)
-    for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
-        kern = (
-            _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
-        )
-        # scalars and single rows or columns (e.g. the exact bits of an axis input) are computed
-        # once per call or per axis, not per point
-        grid = f"[{points.FLAT_SMALL}]" if damped is None else "[64,64]"
-        per_point = [f for f in _fusions(kern, *args) if grid in f]
+    axis = lambda d, n: np.ones([n if i == d else 1 for i in range(5)], dtype)  # noqa: E731
+    grid = tuple(axis(d, n) for d, n in _BENCH_GRID)  # the driver's program of that grid
+    for damped, args in ((None, (x,) * 7), (True, grid)):
+        kern = points._kernel("codes", ss=True, ii=True, damped=damped)
+        # model inputs (one value a model, e.g. the exact bits of kappa) and single rows or
+        # columns are computed once per model or per axis, not per point
+        shape = np.broadcast_shapes(*(a.shape for a in args))
+        per_point = [f for f in _fusions(kern, *args) if str(list(shape)).replace(" ", "") in f]
         assert len(per_point) == 1, per_point
 
 
