@@ -24,11 +24,12 @@ _tier2 = points._kernel("tier2", ss=True, ii=True)
 
 def kernel_verdicts(pts, dtype):
     """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier): the
-    first pass in ``dtype`` on flat columns of the driver's lengths, tier 2 in
-    ``points.LATER_DTYPE`` (an exact conversion) in batches of ``points.LATER_BATCH``."""
+    first pass in ``dtype`` on flat columns of the driver's small length (``points.FLAT_SMALL``:
+    the program of every small point set; the kernel is elementwise, so the batch length does
+    not change a verdict's certificate), tier 2 in ``points.LATER_DTYPE`` (an exact conversion)
+    in batches of ``points.LATER_BATCH``."""
     cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
-    flat = points.FLAT_SMALL if cols[0].size <= points.FLAT_SMALL else points.FLAT_BATCH
-    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols, flat)[0]))
+    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols, points.FLAT_SMALL)[0]))
     idx = np.flatnonzero(first[3])
     if idx.size:
         later = [c[idx].astype(points.LATER_DTYPE) for c in cols]
@@ -166,7 +167,8 @@ def test_ss_matches_spectral_where_both_decide():
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = buckets.call(hurwitz.ss_verdict_jit, *cols)
+        # in batches of the small bucket (the witness checks' program), as the first pass
+        ref = _chunked(lambda *a: (hurwitz.ss_verdict_jit(*a),), cols, buckets.SMALL)[0]
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98
