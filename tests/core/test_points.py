@@ -361,8 +361,9 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
 def model_grid(n=12, dtype=np.float64):
     """A 5-D grid as ``atlas generate`` lays it out: ``(beta1, beta2, kappa, q1, q2)``, the model
     axes last and short; beta through the axis lines (multiples of pi/6), every model damped.  Its
-    padded axes (16 beta values, 8 kappa, 2 q1, 2 q2) are those of the 5-D grid of ``atlas bench``
-    (:mod:`atlas.bench.model_axes`), so the first pass runs that grid's compiled program."""
+    padded axes (16 beta values, 8 kappa, 2 q1, 2 q2) are those of the 5-D grid that
+    ``tests/bench/test_model_axes.py`` runs through :mod:`atlas.bench.model_axes` (12 beta values,
+    8 kappa), so the first pass runs that grid's compiled program."""
     g = np.arange(n) * (2 * np.pi / n)
     c, s = direction(g.astype(dtype), dtype)
     e = lambda a, ax: np.asarray(a, dtype).reshape([-1 if d == ax else 1 for d in range(5)])  # noqa: E731

@@ -181,8 +181,8 @@ def _fusions(jitted, *args):
     return re.findall(r"^\s*(?:ROOT )?%\S+ = (\S+) fusion\(", entry, re.M)
 
 
-#: the 5-D grid of ``atlas bench`` (:mod:`atlas.bench.model_axes`: 12 x 12 beta, 8 kappa, 2 q1,
-#: 2 q2, damped) as the driver's first pass takes it (:func:`atlas.core.points._first_pass`): the
+#: the 5-D grid of ``tests/bench/test_model_axes.py`` (:mod:`atlas.bench.model_axes` at 12 x 12
+#: beta, 8 kappa, 2 q1, 2 q2, damped) as the driver's first pass takes it (:func:`atlas.core.points._first_pass`): the
 #: axes ordered q1, q2, kappa, beta1, beta2 from the outside in, beta padded to 16; per input of
 #: ``codes`` its axis and length
 _BENCH_GRID = ((3, 16), (3, 16), (4, 16), (4, 16), (2, 8), (0, 2), (1, 2))
