@@ -25,7 +25,7 @@ def exact_code(field, b1, b2, model):
     ``(kappa, q1, q2)``: SS its ``stable_SS``; II 0 inconsistent, else ``1 + stable_II``."""
     c1, s1 = (float(x) for x in contact_modes.direction(b1))
     c2, s2 = (float(x) for x in contact_modes.direction(b2))
-    v = exact.point_spectral(c1, s1, c2, s2, *model)
+    v = exact.point_verdicts(c1, s1, c2, s2, *model)
     if field == "SS":
         return v["stable_SS"]
     return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]

@@ -155,12 +155,30 @@ def _offdiag_to_zero(rng, dtype):
 
 
 def _n_real_roots(b1, b2, kap, q):
+    """Real roots of the quartic ``p`` (SPEC §1, ``q1 = q2 = q``, ``k2 = 1``) with 40-digit
+    coefficients: the Sturm count ``V(-inf) - V(+inf)`` of its sequence's leading coefficients
+    (signs of ``P2``, ``T1``, ``Disc`` of :mod:`atlas.core.expressions`, at 80 digits: exact for
+    these coefficients) where none is zero (distinct roots, a sequence of every degree), else
+    the roots of ``mpmath.polyroots`` off the real axis by less than ``1e-25``."""
     with mpmath.workdps(40):
         c1, s1, c2, s2 = mpmath.cos(b1), mpmath.sin(b1), mpmath.cos(b2), mpmath.sin(b2)
         det = ex.det(c1, s1, c2, s2, sub=_SUB)
-        co = [1, *ex.coefficients(c1, s1, c2, s2, kap, 1, q, q, det, sub=_SUB)]
-        r = mpmath.polyroots(co, maxsteps=200, extraprec=80)
+        co = ex.coefficients(c1, s1, c2, s2, kap, 1, q, q, det, sub=_SUB)
+    with mpmath.workdps(80):
+        p2, t1, disc = (
+            int(mpmath.sign(f(*co, sub=_SUB)))
+            for f in (ex.sturm_P2, ex.sturm_T1, ex.quartic_discriminant)
+        )
+    if p2 and t1 and disc:
+        return _variations(1, -1, p2, t1, disc) - _variations(1, 1, p2, -t1, disc)
+    with mpmath.workdps(40):
+        r = mpmath.polyroots([1, *co], maxsteps=200, extraprec=80)
         return sum(1 for z in r if abs(mpmath.im(z)) < mpmath.mpf(10) ** -25)
+
+
+def _variations(*signs) -> int:
+    """Sign changes along a sequence of nonzero signs."""
+    return sum(a != b for a, b in zip(signs, signs[1:]))
 
 
 def _double_roots(rng, dtype):

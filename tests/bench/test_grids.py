@@ -50,6 +50,8 @@ def test_small_case_recomputed_independently(dtype):
         sample_small=10**6,
         disagree_cap=10**6,
         undecided_cap=10**6,
+        budget=0.0,  # the counts, not the times: one timed call a method
+        min_repeats=1,
     )
     case = ("q=0.1", 0.5, 0.1, 0.1)
     rows, res, _, args = grids.measure_grid(

@@ -10,7 +10,7 @@ def _exact_code(field, b1, b2, kappa, q1, q2):
     """The field code from the exact tier alone (FLINT rational arithmetic, no float kernel)."""
     c1, s1 = (float(v) for v in contact_modes.direction(b1))
     c2, s2 = (float(v) for v in contact_modes.direction(b2))
-    v = exact.point_spectral(c1, s1, c2, s2, kappa, q1, q2)
+    v = exact.point_verdicts(c1, s1, c2, s2, kappa, q1, q2)
     if field == "SS":
         return v["stable_SS"]
     return 0 if v["consistent_II"] == 0 else 1 + v["stable_II"]

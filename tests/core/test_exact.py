@@ -52,7 +52,7 @@ def _compare_with_reference(points) -> tuple[list, int]:
         if want is None:
             skipped += 1
             continue
-        got = _verdicts(exact.point_spectral(*p))
+        got = _verdicts(exact.point_verdicts(*p))
         if got != want:
             bad.append((p, got, want))
     return bad, skipped

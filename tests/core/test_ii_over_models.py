@@ -27,7 +27,7 @@ def _per_class(k: int = 1, seed: int = 3):
 
 def _exact(g, m) -> tuple[int, int]:
     """``(consistent_II, stable_II is STABLE)`` of model ``m`` at geometry ``g`` (exact tier)."""
-    v = exact.point_spectral(*g, *m)
+    v = exact.point_verdicts(*g, *m)
     return int(v["consistent_II"]), int(v["stable_II"] == int(Verdict.STABLE))
 
 

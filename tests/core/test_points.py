@@ -37,12 +37,16 @@ def grid(n=12, dtype=np.float64):
 @pytest.mark.parametrize("flat_limit", [0, points.FLAT_LIMIT])
 def test_broadcast_equals_flat_points(monkeypatch, flat_limit):
     """The grid path (per-axis inputs, gathers by index; small grids as flat columns, or always
-    on the grid with ``FLAT_LIMIT = 0``) equals the same points given flat (flat columns)."""
-    args = grid()
+    on the grid with ``FLAT_LIMIT = 0``, there in the slabs and padded axes of
+    :func:`test_slabs_and_padding`, whose program it shares) equals the same points given flat
+    (flat columns)."""
+    args = grid(10)
     shape = np.broadcast_shapes(*(a.shape for a in args))
     flat = [np.broadcast_to(a, shape).ravel() for a in args]
     ref = points.spectral_points(*flat, names=FLAGS + ("spectral_abscissa",))
     monkeypatch.setattr(points, "FLAT_LIMIT", flat_limit)
+    if not flat_limit:
+        monkeypatch.setattr(points, "BLOCK", 50)
     res = points.spectral_points(*args, names=FLAGS + ("spectral_abscissa",))
     st = res.stats
     for k in FLAGS:
@@ -354,15 +358,18 @@ def test_later_tiers_run_in_float64(monkeypatch, later):
         assert np.array_equal(got[k], ref[k]), k
 
 
-def model_grid(n=16, dtype=np.float64):
+def model_grid(n=12, dtype=np.float64):
     """A 5-D grid as ``atlas generate`` lays it out: ``(beta1, beta2, kappa, q1, q2)``, the model
-    axes last and short; beta through the axis lines (multiples of pi/8)."""
+    axes last and short; beta through the axis lines (multiples of pi/6), every model damped.  Its
+    padded axes (16 beta values, 8 kappa, 2 q1, 2 q2) are those of the 5-D grid that
+    ``tests/bench/test_model_axes.py`` runs through :mod:`atlas.bench.model_axes` (12 beta values,
+    8 kappa), so the first pass runs that grid's compiled program."""
     g = np.arange(n) * (2 * np.pi / n)
     c, s = direction(g.astype(dtype), dtype)
     e = lambda a, ax: np.asarray(a, dtype).reshape([-1 if d == ax else 1 for d in range(5)])  # noqa: E731
     return (
         e(c, 0), e(s, 0), e(c, 1), e(s, 1),
-        e([0.1, 2.0, 10.0], 2), e([0.05, 0.2], 3), e([0.0, 0.3], 4),
+        e([0.1, 0.5, 2.0, 5.0, 10.0], 2), e([0.05, 0.2], 3), e([0.0, 0.3], 4),
     )  # fmt: skip
 
 
@@ -414,12 +421,12 @@ def test_grids_over_models_take_the_grid_kernel(monkeypatch):
     calls = []
     monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
     monkeypatch.setattr(points, "FLAT_SIZES", (1 << 10,))
-    g = model_grid(16)  # 16 x 16 x 3 x 2 x 2 = 3072 points
+    g = model_grid()  # 12 x 12 x 5 x 2 x 2 = 2880 points
     points.spectral_points(*g, names=FLAGS, resolve=False)
     assert not calls
     plane = [a.reshape(a.shape[:2]) for a in g[:4]]
     points.spectral_points(*plane, 0.5, 0.1, 0.2, names=FLAGS, resolve=False)  # one model
-    points.spectral_points(*model_grid(4), names=FLAGS, resolve=False)  # 192 points
+    points.spectral_points(*model_grid(4), names=FLAGS, resolve=False)  # 320 points
     assert len(calls) == 2
 
 
@@ -431,7 +438,9 @@ def test_point_lists_stay_flat(monkeypatch):
     every length up to ``FLAT_LIMIT``."""
     calls = []
     monkeypatch.setattr(points, "_on_flat", lambda *a: calls.append(1) or _on_flat(*a))
-    g = [np.broadcast_to(a, (20, 20, 3, 2, 2)).ravel() for a in model_grid(20)]
+    g = model_grid(20)
+    shape = np.broadcast_shapes(*(a.shape for a in g))
+    g = [np.broadcast_to(a, shape).ravel() for a in g]
     points.spectral_points(*g, names=FLAGS, resolve=False)
     assert len(calls) == 1
 

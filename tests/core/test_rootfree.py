@@ -24,11 +24,12 @@ _tier2 = points._kernel("tier2", ss=True, ii=True)
 
 def kernel_verdicts(pts, dtype):
     """First pass + tier 2 exactly as the driver chains them (no roots, no exact tier): the
-    first pass in ``dtype`` on flat columns of the driver's lengths, tier 2 in
-    ``points.LATER_DTYPE`` (an exact conversion) in batches of ``points.LATER_BATCH``."""
+    first pass in ``dtype`` on flat columns of the driver's small length (``points.FLAT_SMALL``:
+    the program of every small point set; the kernel is elementwise, so the batch length does
+    not change a verdict's certificate), tier 2 in ``points.LATER_DTYPE`` (an exact conversion)
+    in batches of ``points.LATER_BATCH``."""
     cols = np.broadcast_arrays(*(np.atleast_1d(np.asarray(pts[k], dtype)) for k in KEYS))
-    flat = points.FLAT_SMALL if cols[0].size <= points.FLAT_SMALL else points.FLAT_BATCH
-    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols, flat)[0]))
+    first = list(rootfree.unpack(_chunked(lambda *a: (_codes(*a),), cols, points.FLAT_SMALL)[0]))
     idx = np.flatnonzero(first[3])
     if idx.size:
         later = [c[idx].astype(points.LATER_DTYPE) for c in cols]
@@ -166,7 +167,8 @@ def test_ss_matches_spectral_where_both_decide():
         pts = _random(rng, 8000, dtype, span=6.0)
         pts["q1"][::7] = 0
         got, cols = kernel_verdicts(pts, dtype)
-        ref = buckets.call(hurwitz.ss_verdict_jit, *cols)
+        # in batches of the small bucket (the witness checks' program), as the first pass
+        ref = _chunked(lambda *a: (hurwitz.ss_verdict_jit(*a),), cols, buckets.SMALL)[0]
         both = (got["stable_SS"] != 3) & (ref != 3)
         assert np.all(got["stable_SS"][both] == ref[both])
         assert both.mean() > 0.98
@@ -179,6 +181,13 @@ def _fusions(jitted, *args):
     return re.findall(r"^\s*(?:ROOT )?%\S+ = (\S+) fusion\(", entry, re.M)
 
 
+#: the 5-D grid of ``tests/bench/test_model_axes.py`` (:mod:`atlas.bench.model_axes` at 12 x 12
+#: beta, 8 kappa, 2 q1, 2 q2, damped) as the driver's first pass takes it (:func:`atlas.core.points._first_pass`): the
+#: axes ordered q1, q2, kappa, beta1, beta2 from the outside in, beta padded to 16; per input of
+#: ``codes`` its axis and length
+_BENCH_GRID = ((3, 16), (3, 16), (4, 16), (4, 16), (2, 8), (0, 2), (1, 2))
+
+
 @pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
 def test_first_pass_computes_every_sign_once(dtype):
     """Soundness (module docstring): the compiled first pass is one loop fusion over the points
@@ -186,15 +195,14 @@ def test_first_pass_computes_every_sign_once(dtype):
     decision reads that copy.  XLA on CPU drops optimization barriers before fusion; if a new
     XLA splits this program, the test fails and the kernel must be split into programs."""
     x = np.ones(points.FLAT_SMALL, dtype)  # the driver's small flat program (numpy: no op)
-    row, col, one = np.ones((64, 1), dtype), np.ones((1, 64), dtype), np.ones((), dtype)
-    for damped, args in ((None, (x,) * 7), (True, (row, row, col, col, one, one, one))):
-        kern = (
-            _codes if damped is None else jax.jit(functools.partial(rootfree.codes, damped=damped))
-        )
-        # scalars and single rows or columns (e.g. the exact bits of an axis input) are computed
-        # once per call or per axis, not per point
-        grid = f"[{points.FLAT_SMALL}]" if damped is None else "[64,64]"
-        per_point = [f for f in _fusions(kern, *args) if grid in f]
+    axis = lambda d, n: np.ones([n if i == d else 1 for i in range(5)], dtype)  # noqa: E731
+    grid = tuple(axis(d, n) for d, n in _BENCH_GRID)  # the driver's program of that grid
+    for damped, args in ((None, (x,) * 7), (True, grid)):
+        kern = points._kernel("codes", ss=True, ii=True, damped=damped)
+        # model inputs (one value a model, e.g. the exact bits of kappa) and single rows or
+        # columns are computed once per model or per axis, not per point
+        shape = np.broadcast_shapes(*(a.shape for a in args))
+        per_point = [f for f in _fusions(kern, *args) if str(list(shape)).replace(" ", "") in f]
         assert len(per_point) == 1, per_point
 
 

@@ -395,12 +395,10 @@ def test_a_step_with_an_event_after_its_safe_substeps_samples_the_amplitude_as_t
     assert int(res.code[0]) == int(out) == int(S.Outcome.GROWING_BOUNCING)
 
 
-def test_an_event_that_keeps_the_configuration_keeps_its_segment(monkeypatch):
-    """300 lanes of the random comparison (seed 46): about a third of their events (a force
-    changing sign beside an open gap, a gap crossing with its force) leave the contact
-    configuration as it was, and the same closed form goes on: fewer segments are built (at the
-    lanes' starts and at configuration changes, counted per lane) than the lanes have events
-    (1,504 segments for 1,326 events when every event started one)."""
+@pytest.fixture(scope="module")
+def random_46():
+    """The 1,000 lanes of the random comparison (seed 46) by the fast engine, counting the
+    segments it builds (one run shared by the tests of these lanes): ``(res, segments built)``."""
     from atlas.dynamics import engine_check as C
 
     built = [0]
@@ -410,13 +408,36 @@ def test_an_event_that_keeps_the_configuration_keeps_its_segment(monkeypatch):
         built[0] += ix.size
         return real(lanes, tables, ix, mask, g, closed=closed)
 
-    monkeypatch.setattr(F, "segments", counted)
     L = C.random_lanes(46, 1000)
-    sel = np.arange(300)
-    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)[sel]
-    q = np.stack([L.q, L.q], axis=1)[sel]
-    res = F.run_lanes(L.beta1[sel], L.beta2[sel], L.alpha[sel], k, q, L.g0[sel])
-    assert built[0] < res.n_events.sum()
+    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(F, "segments", counted)
+        res = F.run_lanes(L.beta1, L.beta2, L.alpha, k, np.stack([L.q, L.q], axis=1), L.g0)
+    return res, built[0]
+
+
+def test_an_event_that_keeps_the_configuration_keeps_its_segment(random_46):
+    """The lanes of the random comparison (seed 46): about a third of their events (a force
+    changing sign beside an open gap, a gap crossing with its force) leave the contact
+    configuration as it was, and the same closed form goes on: fewer segments are built (at the
+    lanes' starts and at configuration changes, counted per lane) than the lanes have events
+    (3,779 segments for 4,421 events; on the first 300, 1,504 for 1,326 when every event started
+    one)."""
+    res, built = random_46
+    assert built < res.n_events.sum()
+
+
+def test_lanes_over_ten_times_the_median_are_event_heavy_at_under_two_steps_per_event(random_46):
+    """The 1,000 lanes of the random comparison (seed 46), counted (not timed): a lane over 10
+    times the median lane's steps has at least 40 events, each costing a step or two (under 1.8
+    steps per event).  Before the sub-steps passed crossings certified beyond their window,
+    took a crossing their last step landed on, and overlapping brackets were closed together,
+    13 lanes were over: one without events (106 steps), one at 4 steps per event (26 events),
+    the others up to 2.25."""
+    res, _ = random_46
+    over = res.steps > 10 * np.median(res.steps)
+    assert np.all(res.n_events[over] >= 40)
+    assert np.all(res.steps[over] < 1.8 * res.n_events[over])
 
 
 def test_free_flight_entered_leaving_settles_before_a_later_amplitude_stop():
@@ -581,23 +602,6 @@ def test_a_gap_and_its_force_crossing_close_together_are_located_in_one_step():
     assert res.n_events[0] == run.n_events == 119
     assert res.steps[0] <= 1.1 * res.n_events[0]
     assert int(res.code[0]) == int(out) == int(S.Outcome.SUSTAINED_OSCILLATION)
-
-
-def test_lanes_over_ten_times_the_median_are_event_heavy_at_under_two_steps_per_event():
-    """The 1,000 lanes of the random comparison (seed 46), counted (not timed): a lane over 10
-    times the median lane's steps has at least 40 events, each costing a step or two (under 1.8
-    steps per event).  Before the sub-steps passed crossings certified beyond their window,
-    took a crossing their last step landed on, and overlapping brackets were closed together,
-    13 lanes were over: one without events (106 steps), one at 4 steps per event (26 events),
-    the others up to 2.25."""
-    from atlas.dynamics import engine_check as C
-
-    L = C.random_lanes(46, 1000)
-    k = np.stack([L.kappa, np.ones_like(L.kappa)], axis=1)
-    res = F.run_lanes(L.beta1, L.beta2, L.alpha, k, np.stack([L.q, L.q], axis=1), L.g0)
-    over = res.steps > 10 * np.median(res.steps)
-    assert np.all(res.n_events[over] >= 40)
-    assert np.all(res.steps[over] < 1.8 * res.n_events[over])
 
 
 def test_a_gap_curving_away_from_its_contact_is_bracketed_by_its_signed_curvature():
