@@ -11,6 +11,7 @@ import re
 import subprocess
 import sys
 import time
+from concurrent.futures import Future
 
 import numpy as np
 import pytest
@@ -28,6 +29,27 @@ from atlas.explore import inspector, maps, state, widget
 
 N = 65
 ALPHA = 0.35 * math.pi
+
+
+@pytest.fixture(autouse=True)
+def no_warm_up(request, monkeypatch):
+    """The widget's background warm-up (one inspection, compiling the inspector's kernels once
+    the first map is drawn) left out of this module's in-process tests, as if it had ended: none
+    is about it, and one still running when its test ends ran on through the next tests or the
+    worker's exit (~7 s CPU over the module).  Its claims keep it: the order against a first
+    overlay (test_state) and a first session's click that does not compile (the e2e tests here,
+    in fresh processes)."""
+    if request.node.get_closest_marker("e2e"):
+        return
+
+    def warm_up(self):
+        if self._warm is None:
+            self._warm = Future()
+            self._warm.set_result(None)
+            self._inspector_ready.set()
+        return self._warm
+
+    monkeypatch.setattr(state.Explorer, "warm_up", warm_up)
 
 
 @pytest.fixture
